@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package hemi needs to build, test, benchmark and draw its plots.
+# Idempotent: packages already present are left alone, and apt-get update runs only when
+# something is missing. Run as root (or with sudo available).
+set -euo pipefail
+
+packages=(
+    # toolchain
+    build-essential cmake ninja-build pkg-config
+    # Vulkan: loader + headers, Mesa lavapipe (software Vulkan), Khronos validation layers, tools
+    libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools spirv-tools
+    # shaders
+    glslang-tools glslang-dev
+    # math, scene and image formats
+    libglm-dev libeigen3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libopenexr-dev
+    # baking
+    libembree-dev libtbb-dev libmeshoptimizer-dev
+    # CLI, formatting, hashing, compression
+    libcli11-dev libfmt-dev libxxhash-dev libzstd-dev
+    # tests and benchmarks
+    libgtest-dev libgmock-dev libbenchmark-dev
+    # plots
+    gnuplot-nox
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+    echo "install_deps: all ${#packages[@]} packages present"
+    exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install_deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,121 @@
+#pragma once
+// The Vulkan device hemi renders and computes with: either one hemi creates (headless, no surface),
+// or the host engine's own instance / physical device / device / queue, adopted without taking ownership.
+
+#include <vulkan/vulkan.h>
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+
+namespace hemi::gpu
+{
+
+enum class LogLevel
+{
+    Debug,
+    Info,
+    Warning,
+    Error,
+};
+
+// hemi never prints: everything it has to say goes through the host's callback. Messages from the
+// Khronos validation layer arrive with `validation == true`. May be called from any thread.
+using LogCallback = std::function<void(LogLevel level, bool validation, std::string_view message)>;
+
+struct DeviceDesc
+{
+    // Which physical device to use. Empty: the HEMI_DEVICE environment variable, and if that is unset,
+    // the first discrete GPU, else integrated, else virtual, else CPU (lavapipe). A selector is either a
+    // decimal index into vkEnumeratePhysicalDevices or a case-insensitive substring of the device name
+    // (e.g. "llvmpipe", "NVIDIA").
+    std::string device_selector;
+    // Enables VK_LAYER_KHRONOS_validation and routes its warnings and errors to `log`.
+    // The HEMI_VALIDATION environment variable ("1"/"0") overrides this.
+    bool validation = false;
+    LogCallback log;
+    std::string application_name = "hemi";
+};
+
+// A host engine's device. hemi uses these handles and destroys none of them. Requirements: Vulkan 1.1,
+// `queue` supports graphics and compute, and the host keeps every handle alive while hemi uses it.
+struct ExternalDevice
+{
+    VkInstance instance = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_device = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    VkQueue queue = VK_NULL_HANDLE;
+    uint32_t queue_family = 0;
+    LogCallback log;
+};
+
+enum class MemoryUsage
+{
+    GpuOnly,  // device-local; uploads go through a staging copy unless the memory is also host-visible
+    Upload,   // host-visible, coherent, written by the CPU
+    Readback, // host-visible, preferably cached, read by the CPU
+};
+
+class Device
+{
+public:
+    // Creates an instance and device of its own. Throws VulkanError (e.g. VK_ERROR_INCOMPATIBLE_DRIVER
+    // when no Vulkan driver is installed) or std::runtime_error (no device matches the selector).
+    explicit Device(const DeviceDesc& desc = {});
+    // Adopts the host's device; destroys nothing of it.
+    explicit Device(const ExternalDevice& external);
+    ~Device();
+
+    Device(const Device&) = delete;
+    Device& operator=(const Device&) = delete;
+
+    VkInstance instance() const { return instance_; }
+    VkPhysicalDevice physical_device() const { return physical_device_; }
+    VkDevice device() const { return device_; }
+    VkQueue queue() const { return queue_; }
+    uint32_t queue_family() const { return queue_family_; }
+    bool owns_device() const { return owns_; }
+
+    const VkPhysicalDeviceProperties& properties() const { return properties_; }
+    const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
+    std::string_view name() const { return properties_.deviceName; }
+    // Lanes of a subgroup (8 on lavapipe with AVX2, 32 on NVIDIA, 32/64 on AMD).
+    uint32_t subgroup_size() const { return subgroup_size_; }
+    // Nanoseconds per timestamp tick; 0 when the queue does not support timestamps.
+    double timestamp_period_ns() const { return timestamp_period_ns_; }
+
+    // A memory type index for `type_bits` with the properties `usage` needs. Throws when there is none.
+    uint32_t memory_type(uint32_t type_bits, MemoryUsage usage) const;
+    bool memory_is_host_visible(uint32_t memory_type) const;
+
+    // Validation-layer warnings and errors seen so far (always 0 without validation).
+    uint64_t validation_messages() const { return validation_messages_.load(); }
+
+    void log(LogLevel level, std::string_view message) const;
+    void wait_idle() const;
+
+private:
+    void init_properties();
+    static VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                         VkDebugUtilsMessageTypeFlagsEXT types,
+                                                         const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                         void* user);
+
+    VkInstance instance_ = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    uint32_t queue_family_ = 0;
+    bool owns_ = false;
+    VkPhysicalDeviceProperties properties_{};
+    VkPhysicalDeviceMemoryProperties memory_{};
+    uint32_t subgroup_size_ = 1;
+    double timestamp_period_ns_ = 0.0;
+    LogCallback log_;
+    std::atomic<uint64_t> validation_messages_{0};
+};
+
+} // namespace hemi::gpu

@@ -1,0 +1,99 @@
+#pragma once
+// The per-frame PRT transfer multiply, c_v = T_v * l (Sloan 2006, Sec. 2): on the Vulkan device
+// (TransferPass) and on the host (transfer_multiply_host), over one shared data layout.
+//
+// T_v is a K x L matrix per vertex (K output coefficients of the pixel basis: 3 HL2, 4 SAL/H4/separable,
+// 6 H6, 9 SH; L lighting SH coefficients: 9, 16, 25 or 36), l is the RGB lighting in SH (L vec3), and
+// c_v is K RGB coefficients. Output layout on both paths: coefficient k of vertex v is the 4 floats at
+// (v*K + k)*4 (r, g, b, 0) -- one RGBA32F texel, what a vertex shader reads with texelFetch.
+
+#include <hemi/gpu/commands.h>
+#include <hemi/gpu/device.h>
+#include <hemi/gpu/pipeline.h>
+#include <hemi/gpu/resources.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace hemi::render
+{
+
+// Per-vertex transfer matrices in hemi's element-interleaved block layout (hemi/shared/transfer.h):
+// blocks of 32 vertices; inside a block, element f = k*L + j of all 32 vertices is 32 consecutive floats.
+// The last block is padded with zero matrices.
+class TransferMatrices
+{
+public:
+    // `row_major` holds N matrices one after another, each K x L row-major (element (k, j) at k*L + j).
+    // Throws std::invalid_argument when N is 0, K is not in [1, 9], L is not a square in [1, 36], the
+    // span's size is not N*K*L, or a value is not finite.
+    TransferMatrices(uint32_t vertex_count, uint32_t k, uint32_t l, std::span<const float> row_major);
+
+    uint32_t vertex_count() const { return n_; }
+    uint32_t k() const { return k_; }
+    uint32_t l() const { return l_; }
+    uint32_t block_count() const { return blocks_; }
+    // Floats of one 32-vertex block: K * L * 32.
+    size_t block_floats() const { return size_t(k_) * l_ * kBlockVertices; }
+    std::span<const float> data() const { return data_; }
+    // Bytes of the matrices proper, N*K*L*4: what the bandwidth ratios of hemi-bench are measured against.
+    size_t matrix_bytes() const { return size_t(n_) * k_ * l_ * sizeof(float); }
+    // Element (k, j) of vertex v (for tests and tools; not for hot loops).
+    float at(uint32_t v, uint32_t k, uint32_t j) const;
+
+    static constexpr uint32_t kBlockVertices = 32;
+
+private:
+    uint32_t n_, k_, l_, blocks_;
+    std::vector<float> data_;
+};
+
+// Throws std::invalid_argument with a message naming the mismatch.
+void validate_transfer_shape(uint32_t vertex_count, uint32_t k, uint32_t l);
+
+// Host path: writes c_v for every vertex into `out` (size N*K*4 floats, layout above). `lighting` has L
+// entries. Vectorised over the 32 vertices of a block (AVX2+FMA when the CPU has it) and multi-threaded
+// over blocks with TBB. Throws std::invalid_argument on size mismatches.
+void transfer_multiply_host(const TransferMatrices& matrices, std::span<const glm::vec3> lighting,
+                            std::span<float> out);
+
+// Device path. Owns the matrices' GPU copy, the lighting uniform buffer, the output coefficient buffer and
+// the compute pipeline; one dispatch per segment of at most maxTexelBufferElements texels.
+class TransferPass
+{
+public:
+    TransferPass(const gpu::Device& device, const TransferMatrices& matrices);
+    ~TransferPass();
+    TransferPass(const TransferPass&) = delete;
+    TransferPass& operator=(const TransferPass&) = delete;
+
+    // Records: the lighting update (vkCmdUpdateBuffer, so no host synchronisation is needed between
+    // frames), a barrier, and the dispatches. The caller orders later reads of coefficients() with a
+    // barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
+    // `lighting` must have L entries of finite values.
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting);
+
+    // Records, submits and waits: for tools and tests.
+    void run(std::span<const glm::vec3> lighting);
+
+    // RGBA32F texels: coefficient k of vertex v is texel v*K + k. Usable as a uniform texel buffer.
+    const gpu::Buffer& coefficients() const;
+    // Reads the coefficients back (N*K*4 floats).
+    std::vector<float> read_coefficients() const;
+
+    uint32_t vertex_count() const;
+    uint32_t k() const;
+    uint32_t l() const;
+    uint32_t segment_count() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace hemi::render

@@ -1,0 +1,333 @@
+#include <hemi/gpu/device.h>
+#include <hemi/gpu/vk_check.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemi::gpu
+{
+namespace
+{
+
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+std::string lower(std::string_view s)
+{
+    std::string out(s);
+    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return out;
+}
+
+bool has_layer(const char* name)
+{
+    uint32_t count = 0;
+    HEMI_VK_CHECK(vkEnumerateInstanceLayerProperties(&count, nullptr));
+    std::vector<VkLayerProperties> layers(count);
+    HEMI_VK_CHECK(vkEnumerateInstanceLayerProperties(&count, layers.data()));
+    return std::any_of(layers.begin(), layers.end(),
+                       [&](const VkLayerProperties& l) { return std::string_view(l.layerName) == name; });
+}
+
+int type_rank(VkPhysicalDeviceType type)
+{
+    switch (type)
+    {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return 3;
+    default:
+        return 4;
+    }
+}
+
+bool find_queue_family(VkPhysicalDevice pd, uint32_t* family)
+{
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &count, families.data());
+    for (uint32_t i = 0; i < count; ++i)
+    {
+        const VkQueueFlags need = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+        if ((families[i].queueFlags & need) == need)
+        {
+            *family = i;
+            return true;
+        }
+    }
+    return false;
+}
+
+VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& selector)
+{
+    uint32_t count = 0;
+    HEMI_VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
+    std::vector<VkPhysicalDevice> devices(count);
+    HEMI_VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, devices.data()));
+
+    std::vector<std::string> names;
+    std::vector<VkPhysicalDevice> usable;
+    for (VkPhysicalDevice pd : devices)
+    {
+        VkPhysicalDeviceProperties props;
+        vkGetPhysicalDeviceProperties(pd, &props);
+        names.push_back(props.deviceName);
+    }
+    std::string all;
+    for (size_t i = 0; i < names.size(); ++i)
+        all += (i ? ", " : "") + std::to_string(i) + ": " + names[i];
+    if (devices.empty())
+        throw std::runtime_error("hemi: no Vulkan physical device found (install mesa-vulkan-drivers for lavapipe)");
+
+    uint32_t family;
+    if (!selector.empty())
+    {
+        bool numeric = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
+        for (size_t i = 0; i < devices.size(); ++i)
+        {
+            bool match = numeric ? std::stoul(selector) == i : lower(names[i]).find(lower(selector)) != std::string::npos;
+            if (match && find_queue_family(devices[i], &family))
+                return devices[i];
+        }
+        throw std::runtime_error("hemi: no Vulkan device with a graphics+compute queue matches '" + selector +
+                                 "' (devices: " + all + ")");
+    }
+
+    VkPhysicalDevice best = VK_NULL_HANDLE;
+    int best_rank = 1 << 20;
+    for (VkPhysicalDevice pd : devices)
+    {
+        VkPhysicalDeviceProperties props;
+        vkGetPhysicalDeviceProperties(pd, &props);
+        int rank = type_rank(props.deviceType);
+        if (props.apiVersion >= VK_API_VERSION_1_1 && find_queue_family(pd, &family) && rank < best_rank)
+        {
+            best = pd;
+            best_rank = rank;
+        }
+    }
+    if (!best)
+        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue (devices: " + all + ")");
+    return best;
+}
+
+} // namespace
+
+VKAPI_ATTR VkBool32 VKAPI_CALL Device::debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                      VkDebugUtilsMessageTypeFlagsEXT,
+                                                      const VkDebugUtilsMessengerCallbackDataEXT* data, void* user)
+{
+    auto* self = static_cast<Device*>(user);
+    LogLevel level = LogLevel::Debug;
+    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)
+        level = LogLevel::Error;
+    else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT)
+        level = LogLevel::Warning;
+    else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_INFO_BIT_EXT)
+        level = LogLevel::Info;
+    if (level >= LogLevel::Warning)
+        self->validation_messages_.fetch_add(1);
+    if (self->log_)
+        self->log_(level, true, data && data->pMessage ? data->pMessage : "(no message)");
+    return VK_FALSE;
+}
+
+Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
+{
+    bool validation = desc.validation;
+    if (const char* env = std::getenv("HEMI_VALIDATION"); env && *env)
+        validation = std::string_view(env) != "0";
+
+    std::vector<const char*> layers;
+    std::vector<const char*> extensions;
+    if (validation)
+    {
+        if (!has_layer(kValidationLayer))
+            throw std::runtime_error("hemi: validation requested but VK_LAYER_KHRONOS_validation is not installed "
+                                     "(Debian: vulkan-validationlayers)");
+        layers.push_back(kValidationLayer);
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = desc.application_name.c_str();
+    app.pEngineName = "hemi";
+    app.apiVersion = VK_API_VERSION_1_1;
+
+    VkDebugUtilsMessengerCreateInfoEXT messenger_info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messenger_info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+                                     VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    messenger_info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                                 VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                 VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    messenger_info.pfnUserCallback = &Device::debug_callback;
+    messenger_info.pUserData = this;
+
+    VkInstanceCreateInfo instance_info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    instance_info.pApplicationInfo = &app;
+    instance_info.enabledLayerCount = uint32_t(layers.size());
+    instance_info.ppEnabledLayerNames = layers.data();
+    instance_info.enabledExtensionCount = uint32_t(extensions.size());
+    instance_info.ppEnabledExtensionNames = extensions.data();
+    // Chained so that messages from vkCreateInstance/vkDestroyInstance themselves are caught too.
+    if (validation)
+        instance_info.pNext = &messenger_info;
+    HEMI_VK_CHECK(vkCreateInstance(&instance_info, nullptr, &instance_));
+
+    try
+    {
+        if (validation)
+        {
+            auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+            HEMI_VK_CHECK(create(instance_, &messenger_info, nullptr, &messenger_));
+        }
+
+        std::string selector = desc.device_selector;
+        if (const char* env = std::getenv("HEMI_DEVICE"); selector.empty() && env)
+            selector = env;
+        physical_device_ = choose_physical_device(instance_, selector);
+        find_queue_family(physical_device_, &queue_family_);
+
+        float priority = 1.0f;
+        VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+        queue_info.queueFamilyIndex = queue_family_;
+        queue_info.queueCount = 1;
+        queue_info.pQueuePriorities = &priority;
+
+        VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        device_info.queueCreateInfoCount = 1;
+        device_info.pQueueCreateInfos = &queue_info;
+        HEMI_VK_CHECK(vkCreateDevice(physical_device_, &device_info, nullptr, &device_));
+        vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+        init_properties();
+        log(LogLevel::Info, std::string("hemi: using ") + properties_.deviceName);
+    }
+    catch (...)
+    {
+        if (device_)
+            vkDestroyDevice(device_, nullptr);
+        if (messenger_)
+        {
+            auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+            destroy(instance_, messenger_, nullptr);
+        }
+        vkDestroyInstance(instance_, nullptr);
+        throw;
+    }
+}
+
+Device::Device(const ExternalDevice& external)
+    : instance_(external.instance), physical_device_(external.physical_device), device_(external.device),
+      queue_(external.queue), queue_family_(external.queue_family), owns_(false), log_(external.log)
+{
+    if (!instance_ || !physical_device_ || !device_ || !queue_)
+        throw std::invalid_argument("hemi: ExternalDevice needs instance, physical_device, device and queue");
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, families.data());
+    const VkQueueFlags need = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+    if (queue_family_ >= count || (families[queue_family_].queueFlags & need) != need)
+        throw std::invalid_argument("hemi: ExternalDevice queue family " + std::to_string(queue_family_) +
+                                    " does not support graphics and compute");
+    init_properties();
+    if (properties_.apiVersion < VK_API_VERSION_1_1)
+        throw std::invalid_argument("hemi: ExternalDevice must support Vulkan 1.1");
+}
+
+Device::~Device()
+{
+    if (!owns_)
+        return;
+    vkDeviceWaitIdle(device_);
+    vkDestroyDevice(device_, nullptr);
+    if (messenger_)
+    {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+        destroy(instance_, messenger_, nullptr);
+    }
+    vkDestroyInstance(instance_, nullptr);
+}
+
+void Device::init_properties()
+{
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    props2.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties2(physical_device_, &props2);
+    properties_ = props2.properties;
+    subgroup_size_ = std::max(1u, subgroup.subgroupSize);
+    vkGetPhysicalDeviceMemoryProperties(physical_device_, &memory_);
+
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, families.data());
+    bool timestamps = queue_family_ < count && families[queue_family_].timestampValidBits > 0;
+    timestamp_period_ns_ = timestamps ? double(properties_.limits.timestampPeriod) : 0.0;
+}
+
+uint32_t Device::memory_type(uint32_t type_bits, MemoryUsage usage) const
+{
+    VkMemoryPropertyFlags required = 0, preferred = 0;
+    switch (usage)
+    {
+    case MemoryUsage::GpuOnly:
+        preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        break;
+    case MemoryUsage::Upload:
+        required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        break;
+    case MemoryUsage::Readback:
+        required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+        break;
+    }
+    int fallback = -1;
+    for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i)
+    {
+        if (!(type_bits & (1u << i)))
+            continue;
+        VkMemoryPropertyFlags flags = memory_.memoryTypes[i].propertyFlags;
+        if ((flags & required) != required)
+            continue;
+        if ((flags & preferred) == preferred)
+            return i;
+        if (fallback < 0)
+            fallback = int(i);
+    }
+    if (fallback < 0)
+        throw std::runtime_error("hemi: no Vulkan memory type for the requested usage on " +
+                                 std::string(properties_.deviceName));
+    return uint32_t(fallback);
+}
+
+bool Device::memory_is_host_visible(uint32_t memory_type) const
+{
+    return memory_.memoryTypes[memory_type].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
+}
+
+void Device::log(LogLevel level, std::string_view message) const
+{
+    if (log_)
+        log_(level, false, message);
+}
+
+void Device::wait_idle() const
+{
+    HEMI_VK_CHECK(vkDeviceWaitIdle(device_));
+}
+
+} // namespace hemi::gpu

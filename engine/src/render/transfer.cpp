@@ -1,0 +1,321 @@
+#include <hemi/render/transfer.h>
+
+#include <hemi/gpu/vk_check.h>
+
+#include "hemi/shared/transfer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::render
+{
+
+static_assert(TransferMatrices::kBlockVertices == HEMI_TRANSFER_BLOCK_VERTICES);
+static_assert(sizeof(TransferPush) == 4);
+
+void validate_transfer_shape(uint32_t vertex_count, uint32_t k, uint32_t l)
+{
+    if (vertex_count == 0)
+        throw std::invalid_argument("hemi: transfer matrices for zero vertices");
+    if (k == 0 || k > HEMI_TRANSFER_MAX_K)
+        throw std::invalid_argument("hemi: transfer output size K = " + std::to_string(k) + " is not in [1, " +
+                                    std::to_string(HEMI_TRANSFER_MAX_K) + "]");
+    uint32_t order = uint32_t(std::lround(std::sqrt(double(l))));
+    if (l == 0 || l > HEMI_TRANSFER_MAX_L || order * order != l)
+        throw std::invalid_argument("hemi: transfer lighting size L = " + std::to_string(l) +
+                                    " is not an SH coefficient count (1, 4, 9, 16, 25 or 36)");
+}
+
+TransferMatrices::TransferMatrices(uint32_t vertex_count, uint32_t k, uint32_t l, std::span<const float> row_major)
+    : n_(vertex_count), k_(k), l_(l)
+{
+    validate_transfer_shape(vertex_count, k, l);
+    const size_t kl = size_t(k) * l;
+    if (row_major.size() != size_t(vertex_count) * kl)
+        throw std::invalid_argument("hemi: transfer matrices: expected " + std::to_string(size_t(vertex_count) * kl) +
+                                    " floats (" + std::to_string(vertex_count) + " vertices x " + std::to_string(k) +
+                                    " x " + std::to_string(l) + "), got " + std::to_string(row_major.size()));
+    blocks_ = (vertex_count + kBlockVertices - 1) / kBlockVertices;
+    data_.assign(size_t(blocks_) * block_floats(), 0.0f);
+
+    std::atomic<size_t> bad{SIZE_MAX};
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, blocks_), [&](const tbb::blocked_range<uint32_t>& r) {
+        for (uint32_t b = r.begin(); b != r.end(); ++b)
+        {
+            float* dst = data_.data() + size_t(b) * block_floats();
+            uint32_t v_end = std::min(vertex_count, (b + 1) * kBlockVertices);
+            for (uint32_t v = b * kBlockVertices; v < v_end; ++v)
+            {
+                const float* src = row_major.data() + size_t(v) * kl;
+                uint32_t lane = v % kBlockVertices;
+                for (size_t f = 0; f < kl; ++f)
+                {
+                    if (!std::isfinite(src[f]))
+                        bad.store(size_t(v) * kl + f);
+                    dst[f * kBlockVertices + lane] = src[f];
+                }
+            }
+        }
+    });
+    if (size_t i = bad.load(); i != SIZE_MAX)
+        throw std::invalid_argument("hemi: transfer matrices: non-finite value at vertex " + std::to_string(i / kl) +
+                                    ", element " + std::to_string(i % kl));
+}
+
+float TransferMatrices::at(uint32_t v, uint32_t k, uint32_t j) const
+{
+    size_t f = size_t(k) * l_ + j;
+    return data_[size_t(v / kBlockVertices) * block_floats() + f * kBlockVertices + v % kBlockVertices];
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Host path
+
+namespace
+{
+
+constexpr uint32_t kB = TransferMatrices::kBlockVertices;
+
+// One block: for each output row k, accumulate r/g/b over j for the 32 vertices. The inner loop over the
+// 32 lanes is contiguous in memory and vectorises; a row's accumulators (3 x 32 floats) stay in registers.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("arch=haswell", "default")))
+#endif
+void multiply_block(const float* __restrict m, const float* __restrict light /* L x 3 */, uint32_t K, uint32_t L,
+                    float* __restrict acc /* K x 3 x 32 */)
+{
+    for (uint32_t k = 0; k < K; ++k)
+    {
+        float r[kB] = {}, g[kB] = {}, b[kB] = {};
+        for (uint32_t j = 0; j < L; ++j)
+        {
+            const float* row = m + (size_t(k) * L + j) * kB;
+            const float lr = light[j * 3 + 0], lg = light[j * 3 + 1], lb = light[j * 3 + 2];
+            for (uint32_t i = 0; i < kB; ++i)
+            {
+                r[i] += row[i] * lr;
+                g[i] += row[i] * lg;
+                b[i] += row[i] * lb;
+            }
+        }
+        float* a = acc + size_t(k) * 3 * kB;
+        std::memcpy(a, r, sizeof r);
+        std::memcpy(a + kB, g, sizeof g);
+        std::memcpy(a + 2 * kB, b, sizeof b);
+    }
+}
+
+void check_lighting(std::span<const glm::vec3> lighting, uint32_t l)
+{
+    if (lighting.size() != l)
+        throw std::invalid_argument("hemi: transfer lighting has " + std::to_string(lighting.size()) +
+                                    " coefficients, the matrices expect L = " + std::to_string(l));
+    for (const glm::vec3& c : lighting)
+        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
+            throw std::invalid_argument("hemi: transfer lighting contains a non-finite value");
+}
+
+} // namespace
+
+void transfer_multiply_host(const TransferMatrices& matrices, std::span<const glm::vec3> lighting,
+                            std::span<float> out)
+{
+    const uint32_t N = matrices.vertex_count(), K = matrices.k(), L = matrices.l();
+    check_lighting(lighting, L);
+    if (out.size() != size_t(N) * K * 4)
+        throw std::invalid_argument("hemi: transfer output has " + std::to_string(out.size()) + " floats, expected " +
+                                    std::to_string(size_t(N) * K * 4) + " (N*K*4)");
+    float light[HEMI_TRANSFER_MAX_L * 3];
+    for (uint32_t j = 0; j < L; ++j)
+    {
+        light[j * 3 + 0] = lighting[j].x;
+        light[j * 3 + 1] = lighting[j].y;
+        light[j * 3 + 2] = lighting[j].z;
+    }
+    const float* data = matrices.data().data();
+    const size_t block_floats = matrices.block_floats();
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, matrices.block_count(), 64),
+                      [&](const tbb::blocked_range<uint32_t>& range) {
+                          float acc[HEMI_TRANSFER_MAX_K * 3 * kB];
+                          for (uint32_t blk = range.begin(); blk != range.end(); ++blk)
+                          {
+                              multiply_block(data + size_t(blk) * block_floats, light, K, L, acc);
+                              uint32_t v0 = blk * kB, count = std::min(kB, N - v0);
+                              for (uint32_t i = 0; i < count; ++i)
+                              {
+                                  float* o = out.data() + (size_t(v0 + i) * K) * 4;
+                                  for (uint32_t k = 0; k < K; ++k)
+                                  {
+                                      const float* a = acc + size_t(k) * 3 * kB;
+                                      o[k * 4 + 0] = a[i];
+                                      o[k * 4 + 1] = a[kB + i];
+                                      o[k * 4 + 2] = a[2 * kB + i];
+                                      o[k * 4 + 3] = 0.0f;
+                                  }
+                              }
+                          }
+                      });
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Device path
+
+struct TransferPass::Impl
+{
+    const gpu::Device* device;
+    uint32_t n, k, l;
+    gpu::Buffer matrices;
+    gpu::Buffer lighting;
+    gpu::Buffer coefficients;
+    gpu::Program program;
+    gpu::DescriptorPool pool;
+    struct Segment
+    {
+        gpu::BufferView matrix_view;
+        gpu::BufferView coefficient_view;
+        VkDescriptorSet set;
+        uint32_t vertex_count;
+    };
+    std::vector<Segment> segments;
+};
+
+static std::vector<gpu::Binding> transfer_bindings()
+{
+    return {
+        {HEMI_TRANSFER_BINDING_MATRICES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+    };
+}
+
+TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m) : impl_(std::make_unique<Impl>())
+{
+    Impl& s = *impl_;
+    s.device = &device;
+    s.n = m.vertex_count();
+    s.k = m.k();
+    s.l = m.l();
+
+    const VkDeviceSize matrix_bytes = m.data().size_bytes();
+    s.matrices = gpu::create_buffer(device, {matrix_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    gpu::write_buffer(device, s.matrices, m.data().data(), matrix_bytes);
+    s.lighting = gpu::create_buffer(device, {HEMI_TRANSFER_MAX_L * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const VkDeviceSize coefficient_bytes = VkDeviceSize(s.n) * s.k * 16;
+    s.coefficients = gpu::create_buffer(
+        device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+
+    std::vector<gpu::Binding> bindings = transfer_bindings();
+    s.program = gpu::create_compute_program(
+        device, {gpu::embedded_spirv("prt_transfer.comp"), bindings, sizeof(TransferPush), {s.k, s.l}});
+
+    // Segments: whole blocks, at most maxTexelBufferElements texels of matrices (and of coefficients) per
+    // view, with view offsets that respect minTexelBufferOffsetAlignment.
+    const VkPhysicalDeviceLimits& limits = device.limits();
+    const uint64_t block_texels = uint64_t(s.k) * s.l * HEMI_TRANSFER_INVOCATIONS_PER_BLOCK;
+    const uint64_t block_bytes = block_texels * 16;
+    const uint64_t out_block_bytes = uint64_t(HEMI_TRANSFER_BLOCK_VERTICES) * s.k * 16;
+    uint64_t blocks_per_segment = limits.maxTexelBufferElements / block_texels;
+    blocks_per_segment =
+        std::min<uint64_t>(blocks_per_segment, limits.maxTexelBufferElements / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
+    const uint64_t align = std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment);
+    const uint64_t step = std::lcm(align / std::gcd(align, block_bytes), align / std::gcd(align, out_block_bytes));
+    blocks_per_segment -= blocks_per_segment % step;
+    if (blocks_per_segment == 0)
+        throw std::runtime_error("hemi: device " + std::string(device.name()) +
+                                 " cannot hold one block of transfer matrices in a texel buffer");
+
+    const uint32_t total_blocks = m.block_count();
+    const uint32_t segment_count = uint32_t((total_blocks + blocks_per_segment - 1) / blocks_per_segment);
+    s.pool = gpu::create_descriptor_pool(device, bindings, segment_count);
+    for (uint32_t i = 0; i < segment_count; ++i)
+    {
+        uint64_t first_block = i * blocks_per_segment;
+        uint64_t blocks = std::min<uint64_t>(blocks_per_segment, total_blocks - first_block);
+        uint64_t first_vertex = first_block * HEMI_TRANSFER_BLOCK_VERTICES;
+        Impl::Segment seg;
+        seg.vertex_count = uint32_t(std::min<uint64_t>(blocks * HEMI_TRANSFER_BLOCK_VERTICES, s.n - first_vertex));
+        seg.matrix_view = gpu::create_buffer_view(device, s.matrices, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                  first_block * block_bytes, blocks * block_bytes);
+        seg.coefficient_view = gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                       first_vertex * s.k * 16, uint64_t(seg.vertex_count) * s.k * 16);
+        seg.set = gpu::allocate_descriptor_set(device, s.pool, s.program.set_layout);
+        gpu::DescriptorWrite writes[3];
+        writes[0].binding = HEMI_TRANSFER_BINDING_MATRICES;
+        writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+        writes[0].texel_view = seg.matrix_view;
+        writes[1].binding = HEMI_TRANSFER_BINDING_LIGHTING;
+        writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        writes[1].buffer = {s.lighting, 0, VK_WHOLE_SIZE};
+        writes[2].binding = HEMI_TRANSFER_BINDING_COEFFICIENTS;
+        writes[2].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+        writes[2].texel_view = seg.coefficient_view;
+        gpu::write_descriptors(device, seg.set, writes);
+        s.segments.push_back(std::move(seg));
+    }
+}
+
+TransferPass::~TransferPass() = default;
+
+void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+{
+    Impl& s = *impl_;
+    check_lighting(lighting, s.l);
+    float packed[HEMI_TRANSFER_MAX_L * 4] = {};
+    for (uint32_t j = 0; j < s.l; ++j)
+    {
+        packed[j * 4 + 0] = lighting[j].x;
+        packed[j * 4 + 1] = lighting[j].y;
+        packed[j * 4 + 2] = lighting[j].z;
+    }
+    // Earlier reads of the lighting (a previous frame's dispatch) finish before the update; the update
+    // finishes before this frame's dispatch reads it. Earlier reads of the coefficients (vertex shaders)
+    // finish before this dispatch overwrites them.
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+                        VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    vkCmdUpdateBuffer(cmd, s.lighting, 0, sizeof(float) * 4 * s.l, packed);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.pipeline);
+    for (const Impl::Segment& seg : s.segments)
+    {
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 0, nullptr);
+        TransferPush push{seg.vertex_count};
+        vkCmdPushConstants(cmd, s.program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
+        uint32_t invocations = (seg.vertex_count + HEMI_TRANSFER_VERTICES_PER_INVOCATION - 1) /
+                               HEMI_TRANSFER_VERTICES_PER_INVOCATION;
+        vkCmdDispatch(cmd, (invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    }
+}
+
+void TransferPass::run(std::span<const glm::vec3> lighting)
+{
+    gpu::one_shot(*impl_->device, [&](VkCommandBuffer cmd) { record(cmd, lighting); });
+}
+
+const gpu::Buffer& TransferPass::coefficients() const
+{
+    return impl_->coefficients;
+}
+
+std::vector<float> TransferPass::read_coefficients() const
+{
+    std::vector<float> out(size_t(impl_->n) * impl_->k * 4);
+    gpu::read_buffer(*impl_->device, impl_->coefficients, out.data(), out.size() * sizeof(float));
+    return out;
+}
+
+uint32_t TransferPass::vertex_count() const { return impl_->n; }
+uint32_t TransferPass::k() const { return impl_->k; }
+uint32_t TransferPass::l() const { return impl_->l; }
+uint32_t TransferPass::segment_count() const { return uint32_t(impl_->segments.size()); }
+
+} // namespace hemi::render
