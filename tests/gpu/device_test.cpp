@@ -1,0 +1,174 @@
+// Device creation, selection, adoption of a host engine's device, and error reporting.
+#include "../gpu_fixture.h"
+
+#include <hemi/gpu/commands.h>
+#include <hemi/gpu/resources.h>
+#include <hemi/gpu/vk_check.h>
+#include <hemi/render/transfer.h>
+
+#include <cstdlib>
+#include <cstring>
+
+namespace
+{
+
+class DeviceTest : public hemi::test::GpuTest
+{
+};
+
+VKAPI_ATTR VkBool32 VKAPI_CALL host_messenger(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void*)
+{
+    hemi::test::validation_log().add(std::string("(host instance) ") + data->pMessage);
+    return VK_FALSE;
+}
+
+} // namespace
+
+TEST_F(DeviceTest, SelectsLavapipeByName)
+{
+    EXPECT_NE(std::string(hemi::test::device().name()).find("llvmpipe"), std::string::npos)
+        << hemi::test::device().name();
+    EXPECT_TRUE(hemi::test::device().owns_device());
+    EXPECT_GT(hemi::test::device().timestamp_period_ns(), 0.0);
+}
+
+TEST(DeviceSelection, UnknownSelectorNamesTheDevices)
+{
+    hemi::gpu::DeviceDesc desc;
+    desc.device_selector = "no-such-gpu";
+    desc.validation = false;
+    try
+    {
+        hemi::gpu::Device d(desc);
+        FAIL() << "a device was created for a selector that matches nothing";
+    }
+    catch (const std::runtime_error& e)
+    {
+        std::string what = e.what();
+        EXPECT_NE(what.find("no-such-gpu"), std::string::npos) << what;
+        EXPECT_NE(what.find("llvmpipe"), std::string::npos) << what;
+    }
+}
+
+TEST(VulkanError, NamesTheCallTheResultAndThePlace)
+{
+    try
+    {
+        HEMI_VK_CHECK(VK_ERROR_OUT_OF_DEVICE_MEMORY);
+        FAIL();
+    }
+    catch (const hemi::gpu::VulkanError& e)
+    {
+        EXPECT_EQ(e.result(), VK_ERROR_OUT_OF_DEVICE_MEMORY);
+        std::string what = e.what();
+        EXPECT_NE(what.find("VK_ERROR_OUT_OF_DEVICE_MEMORY"), std::string::npos) << what;
+        EXPECT_NE(what.find("device_test.cpp:"), std::string::npos) << what;
+    }
+    EXPECT_EQ(hemi::gpu::result_name(VK_ERROR_DEVICE_LOST), "VK_ERROR_DEVICE_LOST");
+    EXPECT_EQ(hemi::gpu::result_name(VkResult(-12345)), "VK_RESULT(-12345)");
+}
+
+TEST_F(DeviceTest, BuffersRoundTripAndRejectOutOfRangeAccess)
+{
+    auto& dev = hemi::test::device();
+    hemi::gpu::Buffer b = hemi::gpu::create_buffer(dev, {256, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    std::vector<uint32_t> in(64), out(64);
+    for (uint32_t i = 0; i < 64; ++i)
+        in[i] = i * 2654435761u;
+    hemi::gpu::write_buffer(dev, b, in.data(), 256);
+    hemi::gpu::read_buffer(dev, b, out.data(), 256);
+    EXPECT_EQ(in, out);
+    EXPECT_THROW(hemi::gpu::write_buffer(dev, b, in.data(), 200, 100), std::out_of_range);
+    EXPECT_THROW(hemi::gpu::create_buffer(dev, {0, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT}), std::invalid_argument);
+}
+
+// A host engine creates its own instance (with its own validation messenger) and device, hands them to
+// hemi, runs hemi work on them, destroys hemi's Device, and then destroys its objects itself: hemi must
+// neither destroy the host's objects nor leak its own (the host instance's object tracker reports leaks).
+TEST_F(DeviceTest, AdoptsAHostEngineDevice)
+{
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.apiVersion = VK_API_VERSION_1_1;
+    const char* layer = "VK_LAYER_KHRONOS_validation";
+    const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+    VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+    mi.pfnUserCallback = host_messenger;
+    VkInstanceCreateInfo ii{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ii.pNext = &mi;
+    ii.pApplicationInfo = &app;
+    ii.enabledLayerCount = 1;
+    ii.ppEnabledLayerNames = &layer;
+    ii.enabledExtensionCount = 1;
+    ii.ppEnabledExtensionNames = &ext;
+    VkInstance instance;
+    ASSERT_EQ(vkCreateInstance(&ii, nullptr, &instance), VK_SUCCESS);
+
+    uint32_t count = 0;
+    vkEnumeratePhysicalDevices(instance, &count, nullptr);
+    std::vector<VkPhysicalDevice> pds(count);
+    vkEnumeratePhysicalDevices(instance, &count, pds.data());
+    VkPhysicalDevice pd = VK_NULL_HANDLE;
+    for (VkPhysicalDevice p : pds)
+    {
+        VkPhysicalDeviceProperties props;
+        vkGetPhysicalDeviceProperties(p, &props);
+        if (std::strstr(props.deviceName, "llvmpipe"))
+            pd = p;
+    }
+    ASSERT_NE(pd, VK_NULL_HANDLE);
+    float priority = 1.0f;
+    VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    qi.queueFamilyIndex = 0;
+    qi.queueCount = 1;
+    qi.pQueuePriorities = &priority;
+    VkDeviceCreateInfo di{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    di.queueCreateInfoCount = 1;
+    di.pQueueCreateInfos = &qi;
+    VkDevice vk_device;
+    ASSERT_EQ(vkCreateDevice(pd, &di, nullptr, &vk_device), VK_SUCCESS);
+    VkQueue queue;
+    vkGetDeviceQueue(vk_device, 0, 0, &queue);
+
+    {
+        hemi::gpu::Device adopted(hemi::gpu::ExternalDevice{instance, pd, vk_device, queue, 0, {}});
+        EXPECT_FALSE(adopted.owns_device());
+        std::vector<float> t(50 * 4 * 9);
+        for (size_t i = 0; i < t.size(); ++i)
+            t[i] = float(i % 7) - 3.0f;
+        hemi::render::TransferMatrices m(50, 4, 9, t);
+        hemi::render::TransferPass pass(adopted, m);
+        std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+        light[2] = glm::vec3(1.0f);
+        pass.run(light);
+        std::vector<float> c = pass.read_coefficients();
+        EXPECT_EQ(c[(49 * 4 + 3) * 4 + 0], t[(49 * 4 + 3) * 9 + 2]);
+    }
+    // Still alive and usable after hemi let go.
+    EXPECT_EQ(vkDeviceWaitIdle(vk_device), VK_SUCCESS);
+    vkDestroyDevice(vk_device, nullptr);
+    vkDestroyInstance(instance, nullptr);
+}
+
+TEST(DeviceAdoption, RejectsIncompleteHandles)
+{
+    EXPECT_THROW(hemi::gpu::Device(hemi::gpu::ExternalDevice{}), std::invalid_argument);
+}
+
+// The fixture's check is only worth something if the layer is really on and reporting: provoke one error.
+TEST_F(DeviceTest, ValidationLayerReportsMisuse)
+{
+    auto& dev = hemi::test::device();
+    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = 16;
+    info.usage = 0; // VUID-VkBufferCreateInfo-usage-requiredbitmask
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkResult r = vkCreateBuffer(dev.device(), &info, nullptr, &buffer);
+    if (r == VK_SUCCESS)
+        vkDestroyBuffer(dev.device(), buffer, nullptr);
+    std::vector<std::string> messages = hemi::test::validation_log().take();
+    ASSERT_FALSE(messages.empty()) << "the validation layer did not report an invalid VkBufferCreateInfo";
+    EXPECT_NE(messages[0].find("usage"), std::string::npos) << messages[0];
+}

@@ -1,0 +1,54 @@
+#include "gpu_fixture.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace hemi::test
+{
+namespace
+{
+std::unique_ptr<gpu::Device> g_device;
+
+class DeviceEnvironment : public ::testing::Environment
+{
+public:
+    void TearDown() override
+    {
+        g_device.reset();
+        std::vector<std::string> late = validation_log().take();
+        for (const std::string& m : late)
+            std::fprintf(stderr, "validation message at device destruction: %s\n", m.c_str());
+        if (!late.empty())
+            std::_Exit(1); // after gtest's own summary: a leak report fails the run
+    }
+};
+[[maybe_unused]] ::testing::Environment* const g_env = ::testing::AddGlobalTestEnvironment(new DeviceEnvironment);
+} // namespace
+
+ValidationLog& validation_log()
+{
+    static ValidationLog log;
+    return log;
+}
+
+gpu::LogCallback recording_log()
+{
+    return [](gpu::LogLevel level, bool validation, std::string_view message) {
+        if (validation && level >= gpu::LogLevel::Warning)
+            validation_log().add(std::string(message));
+    };
+}
+
+gpu::Device& device()
+{
+    if (!g_device)
+    {
+        gpu::DeviceDesc desc;
+        desc.validation = true;
+        desc.log = recording_log();
+        g_device = std::make_unique<gpu::Device>(desc);
+    }
+    return *g_device;
+}
+
+} // namespace hemi::test

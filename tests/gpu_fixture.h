@@ -1,0 +1,52 @@
+#pragma once
+// Every GPU test runs on one shared hemi::gpu::Device with the Khronos validation layer on. Any validation
+// warning or error fails the test that was running when it arrived; messages that arrive while the device
+// is destroyed (the object tracker's leak reports) fail the run at exit.
+
+#include <hemi/gpu/device.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace hemi::test
+{
+
+struct ValidationLog
+{
+    std::mutex mutex;
+    std::vector<std::string> messages;
+
+    void add(std::string m)
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        messages.push_back(std::move(m));
+    }
+    std::vector<std::string> take()
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        return std::exchange(messages, {});
+    }
+};
+
+ValidationLog& validation_log();
+// A log callback that records validation warnings/errors into validation_log().
+gpu::LogCallback recording_log();
+// The shared device (created on first use with validation on).
+gpu::Device& device();
+
+class GpuTest : public ::testing::Test
+{
+protected:
+    void SetUp() override { validation_log().take(); }
+    void TearDown() override
+    {
+        for (const std::string& m : validation_log().take())
+            ADD_FAILURE() << "validation message: " << m;
+    }
+};
+
+} // namespace hemi::test
