@@ -1,0 +1,50 @@
+#pragma once
+// Linear RGBA float images and their writers: EXR (linear float, the HDR format hemi reads and writes)
+// and PNG (tone-mapped 8-bit sRGB, for people to look at). Both writers are atomic.
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemi::io
+{
+
+// Thrown by readers and writers; the message names the file and the problem.
+class FormatError : public std::runtime_error
+{
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct ImageRgba
+{
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<float> pixels; // width * height * 4, row-major from the top row, linear RGB + alpha
+
+    const float* at(uint32_t x, uint32_t y) const { return pixels.data() + (size_t(y) * width + x) * 4; }
+};
+
+// How linear radiance becomes an 8-bit sRGB PNG: out = srgb_oetf(curve(exposure * linear)), per channel,
+// where curve is a clamp to [0, 1] or Reinhard's x / (1 + x); alpha is written as is (clamped).
+struct ToneMap
+{
+    enum class Curve
+    {
+        Clamp,
+        Reinhard,
+    };
+    float exposure = 1.0f;
+    Curve curve = Curve::Clamp;
+};
+
+// Throws FormatError naming `path` when the image is inconsistent or the file cannot be written.
+void write_exr(const std::filesystem::path& path, const ImageRgba& image);
+void write_png(const std::filesystem::path& path, const ImageRgba& image, const ToneMap& tone_map = {});
+
+// sRGB transfer function (IEC 61966-2-1) for one linear value in [0, 1].
+float srgb_oetf(float linear);
+
+} // namespace hemi::io

@@ -1,0 +1,44 @@
+#include <hemi/io/mesh.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace hemi::io
+{
+
+Mesh make_uv_sphere(float radius, uint32_t segments, uint32_t rings)
+{
+    if (segments < 3 || rings < 2 || !(radius > 0.0f))
+        throw std::invalid_argument("hemi: make_uv_sphere needs segments >= 3, rings >= 2 and radius > 0");
+    Mesh m;
+    for (uint32_t r = 0; r <= rings; ++r)
+    {
+        float v = float(r) / float(rings);
+        float theta = float(M_PI) * v;
+        for (uint32_t s = 0; s <= segments; ++s)
+        {
+            float u = float(s) / float(segments);
+            float phi = 2.0f * float(M_PI) * u;
+            glm::vec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            m.positions.push_back(n * radius);
+            m.normals.push_back(n);
+            // dP/du points along +phi; cross(n, t) = -dP/dv / |dP/dv|, so w = +1 (see the header).
+            m.tangents.push_back(glm::vec4(-std::sin(phi), std::cos(phi), 0.0f, 1.0f));
+            m.uvs.push_back(glm::vec2(u, v));
+        }
+    }
+    const uint32_t stride = segments + 1;
+    for (uint32_t r = 0; r < rings; ++r)
+        for (uint32_t s = 0; s < segments; ++s)
+        {
+            uint32_t a = r * stride + s, b = a + 1, c = a + stride, d = c + 1;
+            // Counter-clockwise from outside: (a, c, b) and (b, c, d).
+            if (r != 0)
+                m.indices.insert(m.indices.end(), {a, c, b});
+            if (r != rings - 1)
+                m.indices.insert(m.indices.end(), {b, c, d});
+        }
+    return m;
+}
+
+} // namespace hemi::io

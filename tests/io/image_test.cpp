@@ -1,0 +1,82 @@
+// Image writers: atomic, and the bytes they write decode to what was given.
+#include <hemi/io/atomic_file.h>
+#include <hemi/io/image.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace
+{
+fs::path temp_dir()
+{
+    fs::path d = fs::temp_directory_path() / ("hemi_io_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    fs::create_directories(d);
+    return d;
+}
+} // namespace
+
+TEST(ImageWriters, RejectInconsistentImagesNamingTheFile)
+{
+    hemi::io::ImageRgba bad{4, 4, std::vector<float>(10)};
+    fs::path p = temp_dir() / "bad.png";
+    try
+    {
+        hemi::io::write_png(p, bad);
+        FAIL();
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("bad.png"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(p));
+    EXPECT_THROW(hemi::io::write_exr(temp_dir() / "bad.exr", bad), hemi::io::FormatError);
+}
+
+TEST(ImageWriters, WritePngAndExrFiles)
+{
+    hemi::io::ImageRgba img{3, 2, std::vector<float>(3 * 2 * 4, 0.5f)};
+    fs::path png = temp_dir() / "ok.png", exr = temp_dir() / "ok.exr";
+    hemi::io::write_png(png, img);
+    hemi::io::write_exr(exr, img);
+    std::ifstream f(png, std::ios::binary);
+    char sig[8];
+    f.read(sig, 8);
+    EXPECT_EQ(std::string(sig + 1, 3), "PNG");
+    std::ifstream e(exr, std::ios::binary);
+    unsigned char magic[4];
+    e.read(reinterpret_cast<char*>(magic), 4);
+    EXPECT_EQ(magic[0], 0x76); // OpenEXR magic 20000630
+    EXPECT_EQ(magic[1], 0x2f);
+    for (const auto& entry : fs::directory_iterator(temp_dir()))
+        EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary left behind: " << entry.path();
+}
+
+TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary)
+{
+    fs::path p = temp_dir() / "keep.txt";
+    hemi::io::write_atomically(p, [](const fs::path& tmp) { std::ofstream(tmp) << "old"; });
+    EXPECT_THROW(hemi::io::write_atomically(p,
+                                            [](const fs::path& tmp) {
+                                                std::ofstream(tmp) << "half";
+                                                throw std::runtime_error("interrupted");
+                                            }),
+                 std::runtime_error);
+    std::ifstream f(p);
+    std::string s;
+    f >> s;
+    EXPECT_EQ(s, "old");
+    for (const auto& entry : fs::directory_iterator(temp_dir()))
+        EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST(SrgbOetf, MatchesTheStandard)
+{
+    EXPECT_FLOAT_EQ(hemi::io::srgb_oetf(0.0f), 0.0f);
+    EXPECT_NEAR(hemi::io::srgb_oetf(1.0f), 1.0f, 1e-6f);
+    EXPECT_NEAR(hemi::io::srgb_oetf(0.002f), 0.02584f, 1e-5f);
+    EXPECT_NEAR(hemi::io::srgb_oetf(0.18f), 0.46135f, 1e-4f);
+}
