@@ -1,0 +1,25 @@
+# Installation and the CMake package: find_package(hemi) + target_link_libraries(app hemi::hemi).
+include(CMakePackageConfigHelpers)
+
+set(HEMI_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/hemi)
+set(hemi_install_targets hemi)
+if(TARGET hemi_baker)
+    list(APPEND hemi_install_targets hemi_baker)
+    install(DIRECTORY ${PROJECT_SOURCE_DIR}/baker/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endif()
+install(TARGETS ${hemi_install_targets} EXPORT hemiTargets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/engine/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+# The shared C++/GLSL headers and the GLSL basis library, for applications' own materials.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(EXPORT hemiTargets NAMESPACE hemi:: DESTINATION ${HEMI_INSTALL_CMAKEDIR})
+
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/hemiConfig.cmake.in
+    ${PROJECT_BINARY_DIR}/hemiConfig.cmake INSTALL_DESTINATION ${HEMI_INSTALL_CMAKEDIR})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/hemiConfigVersion.cmake
+    VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/hemiConfig.cmake ${PROJECT_BINARY_DIR}/hemiConfigVersion.cmake
+    DESTINATION ${HEMI_INSTALL_CMAKEDIR})

@@ -13,6 +13,8 @@ packages=(
     glslang-tools glslang-dev
     # math, scene and image formats
     libglm-dev libeigen3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libopenexr-dev
+    # Debian 12's Imath CMake config names its Python binding library; without it every configure warns
+    python3-imath
     # baking
     libembree-dev libtbb-dev libmeshoptimizer-dev
     # CLI, formatting, hashing, compression
