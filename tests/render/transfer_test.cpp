@@ -105,6 +105,25 @@ TEST_F(TransferPassTest, DeviceAndHostEqualReferenceForEveryShape)
             }
 }
 
+// Sets beyond one texel-buffer view (2^27 texels on lavapipe, 2 GiB) are split into segments, one view
+// pair and one dispatch each. Force small views so that the segment arithmetic (view offsets, per-segment
+// vertex counts, the partial last segment) is exercised at test sizes.
+TEST_F(TransferPassTest, SegmentedSetsEqualReference)
+{
+    Case c{1000, 9, 25};
+    std::vector<float> t = random_values(size_t(c.n) * c.k * c.l, 11);
+    std::vector<float> lv = random_values(size_t(c.l) * 3, 12);
+    std::vector<glm::vec3> light(c.l);
+    for (uint32_t j = 0; j < c.l; ++j)
+        light[j] = {lv[j * 3], lv[j * 3 + 1], lv[j * 3 + 2]};
+    TransferMatrices m(c.n, c.k, c.l, t);
+    // One block is 9*25*8 = 1800 texels; 2 * 1800 = 3600 texels per view -> 2 blocks per segment -> 16 segments.
+    TransferPass pass(hemi::test::device(), m, 3600);
+    EXPECT_EQ(pass.segment_count(), 16u);
+    pass.run(light);
+    expect_matches(pass.read_coefficients(), reference(t, light, c), t, light, c, "segmented device");
+}
+
 TEST_F(TransferPassTest, LightingChangesBetweenRunsAreSeen)
 {
     Case c{70, 9, 25};

@@ -235,7 +235,8 @@ static std::vector<gpu::Binding> transfer_bindings()
     };
 }
 
-TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m) : impl_(std::make_unique<Impl>())
+TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m, uint64_t max_view_texels)
+    : impl_(std::make_unique<Impl>())
 {
     Impl& s = *impl_;
     s.device = &device;
@@ -261,9 +262,11 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m)
     const uint64_t block_texels = uint64_t(s.k) * s.l * HEMI_TRANSFER_INVOCATIONS_PER_BLOCK;
     const uint64_t block_bytes = block_texels * 16;
     const uint64_t out_block_bytes = uint64_t(HEMI_TRANSFER_BLOCK_VERTICES) * s.k * 16;
-    uint64_t blocks_per_segment = limits.maxTexelBufferElements / block_texels;
-    blocks_per_segment =
-        std::min<uint64_t>(blocks_per_segment, limits.maxTexelBufferElements / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
+    uint64_t max_texels = limits.maxTexelBufferElements;
+    if (max_view_texels != 0)
+        max_texels = std::min<uint64_t>(max_texels, max_view_texels);
+    uint64_t blocks_per_segment = max_texels / block_texels;
+    blocks_per_segment = std::min<uint64_t>(blocks_per_segment, max_texels / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
     const uint64_t align = std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment);
     const uint64_t step = std::lcm(align / std::gcd(align, block_bytes), align / std::gcd(align, out_block_bytes));
     blocks_per_segment -= blocks_per_segment % step;

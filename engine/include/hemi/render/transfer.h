@@ -67,7 +67,9 @@ void transfer_multiply_host(const TransferMatrices& matrices, std::span<const gl
 class TransferPass
 {
 public:
-    TransferPass(const gpu::Device& device, const TransferMatrices& matrices);
+    // `max_view_texels` bounds the texels of one texel-buffer view (and so one dispatch's segment);
+    // 0 means the device's maxTexelBufferElements. Smaller values exist to exercise segmenting in tests.
+    TransferPass(const gpu::Device& device, const TransferMatrices& matrices, uint64_t max_view_texels = 0);
     ~TransferPass();
     TransferPass(const TransferPass&) = delete;
     TransferPass& operator=(const TransferPass&) = delete;
