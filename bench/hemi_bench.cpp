@@ -8,12 +8,16 @@
 //                                     gpu: the reported time is the GPU timestamp difference around the
 //                                     dispatches (UseManualTime); the counter wall_ms is submit + wait on the host.
 //                                     cpu: wall clock of transfer_multiply_host.
+//   sh/rotate/order:6/rgb             building an order-6 SH rotation and applying it to RGB lighting.
 //
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device.
 
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/device.h>
+#include <hemi/math/sh.h>
 #include <hemi/render/transfer.h>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
@@ -171,6 +175,24 @@ void transfer_gpu(benchmark::State& state, TransferCase c)
     state.SetLabel(std::string(device.name()));
 }
 
+// Per-frame cost of rotating order-6 RGB lighting (36 coefficients): building the band matrices for a new
+// rotation and applying them, as a renderer does once per object per frame.
+void sh_rotate_order6_rgb(benchmark::State& state)
+{
+    std::vector<glm::vec3> in(36), out(36);
+    for (int i = 0; i < 36; ++i)
+        in[i] = glm::vec3(float(i), 0.5f * float(i), 1.0f);
+    float angle = 0.0f;
+    for (auto _ : state)
+    {
+        angle += 0.01f;
+        glm::mat3 r(glm::rotate(glm::mat4(1.0f), angle, glm::normalize(glm::vec3(0.3f, 0.5f, 0.8f))));
+        hemi::math::ShRotation rotation(6, r);
+        rotation.apply(in, out);
+        benchmark::DoNotOptimize(out.data());
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -191,6 +213,7 @@ int main(int argc, char** argv)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
     }
+    benchmark::RegisterBenchmark("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)->Unit(benchmark::kMicrosecond);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

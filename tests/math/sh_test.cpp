@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 using namespace hemi::math;
 
@@ -66,4 +67,156 @@ TEST(Sh9, IrradianceOfSmoothSkyMatchesBruteForce)
             EXPECT_NEAR(sh[ch], brute[ch], 0.03 * brute[ch] + 0.01)
                 << "normal " << n.x << "," << n.y << "," << n.z << " channel " << ch;
     }
+}
+
+namespace
+{
+glm::vec3 random_direction(std::mt19937& rng)
+{
+    std::normal_distribution<float> g;
+    return glm::normalize(glm::vec3(g(rng), g(rng), g(rng)));
+}
+
+glm::mat3 random_rotation(std::mt19937& rng)
+{
+    // Gram-Schmidt of two random directions; det = +1 by construction.
+    glm::vec3 a = random_direction(rng), b = random_direction(rng);
+    glm::vec3 x = glm::normalize(a), y = glm::normalize(b - x * glm::dot(x, b)), z = glm::cross(x, y);
+    return glm::mat3(x, y, z);
+}
+
+// Closed-form band 3 functions (Sloan, "Stupid SH Tricks", appendix, Condon-Shortley phase), an
+// evaluation independent of sh_eval's recurrences.
+std::array<double, 7> band3(glm::dvec3 d)
+{
+    double x = d.x, y = d.y, z = d.z;
+    return {-0.5900435899266435 * y * (3 * x * x - y * y), 2.890611442640554 * x * y * z,
+            -0.4570457994644658 * y * (5 * z * z - 1),     0.3731763325901154 * z * (5 * z * z - 3),
+            -0.4570457994644658 * x * (5 * z * z - 1),     1.445305721320277 * z * (x * x - y * y),
+            -0.5900435899266435 * x * (x * x - 3 * y * y)};
+}
+} // namespace
+
+TEST(ShEval, RecurrenceMatchesClosedFormsForBandsZeroToThree)
+{
+    std::mt19937 rng(3);
+    for (int i = 0; i < 100; ++i)
+    {
+        glm::vec3 d = random_direction(rng);
+        float y[16];
+        sh_eval(4, d, y);
+        Sh9 y9 = sh9_eval(d);
+        for (int k = 0; k < 9; ++k)
+            EXPECT_NEAR(y[k], y9[k], 1e-6f) << "index " << k;
+        std::array<double, 7> y3 = band3(glm::dvec3(d));
+        for (int m = -3; m <= 3; ++m)
+            EXPECT_NEAR(y[sh_index(3, m)], y3[m + 3], 1e-5) << "y3," << m;
+    }
+}
+
+TEST(ShEval, OrthonormalOverTheSphere)
+{
+    const int order = 8, n = sh_count(order);
+    // Project each basis function: the result must be the unit vector (quadrature exact at these degrees).
+    for (int i = 0; i < n; i += 5)
+    {
+        std::vector<glm::vec3> c = project_sh(
+            order,
+            [&](const glm::vec3& d) {
+                float y[64];
+                sh_eval(order, d, y);
+                return glm::vec3(y[i]);
+            },
+            32);
+        for (int j = 0; j < n; ++j)
+            EXPECT_NEAR(c[j].x, i == j ? 1.0f : 0.0f, 2e-5f) << "<y" << i << ", y" << j << ">";
+    }
+}
+
+TEST(ShConvolution, FactorsMatchTheDesignTable)
+{
+    EXPECT_DOUBLE_EQ(clamped_cosine_factor(0), M_PI);
+    EXPECT_DOUBLE_EQ(clamped_cosine_factor(1), 2 * M_PI / 3);
+    EXPECT_NEAR(clamped_cosine_factor(2), M_PI / 4, 1e-15);
+    EXPECT_EQ(clamped_cosine_factor(3), 0.0);
+    EXPECT_NEAR(clamped_cosine_factor(4), -M_PI / 24, 1e-15);
+    EXPECT_NEAR(clamped_cosine_factor(6), M_PI / 64, 1e-15); // Ramamoorthi & Hanrahan: A_6 = pi/64
+}
+
+// A single directional light of unit irradiance, L = delta(w - s): L_lm = y_lm(s). Its SH9 irradiance is
+// the known clamped-cosine approximation E(n) = 1/4 + (1/2) cos + (5/16)(3 cos^2 - 1)/2 ... evaluated via
+// the addition theorem: sum_m y_lm(s) y_lm(n) = (2l+1)/(4 pi) P_l(cos).
+TEST(ShConvolution, DirectionalLightGivesTheKnownClampedCosineApproximation)
+{
+    std::mt19937 rng(5);
+    for (int i = 0; i < 50; ++i)
+    {
+        glm::vec3 s = random_direction(rng), n = random_direction(rng);
+        Sh9 ys = sh9_eval(s);
+        Sh9Rgb L;
+        for (int k = 0; k < 9; ++k)
+            L[k] = glm::vec3(ys[k]);
+        float E = sh9_eval_rgb(convolve_cosine(L), n).x;
+        double c = glm::dot(s, n);
+        double expect = 0.25 + 0.5 * c + 0.3125 * 0.5 * (3 * c * c - 1);
+        EXPECT_NEAR(E, expect, 1e-5) << "cos " << c;
+    }
+    // Peak of the approximation (n = s): 1/4 + 1/2 + 5/16 = 1.0625.
+    EXPECT_NEAR(0.25 + 0.5 + 0.3125, 1.0625, 1e-12);
+}
+
+TEST(ShRotation, RotatedCoefficientsEvaluateAtTheInverselyRotatedDirection)
+{
+    std::mt19937 rng(9);
+    const int order = 8, n = sh_count(order);
+    for (int trial = 0; trial < 20; ++trial)
+    {
+        glm::mat3 R = random_rotation(rng);
+        std::vector<float> c(n), rc(n);
+        for (float& v : c)
+            v = std::uniform_real_distribution<float>(-1, 1)(rng);
+        ShRotation rot(order, R);
+        rot.apply(c, rc);
+        for (int k = 0; k < 10; ++k)
+        {
+            glm::vec3 d = random_direction(rng);
+            float y[64], yr[64];
+            sh_eval(order, d, y);
+            sh_eval(order, glm::transpose(R) * d, yr);
+            // Band by band, so an error in one band's block is reported as that band.
+            for (int l = 0; l < order; ++l)
+            {
+                double a = 0, b = 0;
+                for (int m = -l; m <= l; ++m)
+                {
+                    a += rc[sh_index(l, m)] * y[sh_index(l, m)];
+                    b += c[sh_index(l, m)] * yr[sh_index(l, m)];
+                }
+                ASSERT_NEAR(a, b, 1e-5) << "band " << l << " trial " << trial;
+            }
+        }
+    }
+}
+
+TEST(ShRotation, RejectsBadInput)
+{
+    EXPECT_THROW(ShRotation(0, glm::mat3(1.0f)), std::invalid_argument);
+    glm::mat3 bad(1.0f);
+    bad[1][2] = std::nanf("");
+    EXPECT_THROW(ShRotation(3, bad), std::invalid_argument);
+    ShRotation r(3, glm::mat3(1.0f));
+    std::vector<float> in(9), out(16);
+    EXPECT_THROW(r.apply(in, out), std::invalid_argument);
+}
+
+TEST(ShWindow, WeightsStartAtOneAndDecrease)
+{
+    for (ShWindow w : {ShWindow::Hanning, ShWindow::Lanczos, ShWindow::Laplacian})
+    {
+        EXPECT_DOUBLE_EQ(sh_window_weight(w, 0, 6, 0.01), 1.0);
+        for (int l = 1; l < 6; ++l)
+            EXPECT_LT(sh_window_weight(w, l, 6, 0.01), sh_window_weight(w, l - 1, 6, 0.01));
+    }
+    EXPECT_NEAR(sh_window_weight(ShWindow::Hanning, 3, 6), 0.5, 1e-12);
+    EXPECT_NEAR(sh_window_weight(ShWindow::Laplacian, 1, 6, 0.25), 0.5, 1e-12);
 }

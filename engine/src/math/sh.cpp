@@ -4,26 +4,14 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace hemi::math
 {
-
-Sh9 sh9_eval(const glm::vec3& d)
-{
-    const float x = d.x, y = d.y, z = d.z;
-    return {float(HEMI_SH_Y00),
-            -float(HEMI_SH_Y1) * y,
-            float(HEMI_SH_Y1) * z,
-            -float(HEMI_SH_Y1) * x,
-            float(HEMI_SH_Y2) * x * y,
-            -float(HEMI_SH_Y2) * y * z,
-            float(HEMI_SH_Y20) * (3.0f * z * z - 1.0f),
-            -float(HEMI_SH_Y2) * x * z,
-            float(HEMI_SH_Y22) * (x * x - y * y)};
-}
 
 namespace
 {
@@ -57,17 +45,100 @@ void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w)
 }
 } // namespace
 
-Sh9Rgb project_sh9(const std::function<glm::vec3(const glm::vec3&)>& radiance, int theta_steps)
+namespace
 {
+void check_order(int order)
+{
+    if (order < 1 || order > kMaxShOrder)
+        throw std::invalid_argument("hemi: SH order " + std::to_string(order) + " is not in [1, " +
+                                    std::to_string(kMaxShOrder) + "]");
+}
+
+// K_lm * sqrt(2) (m != 0) or K_l0: the normalisation of the real SH, sqrt((2l+1)/(4pi) (l-|m|)!/(l+|m|)!).
+struct ShNormalisation
+{
+    double k[kMaxShOrder][kMaxShOrder];
+    ShNormalisation()
+    {
+        for (int l = 0; l < kMaxShOrder; ++l)
+            for (int m = 0; m <= l; ++m)
+            {
+                double ratio = 1.0; // (l-m)!/(l+m)!
+                for (int i = l - m + 1; i <= l + m; ++i)
+                    ratio /= i;
+                k[l][m] = std::sqrt((2.0 * l + 1.0) / (4.0 * M_PI) * ratio) * (m ? std::sqrt(2.0) : 1.0);
+            }
+    }
+};
+const ShNormalisation kNorm;
+} // namespace
+
+void sh_eval(int order, const glm::vec3& d, std::span<float> out)
+{
+    check_order(order);
+    if (out.size() < size_t(sh_count(order)))
+        throw std::invalid_argument("hemi: sh_eval output too short");
+    const double x = d.x, y = d.y, z = d.z;
+    // P~_l^m(z) = P_l^m(z) / sin^m(theta) (Condon-Shortley phase included), and
+    // (x + i y)^m = sin^m(theta) (cos m phi + i sin m phi), so y_lm = K P~_l^m * Re/Im (x + iy)^m.
+    double cm = 1.0, sm = 0.0;       // Re, Im of (x + iy)^m
+    double pmm = 1.0;                // P~_m^m = (-1)^m (2m-1)!!
+    for (int m = 0; m < order; ++m)
+    {
+        double p_prev = 0.0, p = pmm; // P~_{l-1}^m, P~_l^m starting at l = m
+        for (int l = m; l < order; ++l)
+        {
+            if (l > m)
+            {
+                double next = (l == m + 1) ? z * (2.0 * m + 1.0) * pmm
+                                           : ((2.0 * l - 1.0) * z * p - (l + m - 1.0) * p_prev) / double(l - m);
+                p_prev = p;
+                p = next;
+            }
+            double base = kNorm.k[l][m] * p;
+            if (m == 0)
+                out[sh_index(l, 0)] = float(base);
+            else
+            {
+                out[sh_index(l, m)] = float(base * cm);
+                out[sh_index(l, -m)] = float(base * sm);
+            }
+        }
+        double c = cm * x - sm * y, s = cm * y + sm * x;
+        cm = c;
+        sm = s;
+        pmm *= -(2.0 * m + 1.0);
+    }
+}
+
+Sh9 sh9_eval(const glm::vec3& d)
+{
+    const float x = d.x, y = d.y, z = d.z;
+    return {float(HEMI_SH_Y00),
+            -float(HEMI_SH_Y1) * y,
+            float(HEMI_SH_Y1) * z,
+            -float(HEMI_SH_Y1) * x,
+            float(HEMI_SH_Y2) * x * y,
+            -float(HEMI_SH_Y2) * y * z,
+            float(HEMI_SH_Y20) * (3.0f * z * z - 1.0f),
+            -float(HEMI_SH_Y2) * x * z,
+            float(HEMI_SH_Y22) * (x * x - y * y)};
+}
+
+std::vector<glm::vec3> project_sh(int order, const std::function<glm::vec3(const glm::vec3&)>& radiance,
+                                  int theta_steps)
+{
+    check_order(order);
     if (theta_steps < 4)
-        throw std::invalid_argument("hemi: project_sh9 needs at least 4 theta steps");
+        throw std::invalid_argument("hemi: project_sh needs at least 4 theta steps");
     // Gauss-Legendre in z = cos(theta) (exact for polynomials in z of degree < 2 * theta_steps) times a
     // uniform rule in phi (exact for trigonometric polynomials of degree < 2 * theta_steps).
-    const int phi_steps = 2 * theta_steps;
+    const int n = sh_count(order), phi_steps = 2 * theta_steps;
     const double dphi = 2.0 * M_PI / phi_steps;
     std::vector<double> zs, ws;
     gauss_legendre(theta_steps, zs, ws);
-    std::array<glm::dvec3, 9> acc{};
+    std::vector<glm::dvec3> acc(n, glm::dvec3(0.0));
+    std::vector<float> y(n);
     for (int t = 0; t < theta_steps; ++t)
     {
         double z = zs[t], r = std::sqrt(std::max(0.0, 1.0 - z * z));
@@ -78,25 +149,100 @@ Sh9Rgb project_sh9(const std::function<glm::vec3(const glm::vec3&)>& radiance, i
             glm::vec3 d(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z));
             glm::vec3 l = radiance(d);
             if (!std::isfinite(l.x) || !std::isfinite(l.y) || !std::isfinite(l.z))
-                throw std::invalid_argument("hemi: project_sh9: radiance is not finite");
-            Sh9 y = sh9_eval(d);
-            for (int i = 0; i < 9; ++i)
+                throw std::invalid_argument("hemi: project_sh: radiance is not finite");
+            sh_eval(order, d, y);
+            for (int i = 0; i < n; ++i)
                 acc[i] += glm::dvec3(l) * (double(y[i]) * w);
         }
     }
-    Sh9Rgb out;
-    for (int i = 0; i < 9; ++i)
+    std::vector<glm::vec3> out(n);
+    for (int i = 0; i < n; ++i)
         out[i] = glm::vec3(acc[i]);
     return out;
 }
 
+Sh9Rgb project_sh9(const std::function<glm::vec3(const glm::vec3&)>& radiance, int theta_steps)
+{
+    std::vector<glm::vec3> c = project_sh(3, radiance, theta_steps);
+    Sh9Rgb out;
+    std::copy(c.begin(), c.end(), out.begin());
+    return out;
+}
+
+double clamped_cosine_factor(int l)
+{
+    if (l < 0)
+        throw std::invalid_argument("hemi: negative SH band");
+    if (l == 0)
+        return M_PI;
+    if (l == 1)
+        return 2.0 * M_PI / 3.0;
+    if (l % 2)
+        return 0.0;
+    // Ramamoorthi & Hanrahan 2001, Eq. (8): A_l = 2 pi (-1)^(l/2-1) / ((l+2)(l-1)) * l! / (2^l ((l/2)!)^2).
+    double ratio = 1.0; // l! / (2^l ((l/2)!)^2), built as a product to stay exact for large l
+    for (int i = 1; i <= l / 2; ++i)
+        ratio *= double(l / 2 + i) / (4.0 * i);
+    double sign = ((l / 2 - 1) % 2) ? -1.0 : 1.0;
+    return 2.0 * M_PI * sign / double((l + 2) * (l - 1)) * ratio;
+}
+
+static int order_of(size_t count)
+{
+    int order = int(std::lround(std::sqrt(double(count))));
+    if (order < 1 || size_t(order * order) != count || order > kMaxShOrder)
+        throw std::invalid_argument("hemi: " + std::to_string(count) + " is not an SH coefficient count");
+    return order;
+}
+
+void convolve_cosine(std::span<glm::vec3> c)
+{
+    int order = order_of(c.size());
+    for (int l = 0; l < order; ++l)
+        for (int m = -l; m <= l; ++m)
+            c[sh_index(l, m)] *= float(clamped_cosine_factor(l));
+}
+
 Sh9Rgb convolve_cosine(const Sh9Rgb& radiance)
 {
-    const float a[3] = {float(HEMI_SH_A0), float(HEMI_SH_A1), float(HEMI_SH_A2)};
-    Sh9Rgb out;
-    for (int i = 0; i < 9; ++i)
-        out[i] = radiance[i] * a[i == 0 ? 0 : (i < 4 ? 1 : 2)];
+    Sh9Rgb out = radiance;
+    convolve_cosine(std::span<glm::vec3>(out));
     return out;
+}
+
+double sh_window_weight(ShWindow window, int l, int order, double strength)
+{
+    switch (window)
+    {
+    case ShWindow::None:
+        return 1.0;
+    case ShWindow::Hanning:
+        return 0.5 * (1.0 + std::cos(M_PI * l / order));
+    case ShWindow::Lanczos:
+        return l == 0 ? 1.0 : std::sin(M_PI * l / order) / (M_PI * l / order);
+    case ShWindow::Laplacian:
+        return 1.0 / (1.0 + strength * double(l) * l * (l + 1.0) * (l + 1.0));
+    }
+    return 1.0;
+}
+
+void apply_window(std::span<glm::vec3> c, ShWindow window, double strength)
+{
+    int order = order_of(c.size());
+    for (int l = 0; l < order; ++l)
+        for (int m = -l; m <= l; ++m)
+            c[sh_index(l, m)] *= float(sh_window_weight(window, l, order, strength));
+}
+
+glm::vec3 sh_eval_rgb(std::span<const glm::vec3> c, const glm::vec3& d)
+{
+    int order = order_of(c.size());
+    float y[kMaxShOrder * kMaxShOrder];
+    sh_eval(order, d, std::span<float>(y, size_t(sh_count(order))));
+    glm::vec3 sum(0.0f);
+    for (size_t i = 0; i < c.size(); ++i)
+        sum += c[i] * y[i];
+    return sum;
 }
 
 glm::vec3 sh9_eval_rgb(const Sh9Rgb& c, const glm::vec3& d)

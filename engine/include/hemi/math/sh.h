@@ -1,36 +1,86 @@
 #pragma once
-// Real spherical harmonics, bands 0-2 (SH9), in hemi's convention (DESIGN.md Sec. 3): Condon-Shortley
-// phase, index i = l(l+1)+m, y1,-1 = -0.488603 y, y1,0 = 0.488603 z, y1,1 = -0.488603 x, ...
-// The math core of later issues extends this to any order; this is what the foundation needs:
-// evaluation, numerical projection of a radiance function, and the clamped-cosine convolution.
+// Real spherical harmonics in hemi's convention (DESIGN.md Sec. 3): Condon-Shortley phase, index
+// i = l(l+1)+m, so y1,-1 = -0.488603 y, y1,0 = 0.488603 z, y1,1 = -0.488603 x, y2,-2 = 1.092548 xy, ...
+// "Order n" means bands 0..n-1, i.e. n^2 coefficients (order 3 = SH9, order 5 = 25, order 6 = 36).
 //
 // Based on: R. Ramamoorthi, P. Hanrahan, "An Efficient Representation for Irradiance Environment Maps",
-// SIGGRAPH 2001 (irradiance = A_l L_lm); P.-P. Sloan, "Stupid Spherical Harmonics (SH) Tricks", GDC 2008.
+// SIGGRAPH 2001 (irradiance = A_l L_lm); P.-P. Sloan, "Stupid Spherical Harmonics (SH) Tricks", GDC 2008
+// (windowing); J. Ivanic, K. Ruedenberg, "Rotation Matrices for Real Spherical Harmonics. Direct
+// Determination by Recursion", J. Phys. Chem. 1996, with the 1998 additions and corrections.
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
 #include <functional>
+#include <span>
+#include <vector>
 
 namespace hemi::math
 {
 
+constexpr int kMaxShOrder = 10; // bands 0..9, 100 coefficients
+constexpr int sh_count(int order) { return order * order; }
+constexpr int sh_index(int l, int m) { return l * (l + 1) + m; }
+
 using Sh9 = std::array<float, 9>;
 using Sh9Rgb = std::array<glm::vec3, 9>;
 
-// The 9 basis functions at unit direction `d` (any frame; the caller's).
+// The order^2 basis functions at unit direction `d` into out[0 .. order^2). Throws std::invalid_argument
+// for order outside [1, kMaxShOrder] or a short `out`.
+void sh_eval(int order, const glm::vec3& d, std::span<float> out);
+// The 9 functions of bands 0-2 in closed form (the same values as sh_eval(3, ...)).
 Sh9 sh9_eval(const glm::vec3& d);
 
-// Projects a radiance function over the sphere onto SH9 by quadrature: `theta_steps` Gauss-Legendre nodes in
-// cos(theta) times 2*`theta_steps` uniform steps in phi (exact for band-limited radiance up to band
-// 2*theta_steps - 3). Throws std::invalid_argument when the function returns a non-finite value.
+// Projects a radiance function over the sphere onto SH of `order` by quadrature: `theta_steps`
+// Gauss-Legendre nodes in cos(theta) times 2*`theta_steps` uniform steps in phi (exact for band-limited
+// radiance up to band 2*theta_steps - order). Throws std::invalid_argument when the function returns a
+// non-finite value.
+std::vector<glm::vec3> project_sh(int order, const std::function<glm::vec3(const glm::vec3&)>& radiance,
+                                  int theta_steps = 128);
 Sh9Rgb project_sh9(const std::function<glm::vec3(const glm::vec3&)>& radiance, int theta_steps = 128);
 
-// Clamped-cosine convolution: radiance coefficients L_lm -> irradiance coefficients A_l L_lm.
+// Funk-Hecke factor of the clamped cosine max(0, cos) for band l: A_0 = pi, A_1 = 2pi/3, A_2 = pi/4,
+// A_3 = 0, A_4 = -pi/24, odd l > 1: 0.
+double clamped_cosine_factor(int l);
+// Radiance coefficients L_lm -> irradiance coefficients A_l L_lm (any order; sh9 overload for SH9).
+void convolve_cosine(std::span<glm::vec3> coefficients);
 Sh9Rgb convolve_cosine(const Sh9Rgb& radiance);
 
+// Windows against ringing, applied per band as c_lm *= w_l.
+enum class ShWindow
+{
+    None,
+    Hanning,   // w_l = (1 + cos(pi l / (order))) / 2
+    Lanczos,   // w_l = sinc(pi l / order)
+    Laplacian, // w_l = 1 / (1 + lambda l^2 (l+1)^2): Sloan 2008, minimises the Laplacian (lambda = strength)
+};
+double sh_window_weight(ShWindow window, int l, int order, double strength = 0.0);
+void apply_window(std::span<glm::vec3> coefficients, ShWindow window, double strength = 0.0);
+
 // sum_i c_i y_i(d): with irradiance coefficients, E(d) at unit normal d.
+glm::vec3 sh_eval_rgb(std::span<const glm::vec3> coefficients, const glm::vec3& d);
 glm::vec3 sh9_eval_rgb(const Sh9Rgb& coefficients, const glm::vec3& d);
+
+// Rotation of SH coefficient vectors by a 3x3 rotation, band by band (Ivanic-Ruedenberg recursion).
+// If f has coefficients c, the rotated function g(d) = f(R^T d) has coefficients D c: rotating then
+// evaluating at d equals evaluating the original at R^-1 d.
+class ShRotation
+{
+public:
+    ShRotation(int order, const glm::mat3& rotation);
+    int order() const { return order_; }
+    // out = D in; in and out have order^2 entries and may not alias.
+    void apply(std::span<const glm::vec3> in, std::span<glm::vec3> out) const;
+    void apply(std::span<const float> in, std::span<float> out) const;
+    // Element (m, n) of band l's (2l+1)^2 block, m, n in [-l, l].
+    float element(int l, int m, int n) const;
+
+private:
+    int order_;
+    std::vector<float> blocks_; // band l's block at offset sum_{k<l} (2k+1)^2, row-major
+    std::vector<int> offsets_;
+};
 
 // An analytic sky with z up, in linear RGB radiance: a zenith-to-horizon gradient over a darker ground
 // and a soft sun lobe. Smooth, so SH9 represents its irradiance well. `sun` is a unit direction.
