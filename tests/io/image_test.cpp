@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -79,4 +80,63 @@ TEST(SrgbOetf, MatchesTheStandard)
     EXPECT_NEAR(hemi::io::srgb_oetf(1.0f), 1.0f, 1e-6f);
     EXPECT_NEAR(hemi::io::srgb_oetf(0.002f), 0.02584f, 1e-5f);
     EXPECT_NEAR(hemi::io::srgb_oetf(0.18f), 0.46135f, 1e-4f);
+}
+
+namespace
+{
+std::vector<char> read_all(const fs::path& p)
+{
+    std::ifstream f(p, std::ios::binary);
+    return std::vector<char>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+void write_all(const fs::path& p, const std::vector<char>& bytes, size_t n)
+{
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    f.write(bytes.data(), std::streamsize(n));
+}
+void expect_format_error_naming(const fs::path& p, const std::string& what_part)
+{
+    try
+    {
+        hemi::io::read_exr(p);
+        ADD_FAILURE() << "read_exr accepted " << p;
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        std::string what = e.what();
+        EXPECT_NE(what.find(p.filename().string()), std::string::npos) << what;
+        EXPECT_NE(what.find(what_part), std::string::npos) << what;
+    }
+}
+} // namespace
+
+TEST(ExrReader, RejectsMissingFile)
+{
+    expect_format_error_naming(temp_dir() / "does_not_exist.exr", "no such file");
+}
+
+TEST(ExrReader, RejectsEveryTruncatedLength)
+{
+    hemi::io::ImageRgba img{5, 3, std::vector<float>(5 * 3 * 4, 0.25f)};
+    fs::path good = temp_dir() / "good.exr", cut = temp_dir() / "cut.exr";
+    hemi::io::write_exr(good, img);
+    std::vector<char> bytes = read_all(good);
+    ASSERT_GT(bytes.size(), 100u);
+    for (size_t n = 0; n < bytes.size(); ++n)
+    {
+        write_all(cut, bytes, n);
+        EXPECT_THROW(hemi::io::read_exr(cut), hemi::io::FormatError) << "truncated to " << n << " bytes";
+    }
+}
+
+TEST(ExrReader, RejectsGarbageAndNaN)
+{
+    fs::path p = temp_dir() / "garbage.exr";
+    write_all(p, std::vector<char>(300, 'x'), 300);
+    expect_format_error_naming(p, "not a readable EXR");
+    hemi::io::ImageRgba img{4, 2, std::vector<float>(4 * 2 * 4, 1.0f)};
+    img.pixels[(1 * 4 + 2) * 4 + 1] = std::nanf("");
+    fs::path nan = temp_dir() / "nan.exr";
+    hemi::io::write_exr(nan, img);
+    expect_format_error_naming(nan, "pixel (2, 1) is not finite");
 }

@@ -4,6 +4,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
@@ -40,6 +41,61 @@ float srgb_oetf(float x)
 {
     x = std::clamp(x, 0.0f, 1.0f);
     return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+ImageRgba read_exr(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw FormatError(path.string() + ": no such file");
+    ImageRgba image;
+    try
+    {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        const long w = long(dw.max.x) - dw.min.x + 1, h = long(dw.max.y) - dw.min.y + 1;
+        if (w <= 0 || h <= 0 || w > 65536 || h > 65536)
+            throw FormatError(path.string() + ": EXR data window of " + std::to_string(w) + "x" + std::to_string(h) +
+                              " is empty or too large");
+        image.width = uint32_t(w);
+        image.height = uint32_t(h);
+        image.pixels.assign(size_t(w) * h * 4, 0.0f);
+        const Imf::ChannelList& channels = file.header().channels();
+        const bool grey = !channels.findChannel("R") && channels.findChannel("Y");
+        const size_t xs = 4 * sizeof(float), ys = xs * size_t(w);
+        // Slices are addressed from the data window's origin (OpenEXR's convention for base pointers).
+        char* base = reinterpret_cast<char*>(image.pixels.data()) - (long(dw.min.x) * long(xs) + long(dw.min.y) * long(ys));
+        Imf::FrameBuffer fb;
+        const char* names[4] = {"R", "G", "B", "A"};
+        for (int c = 0; c < 4; ++c)
+        {
+            if (grey && (c == 1 || c == 2))
+                continue;
+            const char* name = grey && c == 0 ? "Y" : names[c];
+            fb.insert(name, Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, c == 3 ? 1.0 : 0.0));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        if (grey) // a FrameBuffer holds one slice per name: copy Y into G and B
+            for (size_t i = 0; i < image.pixels.size(); i += 4)
+                image.pixels[i + 1] = image.pixels[i + 2] = image.pixels[i];
+    }
+    catch (const FormatError&)
+    {
+        throw;
+    }
+    catch (const std::exception& e)
+    {
+        throw FormatError(path.string() + ": not a readable EXR file: " + e.what());
+    }
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (!std::isfinite(image.pixels[i]))
+        {
+            size_t p = i / 4;
+            throw FormatError(path.string() + ": pixel (" + std::to_string(p % image.width) + ", " +
+                              std::to_string(p / image.width) + ") is not finite");
+        }
+    return image;
 }
 
 void write_exr(const std::filesystem::path& path, const ImageRgba& image)

@@ -40,6 +40,11 @@ struct ToneMap
     Curve curve = Curve::Clamp;
 };
 
+// Reads an OpenEXR file (scanline or tiled, half or float) into linear RGBA: missing R/G/B read as 0 and a
+// missing A as 1; a single-channel Y image is read as grey. Throws FormatError naming `path` when the file
+// is missing, not EXR, truncated or corrupt, or holds a non-finite pixel (with its position).
+ImageRgba read_exr(const std::filesystem::path& path);
+
 // Throws FormatError naming `path` when the image is inconsistent or the file cannot be written.
 void write_exr(const std::filesystem::path& path, const ImageRgba& image);
 void write_png(const std::filesystem::path& path, const ImageRgba& image, const ToneMap& tone_map = {});
