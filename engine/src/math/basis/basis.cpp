@@ -1,0 +1,173 @@
+// The single table of hemispherical bases and the quadrature that derives their projections from SH9.
+#include <hemi/math/basis.h>
+#include <hemi/math/sh.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemi::math
+{
+namespace basis_detail
+{
+extern const BasisDesc kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6;
+}
+
+std::span<const BasisDesc> bases()
+{
+    using namespace basis_detail;
+    static const BasisDesc table[] = {kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6};
+    static_assert(sizeof(table) / sizeof(table[0]) == HEMI_BASIS_COUNT);
+    return table;
+}
+
+const BasisDesc& basis(std::string_view name)
+{
+    std::string known;
+    for (const BasisDesc& b : bases())
+    {
+        if (b.name == name)
+            return b;
+        known += (known.empty() ? "" : ", ") + std::string(b.name);
+    }
+    throw std::invalid_argument("hemi: unknown basis '" + std::string(name) + "' (known: " + known + ")");
+}
+
+namespace
+{
+struct Rule
+{
+    std::vector<double> t, w;
+};
+// Gauss-Legendre nodes on [0, 1].
+Rule gauss_legendre_01(int n)
+{
+    Rule r;
+    r.t.resize(n);
+    r.w.resize(n);
+    for (int i = 0; i < (n + 1) / 2; ++i)
+    {
+        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), pp = 1.0;
+        for (int iter = 0; iter < 100; ++iter)
+        {
+            double p1 = 1.0, p2 = 0.0;
+            for (int j = 1; j <= n; ++j)
+            {
+                double p3 = p2;
+                p2 = p1;
+                p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
+            }
+            pp = n * (z * p1 - p2) / (z * z - 1.0);
+            double z1 = z;
+            z = z1 - p1 / pp;
+            if (std::abs(z - z1) < 1e-15)
+                break;
+        }
+        double w = 2.0 / ((1.0 - z * z) * pp * pp);
+        r.t[i] = 0.5 * (1.0 - z);
+        r.t[n - 1 - i] = 0.5 * (1.0 + z);
+        r.w[i] = r.w[n - 1 - i] = 0.5 * w;
+    }
+    return r;
+}
+} // namespace
+
+double integrate_hemisphere(const std::function<double(const glm::dvec3&)>& f, int steps)
+{
+    // z = t^2, dz = 2t dt: the sqrt(z) factors of the shifted bases become polynomial in t.
+    Rule rule = gauss_legendre_01(steps);
+    const int phi_steps = 2 * steps;
+    const double dphi = 2.0 * M_PI / phi_steps;
+    double sum = 0.0;
+    for (int i = 0; i < steps; ++i)
+    {
+        double t = rule.t[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        double w = rule.w[i] * 2.0 * t * dphi;
+        for (int p = 0; p < phi_steps; ++p)
+        {
+            double phi = (p + 0.5) * dphi;
+            sum += w * f(glm::dvec3(s * std::cos(phi), s * std::sin(phi), z));
+        }
+    }
+    return sum;
+}
+
+namespace
+{
+// One pass over the quadrature nodes, accumulating G and B together.
+void gram_and_cross(const BasisDesc& b, Eigen::MatrixXd& g, Eigen::MatrixXd& c)
+{
+    const int k = b.size;
+    g = Eigen::MatrixXd::Zero(k, k);
+    c = Eigen::MatrixXd::Zero(k, 9);
+    Rule rule = gauss_legendre_01(96);
+    const int steps = int(rule.t.size()), phi_steps = 2 * steps;
+    const double dphi = 2.0 * M_PI / phi_steps;
+    float v[HEMI_BASIS_MAX_SIZE];
+    for (int i = 0; i < steps; ++i)
+    {
+        double t = rule.t[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        double w = rule.w[i] * 2.0 * t * dphi;
+        for (int p = 0; p < phi_steps; ++p)
+        {
+            double phi = (p + 0.5) * dphi;
+            glm::vec3 n(float(s * std::cos(phi)), float(s * std::sin(phi)), float(z));
+            b.eval(n, v);
+            Sh9 y = sh9_eval(n);
+            for (int a = 0; a < k; ++a)
+            {
+                for (int e = 0; e < k; ++e)
+                    g(a, e) += w * double(v[a]) * v[e];
+                for (int j = 0; j < 9; ++j)
+                    c(a, j) += w * double(v[a]) * y[j];
+            }
+        }
+    }
+}
+} // namespace
+
+std::vector<double> gram_matrix(const BasisDesc& b)
+{
+    Eigen::MatrixXd g, c;
+    gram_and_cross(b, g, c);
+    std::vector<double> out(size_t(b.size) * b.size);
+    for (int i = 0; i < b.size; ++i)
+        for (int k = 0; k < b.size; ++k)
+            out[size_t(i) * b.size + k] = g(i, k);
+    return out;
+}
+
+std::vector<double> projection_from_sh9(const BasisDesc& b)
+{
+    Eigen::MatrixXd g, c;
+    gram_and_cross(b, g, c);
+    Eigen::MatrixXd p = g.ldlt().solve(c);
+    std::vector<double> out(size_t(b.size) * 9);
+    for (int i = 0; i < b.size; ++i)
+        for (int j = 0; j < 9; ++j)
+            out[size_t(i) * 9 + j] = p(i, j);
+    return out;
+}
+
+double projection_error_of_sh9_function(const BasisDesc& b, int j)
+{
+    if (j < 0 || j >= 9)
+        throw std::invalid_argument("hemi: SH9 index " + std::to_string(j) + " out of range");
+    std::vector<double> p = projection_from_sh9(b);
+    return integrate_hemisphere(
+        [&](const glm::dvec3& n) {
+            float v[HEMI_BASIS_MAX_SIZE];
+            b.eval(glm::vec3(n), v);
+            double fit = 0.0;
+            for (int i = 0; i < b.size; ++i)
+                fit += p[size_t(i) * 9 + j] * v[i];
+            double d = double(sh9_eval(glm::vec3(n))[j]) - fit;
+            return d * d;
+        },
+        96);
+}
+
+} // namespace hemi::math

@@ -1,0 +1,14 @@
+// GLSL twin of engine/src/math/basis/sal.cpp: the first four shifted associated Legendre functions.
+#ifndef HEMI_BASIS_SAL_GLSL
+#define HEMI_BASIS_SAL_GLSL
+void hemi_eval_sal4(vec3 n, out float b[4])
+{
+    const float k0 = 0.398942280401433, k1 = 0.690988298942671, k2 = 1.381976597885342;
+    float z = max(n.z, 0.0);
+    float s = sqrt(z / (1.0 + z));
+    b[0] = k0;
+    b[1] = -k2 * s * n.y;
+    b[2] = k1 * (2.0 * n.z - 1.0);
+    b[3] = -k2 * s * n.x;
+}
+#endif
