@@ -9,6 +9,7 @@ layout(local_size_x = 64) in;
 
 layout(set = 0, binding = 0, std430) readonly buffer Normals { vec4 normals[]; };
 layout(set = 0, binding = 1, std430) writeonly buffer Values { float values[]; };
+layout(set = 0, binding = 2, std140) uniform Separable { vec4 sep4_weights[9]; };
 layout(push_constant) uniform Push { uint count; } pc;
 
 void main()
@@ -17,7 +18,7 @@ void main()
     if (i >= pc.count)
         return;
     float b[HEMI_BASIS_MAX_SIZE];
-    hemi_eval_basis(kBasis, normals[i].xyz, b);
+    hemi_eval_basis(kBasis, normals[i].xyz, sep4_weights, b);
     for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
         values[i * HEMI_BASIS_MAX_SIZE + k] = b[k];
 }

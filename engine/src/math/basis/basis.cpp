@@ -13,13 +13,13 @@ namespace hemi::math
 {
 namespace basis_detail
 {
-extern const BasisDesc kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6;
+extern const BasisDesc kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6, kSep4;
 }
 
 std::span<const BasisDesc> bases()
 {
     using namespace basis_detail;
-    static const BasisDesc table[] = {kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6};
+    static const BasisDesc table[] = {kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6, kSep4};
     static_assert(sizeof(table) / sizeof(table[0]) == HEMI_BASIS_COUNT);
     return table;
 }

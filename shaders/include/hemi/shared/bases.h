@@ -11,7 +11,8 @@
 #define HEMI_BASIS_SAL4 5      // shifted associated Legendre (Gautron's HSH), first 4 functions
 #define HEMI_BASIS_ZERNIKE3 6  // Koenderink's hemispherical Zernike basis, bands n <= 1
 #define HEMI_BASIS_ZERNIKE6 7  // bands n <= 2
-#define HEMI_BASIS_COUNT 8
+#define HEMI_BASIS_SEP4 8      // Sloan 2006 Sec. 3.2 separable (SVD) basis, 4 terms, convolution folded in
+#define HEMI_BASIS_COUNT 9
 
 #define HEMI_BASIS_MAX_SIZE 9
 
@@ -23,5 +24,6 @@
 #define HEMI_BASIS_SIZE_SAL4 4
 #define HEMI_BASIS_SIZE_ZERNIKE3 3
 #define HEMI_BASIS_SIZE_ZERNIKE6 6
+#define HEMI_BASIS_SIZE_SEP4 4
 
 #endif
