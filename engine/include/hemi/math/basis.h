@@ -41,6 +41,15 @@ std::span<const BasisDesc> bases();
 // Throws std::invalid_argument naming the unknown basis and listing the known ones.
 const BasisDesc& basis(std::string_view name);
 
+struct HemisphereSample
+{
+    glm::dvec3 n;  // unit direction, z >= 0
+    double weight; // solid angle it stands for; the weights sum to 2 pi
+};
+// The quadrature rule behind integrate_hemisphere: `steps` Gauss-Legendre nodes in t = sqrt(z) times
+// 2 * `steps` uniform steps in phi.
+std::vector<HemisphereSample> hemisphere_quadrature(int steps);
+
 // Integrates f over the hemisphere z >= 0 (Gauss-Legendre in t with z = t^2, which also integrates the
 // sqrt(z) behaviour of the shifted bases exactly, times a uniform rule in phi).
 double integrate_hemisphere(const std::function<double(const glm::dvec3&)>& f, int steps = 64);

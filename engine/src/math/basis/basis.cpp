@@ -75,13 +75,16 @@ Rule gauss_legendre_01(int n)
 }
 } // namespace
 
-double integrate_hemisphere(const std::function<double(const glm::dvec3&)>& f, int steps)
+std::vector<HemisphereSample> hemisphere_quadrature(int steps)
 {
+    if (steps < 2)
+        throw std::invalid_argument("hemi: hemisphere quadrature needs at least 2 steps");
     // z = t^2, dz = 2t dt: the sqrt(z) factors of the shifted bases become polynomial in t.
     Rule rule = gauss_legendre_01(steps);
     const int phi_steps = 2 * steps;
     const double dphi = 2.0 * M_PI / phi_steps;
-    double sum = 0.0;
+    std::vector<HemisphereSample> samples;
+    samples.reserve(size_t(steps) * phi_steps);
     for (int i = 0; i < steps; ++i)
     {
         double t = rule.t[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
@@ -89,9 +92,17 @@ double integrate_hemisphere(const std::function<double(const glm::dvec3&)>& f, i
         for (int p = 0; p < phi_steps; ++p)
         {
             double phi = (p + 0.5) * dphi;
-            sum += w * f(glm::dvec3(s * std::cos(phi), s * std::sin(phi), z));
+            samples.push_back({glm::dvec3(s * std::cos(phi), s * std::sin(phi), z), w});
         }
     }
+    return samples;
+}
+
+double integrate_hemisphere(const std::function<double(const glm::dvec3&)>& f, int steps)
+{
+    double sum = 0.0;
+    for (const HemisphereSample& s : hemisphere_quadrature(steps))
+        sum += s.weight * f(s.n);
     return sum;
 }
 
@@ -103,27 +114,18 @@ void gram_and_cross(const BasisDesc& b, Eigen::MatrixXd& g, Eigen::MatrixXd& c)
     const int k = b.size;
     g = Eigen::MatrixXd::Zero(k, k);
     c = Eigen::MatrixXd::Zero(k, 9);
-    Rule rule = gauss_legendre_01(96);
-    const int steps = int(rule.t.size()), phi_steps = 2 * steps;
-    const double dphi = 2.0 * M_PI / phi_steps;
     float v[HEMI_BASIS_MAX_SIZE];
-    for (int i = 0; i < steps; ++i)
+    for (const HemisphereSample& q : hemisphere_quadrature(96))
     {
-        double t = rule.t[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
-        double w = rule.w[i] * 2.0 * t * dphi;
-        for (int p = 0; p < phi_steps; ++p)
+        glm::vec3 n(q.n);
+        b.eval(n, v);
+        Sh9 y = sh9_eval(n);
+        for (int a = 0; a < k; ++a)
         {
-            double phi = (p + 0.5) * dphi;
-            glm::vec3 n(float(s * std::cos(phi)), float(s * std::sin(phi)), float(z));
-            b.eval(n, v);
-            Sh9 y = sh9_eval(n);
-            for (int a = 0; a < k; ++a)
-            {
-                for (int e = 0; e < k; ++e)
-                    g(a, e) += w * double(v[a]) * v[e];
-                for (int j = 0; j < 9; ++j)
-                    c(a, j) += w * double(v[a]) * y[j];
-            }
+            for (int e = 0; e < k; ++e)
+                g(a, e) += q.weight * double(v[a]) * v[e];
+            for (int j = 0; j < 9; ++j)
+                c(a, j) += q.weight * double(v[a]) * y[j];
         }
     }
 }
