@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 namespace
@@ -21,7 +22,7 @@ void print_report(const hemi::bake::BasisReport& r)
         {
             std::printf("    ");
             for (double v : row)
-                std::printf("%10.6f", v);
+                std::printf("%10.6f", std::abs(v) < 5e-7 ? 0.0 : v); // no "-0.000000" from quadrature noise
             std::printf("\n");
         }
     }
@@ -33,7 +34,7 @@ void print_report(const hemi::bake::BasisReport& r)
     {
         std::printf("  %-4s", name.c_str());
         for (double v : values)
-            std::printf("%9.2e", v);
+            std::printf("%9.2e", std::abs(v) < 1e-12 ? 0.0 : v);
         std::printf("\n");
     }
     std::printf("\nSeparable basis singular values (A, then A with the cosine convolution folded in)\n  ");
