@@ -280,3 +280,29 @@ TEST(SeparableBasis, SepFourIsTheBestFourTermFitOfTheGrid)
     EXPECT_LT(err, projection_error_of_sh9_function(basis("hl2"), 0));
     EXPECT_EQ(p.size(), 36u);
 }
+
+// Sloan's runtime lookup: texel (i, k) of the 64 x 64 texture holds the sep4 functions at the normal whose
+// orthographic projection is the texel centre (rows from n.y = -1), and rim normals outside the disk.
+TEST(SeparableBasis, TextureIsIndexedByTheOrthographicProjection)
+{
+    const int size = 64;
+    std::vector<float> tex = separable_texture(size);
+    ASSERT_EQ(tex.size(), size_t(size) * size * 4);
+    const BasisDesc& b = basis("sep4");
+    struct Probe
+    {
+        int row, col;
+    };
+    for (Probe p : {Probe{32, 32}, Probe{5, 40}, Probe{50, 12}, Probe{0, 0}})
+    {
+        float x = (p.col + 0.5f) / size * 2 - 1, y = (p.row + 0.5f) / size * 2 - 1;
+        float r2 = x * x + y * y;
+        glm::vec3 n = r2 < 1 ? glm::vec3(x, y, std::sqrt(1 - r2)) : glm::vec3(x / std::sqrt(r2), y / std::sqrt(r2), 0);
+        float want[HEMI_BASIS_MAX_SIZE];
+        b.eval(n, want);
+        for (int m = 0; m < 4; ++m)
+            EXPECT_NEAR(tex[(size_t(p.row) * size + p.col) * 4 + m], want[m], 1e-6f) << p.row << "," << p.col;
+    }
+    // The texture is not symmetric in n.y (u_1 is odd in y): a transposed or flipped layout would differ.
+    EXPECT_NE(tex[(size_t(5) * size + 32) * 4 + 1], tex[(size_t(58) * size + 32) * 4 + 1]);
+}
