@@ -8,7 +8,7 @@
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <cstdio>
@@ -116,52 +116,54 @@ BasisReport make_basis_report(int signals, uint64_t seed)
             all[b].eval(glm::vec3(nodes[i].n), &values[b][i * all[b].size]);
     }
 
+    // Per-signal results land in their own slots and are summed in index order afterwards, so the report
+    // is the same bytes whatever the thread count.
+    std::vector<double> per_signal(size_t(signals) * (nb + 1), 0.0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, signals, 64), [&](const tbb::blocked_range<int>& range) {
+        std::vector<double> exact(nodes.size());
+        for (int s = range.begin(); s != range.end(); ++s)
+        {
+            double* out = &per_signal[size_t(s) * (nb + 1)];
+            Signal sig = random_signal(seed, s);
+            std::array<double, 9> sh = sh9_irradiance(sig);
+            for (size_t i = 0; i < nodes.size(); ++i)
+            {
+                exact[i] = exact_irradiance(sig, nodes[i].n);
+                out[nb] += nodes[i].weight * exact[i] * exact[i];
+            }
+            for (size_t b = 0; b < nb; ++b)
+            {
+                const int k = all[b].size;
+                double coeff[HEMI_BASIS_MAX_SIZE] = {};
+                for (int i = 0; i < k; ++i)
+                    for (int j = 0; j < 9; ++j)
+                        coeff[i] += projections[b][size_t(i) * 9 + j] * sh[j];
+                double err = 0.0;
+                for (size_t i = 0; i < nodes.size(); ++i)
+                {
+                    double fit = 0.0;
+                    const float* v = &values[b][i * k];
+                    for (int m = 0; m < k; ++m)
+                        fit += coeff[m] * v[m];
+                    double d = fit - exact[i];
+                    err += nodes[i].weight * d * d;
+                }
+                out[b] = err;
+            }
+        }
+    });
     struct Sums
     {
         std::vector<double> imse;
         double energy = 0.0;
-    };
-    Sums total = tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, signals, 64), Sums{std::vector<double>(nb, 0.0), 0.0},
-        [&](const tbb::blocked_range<int>& range, Sums acc) {
-            std::vector<double> exact(nodes.size());
-            for (int s = range.begin(); s != range.end(); ++s)
-            {
-                Signal sig = random_signal(seed, s);
-                std::array<double, 9> sh = sh9_irradiance(sig);
-                for (size_t i = 0; i < nodes.size(); ++i)
-                {
-                    exact[i] = exact_irradiance(sig, nodes[i].n);
-                    acc.energy += nodes[i].weight * exact[i] * exact[i];
-                }
-                for (size_t b = 0; b < nb; ++b)
-                {
-                    const int k = all[b].size;
-                    double coeff[HEMI_BASIS_MAX_SIZE] = {};
-                    for (int i = 0; i < k; ++i)
-                        for (int j = 0; j < 9; ++j)
-                            coeff[i] += projections[b][size_t(i) * 9 + j] * sh[j];
-                    double err = 0.0;
-                    for (size_t i = 0; i < nodes.size(); ++i)
-                    {
-                        double fit = 0.0;
-                        const float* v = &values[b][i * k];
-                        for (int m = 0; m < k; ++m)
-                            fit += coeff[m] * v[m];
-                        double d = fit - exact[i];
-                        err += nodes[i].weight * d * d;
-                    }
-                    acc.imse[b] += err;
-                }
-            }
-            return acc;
-        },
-        [](Sums a, const Sums& b) {
-            for (size_t i = 0; i < a.imse.size(); ++i)
-                a.imse[i] += b.imse[i];
-            a.energy += b.energy;
-            return a;
-        });
+    } total{std::vector<double>(nb, 0.0), 0.0};
+    for (int s = 0; s < signals; ++s)
+    {
+        const double* row = &per_signal[size_t(s) * (nb + 1)];
+        for (size_t b = 0; b < nb; ++b)
+            total.imse[b] += row[b];
+        total.energy += row[nb];
+    }
     for (size_t b = 0; b < nb; ++b)
     {
         BasisErrorStats& st = r.imse[std::string(all[b].name)];
@@ -185,7 +187,8 @@ void write_basis_report_json(const std::string& path, const BasisReport& r)
     io::write_atomically(path, [&](const std::filesystem::path& tmp) {
         std::ofstream f(tmp);
         f << j.dump(2) << "\n";
-        if (!f)
+        f.close();
+        if (f.fail())
             throw std::runtime_error(path + ": cannot write the JSON report");
     });
 }
@@ -233,17 +236,30 @@ void plot_basis_report(const std::string& png_path, const BasisReport& r)
         }
         script << "plot '" << (dir / "imse.dat").string() << "' using 1:2 with points pt 7 ps 1.5 lc rgb '#3060c0'\n";
     }
+    // The paths are quoted for the shell; a temporary directory with a quote in its name is refused.
+    if (dir.string().find('\'') != std::string::npos)
+    {
+        fs::remove_all(dir);
+        throw std::runtime_error(png_path + ": the temporary directory's path contains a quote: " + dir.string());
+    }
+    struct Cleanup
+    {
+        fs::path dir;
+        ~Cleanup()
+        {
+            std::error_code ignored;
+            fs::remove_all(dir, ignored);
+        }
+    } cleanup{dir};
     const std::string cmd = "gnuplot '" + (dir / "fig3.gp").string() + "' 2>'" + (dir / "err.txt").string() + "'";
     int rc = std::system(cmd.c_str());
     if (rc != 0 || !fs::exists(dir / "fig3.png"))
     {
         std::ifstream err(dir / "err.txt");
         std::string msg((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
-        fs::remove_all(dir);
         throw std::runtime_error(png_path + ": gnuplot failed (is gnuplot installed? cmake/install_deps.sh): " + msg);
     }
     io::write_atomically(png_path, [&](const fs::path& tmp) { fs::copy_file(dir / "fig3.png", tmp); });
-    fs::remove_all(dir);
 }
 
 } // namespace hemi::bake

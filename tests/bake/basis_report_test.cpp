@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include <filesystem>
 #include <fstream>
@@ -62,4 +63,19 @@ TEST(BasisReport, WritesJsonAndPlot)
 TEST(BasisReport, RejectsZeroSignals)
 {
     EXPECT_THROW(hemi::bake::make_basis_report(0, 1), std::invalid_argument);
+}
+
+// The report's numbers do not depend on how the work is split across threads.
+TEST(BasisReport, SameNumbersWhateverTheThreadCount)
+{
+    hemi::bake::BasisReport many = hemi::bake::make_basis_report(700, 9), one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = hemi::bake::make_basis_report(700, 9);
+    }
+    for (const auto& [name, st] : many.imse)
+    {
+        EXPECT_EQ(st.mean_imse, one.imse.at(name).mean_imse) << name;
+        EXPECT_EQ(st.rel_rms, one.imse.at(name).rel_rms) << name;
+    }
 }

@@ -4,6 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -139,4 +144,34 @@ TEST(ExrReader, RejectsGarbageAndNaN)
     fs::path nan = temp_dir() / "nan.exr";
     hemi::io::write_exr(nan, img);
     expect_format_error_naming(nan, "pixel (2, 1) is not finite");
+}
+
+// An auto-cropped EXR (data window inside a larger display window, as compositing tools write) is read
+// over its display window, with the data at its offset; an equirect projection then sees the whole sphere.
+TEST(ExrReader, PlacesTheDataWindowInsideTheDisplayWindow)
+{
+    fs::path p = temp_dir() / "cropped.exr";
+    {
+        Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(7, 3)),
+                           Imath::Box2i(Imath::V2i(2, 1), Imath::V2i(5, 2)));
+        header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+        std::vector<float> r(4 * 2);
+        for (size_t i = 0; i < r.size(); ++i)
+            r[i] = float(i + 1);
+        Imf::OutputFile file(p.c_str(), header);
+        Imf::FrameBuffer fb;
+        // Base pointer for the data window's origin (2, 1): pixel (x, y) at base + x * 4 + y * 16 bytes.
+        char* base = reinterpret_cast<char*>(r.data()) - (2 * 4 + 1 * 16);
+        fb.insert("R", Imf::Slice(Imf::FLOAT, base, 4, 16));
+        file.setFrameBuffer(fb);
+        file.writePixels(2);
+    }
+    hemi::io::ImageRgba img = hemi::io::read_exr(p);
+    ASSERT_EQ(img.width, 8u);
+    ASSERT_EQ(img.height, 4u);
+    EXPECT_EQ(img.at(0, 0)[0], 0.0f);
+    EXPECT_EQ(img.at(2, 1)[0], 1.0f);
+    EXPECT_EQ(img.at(5, 2)[0], 8.0f);
+    EXPECT_EQ(img.at(2, 1)[3], 1.0f); // missing alpha reads as 1 inside the data window
+    EXPECT_EQ(img.at(7, 3)[3], 0.0f); // and 0 outside it
 }

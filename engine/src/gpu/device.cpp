@@ -91,14 +91,17 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
     uint32_t family;
     if (!selector.empty())
     {
-        bool numeric = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
+        bool numeric = selector.size() < 9 &&
+                       std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
         for (size_t i = 0; i < devices.size(); ++i)
         {
+            VkPhysicalDeviceProperties props;
+            vkGetPhysicalDeviceProperties(devices[i], &props);
             bool match = numeric ? std::stoul(selector) == i : lower(names[i]).find(lower(selector)) != std::string::npos;
-            if (match && find_queue_family(devices[i], &family))
+            if (match && props.apiVersion >= VK_API_VERSION_1_1 && find_queue_family(devices[i], &family))
                 return devices[i];
         }
-        throw std::runtime_error("hemi: no Vulkan device with a graphics+compute queue matches '" + selector +
+        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue matches '" + selector +
                                  "' (devices: " + all + ")");
     }
 
@@ -317,6 +320,12 @@ uint32_t Device::memory_type(uint32_t type_bits, MemoryUsage usage) const
 bool Device::memory_is_host_visible(uint32_t memory_type) const
 {
     return memory_.memoryTypes[memory_type].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
+}
+
+bool Device::memory_is_host_coherent(uint32_t memory_type) const
+{
+    const VkMemoryPropertyFlags need = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    return (memory_.memoryTypes[memory_type].propertyFlags & need) == need;
 }
 
 void Device::log(LogLevel level, std::string_view message) const

@@ -32,7 +32,8 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc)
     HEMI_VK_CHECK(vkAllocateMemory(d, &alloc, nullptr, &memory));
     b.memory_ = DeviceMemory(d, memory);
     HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, memory, 0));
-    if (device.memory_is_host_visible(alloc.memoryTypeIndex))
+    // Only coherent memory is mapped: hemi never flushes or invalidates ranges.
+    if (device.memory_is_host_coherent(alloc.memoryTypeIndex))
         HEMI_VK_CHECK(vkMapMemory(d, memory, 0, VK_WHOLE_SIZE, 0, &b.mapped_));
     b.size_ = desc.size;
     return b;
@@ -80,6 +81,8 @@ void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDevice
     one_shot(device, [&](VkCommandBuffer cmd) {
         VkBufferCopy region{offset, 0, size};
         vkCmdCopyBuffer(cmd, buffer, staging, 1, &region);
+        memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                       VK_ACCESS_HOST_READ_BIT);
     });
     std::memcpy(out, staging.mapped(), size);
 }
@@ -175,6 +178,8 @@ void transition_image(VkCommandBuffer cmd, const Image& image, VkImageLayout fro
 void upload_image(const Device& device, const Image& image, const void* texels, size_t bytes,
                   VkImageLayout final_layout)
 {
+    if (image.mip_levels() != 1)
+        throw std::invalid_argument("hemi: upload_image fills mip 0 only; create the image with one mip level");
     size_t expected = size_t(image.width()) * image.height() * format_size(image.format());
     if (bytes != expected)
         throw std::invalid_argument("hemi: upload_image got " + std::to_string(bytes) + " bytes for a " +
@@ -194,6 +199,8 @@ void upload_image(const Device& device, const Image& image, const void* texels, 
 
 std::vector<std::byte> read_image(const Device& device, const Image& image, VkImageLayout current_layout)
 {
+    if (current_layout == VK_IMAGE_LAYOUT_UNDEFINED || current_layout == VK_IMAGE_LAYOUT_PREINITIALIZED)
+        throw std::invalid_argument("hemi: read_image of an image with undefined contents");
     size_t bytes = size_t(image.width()) * image.height() * format_size(image.format());
     Buffer staging = create_buffer(device, {bytes, 0, MemoryUsage::Readback});
     one_shot(device, [&](VkCommandBuffer cmd) {
@@ -202,6 +209,8 @@ std::vector<std::byte> read_image(const Device& device, const Image& image, VkIm
         region.imageSubresource = {image.aspect(), 0, 0, 1};
         region.imageExtent = {image.width(), image.height(), 1};
         vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1, &region);
+        memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                       VK_ACCESS_HOST_READ_BIT);
         transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, current_layout);
     });
     std::vector<std::byte> out(bytes);

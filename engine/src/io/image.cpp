@@ -21,6 +21,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
 
 namespace hemi::io
 {
@@ -52,19 +55,27 @@ ImageRgba read_exr(const std::filesystem::path& path)
     try
     {
         Imf::InputFile file(path.c_str());
+        // The image is the display window; pixels outside the data window (auto-cropped files) read as 0.
         const Imath::Box2i dw = file.header().dataWindow();
-        const long w = long(dw.max.x) - dw.min.x + 1, h = long(dw.max.y) - dw.min.y + 1;
-        if (w <= 0 || h <= 0 || w > 65536 || h > 65536)
-            throw FormatError(path.string() + ": EXR data window of " + std::to_string(w) + "x" + std::to_string(h) +
-                              " is empty or too large");
+        const Imath::Box2i disp = file.header().displayWindow();
+        const long w = long(disp.max.x) - disp.min.x + 1, h = long(disp.max.y) - disp.min.y + 1;
+        if (w <= 0 || h <= 0 || w * h > (1l << 28))
+            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
+                              " is empty or larger than 2^28 pixels");
+        if (dw.min.x < disp.min.x || dw.min.y < disp.min.y || dw.max.x > disp.max.x || dw.max.y > disp.max.y)
+            throw FormatError(path.string() + ": EXR data window extends beyond the display window");
         image.width = uint32_t(w);
         image.height = uint32_t(h);
         image.pixels.assign(size_t(w) * h * 4, 0.0f);
         const Imf::ChannelList& channels = file.header().channels();
         const bool grey = !channels.findChannel("R") && channels.findChannel("Y");
+        if (!grey && !channels.findChannel("R") && !channels.findChannel("G") && !channels.findChannel("B"))
+            throw FormatError(path.string() + ": EXR has no R, G, B or Y channel (layered files are not supported)");
         const size_t xs = 4 * sizeof(float), ys = xs * size_t(w);
-        // Slices are addressed from the data window's origin (OpenEXR's convention for base pointers).
-        char* base = reinterpret_cast<char*>(image.pixels.data()) - (long(dw.min.x) * long(xs) + long(dw.min.y) * long(ys));
+        // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys: shift so that the display window's origin
+        // is our first pixel.
+        char* base =
+            reinterpret_cast<char*>(image.pixels.data()) - (long(disp.min.x) * long(xs) + long(disp.min.y) * long(ys));
         Imf::FrameBuffer fb;
         const char* names[4] = {"R", "G", "B", "A"};
         for (int c = 0; c < 4; ++c)
@@ -107,15 +118,19 @@ void write_exr(const std::filesystem::path& path, const ImageRgba& image)
             Imf::Header header(int(image.width), int(image.height));
             for (const char* c : {"R", "G", "B", "A"})
                 header.channels().insert(c, Imf::Channel(Imf::FLOAT));
-            Imf::OutputFile file(tmp.c_str(), header);
-            Imf::FrameBuffer fb;
-            const size_t xs = 4 * sizeof(float), ys = xs * image.width;
-            char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
-            const char* names[4] = {"R", "G", "B", "A"};
-            for (int c = 0; c < 4; ++c)
-                fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
-            file.setFrameBuffer(fb);
-            file.writePixels(int(image.height));
+            {
+                Imf::OutputFile file(tmp.c_str(), header);
+                Imf::FrameBuffer fb;
+                const size_t xs = 4 * sizeof(float), ys = xs * image.width;
+                char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
+                const char* names[4] = {"R", "G", "B", "A"};
+                for (int c = 0; c < 4; ++c)
+                    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+                file.setFrameBuffer(fb);
+                file.writePixels(int(image.height));
+            } // ~OutputFile writes the offset table and swallows its errors: verify by reading back
+            if (!Imf::InputFile(tmp.c_str()).isComplete())
+                throw FormatError(path.string() + ": writing EXR failed (incomplete file)");
         }
         catch (const std::exception& e)
         {
@@ -142,9 +157,18 @@ void write_png(const std::filesystem::path& path, const ImageRgba& image, const 
         }
         bytes[i] = static_cast<unsigned char>(std::lround(v * 255.0f));
     }
+    int length = 0;
+    unsigned char* png = stbi_write_png_to_mem(bytes.data(), int(image.width * 4), int(image.width),
+                                               int(image.height), 4, &length);
+    if (!png)
+        throw FormatError(path.string() + ": encoding PNG failed (stb_image_write)");
+    std::unique_ptr<unsigned char, void (*)(void*)> owner(png, std::free);
     write_atomically(path, [&](const std::filesystem::path& tmp) {
-        if (!stbi_write_png(tmp.c_str(), int(image.width), int(image.height), 4, bytes.data(), int(image.width * 4)))
-            throw FormatError(path.string() + ": writing PNG failed (stb_image_write)");
+        std::ofstream f(tmp, std::ios::binary);
+        f.write(reinterpret_cast<const char*>(png), length);
+        f.close();
+        if (f.fail())
+            throw FormatError(path.string() + ": writing PNG failed (disk full or not writable?)");
     });
 }
 

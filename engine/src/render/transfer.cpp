@@ -59,7 +59,13 @@ TransferMatrices::TransferMatrices(uint32_t vertex_count, uint32_t k, uint32_t l
                 for (size_t f = 0; f < kl; ++f)
                 {
                     if (!std::isfinite(src[f]))
-                        bad.store(size_t(v) * kl + f);
+                    {
+                        // Report the first bad value whatever the thread schedule: keep the minimum index.
+                        size_t i = size_t(v) * kl + f, cur = bad.load();
+                        while (i < cur && !bad.compare_exchange_weak(cur, i))
+                        {
+                        }
+                    }
                     dst[f * kBlockVertices + lane] = src[f];
                 }
             }
@@ -267,6 +273,11 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
         max_texels = std::min<uint64_t>(max_texels, max_view_texels);
     uint64_t blocks_per_segment = max_texels / block_texels;
     blocks_per_segment = std::min<uint64_t>(blocks_per_segment, max_texels / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
+    // One dispatch per segment: its workgroup count must stay within maxComputeWorkGroupCount[0] (65,535 on
+    // many drivers, reached by K = 3, L = 9 sets of ~17M vertices before the texel limit is).
+    blocks_per_segment = std::min<uint64_t>(blocks_per_segment, uint64_t(limits.maxComputeWorkGroupCount[0]) *
+                                                                    HEMI_TRANSFER_WORKGROUP_SIZE /
+                                                                    HEMI_TRANSFER_INVOCATIONS_PER_BLOCK);
     const uint64_t align = std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment);
     const uint64_t step = std::lcm(align / std::gcd(align, block_bytes), align / std::gcd(align, out_block_bytes));
     blocks_per_segment -= blocks_per_segment % step;
@@ -320,8 +331,9 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
     // Earlier reads of the lighting (a previous frame's dispatch) finish before the update; the update
     // finishes before this frame's dispatch reads it. Earlier reads of the coefficients (vertex shaders)
     // finish before this dispatch overwrites them.
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
-                        VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+    // ALL_COMMANDS as the source: valid on compute-only queues, and covers readers in any shader stage.
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
+                        VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     vkCmdUpdateBuffer(cmd, s.lighting, 0, sizeof(float) * 4 * s.l, packed);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
@@ -340,7 +352,13 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
 
 void TransferPass::run(std::span<const glm::vec3> lighting)
 {
-    gpu::one_shot(*impl_->device, [&](VkCommandBuffer cmd) { record(cmd, lighting); });
+    gpu::one_shot(*impl_->device, [&](VkCommandBuffer cmd) {
+        record(cmd, lighting);
+        // A fence wait alone does not make device writes visible to the host.
+        gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                            VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                            VK_ACCESS_HOST_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT);
+    });
 }
 
 const gpu::Buffer& TransferPass::coefficients() const

@@ -37,7 +37,8 @@ struct BasisReport
     uint64_t seed = 0;
 };
 
-// Deterministic for a given (signals, seed); multi-threaded. Throws std::invalid_argument for signals < 1.
+// Deterministic for a given (signals, seed) and standard library (std::normal_distribution's algorithm is
+// the library's), whatever the thread count; multi-threaded. Throws std::invalid_argument for signals < 1.
 BasisReport make_basis_report(int signals, uint64_t seed);
 
 // JSON with the keys "projection", "sloan_table2", "imse" ({"mean", "rel_rms", "coefficients"} per basis),

@@ -89,6 +89,7 @@ public:
     // A memory type index for `type_bits` with the properties `usage` needs. Throws when there is none.
     uint32_t memory_type(uint32_t type_bits, MemoryUsage usage) const;
     bool memory_is_host_visible(uint32_t memory_type) const;
+    bool memory_is_host_coherent(uint32_t memory_type) const;
 
     // Validation-layer warnings and errors seen so far (always 0 without validation).
     uint64_t validation_messages() const { return validation_messages_.load(); }

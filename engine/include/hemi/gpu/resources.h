@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace hemi::gpu
@@ -25,10 +26,27 @@ class Buffer
 {
 public:
     Buffer() = default;
+    Buffer(Buffer&& o) noexcept
+        : memory_(std::move(o.memory_)), buffer_(std::move(o.buffer_)), size_(std::exchange(o.size_, 0)),
+          mapped_(std::exchange(o.mapped_, nullptr))
+    {
+    }
+    Buffer& operator=(Buffer&& o) noexcept
+    {
+        if (this != &o)
+        {
+            buffer_ = std::move(o.buffer_); // the buffer goes before its memory
+            memory_ = std::move(o.memory_);
+            size_ = std::exchange(o.size_, 0);
+            mapped_ = std::exchange(o.mapped_, nullptr);
+        }
+        return *this;
+    }
     VkBuffer handle() const { return buffer_; }
     operator VkBuffer() const { return buffer_; }
     VkDeviceSize size() const { return size_; }
-    // Persistently mapped pointer when the memory is host-visible (always on lavapipe), else nullptr.
+    // Persistently mapped pointer when the memory is host-visible and coherent (always on lavapipe), else
+    // nullptr (then write_buffer/read_buffer stage through a copy).
     void* mapped() const { return mapped_; }
 
 private:

@@ -40,8 +40,9 @@ struct ToneMap
     Curve curve = Curve::Clamp;
 };
 
-// Reads an OpenEXR file (scanline or tiled, half or float) into linear RGBA: missing R/G/B read as 0 and a
-// missing A as 1; a single-channel Y image is read as grey. Throws FormatError naming `path` when the file
+// Reads an OpenEXR file (scanline or tiled, half or float) into linear RGBA over its display window (pixels
+// outside the data window of an auto-cropped file read as 0, alpha 0 there): missing R/G/B read as 0 and a
+// missing A as 1; a single-channel Y image is read as grey. Files with neither R, G, B nor Y are refused. Throws FormatError naming `path` when the file
 // is missing, not EXR, truncated or corrupt, or holds a non-finite pixel (with its position).
 ImageRgba read_exr(const std::filesystem::path& path);
 
