@@ -8,6 +8,7 @@
 #include <hemi/io/mesh.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/offscreen.h>
+#include <hemi/render/surface.h>
 
 #include <glm/mat4x4.hpp>
 
@@ -39,13 +40,13 @@ public:
     void draw(VkCommandBuffer cmd) const;
 
 private:
-    gpu::Program program_;
-    gpu::Buffer vertices_, indices_, uniforms_;
+    GpuMesh mesh_;
     gpu::Image normal_map_;
+    gpu::Program program_;
+    gpu::Buffer uniforms_;
     gpu::Sampler sampler_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
-    uint32_t index_count_ = 0;
 };
 
 // A view-projection matrix (Vulkan clip space) looking from `eye` at `target`, z up.

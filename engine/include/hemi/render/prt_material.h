@@ -1,0 +1,52 @@
+#pragma once
+// The PRT material of Sloan 2006: per-vertex basis coefficients (the transfer pass's output, already in each
+// vertex's tangent frame) interpolated across triangles, the basis evaluated per pixel at the normal-map
+// normal, times albedo / pi. One material for every basis: the basis is a specialization constant.
+
+#include <hemi/gpu/device.h>
+#include <hemi/gpu/pipeline.h>
+#include <hemi/gpu/resources.h>
+#include <hemi/io/mesh.h>
+#include <hemi/math/basis.h>
+#include <hemi/render/offscreen.h>
+#include <hemi/render/surface.h>
+#include <hemi/render/transfer.h>
+
+#include <glm/mat4x4.hpp>
+
+namespace hemi::render
+{
+
+struct PrtMaterialFrame
+{
+    glm::mat4 view_projection{1.0f};
+    glm::mat4 model{1.0f};
+    glm::vec3 albedo{1.0f}; // 1 for the lighting-only ("white") view
+};
+
+class PrtMaterialRenderer
+{
+public:
+    // `coefficients` must come from matrices of `basis.size` rows over the same vertices as `mesh`; it must
+    // outlive the renderer. Throws std::invalid_argument on a mismatch.
+    PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target, const io::Mesh& mesh,
+                        std::span<const uint8_t> normal_map, uint32_t map_width, uint32_t map_height,
+                        const math::BasisDesc& basis, const TransferPass& coefficients);
+
+    // Outside the render pass: records the uniform update.
+    void update(VkCommandBuffer cmd, const PrtMaterialFrame& frame) const;
+    // Inside target.begin()/end(): records the draw.
+    void draw(VkCommandBuffer cmd) const;
+
+private:
+    GpuMesh mesh_;
+    gpu::Image normal_map_;
+    gpu::Sampler sampler_;
+    gpu::BufferView coefficient_view_;
+    gpu::Buffer uniforms_;
+    gpu::Program program_;
+    gpu::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;
+};
+
+} // namespace hemi::render

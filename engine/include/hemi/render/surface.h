@@ -1,0 +1,50 @@
+#pragma once
+// What every material draws: a mesh on the GPU (positions, normals, glTF tangents, UVs; 32-bit indices)
+// and its normal map. Shared by all raster materials so that there is one vertex layout and one upload.
+
+#include <hemi/gpu/device.h>
+#include <hemi/gpu/resources.h>
+#include <hemi/gpu/pipeline.h>
+#include <hemi/io/mesh.h>
+#include <hemi/render/offscreen.h>
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace hemi::render
+{
+
+class GpuMesh
+{
+public:
+    // The mesh needs a normal, tangent and UV per vertex and a non-empty triangle list with indices in
+    // range; throws std::invalid_argument naming the problem otherwise.
+    GpuMesh(const gpu::Device& device, const io::Mesh& mesh);
+
+    // Vertex input of every material's vertex shader: locations 0 position, 1 normal, 2 tangent, 3 uv.
+    static std::vector<VkVertexInputBindingDescription> vertex_bindings();
+    static std::vector<VkVertexInputAttributeDescription> vertex_attributes();
+
+    void draw(VkCommandBuffer cmd) const; // binds the buffers and draws every triangle
+    uint32_t vertex_count() const { return vertex_count_; }
+
+private:
+    gpu::Buffer vertices_, indices_;
+    uint32_t vertex_count_ = 0, index_count_ = 0;
+};
+
+// The graphics program of a material drawing a GpuMesh into an OffscreenTarget: embedded shaders by name,
+// set-0 bindings, specialization constants shared by both stages, back-face culling of counter-clockwise
+// (from outside) meshes.
+gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTarget& target,
+                                    std::string_view vertex_shader, std::string_view fragment_shader,
+                                    const std::vector<gpu::Binding>& bindings,
+                                    const std::vector<uint32_t>& specialization = {});
+
+// An RGBA8 tangent-space normal map (glTF convention) as a sampled image in SHADER_READ_ONLY_OPTIMAL.
+gpu::Image upload_normal_map(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
+                             uint32_t height);
+
+} // namespace hemi::render

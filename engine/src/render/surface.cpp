@@ -1,0 +1,100 @@
+#include <hemi/render/surface.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace hemi::render
+{
+namespace
+{
+struct Vertex
+{
+    float position[3];
+    float normal[3];
+    float tangent[4];
+    float uv[2];
+};
+} // namespace
+
+GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh)
+{
+    const size_t n = mesh.positions.size();
+    if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3 != 0)
+        throw std::invalid_argument("hemi: a mesh needs vertices and a non-empty triangle list");
+    if (mesh.normals.size() != n || mesh.tangents.size() != n || mesh.uvs.size() != n)
+        throw std::invalid_argument("hemi: a mesh needs a normal, tangent and UV per vertex");
+    for (uint32_t i : mesh.indices)
+        if (i >= n)
+            throw std::invalid_argument("hemi: mesh index " + std::to_string(i) + " out of range (" +
+                                        std::to_string(n) + " vertices)");
+    std::vector<Vertex> vertices(n);
+    for (size_t i = 0; i < n; ++i)
+        vertices[i] = {{mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z},
+                       {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z},
+                       {mesh.tangents[i].x, mesh.tangents[i].y, mesh.tangents[i].z, mesh.tangents[i].w},
+                       {mesh.uvs[i].x, mesh.uvs[i].y}};
+    vertices_ = gpu::create_buffer(device, {vertices.size() * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    gpu::write_buffer(device, vertices_, vertices.data(), vertices.size() * sizeof(Vertex));
+    indices_ = gpu::create_buffer(device, {mesh.indices.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
+    gpu::write_buffer(device, indices_, mesh.indices.data(), mesh.indices.size() * 4);
+    vertex_count_ = uint32_t(n);
+    index_count_ = uint32_t(mesh.indices.size());
+}
+
+std::vector<VkVertexInputBindingDescription> GpuMesh::vertex_bindings()
+{
+    return {{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
+}
+
+std::vector<VkVertexInputAttributeDescription> GpuMesh::vertex_attributes()
+{
+    return {
+        {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
+        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
+        {2, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(Vertex, tangent)},
+        {3, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, uv)},
+    };
+}
+
+void GpuMesh::draw(VkCommandBuffer cmd) const
+{
+    VkBuffer vb = vertices_;
+    VkDeviceSize offset = 0;
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cmd, indices_, 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cmd, index_count_, 1, 0, 0, 0);
+}
+
+gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTarget& target,
+                                    std::string_view vertex_shader, std::string_view fragment_shader,
+                                    const std::vector<gpu::Binding>& bindings,
+                                    const std::vector<uint32_t>& specialization)
+{
+    gpu::GraphicsProgramDesc desc;
+    desc.vertex_shader = gpu::embedded_spirv(vertex_shader);
+    desc.fragment_shader = gpu::embedded_spirv(fragment_shader);
+    desc.bindings = bindings;
+    desc.specialization = specialization;
+    desc.vertex_bindings = GpuMesh::vertex_bindings();
+    desc.vertex_attributes = GpuMesh::vertex_attributes();
+    desc.render_pass = target.render_pass();
+    desc.color_attachments = OffscreenTarget::kColorAttachments;
+    desc.cull_mode = VK_CULL_MODE_BACK_BIT;
+    // Meshes are counter-clockwise seen from outside; look_at_projection flips y for Vulkan's clip space,
+    // and Vulkan's facing rule (its area formula is negated for y-down framebuffers) keeps them CCW.
+    desc.front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    return gpu::create_graphics_program(device, desc);
+}
+
+gpu::Image upload_normal_map(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
+                             uint32_t height)
+{
+    if (width == 0 || height == 0 || rgba8.size() != size_t(width) * height * 4)
+        throw std::invalid_argument("hemi: normal map is " + std::to_string(rgba8.size()) + " bytes for " +
+                                    std::to_string(width) + "x" + std::to_string(height) + " RGBA8");
+    gpu::Image image = gpu::create_image(device, {width, height, VK_FORMAT_R8G8B8A8_UNORM});
+    gpu::upload_image(device, image, rgba8.data(), rgba8.size(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    return image;
+}
+
+} // namespace hemi::render
