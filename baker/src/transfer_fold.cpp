@@ -35,24 +35,34 @@ std::vector<float> unshadowed_transfer(const glm::mat3& object_to_tangent, int l
     return rm;
 }
 
-std::vector<float> fold_transfer(std::span<const float> rm, int l, const math::BasisDesc& basis)
+TransferFold::TransferFold(const math::BasisDesc& basis) : k_(basis.size), pc_(math::projection_from_sh9(basis))
+{
+    for (int i = 0; i < k_; ++i)
+        for (int j = 0; j < 9; ++j)
+            pc_[size_t(i) * 9 + j] *= math::clamped_cosine_factor(j == 0 ? 0 : (j < 4 ? 1 : 2));
+}
+
+std::vector<float> TransferFold::apply(std::span<const float> rm, int l) const
 {
     if (l <= 0 || rm.size() != size_t(9) * l)
         throw std::invalid_argument("hemi: fold_transfer expects a 9 x " + std::to_string(l) + " matrix, got " +
                                     std::to_string(rm.size()) + " values");
-    const std::vector<double> p = math::projection_from_sh9(basis);
-    const int k = basis.size;
-    std::vector<float> t(size_t(k) * l, 0.0f);
-    for (int i = 0; i < k; ++i)
+    std::vector<float> t(size_t(k_) * l, 0.0f);
+    for (int i = 0; i < k_; ++i)
         for (int j = 0; j < 9; ++j)
         {
-            const double pc = p[size_t(i) * 9 + j] * math::clamped_cosine_factor(j == 0 ? 0 : (j < 4 ? 1 : 2));
+            const double pc = pc_[size_t(i) * 9 + j];
             if (pc == 0.0)
                 continue;
             for (int c = 0; c < l; ++c)
                 t[size_t(i) * l + c] += float(pc * rm[size_t(j) * l + c]);
         }
     return t;
+}
+
+std::vector<float> fold_transfer(std::span<const float> rm, int l, const math::BasisDesc& basis)
+{
+    return TransferFold(basis).apply(rm, l);
 }
 
 } // namespace hemi::bake

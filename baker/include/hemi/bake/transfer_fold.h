@@ -26,8 +26,22 @@ glm::mat3 object_to_tangent(const glm::vec3& normal, const glm::vec3& tangent, f
 // R * M for unshadowed transfer: 9 x L row-major, L = lighting_order^2 (lighting_order in [3, 10]).
 std::vector<float> unshadowed_transfer(const glm::mat3& object_to_tangent, int lighting_order);
 
-// T = P_basis * C * rm for `rm` = R * M (9 x L row-major, already in the tangent frame). K x L row-major.
-// Throws std::invalid_argument when rm.size() is not 9 * L.
+// P_basis * C for one basis, computed once (the projection is a quadrature) and applied per vertex.
+class TransferFold
+{
+public:
+    explicit TransferFold(const math::BasisDesc& basis);
+    // T = P_basis * C * rm for `rm` = R * M (9 x L row-major, already in the tangent frame). K x L row-major.
+    // Throws std::invalid_argument when rm.size() is not 9 * L.
+    std::vector<float> apply(std::span<const float> rm, int l) const;
+    int k() const { return k_; }
+
+private:
+    int k_;
+    std::vector<double> pc_; // K x 9
+};
+
+// TransferFold(basis).apply(rm, l): for one-off use; bakes keep a TransferFold per basis.
 std::vector<float> fold_transfer(std::span<const float> rm, int l, const math::BasisDesc& basis);
 
 } // namespace hemi::bake
