@@ -1,0 +1,33 @@
+#pragma once
+// glTF 2.0 scenes (.gltf with external or embedded buffers, and .glb) into one hemi Mesh in scene space,
+// read with tinygltf (Debian's libtinygltf).
+//
+// Every triangle primitive of every mesh node of the default scene (or scene 0, or every mesh when the file
+// has no scene) is transformed by its node's world matrix and appended. Normals are the file's, or
+// area-weighted vertex normals when absent. Tangents are the file's, or generated from the UV layout when
+// absent: per-triangle UV derivatives accumulated per vertex, Gram-Schmidt against the normal, handedness in
+// w (the construction MikkTSpace refines; for well-conditioned UV charts the frames agree, but this is not a
+// bit-exact MikkTSpace, which Debian does not package). Texture references are resolved relative to the
+// file and must exist.
+
+#include <hemi/io/mesh.h>
+
+#include <filesystem>
+
+namespace hemi::io
+{
+
+struct GltfScene
+{
+    Mesh mesh;
+    std::filesystem::path base_color_texture; // empty when the material has none
+    std::filesystem::path normal_texture;     // empty when the material has none
+    bool tangents_generated = false;
+};
+
+// Throws FormatError naming the file and the problem: missing or malformed file, truncated .glb, a
+// primitive that is not a triangle list or lacks POSITION, an accessor that reads past its buffer, an index
+// out of range, a non-finite attribute, a referenced texture that does not exist, or no triangles at all.
+GltfScene read_gltf(const std::filesystem::path& path);
+
+} // namespace hemi::io

@@ -1,0 +1,285 @@
+#include <hemi/io/gltf.h>
+#include <hemi/io/image.h>
+
+#include <tiny_gltf.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <glm/gtc/matrix_transform.hpp>
+#include <string>
+
+namespace hemi::io
+{
+namespace
+{
+
+struct Reader
+{
+    std::string file;
+    const tinygltf::Model& model;
+
+    [[noreturn]] void fail(const std::string& what) const { throw FormatError(file + ": " + what); }
+
+    // Reads `count` elements of `components` floats (or normalised/unsigned ints for indices) from accessor i.
+    template <typename T>
+    std::vector<T> read(int index, int components, const char* what) const
+    {
+        if (index < 0 || size_t(index) >= model.accessors.size())
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " does not exist");
+        const tinygltf::Accessor& a = model.accessors[index];
+        if (tinygltf::GetNumComponentsInType(uint32_t(a.type)) != components)
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " has the wrong type");
+        if (a.bufferView < 0 || size_t(a.bufferView) >= model.bufferViews.size())
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " has no buffer view (sparse accessors are not supported)");
+        const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
+        if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size())
+            fail(std::string(what) + ": buffer view " + std::to_string(a.bufferView) + " has no buffer");
+        const std::vector<unsigned char>& data = model.buffers[view.buffer].data;
+        const int component_size = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        if (component_size <= 0)
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " has an unknown component type");
+        const size_t element = size_t(component_size) * components;
+        const size_t stride = view.byteStride ? view.byteStride : element;
+        const size_t begin = view.byteOffset + a.byteOffset;
+        if (a.count == 0)
+            return {};
+        const size_t end = begin + stride * (a.count - 1) + element;
+        if (end > view.byteOffset + view.byteLength || end > data.size() || stride < element)
+            fail(std::string(what) + ": accessor " + std::to_string(index) + " reads past its buffer");
+        std::vector<T> out(a.count * size_t(components));
+        for (size_t i = 0; i < a.count; ++i)
+            for (int c = 0; c < components; ++c)
+            {
+                const unsigned char* p = data.data() + begin + i * stride + size_t(c) * component_size;
+                double v = 0;
+                switch (a.componentType)
+                {
+                case TINYGLTF_COMPONENT_TYPE_FLOAT: { float f; std::memcpy(&f, p, 4); v = f; break; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *p; break;
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, p, 2); v = s; break; }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t u; std::memcpy(&u, p, 4); v = u; break; }
+                default: fail(std::string(what) + ": unsupported component type");
+                }
+                if constexpr (std::is_floating_point_v<T>)
+                    if (!std::isfinite(v))
+                        fail(std::string(what) + ": non-finite value in accessor " + std::to_string(index));
+                out[i * components + c] = T(v);
+            }
+        return out;
+    }
+};
+
+glm::mat4 local_matrix(const tinygltf::Node& n)
+{
+    if (n.matrix.size() == 16)
+    {
+        glm::dmat4 m = glm::make_mat4(n.matrix.data());
+        return glm::mat4(m);
+    }
+    glm::mat4 m(1.0f);
+    if (n.translation.size() == 3)
+        m = glm::translate(m, glm::vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2])));
+    if (n.rotation.size() == 4)
+        m *= glm::mat4_cast(glm::quat(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2])));
+    if (n.scale.size() == 3)
+        m = glm::scale(m, glm::vec3(float(n.scale[0]), float(n.scale[1]), float(n.scale[2])));
+    return m;
+}
+
+void generate_normals(Mesh& m, size_t first_vertex, size_t first_index)
+{
+    for (size_t v = first_vertex; v < m.positions.size(); ++v)
+        m.normals[v] = glm::vec3(0.0f);
+    for (size_t i = first_index; i + 2 < m.indices.size(); i += 3)
+    {
+        uint32_t a = m.indices[i], b = m.indices[i + 1], c = m.indices[i + 2];
+        glm::vec3 n = glm::cross(m.positions[b] - m.positions[a], m.positions[c] - m.positions[a]); // area-weighted
+        m.normals[a] += n, m.normals[b] += n, m.normals[c] += n;
+    }
+    for (size_t v = first_vertex; v < m.positions.size(); ++v)
+    {
+        float len = glm::length(m.normals[v]);
+        m.normals[v] = len > 0 ? m.normals[v] / len : glm::vec3(0, 0, 1);
+    }
+}
+
+void generate_tangents(Mesh& m, size_t first_vertex, size_t first_index)
+{
+    const size_t n = m.positions.size();
+    std::vector<glm::vec3> t(n, glm::vec3(0.0f)), b(n, glm::vec3(0.0f));
+    for (size_t i = first_index; i + 2 < m.indices.size(); i += 3)
+    {
+        uint32_t i0 = m.indices[i], i1 = m.indices[i + 1], i2 = m.indices[i + 2];
+        glm::vec3 e1 = m.positions[i1] - m.positions[i0], e2 = m.positions[i2] - m.positions[i0];
+        glm::vec2 d1 = m.uvs[i1] - m.uvs[i0], d2 = m.uvs[i2] - m.uvs[i0];
+        float det = d1.x * d2.y - d2.x * d1.y;
+        if (std::abs(det) < 1e-20f)
+            continue;
+        // dP/du and dP/dv of the triangle; glTF's bitangent points toward -v (DESIGN.md, io/mesh.h).
+        glm::vec3 dpdu = (e1 * d2.y - e2 * d1.y) / det, dpdv = (e2 * d1.x - e1 * d2.x) / det;
+        for (uint32_t v : {i0, i1, i2})
+        {
+            t[v] += dpdu;
+            b[v] -= dpdv;
+        }
+    }
+    for (size_t v = first_vertex; v < n; ++v)
+    {
+        glm::vec3 nn = m.normals[v];
+        glm::vec3 tt = t[v] - nn * glm::dot(nn, t[v]);
+        float len = glm::length(tt);
+        if (len < 1e-12f) // no UV gradient: any tangent perpendicular to the normal
+            tt = glm::normalize(std::abs(nn.x) < 0.9f ? glm::cross(nn, glm::vec3(1, 0, 0)) : glm::cross(nn, glm::vec3(0, 1, 0)));
+        else
+            tt /= len;
+        float w = glm::dot(glm::cross(nn, tt), b[v]) < 0.0f ? -1.0f : 1.0f;
+        m.tangents[v] = glm::vec4(tt, w);
+    }
+}
+
+std::filesystem::path texture_path(const Reader& r, const std::filesystem::path& dir, int texture_index)
+{
+    if (texture_index < 0)
+        return {};
+    if (size_t(texture_index) >= r.model.textures.size())
+        r.fail("texture " + std::to_string(texture_index) + " does not exist");
+    int source = r.model.textures[texture_index].source;
+    if (source < 0 || size_t(source) >= r.model.images.size())
+        r.fail("texture " + std::to_string(texture_index) + " has no image");
+    const tinygltf::Image& img = r.model.images[source];
+    if (img.uri.empty())
+        r.fail("image " + std::to_string(source) + " is embedded; hemi reads textures from files");
+    std::filesystem::path p = dir / img.uri;
+    if (!std::filesystem::exists(p))
+        r.fail("texture file " + p.string() + " does not exist");
+    return p;
+}
+
+} // namespace
+
+GltfScene read_gltf(const std::filesystem::path& path)
+{
+    const std::string file = path.string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw FormatError(file + ": no such file");
+    tinygltf::TinyGLTF loader;
+    // Images are only referenced here (decoded later by the texture reader): accept without decoding.
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*,
+                             int, void*) { return true; },
+                          nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    const bool binary = path.extension() == ".glb";
+    bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
+                     : loader.LoadASCIIFromFile(&model, &err, &warn, file);
+    if (!ok)
+        throw FormatError(file + ": not a readable glTF file: " + (err.empty() ? std::string("unknown error") : err));
+
+    Reader r{file, model};
+    GltfScene scene;
+    Mesh& m = scene.mesh;
+    const std::filesystem::path dir = path.parent_path();
+    int material = -1;
+
+    auto add_mesh = [&](int mesh_index, const glm::mat4& world) {
+        if (mesh_index < 0 || size_t(mesh_index) >= model.meshes.size())
+            r.fail("node refers to mesh " + std::to_string(mesh_index) + ", which does not exist");
+        const glm::mat3 linear(world);
+        const glm::mat3 normal_matrix = glm::inverseTranspose(linear);
+        const float handedness = glm::determinant(linear) < 0.0f ? -1.0f : 1.0f;
+        for (const tinygltf::Primitive& prim : model.meshes[mesh_index].primitives)
+        {
+            if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1)
+                r.fail("mesh " + std::to_string(mesh_index) + ": only triangle lists are supported");
+            auto pos_it = prim.attributes.find("POSITION");
+            if (pos_it == prim.attributes.end())
+                r.fail("mesh " + std::to_string(mesh_index) + ": a primitive has no POSITION");
+            std::vector<float> pos = r.read<float>(pos_it->second, 3, "POSITION");
+            const size_t count = pos.size() / 3, first_vertex = m.positions.size(), first_index = m.indices.size();
+            std::vector<float> nrm, tan, uv;
+            if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end())
+                nrm = r.read<float>(it->second, 3, "NORMAL");
+            if (auto it = prim.attributes.find("TANGENT"); it != prim.attributes.end())
+                tan = r.read<float>(it->second, 4, "TANGENT");
+            if (auto it = prim.attributes.find("TEXCOORD_0"); it != prim.attributes.end())
+                uv = r.read<float>(it->second, 2, "TEXCOORD_0");
+            if ((!nrm.empty() && nrm.size() != count * 3) || (!tan.empty() && tan.size() != count * 4) ||
+                (!uv.empty() && uv.size() != count * 2))
+                r.fail("mesh " + std::to_string(mesh_index) + ": attribute counts differ from POSITION's");
+            for (size_t v = 0; v < count; ++v)
+            {
+                m.positions.push_back(glm::vec3(world * glm::vec4(pos[v * 3], pos[v * 3 + 1], pos[v * 3 + 2], 1.0f)));
+                m.normals.push_back(nrm.empty() ? glm::vec3(0.0f)
+                                                : glm::normalize(normal_matrix * glm::vec3(nrm[v * 3], nrm[v * 3 + 1], nrm[v * 3 + 2])));
+                m.tangents.push_back(tan.empty() ? glm::vec4(0.0f)
+                                                 : glm::vec4(glm::normalize(linear * glm::vec3(tan[v * 4], tan[v * 4 + 1], tan[v * 4 + 2])),
+                                                             tan[v * 4 + 3] * handedness));
+                m.uvs.push_back(uv.empty() ? glm::vec2(0.0f) : glm::vec2(uv[v * 2], uv[v * 2 + 1]));
+            }
+            std::vector<uint32_t> idx;
+            if (prim.indices >= 0)
+                idx = r.read<uint32_t>(prim.indices, 1, "indices");
+            else
+                for (size_t v = 0; v < count; ++v)
+                    idx.push_back(uint32_t(v));
+            if (idx.size() % 3 != 0)
+                r.fail("mesh " + std::to_string(mesh_index) + ": index count is not a multiple of 3");
+            for (uint32_t i : idx)
+            {
+                if (i >= count)
+                    r.fail("mesh " + std::to_string(mesh_index) + ": index " + std::to_string(i) + " out of range (" +
+                           std::to_string(count) + " vertices)");
+                m.indices.push_back(uint32_t(first_vertex + i));
+            }
+            if (nrm.empty())
+                generate_normals(m, first_vertex, first_index);
+            if (tan.empty())
+            {
+                generate_tangents(m, first_vertex, first_index);
+                scene.tangents_generated = true;
+            }
+            if (material < 0)
+                material = prim.material;
+        }
+    };
+
+    std::function<void(int, const glm::mat4&, int)> visit = [&](int node, const glm::mat4& parent, int depth) {
+        if (node < 0 || size_t(node) >= model.nodes.size() || depth > 256)
+            r.fail("node " + std::to_string(node) + " does not exist (or the hierarchy has a cycle)");
+        const tinygltf::Node& n = model.nodes[node];
+        glm::mat4 world = parent * local_matrix(n);
+        if (n.mesh >= 0)
+            add_mesh(n.mesh, world);
+        for (int child : n.children)
+            visit(child, world, depth + 1);
+    };
+    if (!model.scenes.empty())
+    {
+        int s = model.defaultScene >= 0 && size_t(model.defaultScene) < model.scenes.size() ? model.defaultScene : 0;
+        for (int node : model.scenes[s].nodes)
+            visit(node, glm::mat4(1.0f), 0);
+    }
+    else
+        for (size_t i = 0; i < model.meshes.size(); ++i)
+            add_mesh(int(i), glm::mat4(1.0f));
+    if (m.indices.empty())
+        r.fail("the scene has no triangles");
+    if (material >= 0 && size_t(material) < model.materials.size())
+    {
+        const tinygltf::Material& mat = model.materials[material];
+        scene.base_color_texture = texture_path(r, dir, mat.pbrMetallicRoughness.baseColorTexture.index);
+        scene.normal_texture = texture_path(r, dir, mat.normalTexture.index);
+    }
+    return scene;
+}
+
+} // namespace hemi::io
