@@ -1,0 +1,77 @@
+#pragma once
+// The baked-asset container (.hemi): named binary sections in one versioned, checksummed file, written
+// atomically. The techniques define what goes in the sections; this layer only guarantees that what is read
+// is exactly what was written.
+//
+// Layout (little-endian):
+//   header   : "HEMIASET" (8 bytes), version u32, section count u32
+//   table    : per section: name (32 bytes, NUL-padded), offset u64 (from the file start), size u64
+//   sections : the bytes of each section, in table order, packed
+//   trailer  : XXH64 (seed 0) of every preceding byte, u64
+// Any changed, missing or extra byte is detected: the trailer covers the whole file.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hemi::io
+{
+
+constexpr uint32_t kAssetVersion = 1;
+
+class AssetWriter
+{
+public:
+    // Throws std::invalid_argument for an empty or too long (> 31 bytes) name, or a duplicate.
+    void add(const std::string& name, std::span<const std::byte> bytes);
+    template <typename T>
+    void add_array(const std::string& name, std::span<const T> values)
+    {
+        add(name, std::as_bytes(values));
+    }
+    // Atomic (temporary file + rename). Throws FormatError naming the file on I/O failure.
+    void write(const std::filesystem::path& path) const;
+
+private:
+    std::vector<std::pair<std::string, std::vector<std::byte>>> sections_;
+};
+
+class AssetReader
+{
+public:
+    // Reads and validates the whole file. Throws FormatError naming the file and the problem: missing file,
+    // not a hemi asset (magic), unsupported version, truncated, checksum mismatch (corrupted), or a section
+    // table that points outside the file.
+    explicit AssetReader(const std::filesystem::path& path);
+
+    uint32_t version() const { return version_; }
+    bool has(const std::string& name) const { return sections_.count(name) != 0; }
+    // Throws FormatError naming the file when the section is missing.
+    std::span<const std::byte> section(const std::string& name) const;
+    // The section as an array of T; throws FormatError when its size is not a multiple of sizeof(T).
+    template <typename T>
+    std::vector<T> array(const std::string& name) const
+    {
+        std::span<const std::byte> b = section(name);
+        check_multiple(name, b.size(), sizeof(T));
+        std::vector<T> out(b.size() / sizeof(T));
+        if (!b.empty())
+            std::memcpy(out.data(), b.data(), b.size());
+        return out;
+    }
+
+private:
+    void check_multiple(const std::string& name, size_t size, size_t element) const;
+
+    std::string file_;
+    uint32_t version_ = 0;
+    std::vector<std::byte> data_;
+    std::map<std::string, std::pair<uint64_t, uint64_t>> sections_; // offset, size
+};
+
+} // namespace hemi::io
