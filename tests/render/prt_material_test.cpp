@@ -3,6 +3,7 @@
 // basis that holds a constant, and the GPU frame against a CPU evaluation of the same material.
 #include "../gpu_fixture.h"
 
+#include "normal_map_lookup.h"
 #include "scene.h"
 
 #include <hemi/bake/transfer_fold.h>
@@ -68,20 +69,6 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
     return {target.read_color(), target.read_aux()};
 }
 
-glm::vec3 sample_bilinear(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv)
-{
-    float x = uv.x * s.map_width - 0.5f, y = uv.y * s.map_height - 0.5f;
-    int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-    float fx = x - x0, fy = y - y0;
-    auto texel = [&](int xi, int yi) {
-        xi = ((xi % int(s.map_width)) + int(s.map_width)) % int(s.map_width);
-        yi = ((yi % int(s.map_height)) + int(s.map_height)) % int(s.map_height);
-        const uint8_t* p = &s.normal_map[(size_t(yi) * s.map_width + xi) * 4];
-        return glm::vec3(p[0], p[1], p[2]) / 255.0f;
-    };
-    return (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
-           (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
-}
 
 } // namespace
 
@@ -150,7 +137,7 @@ TEST_F(PrtMaterial, FrameMatchesCpuEvaluationForEveryBasis)
                 glm::vec3 t(-std::sin(phi), std::cos(phi), 0.0f);
                 std::vector<float> tm =
                     fold.apply(hemi::bake::unshadowed_transfer(hemi::bake::object_to_tangent(n, t, 1.0f), 3), 9);
-                glm::vec3 nt = glm::normalize(sample_bilinear(scene, uv) * 2.0f - 1.0f);
+                glm::vec3 nt = glm::normalize(hemi::test::sample_bilinear(scene, uv) * 2.0f - 1.0f);
                 float v[HEMI_BASIS_MAX_SIZE];
                 b.eval(nt, v);
                 glm::vec3 e(0.0f);

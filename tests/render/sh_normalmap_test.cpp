@@ -3,6 +3,7 @@
 // at the UV the GPU reports for each sampled pixel.
 #include "../gpu_fixture.h"
 
+#include "normal_map_lookup.h"
 #include "scene.h"
 
 #include <glm/geometric.hpp>
@@ -16,21 +17,6 @@ class ShNormalMapSample : public hemi::test::GpuTest
 {
 };
 
-// Bilinear RGBA8 lookup with REPEAT addressing, as VkSampler with VK_FILTER_LINEAR does it.
-glm::vec3 sample_bilinear(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv)
-{
-    float x = uv.x * s.map_width - 0.5f, y = uv.y * s.map_height - 0.5f;
-    int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-    float fx = x - x0, fy = y - y0;
-    auto texel = [&](int xi, int yi) {
-        xi = ((xi % int(s.map_width)) + int(s.map_width)) % int(s.map_width);
-        yi = ((yi % int(s.map_height)) + int(s.map_height)) % int(s.map_height);
-        const uint8_t* p = &s.normal_map[(size_t(yi) * s.map_width + xi) * 4];
-        return glm::vec3(p[0], p[1], p[2]) / 255.0f;
-    };
-    return (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
-           (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
-}
 
 glm::vec3 cpu_shade(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv)
 {
@@ -38,7 +24,7 @@ glm::vec3 cpu_shade(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv)
     glm::vec3 N(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
     glm::vec3 T(-std::sin(phi), std::cos(phi), 0.0f);
     glm::vec3 B = -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
-    glm::vec3 nt = glm::normalize(sample_bilinear(s, uv) * 2.0f - 1.0f);
+    glm::vec3 nt = glm::normalize(hemi::test::sample_bilinear(s, uv) * 2.0f - 1.0f);
     glm::vec3 n = glm::normalize(T * nt.x + B * nt.y + N * nt.z);
     return s.albedo * hemi::math::sh9_eval_rgb(s.irradiance, n) / float(M_PI);
 }

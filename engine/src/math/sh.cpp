@@ -1,3 +1,4 @@
+#include <hemi/math/quadrature.h>
 #include <hemi/math/sh.h>
 
 #include "hemi/shared/sh_constants.h"
@@ -12,38 +13,6 @@
 
 namespace hemi::math
 {
-
-namespace
-{
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n; Numerical Recipes' gauleg).
-void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w)
-{
-    x.resize(n);
-    w.resize(n);
-    for (int i = 0; i < (n + 1) / 2; ++i)
-    {
-        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), pp = 0.0;
-        for (int iter = 0; iter < 100; ++iter)
-        {
-            double p1 = 1.0, p2 = 0.0;
-            for (int j = 1; j <= n; ++j)
-            {
-                double p3 = p2;
-                p2 = p1;
-                p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
-            }
-            pp = n * (z * p1 - p2) / (z * z - 1.0);
-            double z1 = z;
-            z = z1 - p1 / pp;
-            if (std::abs(z - z1) < 1e-15)
-                break;
-        }
-        x[i] = -z;
-        x[n - 1 - i] = z;
-        w[i] = w[n - 1 - i] = 2.0 / ((1.0 - z * z) * pp * pp);
-    }
-}
-} // namespace
 
 namespace
 {
@@ -135,8 +104,8 @@ std::vector<glm::vec3> project_sh(int order, const std::function<glm::vec3(const
     // uniform rule in phi (exact for trigonometric polynomials of degree < 2 * theta_steps).
     const int n = sh_count(order), phi_steps = 2 * theta_steps;
     const double dphi = 2.0 * M_PI / phi_steps;
-    std::vector<double> zs, ws;
-    gauss_legendre(theta_steps, zs, ws);
+    const QuadratureRule rule = gauss_legendre(theta_steps);
+    const std::vector<double>&zs = rule.x, &ws = rule.w;
     std::vector<glm::dvec3> acc(n, glm::dvec3(0.0));
     std::vector<float> y(n);
     for (int t = 0; t < theta_steps; ++t)

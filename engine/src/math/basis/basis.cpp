@@ -1,5 +1,6 @@
 // The single table of hemispherical bases and the quadrature that derives their projections from SH9.
 #include <hemi/math/basis.h>
+#include <hemi/math/quadrature.h>
 #include <hemi/math/sh.h>
 
 #include <Eigen/Dense>
@@ -36,58 +37,19 @@ const BasisDesc& basis(std::string_view name)
     throw std::invalid_argument("hemi: unknown basis '" + std::string(name) + "' (known: " + known + ")");
 }
 
-namespace
-{
-struct Rule
-{
-    std::vector<double> t, w;
-};
-// Gauss-Legendre nodes on [0, 1].
-Rule gauss_legendre_01(int n)
-{
-    Rule r;
-    r.t.resize(n);
-    r.w.resize(n);
-    for (int i = 0; i < (n + 1) / 2; ++i)
-    {
-        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), pp = 1.0;
-        for (int iter = 0; iter < 100; ++iter)
-        {
-            double p1 = 1.0, p2 = 0.0;
-            for (int j = 1; j <= n; ++j)
-            {
-                double p3 = p2;
-                p2 = p1;
-                p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
-            }
-            pp = n * (z * p1 - p2) / (z * z - 1.0);
-            double z1 = z;
-            z = z1 - p1 / pp;
-            if (std::abs(z - z1) < 1e-15)
-                break;
-        }
-        double w = 2.0 / ((1.0 - z * z) * pp * pp);
-        r.t[i] = 0.5 * (1.0 - z);
-        r.t[n - 1 - i] = 0.5 * (1.0 + z);
-        r.w[i] = r.w[n - 1 - i] = 0.5 * w;
-    }
-    return r;
-}
-} // namespace
-
 std::vector<HemisphereSample> hemisphere_quadrature(int steps)
 {
     if (steps < 2)
         throw std::invalid_argument("hemi: hemisphere quadrature needs at least 2 steps");
     // z = t^2, dz = 2t dt: the sqrt(z) factors of the shifted bases become polynomial in t.
-    Rule rule = gauss_legendre_01(steps);
+    const QuadratureRule rule = gauss_legendre(steps, 0.0, 1.0);
     const int phi_steps = 2 * steps;
     const double dphi = 2.0 * M_PI / phi_steps;
     std::vector<HemisphereSample> samples;
     samples.reserve(size_t(steps) * phi_steps);
     for (int i = 0; i < steps; ++i)
     {
-        double t = rule.t[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        double t = rule.x[i], z = t * t, s = std::sqrt(std::max(0.0, 1.0 - z * z));
         double w = rule.w[i] * 2.0 * t * dphi;
         for (int p = 0; p < phi_steps; ++p)
         {
