@@ -69,7 +69,6 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
     return {target.read_color(), target.read_aux()};
 }
 
-
 } // namespace
 
 // Constant radiance 1, albedo 1: every covered pixel is exactly 1 for the bases that hold a constant,

@@ -17,7 +17,6 @@ class ShNormalMapSample : public hemi::test::GpuTest
 {
 };
 
-
 glm::vec3 cpu_shade(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv)
 {
     float phi = 2.0f * float(M_PI) * uv.x, theta = float(M_PI) * uv.y;
