@@ -267,9 +267,9 @@ TEST(SeparableBasis, ConcentricMapIsEqualAreaOnTheHemisphere)
     EXPECT_NEAR(double(above) / (n * n), 0.5, 0.003);
 }
 
-// The separable functions reproduce the SH9 signal they were fitted to: with all 9 terms the fit of any
-// irradiance vector is exact on the hemisphere, which checks the weights W = C V S^-1 and the projection.
-TEST(SeparableBasis, SepFourIsTheBestFourTermFitOfTheGrid)
+// The 4-term separable basis (convolution folded in) represents the constant irradiance nearly exactly,
+// unlike HL2: a wrong W = C V S^-1 (e.g. V without S^-1, or C on the wrong side) loses the DC term.
+TEST(SeparableBasis, SepFourHoldsTheConstantNearlyExactly)
 {
     const BasisDesc& b = basis("sep4");
     std::vector<double> p = projection_from_sh9(b);
