@@ -1,6 +1,7 @@
 #version 450
 // PRT material, fragment stage (Sloan 2006 Sec. 3): the coefficients are already in the vertex's tangent
-// frame, so the normal-map normal evaluates the basis directly: out = albedo * sum_k c_k b_k(n) / pi.
+// frame, so the normal-map normal evaluates the basis directly: out = albedo * sum_k c_k b_k(n) / pi, with
+// albedo = the uniform factor times the base colour texture.
 // Attachment 1 carries (u, v, 0, 1) where the mesh covers the pixel.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -15,6 +16,7 @@ layout(set = 0, binding = HEMI_PRT_MATERIAL_BINDING_UNIFORMS, std140) uniform Un
     PrtMaterialUniforms u;
 };
 layout(set = 0, binding = HEMI_PRT_MATERIAL_BINDING_NORMAL_MAP) uniform sampler2D normal_map;
+layout(set = 0, binding = HEMI_PRT_MATERIAL_BINDING_BASE_COLOR) uniform sampler2D base_color; // sRGB format
 
 layout(location = 0) in vec4 in_packed[HEMI_PRT_MATERIAL_PACKED_VEC4];
 layout(location = HEMI_PRT_MATERIAL_PACKED_VEC4) in vec2 in_uv;
@@ -36,6 +38,6 @@ void main()
         vec3 c = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4], in_packed[(i + 2) / 4][(i + 2) % 4]);
         e += c * b[k];
     }
-    out_color = vec4(u.albedo.rgb * e / kPi, 1.0);
+    out_color = vec4(u.albedo.rgb * texture(base_color, in_uv).rgb * e / kPi, 1.0);
     out_aux = vec4(in_uv, 0.0, 1.0);
 }

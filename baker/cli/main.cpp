@@ -1,12 +1,18 @@
 // hemi-bake: the offline side of hemi as a command line. Subcommands:
 //   basis-report [--json FILE] [--plot FILE.png] [--signals N] [--seed S]
+//   prt SCENE.gltf|.glb -o ASSET.hemi [--bases ...] [--transfer ...] [--bounces B] [--order N] [--rays R]
+//       [--seed S] [--albedo A] [--cpca CxV] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
+#include <hemi/bake/prt_bake.h>
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
 
 namespace
 {
@@ -48,6 +54,69 @@ void print_report(const hemi::bake::BasisReport& r)
     for (const auto& [name, st] : r.imse)
         std::printf("  %-9s %6d %12.5f %10.4f\n", name.c_str(), st.coefficients, st.mean_imse, st.rel_rms);
 }
+// Progress on stderr: one line rewritten in place, with the ETA over all passes.
+class ProgressLine
+{
+public:
+    void operator()(const hemi::bake::PrtBakeProgress& p)
+    {
+        using clock = std::chrono::steady_clock;
+        const double fraction =
+            (p.pass + (p.vertex_count ? double(p.vertices_done) / double(p.vertex_count) : 1.0)) / p.passes;
+        const double elapsed = std::chrono::duration<double>(clock::now() - start_).count();
+        const char* what = p.pass == 0 ? "visibility" : "bounce";
+        char eta[32] = "";
+        if (fraction > 0.02 && fraction < 1.0)
+            std::snprintf(eta, sizeof eta, ", ETA %.0f s", elapsed * (1.0 - fraction) / fraction);
+        std::fprintf(stderr, "\rhemi-bake prt: pass %d/%d (%s%s) %5.1f%%%s      ", p.pass + 1, p.passes, what,
+                     p.pass == 0 ? "" : (" " + std::to_string(p.pass)).c_str(), 100.0 * fraction, eta);
+        if (p.pass + 1 == p.passes && p.vertices_done == p.vertex_count)
+            std::fprintf(stderr, "\n");
+        std::fflush(stderr);
+    }
+
+private:
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+std::vector<std::string> split(const std::string& list)
+{
+    std::vector<std::string> out;
+    std::stringstream in(list);
+    for (std::string item; std::getline(in, item, ',');)
+        if (!item.empty())
+            out.push_back(item);
+    return out;
+}
+
+void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::PrtAssetOptions& o,
+                       const std::string& asset)
+{
+    std::printf("baked %s: %u vertices, %u triangles, %s transfer, order %d (L = %d)", asset.c_str(), s.vertices,
+                s.triangles, std::string(hemi::bake::to_string(o.bake.kind)).c_str(), o.bake.order,
+                o.bake.order * o.bake.order);
+    if (o.bake.kind != hemi::bake::TransferKind::Unshadowed)
+        std::printf(", %d rays per vertex", o.bake.rays);
+    if (o.bake.kind == hemi::bake::TransferKind::Interreflected)
+        std::printf(", %d bounces, albedo %.2f", o.bake.bounces, o.bake.albedo);
+    std::printf("\n");
+    if (s.tangents_generated)
+        std::printf("tangents were generated from the UV layout (the scene has none)\n");
+    std::printf("rays: %llu in %.2f s = %.2f Mrays/s; total %.2f s\n", (unsigned long long)s.rays, s.trace_seconds,
+                s.rays_per_second() * 1e-6, s.total_seconds);
+    std::printf("  %-6s %3s %12s", "tech", "K", "dense MB");
+    if (o.cpca_clusters)
+        std::printf(" %10s %12s %12s", "CPCA MB", "CPCA RMS", "relative");
+    std::printf("\n");
+    for (const auto& t : s.techniques)
+    {
+        std::printf("  %-6s %3d %12.2f", t.name.c_str(), t.k, double(t.dense_bytes) / 1048576.0);
+        if (o.cpca_clusters)
+            std::printf(" %10.2f %12.3e %12.3e", double(t.cpca_bytes) / 1048576.0, t.cpca_rms, t.cpca_relative);
+        std::printf("\n");
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -64,7 +133,67 @@ int main(int argc, char** argv)
     report->add_option("--signals", signals, "number of random irradiance signals")->check(CLI::Range(1, 10000000))
         ->capture_default_str();
     report->add_option("--seed", seed, "seed of the random signals")->capture_default_str();
+
+    std::string scene, asset, bases, transfer = "interreflected", cpca, prt_json;
+    hemi::bake::PrtAssetOptions prt_options;
+    {
+        std::string all;
+        for (const auto& t : hemi::bake::default_techniques())
+            all += (all.empty() ? "" : ",") + t;
+        bases = all;
+    }
+    CLI::App* prt = app.add_subcommand("prt", "bake per-vertex PRT transfer matrices (Sloan 2006) from a glTF scene");
+    prt->add_option("scene", scene, "glTF 2.0 scene (.gltf or .glb)")->required()->check(CLI::ExistingFile);
+    prt->add_option("-o,--output", asset, "baked asset to write (.hemi)")->required();
+    prt->add_option("--bases", bases, "comma-separated techniques: gs (SH9, the gold standard), hl2, sal4, h4, h6, "
+                                      "sep4, prt (classic PRT, no normal map); also sh4ls, zernike3, zernike6")
+        ->capture_default_str();
+    prt->add_option("--transfer", transfer, "unshadowed | shadowed | interreflected")->capture_default_str();
+    prt->add_option("--bounces", prt_options.bake.bounces, "interreflection bounces")->check(CLI::Range(0, 16))
+        ->capture_default_str();
+    prt->add_option("--order", prt_options.bake.order, "lighting SH order n (L = n^2)")->check(CLI::Range(3, 6))
+        ->capture_default_str();
+    prt->add_option("--rays", prt_options.bake.rays, "rays per vertex")->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    prt->add_option("--seed", prt_options.bake.seed, "seed of the ray directions (same seed, same bytes)")
+        ->capture_default_str();
+    prt->add_option("--albedo", prt_options.bake.albedo, "grey albedo for interreflection, in [0, 1)")
+        ->capture_default_str();
+    prt->add_option("--cpca", cpca, "compress with CPCA: CLUSTERSxVECTORS, e.g. 1x24 (dense matrices are kept)");
+    prt->add_option("--json", prt_json, "write the bake summary as JSON to FILE");
     CLI11_PARSE(app, argc, argv);
+
+    if (prt->parsed())
+    {
+        try
+        {
+            prt_options.bake.kind = hemi::bake::parse_transfer_kind(transfer);
+            prt_options.techniques = split(bases);
+            if (!cpca.empty())
+            {
+                unsigned c = 0, v = 0;
+                char x = 0, rest = 0;
+                if (std::sscanf(cpca.c_str(), "%u%c%u%c", &c, &x, &v, &rest) != 3 || x != 'x' || c == 0 || v == 0)
+                    throw std::invalid_argument("--cpca expects CLUSTERSxVECTORS (e.g. 1x24), got '" + cpca + "'");
+                prt_options.cpca_clusters = c;
+                prt_options.cpca_vectors = v;
+            }
+            ProgressLine line;
+            hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
+            print_prt_summary(s, prt_options, asset);
+            if (!prt_json.empty())
+            {
+                hemi::bake::write_prt_bake_json(prt_json, s, prt_options);
+                std::printf("wrote %s\n", prt_json.c_str());
+            }
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "\nhemi-bake prt: %s\n", e.what());
+            return 1;
+        }
+        return 0;
+    }
 
     try
     {

@@ -54,8 +54,8 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
                                      folded_matrices(scene.mesh, basis));
     hemi::render::TransferPass pass(dev, m);
     hemi::render::OffscreenTarget target(dev, w, h);
-    hemi::render::PrtMaterialRenderer material(dev, target, scene.mesh, scene.normal_map, scene.map_width,
-                                               scene.map_height, basis, pass);
+    const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
+    hemi::render::PrtMaterialRenderer material(dev, target, scene.mesh, normal_map, nullptr, basis, pass);
     hemi::render::PrtMaterialFrame frame;
     frame.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
     frame.albedo = albedo;

@@ -1,4 +1,5 @@
 #include <hemi/io/gltf.h>
+#include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
 
 #include <tiny_gltf.h>
@@ -280,6 +281,101 @@ GltfScene read_gltf(const std::filesystem::path& path)
         scene.normal_texture = texture_path(r, dir, mat.normalTexture.index);
     }
     return scene;
+}
+
+void write_gltf(const std::filesystem::path& path, const Mesh& mesh, const std::string& base_color_uri,
+                const std::string& normal_uri)
+{
+    const size_t n = mesh.vertex_count();
+    if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3)
+        throw std::invalid_argument("hemi: cannot write " + path.string() + ": empty or non-triangle mesh");
+    for (uint32_t i : mesh.indices)
+        if (i >= n)
+            throw std::invalid_argument("hemi: cannot write " + path.string() + ": index out of range");
+    tinygltf::Model m;
+    m.asset.version = "2.0";
+    m.asset.generator = "hemi";
+    m.buffers.emplace_back();
+    std::vector<unsigned char>& data = m.buffers[0].data;
+    tinygltf::Primitive prim;
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+    auto add = [&](const void* bytes, size_t size, int component, int type, size_t count, int target) {
+        while (data.size() % 4)
+            data.push_back(0);
+        tinygltf::BufferView view;
+        view.buffer = 0;
+        view.byteOffset = data.size();
+        view.byteLength = size;
+        view.target = target;
+        const auto* b = static_cast<const unsigned char*>(bytes);
+        data.insert(data.end(), b, b + size);
+        m.bufferViews.push_back(view);
+        tinygltf::Accessor a;
+        a.bufferView = int(m.bufferViews.size() - 1);
+        a.componentType = component;
+        a.type = type;
+        a.count = count;
+        m.accessors.push_back(a);
+        return int(m.accessors.size() - 1);
+    };
+    const int position = add(mesh.positions.data(), n * 12, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n,
+                             TINYGLTF_TARGET_ARRAY_BUFFER);
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    m.accessors[position].minValues = {lo.x, lo.y, lo.z};
+    m.accessors[position].maxValues = {hi.x, hi.y, hi.z};
+    prim.attributes["POSITION"] = position;
+    if (mesh.normals.size() == n)
+        prim.attributes["NORMAL"] = add(mesh.normals.data(), n * 12, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                        TINYGLTF_TYPE_VEC3, n, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (mesh.tangents.size() == n)
+        prim.attributes["TANGENT"] = add(mesh.tangents.data(), n * 16, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                         TINYGLTF_TYPE_VEC4, n, TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (mesh.uvs.size() == n)
+        prim.attributes["TEXCOORD_0"] = add(mesh.uvs.data(), n * 8, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                            TINYGLTF_TYPE_VEC2, n, TINYGLTF_TARGET_ARRAY_BUFFER);
+    prim.indices = add(mesh.indices.data(), mesh.indices.size() * 4, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
+                       TINYGLTF_TYPE_SCALAR, mesh.indices.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    m.buffers[0].uri.clear();
+
+    tinygltf::Material material;
+    material.name = "hemi";
+    auto texture = [&](const std::string& uri) {
+        tinygltf::Image image;
+        image.uri = uri;
+        m.images.push_back(image);
+        tinygltf::Texture t;
+        t.source = int(m.images.size() - 1);
+        m.textures.push_back(t);
+        return int(m.textures.size() - 1);
+    };
+    if (!base_color_uri.empty())
+        material.pbrMetallicRoughness.baseColorTexture.index = texture(base_color_uri);
+    if (!normal_uri.empty())
+        material.normalTexture.index = texture(normal_uri);
+    m.materials.push_back(material);
+    prim.material = 0;
+    tinygltf::Mesh gmesh;
+    gmesh.primitives.push_back(prim);
+    m.meshes.push_back(gmesh);
+    tinygltf::Node node;
+    node.mesh = 0;
+    m.nodes.push_back(node);
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    m.scenes.push_back(scene);
+    m.defaultScene = 0;
+
+    const bool binary = path.extension() == ".glb";
+    write_atomically(path, [&](const std::filesystem::path& tmp) {
+        tinygltf::TinyGLTF writer;
+        if (!writer.WriteGltfSceneToFile(&m, tmp.string(), false, true, true, binary))
+            throw FormatError(path.string() + ": writing glTF failed");
+    });
 }
 
 } // namespace hemi::io

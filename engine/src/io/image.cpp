@@ -15,6 +15,10 @@
 #pragma GCC diagnostic ignored "-Wunused-function"
 #endif
 #include <stb/stb_image_write.h>
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
 #if defined(__GNUC__)
 #pragma GCC diagnostic pop
 #endif
@@ -22,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 
@@ -157,8 +162,16 @@ void write_png(const std::filesystem::path& path, const ImageRgba& image, const 
         }
         bytes[i] = static_cast<unsigned char>(std::lround(v * 255.0f));
     }
+    write_png(path, ImageRgba8{image.width, image.height, std::move(bytes)});
+}
+
+void write_png(const std::filesystem::path& path, const ImageRgba8& image)
+{
+    if (image.width == 0 || image.height == 0 || image.pixels.size() != size_t(image.width) * image.height * 4)
+        throw FormatError(path.string() + ": RGBA8 image of " + std::to_string(image.width) + "x" +
+                          std::to_string(image.height) + " has " + std::to_string(image.pixels.size()) + " bytes");
     int length = 0;
-    unsigned char* png = stbi_write_png_to_mem(bytes.data(), int(image.width * 4), int(image.width),
+    unsigned char* png = stbi_write_png_to_mem(image.pixels.data(), int(image.width * 4), int(image.width),
                                                int(image.height), 4, &length);
     if (!png)
         throw FormatError(path.string() + ": encoding PNG failed (stb_image_write)");
@@ -170,6 +183,24 @@ void write_png(const std::filesystem::path& path, const ImageRgba& image, const 
         if (f.fail())
             throw FormatError(path.string() + ": writing PNG failed (disk full or not writable?)");
     });
+}
+
+ImageRgba8 read_png(const std::filesystem::path& path)
+{
+    std::ifstream f(path, std::ios::binary);
+    if (!f)
+        throw FormatError(path.string() + ": no such file or not readable");
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) != 0)
+        throw FormatError(path.string() + ": not a PNG file");
+    int w = 0, h = 0, channels = 0;
+    unsigned char* data = stbi_load_from_memory(bytes.data(), int(bytes.size()), &w, &h, &channels, 4);
+    if (!data)
+        throw FormatError(path.string() + ": corrupt or truncated PNG (" + stbi_failure_reason() + ")");
+    std::unique_ptr<unsigned char, void (*)(void*)> owner(data, stbi_image_free);
+    ImageRgba8 out{uint32_t(w), uint32_t(h), {}};
+    out.pixels.assign(data, data + size_t(w) * h * 4);
+    return out;
 }
 
 } // namespace hemi::io

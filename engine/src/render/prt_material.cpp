@@ -10,11 +10,15 @@ namespace hemi::render
 {
 
 PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target,
-                                         const io::Mesh& mesh, std::span<const uint8_t> normal_map,
-                                         uint32_t map_width, uint32_t map_height, const math::BasisDesc& basis,
-                                         const TransferPass& coefficients)
-    : mesh_(device, mesh), normal_map_(upload_normal_map(device, normal_map, map_width, map_height))
+                                         const io::Mesh& mesh, const io::ImageRgba8& normal_map,
+                                         const io::ImageRgba8* base_color, const math::BasisDesc& basis,
+                                         const CoefficientSource& coefficients)
+    : mesh_(device, mesh), normal_map_(upload_normal_map(device, normal_map.pixels, normal_map.width,
+                                                         normal_map.height))
 {
+    const io::ImageRgba8 white{1, 1, {255, 255, 255, 255}};
+    const io::ImageRgba8& albedo = base_color ? *base_color : white;
+    base_color_ = upload_texture(device, albedo.pixels, albedo.width, albedo.height, true);
     if (coefficients.vertex_count() != mesh_.vertex_count())
         throw std::invalid_argument("hemi: transfer pass has " + std::to_string(coefficients.vertex_count()) +
                                     " vertices, the mesh " + std::to_string(mesh_.vertex_count()));
@@ -35,12 +39,13 @@ PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const Offscr
         {HEMI_PRT_MATERIAL_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, graphics},
         {HEMI_PRT_MATERIAL_BINDING_NORMAL_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT},
         {HEMI_PRT_MATERIAL_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_VERTEX_BIT},
+        {HEMI_PRT_MATERIAL_BINDING_BASE_COLOR, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT},
     };
     program_ = create_surface_program(device, target, "prt_material.vert", "prt_material.frag", bindings,
                                       {uint32_t(basis.id), uint32_t(basis.size)});
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, program_.set_layout);
-    gpu::DescriptorWrite writes[3];
+    gpu::DescriptorWrite writes[4];
     writes[0].binding = HEMI_PRT_MATERIAL_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[0].buffer = {uniforms_, 0, VK_WHOLE_SIZE};
@@ -50,6 +55,9 @@ PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const Offscr
     writes[2].binding = HEMI_PRT_MATERIAL_BINDING_COEFFICIENTS;
     writes[2].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     writes[2].texel_view = coefficient_view_;
+    writes[3].binding = HEMI_PRT_MATERIAL_BINDING_BASE_COLOR;
+    writes[3].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    writes[3].image = {sampler_, base_color_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     gpu::write_descriptors(device, set_, writes);
 }
 

@@ -89,10 +89,17 @@ gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTa
 gpu::Image upload_normal_map(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
                              uint32_t height)
 {
+    return upload_texture(device, rgba8, width, height, false);
+}
+
+gpu::Image upload_texture(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
+                          uint32_t height, bool srgb)
+{
     if (width == 0 || height == 0 || rgba8.size() != size_t(width) * height * 4)
-        throw std::invalid_argument("hemi: normal map is " + std::to_string(rgba8.size()) + " bytes for " +
+        throw std::invalid_argument("hemi: texture is " + std::to_string(rgba8.size()) + " bytes for " +
                                     std::to_string(width) + "x" + std::to_string(height) + " RGBA8");
-    gpu::Image image = gpu::create_image(device, {width, height, VK_FORMAT_R8G8B8A8_UNORM});
+    gpu::Image image = gpu::create_image(
+        device, {width, height, srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM});
     gpu::upload_image(device, image, rgba8.data(), rgba8.size(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     return image;
 }

@@ -317,12 +317,15 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
 
 TransferPass::~TransferPass() = default;
 
-void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+namespace
 {
-    Impl& s = *impl_;
-    check_lighting(lighting, s.l);
+// The per-frame lighting update both passes start with.
+void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std::span<const glm::vec3> lighting,
+                            uint32_t l)
+{
+    check_lighting(lighting, l);
     float packed[HEMI_TRANSFER_MAX_L * 4] = {};
-    for (uint32_t j = 0; j < s.l; ++j)
+    for (uint32_t j = 0; j < l; ++j)
     {
         packed[j * 4 + 0] = lighting[j].x;
         packed[j * 4 + 1] = lighting[j].y;
@@ -335,9 +338,16 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
                         VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdUpdateBuffer(cmd, s.lighting, 0, sizeof(float) * 4 * s.l, packed);
+    vkCmdUpdateBuffer(cmd, buffer, 0, sizeof(float) * 4 * l, packed);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
+}
+} // namespace
+
+void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+{
+    Impl& s = *impl_;
+    record_lighting_update(cmd, s.lighting, lighting, s.l);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.pipeline);
     for (const Impl::Segment& seg : s.segments)
     {
@@ -350,9 +360,9 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
     }
 }
 
-void TransferPass::run(std::span<const glm::vec3> lighting)
+void CoefficientSource::run(std::span<const glm::vec3> lighting)
 {
-    gpu::one_shot(*impl_->device, [&](VkCommandBuffer cmd) {
+    gpu::one_shot(device(), [&](VkCommandBuffer cmd) {
         record(cmd, lighting);
         // A fence wait alone does not make device writes visible to the host.
         gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -366,10 +376,10 @@ const gpu::Buffer& TransferPass::coefficients() const
     return impl_->coefficients;
 }
 
-std::vector<float> TransferPass::read_coefficients() const
+std::vector<float> CoefficientSource::read_coefficients() const
 {
-    std::vector<float> out(size_t(impl_->n) * impl_->k * 4);
-    gpu::read_buffer(*impl_->device, impl_->coefficients, out.data(), out.size() * sizeof(float));
+    std::vector<float> out(size_t(vertex_count()) * k() * 4);
+    gpu::read_buffer(device(), coefficients(), out.data(), out.size() * sizeof(float));
     return out;
 }
 
@@ -377,5 +387,202 @@ uint32_t TransferPass::vertex_count() const { return impl_->n; }
 uint32_t TransferPass::k() const { return impl_->k; }
 uint32_t TransferPass::l() const { return impl_->l; }
 uint32_t TransferPass::segment_count() const { return uint32_t(impl_->segments.size()); }
+const gpu::Device& TransferPass::device() const { return *impl_->device; }
+
+namespace
+{
+void validate_cpca(const CpcaMatrices& c)
+{
+    validate_transfer_shape(c.vertex_count, c.k, c.l);
+    const size_t d = size_t(c.k) * c.l;
+    if (c.clusters == 0 || c.vectors == 0)
+        throw std::invalid_argument("hemi: CPCA needs at least one cluster and one vector");
+    if (c.means.size() != c.clusters * d || c.basis.size() != size_t(c.clusters) * c.vectors * d ||
+        c.cluster.size() != c.vertex_count || c.weights.size() != size_t(c.vertex_count) * c.vectors)
+        throw std::invalid_argument("hemi: CPCA array sizes do not match " + std::to_string(c.clusters) + "x" +
+                                    std::to_string(c.vectors) + " clusters x vectors over " +
+                                    std::to_string(c.vertex_count) + " vertices");
+    for (uint32_t id : c.cluster)
+        if (id >= c.clusters)
+            throw std::invalid_argument("hemi: CPCA cluster id " + std::to_string(id) + " out of range");
+    for (std::span<const float> values : {c.means, c.basis, c.weights})
+        for (float v : values)
+            if (!std::isfinite(v))
+                throw std::invalid_argument("hemi: CPCA data contain a non-finite value");
+}
+} // namespace
+
+void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighting, std::span<float> out)
+{
+    validate_cpca(c);
+    check_lighting(lighting, c.l);
+    if (out.size() != size_t(c.vertex_count) * c.k * 4)
+        throw std::invalid_argument("hemi: CPCA output has " + std::to_string(out.size()) + " floats, expected " +
+                                    std::to_string(size_t(c.vertex_count) * c.k * 4));
+    const size_t d = size_t(c.k) * c.l, rows = size_t(c.clusters) * (c.vectors + 1) * c.k;
+    // Step 1: every cluster row (mean, then the V vectors) times the lighting.
+    std::vector<glm::vec3> projected(rows);
+    for (uint32_t cl = 0; cl < c.clusters; ++cl)
+        for (uint32_t j = 0; j <= c.vectors; ++j)
+        {
+            const float* m = j == 0 ? &c.means[cl * d] : &c.basis[(size_t(cl) * c.vectors + j - 1) * d];
+            for (uint32_t k = 0; k < c.k; ++k)
+            {
+                glm::vec3 sum(0.0f);
+                for (uint32_t i = 0; i < c.l; ++i)
+                    sum += m[k * c.l + i] * lighting[i];
+                projected[(size_t(cl) * (c.vectors + 1) + j) * c.k + k] = sum;
+            }
+        }
+    // Step 2: per vertex, the mean's projection plus the weighted vectors' projections.
+    tbb::parallel_for(uint32_t(0), c.vertex_count, [&](uint32_t v) {
+        const size_t base = size_t(c.cluster[v]) * (c.vectors + 1) * c.k;
+        for (uint32_t k = 0; k < c.k; ++k)
+        {
+            glm::vec3 sum = projected[base + k];
+            for (uint32_t j = 0; j < c.vectors; ++j)
+                sum += c.weights[size_t(v) * c.vectors + j] * projected[base + (j + 1) * c.k + k];
+            float* o = &out[(size_t(v) * c.k + k) * 4];
+            o[0] = sum.x;
+            o[1] = sum.y;
+            o[2] = sum.z;
+            o[3] = 0.0f;
+        }
+    });
+}
+
+struct CpcaTransferPass::Impl
+{
+    const gpu::Device* device;
+    uint32_t n, k, l, rows;
+    gpu::Buffer rows_buffer, lighting, projected, weights, clusters, coefficients;
+    gpu::BufferView coefficient_view;
+    gpu::Program project, reconstruct;
+    gpu::DescriptorPool pool;
+    VkDescriptorSet project_set = VK_NULL_HANDLE, reconstruct_set = VK_NULL_HANDLE;
+};
+
+CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c)
+    : impl_(std::make_unique<Impl>())
+{
+    validate_cpca(c);
+    Impl& s = *impl_;
+    s.device = &device;
+    s.n = c.vertex_count;
+    s.k = c.k;
+    s.l = c.l;
+    const size_t d = size_t(c.k) * c.l;
+    s.rows = c.clusters * (c.vectors + 1) * c.k;
+    const VkPhysicalDeviceLimits& limits = device.limits();
+    auto storage = [&](VkDeviceSize bytes, const char* what) {
+        if (bytes > limits.maxStorageBufferRange)
+            throw std::runtime_error("hemi: CPCA " + std::string(what) + " (" + std::to_string(bytes) +
+                                     " bytes) exceed the device's maxStorageBufferRange");
+        return gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    };
+    if ((uint64_t(s.n) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
+            limits.maxComputeWorkGroupCount[0] ||
+        (uint64_t(s.rows) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
+            limits.maxComputeWorkGroupCount[0])
+        throw std::runtime_error("hemi: CPCA pass over " + std::to_string(s.n) +
+                                 " vertices exceeds the device's maxComputeWorkGroupCount");
+    if (uint64_t(s.n) * s.k > limits.maxTexelBufferElements)
+        throw std::runtime_error("hemi: CPCA output of " + std::to_string(uint64_t(s.n) * s.k) +
+                                 " texels exceeds the device's maxTexelBufferElements");
+    // Rows: per cluster, the mean then the V vectors, each K x L.
+    std::vector<float> rows(size_t(s.rows) * c.l);
+    for (uint32_t cl = 0; cl < c.clusters; ++cl)
+    {
+        std::copy_n(&c.means[cl * d], d, &rows[size_t(cl) * (c.vectors + 1) * d]);
+        std::copy_n(&c.basis[size_t(cl) * c.vectors * d], size_t(c.vectors) * d,
+                    &rows[(size_t(cl) * (c.vectors + 1) + 1) * d]);
+    }
+    s.rows_buffer = storage(rows.size() * 4, "cluster matrices");
+    gpu::write_buffer(device, s.rows_buffer, rows.data(), rows.size() * 4);
+    s.weights = storage(c.weights.size_bytes(), "weights");
+    gpu::write_buffer(device, s.weights, c.weights.data(), c.weights.size_bytes());
+    s.clusters = storage(c.cluster.size_bytes(), "cluster ids");
+    gpu::write_buffer(device, s.clusters, c.cluster.data(), c.cluster.size_bytes());
+    s.projected = storage(VkDeviceSize(s.rows) * 16, "projections");
+    s.lighting = gpu::create_buffer(device, {HEMI_TRANSFER_MAX_L * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const VkDeviceSize coefficient_bytes = VkDeviceSize(s.n) * s.k * 16;
+    s.coefficients = gpu::create_buffer(
+        device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.coefficient_view = gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
+                                                 coefficient_bytes);
+
+    const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
+    const std::vector<gpu::Binding> project_bindings = {
+        {HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+        {HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, cs},
+        {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+    };
+    const std::vector<gpu::Binding> reconstruct_bindings = {
+        {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+        {HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+        {HEMI_CPCA_BINDING_CLUSTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+        {HEMI_CPCA_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, cs},
+    };
+    s.project = gpu::create_compute_program(
+        device, {gpu::embedded_spirv("cpca_project.comp"), project_bindings, sizeof(CpcaPush), {s.l}});
+    s.reconstruct = gpu::create_compute_program(
+        device, {gpu::embedded_spirv("cpca_reconstruct.comp"), reconstruct_bindings, sizeof(CpcaPush),
+                 {s.k, c.vectors}});
+    std::vector<gpu::Binding> all = project_bindings;
+    all.insert(all.end(), reconstruct_bindings.begin(), reconstruct_bindings.end());
+    s.pool = gpu::create_descriptor_pool(device, all, 2);
+    s.project_set = gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
+    s.reconstruct_set = gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
+    auto buffer_write = [](uint32_t binding, VkDescriptorType type, VkBuffer buffer) {
+        gpu::DescriptorWrite w;
+        w.binding = binding;
+        w.type = type;
+        w.buffer = {buffer, 0, VK_WHOLE_SIZE};
+        return w;
+    };
+    gpu::DescriptorWrite project_writes[3] = {
+        buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer),
+        buffer_write(HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, s.lighting),
+        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected),
+    };
+    gpu::write_descriptors(device, s.project_set, project_writes);
+    gpu::DescriptorWrite reconstruct_writes[4] = {
+        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected),
+        buffer_write(HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.weights),
+        buffer_write(HEMI_CPCA_BINDING_CLUSTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.clusters),
+        {},
+    };
+    reconstruct_writes[3].binding = HEMI_CPCA_BINDING_COEFFICIENTS;
+    reconstruct_writes[3].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+    reconstruct_writes[3].texel_view = s.coefficient_view;
+    gpu::write_descriptors(device, s.reconstruct_set, reconstruct_writes);
+}
+
+CpcaTransferPass::~CpcaTransferPass() = default;
+
+void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+{
+    Impl& s = *impl_;
+    record_lighting_update(cmd, s.lighting, lighting, s.l);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &s.project_set, 0, nullptr);
+    CpcaPush push{s.rows};
+    vkCmdPushConstants(cmd, s.project.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
+    vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_set, 0,
+                            nullptr);
+    push.count = s.n;
+    vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
+    vkCmdDispatch(cmd, (s.n + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+}
+
+const gpu::Buffer& CpcaTransferPass::coefficients() const { return impl_->coefficients; }
+uint32_t CpcaTransferPass::vertex_count() const { return impl_->n; }
+uint32_t CpcaTransferPass::k() const { return impl_->k; }
+uint32_t CpcaTransferPass::l() const { return impl_->l; }
+const gpu::Device& CpcaTransferPass::device() const { return *impl_->device; }
 
 } // namespace hemi::render

@@ -51,6 +51,14 @@ public:
 
     uint32_t version() const { return version_; }
     bool has(const std::string& name) const { return sections_.count(name) != 0; }
+    // Every section name, sorted.
+    std::vector<std::string> names() const
+    {
+        std::vector<std::string> out;
+        for (const auto& entry : sections_)
+            out.push_back(entry.first);
+        return out;
+    }
     // Throws FormatError naming the file when the section is missing.
     std::span<const std::byte> section(const std::string& name) const;
     // The section as an array of T; throws FormatError when its size is not a multiple of sizeof(T).

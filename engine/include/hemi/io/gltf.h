@@ -30,4 +30,11 @@ struct GltfScene
 // out of range, a non-finite attribute, a referenced texture that does not exist, or no triangles at all.
 GltfScene read_gltf(const std::filesystem::path& path);
 
+// Writes `mesh` (positions, normals, tangents and UVs when present, 32-bit indices) as one glTF 2.0 mesh node
+// with one material, buffers embedded: a .glb when the path ends in ".glb", else a .gltf. The texture
+// references (URIs relative to the glTF file; empty for none) are written as they are: the files are the
+// caller's. Atomic. Throws std::invalid_argument for an inconsistent mesh, FormatError on I/O failure.
+void write_gltf(const std::filesystem::path& path, const Mesh& mesh, const std::string& base_color_uri = {},
+                const std::string& normal_uri = {});
+
 } // namespace hemi::io

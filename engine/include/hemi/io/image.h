@@ -50,6 +50,20 @@ ImageRgba read_exr(const std::filesystem::path& path);
 void write_exr(const std::filesystem::path& path, const ImageRgba& image);
 void write_png(const std::filesystem::path& path, const ImageRgba& image, const ToneMap& tone_map = {});
 
+// 8-bit RGBA as stored: textures (sRGB base colour, linear normal maps), no conversion either way.
+struct ImageRgba8
+{
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<uint8_t> pixels; // width * height * 4, row-major from the top row
+};
+
+// Reads a PNG (any bit depth or channel count; 16-bit is reduced to 8, grey and RGB get alpha 255). Throws
+// FormatError naming `path` when the file is missing, not a PNG, truncated or corrupt.
+ImageRgba8 read_png(const std::filesystem::path& path);
+// Writes the bytes as they are (atomic). Throws FormatError naming `path` on a size mismatch or I/O failure.
+void write_png(const std::filesystem::path& path, const ImageRgba8& image);
+
 // sRGB transfer function (IEC 61966-2-1) for one linear value in [0, 1].
 float srgb_oetf(float linear);
 

@@ -41,6 +41,15 @@ std::span<const BasisDesc> bases();
 // Throws std::invalid_argument naming the unknown basis and listing the known ones.
 const BasisDesc& basis(std::string_view name);
 
+// Classic diffuse PRT without normal mapping (Sloan et al. 2002), the comparison of Sloan 2006: one
+// constant function; its single coefficient is the irradiance at the vertex normal. Not a hemispherical
+// basis of bases() (it represents nothing of the normal map), but the PRT material draws it like one.
+const BasisDesc& vertex_irradiance_basis();
+
+// The names pipelines use for PRT techniques: "gs" (the gold standard, = "sh9"), "prt" (classic PRT,
+// vertex_irradiance_basis()) or any name of bases(). Throws std::invalid_argument listing the known names.
+const BasisDesc& technique(std::string_view name);
+
 struct HemisphereSample
 {
     glm::dvec3 n;  // unit direction, z >= 0

@@ -1,11 +1,13 @@
 #pragma once
 // The PRT material of Sloan 2006: per-vertex basis coefficients (the transfer pass's output, already in each
 // vertex's tangent frame) interpolated across triangles, the basis evaluated per pixel at the normal-map
-// normal, times albedo / pi. One material for every basis: the basis is a specialization constant.
+// normal, times albedo / pi. One material for every basis: the basis is a specialization constant; the
+// coefficients come from any CoefficientSource (dense transfer pass or CPCA).
 
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/pipeline.h>
 #include <hemi/gpu/resources.h>
+#include <hemi/io/image.h>
 #include <hemi/io/mesh.h>
 #include <hemi/math/basis.h>
 #include <hemi/render/offscreen.h>
@@ -21,17 +23,18 @@ struct PrtMaterialFrame
 {
     glm::mat4 view_projection{1.0f};
     glm::mat4 model{1.0f};
-    glm::vec3 albedo{1.0f}; // 1 for the lighting-only ("white") view
+    glm::vec3 albedo{1.0f}; // multiplies the base colour texture; 1 (and no texture) for the "white" view
 };
 
 class PrtMaterialRenderer
 {
 public:
     // `coefficients` must come from matrices of `basis.size` rows over the same vertices as `mesh`; it must
-    // outlive the renderer. Throws std::invalid_argument on a mismatch.
+    // outlive the renderer. `normal_map` is a tangent-space RGBA8 map (glTF convention); `base_color` an
+    // sRGB RGBA8 texture, or null for white. Throws std::invalid_argument on a mismatch.
     PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target, const io::Mesh& mesh,
-                        std::span<const uint8_t> normal_map, uint32_t map_width, uint32_t map_height,
-                        const math::BasisDesc& basis, const TransferPass& coefficients);
+                        const io::ImageRgba8& normal_map, const io::ImageRgba8* base_color,
+                        const math::BasisDesc& basis, const CoefficientSource& coefficients);
 
     // Outside the render pass: records the uniform update.
     void update(VkCommandBuffer cmd, const PrtMaterialFrame& frame) const;
@@ -40,7 +43,7 @@ public:
 
 private:
     GpuMesh mesh_;
-    gpu::Image normal_map_;
+    gpu::Image normal_map_, base_color_;
     gpu::Sampler sampler_;
     gpu::BufferView coefficient_view_;
     gpu::Buffer uniforms_;

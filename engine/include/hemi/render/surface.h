@@ -43,6 +43,11 @@ gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTa
                                     const std::vector<gpu::Binding>& bindings,
                                     const std::vector<uint32_t>& specialization = {});
 
+// An RGBA8 texture as a sampled image in SHADER_READ_ONLY_OPTIMAL: R8G8B8A8_SRGB when `srgb` (colour),
+// R8G8B8A8_UNORM otherwise (data). Throws std::invalid_argument on a size mismatch.
+gpu::Image upload_texture(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
+                          uint32_t height, bool srgb);
+
 // An RGBA8 tangent-space normal map (glTF convention) as a sampled image in SHADER_READ_ONLY_OPTIMAL.
 gpu::Image upload_normal_map(const gpu::Device& device, std::span<const uint8_t> rgba8, uint32_t width,
                              uint32_t height);

@@ -62,9 +62,31 @@ void validate_transfer_shape(uint32_t vertex_count, uint32_t k, uint32_t l);
 void transfer_multiply_host(const TransferMatrices& matrices, std::span<const glm::vec3> lighting,
                             std::span<float> out);
 
+// What a PRT material reads: per-vertex basis coefficients on the device (texel v*K + k, RGBA32F), written
+// each frame from the lighting by a compute pass. TransferPass (dense matrices) and CpcaTransferPass (CPCA)
+// are the two sources; the materials take either.
+class CoefficientSource
+{
+public:
+    virtual ~CoefficientSource() = default;
+    // Records the lighting update and the compute work. The caller orders later reads of coefficients()
+    // with a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
+    // `lighting` must have L entries of finite values.
+    virtual void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) = 0;
+    // Records, submits and waits (with the coefficients made visible to the host): for tools and tests.
+    void run(std::span<const glm::vec3> lighting);
+    virtual const gpu::Buffer& coefficients() const = 0;
+    // Reads the coefficients back (N*K*4 floats).
+    std::vector<float> read_coefficients() const;
+    virtual uint32_t vertex_count() const = 0;
+    virtual uint32_t k() const = 0;
+    virtual uint32_t l() const = 0;
+    virtual const gpu::Device& device() const = 0;
+};
+
 // Device path. Owns the matrices' GPU copy, the lighting uniform buffer, the output coefficient buffer and
 // the compute pipeline; one dispatch per segment of at most maxTexelBufferElements texels.
-class TransferPass
+class TransferPass : public CoefficientSource
 {
 public:
     // `max_view_texels` bounds the texels of one texel-buffer view (and so one dispatch's segment);
@@ -78,20 +100,55 @@ public:
     // frames), a barrier, and the dispatches. The caller orders later reads of coefficients() with a
     // barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
     // `lighting` must have L entries of finite values.
-    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting);
-
-    // Records, submits and waits: for tools and tests.
-    void run(std::span<const glm::vec3> lighting);
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) override;
 
     // RGBA32F texels: coefficient k of vertex v is texel v*K + k. Usable as a uniform texel buffer.
-    const gpu::Buffer& coefficients() const;
-    // Reads the coefficients back (N*K*4 floats).
-    std::vector<float> read_coefficients() const;
+    const gpu::Buffer& coefficients() const override;
 
-    uint32_t vertex_count() const;
-    uint32_t k() const;
-    uint32_t l() const;
+    uint32_t vertex_count() const override;
+    uint32_t k() const override;
+    uint32_t l() const override;
+    const gpu::Device& device() const override;
     uint32_t segment_count() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Matrices compressed with CPCA (Sloan et al. 2003): C clusters, each a mean and V PCA matrices (K x L, the
+// same row-major form as TransferMatrices' input), and per vertex a cluster and V weights.
+struct CpcaMatrices
+{
+    uint32_t vertex_count = 0, k = 0, l = 0, clusters = 0, vectors = 0;
+    std::span<const float> means;      // C x K*L
+    std::span<const float> basis;      // C x V x K*L
+    std::span<const uint32_t> cluster; // N
+    std::span<const float> weights;    // N x V
+};
+
+// Host reference of the CPCA multiply: same output layout as transfer_multiply_host.
+void cpca_multiply_host(const CpcaMatrices& cpca, std::span<const glm::vec3> lighting, std::span<float> out);
+
+// The CPCA path on the device: a small dispatch projecting every cluster's mean and PCA matrices on the
+// lighting ((V + 1) * K RGB values per cluster), then one invocation per vertex summing its V weighted
+// projections. The per-frame memory traffic per vertex is V weights instead of K * L matrix elements.
+class CpcaTransferPass : public CoefficientSource
+{
+public:
+    // Throws std::invalid_argument on inconsistent sizes, a cluster out of range or a non-finite value, and
+    // std::runtime_error when the data exceed the device's storage-buffer range or texel-buffer size.
+    CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca);
+    ~CpcaTransferPass();
+    CpcaTransferPass(const CpcaTransferPass&) = delete;
+    CpcaTransferPass& operator=(const CpcaTransferPass&) = delete;
+
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) override;
+    const gpu::Buffer& coefficients() const override;
+    uint32_t vertex_count() const override;
+    uint32_t k() const override;
+    uint32_t l() const override;
+    const gpu::Device& device() const override;
 
 private:
     struct Impl;

@@ -37,6 +37,28 @@ const BasisDesc& basis(std::string_view name)
     throw std::invalid_argument("hemi: unknown basis '" + std::string(name) + "' (known: " + known + ")");
 }
 
+const BasisDesc& vertex_irradiance_basis()
+{
+    static const BasisDesc prt{HEMI_BASIS_VERTEX_IRRADIANCE, "prt", 1, false,
+                               [](const glm::vec3&, float* out) { out[0] = 1.0f; }};
+    return prt;
+}
+
+const BasisDesc& technique(std::string_view name)
+{
+    if (name == "gs")
+        return basis("sh9");
+    if (name == "prt")
+        return vertex_irradiance_basis();
+    for (const BasisDesc& b : bases())
+        if (b.name == name)
+            return b;
+    std::string known = "gs, prt";
+    for (const BasisDesc& b : bases())
+        known += ", " + std::string(b.name);
+    throw std::invalid_argument("hemi: unknown technique '" + std::string(name) + "' (known: " + known + ")");
+}
+
 std::vector<HemisphereSample> hemisphere_quadrature(int steps)
 {
     if (steps < 2)

@@ -69,5 +69,9 @@ void hemi_eval_basis(int id, vec3 n, vec4 sep4_weights[9], out float b[HEMI_BASI
         hemi_eval_sep4(n, sep4_weights, t);
         for (int i = 0; i < 4; ++i) b[i] = t[i];
     }
+    else if (id == HEMI_BASIS_VERTEX_IRRADIANCE)
+    {
+        b[0] = 1.0;
+    }
 }
 #endif

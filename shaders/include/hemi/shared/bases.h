@@ -13,6 +13,9 @@
 #define HEMI_BASIS_ZERNIKE6 7  // bands n <= 2
 #define HEMI_BASIS_SEP4 8      // Sloan 2006 Sec. 3.2 separable (SVD) basis, 4 terms, convolution folded in
 #define HEMI_BASIS_COUNT 9
+// Not a hemispherical basis: classic diffuse PRT's single constant function (the coefficient is the
+// irradiance at the vertex normal; the normal map is ignored). math::vertex_irradiance_basis().
+#define HEMI_BASIS_VERTEX_IRRADIANCE 9
 
 #define HEMI_BASIS_MAX_SIZE 9
 

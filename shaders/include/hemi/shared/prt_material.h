@@ -16,13 +16,14 @@ struct PrtMaterialUniforms
 {
     mat4 view_projection;
     mat4 model;
-    vec4 albedo;          // rgb, a unused
+    vec4 albedo;          // rgb multiplies the base colour texture, a unused
     vec4 sep4_weights[9]; // math::sep4_weights() rows, read only by the separable basis
 };
 
 #define HEMI_PRT_MATERIAL_BINDING_UNIFORMS 0
 #define HEMI_PRT_MATERIAL_BINDING_NORMAL_MAP 1
 #define HEMI_PRT_MATERIAL_BINDING_COEFFICIENTS 2
+#define HEMI_PRT_MATERIAL_BINDING_BASE_COLOR 3
 // 9 RGB coefficients = 27 floats travel from the vertex to the fragment stage as 7 vec4.
 #define HEMI_PRT_MATERIAL_PACKED_VEC4 7
 

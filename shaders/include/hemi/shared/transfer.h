@@ -28,6 +28,19 @@ struct TransferPush
     HEMI_UINT vertex_count; // vertices in this dispatch's segment
 };
 
+// The CPCA path (cpca_project.comp, then cpca_reconstruct.comp).
+#define HEMI_CPCA_BINDING_ROWS 0
+#define HEMI_CPCA_BINDING_LIGHTING 1
+#define HEMI_CPCA_BINDING_PROJECTED 2
+#define HEMI_CPCA_BINDING_WEIGHTS 3
+#define HEMI_CPCA_BINDING_CLUSTERS 4
+#define HEMI_CPCA_BINDING_COEFFICIENTS 5
+
+struct CpcaPush
+{
+    HEMI_UINT count; // rows to project (step 1) or vertices (step 2)
+};
+
 #ifdef __cplusplus
 #undef HEMI_UINT
 #endif

@@ -1,0 +1,499 @@
+#include <hemi/bake/cpca.h>
+#include <hemi/bake/prt_bake.h>
+#include <hemi/io/atomic_file.h>
+#include <hemi/io/gltf.h>
+#include <hemi/io/image.h>
+#include <hemi/bake/transfer_fold.h>
+#include <hemi/math/basis.h>
+#include <hemi/math/sh.h>
+
+#include <embree3/rtcore.h>
+#include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace hemi::bake
+{
+
+std::string_view to_string(TransferKind kind)
+{
+    switch (kind)
+    {
+    case TransferKind::Unshadowed: return "unshadowed";
+    case TransferKind::Shadowed: return "shadowed";
+    case TransferKind::Interreflected: return "interreflected";
+    }
+    return "?";
+}
+
+TransferKind parse_transfer_kind(std::string_view name)
+{
+    for (TransferKind k : {TransferKind::Unshadowed, TransferKind::Shadowed, TransferKind::Interreflected})
+        if (to_string(k) == name)
+            return k;
+    throw std::invalid_argument("hemi: unknown transfer kind '" + std::string(name) +
+                                "' (known: unshadowed, shadowed, interreflected)");
+}
+
+namespace
+{
+
+// Counter-based random numbers (SplitMix64 finaliser): the value depends only on its inputs, never on
+// scheduling.
+uint64_t mix(uint64_t z)
+{
+    z += 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+float uniform01(uint64_t seed, uint64_t a, uint64_t b)
+{
+    return float(mix(mix(mix(seed) ^ a) ^ (b * 0x632be59bd9b4e019ull)) >> 40) * (1.0f / 16777216.0f);
+}
+
+// Ray i of R for a vertex: jittered spherical Fibonacci (stratified in z, golden-angle spaced in phi) with a
+// per-vertex random rotation about z. Uniform on the sphere; each ray stands for 4 pi / R steradians.
+glm::vec3 ray_direction(uint64_t seed, uint32_t vertex, int i, int rays)
+{
+    const float z = 1.0f - 2.0f * (float(i) + uniform01(seed, vertex, uint64_t(i) + 1)) / float(rays);
+    const float offset = uniform01(seed, vertex, 0);
+    float frac = float(i) * 0.6180339887f + offset;
+    frac -= std::floor(frac);
+    const float phi = 2.0f * float(M_PI) * frac, s = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return {s * std::cos(phi), s * std::sin(phi), z};
+}
+
+struct EmbreeScene
+{
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::string error;
+
+    explicit EmbreeScene(const io::Mesh& mesh)
+    {
+        device = rtcNewDevice(nullptr);
+        if (!device)
+            throw std::runtime_error("hemi: Embree device creation failed (error " +
+                                     std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+        rtcSetDeviceErrorFunction(
+            device,
+            [](void* user, RTCError, const char* message) {
+                static_cast<EmbreeScene*>(user)->error = message ? message : "unknown Embree error";
+            },
+            this);
+        scene = rtcNewScene(device);
+        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), mesh.vertex_count()));
+        auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
+                                                                  RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+                                                                  mesh.indices.size() / 3));
+        if (!vb || !ib)
+        {
+            rtcReleaseGeometry(geometry);
+            fail("allocating the geometry");
+        }
+        for (size_t v = 0; v < mesh.vertex_count(); ++v)
+            for (int c = 0; c < 3; ++c)
+                vb[v * 3 + c] = mesh.positions[v][c];
+        std::copy(mesh.indices.begin(), mesh.indices.end(), ib);
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(scene, geometry);
+        rtcReleaseGeometry(geometry);
+        rtcCommitScene(scene);
+        if (!error.empty())
+            fail("building the scene");
+    }
+    ~EmbreeScene()
+    {
+        if (scene)
+            rtcReleaseScene(scene);
+        if (device)
+            rtcReleaseDevice(device);
+    }
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    [[noreturn]] void fail(const std::string& what)
+    {
+        std::string message = "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
+        this->~EmbreeScene();
+        scene = nullptr;
+        device = nullptr;
+        throw std::runtime_error(message);
+    }
+
+    // Closest hit along the ray; returns false on a miss.
+    bool intersect(const glm::vec3& origin, const glm::vec3& dir, uint32_t& prim, float& u, float& v) const
+    {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRayHit rh{};
+        rh.ray.org_x = origin.x;
+        rh.ray.org_y = origin.y;
+        rh.ray.org_z = origin.z;
+        rh.ray.dir_x = dir.x;
+        rh.ray.dir_y = dir.y;
+        rh.ray.dir_z = dir.z;
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = INFINITY;
+        rh.ray.mask = 0xffffffffu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene, &context, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+            return false;
+        prim = rh.hit.primID;
+        u = rh.hit.u;
+        v = rh.hit.v;
+        return true;
+    }
+};
+
+void check(const io::Mesh& mesh, const PrtBakeOptions& o)
+{
+    if (o.order < 3 || o.order > 6)
+        throw std::invalid_argument("hemi: PRT lighting order " + std::to_string(o.order) + " is not in [3, 6]");
+    if (o.rays < 1 && o.kind != TransferKind::Unshadowed)
+        throw std::invalid_argument("hemi: PRT bake needs at least 1 ray per vertex, got " + std::to_string(o.rays));
+    if (o.bounces < 0)
+        throw std::invalid_argument("hemi: negative bounce count " + std::to_string(o.bounces));
+    if (!(o.albedo >= 0.0f && o.albedo < 1.0f))
+        throw std::invalid_argument("hemi: interreflection albedo " + std::to_string(o.albedo) +
+                                    " is not in [0, 1)");
+    if (!(o.ray_offset >= 0.0f && o.ray_offset < 0.1f))
+        throw std::invalid_argument("hemi: ray offset must be in [0, 0.1)");
+    if (mesh.vertex_count() == 0 || mesh.indices.empty() || mesh.indices.size() % 3)
+        throw std::invalid_argument("hemi: PRT bake needs a non-empty triangle mesh");
+    if (mesh.normals.size() != mesh.vertex_count())
+        throw std::invalid_argument("hemi: PRT bake needs a normal per vertex");
+    for (uint32_t i : mesh.indices)
+        if (i >= mesh.vertex_count())
+            throw std::invalid_argument("hemi: PRT bake: index " + std::to_string(i) + " out of range");
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(mesh.positions[v][c]) || !std::isfinite(mesh.normals[v][c]))
+                throw std::invalid_argument("hemi: PRT bake: vertex " + std::to_string(v) +
+                                            " has a non-finite position or normal");
+}
+
+} // namespace
+
+PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, const PrtProgressCallback& progress)
+{
+    check(mesh, o);
+    const auto t0 = std::chrono::steady_clock::now();
+    const uint32_t n = uint32_t(mesh.vertex_count());
+    const int L = o.order * o.order;
+    PrtTransfer out;
+    out.vertex_count = n;
+    out.order = o.order;
+    out.radiance.assign(size_t(n) * 9 * L, 0.0f);
+    out.irradiance.assign(size_t(n) * L, 0.0f);
+
+    // Unshadowed: M = identity on bands 0-2, t = A_l y_lm(n).
+    std::vector<float> cosine(L);
+    for (int l = 0; l < o.order; ++l)
+        for (int m = -l; m <= l; ++m)
+            cosine[math::sh_index(l, m)] = float(math::clamped_cosine_factor(l));
+    tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
+        for (int i = 0; i < 9; ++i)
+            out.radiance[(size_t(v) * 9 + i) * L + i] = 1.0f;
+        float y[36];
+        math::sh_eval(o.order, glm::normalize(mesh.normals[v]), std::span<float>(y, L));
+        for (int c = 0; c < L; ++c)
+            out.irradiance[size_t(v) * L + c] = cosine[c] * y[c];
+    });
+    if (o.kind == TransferKind::Unshadowed)
+        return out;
+
+    EmbreeScene embree(mesh);
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const float offset = o.ray_offset * glm::length(hi - lo);
+    const float weight = 4.0f * float(M_PI) / float(o.rays);
+    const int passes = 1 + (o.kind == TransferKind::Interreflected ? o.bounces : 0);
+
+    // Exit radiance per vertex of the previous pass, as an L-vector over the lighting: (albedo / pi) t_{b-1}.
+    std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
+    std::atomic<uint64_t> done{0};
+    for (int pass = 0; pass < passes; ++pass)
+    {
+        if (pass > 0)
+        {
+            // Bounce 1 gathers the direct (shadowed) irradiance; later bounces the previous bounce's.
+            const std::vector<float>& previous = pass == 1 ? out.irradiance : bounce_irradiance;
+            for (size_t i = 0; i < exitant.size(); ++i)
+                exitant[i] = float(o.albedo / M_PI) * previous[i];
+            std::fill(bounce_irradiance.begin(), bounce_irradiance.end(), 0.0f);
+        }
+        done = 0;
+        constexpr uint32_t kChunk = 256;
+        auto work = [&](const tbb::blocked_range<uint32_t>& range) {
+            float y[36], x[36];
+            std::vector<float> m_acc(size_t(9) * L), t_acc(L);
+            for (uint32_t v = range.begin(); v != range.end(); ++v)
+            {
+                std::fill(m_acc.begin(), m_acc.end(), 0.0f);
+                std::fill(t_acc.begin(), t_acc.end(), 0.0f);
+                const glm::vec3 normal = glm::normalize(mesh.normals[v]);
+                const glm::vec3 origin = mesh.positions[v] + offset * normal;
+                for (int r = 0; r < o.rays; ++r)
+                {
+                    const glm::vec3 d = ray_direction(o.seed, v, r, o.rays);
+                    uint32_t prim;
+                    float bu, bv;
+                    if (!embree.intersect(origin, d, prim, bu, bv))
+                        continue;
+                    math::sh_eval(o.order, d, std::span<float>(y, L));
+                    const float cosine_weight = std::max(0.0f, glm::dot(normal, d));
+                    if (pass == 0)
+                    {
+                        // The blocked radiance: the receiver (y_i for M, the clamped cosine for t) times y_c.
+                        for (int c = 0; c < L; ++c)
+                            x[c] = y[c];
+                    }
+                    else
+                    {
+                        const uint32_t* tri = &mesh.indices[size_t(prim) * 3];
+                        const float w0 = 1.0f - bu - bv;
+                        for (int c = 0; c < L; ++c)
+                            x[c] = w0 * exitant[size_t(tri[0]) * L + c] + bu * exitant[size_t(tri[1]) * L + c] +
+                                   bv * exitant[size_t(tri[2]) * L + c];
+                    }
+                    for (int i = 0; i < 9; ++i)
+                        for (int c = 0; c < L; ++c)
+                            m_acc[size_t(i) * L + c] += y[i] * x[c];
+                    for (int c = 0; c < L; ++c)
+                        t_acc[c] += cosine_weight * x[c];
+                }
+                const float sign = pass == 0 ? -weight : weight;
+                float* m = &out.radiance[size_t(v) * 9 * L];
+                for (size_t i = 0; i < m_acc.size(); ++i)
+                    m[i] += sign * m_acc[i];
+                float* t = pass == 0 ? &out.irradiance[size_t(v) * L] : &bounce_irradiance[size_t(v) * L];
+                for (int c = 0; c < L; ++c)
+                    t[c] += sign * t_acc[c];
+            }
+            done += range.end() - range.begin();
+        };
+        // Trace on TBB's workers while this thread reports progress.
+        std::exception_ptr error;
+        std::thread tracer([&] {
+            try
+            {
+                tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
+            }
+            catch (...)
+            {
+                error = std::current_exception();
+            }
+            done = n + 1u; // sentinel: finished
+        });
+        while (done.load() <= n)
+        {
+            if (progress)
+                progress({pass, passes, std::min<uint64_t>(done.load(), n), n});
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        }
+        tracer.join();
+        if (error)
+            std::rethrow_exception(error);
+        if (progress)
+            progress({pass, passes, n, n});
+        if (pass > 0)
+            for (size_t i = 0; i < out.irradiance.size(); ++i)
+                out.irradiance[i] += bounce_irradiance[i];
+        out.rays_traced += uint64_t(n) * uint64_t(o.rays);
+    }
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+int technique_size(std::string_view technique)
+{
+    return math::technique(technique).size;
+}
+
+std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& mesh, std::string_view technique)
+{
+    const math::BasisDesc& basis = math::technique(technique);
+    const uint32_t n = transfer.vertex_count;
+    const int L = transfer.l();
+    if (basis.id == HEMI_BASIS_VERTEX_IRRADIANCE)
+        return transfer.irradiance;
+    if (mesh.vertex_count() != n || mesh.tangents.size() != n)
+        throw std::invalid_argument("hemi: folding " + std::string(technique) +
+                                    " needs the baked mesh with a tangent per vertex");
+    const TransferFold fold(basis);
+    std::vector<float> out(size_t(n) * basis.size * L);
+    tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
+        // Rotate M's rows (SH9 of incident radiance) from object space into the tangent frame.
+        const glm::mat3 r = object_to_tangent(glm::normalize(mesh.normals[v]), glm::vec3(mesh.tangents[v]),
+                                              mesh.tangents[v].w);
+        const std::vector<float> d9 = unshadowed_transfer(r, 3); // the 9 x 9 SH9 rotation
+        std::vector<float> rm(size_t(9) * L, 0.0f);
+        const float* m = &transfer.radiance[size_t(v) * 9 * L];
+        for (int i = 0; i < 9; ++i)
+            for (int j = 0; j < 9; ++j)
+            {
+                const float dij = d9[size_t(i) * 9 + j];
+                if (dij != 0.0f)
+                    for (int c = 0; c < L; ++c)
+                        rm[size_t(i) * L + c] += dij * m[size_t(j) * L + c];
+            }
+        const std::vector<float> t = fold.apply(rm, L);
+        std::copy(t.begin(), t.end(), out.begin() + ptrdiff_t(v) * basis.size * L);
+    });
+    return out;
+}
+
+} // namespace hemi::bake
+
+namespace hemi::bake
+{
+
+const std::vector<std::string>& default_techniques()
+{
+    static const std::vector<std::string> names = {"prt", "gs", "sep4", "sal4", "hl2", "h4", "h6"};
+    return names;
+}
+
+io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options, PrtBakeSummary& summary,
+                            const PrtProgressCallback& progress)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    if (options.techniques.empty())
+        throw std::invalid_argument("hemi: no techniques to bake");
+    for (size_t i = 0; i < options.techniques.size(); ++i)
+    {
+        math::technique(options.techniques[i]); // throws for an unknown name
+        for (size_t j = 0; j < i; ++j)
+            if (options.techniques[j] == options.techniques[i])
+                throw std::invalid_argument("hemi: technique '" + options.techniques[i] + "' requested twice");
+    }
+    if ((options.cpca_clusters == 0) != (options.cpca_vectors == 0))
+        throw std::invalid_argument("hemi: CPCA needs both a cluster and a vector count");
+    if (mesh.tangents.size() != mesh.vertex_count() || mesh.uvs.size() != mesh.vertex_count())
+        throw std::invalid_argument("hemi: the PRT bake needs a tangent and UV per vertex");
+
+    const PrtTransfer transfer = bake_prt_transfer(mesh, options.bake, progress);
+    io::PrtAsset asset;
+    asset.mesh = mesh;
+    asset.order = uint32_t(options.bake.order);
+    asset.transfer_kind = uint32_t(options.bake.kind);
+    asset.bounces = options.bake.kind == TransferKind::Interreflected ? uint32_t(options.bake.bounces) : 0;
+    asset.rays = options.bake.kind == TransferKind::Unshadowed ? 0 : uint32_t(options.bake.rays);
+    asset.seed = options.bake.seed;
+    asset.albedo = options.bake.albedo;
+    summary = {};
+    summary.vertices = uint32_t(mesh.vertex_count());
+    summary.triangles = uint32_t(mesh.indices.size() / 3);
+    summary.rays = transfer.rays_traced;
+    summary.trace_seconds = transfer.seconds;
+    const uint32_t n = transfer.vertex_count, L = uint32_t(transfer.l());
+    for (const std::string& name : options.techniques)
+    {
+        io::PrtTechnique t;
+        t.name = name;
+        t.k = uint32_t(technique_size(name));
+        t.matrices = fold_technique(transfer, mesh, name);
+        PrtTechniqueSummary s;
+        s.name = name;
+        s.k = int(t.k);
+        s.dense_bytes = t.matrices.size() * sizeof(float);
+        if (options.cpca_clusters)
+        {
+            t.cpca = compress_cpca(t.matrices, n, t.k * L, std::min(options.cpca_clusters, n), options.cpca_vectors);
+            const io::PrtCpca& c = *t.cpca;
+            s.cpca_bytes = (c.means.size() + c.basis.size() + c.cluster.size() + c.weights.size()) * 4;
+            s.cpca_rms = c.rms_error;
+            double squares = 0.0;
+            for (float v : t.matrices)
+                squares += double(v) * v;
+            const double rms = std::sqrt(squares / double(t.matrices.size()));
+            s.cpca_relative = rms > 0.0 ? c.rms_error / rms : 0.0;
+        }
+        summary.techniques.push_back(s);
+        asset.techniques.push_back(std::move(t));
+    }
+    summary.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return asset;
+}
+
+PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std::filesystem::path& asset_path,
+                             const PrtAssetOptions& options, const PrtProgressCallback& progress)
+{
+    const io::GltfScene scene = io::read_gltf(scene_path);
+    PrtBakeSummary summary;
+    io::PrtAsset asset = make_prt_asset(scene.mesh, options, summary, progress);
+    summary.tangents_generated = scene.tangents_generated;
+    const std::filesystem::path folder = std::filesystem::absolute(asset_path).parent_path();
+    auto reference = [&](const std::filesystem::path& texture) -> std::string {
+        if (texture.empty())
+            return {};
+        return std::filesystem::absolute(texture).lexically_relative(folder).generic_string();
+    };
+    asset.base_color_texture = reference(scene.base_color_texture);
+    asset.normal_texture = reference(scene.normal_texture);
+    io::write_prt_asset(asset_path, asset);
+    return summary;
+}
+
+void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary& s, const PrtAssetOptions& o)
+{
+    nlohmann::json j;
+    j["transfer"] = std::string(to_string(o.bake.kind));
+    j["order"] = o.bake.order;
+    j["rays_per_vertex"] = o.bake.rays;
+    j["bounces"] = o.bake.bounces;
+    j["albedo"] = o.bake.albedo;
+    j["seed"] = o.bake.seed;
+    j["vertices"] = s.vertices;
+    j["triangles"] = s.triangles;
+    j["tangents_generated"] = s.tangents_generated;
+    j["rays"] = s.rays;
+    j["trace_seconds"] = s.trace_seconds;
+    j["total_seconds"] = s.total_seconds;
+    j["rays_per_second"] = s.rays_per_second();
+    if (o.cpca_clusters)
+        j["cpca"] = {{"clusters", o.cpca_clusters}, {"vectors", o.cpca_vectors}};
+    for (const PrtTechniqueSummary& t : s.techniques)
+    {
+        nlohmann::json e = {{"name", t.name}, {"k", t.k}, {"dense_bytes", t.dense_bytes}};
+        if (o.cpca_clusters)
+        {
+            e["cpca_bytes"] = t.cpca_bytes;
+            e["cpca_rms_error"] = t.cpca_rms;
+            e["cpca_relative_error"] = t.cpca_relative;
+        }
+        j["techniques"].push_back(e);
+    }
+    io::write_atomically(path, [&](const std::filesystem::path& tmp) {
+        std::ofstream f(tmp);
+        f << j.dump(2) << "\n";
+        f.close();
+        if (f.fail())
+            throw io::FormatError(path.string() + ": cannot write the JSON report");
+    });
+}
+
+} // namespace hemi::bake

@@ -1,0 +1,268 @@
+#include <hemi/io/asset.h>
+#include <hemi/io/image.h>
+#include <hemi/io/prt_asset.h>
+#include <hemi/math/basis.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::io
+{
+
+const PrtTechnique& PrtAsset::technique(const std::string& name) const
+{
+    std::string known;
+    for (const PrtTechnique& t : techniques)
+    {
+        if (t.name == name)
+            return t;
+        known += (known.empty() ? "" : ", ") + t.name;
+    }
+    throw std::invalid_argument("hemi: the asset has no technique '" + name + "' (it has: " + known + ")");
+}
+
+namespace
+{
+
+struct Info
+{
+    uint32_t layout, vertices, order, transfer_kind, bounces, rays;
+    uint64_t seed;
+    float albedo;
+    uint32_t reserved;
+};
+static_assert(sizeof(Info) == 40);
+
+template <typename T>
+bool finite(const std::vector<T>& v)
+{
+    for (const T& x : v)
+        for (int c = 0; c < int(sizeof(T) / sizeof(float)); ++c)
+            if (!std::isfinite(reinterpret_cast<const float*>(&x)[c]))
+                return false;
+    return true;
+}
+
+// The problem with an asset, or an empty string.
+std::string problem(const PrtAsset& a)
+{
+    const Mesh& m = a.mesh;
+    const size_t n = m.vertex_count();
+    if (n == 0)
+        return "the mesh has no vertices";
+    if (m.normals.size() != n || m.tangents.size() != n || m.uvs.size() != n)
+        return "the mesh needs a normal, tangent and UV for each of its " + std::to_string(n) + " vertices";
+    if (m.indices.empty() || m.indices.size() % 3)
+        return "the mesh's index count " + std::to_string(m.indices.size()) + " is not a positive multiple of 3";
+    for (uint32_t i : m.indices)
+        if (i >= n)
+            return "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)";
+    if (!finite(m.positions) || !finite(m.normals) || !finite(m.tangents) || !finite(m.uvs))
+        return "the mesh has a non-finite attribute";
+    if (a.order < 3 || a.order > 6)
+        return "lighting order " + std::to_string(a.order) + " is not in [3, 6]";
+    if (a.transfer_kind > 2)
+        return "unknown transfer kind " + std::to_string(a.transfer_kind);
+    if (a.techniques.empty())
+        return "no techniques";
+    const size_t l = a.l();
+    for (const PrtTechnique& t : a.techniques)
+    {
+        const std::string where = "technique '" + t.name + "': ";
+        int k = 0;
+        try
+        {
+            k = math::technique(t.name).size;
+        }
+        catch (const std::invalid_argument&)
+        {
+            return "unknown technique '" + t.name + "'";
+        }
+        if (t.name.size() > 24)
+            return where + "name too long";
+        if (uint32_t(k) != t.k)
+            return where + "K = " + std::to_string(t.k) + ", the technique has " + std::to_string(k);
+        const size_t d = size_t(k) * l;
+        if (t.matrices.empty() && !t.cpca)
+            return where + "neither matrices nor CPCA data";
+        if (!t.matrices.empty() && t.matrices.size() != n * d)
+            return where + std::to_string(t.matrices.size()) + " matrix values, expected " + std::to_string(n * d);
+        if (!finite(t.matrices))
+            return where + "non-finite matrix value";
+        if (t.cpca)
+        {
+            const PrtCpca& c = *t.cpca;
+            if (c.clusters == 0 || c.vectors == 0 || c.vectors > 1024 || c.clusters > n)
+                return where + "CPCA shape " + std::to_string(c.clusters) + "x" + std::to_string(c.vectors) +
+                       " is not valid for " + std::to_string(n) + " vertices";
+            if (c.means.size() != c.clusters * d || c.basis.size() != size_t(c.clusters) * c.vectors * d ||
+                c.cluster.size() != n || c.weights.size() != n * c.vectors)
+                return where + "CPCA array sizes do not match its shape";
+            for (uint32_t id : c.cluster)
+                if (id >= c.clusters)
+                    return where + "CPCA cluster " + std::to_string(id) + " out of range";
+            if (!finite(c.means) || !finite(c.basis) || !finite(c.weights) || !std::isfinite(c.rms_error))
+                return where + "non-finite CPCA value";
+        }
+    }
+    return {};
+}
+
+template <typename T>
+void add(AssetWriter& w, const std::string& name, const std::vector<T>& v)
+{
+    w.add_array(name, std::span<const T>(v));
+}
+
+template <typename T>
+void append(std::vector<std::byte>& out, const T* data, size_t count)
+{
+    const auto* b = reinterpret_cast<const std::byte*>(data);
+    out.insert(out.end(), b, b + count * sizeof(T));
+}
+
+} // namespace
+
+void write_prt_asset(const std::filesystem::path& path, const PrtAsset& a)
+{
+    if (std::string p = problem(a); !p.empty())
+        throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
+    AssetWriter w;
+    Info info{kPrtLayoutVersion, uint32_t(a.mesh.vertex_count()), a.order, a.transfer_kind, a.bounces,
+              a.rays, a.seed, a.albedo, 0};
+    w.add("prt.info", std::as_bytes(std::span<const Info>(&info, 1)));
+    add(w, "mesh.positions", a.mesh.positions);
+    add(w, "mesh.normals", a.mesh.normals);
+    add(w, "mesh.tangents", a.mesh.tangents);
+    add(w, "mesh.uvs", a.mesh.uvs);
+    add(w, "mesh.indices", a.mesh.indices);
+    w.add("tex.base_color", std::as_bytes(std::span<const char>(a.base_color_texture)));
+    w.add("tex.normal", std::as_bytes(std::span<const char>(a.normal_texture)));
+    for (const PrtTechnique& t : a.techniques)
+    {
+        if (!t.matrices.empty())
+            add(w, "T." + t.name, t.matrices);
+        if (t.cpca)
+        {
+            const PrtCpca& c = *t.cpca;
+            std::vector<std::byte> bytes;
+            const uint32_t shape[2] = {c.clusters, c.vectors};
+            append(bytes, shape, 2);
+            append(bytes, &c.rms_error, 1);
+            append(bytes, c.means.data(), c.means.size());
+            append(bytes, c.basis.data(), c.basis.size());
+            append(bytes, c.cluster.data(), c.cluster.size());
+            append(bytes, c.weights.data(), c.weights.size());
+            w.add("C." + t.name, bytes);
+        }
+    }
+    w.write(path);
+}
+
+PrtAsset read_prt_asset(const std::filesystem::path& path)
+{
+    const AssetReader r(path);
+    const std::string file = path.string();
+    auto fail = [&](const std::string& what) -> FormatError { return FormatError(file + ": " + what); };
+
+    std::span<const std::byte> info_bytes = r.section("prt.info");
+    if (info_bytes.size() != sizeof(Info))
+        throw fail("prt.info has " + std::to_string(info_bytes.size()) + " bytes, expected " +
+                   std::to_string(sizeof(Info)));
+    Info info;
+    std::memcpy(&info, info_bytes.data(), sizeof info);
+    if (info.layout != kPrtLayoutVersion)
+        throw fail("PRT layout version " + std::to_string(info.layout) + " is not supported (this hemi reads " +
+                   std::to_string(kPrtLayoutVersion) + ")");
+    PrtAsset a;
+    a.order = info.order;
+    a.transfer_kind = info.transfer_kind;
+    a.bounces = info.bounces;
+    a.rays = info.rays;
+    a.seed = info.seed;
+    a.albedo = info.albedo;
+    a.mesh.positions = r.array<glm::vec3>("mesh.positions");
+    a.mesh.normals = r.array<glm::vec3>("mesh.normals");
+    a.mesh.tangents = r.array<glm::vec4>("mesh.tangents");
+    a.mesh.uvs = r.array<glm::vec2>("mesh.uvs");
+    a.mesh.indices = r.array<uint32_t>("mesh.indices");
+    if (a.mesh.vertex_count() != info.vertices)
+        throw fail("prt.info says " + std::to_string(info.vertices) + " vertices, mesh.positions holds " +
+                   std::to_string(a.mesh.vertex_count()));
+    auto text = [&](const std::string& name) {
+        std::span<const std::byte> b = r.section(name);
+        return std::string(reinterpret_cast<const char*>(b.data()), b.size());
+    };
+    a.base_color_texture = text("tex.base_color");
+    a.normal_texture = text("tex.normal");
+
+    const size_t n = info.vertices, l = size_t(info.order) * info.order;
+    std::vector<std::string> names;
+    for (const std::string& section : r.names())
+        if ((section.rfind("T.", 0) == 0 || section.rfind("C.", 0) == 0) &&
+            std::find(names.begin(), names.end(), section.substr(2)) == names.end())
+            names.push_back(section.substr(2));
+    for (const std::string& name : names)
+    {
+        const std::string dense = "T." + name, compressed = "C." + name;
+        PrtTechnique t;
+        t.name = name;
+        try
+        {
+            t.k = uint32_t(math::technique(name).size);
+        }
+        catch (const std::invalid_argument&)
+        {
+            throw fail("unknown technique '" + name + "'");
+        }
+        if (r.has(dense))
+            t.matrices = r.array<float>(dense);
+        if (r.has(compressed))
+        {
+            std::span<const std::byte> b = r.section(compressed);
+            PrtCpca c;
+            if (b.size() < 12)
+                throw fail(compressed + " is too short");
+            uint32_t shape[2];
+            std::memcpy(shape, b.data(), 8);
+            std::memcpy(&c.rms_error, b.data() + 8, 4);
+            c.clusters = shape[0];
+            c.vectors = shape[1];
+            const size_t d = size_t(t.k) * l;
+            const uint64_t expected = 12 + 4 * (uint64_t(c.clusters) * d + uint64_t(c.clusters) * c.vectors * d +
+                                                n + n * uint64_t(c.vectors));
+            if (c.clusters > n || c.vectors > 1024 || b.size() != expected)
+                throw fail(compressed + " has " + std::to_string(b.size()) + " bytes, its shape " +
+                           std::to_string(c.clusters) + "x" + std::to_string(c.vectors) + " needs " +
+                           std::to_string(expected));
+            const std::byte* p = b.data() + 12;
+            auto take = [&](auto& v, size_t count) {
+                v.resize(count);
+                std::memcpy(v.data(), p, count * 4);
+                p += count * 4;
+            };
+            take(c.means, c.clusters * d);
+            take(c.basis, size_t(c.clusters) * c.vectors * d);
+            take(c.cluster, n);
+            take(c.weights, n * c.vectors);
+            t.cpca = std::move(c);
+        }
+        a.techniques.push_back(std::move(t));
+    }
+    if (std::string p = problem(a); !p.empty())
+        throw fail(p);
+    return a;
+}
+
+std::filesystem::path resolve_texture(const std::filesystem::path& asset_path, const std::string& reference)
+{
+    if (reference.empty())
+        return {};
+    std::filesystem::path p(reference);
+    return p.is_absolute() ? p : asset_path.parent_path() / p;
+}
+
+} // namespace hemi::io
