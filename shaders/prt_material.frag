@@ -38,6 +38,7 @@ void main()
         vec3 c = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4], in_packed[(i + 2) / 4][(i + 2) % 4]);
         e += c * b[k];
     }
-    out_color = vec4(u.albedo.rgb * texture(base_color, in_uv).rgb * e / kPi, 1.0);
+    vec3 albedo = u.albedo.rgb * mix(vec3(1.0), texture(base_color, in_uv).rgb, u.albedo.a);
+    out_color = vec4(albedo * e / kPi, 1.0);
     out_aux = vec4(in_uv, 0.0, 1.0);
 }

@@ -19,10 +19,11 @@ float smoothstep(float e0, float e1, float x)
     return t * t * (3.0f - 2.0f * t);
 }
 
-// Running-bond bricks: 32 around, 16 rows; bevelled edges over `bevel` of a brick, mortar at 0.
-std::vector<float> brick_heights(uint32_t w, uint32_t h, float amplitude)
+} // namespace
+
+std::vector<float> brick_heights(uint32_t w, uint32_t h, float amplitude, float columns, float rows)
 {
-    const float columns = 32.0f, rows = 16.0f, mortar = 0.06f, bevel = 0.12f;
+    const float mortar = 0.06f, bevel = 0.12f;
     std::vector<float> out(size_t(w) * h);
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x)
@@ -38,8 +39,6 @@ std::vector<float> brick_heights(uint32_t w, uint32_t h, float amplitude)
         }
     return out;
 }
-
-} // namespace
 
 ShNormalMapScene make_sh_normalmap_scene(Environment environment)
 {

@@ -1,3 +1,4 @@
+#include <hemi/gpu/commands.h>
 #include <hemi/math/separable_basis.h>
 #include <hemi/render/prt_material.h>
 
@@ -66,11 +67,17 @@ void PrtMaterialRenderer::update(VkCommandBuffer cmd, const PrtMaterialFrame& fr
     shared::PrtMaterialUniforms u{};
     u.view_projection = frame.view_projection;
     u.model = frame.model;
-    u.albedo = glm::vec4(frame.albedo, 0.0f);
+    u.albedo = glm::vec4(frame.albedo, frame.use_base_color ? 1.0f : 0.0f);
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)
         u.sep4_weights[j] = glm::vec4(w[j * 4], w[j * 4 + 1], w[j * 4 + 2], w[j * 4 + 3]);
+    // The previous frame's reads finish before the update, which finishes before this frame's draws read it.
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                        VK_ACCESS_UNIFORM_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
     vkCmdUpdateBuffer(cmd, uniforms_, 0, sizeof u, &u);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                        VK_ACCESS_UNIFORM_READ_BIT);
 }
 
 void PrtMaterialRenderer::draw(VkCommandBuffer cmd) const

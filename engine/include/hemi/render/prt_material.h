@@ -23,7 +23,8 @@ struct PrtMaterialFrame
 {
     glm::mat4 view_projection{1.0f};
     glm::mat4 model{1.0f};
-    glm::vec3 albedo{1.0f}; // multiplies the base colour texture; 1 (and no texture) for the "white" view
+    glm::vec3 albedo{1.0f};       // multiplies the base colour texture
+    bool use_base_color = true;   // false (with albedo 1) for the lighting-only ("white") view
 };
 
 class PrtMaterialRenderer

@@ -16,7 +16,7 @@ struct PrtMaterialUniforms
 {
     mat4 view_projection;
     mat4 model;
-    vec4 albedo;          // rgb multiplies the base colour texture, a unused
+    vec4 albedo;          // rgb multiplies the base colour texture; a = 1 uses the texture, 0 ignores it
     vec4 sep4_weights[9]; // math::sep4_weights() rows, read only by the separable basis
 };
 

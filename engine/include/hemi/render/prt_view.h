@@ -1,0 +1,87 @@
+#pragma once
+// A baked PRT asset ready to draw with one technique: the runtime half of Sloan 2006 behind hemi-render, the
+// prt_normalmap sample and the benchmark. Each frame: rotate the world lighting into object space (SH
+// rotation), run the coefficient source (dense transfer pass or CPCA), draw the PRT material.
+//
+// Conventions: hemi's world is z up; glTF scenes (and so baked assets) are y up and are placed in the world
+// by gltf_to_world() (glTF +y becomes world +z). Environments are world-space SH (math/sh_environment.h).
+
+#include <hemi/gpu/device.h>
+#include <hemi/io/image.h>
+#include <hemi/io/prt_asset.h>
+#include <hemi/render/offscreen.h>
+#include <hemi/render/prt_material.h>
+#include <hemi/render/transfer.h>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hemi::render
+{
+
+// World-space lighting of SH order `order`: "uniform" (radiance 1 from every direction), "sky"
+// (math::AnalyticSky) or the path of an equirectangular EXR (io::read_exr, math::project_equirect). Throws
+// io::FormatError for a bad file, std::invalid_argument for a bad order.
+std::vector<glm::vec3> environment_lighting(const std::string& environment, int order);
+
+// The rotation placing glTF's y-up space in hemi's z-up world.
+glm::mat4 gltf_to_world();
+
+struct PrtCamera
+{
+    glm::vec3 eye{0.0f, -3.0f, 1.0f};
+    glm::vec3 target{0.0f};
+    float fov_y_degrees = 35.0f;
+};
+// A camera that frames the whole model (its bounding sphere under `model`) from the front and slightly above.
+PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect);
+// View-projection for `camera` with near and far planes that enclose the model's bounding sphere.
+glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
+
+struct PrtFrame
+{
+    std::vector<glm::vec3> world_lighting; // SH of the asset's order (or higher: truncated)
+    float rotate_degrees = 0.0f;           // the environment turns about world z
+    PrtCamera camera;
+    glm::mat4 model = gltf_to_world();     // a rotation; the lighting is rotated by its inverse
+    bool white = false;                    // albedo 1: the lighting-only view
+};
+
+class PrtView
+{
+public:
+    // `asset_path` resolves the asset's texture references (missing textures: io::FormatError naming them).
+    // `cpca` selects the CPCA data of the technique (std::invalid_argument when the asset has none).
+    PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::filesystem::path& asset_path,
+            const std::string& technique, bool cpca, uint32_t width, uint32_t height);
+    ~PrtView();
+
+    // The object-space lighting the coefficient source receives for `frame`.
+    std::vector<glm::vec3> object_lighting(const PrtFrame& frame) const;
+
+    // Outside a render pass: the transfer (or CPCA) pass, then the material's uniform update.
+    void record_transfer(VkCommandBuffer cmd, const PrtFrame& frame);
+    // The raster pass into target(): begin, draw, end.
+    void record_raster(VkCommandBuffer cmd) const;
+    // Both, submitted and waited for; returns the colour with alpha = coverage (1 where the model is).
+    io::ImageRgba render(const PrtFrame& frame);
+
+    const OffscreenTarget& target() const { return target_; }
+    CoefficientSource& coefficients() { return *source_; }
+    const io::Mesh& mesh() const { return asset_->mesh; }
+
+private:
+    const gpu::Device* device_;
+    const io::PrtAsset* asset_;
+    const math::BasisDesc* basis_;
+    OffscreenTarget target_;
+    std::unique_ptr<CoefficientSource> source_;
+    std::unique_ptr<PrtMaterialRenderer> material_;
+};
+
+} // namespace hemi::render

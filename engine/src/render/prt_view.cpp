@@ -1,0 +1,183 @@
+#include <hemi/math/basis.h>
+#include <hemi/math/sh.h>
+#include <hemi/math/sh_environment.h>
+#include <hemi/render/prt_view.h>
+
+#include <hemi/gpu/commands.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace hemi::render
+{
+
+std::vector<glm::vec3> environment_lighting(const std::string& environment, int order)
+{
+    if (order < 1 || order > math::kMaxShOrder)
+        throw std::invalid_argument("hemi: environment SH order " + std::to_string(order) + " out of range");
+    if (environment == "uniform")
+    {
+        std::vector<glm::vec3> l(size_t(order) * order, glm::vec3(0.0f));
+        l[0] = glm::vec3(2.0f * std::sqrt(float(M_PI))); // radiance 1: the integral of y00 over the sphere
+        return l;
+    }
+    if (environment == "sky")
+    {
+        const math::AnalyticSky sky;
+        return math::project_sh(order, [&](const glm::vec3& d) { return sky.radiance(d); }, 256);
+    }
+    const io::ImageRgba image = io::read_exr(environment);
+    return math::project_equirect(order, image.width, image.height, image.pixels);
+}
+
+glm::mat4 gltf_to_world()
+{
+    // (x, y, z)_glTF -> (x, -z, y)_world: +90 degrees about x.
+    return glm::rotate(glm::mat4(1.0f), float(M_PI) / 2.0f, glm::vec3(1.0f, 0.0f, 0.0f));
+}
+
+namespace
+{
+struct Sphere
+{
+    glm::vec3 centre;
+    float radius;
+};
+Sphere bounds(const io::Mesh& mesh, const glm::mat4& model)
+{
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        const glm::vec3 w = glm::vec3(model * glm::vec4(p, 1.0f));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+    }
+    const glm::vec3 c = 0.5f * (lo + hi);
+    float r = 0.0f;
+    for (const glm::vec3& p : mesh.positions)
+        r = std::max(r, glm::length(glm::vec3(model * glm::vec4(p, 1.0f)) - c));
+    return {c, std::max(r, 1e-6f)};
+}
+} // namespace
+
+PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect)
+{
+    const Sphere s = bounds(mesh, model);
+    PrtCamera c;
+    const float half = glm::radians(c.fov_y_degrees) * 0.5f;
+    // The sphere fits the narrower of the two fields of view.
+    const float fit = aspect < 1.0f ? std::atan(std::tan(half) * aspect) : half;
+    const float distance = s.radius / std::sin(fit) * 1.02f;
+    c.target = s.centre;
+    c.eye = s.centre + distance * glm::normalize(glm::vec3(0.35f, -1.0f, 0.45f));
+    return c;
+}
+
+glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect)
+{
+    const Sphere s = bounds(mesh, model);
+    const float d = glm::length(s.centre - camera.eye);
+    const float far_plane = d + s.radius * 1.01f;
+    const float near_plane = std::max(far_plane * 1e-4f, d - s.radius * 1.01f);
+    glm::vec3 up(0.0f, 0.0f, 1.0f);
+    if (glm::length(glm::cross(glm::normalize(camera.target - camera.eye), up)) < 1e-3f)
+        up = glm::vec3(0.0f, 1.0f, 0.0f); // looking straight up or down
+    const glm::mat4 view = glm::lookAt(camera.eye, camera.target, up);
+    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(camera.fov_y_degrees), aspect, near_plane, far_plane);
+    proj[1][1] *= -1.0f; // Vulkan clip space: y down
+    return proj * view;
+}
+
+PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::filesystem::path& asset_path,
+                 const std::string& technique, bool cpca, uint32_t width, uint32_t height)
+    : device_(&device), asset_(&asset), basis_(&math::technique(technique)), target_(device, width, height)
+{
+    const io::PrtTechnique& t = asset.technique(technique);
+    if (cpca)
+    {
+        if (!t.cpca)
+            throw std::invalid_argument("hemi: the asset has no CPCA data for '" + technique +
+                                        "' (bake it with --cpca)");
+        const io::PrtCpca& c = *t.cpca;
+        source_ = std::make_unique<CpcaTransferPass>(
+            device, CpcaMatrices{uint32_t(asset.mesh.vertex_count()), t.k, asset.l(), c.clusters, c.vectors, c.means,
+                                 c.basis, c.cluster, c.weights});
+    }
+    else
+    {
+        if (t.matrices.empty())
+            throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + technique + "' (use --cpca)");
+        source_ = std::make_unique<TransferPass>(
+            device, TransferMatrices(uint32_t(asset.mesh.vertex_count()), t.k, asset.l(), t.matrices));
+    }
+    const io::ImageRgba8 flat{1, 1, {128, 128, 255, 255}};
+    io::ImageRgba8 normal_map = flat, base_color;
+    if (!asset.normal_texture.empty())
+        normal_map = io::read_png(io::resolve_texture(asset_path, asset.normal_texture));
+    if (!asset.base_color_texture.empty())
+        base_color = io::read_png(io::resolve_texture(asset_path, asset.base_color_texture));
+    material_ = std::make_unique<PrtMaterialRenderer>(device, target_, asset.mesh, normal_map,
+                                                      base_color.pixels.empty() ? nullptr : &base_color, *basis_,
+                                                      *source_);
+}
+
+PrtView::~PrtView() = default;
+
+std::vector<glm::vec3> PrtView::object_lighting(const PrtFrame& frame) const
+{
+    const int order = int(asset_->order);
+    const size_t l = asset_->l();
+    if (frame.world_lighting.size() < l)
+        throw std::invalid_argument("hemi: the lighting has " + std::to_string(frame.world_lighting.size()) +
+                                    " SH coefficients, the asset needs " + std::to_string(l));
+    // The environment turned about world z (g(d) = f(Rz^T d): coefficients D(Rz) l, math::ShRotation's
+    // contract), then seen in object coordinates (f_o(d) = g(M d): D(M^T)); D(A) D(B) = D(AB).
+    const glm::mat3 world_to_object = glm::transpose(glm::mat3(frame.model));
+    const glm::mat3 turn = glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(frame.rotate_degrees),
+                                                 glm::vec3(0.0f, 0.0f, 1.0f)));
+    const math::ShRotation rotation(order, world_to_object * turn);
+    std::vector<glm::vec3> out(l);
+    rotation.apply(std::span<const glm::vec3>(frame.world_lighting.data(), l), out);
+    return out;
+}
+
+void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
+{
+    const std::vector<glm::vec3> lighting = object_lighting(frame);
+    source_->record(cmd, lighting);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    const float aspect = float(target_.width()) / float(target_.height());
+    PrtMaterialFrame m;
+    m.model = frame.model;
+    m.view_projection = camera_matrix(frame.camera, asset_->mesh, frame.model, aspect);
+    m.albedo = glm::vec3(1.0f);
+    m.use_base_color = !frame.white;
+    material_->update(cmd, m);
+}
+
+void PrtView::record_raster(VkCommandBuffer cmd) const
+{
+    target_.begin(cmd);
+    material_->draw(cmd);
+    target_.end(cmd);
+}
+
+io::ImageRgba PrtView::render(const PrtFrame& frame)
+{
+    gpu::one_shot(*device_, [&](VkCommandBuffer cmd) {
+        record_transfer(cmd, frame);
+        record_raster(cmd);
+    });
+    io::ImageRgba color = target_.read_color();
+    const io::ImageRgba aux = target_.read_aux();
+    for (size_t i = 0; i < color.pixels.size(); i += 4)
+        color.pixels[i + 3] = aux.pixels[i + 3];
+    return color;
+}
+
+} // namespace hemi::render
