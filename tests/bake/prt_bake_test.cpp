@@ -1,0 +1,264 @@
+// The Embree PRT bake against independent evaluations: a brute-force ray caster (Moller-Trumbore over every
+// triangle) and fine lat-long quadrature recompute the shadowed irradiance and the first interreflection
+// bounce at chosen vertices; a convex mesh loses nothing above its horizon; the same seed gives the same
+// bytes whatever the thread count.
+#include "models.h"
+
+#include <hemi/bake/prt_bake.h>
+#include <hemi/io/mesh.h>
+#include <hemi/math/sh.h>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstring>
+
+namespace
+{
+
+using hemi::bake::PrtBakeOptions;
+using hemi::bake::TransferKind;
+
+const float kUniform = 2.0f * std::sqrt(float(M_PI)); // y00 coefficient of radiance 1
+
+// Irradiance under radiance 1 from every direction, from a transfer vector.
+float uniform_irradiance(const hemi::bake::PrtTransfer& t, size_t v)
+{
+    return t.irradiance[v * size_t(t.l())] * kUniform;
+}
+
+struct Hit
+{
+    uint32_t prim;
+    float u, v;
+};
+
+// Independent closest-hit ray caster: every triangle, Moller-Trumbore, double precision.
+bool cast(const hemi::io::Mesh& m, const glm::dvec3& o, const glm::dvec3& d, Hit& hit)
+{
+    double best = INFINITY;
+    for (size_t t = 0; t < m.indices.size() / 3; ++t)
+    {
+        const glm::dvec3 a(m.positions[m.indices[t * 3]]), b(m.positions[m.indices[t * 3 + 1]]),
+            c(m.positions[m.indices[t * 3 + 2]]);
+        const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
+        const double det = glm::dot(e1, p);
+        if (std::abs(det) < 1e-14)
+            continue;
+        const glm::dvec3 s = o - a;
+        const double u = glm::dot(s, p) / det;
+        if (u < 0.0 || u > 1.0)
+            continue;
+        const glm::dvec3 q = glm::cross(s, e1);
+        const double v = glm::dot(d, q) / det;
+        if (v < 0.0 || u + v > 1.0)
+            continue;
+        const double dist = glm::dot(e2, q) / det;
+        if (dist > 0.0 && dist < best)
+        {
+            best = dist;
+            hit = {uint32_t(t), float(u), float(v)};
+        }
+    }
+    return best < INFINITY;
+}
+
+// Integrates f(d) * max(n.d, 0) over the sphere on a lat-long grid (exact cell solid angles).
+template <typename F>
+double cosine_integral(const glm::dvec3& n, int rows, F f)
+{
+    double sum = 0.0;
+    const int cols = 2 * rows;
+    for (int i = 0; i < rows; ++i)
+    {
+        const double t0 = M_PI * i / rows, t1 = M_PI * (i + 1) / rows, theta = 0.5 * (t0 + t1);
+        const double omega = (std::cos(t0) - std::cos(t1)) * 2.0 * M_PI / cols;
+        for (int j = 0; j < cols; ++j)
+        {
+            const double phi = 2.0 * M_PI * (j + 0.5) / cols;
+            const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const double c = glm::dot(n, d);
+            if (c > 0.0)
+                sum += omega * c * f(d);
+        }
+    }
+    return sum;
+}
+
+glm::dvec3 ray_origin(const hemi::io::Mesh& m, size_t v, float offset)
+{
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : m.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    return glm::dvec3(m.positions[v]) + double(offset * glm::length(hi - lo)) * glm::dvec3(glm::normalize(m.normals[v]));
+}
+
+// Vertices on the torus's inner equator: they face across the hole at the other side.
+std::vector<size_t> hole_vertices(const hemi::io::Mesh& m, size_t count)
+{
+    std::vector<size_t> out;
+    float inner = INFINITY;
+    for (const glm::vec3& p : m.positions)
+        inner = std::min(inner, std::hypot(p.x, p.z));
+    for (size_t v = 0; v < m.vertex_count() && out.size() < count; v += 7)
+        if (std::hypot(m.positions[v].x, m.positions[v].z) < inner + 1e-4f)
+            out.push_back(v);
+    return out;
+}
+
+} // namespace
+
+// A closed convex mesh: every ray above a vertex's tangent plane escapes, every ray below hits the mesh. The
+// irradiance transfer is therefore exactly the unshadowed one (the control variate subtracts only rays with
+// zero cosine), and M's y00 -> y00 entry is the visible fraction of the sphere of directions: 1/2, plus a
+// sliver just below the smooth tangent plane that escapes past the faces. The faces dip below that plane by
+// less than one segment (7.5 degrees here), so the sliver is under sin(7.5 deg) / 2 = 0.065 of the sphere;
+// the Monte Carlo noise per vertex averages out over the vertices.
+TEST(PrtBake, ConvexMeshLosesNothingAboveTheHorizon)
+{
+    const hemi::io::Mesh sphere = hemi::io::make_uv_sphere(1.0f, 48, 24);
+    PrtBakeOptions o;
+    o.kind = TransferKind::Shadowed;
+    o.rays = 1024;
+    o.order = 3;
+    const auto shadowed = hemi::bake::bake_prt_transfer(sphere, o);
+    o.kind = TransferKind::Unshadowed;
+    const auto unshadowed = hemi::bake::bake_prt_transfer(sphere, o);
+    double worst_m00 = 0.0, mean_m00 = 0.0;
+    for (size_t v = 0; v < sphere.vertex_count(); ++v)
+    {
+        for (int c = 0; c < 9; ++c)
+            ASSERT_NEAR(shadowed.irradiance[v * 9 + c], unshadowed.irradiance[v * 9 + c], 1e-5) << v;
+        worst_m00 = std::max(worst_m00, std::abs(shadowed.radiance[v * 81] - 0.5));
+        mean_m00 += shadowed.radiance[v * 81] / double(sphere.vertex_count());
+    }
+    EXPECT_GT(mean_m00, 0.5 - 0.005);
+    EXPECT_LT(mean_m00, 0.5 + std::sin(7.5 * M_PI / 180.0) / 2.0);
+    EXPECT_LT(worst_m00, 0.15);
+    EXPECT_EQ(shadowed.rays_traced, sphere.vertex_count() * 1024u);
+    EXPECT_EQ(unshadowed.rays_traced, 0u);
+}
+
+// Shadowed irradiance at vertices in the torus's hole equals a brute-force evaluation (every triangle,
+// 200 x 400 directions); so does the first bounce: (albedo / pi) times the direct irradiance interpolated
+// where each direction hits, cosine-weighted.
+TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
+{
+    const hemi::io::Mesh torus = hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple);
+    PrtBakeOptions o;
+    o.kind = TransferKind::Shadowed;
+    o.rays = 4096;
+    o.order = 3;
+    o.albedo = 0.5f;
+    const auto direct = hemi::bake::bake_prt_transfer(torus, o);
+    o.kind = TransferKind::Interreflected;
+    o.bounces = 1;
+    const auto one = hemi::bake::bake_prt_transfer(torus, o);
+
+    const std::vector<size_t> probes = hole_vertices(torus, 3);
+    ASSERT_EQ(probes.size(), 3u);
+    for (size_t v : probes)
+    {
+        const glm::dvec3 n = glm::normalize(glm::dvec3(torus.normals[v])), origin = ray_origin(torus, v, o.ray_offset);
+        Hit hit{};
+        const double e0 = cosine_integral(n, 100, [&](const glm::dvec3& d) { return cast(torus, origin, d, hit) ? 0.0 : 1.0; });
+        const double e1 = cosine_integral(n, 100, [&](const glm::dvec3& d) {
+            if (!cast(torus, origin, d, hit))
+                return 0.0;
+            const uint32_t* tri = &torus.indices[size_t(hit.prim) * 3];
+            const double at = (1.0 - hit.u - hit.v) * uniform_irradiance(direct, tri[0]) +
+                              hit.u * uniform_irradiance(direct, tri[1]) + hit.v * uniform_irradiance(direct, tri[2]);
+            return o.albedo / M_PI * at;
+        });
+        EXPECT_LT(e0, 0.8 * M_PI) << "vertex " << v << " should be noticeably shadowed";
+        EXPECT_GT(e1, 0.02) << "vertex " << v << " should receive interreflected light";
+        EXPECT_NEAR(uniform_irradiance(direct, v), e0, 0.02 * M_PI) << v;
+        EXPECT_NEAR(uniform_irradiance(one, v) - uniform_irradiance(direct, v), e1, 0.05 * e1 + 2e-3) << v;
+    }
+}
+
+// Under uniform lighting on a concave model with albedo < 1: occlusion only removes light, every bounce only
+// adds it, and the total never exceeds the unshadowed value (small Monte Carlo slack).
+TEST(PrtBake, ShadowsDarkenBouncesBrightenNeverAboveUnshadowed)
+{
+    const hemi::io::Mesh knot = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex, 0.25f);
+    PrtBakeOptions o;
+    o.rays = 256;
+    o.albedo = 0.8f;
+    std::vector<hemi::bake::PrtTransfer> passes;
+    o.kind = TransferKind::Unshadowed;
+    passes.push_back(hemi::bake::bake_prt_transfer(knot, o));
+    o.kind = TransferKind::Shadowed;
+    passes.push_back(hemi::bake::bake_prt_transfer(knot, o));
+    o.kind = TransferKind::Interreflected;
+    for (int b = 1; b <= 3; ++b)
+    {
+        o.bounces = b;
+        passes.push_back(hemi::bake::bake_prt_transfer(knot, o));
+    }
+    size_t shadowed = 0;
+    for (size_t v = 0; v < knot.vertex_count(); ++v)
+    {
+        const float unshadowed = uniform_irradiance(passes[0], v);
+        ASSERT_NEAR(unshadowed, float(M_PI), 1e-4);
+        shadowed += uniform_irradiance(passes[1], v) < 0.9f * unshadowed;
+        for (size_t p = 1; p < passes.size(); ++p)
+        {
+            ASSERT_LE(uniform_irradiance(passes[p], v), unshadowed * 1.001f) << "pass " << p << " vertex " << v;
+            if (p > 1)
+            {
+                ASSERT_GE(uniform_irradiance(passes[p], v), uniform_irradiance(passes[p - 1], v) - 1e-5f)
+                    << "bounce " << p - 1 << " darkened vertex " << v;
+            }
+        }
+    }
+    EXPECT_GT(shadowed, knot.vertex_count() / 10) << "the knot should shadow itself";
+}
+
+TEST(PrtBake, SameSeedSameBytesWhateverTheThreadCount)
+{
+    const hemi::io::Mesh torus = hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple, 0.5f);
+    PrtBakeOptions o;
+    o.rays = 64;
+    o.bounces = 2;
+    const auto parallel = hemi::bake::bake_prt_transfer(torus, o);
+    hemi::bake::PrtTransfer serial;
+    {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        serial = hemi::bake::bake_prt_transfer(torus, o);
+    }
+    ASSERT_EQ(parallel.radiance.size(), serial.radiance.size());
+    EXPECT_EQ(0, std::memcmp(parallel.radiance.data(), serial.radiance.data(), serial.radiance.size() * 4));
+    EXPECT_EQ(0, std::memcmp(parallel.irradiance.data(), serial.irradiance.data(), serial.irradiance.size() * 4));
+    o.seed = 2;
+    const auto other = hemi::bake::bake_prt_transfer(torus, o);
+    EXPECT_NE(0, std::memcmp(parallel.radiance.data(), other.radiance.data(), other.radiance.size() * 4));
+}
+
+TEST(PrtBake, RejectsBadOptionsAndMeshes)
+{
+    const hemi::io::Mesh torus = hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple, 0.3f);
+    PrtBakeOptions o;
+    o.order = 7;
+    EXPECT_THROW(hemi::bake::bake_prt_transfer(torus, o), std::invalid_argument);
+    o = {};
+    o.albedo = 1.0f;
+    EXPECT_THROW(hemi::bake::bake_prt_transfer(torus, o), std::invalid_argument);
+    o = {};
+    hemi::io::Mesh nan = torus;
+    nan.positions[3].y = NAN;
+    EXPECT_THROW(hemi::bake::bake_prt_transfer(nan, o), std::invalid_argument);
+    hemi::io::Mesh bad = torus;
+    bad.indices[5] = uint32_t(bad.vertex_count());
+    EXPECT_THROW(hemi::bake::bake_prt_transfer(bad, o), std::invalid_argument);
+    EXPECT_THROW(hemi::bake::parse_transfer_kind("ambient"), std::invalid_argument);
+    EXPECT_THROW(hemi::bake::technique_size("hl3"), std::invalid_argument);
+    EXPECT_EQ(hemi::bake::technique_size("gs"), 9);
+    EXPECT_EQ(hemi::bake::technique_size("prt"), 1);
+}
