@@ -6,6 +6,7 @@
 #include "normal_map_lookup.h"
 #include "scene.h"
 
+#include <hemi/bake/prt_bake.h>
 #include <hemi/bake/transfer_fold.h>
 #include <hemi/gpu/commands.h>
 #include <hemi/math/basis.h>
@@ -31,19 +32,14 @@ struct Rendered
     hemi::io::ImageRgba color, aux;
 };
 
-// Unshadowed transfer of lighting order 3 (L = 9), folded into `basis`, for every vertex of the mesh.
+// Unshadowed transfer of lighting order 3 (L = 9), folded by the bake for `basis` (any technique), for every
+// vertex of the mesh.
 std::vector<float> folded_matrices(const hemi::io::Mesh& mesh, const hemi::math::BasisDesc& basis)
 {
-    std::vector<float> all;
-    all.reserve(mesh.vertex_count() * basis.size * 9);
-    const hemi::bake::TransferFold fold(basis);
-    for (size_t v = 0; v < mesh.vertex_count(); ++v)
-    {
-        glm::mat3 r = hemi::bake::object_to_tangent(mesh.normals[v], glm::vec3(mesh.tangents[v]), mesh.tangents[v].w);
-        std::vector<float> t = fold.apply(hemi::bake::unshadowed_transfer(r, 3), 9);
-        all.insert(all.end(), t.begin(), t.end());
-    }
-    return all;
+    hemi::bake::PrtBakeOptions o;
+    o.kind = hemi::bake::TransferKind::Unshadowed;
+    o.order = 3;
+    return hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(mesh, o), mesh, basis.name);
 }
 
 Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::BasisDesc& basis,
@@ -114,10 +110,11 @@ TEST_F(PrtMaterial, FrameMatchesCpuEvaluationForEveryBasis)
     auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Sky);
     hemi::math::AnalyticSky sky;
     std::vector<glm::vec3> lighting = hemi::math::project_sh(3, [&](const glm::vec3& d) { return sky.radiance(d); }, 64);
-    for (const char* name : {"sh9", "h6", "h4", "sal4", "hl2", "sep4", "zernike6"})
+    for (const char* name : {"sh9", "h6", "h4", "sal4", "hl2", "sep4", "zernike6", "prt"})
     {
-        const hemi::math::BasisDesc& b = hemi::math::basis(name);
-        const hemi::bake::TransferFold fold(b);
+        const hemi::math::BasisDesc& b = hemi::math::technique(name);
+        const bool classic = b.id == HEMI_BASIS_VERTEX_IRRADIANCE;
+        const hemi::bake::TransferFold fold(classic ? hemi::math::basis("sh9") : b);
         const uint32_t W = 160, H = 120;
         Rendered r = render(scene, b, lighting, scene.albedo, W, H);
         int compared = 0, failures = 0;
@@ -136,6 +133,14 @@ TEST_F(PrtMaterial, FrameMatchesCpuEvaluationForEveryBasis)
                 glm::vec3 t(-std::sin(phi), std::cos(phi), 0.0f);
                 std::vector<float> tm =
                     fold.apply(hemi::bake::unshadowed_transfer(hemi::bake::object_to_tangent(n, t, 1.0f), 3), 9);
+                if (classic)
+                {
+                    // Classic PRT: the irradiance at the surface normal, A_l y_lm(n); the normal map is ignored.
+                    float ylm[9];
+                    hemi::math::sh_eval(3, n, ylm);
+                    for (int j = 0; j < 9; ++j)
+                        tm[j] = float(hemi::math::clamped_cosine_factor(j == 0 ? 0 : (j < 4 ? 1 : 2))) * ylm[j];
+                }
                 glm::vec3 nt = glm::normalize(hemi::test::sample_bilinear(scene, uv) * 2.0f - 1.0f);
                 float v[HEMI_BASIS_MAX_SIZE];
                 b.eval(nt, v);
