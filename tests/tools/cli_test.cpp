@@ -1,0 +1,174 @@
+// The command lines pipelines script against, run as processes: hemi-bake prt and hemi-render with the
+// issue's exact forms, their outputs, and their errors on bad input (exit status 1, a message naming the
+// file and the problem, no output file left behind).
+#include "models.h"
+
+#include <hemi/io/image.h>
+#include <hemi/io/prt_asset.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace
+{
+
+fs::path dir()
+{
+    static const fs::path d = [] {
+        fs::path p = fs::temp_directory_path() / ("hemi_cli_test_" + std::to_string(getpid()));
+        fs::create_directories(p);
+        return p;
+    }();
+    return d;
+}
+
+struct Result
+{
+    int status;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream f(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+Result run(const std::string& exe, const std::string& args)
+{
+    const fs::path out = dir() / "stdout.txt", err = dir() / "stderr.txt";
+    const std::string command = "'" + exe + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const int raw = std::system(command.c_str());
+    return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+Result bake(const std::string& args) { return run(HEMI_BAKE_EXE, "prt " + args); }
+Result render(const std::string& args) { return run(HEMI_RENDER_EXE, args); }
+
+std::string q(const fs::path& p)
+{
+    std::string quoted(1, '\'');
+    quoted.append(p.string());
+    quoted.push_back('\'');
+    return quoted;
+}
+
+const fs::path& knot()
+{
+    static const fs::path p = hemi::samples::write_prt_model(dir() / "models", "knot", hemi::samples::PrtModel::Complex, 0.2f);
+    return p;
+}
+
+} // namespace
+
+// The command forms end to end: bake with CPCA and a JSON report, then render the lighting-only
+// white furnace to EXR (linear, alpha = coverage) and a colour view to PNG.
+TEST(Cli, BakeThenRenderEndToEnd)
+{
+    const fs::path asset = dir() / "knot.hemi", json = dir() / "knot.json";
+    const Result b = bake(q(knot()) + " -o " + q(asset) +
+                          " --bases gs,hl2,sal4,h4,h6,sep4,prt --transfer unshadowed --order 4 --rays 16 --seed 3"
+                          " --cpca 1x8 --json " + q(json));
+    ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_NE(b.out.find("Mrays/s"), std::string::npos) << b.out;
+    EXPECT_NE(b.out.find("CPCA"), std::string::npos) << b.out;
+    const nlohmann::json report = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(report["transfer"], "unshadowed");
+    EXPECT_EQ(report["order"], 4);
+    EXPECT_EQ(report["techniques"].size(), 7u);
+    EXPECT_GT(report["techniques"][0]["cpca_rms_error"].get<double>(), 0.0);
+
+    const fs::path exr = dir() / "white.exr";
+    const Result r = render(q(asset) + " --technique h4 --env uniform --white --size 96x64 -o " + q(exr));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const hemi::io::ImageRgba img = hemi::io::read_exr(exr);
+    ASSERT_EQ(img.width, 96u);
+    ASSERT_EQ(img.height, 64u);
+    size_t covered = 0, empty = 0;
+    for (size_t i = 0; i < img.pixels.size(); i += 4)
+    {
+        if (img.pixels[i + 3] == 1.0f)
+        {
+            ++covered;
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(img.pixels[i + c], 1.0f, 0.01f) << "pixel " << i / 4;
+        }
+        else
+        {
+            ASSERT_EQ(img.pixels[i + 3], 0.0f);
+            ++empty;
+        }
+    }
+    EXPECT_GT(covered, 500u);
+    EXPECT_GT(empty, 500u);
+
+    const fs::path png = dir() / "sky.png";
+    const Result c = render(q(asset) + " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
+                                       "--camera 0,-4,1,0,0,0 -o " + q(png));
+    ASSERT_EQ(c.status, 0) << c.err;
+    EXPECT_EQ(hemi::io::read_png(png).width, 64u);
+}
+
+TEST(Cli, SameSeedSameBytes)
+{
+    const fs::path a = dir() / "a.hemi", b = dir() / "b.hemi", c = dir() / "c.hemi";
+    const std::string args = " --bases gs,prt --transfer interreflected --bounces 1 --rays 8 --order 3";
+    ASSERT_EQ(bake(q(knot()) + " -o " + q(a) + args + " --seed 5").status, 0);
+    ASSERT_EQ(bake(q(knot()) + " -o " + q(b) + args + " --seed 5").status, 0);
+    ASSERT_EQ(bake(q(knot()) + " -o " + q(c) + args + " --seed 6").status, 0);
+    EXPECT_EQ(slurp(a), slurp(b));
+    EXPECT_NE(slurp(a), slurp(c));
+}
+
+TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
+{
+    const fs::path out = dir() / "never.hemi";
+    auto expect_failure = [&](const Result& r, const std::string& part) {
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find(part), std::string::npos) << "stderr: " << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    };
+    // Malformed glTF.
+    const fs::path garbage = dir() / "garbage.gltf";
+    std::ofstream(garbage) << "{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ { \"primitives\": [ { ";
+    expect_failure(bake(q(garbage) + " -o " + q(out)), garbage.string());
+    // A normal map the glTF references but that does not exist.
+    fs::path missing = hemi::samples::write_prt_model(dir() / "missing", "m", hemi::samples::PrtModel::Simple, 0.3f);
+    fs::remove(dir() / "missing" / "m_normal.png");
+    expect_failure(bake(q(missing) + " -o " + q(out)), "m_normal.png");
+    // Bad options.
+    expect_failure(bake(q(knot()) + " -o " + q(out) + " --cpca 24"), "CLUSTERSxVECTORS");
+    expect_failure(bake(q(knot()) + " -o " + q(out) + " --bases gs,phong"), "phong");
+    expect_failure(bake(q(knot()) + " -o " + q(out) + " --transfer ambient"), "ambient");
+
+    // hemi-render: a truncated asset, a corrupted one, a technique the asset lacks, a missing environment.
+    const fs::path good = dir() / "small.hemi";
+    ASSERT_EQ(bake(q(knot()) + " -o " + q(good) + " --bases hl2 --transfer unshadowed").status, 0);
+    const std::string bytes = slurp(good);
+    const fs::path cut = dir() / "cut.hemi", flipped = dir() / "flipped.hemi";
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    std::string f = bytes;
+    f[f.size() / 2] = char(f[f.size() / 2] ^ 0x01);
+    std::ofstream(flipped, std::ios::binary) << f;
+    const fs::path png = dir() / "never.png";
+    auto expect_render_failure = [&](const Result& r, const std::string& part) {
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find(part), std::string::npos) << "stderr: " << r.err;
+        EXPECT_FALSE(fs::exists(png));
+    };
+    expect_render_failure(render(q(cut) + " --technique hl2 --env sky -o " + q(png)), cut.string());
+    expect_render_failure(render(q(flipped) + " --technique hl2 --env sky -o " + q(png)), "checksum");
+    expect_render_failure(render(q(good) + " --technique gs --env sky -o " + q(png)), "no technique 'gs'");
+    expect_render_failure(render(q(good) + " --technique hl2 --env " + q(dir() / "nope.exr") + " -o " + q(png)),
+                          "nope.exr");
+    expect_render_failure(render(q(good) + " --technique hl2 --env sky --size 0x5 -o " + q(png)), "--size");
+}
