@@ -9,10 +9,29 @@
 //                                     dispatches (UseManualTime); the counter wall_ms is submit + wait on the host.
 //                                     cpu: wall clock of transfer_multiply_host.
 //   sh/rotate/order:6/rgb             building an order-6 SH rotation and applying it to RGB lighting.
+//   table1/MODEL/TECH[/cpu]           Sloan 2006 Table 1, re-measured: one frame of a baked PRT asset
+//                                     (render::PrtView) at 640 x 480 for MODEL = simple (703 vertices),
+//                                     complex (29,197) and 1M (1,002,774), TECH = gs, sep4, sal4, hl2, h4, h6,
+//                                     gs+cpca, sep4+cpca (1 cluster x 24 vectors). Time = GPU timestamps of the
+//                                     whole frame; counters fps, transfer_ms (coefficient pass), raster_ms,
+//                                     wall_ms. /cpu: the paper's non-GPU path, the multiply on the host
+//                                     (transfer_multiply_host / cpca_multiply_host) then the upload of the
+//                                     coefficients, then the same raster pass; counters cpu_ms, upload_ms,
+//                                     raster_ms. Frame cost does not depend on the matrices' values, so the
+//                                     assets hold unshadowed transfer (the 1M model's CPCA data are random,
+//                                     with the real shapes: CPCA of 1M x 225 values is a bake-time job).
+//   bake/complex                      the PRT bake's first (visibility) pass on the complex model, 64 rays per
+//                                     vertex: rays_per_s, and embree_ratio = Embree's own rays/s tracing the
+//                                     same rays with nothing else (bake::trace_bake_rays) / the bake's.
 //
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device.
 
+#include "models.h"
+
+#include <hemi/bake/cpca.h>
+#include <hemi/bake/prt_bake.h>
 #include <hemi/gpu/commands.h>
+#include <hemi/render/prt_view.h>
 #include <hemi/gpu/device.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/transfer.h>
@@ -24,6 +43,7 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <map>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -193,6 +213,165 @@ void sh_rotate_order6_rgb(benchmark::State& state)
     }
 }
 
+// ---- Table 1 ----------------------------------------------------------------------------------------
+
+struct Table1Model
+{
+    hemi::io::Mesh mesh;
+    hemi::bake::PrtTransfer transfer; // unshadowed, order 5
+};
+
+const Table1Model& table1_model(const std::string& name)
+{
+    static std::map<std::string, std::unique_ptr<Table1Model>> cache;
+    auto& slot = cache[name];
+    if (!slot)
+    {
+        cache.clear(); // one model in memory at a time (the 1M one is large)
+        auto m = std::make_unique<Table1Model>();
+        const float detail = name == "simple" ? 1.0f : name == "complex" ? 1.0f : 5.89f;
+        m->mesh = hemi::samples::make_prt_model(
+            name == "simple" ? hemi::samples::PrtModel::Simple : hemi::samples::PrtModel::Complex, detail);
+        hemi::bake::PrtBakeOptions o;
+        o.kind = hemi::bake::TransferKind::Unshadowed;
+        m->transfer = hemi::bake::bake_prt_transfer(m->mesh, o);
+        cache[name] = std::move(m);
+        return *cache[name];
+    }
+    return *slot;
+}
+
+hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& technique, bool cpca)
+{
+    hemi::io::PrtAsset a;
+    a.mesh = model.mesh;
+    a.order = uint32_t(model.transfer.order);
+    hemi::io::PrtTechnique t;
+    t.name = technique;
+    t.k = uint32_t(hemi::bake::technique_size(technique));
+    const uint32_t n = uint32_t(model.mesh.vertex_count()), d = t.k * a.l();
+    if (!cpca)
+        t.matrices = hemi::bake::fold_technique(model.transfer, model.mesh, technique);
+    else if (n < 100000)
+        t.cpca = hemi::bake::compress_cpca(hemi::bake::fold_technique(model.transfer, model.mesh, technique), n, d, 1, 24);
+    else
+    {
+        hemi::io::PrtCpca c;
+        c.clusters = 1;
+        c.vectors = 24;
+        c.means = random_floats(d, 2);
+        c.basis = random_floats(size_t(24) * d, 3);
+        c.cluster.assign(n, 0);
+        c.weights = random_floats(size_t(n) * 24, 4);
+        t.cpca = std::move(c);
+    }
+    a.techniques.push_back(std::move(t));
+    return a;
+}
+
+void table1(benchmark::State& state, std::string model_name, std::string technique, bool cpca, bool cpu_path)
+{
+    hemi::gpu::Device& device = bench_device();
+    const Table1Model& model = table1_model(model_name);
+    const hemi::io::PrtAsset asset = table1_asset(model, technique, cpca);
+    const uint32_t w = 640, h = 480;
+    hemi::render::PrtView view(device, asset, "", technique, cpca, w, h);
+    hemi::render::PrtFrame frame;
+    frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
+    frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, float(w) / float(h));
+    hemi::gpu::CommandContext ctx(device);
+    hemi::gpu::TimestampQueries queries(device, 3);
+    view.render(frame); // warm-up: pipeline variants compiled, memory faulted in
+
+    const hemi::io::PrtTechnique& t = asset.techniques[0];
+    const uint32_t n = uint32_t(asset.mesh.vertex_count());
+    std::unique_ptr<hemi::render::TransferMatrices> host_matrices;
+    hemi::render::CpcaMatrices host_cpca;
+    if (cpu_path && !cpca)
+        host_matrices = std::make_unique<hemi::render::TransferMatrices>(n, t.k, asset.l(), t.matrices);
+    if (cpu_path && cpca)
+        host_cpca = {n, t.k, asset.l(), 1, 24, t.cpca->means, t.cpca->basis, t.cpca->cluster, t.cpca->weights};
+    std::vector<float> coefficients(size_t(n) * t.k * 4);
+    const std::vector<glm::vec3> lighting = view.object_lighting(frame);
+
+    double transfer = 0.0, raster = 0.0, wall = 0.0, cpu = 0.0, upload = 0.0;
+    for (auto _ : state)
+    {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (cpu_path)
+        {
+            if (cpca)
+                hemi::render::cpca_multiply_host(host_cpca, lighting, coefficients);
+            else
+                hemi::render::transfer_multiply_host(*host_matrices, lighting, coefficients);
+            const auto t1 = std::chrono::steady_clock::now();
+            hemi::gpu::write_buffer(device, view.coefficients().coefficients(), coefficients.data(),
+                                    coefficients.size() * sizeof(float));
+            const auto t2 = std::chrono::steady_clock::now();
+            cpu += std::chrono::duration<double>(t1 - t0).count();
+            upload += std::chrono::duration<double>(t2 - t1).count();
+        }
+        VkCommandBuffer cmd = ctx.begin();
+        queries.reset(cmd);
+        queries.write(cmd, 0, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT);
+        if (cpu_path)
+        {
+            // Only the material's uniforms: the coefficients were uploaded.
+            hemi::render::PrtFrame f = frame;
+            view.record_material(cmd, f);
+        }
+        else
+            view.record_transfer(cmd, frame);
+        queries.write(cmd, 1, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        view.record_raster(cmd);
+        queries.write(cmd, 2, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        ctx.submit_and_wait();
+        const auto t3 = std::chrono::steady_clock::now();
+        const std::vector<double> ns = queries.read_ns();
+        const double gpu_frame = (ns[2] - ns[0]) * 1e-9;
+        transfer += (ns[1] - ns[0]) * 1e-9;
+        raster += (ns[2] - ns[1]) * 1e-9;
+        wall += std::chrono::duration<double>(t3 - t0).count();
+        state.SetIterationTime(cpu_path ? std::chrono::duration<double>(t3 - t0).count() : gpu_frame);
+    }
+    const double iters = double(state.iterations());
+    state.counters["vertices"] = n;
+    state.counters["raster_ms"] = raster / iters * 1e3;
+    state.counters["wall_ms"] = wall / iters * 1e3;
+    if (cpu_path)
+    {
+        state.counters["cpu_ms"] = cpu / iters * 1e3;
+        state.counters["upload_ms"] = upload / iters * 1e3;
+        state.counters["fps"] = iters / wall;
+    }
+    else
+    {
+        state.counters["transfer_ms"] = transfer / iters * 1e3;
+        state.counters["fps"] = iters / (transfer + raster);
+    }
+}
+
+void bake_complex(benchmark::State& state)
+{
+    const hemi::io::Mesh mesh = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex);
+    hemi::bake::PrtBakeOptions o;
+    o.kind = hemi::bake::TransferKind::Shadowed;
+    o.rays = 64;
+    double bake_rays_per_s = 0.0, embree_rays_per_s = 0.0;
+    for (auto _ : state)
+    {
+        const hemi::bake::PrtTransfer t = hemi::bake::bake_prt_transfer(mesh, o);
+        double seconds = 0.0;
+        hemi::bake::trace_bake_rays(mesh, o, seconds);
+        bake_rays_per_s = double(t.rays_traced) / t.seconds;
+        embree_rays_per_s = double(t.rays_traced) / seconds;
+        state.SetIterationTime(t.seconds);
+    }
+    state.counters["rays_per_s"] = bake_rays_per_s;
+    state.counters["embree_rays_per_s"] = embree_rays_per_s;
+    state.counters["embree_ratio"] = embree_rays_per_s / bake_rays_per_s;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -214,6 +393,23 @@ int main(int argc, char** argv)
             ->UseRealTime();
     }
     benchmark::RegisterBenchmark("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)->Unit(benchmark::kMicrosecond);
+
+    for (const char* model : {"simple", "complex", "1M"})
+        for (const char* tech : {"gs", "sep4", "sal4", "hl2", "h4", "h6", "gs+cpca", "sep4+cpca"})
+            for (bool cpu_path : {false, true})
+            {
+                const std::string name = std::string("table1/") + model + "/" + tech + (cpu_path ? "/cpu" : "");
+                std::string t = tech;
+                const bool cpca = t.size() > 5 && t.substr(t.size() - 5) == "+cpca";
+                if (cpca)
+                    t = t.substr(0, t.size() - 5);
+                benchmark::RegisterBenchmark(name.c_str(), table1, std::string(model), t, cpca, cpu_path)
+                    ->Unit(benchmark::kMillisecond)
+                    ->UseManualTime()
+                    ->MinTime(0.2);
+            }
+    benchmark::RegisterBenchmark("bake/complex", bake_complex)->Unit(benchmark::kMillisecond)->UseManualTime()
+        ->Iterations(2);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

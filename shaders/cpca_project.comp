@@ -1,7 +1,8 @@
 #version 450
 // CPCA transfer, step 1 (Sloan et al. 2003; Sloan 2006 Sec. 2): per cluster, the mean matrix and each PCA
 // matrix times the lighting. Row r of the (C * (V + 1) * K) x L row set is one output: projected[r] = rows[r] . l.
-// A small dispatch: C * (V + 1) * K invocations, each an L-term dot product per colour.
+// A small dispatch: C * (V + 1) * K invocations, each an L-term dot product per colour. Each cluster's
+// results start at an aligned stride: step 2 binds them as a uniform block at a dynamic offset.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "hemi/shared/transfer.h"
@@ -30,5 +31,5 @@ void main()
     vec3 sum = vec3(0.0);
     [[unroll]] for (uint j = 0; j < L; ++j)
         sum += rows[r * L + j] * light[j].rgb;
-    projected[r] = vec4(sum, 0.0);
+    projected[(r / pc.per_cluster) * pc.stride + r % pc.per_cluster] = vec4(sum, 0.0);
 }

@@ -295,28 +295,40 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
             }
             done += range.end() - range.begin();
         };
-        // Trace on TBB's workers while this thread reports progress.
-        std::exception_ptr error;
-        std::thread tracer([&] {
-            try
-            {
-                tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
-            }
-            catch (...)
-            {
-                error = std::current_exception();
-            }
-            done = n + 1u; // sentinel: finished
-        });
-        while (done.load() <= n)
+        if (!progress)
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
+        else
         {
-            if (progress)
-                progress({pass, passes, std::min<uint64_t>(done.load(), n), n});
-            std::this_thread::sleep_for(std::chrono::milliseconds(200));
+            // Trace on TBB's workers while this thread reports progress (every 200 ms, polled often so
+            // that a pass ends without waiting out a reporting interval).
+            std::exception_ptr error;
+            std::atomic<bool> finished{false};
+            std::thread tracer([&] {
+                try
+                {
+                    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
+                }
+                catch (...)
+                {
+                    error = std::current_exception();
+                }
+                finished = true;
+            });
+            auto last = std::chrono::steady_clock::now();
+            progress({pass, passes, 0, n});
+            while (!finished.load())
+            {
+                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+                if (std::chrono::steady_clock::now() - last > std::chrono::milliseconds(200))
+                {
+                    last = std::chrono::steady_clock::now();
+                    progress({pass, passes, std::min<uint64_t>(done.load(), n), n});
+                }
+            }
+            tracer.join();
+            if (error)
+                std::rethrow_exception(error);
         }
-        tracer.join();
-        if (error)
-            std::rethrow_exception(error);
         if (progress)
             progress({pass, passes, n, n});
         if (pass > 0)
@@ -326,6 +338,38 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
     }
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
+}
+
+uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& seconds)
+{
+    check(mesh, o);
+    EmbreeScene embree(mesh);
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const float offset = o.ray_offset * glm::length(hi - lo);
+    const uint32_t n = uint32_t(mesh.vertex_count());
+    std::atomic<uint64_t> hits{0};
+    const auto t0 = std::chrono::steady_clock::now();
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 256), [&](const tbb::blocked_range<uint32_t>& range) {
+        uint64_t local = 0;
+        for (uint32_t v = range.begin(); v != range.end(); ++v)
+        {
+            const glm::vec3 origin = mesh.positions[v] + offset * glm::normalize(mesh.normals[v]);
+            for (int r = 0; r < o.rays; ++r)
+            {
+                uint32_t prim;
+                float bu, bv;
+                local += embree.intersect(origin, ray_direction(o.seed, v, r, o.rays), prim, bu, bv);
+            }
+        }
+        hits += local;
+    });
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return hits;
 }
 
 int technique_size(std::string_view technique)

@@ -151,6 +151,11 @@ void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
     source_->record(cmd, lighting);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                         VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    record_material(cmd, frame);
+}
+
+void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
+{
     const float aspect = float(target_.width()) / float(target_.height());
     PrtMaterialFrame m;
     m.model = frame.model;

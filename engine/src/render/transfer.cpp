@@ -454,9 +454,15 @@ void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighti
 struct CpcaTransferPass::Impl
 {
     const gpu::Device* device;
-    uint32_t n, k, l, rows;
-    gpu::Buffer rows_buffer, lighting, projected, weights, clusters, coefficients;
-    gpu::BufferView coefficient_view;
+    uint32_t n, k, l, rows, per_cluster;
+    VkDeviceSize projected_stride; // bytes between clusters' projections (aligned for dynamic offsets)
+    struct Run
+    {
+        uint32_t cluster, first_invocation, invocations;
+    };
+    std::vector<Run> runs; // one dispatch per non-empty cluster
+    gpu::Buffer rows_buffer, lighting, projected, weights, slots, coefficients;
+    gpu::BufferView coefficient_view, weight_view;
     gpu::Program project, reconstruct;
     gpu::DescriptorPool pool;
     VkDescriptorSet project_set = VK_NULL_HANDLE, reconstruct_set = VK_NULL_HANDLE;
@@ -473,6 +479,7 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     s.l = c.l;
     const size_t d = size_t(c.k) * c.l;
     s.rows = c.clusters * (c.vectors + 1) * c.k;
+    s.per_cluster = (c.vectors + 1) * c.k;
     const VkPhysicalDeviceLimits& limits = device.limits();
     auto storage = [&](VkDeviceSize bytes, const char* what) {
         if (bytes > limits.maxStorageBufferRange)
@@ -480,15 +487,9 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
                                      " bytes) exceed the device's maxStorageBufferRange");
         return gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     };
-    if ((uint64_t(s.n) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
-            limits.maxComputeWorkGroupCount[0] ||
-        (uint64_t(s.rows) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
-            limits.maxComputeWorkGroupCount[0])
-        throw std::runtime_error("hemi: CPCA pass over " + std::to_string(s.n) +
-                                 " vertices exceeds the device's maxComputeWorkGroupCount");
-    if (uint64_t(s.n) * s.k > limits.maxTexelBufferElements)
-        throw std::runtime_error("hemi: CPCA output of " + std::to_string(uint64_t(s.n) * s.k) +
-                                 " texels exceeds the device's maxTexelBufferElements");
+    if (c.vectors > HEMI_CPCA_MAX_VECTORS)
+        throw std::invalid_argument("hemi: the CPCA pass supports up to " + std::to_string(HEMI_CPCA_MAX_VECTORS) +
+                                    " vectors per cluster, got " + std::to_string(c.vectors));
     // Rows: per cluster, the mean then the V vectors, each K x L.
     std::vector<float> rows(size_t(s.rows) * c.l);
     for (uint32_t cl = 0; cl < c.clusters; ++cl)
@@ -497,13 +498,63 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
         std::copy_n(&c.basis[size_t(cl) * c.vectors * d], size_t(c.vectors) * d,
                     &rows[(size_t(cl) * (c.vectors + 1) + 1) * d]);
     }
+    // Slots: vertices grouped by cluster, each cluster's run padded to whole 32-slot blocks (one dispatch per
+    // cluster); weights element-interleaved in blocks of 32 slots, as the dense matrices are.
+    constexpr uint32_t kNone = 0xffffffffu, kBlock = HEMI_TRANSFER_BLOCK_VERTICES;
+    std::vector<std::vector<uint32_t>> members(c.clusters);
+    for (uint32_t v = 0; v < c.vertex_count; ++v)
+        members[c.cluster[v]].push_back(v);
+    std::vector<uint32_t> slot_vertex;
+    uint32_t largest_run = 0;
+    for (uint32_t cl = 0; cl < c.clusters; ++cl)
+    {
+        if (members[cl].empty())
+            continue;
+        const uint32_t first = uint32_t(slot_vertex.size() / HEMI_TRANSFER_VERTICES_PER_INVOCATION);
+        slot_vertex.insert(slot_vertex.end(), members[cl].begin(), members[cl].end());
+        slot_vertex.resize((slot_vertex.size() + kBlock - 1) / kBlock * kBlock, kNone);
+        const uint32_t count = uint32_t(slot_vertex.size() / HEMI_TRANSFER_VERTICES_PER_INVOCATION) - first;
+        s.runs.push_back({cl, first, count});
+        largest_run = std::max(largest_run, count);
+    }
+    const VkDeviceSize align = std::max<VkDeviceSize>(1, limits.minUniformBufferOffsetAlignment);
+    s.projected_stride = (VkDeviceSize(c.vectors + 1) * c.k * 16 + align - 1) / align * align;
+    if (HEMI_CPCA_PROJECTED_BYTES > limits.maxUniformBufferRange)
+        throw std::runtime_error("hemi: the device's maxUniformBufferRange is below the CPCA pass's uniform block");
+    const uint32_t V = c.vectors, per_block = HEMI_TRANSFER_INVOCATIONS_PER_BLOCK;
+    std::vector<float> interleaved(slot_vertex.size() * V, 0.0f);
+    for (size_t slot = 0; slot < slot_vertex.size(); ++slot)
+    {
+        if (slot_vertex[slot] == kNone)
+            continue;
+        const size_t invocation = slot / 4, block = invocation / per_block, lane = invocation % per_block;
+        for (uint32_t j = 0; j < V; ++j)
+            interleaved[((block * V + j) * per_block + lane) * 4 + slot % 4] =
+                c.weights[size_t(slot_vertex[slot]) * V + j];
+    }
+    if ((uint64_t(largest_run) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
+            limits.maxComputeWorkGroupCount[0] ||
+        (uint64_t(s.rows) + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE >
+            limits.maxComputeWorkGroupCount[0])
+        throw std::runtime_error("hemi: CPCA pass over " + std::to_string(s.n) +
+                                 " vertices exceeds the device's maxComputeWorkGroupCount");
+    if (uint64_t(s.n) * s.k > limits.maxTexelBufferElements ||
+        interleaved.size() / 4 > limits.maxTexelBufferElements)
+        throw std::runtime_error("hemi: CPCA data of " + std::to_string(s.n) +
+                                 " vertices exceed the device's maxTexelBufferElements");
     s.rows_buffer = storage(rows.size() * 4, "cluster matrices");
     gpu::write_buffer(device, s.rows_buffer, rows.data(), rows.size() * 4);
-    s.weights = storage(c.weights.size_bytes(), "weights");
-    gpu::write_buffer(device, s.weights, c.weights.data(), c.weights.size_bytes());
-    s.clusters = storage(c.cluster.size_bytes(), "cluster ids");
-    gpu::write_buffer(device, s.clusters, c.cluster.data(), c.cluster.size_bytes());
-    s.projected = storage(VkDeviceSize(s.rows) * 16, "projections");
+    s.weights = gpu::create_buffer(device, {interleaved.size() * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    gpu::write_buffer(device, s.weights, interleaved.data(), interleaved.size() * 4);
+    s.weight_view = gpu::create_buffer_view(device, s.weights, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
+                                            interleaved.size() * 4);
+    s.slots = storage(slot_vertex.size() * 4, "vertex slots");
+    gpu::write_buffer(device, s.slots, slot_vertex.data(), slot_vertex.size() * 4);
+    // Written by step 1 as a storage buffer, read by step 2 as a uniform block at a dynamic offset: cluster
+    // c's projections start at c * stride.
+    s.projected = gpu::create_buffer(
+        device, {s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES,
+                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     s.lighting = gpu::create_buffer(device, {HEMI_TRANSFER_MAX_L * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const VkDeviceSize coefficient_bytes = VkDeviceSize(s.n) * s.k * 16;
     s.coefficients = gpu::create_buffer(
@@ -518,9 +569,9 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
         {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
     };
     const std::vector<gpu::Binding> reconstruct_bindings = {
-        {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
-        {HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
-        {HEMI_CPCA_BINDING_CLUSTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
+        {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, cs},
+        {HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, cs},
+        {HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
         {HEMI_CPCA_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, cs},
     };
     s.project = gpu::create_compute_program(
@@ -547,11 +598,15 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     };
     gpu::write_descriptors(device, s.project_set, project_writes);
     gpu::DescriptorWrite reconstruct_writes[4] = {
-        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected),
-        buffer_write(HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.weights),
-        buffer_write(HEMI_CPCA_BINDING_CLUSTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.clusters),
+        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.projected),
+        {},
+        buffer_write(HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.slots),
         {},
     };
+    reconstruct_writes[0].buffer.range = HEMI_CPCA_PROJECTED_BYTES;
+    reconstruct_writes[1].binding = HEMI_CPCA_BINDING_WEIGHTS;
+    reconstruct_writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    reconstruct_writes[1].texel_view = s.weight_view;
     reconstruct_writes[3].binding = HEMI_CPCA_BINDING_COEFFICIENTS;
     reconstruct_writes[3].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
     reconstruct_writes[3].texel_view = s.coefficient_view;
@@ -566,17 +621,21 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
     record_lighting_update(cmd, s.lighting, lighting, s.l);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.pipeline);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &s.project_set, 0, nullptr);
-    CpcaPush push{s.rows};
+    const CpcaPush push{s.rows, 0, s.per_cluster, uint32_t(s.projected_stride / 16)};
     vkCmdPushConstants(cmd, s.project.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
     vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_set, 0,
-                            nullptr);
-    push.count = s.n;
-    vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
-    vkCmdDispatch(cmd, (s.n + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    for (const Impl::Run& run : s.runs)
+    {
+        const uint32_t offset = uint32_t(run.cluster * s.projected_stride);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_set, 1,
+                                &offset);
+        const CpcaPush run_push{run.invocations, run.first_invocation, 0, 0};
+        vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof run_push, &run_push);
+        vkCmdDispatch(cmd, (run.invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    }
 }
 
 const gpu::Buffer& CpcaTransferPass::coefficients() const { return impl_->coefficients; }

@@ -79,6 +79,11 @@ struct PrtTransfer
 PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& options,
                               const PrtProgressCallback& progress = {});
 
+// Traces exactly the rays of the bake's first pass (same origins, directions and Embree scene) and does
+// nothing else: Embree's own throughput on the bake's rays, what hemi-bench compares the bake's rays/s with.
+// Returns the number of rays that hit; `seconds` receives the tracing time.
+uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& options, double& seconds);
+
 // The K x L matrix of one technique for every vertex (N x K x L, row-major per vertex), in the vertex's
 // tangent frame: a hemispherical basis name of math::bases() ("sh9", "hl2", "h4", "h6", "sal4", "sep4", ...)
 // folds M with the tangent rotation, the cosine convolution and the basis projection; "prt" is t itself

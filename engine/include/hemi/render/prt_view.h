@@ -64,8 +64,11 @@ public:
     // The object-space lighting the coefficient source receives for `frame`.
     std::vector<glm::vec3> object_lighting(const PrtFrame& frame) const;
 
-    // Outside a render pass: the transfer (or CPCA) pass, then the material's uniform update.
+    // Outside a render pass: the transfer (or CPCA) pass, then record_material().
     void record_transfer(VkCommandBuffer cmd, const PrtFrame& frame);
+    // Outside a render pass: the material's uniform update only (camera, albedo), for a frame whose
+    // coefficients are already in place (e.g. uploaded by a host-side multiply).
+    void record_material(VkCommandBuffer cmd, const PrtFrame& frame);
     // The raster pass into target(): begin, draw, end.
     void record_raster(VkCommandBuffer cmd) const;
     // Both, submitted and waited for; returns the colour with alpha = coverage (1 where the model is).

@@ -33,12 +33,19 @@ struct TransferPush
 #define HEMI_CPCA_BINDING_LIGHTING 1
 #define HEMI_CPCA_BINDING_PROJECTED 2
 #define HEMI_CPCA_BINDING_WEIGHTS 3
-#define HEMI_CPCA_BINDING_CLUSTERS 4
 #define HEMI_CPCA_BINDING_COEFFICIENTS 5
+#define HEMI_CPCA_BINDING_SLOTS 4
+// PCA vectors per cluster the runtime pass supports (its shared-memory copy of a cluster's projections).
+#define HEMI_CPCA_MAX_VECTORS 64
+// Size of the uniform block holding one cluster's projections (std140 vec4 array).
+#define HEMI_CPCA_PROJECTED_BYTES (HEMI_TRANSFER_MAX_K * (HEMI_CPCA_MAX_VECTORS + 1) * 16)
 
 struct CpcaPush
 {
-    HEMI_UINT count; // rows to project (step 1) or vertices (step 2)
+    HEMI_UINT count;       // rows to project (step 1) or invocations of this cluster's dispatch (step 2)
+    HEMI_UINT first;       // step 2: the cluster's first invocation (slots / 4)
+    HEMI_UINT per_cluster; // step 1: rows per cluster, (V + 1) * K
+    HEMI_UINT stride;      // step 1: vec4s between two clusters' projections (aligned for dynamic offsets)
 };
 
 #ifdef __cplusplus
