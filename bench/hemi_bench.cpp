@@ -11,7 +11,7 @@
 //   sh/rotate/order:6/rgb             building an order-6 SH rotation and applying it to RGB lighting.
 //   table1/MODEL/TECH[/cpu]           Sloan 2006 Table 1, re-measured: one frame of a baked PRT asset
 //                                     (render::PrtView) at 640 x 480 for MODEL = simple (703 vertices),
-//                                     complex (29,197) and 1M (1,002,774), TECH = gs, sep4, sal4, hl2, h4, h6,
+//                                     complex (29,197) and 1M (1,000,688), TECH = gs, sep4, sal4, hl2, h4, h6,
 //                                     gs+cpca, sep4+cpca (1 cluster x 24 vectors). Time = GPU timestamps of the
 //                                     whole frame; counters fps, transfer_ms (coefficient pass), raster_ms,
 //                                     wall_ms. /cpu: the paper's non-GPU path, the multiply on the host

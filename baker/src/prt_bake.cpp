@@ -191,6 +191,18 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
                                             " has a non-finite position or normal");
 }
 
+// How far ray origins move off the surface along the normal: a fraction of the bounding-box diagonal.
+float ray_offset_distance(const io::Mesh& mesh, const PrtBakeOptions& o)
+{
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    return o.ray_offset * glm::length(hi - lo);
+}
+
 } // namespace
 
 PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, const PrtProgressCallback& progress)
@@ -222,13 +234,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
         return out;
 
     EmbreeScene embree(mesh);
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    const float offset = o.ray_offset * glm::length(hi - lo);
+    const float offset = ray_offset_distance(mesh, o);
     const float weight = 4.0f * float(M_PI) / float(o.rays);
     const int passes = 1 + (o.kind == TransferKind::Interreflected ? o.bounces : 0);
 
@@ -344,13 +350,7 @@ uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& 
 {
     check(mesh, o);
     EmbreeScene embree(mesh);
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    const float offset = o.ray_offset * glm::length(hi - lo);
+    const float offset = ray_offset_distance(mesh, o);
     const uint32_t n = uint32_t(mesh.vertex_count());
     std::atomic<uint64_t> hits{0};
     const auto t0 = std::chrono::steady_clock::now();

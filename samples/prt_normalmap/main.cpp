@@ -73,7 +73,7 @@ int main(int argc, char** argv)
     CLI::App app{"prt_normalmap: Sloan 2006's technique comparison, baked and rendered with hemi"};
     std::string out_dir = "prt_normalmap", image_path = "prt_normalmap.png", table_path = "prt_normalmap.md";
     int rays = 256, tile = 300;
-    float detail = 1.0f, exposure = 1.0f, rotate = 30.0f;
+    float detail = 1.0f, exposure = 0.6f, rotate = 30.0f;
     app.add_option("--dir", out_dir, "folder for the models, textures and baked assets")->capture_default_str();
     app.add_option("-o,--output", image_path, "comparison image (PNG)")->capture_default_str();
     app.add_option("--table", table_path, "error table (Markdown)")->capture_default_str();
