@@ -1,4 +1,5 @@
 #include <hemi/bake/basis_report.h>
+#include <hemi/bake/gnuplot.h>
 
 #include <hemi/io/atomic_file.h>
 #include <hemi/math/basis.h>
@@ -196,9 +197,7 @@ void write_basis_report_json(const std::string& path, const BasisReport& r)
 void plot_basis_report(const std::string& png_path, const BasisReport& r)
 {
     namespace fs = std::filesystem;
-    fs::path dir = fs::temp_directory_path() / ("hemi_plot_" + std::to_string(std::random_device{}()));
-    fs::create_directories(dir);
-    {
+    run_gnuplot(png_path, [&](const fs::path& dir, std::ostream& script, const fs::path& output) {
         // Bases with the same count crowd one column: merge identical points (h4 = sh4ls) and put the
         // labels of a column alternately left and right of their points, in order of error.
         std::map<int, std::vector<std::pair<double, std::string>>> columns;
@@ -216,9 +215,8 @@ void plot_basis_report(const std::string& png_path, const BasisReport& r)
                 col.push_back({st.mean_imse, name});
         }
         std::ofstream data(dir / "imse.dat");
-        std::ofstream script(dir / "fig3.gp");
         script << "set terminal pngcairo size 900,600 noenhanced font 'Sans,11'\n"
-               << "set output '" << (dir / "fig3.png").string() << "'\n"
+               << "set output '" << output.string() << "'\n"
                << "set title 'Mean IMSE over the hemisphere of " << r.signals
                << " random irradiance signals (cf. Habel and Wimmer 2010, Fig. 3)'\n"
                << "set xlabel 'number of coefficients'\nset ylabel 'mean integrated squared error'\n"
@@ -235,31 +233,7 @@ void plot_basis_report(const std::string& png_path, const BasisReport& r)
             }
         }
         script << "plot '" << (dir / "imse.dat").string() << "' using 1:2 with points pt 7 ps 1.5 lc rgb '#3060c0'\n";
-    }
-    // The paths are quoted for the shell; a temporary directory with a quote in its name is refused.
-    if (dir.string().find('\'') != std::string::npos)
-    {
-        fs::remove_all(dir);
-        throw std::runtime_error(png_path + ": the temporary directory's path contains a quote: " + dir.string());
-    }
-    struct Cleanup
-    {
-        fs::path dir;
-        ~Cleanup()
-        {
-            std::error_code ignored;
-            fs::remove_all(dir, ignored);
-        }
-    } cleanup{dir};
-    const std::string cmd = "gnuplot '" + (dir / "fig3.gp").string() + "' 2>'" + (dir / "err.txt").string() + "'";
-    int rc = std::system(cmd.c_str());
-    if (rc != 0 || !fs::exists(dir / "fig3.png"))
-    {
-        std::ifstream err(dir / "err.txt");
-        std::string msg((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
-        throw std::runtime_error(png_path + ": gnuplot failed (is gnuplot installed? cmake/install_deps.sh): " + msg);
-    }
-    io::write_atomically(png_path, [&](const fs::path& tmp) { fs::copy_file(dir / "fig3.png", tmp); });
+    });
 }
 
 } // namespace hemi::bake

@@ -2,9 +2,12 @@
 // as glTF, baked with hemi-bake's code path (interreflected transfer, CPCA 1x24 on the complex one), and
 // rendered under the analytic sky with every technique: classic PRT (no normal map), the SH9 gold standard,
 // the separable basis, HL2, SAL, H4, H6, and the gold standard through CPCA. Writes one comparison image
-// (rows: models; columns: techniques) and a table of each technique's error against the gold standard.
+// (rows: models; columns: techniques) and a table of each technique's error against the gold standard, and a
+// second image of the complex object's lighting with each transfer kind (unshadowed, shadowed, 1 and 2
+// bounces).
 #include "models.h"
 
+#include <hemi/bake/gnuplot.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/gpu/device.h>
 #include <hemi/io/atomic_file.h>
@@ -19,6 +22,8 @@
 #include <fstream>
 #include <sstream>
 
+namespace fs = std::filesystem;
+
 namespace
 {
 
@@ -29,9 +34,9 @@ struct Column
     const char* label;
 };
 const Column kColumns[] = {
-    {"prt", false, "classic PRT"}, {"gs", false, "gold standard (SH9)"}, {"sep4", false, "separable"},
-    {"hl2", false, "HL2"},         {"sal4", false, "SAL"},               {"h4", false, "H4"},
-    {"h6", false, "H6"},           {"gs", true, "gold standard + CPCA 1x24"},
+    {"prt", false, "classic PRT"}, {"gs", false, "SH9 (gold standard)"}, {"sep4", false, "separable"},
+    {"hl2", false, "HL2"},         {"sal4", false, "SAL"},                {"h4", false, "H4"},
+    {"h6", false, "H6"},           {"gs", true, "SH9 + CPCA 1x24"},
 };
 
 struct Error
@@ -66,17 +71,54 @@ Error compare(const hemi::io::ImageRgba& image, const hemi::io::ImageRgba& refer
     return e;
 }
 
+// Tiles (rows x columns, each t x t, row-major) composed into one PNG with column and row labels, drawn by
+// gnuplot.
+void write_labeled_grid(const std::string& path, const std::vector<hemi::io::ImageRgba>& tiles, uint32_t t,
+                        const std::vector<std::string>& column_labels, const std::vector<std::string>& row_labels,
+                        float exposure)
+{
+    const uint32_t columns = uint32_t(column_labels.size()), rows = uint32_t(row_labels.size());
+    hemi::io::ImageRgba grid{t * columns, t * rows, std::vector<float>(size_t(t) * columns * t * rows * 4, 0.0f)};
+    for (uint32_t r = 0; r < rows; ++r)
+        for (uint32_t c = 0; c < columns; ++c)
+            for (uint32_t y = 0; y < t; ++y)
+                for (uint32_t x = 0; x < t; ++x)
+                    for (int k = 0; k < 4; ++k)
+                        grid.pixels[((size_t(r) * t + y) * grid.width + c * t + x) * 4 + k] =
+                            k == 3 ? 1.0f : tiles[r * columns + c].at(x, y)[k];
+    hemi::bake::run_gnuplot(path, [&](const fs::path& folder, std::ostream& script, const fs::path& output) {
+        hemi::io::write_png(folder / "grid.png", grid, {exposure, hemi::io::ToneMap::Curve::Clamp});
+        const int header = 26, w = int(grid.width), h = int(grid.height);
+        script << "set terminal pngcairo size " << w << "," << h + header
+               << " noenhanced font 'Sans,11' background rgb 'black'\n"
+               << "set output '" << output.string() << "'\n"
+               << "unset border\nunset tics\nunset key\n"
+               << "set lmargin at screen 0\nset rmargin at screen 1\nset bmargin at screen 0\n"
+               << "set tmargin at screen " << double(h) / (h + header) << "\n"
+               << "set xrange [-0.5:" << w - 0.5 << "]\nset yrange [-0.5:" << h - 0.5 << "]\n";
+        for (uint32_t c = 0; c < columns; ++c)
+            script << "set label '" << column_labels[c] << "' at screen " << (c + 0.5) / columns << ", screen "
+                   << 1.0 - 0.5 * header / (h + header) << " center tc rgb 'white'\n";
+        for (uint32_t r = 0; r < rows; ++r)
+            script << "set label '" << row_labels[r] << "' at screen 0.004, screen "
+                   << (double(h) * (1.0 - double(r) / rows) - 14.0) / (h + header) << " left front tc rgb '#c0c0c0'\n";
+        script << "plot '" << (folder / "grid.png").string() << "' binary filetype=png with rgbimage\n";
+    });
+}
+
 } // namespace
 
 int main(int argc, char** argv)
 {
     CLI::App app{"prt_normalmap: Sloan 2006's technique comparison, baked and rendered with hemi"};
-    std::string out_dir = "prt_normalmap", image_path = "prt_normalmap.png", table_path = "prt_normalmap.md";
+    std::string out_dir = "prt_normalmap", image_path = "prt_normalmap.png", table_path = "prt_normalmap.md",
+                kinds_path = "prt_transfer_kinds.png";
     int rays = 256, tile = 300;
     float detail = 1.0f, exposure = 0.6f, rotate = 30.0f;
     app.add_option("--dir", out_dir, "folder for the models, textures and baked assets")->capture_default_str();
     app.add_option("-o,--output", image_path, "comparison image (PNG)")->capture_default_str();
     app.add_option("--table", table_path, "error table (Markdown)")->capture_default_str();
+    app.add_option("--kinds", kinds_path, "transfer-kinds figure (PNG; empty: skip)")->capture_default_str();
     app.add_option("--rays", rays, "rays per vertex of the bakes")->capture_default_str();
     app.add_option("--tile", tile, "pixel size of each square tile")->capture_default_str();
     app.add_option("--detail", detail, "tessellation scale of the models (1: 703 and 29,197 vertices)")
@@ -89,10 +131,12 @@ int main(int argc, char** argv)
     {
         hemi::gpu::Device device;
         const uint32_t t = uint32_t(tile), columns = uint32_t(std::size(kColumns));
-        hemi::io::ImageRgba grid{t * columns, 2 * t, std::vector<float>(size_t(t) * columns * 2 * t * 4, 0.0f)};
+        std::vector<hemi::io::ImageRgba> tiles;
         std::ostringstream table;
         table << "| model | vertices | technique | RMSE (linear) | PSNR (dB, sRGB) |\n| --- | ---: | --- | ---: | ---: |\n";
-        int row = 0;
+        std::vector<std::string> row_labels, column_labels;
+        for (const Column& c : kColumns)
+            column_labels.push_back(c.label);
         for (auto [model, name] : {std::pair{hemi::samples::PrtModel::Simple, "simple"},
                                    std::pair{hemi::samples::PrtModel::Complex, "complex"}})
         {
@@ -107,6 +151,7 @@ int main(int argc, char** argv)
             std::printf("%s: %u vertices, %.2f Mrays/s, bake %.1f s\n", name, s.vertices, s.rays_per_second() * 1e-6,
                         s.total_seconds);
             const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+            row_labels.push_back(std::string(name) + ", " + std::to_string(s.vertices) + " vertices");
             hemi::render::PrtFrame frame;
             frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
             frame.rotate_degrees = rotate;
@@ -118,13 +163,9 @@ int main(int argc, char** argv)
                 images.push_back(view.render(frame));
             }
             const hemi::io::ImageRgba& gold = images[1];
+            tiles.insert(tiles.end(), images.begin(), images.end());
             for (uint32_t col = 0; col < columns; ++col)
             {
-                for (uint32_t y = 0; y < t; ++y)
-                    for (uint32_t x = 0; x < t; ++x)
-                        for (int k = 0; k < 4; ++k)
-                            grid.pixels[((size_t(row) * t + y) * grid.width + col * t + x) * 4 + k] =
-                                k == 3 ? 1.0f : images[col].at(x, y)[k];
                 if (col == 1)
                     continue;
                 const Error e = compare(images[col], gold, exposure);
@@ -133,9 +174,44 @@ int main(int argc, char** argv)
                               kColumns[col].label, e.rmse, e.psnr);
                 table << line;
             }
-            ++row;
         }
-        hemi::io::write_png(image_path, grid, {exposure, hemi::io::ToneMap::Curve::Clamp});
+        write_labeled_grid(image_path, tiles, t, column_labels, row_labels, exposure);
+
+        // The transfer kinds on the complex object, lighting only (albedo 1), SH9 under the sky: what
+        // shadowing and each bounce of interreflection add.
+        if (!kinds_path.empty())
+        {
+            const auto gltf = std::filesystem::path(out_dir) / "complex.gltf";
+            std::vector<hemi::io::ImageRgba> kinds;
+            const uint32_t kt = std::max(t, 320u);
+            const std::vector<std::pair<hemi::bake::TransferKind, int>> settings = {
+                {hemi::bake::TransferKind::Unshadowed, 0}, {hemi::bake::TransferKind::Shadowed, 0},
+                {hemi::bake::TransferKind::Interreflected, 1}, {hemi::bake::TransferKind::Interreflected, 2}};
+            for (const auto& [kind, bounces] : settings)
+            {
+                hemi::bake::PrtAssetOptions options;
+                options.bake.rays = rays;
+                options.bake.kind = kind;
+                options.bake.bounces = bounces;
+                options.techniques = {"gs"};
+                const auto asset_path = std::filesystem::path(out_dir) / "complex_kind.hemi";
+                std::fprintf(stderr, "baking %s (%s, %d bounces) ...\n", gltf.c_str(),
+                             std::string(hemi::bake::to_string(kind)).c_str(), bounces);
+                hemi::bake::bake_prt_file(gltf, asset_path, options);
+                const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+                hemi::render::PrtView view(device, asset, asset_path, "gs", false, kt, kt);
+                hemi::render::PrtFrame frame;
+                frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
+                frame.rotate_degrees = rotate;
+                frame.white = true;
+                frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, 1.0f);
+                kinds.push_back(view.render(frame));
+            }
+            write_labeled_grid(kinds_path, kinds, kt,
+                               {"unshadowed", "shadowed", "+ 1 bounce", "+ 2 bounces"},
+                               {"lighting only (albedo 1), SH9"}, exposure * 0.7f);
+            std::printf("wrote %s\n", kinds_path.c_str());
+        }
         const std::string text = table.str();
         hemi::io::write_atomically(table_path, [&](const std::filesystem::path& tmp) {
             std::ofstream f(tmp);
