@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <unistd.h>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -68,15 +69,24 @@ public:
         char eta[32] = "";
         if (fraction > 0.02 && fraction < 1.0)
             std::snprintf(eta, sizeof eta, ", ETA %.0f s", elapsed * (1.0 - fraction) / fraction);
-        std::fprintf(stderr, "\rhemi-bake prt: pass %d/%d (%s%s) %5.1f%%%s      ", p.pass + 1, p.passes, what,
-                     p.pass == 0 ? "" : (" " + std::to_string(p.pass)).c_str(), 100.0 * fraction, eta);
-        if (p.pass + 1 == p.passes && p.vertices_done == p.vertex_count)
+        const bool done = p.pass + 1 == p.passes && p.vertices_done == p.vertex_count;
+        // On a terminal one line is rewritten in place; in a log, a line per 10% (and the last).
+        const int decile = int(fraction * 10.0);
+        if (!tty_ && decile == last_decile_ && !done)
+            return;
+        last_decile_ = decile;
+        std::fprintf(stderr, "%shemi-bake prt: pass %d/%d (%s%s) %5.1f%%%s%s", tty_ ? "\r" : "", p.pass + 1,
+                     p.passes, what, p.pass == 0 ? "" : (" " + std::to_string(p.pass)).c_str(), 100.0 * fraction,
+                     eta, tty_ ? "      " : "\n");
+        if (done && tty_)
             std::fprintf(stderr, "\n");
         std::fflush(stderr);
     }
 
 private:
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+    bool tty_ = isatty(fileno(stderr)) != 0;
+    int last_decile_ = -1;
 };
 
 std::vector<std::string> split(const std::string& list)
@@ -102,6 +112,8 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
     std::printf("\n");
     if (s.tangents_generated)
         std::printf("tangents were generated from the UV layout (the scene has none)\n");
+    if (s.resumed)
+        std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1, s.resumed_vertex);
     std::printf("rays: %llu in %.2f s = %.2f Mrays/s; total %.2f s\n", (unsigned long long)s.rays, s.trace_seconds,
                 s.rays_per_second() * 1e-6, s.total_seconds);
     std::printf("  %-6s %3s %12s", "tech", "K", "dense MB");
@@ -161,6 +173,10 @@ int main(int argc, char** argv)
         ->capture_default_str();
     prt->add_option("--cpca", cpca, "compress with CPCA: CLUSTERSxVECTORS, e.g. 1x24 (dense matrices are kept)");
     prt->add_option("--json", prt_json, "write the bake summary as JSON to FILE");
+    prt->add_option("--checkpoint-interval", prt_options.bake.checkpoint_seconds,
+                    "seconds between checkpoints to ASSET.partial (an interrupted bake resumes from it)")
+        ->check(CLI::Range(0.0, 1e9))
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
 
     if (prt->parsed())

@@ -7,8 +7,12 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 
+#include <hemi/io/asset.h>
+
 #include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
+#define XXH_INLINE_ALL
+#include <xxhash.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -18,12 +22,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace hemi::bake
 {
@@ -175,6 +179,8 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
     if (!(o.albedo >= 0.0f && o.albedo < 1.0f))
         throw std::invalid_argument("hemi: interreflection albedo " + std::to_string(o.albedo) +
                                     " is not in [0, 1)");
+    if (o.rays_per_slice == 0)
+        throw std::invalid_argument("hemi: rays_per_slice must be positive");
     if (!(o.ray_offset >= 0.0f && o.ray_offset < 0.1f))
         throw std::invalid_argument("hemi: ray offset must be in [0, 0.1)");
     if (mesh.vertex_count() == 0 || mesh.indices.empty() || mesh.indices.size() % 3)
@@ -189,6 +195,80 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
             if (!std::isfinite(mesh.positions[v][c]) || !std::isfinite(mesh.normals[v][c]))
                 throw std::invalid_argument("hemi: PRT bake: vertex " + std::to_string(v) +
                                             " has a non-finite position or normal");
+}
+
+// Where a bake stands: passes before `pass` are complete, and so are vertices [0, next_vertex) of `pass`.
+struct BakeState
+{
+    uint32_t pass, next_vertex;
+    uint64_t rays_traced;
+};
+
+constexpr uint32_t kCheckpointVersion = 1;
+
+// Everything the bake's result depends on: the geometry, every option that changes a number, the layout.
+uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)
+{
+    XXH64_state_t* h = XXH64_createState();
+    XXH64_reset(h, kCheckpointVersion);
+    XXH64_update(h, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+    XXH64_update(h, mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
+    XXH64_update(h, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+    const int ints[4] = {int(o.kind), o.order, o.rays, o.bounces};
+    const float floats[2] = {o.albedo, o.ray_offset};
+    XXH64_update(h, ints, sizeof ints);
+    XXH64_update(h, floats, sizeof floats);
+    XXH64_update(h, &o.seed, sizeof o.seed);
+    const uint64_t key = XXH64_digest(h);
+    XXH64_freeState(h);
+    return key;
+}
+
+void save_checkpoint(const std::filesystem::path& path, uint64_t key, const BakeState& state, const PrtTransfer& t,
+                     const std::vector<float>& exitant, const std::vector<float>& bounce)
+{
+    io::AssetWriter w;
+    w.add_array<uint64_t>("ckpt.key", std::span<const uint64_t>(&key, 1));
+    w.add("ckpt.state", std::as_bytes(std::span<const BakeState>(&state, 1)));
+    w.add_array<float>("ckpt.radiance", t.radiance);
+    w.add_array<float>("ckpt.irradiance", t.irradiance);
+    w.add_array<float>("ckpt.exitant", exitant);
+    w.add_array<float>("ckpt.bounce", bounce);
+    w.write(path);
+}
+
+// Restores a checkpoint written for the same key; false (and nothing touched) when there is none, it is
+// unreadable or corrupt, or it belongs to another mesh or other options.
+bool load_checkpoint(const std::filesystem::path& path, uint64_t key, BakeState& state, PrtTransfer& t,
+                     std::vector<float>& exitant, std::vector<float>& bounce)
+{
+    if (!std::filesystem::exists(path))
+        return false;
+    try
+    {
+        const io::AssetReader r(path);
+        const std::vector<uint64_t> stored = r.array<uint64_t>("ckpt.key");
+        const std::span<const std::byte> s = r.section("ckpt.state");
+        if (stored.size() != 1 || stored[0] != key || s.size() != sizeof(BakeState))
+            return false;
+        BakeState loaded;
+        std::memcpy(&loaded, s.data(), sizeof loaded);
+        std::vector<float> radiance = r.array<float>("ckpt.radiance"), irradiance = r.array<float>("ckpt.irradiance"),
+                           ex = r.array<float>("ckpt.exitant"), bo = r.array<float>("ckpt.bounce");
+        if (radiance.size() != t.radiance.size() || irradiance.size() != t.irradiance.size() ||
+            ex.size() != exitant.size() || bo.size() != bounce.size() || loaded.next_vertex > t.vertex_count)
+            return false;
+        state = loaded;
+        t.radiance = std::move(radiance);
+        t.irradiance = std::move(irradiance);
+        exitant = std::move(ex);
+        bounce = std::move(bo);
+        return true;
+    }
+    catch (const io::FormatError&)
+    {
+        return false;
+    }
 }
 
 // How far ray origins move off the surface along the normal: a fraction of the bounding-box diagonal.
@@ -240,10 +320,22 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
 
     // Exit radiance per vertex of the previous pass, as an L-vector over the lighting: (albedo / pi) t_{b-1}.
     std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
-    std::atomic<uint64_t> done{0};
-    for (int pass = 0; pass < passes; ++pass)
+    BakeState state{0, 0, 0};
+    const uint64_t key = checkpoint_key(mesh, o);
+    if (!o.checkpoint.empty() && load_checkpoint(o.checkpoint, key, state, out, exitant, bounce_irradiance))
     {
-        if (pass > 0)
+        out.resumed = true;
+        out.resumed_pass = int(state.pass);
+        out.resumed_vertex = state.next_vertex;
+    }
+    auto last_checkpoint = std::chrono::steady_clock::now();
+    // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
+    const uint32_t slice =
+        std::max<uint32_t>(256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
+    for (int pass = int(state.pass); pass < passes; ++pass)
+    {
+        const bool resuming_mid_pass = pass == int(state.pass) && state.next_vertex > 0;
+        if (pass > 0 && !resuming_mid_pass)
         {
             // Bounce 1 gathers the direct (shadowed) irradiance; later bounces the previous bounce's.
             const std::vector<float>& previous = pass == 1 ? out.irradiance : bounce_irradiance;
@@ -251,8 +343,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                 exitant[i] = float(o.albedo / M_PI) * previous[i];
             std::fill(bounce_irradiance.begin(), bounce_irradiance.end(), 0.0f);
         }
-        done = 0;
-        constexpr uint32_t kChunk = 256;
+        constexpr uint32_t kChunk = 64;
         auto work = [&](const tbb::blocked_range<uint32_t>& range) {
             float y[36], x[36];
             std::vector<float> m_acc(size_t(9) * L), t_acc(L);
@@ -279,6 +370,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                     }
                     else
                     {
+                        // Embree's barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
                         const uint32_t* tri = &mesh.indices[size_t(prim) * 3];
                         const float w0 = 1.0f - bu - bv;
                         for (int c = 0; c < L; ++c)
@@ -299,48 +391,31 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                 for (int c = 0; c < L; ++c)
                     t[c] += sign * t_acc[c];
             }
-            done += range.end() - range.begin();
         };
-        if (!progress)
-            tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
-        else
-        {
-            // Trace on TBB's workers while this thread reports progress (every 200 ms, polled often so
-            // that a pass ends without waiting out a reporting interval).
-            std::exception_ptr error;
-            std::atomic<bool> finished{false};
-            std::thread tracer([&] {
-                try
-                {
-                    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), work);
-                }
-                catch (...)
-                {
-                    error = std::current_exception();
-                }
-                finished = true;
-            });
-            auto last = std::chrono::steady_clock::now();
-            progress({pass, passes, 0, n});
-            while (!finished.load())
-            {
-                std::this_thread::sleep_for(std::chrono::milliseconds(5));
-                if (std::chrono::steady_clock::now() - last > std::chrono::milliseconds(200))
-                {
-                    last = std::chrono::steady_clock::now();
-                    progress({pass, passes, std::min<uint64_t>(done.load(), n), n});
-                }
-            }
-            tracer.join();
-            if (error)
-                std::rethrow_exception(error);
-        }
+        uint32_t first = resuming_mid_pass ? state.next_vertex : 0;
         if (progress)
-            progress({pass, passes, n, n});
-        if (pass > 0)
-            for (size_t i = 0; i < out.irradiance.size(); ++i)
-                out.irradiance[i] += bounce_irradiance[i];
-        out.rays_traced += uint64_t(n) * uint64_t(o.rays);
+            progress({pass, passes, first, n});
+        while (first < n)
+        {
+            const uint32_t last = std::min(n, first + slice);
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, kChunk), work);
+            out.rays_traced += uint64_t(last - first) * uint64_t(o.rays);
+            first = last;
+            if (first == n && pass > 0)
+                for (size_t i = 0; i < out.irradiance.size(); ++i)
+                    out.irradiance[i] += bounce_irradiance[i];
+            if (!o.checkpoint.empty() && (first < n || pass + 1 < passes) &&
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count() >=
+                    o.checkpoint_seconds)
+            {
+                const BakeState now = first < n ? BakeState{uint32_t(pass), first, out.rays_traced}
+                                                : BakeState{uint32_t(pass + 1), 0, out.rays_traced};
+                save_checkpoint(o.checkpoint, key, now, out, exitant, bounce_irradiance);
+                last_checkpoint = std::chrono::steady_clock::now();
+            }
+            if (progress)
+                progress({pass, passes, first, n});
+        }
     }
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
@@ -453,6 +528,9 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     summary.triangles = uint32_t(mesh.indices.size() / 3);
     summary.rays = transfer.rays_traced;
     summary.trace_seconds = transfer.seconds;
+    summary.resumed = transfer.resumed;
+    summary.resumed_pass = transfer.resumed_pass;
+    summary.resumed_vertex = transfer.resumed_vertex;
     const uint32_t n = transfer.vertex_count, L = uint32_t(transfer.l());
     for (const std::string& name : options.techniques)
     {
@@ -488,7 +566,10 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
 {
     const io::GltfScene scene = io::read_gltf(scene_path);
     PrtBakeSummary summary;
-    io::PrtAsset asset = make_prt_asset(scene.mesh, options, summary, progress);
+    PrtAssetOptions o = options;
+    if (o.bake.checkpoint.empty())
+        o.bake.checkpoint = asset_path.string() + ".partial";
+    io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress);
     summary.tangents_generated = scene.tangents_generated;
     const std::filesystem::path folder = std::filesystem::absolute(asset_path).parent_path();
     auto reference = [&](const std::filesystem::path& texture) -> std::string {
@@ -499,6 +580,8 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     asset.base_color_texture = reference(scene.base_color_texture);
     asset.normal_texture = reference(scene.normal_texture);
     io::write_prt_asset(asset_path, asset);
+    std::error_code ignored;
+    std::filesystem::remove(o.bake.checkpoint, ignored); // the finished work is in the asset now
     return summary;
 }
 
@@ -518,6 +601,8 @@ void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.rays_per_second();
+    if (s.resumed)
+        j["resumed"] = {{"pass", s.resumed_pass}, {"vertex", s.resumed_vertex}};
     if (o.cpca_clusters)
         j["cpca"] = {{"clusters", o.cpca_clusters}, {"vectors", o.cpca_vectors}};
     for (const PrtTechniqueSummary& t : s.techniques)

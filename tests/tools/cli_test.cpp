@@ -79,6 +79,7 @@ TEST(Cli, BakeThenRenderEndToEnd)
                           " --bases gs,hl2,sal4,h4,h6,sep4,prt --transfer unshadowed --order 4 --rays 16 --seed 3"
                           " --cpca 1x8 --json " + q(json));
     ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_FALSE(fs::exists(asset.string() + ".partial")) << "the checkpoint outlived a finished bake";
     EXPECT_NE(b.out.find("Mrays/s"), std::string::npos) << b.out;
     EXPECT_NE(b.out.find("CPCA"), std::string::npos) << b.out;
     const nlohmann::json report = nlohmann::json::parse(slurp(json));

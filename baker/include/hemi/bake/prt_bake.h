@@ -52,6 +52,15 @@ struct PrtBakeOptions
     uint64_t seed = 1;      // random stream of the ray directions
     // Ray origins move off the surface by this fraction of the bounding-box diagonal (self-intersection).
     float ray_offset = 1e-4f;
+    // Checkpoint file (empty: none). The bake saves its finished work there at most every
+    // `checkpoint_seconds` (atomically, between slices of `rays_per_slice` rays) and, when started again with
+    // the same mesh and options, resumes from it, giving the same bytes as an uninterrupted bake. A
+    // checkpoint of another mesh or other options, or an unreadable one, is ignored and replaced. The bake
+    // does not delete it: the caller does once the result is safe (bake_prt_file, after writing the asset).
+    std::filesystem::path checkpoint;
+    double checkpoint_seconds = 30.0;
+    // Rays traced between two progress calls (and possible checkpoints); slices are whole 256-vertex groups.
+    uint64_t rays_per_slice = uint64_t(1) << 20;
 };
 
 struct PrtBakeProgress
@@ -68,14 +77,18 @@ struct PrtTransfer
     int order = 0;
     std::vector<float> radiance;   // N x 9 x L: M per vertex, row-major, object space
     std::vector<float> irradiance; // N x L: t per vertex
-    uint64_t rays_traced = 0;      // every ray of every pass
-    double seconds = 0.0;          // wall time of the tracing passes
+    uint64_t rays_traced = 0;      // rays traced by this call (not those of a resumed checkpoint)
+    double seconds = 0.0;          // wall time of this call
+    bool resumed = false;          // true when a checkpoint supplied finished work
+    int resumed_pass = 0;          // where it resumed: pass, and first vertex of that pass
+    uint32_t resumed_vertex = 0;
     int l() const { return order * order; }
 };
 
 // Throws std::invalid_argument for bad options or a mesh without normals for every vertex, and
 // std::runtime_error when Embree fails (with Embree's message). `progress` is called from the calling
-// thread, at most every few thousand vertices.
+// thread between slices; an exception it throws stops the bake (what is in the
+// checkpoint stays). Slices are `rays_per_slice` rays.
 PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& options,
                               const PrtProgressCallback& progress = {});
 
@@ -116,6 +129,9 @@ struct PrtBakeSummary
     uint64_t rays = 0;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool tangents_generated = false;
+    bool resumed = false; // from a checkpoint, at pass resumed_pass, vertex resumed_vertex
+    int resumed_pass = 0;
+    uint32_t resumed_vertex = 0;
     std::vector<PrtTechniqueSummary> techniques;
     double rays_per_second() const { return trace_seconds > 0.0 ? double(rays) / trace_seconds : 0.0; }
 };
@@ -126,7 +142,9 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
                             const PrtProgressCallback& progress = {});
 
 // `hemi-bake prt`: reads a glTF 2.0 scene (.gltf or .glb), bakes it and writes the asset atomically, with the
-// scene's textures referenced relative to the asset's folder. Throws io::FormatError for bad input files and
+// scene's textures referenced relative to the asset's folder. Unless options.bake.checkpoint names another
+// file, the bake checkpoints to ASSET.partial (resuming from it when it matches) and removes it once the
+// asset is written. Throws io::FormatError for bad input files and
 // std::invalid_argument for bad options.
 PrtBakeSummary bake_prt_file(const std::filesystem::path& scene, const std::filesystem::path& asset,
                              const PrtAssetOptions& options, const PrtProgressCallback& progress = {});
