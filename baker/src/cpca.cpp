@@ -56,7 +56,7 @@ ClusterFit fit(const Eigen::Map<const RowMatrix>& x, const std::vector<uint32_t>
 float residual(const Eigen::VectorXf& x, const ClusterFit& f)
 {
     const Eigen::VectorXf c = x - f.mean;
-    return std::max(0.0f, c.squaredNorm() - (f.basis.transpose() * c).squaredNorm());
+    return (c - f.basis * (f.basis.transpose() * c)).squaredNorm(); // no cancellation, unlike |c|^2 - |B^T c|^2
 }
 } // namespace
 
@@ -135,6 +135,34 @@ io::PrtCpca compress_cpca(std::span<const float> matrices, uint32_t n, uint32_t 
             moved = moved || best != assignment[i];
             assignment[i] = best;
         }
+        // A cluster left without members is re-seeded with the vertex reconstructed worst.
+        std::vector<uint32_t> counts(clusters, 0);
+        for (uint32_t a : assignment)
+            ++counts[a];
+        for (uint32_t c = 0; c < clusters; ++c)
+            if (counts[c] == 0)
+            {
+                uint32_t worst = 0;
+                float worst_error = -1.0f;
+                for (uint32_t i = 0; i < n; ++i)
+                {
+                    if (counts[assignment[i]] <= 1)
+                        continue;
+                    const float e = residual(x.row(i).transpose(), fits[assignment[i]]);
+                    if (e > worst_error)
+                    {
+                        worst_error = e;
+                        worst = i;
+                    }
+                }
+                if (worst_error >= 0.0f)
+                {
+                    --counts[assignment[worst]];
+                    assignment[worst] = c;
+                    counts[c] = 1;
+                    moved = true;
+                }
+            }
         if (!moved)
             break;
         if (it + 1 == std::max(1, iterations))

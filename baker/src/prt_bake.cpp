@@ -9,6 +9,8 @@
 
 #include <hemi/io/asset.h>
 
+#include "hemi/shared/transfer.h"
+
 #include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
 #define XXH_INLINE_ALL
@@ -26,6 +28,7 @@
 #include <fstream>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -85,6 +88,7 @@ struct EmbreeScene
 {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
+    std::mutex error_mutex; // Embree may report from its worker threads
     std::string error;
 
     explicit EmbreeScene(const io::Mesh& mesh)
@@ -96,7 +100,9 @@ struct EmbreeScene
         rtcSetDeviceErrorFunction(
             device,
             [](void* user, RTCError, const char* message) {
-                static_cast<EmbreeScene*>(user)->error = message ? message : "unknown Embree error";
+                auto* self = static_cast<EmbreeScene*>(user);
+                std::lock_guard<std::mutex> lock(self->error_mutex);
+                self->error = message ? message : "unknown Embree error";
             },
             this);
         scene = rtcNewScene(device);
@@ -120,25 +126,37 @@ struct EmbreeScene
         rtcAttachGeometry(scene, geometry);
         rtcReleaseGeometry(geometry);
         rtcCommitScene(scene);
-        if (!error.empty())
+        bool failed;
+        {
+            std::lock_guard<std::mutex> lock(error_mutex);
+            failed = !error.empty();
+        }
+        if (failed)
             fail("building the scene");
     }
-    ~EmbreeScene()
+    ~EmbreeScene() { release(); }
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    void release()
     {
         if (scene)
             rtcReleaseScene(scene);
         if (device)
             rtcReleaseDevice(device);
-    }
-    EmbreeScene(const EmbreeScene&) = delete;
-    EmbreeScene& operator=(const EmbreeScene&) = delete;
-
-    [[noreturn]] void fail(const std::string& what)
-    {
-        std::string message = "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
-        this->~EmbreeScene();
         scene = nullptr;
         device = nullptr;
+    }
+
+    // From the constructor: the destructor will not run, so the handles are released here.
+    [[noreturn]] void fail(const std::string& what)
+    {
+        std::string message;
+        {
+            std::lock_guard<std::mutex> lock(error_mutex);
+            message = "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
+        }
+        release();
         throw std::runtime_error(message);
     }
 
@@ -158,6 +176,7 @@ struct EmbreeScene
         rh.ray.tfar = INFINITY;
         rh.ray.mask = 0xffffffffu;
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene, &context, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
             return false;
@@ -201,10 +220,9 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
 struct BakeState
 {
     uint32_t pass, next_vertex;
-    uint64_t rays_traced;
 };
 
-constexpr uint32_t kCheckpointVersion = 1;
+constexpr uint32_t kCheckpointVersion = 2;
 
 // Everything the bake's result depends on: the geometry, every option that changes a number, the layout.
 uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)
@@ -219,6 +237,8 @@ uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)
     XXH64_update(h, ints, sizeof ints);
     XXH64_update(h, floats, sizeof floats);
     XXH64_update(h, &o.seed, sizeof o.seed);
+    const int embree_version = RTC_VERSION;
+    XXH64_update(h, &embree_version, sizeof embree_version);
     const uint64_t key = XXH64_digest(h);
     XXH64_freeState(h);
     return key;
@@ -320,7 +340,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
 
     // Exit radiance per vertex of the previous pass, as an L-vector over the lighting: (albedo / pi) t_{b-1}.
     std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
-    BakeState state{0, 0, 0};
+    BakeState state{0, 0};
     const uint64_t key = checkpoint_key(mesh, o);
     if (!o.checkpoint.empty() && load_checkpoint(o.checkpoint, key, state, out, exitant, bounce_irradiance))
     {
@@ -370,8 +390,15 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                     }
                     else
                     {
-                        // Embree's barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
+                        // Bounced light arrives only from above the surface and leaves only the front of
+                        // the surface it hit (counter-clockwise seen from outside): a ray below the tangent
+                        // plane that hits the surface next to its origin carries no light to it.
                         const uint32_t* tri = &mesh.indices[size_t(prim) * 3];
+                        const glm::vec3 face = glm::cross(mesh.positions[tri[1]] - mesh.positions[tri[0]],
+                                                          mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+                        if (cosine_weight <= 0.0f || glm::dot(face, d) >= 0.0f)
+                            continue;
+                        // Embree's barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
                         const float w0 = 1.0f - bu - bv;
                         for (int c = 0; c < L; ++c)
                             x[c] = w0 * exitant[size_t(tri[0]) * L + c] + bu * exitant[size_t(tri[1]) * L + c] +
@@ -408,8 +435,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count() >=
                     o.checkpoint_seconds)
             {
-                const BakeState now = first < n ? BakeState{uint32_t(pass), first, out.rays_traced}
-                                                : BakeState{uint32_t(pass + 1), 0, out.rays_traced};
+                const BakeState now = first < n ? BakeState{uint32_t(pass), first} : BakeState{uint32_t(pass + 1), 0};
                 save_checkpoint(o.checkpoint, key, now, out, exitant, bounce_irradiance);
                 last_checkpoint = std::chrono::steady_clock::now();
             }
@@ -466,8 +492,13 @@ std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& m
     std::vector<float> out(size_t(n) * basis.size * L);
     tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
         // Rotate M's rows (SH9 of incident radiance) from object space into the tangent frame.
-        const glm::mat3 r = object_to_tangent(glm::normalize(mesh.normals[v]), glm::vec3(mesh.tangents[v]),
-                                              mesh.tangents[v].w);
+        // A file's tangent need not be exactly perpendicular to its normal: Gram-Schmidt, so that the frame
+        // is a rotation.
+        const glm::vec3 nrm = glm::normalize(mesh.normals[v]);
+        glm::vec3 tan = glm::vec3(mesh.tangents[v]) - glm::dot(glm::vec3(mesh.tangents[v]), nrm) * nrm;
+        if (glm::dot(tan, tan) < 1e-12f)
+            tan = std::abs(nrm.x) < 0.9f ? glm::cross(nrm, glm::vec3(1, 0, 0)) : glm::cross(nrm, glm::vec3(0, 1, 0));
+        const glm::mat3 r = object_to_tangent(nrm, glm::normalize(tan), mesh.tangents[v].w);
         const std::vector<float> d9 = unshadowed_transfer(r, 3); // the 9 x 9 SH9 rotation
         std::vector<float> rm(size_t(9) * L, 0.0f);
         const float* m = &transfer.radiance[size_t(v) * 9 * L];
@@ -511,6 +542,10 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     }
     if ((options.cpca_clusters == 0) != (options.cpca_vectors == 0))
         throw std::invalid_argument("hemi: CPCA needs both a cluster and a vector count");
+    if (options.cpca_vectors > HEMI_CPCA_MAX_VECTORS)
+        throw std::invalid_argument("hemi: CPCA with " + std::to_string(options.cpca_vectors) +
+                                    " vectors per cluster; the runtime pass supports up to " +
+                                    std::to_string(HEMI_CPCA_MAX_VECTORS));
     if (mesh.tangents.size() != mesh.vertex_count() || mesh.uvs.size() != mesh.vertex_count())
         throw std::invalid_argument("hemi: the PRT bake needs a tangent and UV per vertex");
 

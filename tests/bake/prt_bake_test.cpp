@@ -92,6 +92,23 @@ double cosine_integral(const glm::dvec3& n, int rows, F f)
     return sum;
 }
 
+// Calls f(d, solid angle) over a lat-long grid of the whole sphere (exact cell solid angles).
+template <typename F>
+void sphere_integral(int rows, F f)
+{
+    const int cols = 2 * rows;
+    for (int i = 0; i < rows; ++i)
+    {
+        const double t0 = M_PI * i / rows, t1 = M_PI * (i + 1) / rows, theta = 0.5 * (t0 + t1);
+        const double omega = (std::cos(t0) - std::cos(t1)) * 2.0 * M_PI / cols;
+        for (int j = 0; j < cols; ++j)
+        {
+            const double phi = 2.0 * M_PI * (j + 0.5) / cols;
+            f(glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)), omega);
+        }
+    }
+}
+
 glm::dvec3 ray_origin(const hemi::io::Mesh& m, size_t v, float offset)
 {
     glm::vec3 lo(INFINITY), hi(-INFINITY);
@@ -172,18 +189,48 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
         const glm::dvec3 n = glm::normalize(glm::dvec3(torus.normals[v])), origin = ray_origin(torus, v, o.ray_offset);
         Hit hit{};
         const double e0 = cosine_integral(n, 100, [&](const glm::dvec3& d) { return cast(torus, origin, d, hit) ? 0.0 : 1.0; });
-        const double e1 = cosine_integral(n, 100, [&](const glm::dvec3& d) {
-            if (!cast(torus, origin, d, hit))
+        // Radiance bounced toward the vertex from direction d under uniform light: (albedo / pi) times the
+        // direct irradiance interpolated where d hits the front of a triangle, from above the horizon.
+        auto bounced = [&](const glm::dvec3& d) {
+            if (glm::dot(n, d) <= 0.0 || !cast(torus, origin, d, hit))
                 return 0.0;
             const uint32_t* tri = &torus.indices[size_t(hit.prim) * 3];
+            const glm::dvec3 p0(torus.positions[tri[0]]), p1(torus.positions[tri[1]]), p2(torus.positions[tri[2]]);
+            if (glm::dot(glm::cross(p1 - p0, p2 - p0), d) >= 0.0)
+                return 0.0;
             const double at = (1.0 - hit.u - hit.v) * uniform_irradiance(direct, tri[0]) +
                               hit.u * uniform_irradiance(direct, tri[1]) + hit.v * uniform_irradiance(direct, tri[2]);
             return o.albedo / M_PI * at;
-        });
+        };
+        const double e1 = cosine_integral(n, 100, bounced);
         EXPECT_LT(e0, 0.8 * M_PI) << "vertex " << v << " should be noticeably shadowed";
         EXPECT_GT(e1, 0.02) << "vertex " << v << " should receive interreflected light";
         EXPECT_NEAR(uniform_irradiance(direct, v), e0, 0.02 * M_PI) << v;
         EXPECT_NEAR(uniform_irradiance(one, v) - uniform_irradiance(direct, v), e1, 0.05 * e1 + 2e-3) << v;
+
+        // M itself (what the normal-mapped techniques fold), entry by entry: shadowed M_ic = delta_ic minus
+        // the integral of y_i y_c over the blocked directions; the bounce adds the integral of y_i times the
+        // bounced radiance (seen through the uniform lighting's y00 column).
+        std::vector<double> blocked(81, 0.0), gathered(9, 0.0);
+        sphere_integral(100, [&](const glm::dvec3& d, double omega) {
+            float y[9];
+            hemi::math::sh_eval(3, glm::vec3(d), y);
+            if (cast(torus, origin, d, hit))
+                for (int i = 0; i < 9; ++i)
+                    for (int c = 0; c < 9; ++c)
+                        blocked[i * 9 + c] += omega * y[i] * y[c];
+            const double b = bounced(d);
+            for (int i = 0; i < 9; ++i)
+                gathered[i] += omega * y[i] * b;
+        });
+        for (int i = 0; i < 9; ++i)
+        {
+            for (int c : {0, 2, 5, 8})
+                EXPECT_NEAR(direct.radiance[(v * 9 + i) * 9 + c], (i == c ? 1.0 : 0.0) - blocked[i * 9 + c], 0.03)
+                    << "vertex " << v << " M(" << i << "," << c << ")";
+            const double bounce_m = (one.radiance[(v * 9 + i) * 9] - direct.radiance[(v * 9 + i) * 9]) * kUniform;
+            EXPECT_NEAR(bounce_m, gathered[i], 0.06 * std::abs(gathered[0]) + 2e-3) << "vertex " << v << " row " << i;
+        }
     }
 }
 

@@ -97,6 +97,12 @@ TEST(PrtAsset, RoundTripKeepsEveryValue)
     ASSERT_EQ(b.mesh.vertex_count(), a.mesh.vertex_count());
     EXPECT_EQ(0, std::memcmp(b.mesh.tangents.data(), a.mesh.tangents.data(), a.mesh.tangents.size() * 16));
     EXPECT_EQ(b.mesh.indices, a.mesh.indices);
+    EXPECT_EQ(0, std::memcmp(b.mesh.positions.data(), a.mesh.positions.data(), a.mesh.positions.size() * 12));
+    EXPECT_EQ(0, std::memcmp(b.mesh.normals.data(), a.mesh.normals.data(), a.mesh.normals.size() * 12));
+    EXPECT_EQ(0, std::memcmp(b.mesh.uvs.data(), a.mesh.uvs.data(), a.mesh.uvs.size() * 8));
+    EXPECT_EQ(b.seed, a.seed);
+    EXPECT_EQ(b.albedo, a.albedo);
+    EXPECT_EQ(b.bounces, a.bounces);
     ASSERT_EQ(b.techniques.size(), 3u);
     for (const hemi::io::PrtTechnique& t : a.techniques)
     {
@@ -107,6 +113,7 @@ TEST(PrtAsset, RoundTripKeepsEveryValue)
         EXPECT_EQ(u.cpca->cluster, t.cpca->cluster);
         EXPECT_EQ(u.cpca->weights, t.cpca->weights);
         EXPECT_EQ(u.cpca->basis, t.cpca->basis);
+        EXPECT_EQ(u.cpca->means, t.cpca->means);
         EXPECT_EQ(u.cpca->rms_error, t.cpca->rms_error);
     }
     EXPECT_THROW(b.technique("sep4"), std::invalid_argument);
@@ -190,6 +197,17 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                              return true;
                          }),
                  "layout version 9");
+    // An absurd lighting order would make every size computed from it overflow: refused before any is.
+    expect_error(rewrite(good, "order.hemi",
+                         [](const std::string& s, std::vector<std::byte>& b) {
+                             if (s == "prt.info")
+                             {
+                                 const uint32_t order = 1u << 31;
+                                 std::memcpy(b.data() + 8, &order, 4);
+                             }
+                             return true;
+                         }),
+                 "lighting order 2147483648");
 }
 
 TEST(PrtAsset, WriterRefusesInconsistentAssets)

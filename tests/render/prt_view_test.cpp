@@ -14,6 +14,8 @@
 #include <hemi/render/prt_view.h>
 #include <hemi/render/transfer.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <unistd.h>
 
 #include <array>
@@ -225,7 +227,7 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 
     for (auto [clusters, vectors] : {std::pair{3u, 5u}, std::pair{2u, d}})
     {
-        const hemi::io::PrtCpca c = hemi::bake::compress_cpca(dense, n, d, clusters, vectors);
+        hemi::io::PrtCpca c = hemi::bake::compress_cpca(dense, n, d, clusters, vectors);
         const hemi::render::CpcaMatrices m{n, k, l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights};
         hemi::render::CpcaTransferPass pass(hemi::test::device(), m);
         pass.run(lighting);
@@ -244,6 +246,60 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
                 ASSERT_NEAR(gpu[i], want[i], 1e-3f * (1.0f + std::abs(want[i]))) << i;
         }
     }
+}
+
+// The largest shapes the pass supports, K = 9, L = 36, V = 64: each cluster's projections (65 x 9 vec4 =
+// 9,360 bytes) sit at a stride rounded up to the dynamic-offset alignment; a cluster without vertices gets
+// no dispatch. GPU = host.
+TEST_F(PrtView, CpcaPassAtItsLimitsWithAnEmptyCluster)
+{
+    const uint32_t n = 700, k = 9, l = 36, d = k * l;
+    std::mt19937 rng(5);
+    std::normal_distribution<float> g;
+    std::vector<float> dense(size_t(n) * d);
+    for (float& x : dense)
+        x = g(rng);
+    hemi::io::PrtCpca c = hemi::bake::compress_cpca(dense, n, d, 3, 64);
+    for (uint32_t& id : c.cluster)
+        if (id == 1)
+            id = 0; // cluster 1 has no vertices now
+    std::vector<glm::vec3> lighting(l);
+    for (glm::vec3& x : lighting)
+        x = glm::vec3(g(rng), g(rng), g(rng));
+    const hemi::render::CpcaMatrices m{n, k, l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights};
+    hemi::render::CpcaTransferPass pass(hemi::test::device(), m);
+    pass.run(lighting);
+    const std::vector<float> gpu = pass.read_coefficients();
+    std::vector<float> host(gpu.size());
+    hemi::render::cpca_multiply_host(m, lighting, host);
+    for (size_t i = 0; i < gpu.size(); ++i)
+        ASSERT_NEAR(gpu[i], host[i], 1e-4f * (1.0f + std::abs(host[i]))) << i;
+}
+
+// The environment turns about world z and is seen in object space: a narrow lobe at world direction w, turned
+// by the frame's rotation, peaks in object space at M^T Rz w with the same height (the wrong order or
+// direction of either rotation moves the peak).
+TEST_F(PrtView, LightingIsTurnedIntoObjectSpace)
+{
+    hemi::bake::PrtAssetOptions o;
+    o.bake.kind = hemi::bake::TransferKind::Unshadowed;
+    o.bake.order = 6;
+    o.techniques = {"gs"};
+    const Baked b = bake(hemi::samples::PrtModel::Simple, 0.3f, o, "turn");
+    hemi::render::PrtView view(hemi::test::device(), b.asset, b.path, "gs", false, 8, 8);
+    const glm::vec3 w = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
+    hemi::render::PrtFrame frame;
+    frame.world_lighting = hemi::math::project_sh(6, [&](const glm::vec3& d) {
+        return glm::vec3(std::pow(std::max(0.0f, glm::dot(d, w)), 8.0f));
+    });
+    frame.rotate_degrees = 50.0f;
+    const std::vector<glm::vec3> object = view.object_lighting(frame);
+    const glm::mat3 m(frame.model);
+    const glm::mat3 rz(glm::rotate(glm::mat4(1.0f), glm::radians(50.0f), glm::vec3(0.0f, 0.0f, 1.0f)));
+    const float peak = hemi::math::sh_eval_rgb(frame.world_lighting, w).x;
+    EXPECT_NEAR(hemi::math::sh_eval_rgb(object, glm::transpose(m) * rz * w).x, peak, 1e-3f * peak);
+    for (const glm::vec3& wrong : {glm::transpose(m) * glm::transpose(rz) * w, m * rz * w, rz * w, glm::transpose(m) * w})
+        EXPECT_LT(hemi::math::sh_eval_rgb(object, wrong).x, 0.8f * peak);
 }
 
 // Sloan's setting, CPCA 1x24 of the gold standard on the complex object: the render stays within a PSNR

@@ -177,6 +177,11 @@ PrtAsset read_prt_asset(const std::filesystem::path& path)
     if (info.layout != kPrtLayoutVersion)
         throw fail("PRT layout version " + std::to_string(info.layout) + " is not supported (this hemi reads " +
                    std::to_string(kPrtLayoutVersion) + ")");
+    // The numbers every size below is computed from, checked before any arithmetic uses them.
+    if (info.order < 3 || info.order > 6)
+        throw fail("prt.info: lighting order " + std::to_string(info.order) + " is not in [3, 6]");
+    if (info.vertices == 0)
+        throw fail("prt.info: no vertices");
     PrtAsset a;
     a.order = info.order;
     a.transfer_kind = info.transfer_kind;
@@ -231,10 +236,14 @@ PrtAsset read_prt_asset(const std::filesystem::path& path)
             std::memcpy(&c.rms_error, b.data() + 8, 4);
             c.clusters = shape[0];
             c.vectors = shape[1];
-            const size_t d = size_t(t.k) * l;
+            const size_t d = size_t(t.k) * l; // at most 9 x 36
+            if (c.clusters == 0 || c.clusters > n || c.vectors == 0 || c.vectors > 1024)
+                throw fail(compressed + ": CPCA shape " + std::to_string(c.clusters) + "x" +
+                           std::to_string(c.vectors) + " is not valid for " + std::to_string(n) + " vertices");
+            // Every factor is bounded now (n < 2^32, C <= n, V <= 1024, d <= 324): no overflow in 64 bits.
             const uint64_t expected = 12 + 4 * (uint64_t(c.clusters) * d + uint64_t(c.clusters) * c.vectors * d +
                                                 n + n * uint64_t(c.vectors));
-            if (c.clusters > n || c.vectors > 1024 || b.size() != expected)
+            if (b.size() != expected)
                 throw fail(compressed + " has " + std::to_string(b.size()) + " bytes, its shape " +
                            std::to_string(c.clusters) + "x" + std::to_string(c.vectors) + " needs " +
                            std::to_string(expected));

@@ -80,11 +80,15 @@ PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect
 glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect)
 {
     const Sphere s = bounds(mesh, model);
-    const float d = glm::length(s.centre - camera.eye);
-    const float far_plane = d + s.radius * 1.01f;
-    const float near_plane = std::max(far_plane * 1e-4f, d - s.radius * 1.01f);
+    if (!(glm::length(camera.target - camera.eye) > 0.0f))
+        throw std::invalid_argument("hemi: the camera's eye and target coincide");
+    // Depth is measured along the view axis, not toward the sphere's centre (the target may be off-centre).
+    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
+    const float depth = glm::dot(s.centre - camera.eye, forward);
+    const float far_plane = std::max(depth + s.radius * 1.01f, 1e-3f);
+    const float near_plane = std::max(far_plane * 1e-4f, depth - s.radius * 1.01f);
     glm::vec3 up(0.0f, 0.0f, 1.0f);
-    if (glm::length(glm::cross(glm::normalize(camera.target - camera.eye), up)) < 1e-3f)
+    if (glm::length(glm::cross(forward, up)) < 1e-3f)
         up = glm::vec3(0.0f, 1.0f, 0.0f); // looking straight up or down
     const glm::mat4 view = glm::lookAt(camera.eye, camera.target, up);
     glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(camera.fov_y_degrees), aspect, near_plane, far_plane);

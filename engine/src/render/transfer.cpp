@@ -552,6 +552,9 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     gpu::write_buffer(device, s.slots, slot_vertex.data(), slot_vertex.size() * 4);
     // Written by step 1 as a storage buffer, read by step 2 as a uniform block at a dynamic offset: cluster
     // c's projections start at c * stride.
+    if (s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES > limits.maxStorageBufferRange)
+        throw std::runtime_error("hemi: CPCA projections of " + std::to_string(c.clusters) +
+                                 " clusters exceed the device's maxStorageBufferRange");
     s.projected = gpu::create_buffer(
         device, {s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES,
                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});

@@ -35,7 +35,7 @@ struct TransferPush
 #define HEMI_CPCA_BINDING_WEIGHTS 3
 #define HEMI_CPCA_BINDING_COEFFICIENTS 5
 #define HEMI_CPCA_BINDING_SLOTS 4
-// PCA vectors per cluster the runtime pass supports (its shared-memory copy of a cluster's projections).
+// PCA vectors per cluster the runtime pass supports (its uniform block holds one cluster's projections).
 #define HEMI_CPCA_MAX_VECTORS 64
 // Size of the uniform block holding one cluster's projections (std140 vec4 array).
 #define HEMI_CPCA_PROJECTED_BYTES (HEMI_TRANSFER_MAX_K * (HEMI_CPCA_MAX_VECTORS + 1) * 16)
