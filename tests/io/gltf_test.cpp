@@ -155,6 +155,30 @@ TEST(GltfReader, MirroredUvsFlipTheHandedness)
     EXPECT_EQ(s.mesh.tangents[0].w, -1.0f);
 }
 
+// Generated tangents weight each triangle by its corner angle (MikkTSpace), not by its area or UV scale: a
+// vertex shared by a 90-degree corner whose UVs run along +x and a ten times larger 45-degree corner whose
+// UVs run along +y gets the tangent normalize(2x + y), where area or plain summing would give other mixes.
+TEST(GltfReader, GeneratedTangentsWeightTrianglesByCornerAngle)
+{
+    hemi::io::Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-10, 0, 0}, {-10, -10, 0}};
+    m.normals.assign(5, glm::vec3(0, 0, 1));
+    // Triangle A (0, 1, 2): u = x, v = -y. Triangle B (0, 3, 4): u = y, v = x (the same frame turned 90 deg).
+    // Vertex 0 has one UV for both; the others belong to one triangle each.
+    m.uvs = {{0, 0}, {1, 0}, {0, -1}, {0, -10}, {-10, -10}};
+    m.indices = {0, 1, 2, 0, 3, 4};
+    const fs::path p = dir() / "corner.gltf";
+    hemi::io::write_gltf(p, m);
+    const hemi::io::GltfScene s = hemi::io::read_gltf(p);
+    ASSERT_TRUE(s.tangents_generated);
+    const glm::vec3 want = glm::normalize(glm::vec3(2, 1, 0));
+    EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[0]) - want), 0.0f, 1e-5f)
+        << s.mesh.tangents[0].x << " " << s.mesh.tangents[0].y << " " << s.mesh.tangents[0].z;
+    EXPECT_EQ(s.mesh.tangents[0].w, 1.0f);
+    EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[1]) - glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
+    EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[3]) - glm::vec3(0, 1, 0)), 0.0f, 1e-5f);
+}
+
 TEST(GltfReader, RejectsMissingMalformedAndInconsistentFiles)
 {
     expect_error_naming(dir() / "nope.gltf", "no such file");

@@ -11,6 +11,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -114,22 +115,35 @@ void generate_normals(Mesh& m, size_t first_vertex, size_t first_index)
 
 void generate_tangents(Mesh& m, size_t first_vertex, size_t first_index)
 {
+    // MikkTSpace's construction: each triangle's UV tangent and bitangent, projected into the plane of
+    // each corner's vertex normal and normalised, are accumulated weighted by the corner's angle (so a
+    // vertex's frame does not depend on how finely its neighbourhood is tessellated).
     const size_t n = m.positions.size();
     std::vector<glm::vec3> t(n, glm::vec3(0.0f)), b(n, glm::vec3(0.0f));
+    auto unit_in_plane = [](const glm::vec3& v, const glm::vec3& normal) {
+        const glm::vec3 p = v - normal * glm::dot(normal, v);
+        const float len = glm::length(p);
+        return len > 1e-20f ? p / len : glm::vec3(0.0f);
+    };
     for (size_t i = first_index; i + 2 < m.indices.size(); i += 3)
     {
-        uint32_t i0 = m.indices[i], i1 = m.indices[i + 1], i2 = m.indices[i + 2];
-        glm::vec3 e1 = m.positions[i1] - m.positions[i0], e2 = m.positions[i2] - m.positions[i0];
-        glm::vec2 d1 = m.uvs[i1] - m.uvs[i0], d2 = m.uvs[i2] - m.uvs[i0];
+        const uint32_t idx[3] = {m.indices[i], m.indices[i + 1], m.indices[i + 2]};
+        glm::vec3 e1 = m.positions[idx[1]] - m.positions[idx[0]], e2 = m.positions[idx[2]] - m.positions[idx[0]];
+        glm::vec2 d1 = m.uvs[idx[1]] - m.uvs[idx[0]], d2 = m.uvs[idx[2]] - m.uvs[idx[0]];
         float det = d1.x * d2.y - d2.x * d1.y;
         if (std::abs(det) < 1e-20f)
             continue;
         // dP/du and dP/dv of the triangle; glTF's bitangent points toward -v (DESIGN.md, io/mesh.h).
-        glm::vec3 dpdu = (e1 * d2.y - e2 * d1.y) / det, dpdv = (e2 * d1.x - e1 * d2.x) / det;
-        for (uint32_t v : {i0, i1, i2})
+        const glm::vec3 dpdu = (e1 * d2.y - e2 * d1.y) / det, dpdv = (e2 * d1.x - e1 * d2.x) / det;
+        for (int c = 0; c < 3; ++c)
         {
-            t[v] += dpdu;
-            b[v] -= dpdv;
+            const uint32_t v = idx[c];
+            const glm::vec3& normal = m.normals[v];
+            const glm::vec3 a = unit_in_plane(m.positions[idx[(c + 1) % 3]] - m.positions[v], normal);
+            const glm::vec3 e = unit_in_plane(m.positions[idx[(c + 2) % 3]] - m.positions[v], normal);
+            const float angle = std::acos(std::clamp(glm::dot(a, e), -1.0f, 1.0f));
+            t[v] += angle * unit_in_plane(dpdu, normal);
+            b[v] -= angle * unit_in_plane(dpdv, normal);
         }
     }
     for (size_t v = first_vertex; v < n; ++v)

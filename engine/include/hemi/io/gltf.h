@@ -5,9 +5,10 @@
 // Every triangle primitive of every mesh node of the default scene (or scene 0, or every mesh when the file
 // has no scene) is transformed by its node's world matrix and appended. Normals are the file's, or
 // area-weighted vertex normals when absent. Tangents are the file's, or generated from the UV layout when
-// absent: per-triangle UV derivatives accumulated per vertex, Gram-Schmidt against the normal, handedness in
-// w (the construction MikkTSpace refines; for well-conditioned UV charts the frames agree, but this is not a
-// bit-exact MikkTSpace, which Debian does not package). Texture references are resolved relative to the
+// absent, with MikkTSpace's construction: each triangle's UV tangent and bitangent, projected into the
+// plane of the corner's vertex normal and normalised, accumulated per vertex weighted by the corner angle,
+// handedness in w. It is not a bit-exact MikkTSpace (which Debian does not package): MikkTSpace also splits
+// vertices whose neighbouring triangles disagree on handedness, where this keeps the file's vertices. Texture references are resolved relative to the
 // file and must exist.
 
 #include <hemi/io/mesh.h>
