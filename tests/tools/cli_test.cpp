@@ -43,10 +43,11 @@ std::string slurp(const fs::path& p)
     return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 }
 
-Result run(const std::string& exe, const std::string& args)
+Result run(const std::string& exe, const std::string& args, const std::string& environment = "")
 {
     const fs::path out = dir() / "stdout.txt", err = dir() / "stderr.txt";
-    const std::string command = "'" + exe + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const std::string command =
+        environment + " '" + exe + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
     const int raw = std::system(command.c_str());
     return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
 }
@@ -112,6 +113,19 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_GT(covered, 500u);
     EXPECT_GT(empty, 500u);
 
+    // An EXR environment of radiance 1 everywhere is the uniform environment: the furnace again.
+    const fs::path env = dir() / "white_env.exr", exr_env = dir() / "white_from_exr.exr";
+    hemi::io::write_exr(env, hemi::io::ImageRgba{64, 32, std::vector<float>(64 * 32 * 4, 1.0f)});
+    const Result e = render(q(asset) + " --technique sal4 --env " + q(env) + " --white --rotate 33 --size 96x64 -o " +
+                            q(exr_env));
+    ASSERT_EQ(e.status, 0) << e.err;
+    const hemi::io::ImageRgba from_exr = hemi::io::read_exr(exr_env);
+    for (size_t i = 0; i < from_exr.pixels.size(); i += 4)
+    {
+        if (from_exr.pixels[i + 3] == 1.0f)
+            ASSERT_NEAR(from_exr.pixels[i], 1.0f, 0.01f) << "pixel " << i / 4;
+    }
+
     const fs::path png = dir() / "sky.png";
     const Result c = render(q(asset) + " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
                                        "--camera 0,-4,1,0,0,0 -o " + q(png));
@@ -172,4 +186,8 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
     expect_render_failure(render(q(good) + " --technique hl2 --env " + q(dir() / "nope.exr") + " -o " + q(png)),
                           "nope.exr");
     expect_render_failure(render(q(good) + " --technique hl2 --env sky --size 0x5 -o " + q(png)), "--size");
+    // No Vulkan device matching the selector.
+    expect_render_failure(run(HEMI_RENDER_EXE, q(good) + " --technique hl2 --env sky -o " + q(png),
+                              "HEMI_DEVICE=no-such-gpu"),
+                          "no-such-gpu");
 }
