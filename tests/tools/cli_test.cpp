@@ -123,7 +123,9 @@ TEST(Cli, BakeThenRenderEndToEnd)
     for (size_t i = 0; i < from_exr.pixels.size(); i += 4)
     {
         if (from_exr.pixels[i + 3] == 1.0f)
+        {
             ASSERT_NEAR(from_exr.pixels[i], 1.0f, 0.01f) << "pixel " << i / 4;
+        }
     }
 
     const fs::path png = dir() / "sky.png";
