@@ -114,6 +114,8 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
         std::printf("tangents were generated from the UV layout (the scene has none)\n");
     if (s.resumed)
         std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1, s.resumed_vertex);
+    if (!s.checkpoint_error.empty())
+        std::fprintf(stderr, "hemi-bake prt: warning: checkpoints stopped: %s\n", s.checkpoint_error.c_str());
     std::printf("rays: %llu in %.2f s = %.2f Mrays/s; total %.2f s\n", (unsigned long long)s.rays, s.trace_seconds,
                 s.rays_per_second() * 1e-6, s.total_seconds);
     std::printf("  %-6s %3s %12s", "tech", "K", "dense MB");

@@ -259,7 +259,7 @@ void save_checkpoint(const std::filesystem::path& path, uint64_t key, const Bake
 
 // Restores a checkpoint written for the same key; false (and nothing touched) when there is none, it is
 // unreadable or corrupt, or it belongs to another mesh or other options.
-bool load_checkpoint(const std::filesystem::path& path, uint64_t key, BakeState& state, PrtTransfer& t,
+bool load_checkpoint(const std::filesystem::path& path, uint64_t key, int passes, BakeState& state, PrtTransfer& t,
                      std::vector<float>& exitant, std::vector<float>& bounce)
 {
     if (!std::filesystem::exists(path))
@@ -276,7 +276,11 @@ bool load_checkpoint(const std::filesystem::path& path, uint64_t key, BakeState&
         std::vector<float> radiance = r.array<float>("ckpt.radiance"), irradiance = r.array<float>("ckpt.irradiance"),
                            ex = r.array<float>("ckpt.exitant"), bo = r.array<float>("ckpt.bounce");
         if (radiance.size() != t.radiance.size() || irradiance.size() != t.irradiance.size() ||
-            ex.size() != exitant.size() || bo.size() != bounce.size() || loaded.next_vertex > t.vertex_count)
+            ex.size() != exitant.size() || bo.size() != bounce.size())
+            return false;
+        // Only states save_checkpoint writes: inside the bake, never at its very start or end.
+        if (loaded.pass >= uint32_t(passes) || loaded.next_vertex >= t.vertex_count ||
+            (loaded.pass == 0 && loaded.next_vertex == 0))
             return false;
         state = loaded;
         t.radiance = std::move(radiance);
@@ -342,13 +346,14 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
     std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
     BakeState state{0, 0};
     const uint64_t key = checkpoint_key(mesh, o);
-    if (!o.checkpoint.empty() && load_checkpoint(o.checkpoint, key, state, out, exitant, bounce_irradiance))
+    if (!o.checkpoint.empty() && load_checkpoint(o.checkpoint, key, passes, state, out, exitant, bounce_irradiance))
     {
         out.resumed = true;
         out.resumed_pass = int(state.pass);
         out.resumed_vertex = state.next_vertex;
     }
     auto last_checkpoint = std::chrono::steady_clock::now();
+    bool checkpointing = !o.checkpoint.empty();
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
     const uint32_t slice =
         std::max<uint32_t>(256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
@@ -431,12 +436,21 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
             if (first == n && pass > 0)
                 for (size_t i = 0; i < out.irradiance.size(); ++i)
                     out.irradiance[i] += bounce_irradiance[i];
-            if (!o.checkpoint.empty() && (first < n || pass + 1 < passes) &&
+            if (checkpointing && (first < n || pass + 1 < passes) &&
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count() >=
                     o.checkpoint_seconds)
             {
                 const BakeState now = first < n ? BakeState{uint32_t(pass), first} : BakeState{uint32_t(pass + 1), 0};
-                save_checkpoint(o.checkpoint, key, now, out, exitant, bounce_irradiance);
+                try
+                {
+                    save_checkpoint(o.checkpoint, key, now, out, exitant, bounce_irradiance);
+                }
+                catch (const std::exception& e)
+                {
+                    // A checkpoint is insurance, not the result: the bake goes on without further ones.
+                    out.checkpoint_error = e.what();
+                    checkpointing = false;
+                }
                 last_checkpoint = std::chrono::steady_clock::now();
             }
             if (progress)
@@ -566,6 +580,7 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     summary.resumed = transfer.resumed;
     summary.resumed_pass = transfer.resumed_pass;
     summary.resumed_vertex = transfer.resumed_vertex;
+    summary.checkpoint_error = transfer.checkpoint_error;
     const uint32_t n = transfer.vertex_count, L = uint32_t(transfer.l());
     for (const std::string& name : options.techniques)
     {

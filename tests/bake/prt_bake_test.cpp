@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 
@@ -181,6 +182,8 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
     o.kind = TransferKind::Interreflected;
     o.bounces = 1;
     const auto one = hemi::bake::bake_prt_transfer(torus, o);
+    o.bounces = 2;
+    const auto two = hemi::bake::bake_prt_transfer(torus, o);
 
     const std::vector<size_t> probes = hole_vertices(torus, 3);
     ASSERT_EQ(probes.size(), 3u);
@@ -191,18 +194,28 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
         const double e0 = cosine_integral(n, 100, [&](const glm::dvec3& d) { return cast(torus, origin, d, hit) ? 0.0 : 1.0; });
         // Radiance bounced toward the vertex from direction d under uniform light: (albedo / pi) times the
         // direct irradiance interpolated where d hits the front of a triangle, from above the horizon.
-        auto bounced = [&](const glm::dvec3& d) {
-            if (glm::dot(n, d) <= 0.0 || !cast(torus, origin, d, hit))
-                return 0.0;
-            const uint32_t* tri = &torus.indices[size_t(hit.prim) * 3];
-            const glm::dvec3 p0(torus.positions[tri[0]]), p1(torus.positions[tri[1]]), p2(torus.positions[tri[2]]);
-            if (glm::dot(glm::cross(p1 - p0, p2 - p0), d) >= 0.0)
-                return 0.0;
-            const double at = (1.0 - hit.u - hit.v) * uniform_irradiance(direct, tri[0]) +
-                              hit.u * uniform_irradiance(direct, tri[1]) + hit.v * uniform_irradiance(direct, tri[2]);
-            return o.albedo / M_PI * at;
+        // `irradiance(u)` is the irradiance at vertex u that bounces (the direct one for bounce 1; bounce 1's
+        // own for bounce 2: each bounce carries only the previous one's light).
+        auto bounce_of = [&](const std::function<double(uint32_t)>& irradiance) {
+            return [&, irradiance](const glm::dvec3& d) {
+                if (glm::dot(n, d) <= 0.0 || !cast(torus, origin, d, hit))
+                    return 0.0;
+                const uint32_t* tri = &torus.indices[size_t(hit.prim) * 3];
+                const glm::dvec3 p0(torus.positions[tri[0]]), p1(torus.positions[tri[1]]),
+                    p2(torus.positions[tri[2]]);
+                if (glm::dot(glm::cross(p1 - p0, p2 - p0), d) >= 0.0)
+                    return 0.0;
+                const double at = (1.0 - hit.u - hit.v) * irradiance(tri[0]) + hit.u * irradiance(tri[1]) +
+                                  hit.v * irradiance(tri[2]);
+                return o.albedo / M_PI * at;
+            };
         };
+        const auto bounced = bounce_of([&](uint32_t u) { return double(uniform_irradiance(direct, u)); });
         const double e1 = cosine_integral(n, 100, bounced);
+        const double e2 = cosine_integral(n, 100, bounce_of([&](uint32_t u) {
+            return double(uniform_irradiance(one, u) - uniform_irradiance(direct, u));
+        }));
+        EXPECT_NEAR(uniform_irradiance(two, v) - uniform_irradiance(one, v), e2, 0.05 * e2 + 1e-3) << v;
         EXPECT_LT(e0, 0.8 * M_PI) << "vertex " << v << " should be noticeably shadowed";
         EXPECT_GT(e1, 0.02) << "vertex " << v << " should receive interreflected light";
         EXPECT_NEAR(uniform_irradiance(direct, v), e0, 0.02 * M_PI) << v;
@@ -339,7 +352,11 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
         std::filesystem::temp_directory_path() / ("hemi_checkpoint_test_" + std::to_string(getpid()) + ".partial");
     o.checkpoint = checkpoint;
     o.checkpoint_seconds = 0.0; // after every slice
-    for (int stop_after : {3, 12, 30})
+    // Progress calls: one at each pass's start, then one per slice (11 per pass). Stopping after 3 resumes
+    // mid-pass 0, after 12 at the start of pass 1, after 24 at the start of pass 2 (bounce 2 from the saved
+    // bounce-1 irradiance), after 30 mid-pass 2.
+    const std::pair<int, int> expected_pass[] = {{3, 0}, {12, 1}, {24, 2}, {30, 2}};
+    for (auto [stop_after, resume_pass] : expected_pass)
     {
         std::filesystem::remove(checkpoint);
         int calls = 0;
@@ -352,6 +369,7 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
         ASSERT_TRUE(std::filesystem::exists(checkpoint)) << stop_after;
         const auto resumed = hemi::bake::bake_prt_transfer(knot, o);
         EXPECT_TRUE(resumed.resumed) << stop_after;
+        EXPECT_EQ(resumed.resumed_pass, resume_pass) << stop_after;
         EXPECT_LT(resumed.rays_traced, whole.rays_traced) << "the resumed bake should not redo finished work";
         EXPECT_EQ(0, std::memcmp(resumed.radiance.data(), whole.radiance.data(), whole.radiance.size() * 4))
             << "stopped after " << stop_after << " progress calls, resumed at pass " << resumed.resumed_pass
@@ -362,8 +380,14 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
     // Another seed: the checkpoint is not this bake's and is ignored.
     PrtBakeOptions other = o;
     other.seed = 9;
+    other.checkpoint = checkpoint.string() + ".other";
+    std::filesystem::copy_file(checkpoint, other.checkpoint);
     EXPECT_FALSE(hemi::bake::bake_prt_transfer(knot, other).resumed);
-    // A corrupted checkpoint is ignored too.
+    std::filesystem::remove(other.checkpoint);
+    // A corrupted checkpoint of this very bake is ignored too (it would resume if intact: checked first).
+    std::filesystem::copy_file(checkpoint, checkpoint.string() + ".copy");
+    EXPECT_TRUE(hemi::bake::bake_prt_transfer(knot, o).resumed);
+    std::filesystem::rename(checkpoint.string() + ".copy", checkpoint);
     {
         std::fstream f(checkpoint, std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(200);

@@ -157,7 +157,8 @@ TEST(GltfReader, MirroredUvsFlipTheHandedness)
 
 // Generated tangents weight each triangle by its corner angle (MikkTSpace), not by its area or UV scale: a
 // vertex shared by a 90-degree corner whose UVs run along +x and a ten times larger 45-degree corner whose
-// UVs run along +y gets the tangent normalize(2x + y), where area or plain summing would give other mixes.
+// UVs (three times denser) run along +y gets the tangent normalize(2x + y); summing raw dP/du (x + y/3),
+// area weighting or angle times raw dP/du (2x + y/3) would give other mixes.
 TEST(GltfReader, GeneratedTangentsWeightTrianglesByCornerAngle)
 {
     hemi::io::Mesh m;
@@ -165,7 +166,7 @@ TEST(GltfReader, GeneratedTangentsWeightTrianglesByCornerAngle)
     m.normals.assign(5, glm::vec3(0, 0, 1));
     // Triangle A (0, 1, 2): u = x, v = -y. Triangle B (0, 3, 4): u = y, v = x (the same frame turned 90 deg).
     // Vertex 0 has one UV for both; the others belong to one triangle each.
-    m.uvs = {{0, 0}, {1, 0}, {0, -1}, {0, -10}, {-10, -10}};
+    m.uvs = {{0, 0}, {1, 0}, {0, -1}, {0, -30}, {-30, -30}}; // B's UVs 3x denser: raw dP/du would weigh it 1/3
     m.indices = {0, 1, 2, 0, 3, 4};
     const fs::path p = dir() / "corner.gltf";
     hemi::io::write_gltf(p, m);
@@ -177,6 +178,24 @@ TEST(GltfReader, GeneratedTangentsWeightTrianglesByCornerAngle)
     EXPECT_EQ(s.mesh.tangents[0].w, 1.0f);
     EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[1]) - glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
     EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[3]) - glm::vec3(0, 1, 0)), 0.0f, 1e-5f);
+}
+
+// A node that mirrors its mesh (scale -1 on x) keeps the triangles counter-clockwise seen from the side the
+// normals face (glTF flips the winding of mirrored nodes): the quad still faces +z, generated normals
+// included, and the tangent frame turns left-handed.
+TEST(GltfReader, MirroringNodeKeepsTrianglesFacingOut)
+{
+    tinygltf::Model m = quad_model(false);
+    m.nodes[0].scale = {-1.0, 1.0, 1.0};
+    const hemi::io::GltfScene s = hemi::io::read_gltf(write_model(m, "mirrored_node.gltf"));
+    for (size_t t = 0; t < s.mesh.indices.size(); t += 3)
+    {
+        const glm::vec3 a = s.mesh.positions[s.mesh.indices[t]], b = s.mesh.positions[s.mesh.indices[t + 1]],
+                        c = s.mesh.positions[s.mesh.indices[t + 2]];
+        EXPECT_GT(glm::cross(b - a, c - a).z, 0.0f) << "triangle " << t / 3 << " winds clockwise seen from +z";
+    }
+    for (const glm::vec3& n : s.mesh.normals)
+        EXPECT_NEAR(glm::length(n - glm::vec3(0, 0, 1)), 0.0f, 1e-6f);
 }
 
 TEST(GltfReader, RejectsMissingMalformedAndInconsistentFiles)

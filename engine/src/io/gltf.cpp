@@ -141,7 +141,10 @@ void generate_tangents(Mesh& m, size_t first_vertex, size_t first_index)
             const glm::vec3& normal = m.normals[v];
             const glm::vec3 a = unit_in_plane(m.positions[idx[(c + 1) % 3]] - m.positions[v], normal);
             const glm::vec3 e = unit_in_plane(m.positions[idx[(c + 2) % 3]] - m.positions[v], normal);
-            const float angle = std::acos(std::clamp(glm::dot(a, e), -1.0f, 1.0f));
+            // A corner whose edges vanish in the normal's plane says nothing about the frame: no weight.
+            const float angle = glm::dot(a, a) > 0.0f && glm::dot(e, e) > 0.0f
+                                    ? std::acos(std::clamp(glm::dot(a, e), -1.0f, 1.0f))
+                                    : 0.0f;
             t[v] += angle * unit_in_plane(dpdu, normal);
             b[v] -= angle * unit_in_plane(dpdv, normal);
         }
@@ -249,11 +252,16 @@ GltfScene read_gltf(const std::filesystem::path& path)
             if (idx.size() % 3 != 0)
                 r.fail("mesh " + std::to_string(mesh_index) + ": index count is not a multiple of 3");
             for (uint32_t i : idx)
-            {
                 if (i >= count)
                     r.fail("mesh " + std::to_string(mesh_index) + ": index " + std::to_string(i) + " out of range (" +
                            std::to_string(count) + " vertices)");
-                m.indices.push_back(uint32_t(first_vertex + i));
+            // A mirroring node (negative determinant) turns counter-clockwise triangles clockwise (glTF 2.0,
+            // 3.7.4): swap two corners so that every triangle stays counter-clockwise seen from outside.
+            for (size_t t = 0; t < idx.size(); t += 3)
+            {
+                m.indices.push_back(uint32_t(first_vertex + idx[t]));
+                m.indices.push_back(uint32_t(first_vertex + idx[handedness < 0.0f ? t + 2 : t + 1]));
+                m.indices.push_back(uint32_t(first_vertex + idx[handedness < 0.0f ? t + 1 : t + 2]));
             }
             if (nrm.empty())
                 generate_normals(m, first_vertex, first_index);

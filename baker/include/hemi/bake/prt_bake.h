@@ -82,6 +82,7 @@ struct PrtTransfer
     bool resumed = false;          // true when a checkpoint supplied finished work
     int resumed_pass = 0;          // where it resumed: pass, and first vertex of that pass
     uint32_t resumed_vertex = 0;
+    std::string checkpoint_error;  // why checkpointing stopped (e.g. a full disk); the bake itself went on
     int l() const { return order * order; }
 };
 
@@ -132,6 +133,7 @@ struct PrtBakeSummary
     bool resumed = false; // from a checkpoint, at pass resumed_pass, vertex resumed_vertex
     int resumed_pass = 0;
     uint32_t resumed_vertex = 0;
+    std::string checkpoint_error; // non-empty: checkpoints stopped for this reason (the asset is complete)
     std::vector<PrtTechniqueSummary> techniques;
     double rays_per_second() const { return trace_seconds > 0.0 ? double(rays) / trace_seconds : 0.0; }
 };
