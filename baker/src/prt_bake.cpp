@@ -368,7 +368,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                 exitant[i] = float(o.albedo / M_PI) * previous[i];
             std::fill(bounce_irradiance.begin(), bounce_irradiance.end(), 0.0f);
         }
-        constexpr uint32_t kChunk = 64;
+        constexpr uint32_t kChunk = 256;
         auto work = [&](const tbb::blocked_range<uint32_t>& range) {
             float y[36], x[36];
             std::vector<float> m_acc(size_t(9) * L), t_acc(L);
