@@ -357,8 +357,6 @@ void bake_complex(benchmark::State& state)
     hemi::bake::PrtBakeOptions o;
     o.kind = hemi::bake::TransferKind::Shadowed;
     o.rays = 64;
-    if (const char* slice = std::getenv("HEMI_BENCH_SLICE"))
-        o.rays_per_slice = std::strtoull(slice, nullptr, 10);
     double bake_rays_per_s = 0.0, embree_rays_per_s = 0.0;
     for (auto _ : state)
     {
