@@ -17,8 +17,10 @@
 #include <hemi/render/transfer.h>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/packing.hpp>
 
 #include <cmath>
+#include <cstring>
 
 namespace
 {
@@ -161,4 +163,129 @@ TEST_F(PrtMaterial, FrameMatchesCpuEvaluationForEveryBasis)
             }
         EXPECT_GT(compared, 60) << name;
     }
+}
+
+// An engine draws the material into its own render pass: one RGBA16F colour attachment and a depth buffer,
+// no aux attachment, the engine's own clear colour. The covered pixels equal those hemi's OffscreenTarget
+// renders from the same frame (white furnace, albedo 1: exactly 1 for SH9), the background keeps the
+// engine's clear colour, and the validation layer stays silent about the unused second output.
+TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
+{
+    auto& dev = hemi::test::device();
+    auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    scene.mesh = hemi::io::make_uv_sphere(1.0f, 48, 24);
+    const hemi::math::BasisDesc& basis = hemi::math::basis("sh9");
+    std::vector<glm::vec3> lighting(9, glm::vec3(0.0f));
+    lighting[0] = glm::vec3(2.0f * std::sqrt(float(M_PI)));
+    const uint32_t w = 96, h = 72;
+    const Rendered reference = render(scene, basis, lighting, glm::vec3(1.0f), w, h);
+
+    // The engine's pass.
+    hemi::gpu::Image color = hemi::gpu::create_image(
+        dev, {w, h, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT});
+    hemi::gpu::Image depth = hemi::gpu::create_image(
+        dev, {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+    VkAttachmentDescription attachments[2] = {};
+    attachments[0].format = VK_FORMAT_R16G16B16A16_SFLOAT;
+    attachments[0].samples = VK_SAMPLE_COUNT_1_BIT;
+    attachments[0].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    attachments[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    attachments[0].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    attachments[0].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    attachments[0].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    attachments[0].finalLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    attachments[1] = attachments[0];
+    attachments[1].format = VK_FORMAT_D32_SFLOAT;
+    attachments[1].storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    attachments[1].finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    VkAttachmentReference color_ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    VkAttachmentReference depth_ref{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    VkSubpassDescription subpass{};
+    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    subpass.colorAttachmentCount = 1;
+    subpass.pColorAttachments = &color_ref;
+    subpass.pDepthStencilAttachment = &depth_ref;
+    VkSubpassDependency dependency{};
+    dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
+    dependency.dstSubpass = 0;
+    dependency.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+    dependency.dstStageMask = VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT;
+    dependency.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+    dependency.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+    VkRenderPassCreateInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+    rp.attachmentCount = 2;
+    rp.pAttachments = attachments;
+    rp.subpassCount = 1;
+    rp.pSubpasses = &subpass;
+    rp.dependencyCount = 1;
+    rp.pDependencies = &dependency;
+    VkRenderPass raw_pass;
+    ASSERT_EQ(vkCreateRenderPass(dev.device(), &rp, nullptr, &raw_pass), VK_SUCCESS);
+    hemi::gpu::RenderPass render_pass(dev.device(), raw_pass);
+    VkImageView views[2] = {color.view(), depth.view()};
+    VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    fb.renderPass = render_pass;
+    fb.attachmentCount = 2;
+    fb.pAttachments = views;
+    fb.width = w;
+    fb.height = h;
+    fb.layers = 1;
+    VkFramebuffer raw_fb;
+    ASSERT_EQ(vkCreateFramebuffer(dev.device(), &fb, nullptr, &raw_fb), VK_SUCCESS);
+    hemi::gpu::Framebuffer framebuffer(dev.device(), raw_fb);
+
+    hemi::render::TransferMatrices m(uint32_t(scene.mesh.vertex_count()), uint32_t(basis.size), 9,
+                                     folded_matrices(scene.mesh, basis));
+    hemi::render::TransferPass pass(dev, m);
+    const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
+    hemi::render::PrtMaterialRenderer material(dev, hemi::render::SurfacePass{render_pass, 0, 1}, scene.mesh,
+                                               normal_map, nullptr, basis, pass);
+    hemi::render::PrtMaterialFrame frame;
+    frame.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    const float clear[4] = {0.25f, 0.5f, 0.75f, 1.0f};
+    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
+        pass.record(cmd, lighting);
+        hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                                  VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+        material.update(cmd, frame);
+        VkClearValue clears[2];
+        std::memcpy(clears[0].color.float32, clear, sizeof clear);
+        clears[1].depthStencil = {1.0f, 0};
+        VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+        begin.renderPass = render_pass;
+        begin.framebuffer = framebuffer;
+        begin.renderArea = {{0, 0}, {w, h}};
+        begin.clearValueCount = 2;
+        begin.pClearValues = clears;
+        vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+        VkViewport viewport{0.0f, 0.0f, float(w), float(h), 0.0f, 1.0f};
+        VkRect2D scissor{{0, 0}, {w, h}};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        material.draw(cmd);
+        vkCmdEndRenderPass(cmd);
+    });
+    const std::vector<std::byte> bytes = hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    ASSERT_EQ(bytes.size(), size_t(w) * h * 8);
+    auto half = [&](size_t i) {
+        uint16_t bits;
+        std::memcpy(&bits, bytes.data() + i * 2, 2);
+        return glm::unpackHalf1x16(bits);
+    };
+    size_t covered = 0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+        {
+            const size_t p = size_t(y) * w + x;
+            if (reference.aux.at(x, y)[3] == 1.0f)
+            {
+                ++covered;
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(half(p * 4 + c), reference.color.at(x, y)[c], 2e-3f) << x << "," << y;
+            }
+            else
+                for (int c = 0; c < 4; ++c)
+                    ASSERT_EQ(half(p * 4 + c), clear[c]) << "background " << x << "," << y;
+        }
+    EXPECT_GT(covered, 1000u);
 }

@@ -182,6 +182,7 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     info.pDynamicState = &dynamic;
     info.layout = p.layout;
     info.renderPass = desc.render_pass;
+    info.subpass = desc.subpass;
     VkPipeline pipeline;
     HEMI_VK_CHECK(vkCreateGraphicsPipelines(device.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
     p.pipeline = Pipeline(device.device(), pipeline);

@@ -10,7 +10,7 @@
 namespace hemi::render
 {
 
-PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target,
+PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const SurfacePass& pass,
                                          const io::Mesh& mesh, const io::ImageRgba8& normal_map,
                                          const io::ImageRgba8* base_color, const math::BasisDesc& basis,
                                          const CoefficientSource& coefficients)
@@ -42,7 +42,8 @@ PrtMaterialRenderer::PrtMaterialRenderer(const gpu::Device& device, const Offscr
         {HEMI_PRT_MATERIAL_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_VERTEX_BIT},
         {HEMI_PRT_MATERIAL_BINDING_BASE_COLOR, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT},
     };
-    program_ = create_surface_program(device, target, "prt_material.vert", "prt_material.frag", bindings,
+    program_ = create_surface_program(device, pass, "prt_material.vert",
+                                      pass.color_attachments >= 2 ? "prt_material.frag" : "prt_material_color.frag", bindings,
                                       {uint32_t(basis.id), uint32_t(basis.size)});
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, program_.set_layout);

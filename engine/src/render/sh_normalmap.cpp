@@ -21,7 +21,7 @@ ShNormalMapRenderer::ShNormalMapRenderer(const gpu::Device& device, const Offscr
         {HEMI_SH_NORMALMAP_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, graphics},
         {HEMI_SH_NORMALMAP_BINDING_NORMAL_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT},
     };
-    program_ = create_surface_program(device, target, "sh_normalmap.vert", "sh_normalmap.frag", bindings);
+    program_ = create_surface_program(device, surface_pass(target), "sh_normalmap.vert", "sh_normalmap.frag", bindings);
 
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, program_.set_layout);

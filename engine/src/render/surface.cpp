@@ -65,7 +65,12 @@ void GpuMesh::draw(VkCommandBuffer cmd) const
     vkCmdDrawIndexed(cmd, index_count_, 1, 0, 0, 0);
 }
 
-gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTarget& target,
+SurfacePass surface_pass(const OffscreenTarget& target)
+{
+    return {target.render_pass(), 0, OffscreenTarget::kColorAttachments};
+}
+
+gpu::Program create_surface_program(const gpu::Device& device, const SurfacePass& pass,
                                     std::string_view vertex_shader, std::string_view fragment_shader,
                                     const std::vector<gpu::Binding>& bindings,
                                     const std::vector<uint32_t>& specialization)
@@ -77,8 +82,11 @@ gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTa
     desc.specialization = specialization;
     desc.vertex_bindings = GpuMesh::vertex_bindings();
     desc.vertex_attributes = GpuMesh::vertex_attributes();
-    desc.render_pass = target.render_pass();
-    desc.color_attachments = OffscreenTarget::kColorAttachments;
+    if (pass.render_pass == VK_NULL_HANDLE || pass.color_attachments == 0)
+        throw std::invalid_argument("hemi: a surface pass needs a render pass with at least one colour attachment");
+    desc.render_pass = pass.render_pass;
+    desc.subpass = pass.subpass;
+    desc.color_attachments = pass.color_attachments;
     desc.cull_mode = VK_CULL_MODE_BACK_BIT;
     // Meshes are counter-clockwise seen from outside; look_at_projection flips y for Vulkan's clip space,
     // and Vulkan's facing rule (its area formula is negated for y-down framebuffers) keeps them CCW.

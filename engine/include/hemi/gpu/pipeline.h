@@ -55,6 +55,7 @@ struct GraphicsProgramDesc
     std::vector<VkVertexInputBindingDescription> vertex_bindings;
     std::vector<VkVertexInputAttributeDescription> vertex_attributes;
     VkRenderPass render_pass = VK_NULL_HANDLE;
+    uint32_t subpass = 0;
     uint32_t color_attachments = 1;
     bool depth_test = true;
     VkCullModeFlags cull_mode = VK_CULL_MODE_BACK_BIT;

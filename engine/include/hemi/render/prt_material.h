@@ -33,13 +33,22 @@ public:
     // `coefficients` must come from matrices of `basis.size` rows over the same vertices as `mesh`; it must
     // outlive the renderer. `normal_map` is a tangent-space RGBA8 map (glTF convention); `base_color` an
     // sRGB RGBA8 texture, or null for white. Throws std::invalid_argument on a mismatch.
-    PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target, const io::Mesh& mesh,
+    // `pass` is where draw() will record: hemi's OffscreenTarget (surface_pass(target)) or a subpass of
+    // the engine's own render pass (render/surface.h says what the material writes there).
+    PrtMaterialRenderer(const gpu::Device& device, const SurfacePass& pass, const io::Mesh& mesh,
                         const io::ImageRgba8& normal_map, const io::ImageRgba8* base_color,
                         const math::BasisDesc& basis, const CoefficientSource& coefficients);
+    PrtMaterialRenderer(const gpu::Device& device, const OffscreenTarget& target, const io::Mesh& mesh,
+                        const io::ImageRgba8& normal_map, const io::ImageRgba8* base_color,
+                        const math::BasisDesc& basis, const CoefficientSource& coefficients)
+        : PrtMaterialRenderer(device, surface_pass(target), mesh, normal_map, base_color, basis, coefficients)
+    {
+    }
 
     // Outside the render pass: records the uniform update.
     void update(VkCommandBuffer cmd, const PrtMaterialFrame& frame) const;
-    // Inside target.begin()/end(): records the draw.
+    // Inside the render pass (target.begin()/end(), or the engine's pass with viewport and scissor set):
+    // records the draw.
     void draw(VkCommandBuffer cmd) const;
 
 private:

@@ -35,10 +35,27 @@ private:
     uint32_t vertex_count_ = 0, index_count_ = 0;
 };
 
-// The graphics program of a material drawing a GpuMesh into an OffscreenTarget: embedded shaders by name,
-// set-0 bindings, specialization constants shared by both stages, back-face culling of counter-clockwise
-// (from outside) meshes.
-gpu::Program create_surface_program(const gpu::Device& device, const OffscreenTarget& target,
+// Where a material draws: a render pass and subpass, hemi's OffscreenTarget or an engine's own. Materials
+// write linear colour to colour attachment 0 and, when the subpass has a second colour attachment, (u, v, 0,
+// 1) where the mesh covers the pixel to attachment 1 (hemi's tests and tools read it; with one attachment a
+// colour-only shader variant is used, so nothing is written without a target); further colour
+// attachments are not written (Vulkan leaves them undefined where the mesh is drawn), none is blended. A
+// depth attachment, if any, is tested and written (LESS).
+// Viewport and scissor are dynamic state: the caller sets them (OffscreenTarget::begin does).
+struct SurfacePass
+{
+    VkRenderPass render_pass = VK_NULL_HANDLE;
+    uint32_t subpass = 0;
+    uint32_t color_attachments = 1;
+};
+
+// hemi's offscreen target as a surface pass (subpass 0, colour + aux attachments).
+SurfacePass surface_pass(const OffscreenTarget& target);
+
+// The graphics program of a material drawing a GpuMesh into `pass`: embedded shaders by name, set-0
+// bindings, specialization constants shared by both stages, back-face culling of counter-clockwise (from
+// outside) meshes.
+gpu::Program create_surface_program(const gpu::Device& device, const SurfacePass& pass,
                                     std::string_view vertex_shader, std::string_view fragment_shader,
                                     const std::vector<gpu::Binding>& bindings,
                                     const std::vector<uint32_t>& specialization = {});
