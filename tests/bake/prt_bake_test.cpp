@@ -71,28 +71,6 @@ bool cast(const hemi::io::Mesh& m, const glm::dvec3& o, const glm::dvec3& d, Hit
     return best < INFINITY;
 }
 
-// Integrates f(d) * max(n.d, 0) over the sphere on a lat-long grid (exact cell solid angles).
-template <typename F>
-double cosine_integral(const glm::dvec3& n, int rows, F f)
-{
-    double sum = 0.0;
-    const int cols = 2 * rows;
-    for (int i = 0; i < rows; ++i)
-    {
-        const double t0 = M_PI * i / rows, t1 = M_PI * (i + 1) / rows, theta = 0.5 * (t0 + t1);
-        const double omega = (std::cos(t0) - std::cos(t1)) * 2.0 * M_PI / cols;
-        for (int j = 0; j < cols; ++j)
-        {
-            const double phi = 2.0 * M_PI * (j + 0.5) / cols;
-            const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
-            const double c = glm::dot(n, d);
-            if (c > 0.0)
-                sum += omega * c * f(d);
-        }
-    }
-    return sum;
-}
-
 // Calls f(d, solid angle) over a lat-long grid of the whole sphere (exact cell solid angles).
 template <typename F>
 void sphere_integral(int rows, F f)
@@ -108,6 +86,19 @@ void sphere_integral(int rows, F f)
             f(glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)), omega);
         }
     }
+}
+
+// Integrates f(d) * max(n.d, 0) over the sphere on the same grid.
+template <typename F>
+double cosine_integral(const glm::dvec3& n, int rows, F f)
+{
+    double sum = 0.0;
+    sphere_integral(rows, [&](const glm::dvec3& d, double omega) {
+        const double c = glm::dot(n, d);
+        if (c > 0.0)
+            sum += omega * c * f(d);
+    });
+    return sum;
 }
 
 glm::dvec3 ray_origin(const hemi::io::Mesh& m, size_t v, float offset)

@@ -218,35 +218,60 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
     }
 }
 
+namespace
+{
+struct RandomCpcaCase
+{
+    uint32_t n, k, l;
+    std::vector<float> dense;
+    std::vector<glm::vec3> lighting;
+};
+
+RandomCpcaCase random_cpca_case(uint32_t n, uint32_t k, uint32_t l, uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> g;
+    RandomCpcaCase c{n, k, l, std::vector<float>(size_t(n) * k * l), std::vector<glm::vec3>(l)};
+    for (float& x : c.dense)
+        x = g(rng);
+    for (glm::vec3& x : c.lighting)
+        x = glm::vec3(g(rng), g(rng), g(rng));
+    return c;
+}
+
+// Runs the CPCA pass and checks it against cpca_multiply_host; returns the GPU coefficients.
+std::vector<float> expect_cpca_pass_matches_host(const hemi::render::CpcaMatrices& m,
+                                                 const std::vector<glm::vec3>& lighting)
+{
+    hemi::render::CpcaTransferPass pass(hemi::test::device(), m);
+    pass.run(lighting);
+    std::vector<float> gpu = pass.read_coefficients();
+    std::vector<float> host(gpu.size());
+    hemi::render::cpca_multiply_host(m, lighting, host);
+    for (size_t i = 0; i < gpu.size(); ++i)
+    {
+        EXPECT_NEAR(gpu[i], host[i], 1e-4f * (1.0f + std::abs(host[i]))) << i;
+        if (std::abs(gpu[i] - host[i]) > 1e-4f * (1.0f + std::abs(host[i])))
+            break;
+    }
+    return gpu;
+}
+} // namespace
+
 // The CPCA pass equals its host reference, and with as many vectors as dimensions it equals the dense pass.
 TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 {
-    const uint32_t n = 1000, k = 4, l = 9, d = k * l;
-    std::mt19937 rng(3);
-    std::normal_distribution<float> g;
-    std::vector<float> dense(size_t(n) * d);
-    for (float& x : dense)
-        x = g(rng);
-    std::vector<glm::vec3> lighting(l);
-    for (glm::vec3& c : lighting)
-        c = glm::vec3(g(rng), g(rng), g(rng));
-
+    const RandomCpcaCase t = random_cpca_case(1000, 4, 9, 3);
+    const uint32_t d = t.k * t.l;
     for (auto [clusters, vectors] : {std::pair{3u, 5u}, std::pair{2u, d}})
     {
-        hemi::io::PrtCpca c = hemi::bake::compress_cpca(dense, n, d, clusters, vectors);
-        const hemi::render::CpcaMatrices m{n, k, l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights};
-        hemi::render::CpcaTransferPass pass(hemi::test::device(), m);
-        pass.run(lighting);
-        const std::vector<float> gpu = pass.read_coefficients();
-        std::vector<float> host(gpu.size());
-        hemi::render::cpca_multiply_host(m, lighting, host);
-        for (size_t i = 0; i < gpu.size(); ++i)
-            ASSERT_NEAR(gpu[i], host[i], 1e-4f * (1.0f + std::abs(host[i]))) << i;
+        const hemi::io::PrtCpca c = hemi::bake::compress_cpca(t.dense, t.n, d, clusters, vectors);
+        const std::vector<float> gpu = expect_cpca_pass_matches_host(
+            {t.n, t.k, t.l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights}, t.lighting);
         if (vectors == d)
         {
-            hemi::render::TransferMatrices tm(n, k, l, dense);
-            hemi::render::TransferPass full(hemi::test::device(), tm);
-            full.run(lighting);
+            hemi::render::TransferPass full(hemi::test::device(), hemi::render::TransferMatrices(t.n, t.k, t.l, t.dense));
+            full.run(t.lighting);
             const std::vector<float> want = full.read_coefficients();
             for (size_t i = 0; i < gpu.size(); ++i)
                 ASSERT_NEAR(gpu[i], want[i], 1e-3f * (1.0f + std::abs(want[i]))) << i;
@@ -259,27 +284,13 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 // no dispatch. GPU = host.
 TEST_F(PrtView, CpcaPassAtItsLimitsWithAnEmptyCluster)
 {
-    const uint32_t n = 700, k = 9, l = 36, d = k * l;
-    std::mt19937 rng(5);
-    std::normal_distribution<float> g;
-    std::vector<float> dense(size_t(n) * d);
-    for (float& x : dense)
-        x = g(rng);
-    hemi::io::PrtCpca c = hemi::bake::compress_cpca(dense, n, d, 3, 64);
+    const RandomCpcaCase t = random_cpca_case(700, 9, 36, 5);
+    hemi::io::PrtCpca c = hemi::bake::compress_cpca(t.dense, t.n, t.k * t.l, 3, 64);
     for (uint32_t& id : c.cluster)
         if (id == 1)
             id = 0; // cluster 1 has no vertices now
-    std::vector<glm::vec3> lighting(l);
-    for (glm::vec3& x : lighting)
-        x = glm::vec3(g(rng), g(rng), g(rng));
-    const hemi::render::CpcaMatrices m{n, k, l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights};
-    hemi::render::CpcaTransferPass pass(hemi::test::device(), m);
-    pass.run(lighting);
-    const std::vector<float> gpu = pass.read_coefficients();
-    std::vector<float> host(gpu.size());
-    hemi::render::cpca_multiply_host(m, lighting, host);
-    for (size_t i = 0; i < gpu.size(); ++i)
-        ASSERT_NEAR(gpu[i], host[i], 1e-4f * (1.0f + std::abs(host[i]))) << i;
+    expect_cpca_pass_matches_host({t.n, t.k, t.l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
+                                  t.lighting);
 }
 
 // The environment turns about world z and is seen in object space: a narrow lobe at world direction w, turned
