@@ -3,6 +3,8 @@
 //
 //   hemi-render ASSET.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
 //               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o OUT.png|OUT.exr
+// HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
+// message from it makes the exit status 2.
 #include <hemi/gpu/device.h>
 #include <hemi/io/image.h>
 #include <hemi/io/prt_asset.h>
@@ -13,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <string_view>
 
 namespace
 {
@@ -66,7 +69,14 @@ int main(int argc, char** argv)
             throw std::invalid_argument("-o must end in .png or .exr, got '" + output + "'");
 
         const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
-        hemi::gpu::Device device;
+        // Vulkan's warnings and errors (the validation layer's too, with HEMI_VALIDATION=1) go to stderr.
+        hemi::gpu::DeviceDesc desc;
+        desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message) {
+            if (level >= hemi::gpu::LogLevel::Warning)
+                std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "", int(message.size()),
+                             message.data());
+        };
+        hemi::gpu::Device device(desc);
         hemi::render::PrtView view(device, asset, asset_path, technique, cpca, w, h);
         hemi::render::PrtFrame frame;
         frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
@@ -97,6 +107,12 @@ int main(int argc, char** argv)
         std::printf("rendered %s (%s%s, %s, %ux%u) in %.2f s -> %s\n", asset_path.c_str(), technique.c_str(),
                     cpca ? " + CPCA" : "", env.c_str(), w, h,
                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), output.c_str());
+        if (device.validation_messages() > 0)
+        {
+            std::fprintf(stderr, "hemi-render: the validation layer reported %llu problem(s)\n",
+                         (unsigned long long)device.validation_messages());
+            return 2;
+        }
     }
     catch (const std::exception& e)
     {

@@ -53,7 +53,8 @@ Result run(const std::string& exe, const std::string& args, const std::string& e
 }
 
 Result bake(const std::string& args) { return run(HEMI_BAKE_EXE, "prt " + args); }
-Result render(const std::string& args) { return run(HEMI_RENDER_EXE, args); }
+// Every render runs with the Khronos validation layer: hemi-render exits 2 if it reports anything.
+Result render(const std::string& args) { return run(HEMI_RENDER_EXE, args, "HEMI_VALIDATION=1"); }
 
 std::string q(const fs::path& p)
 {
@@ -190,6 +191,6 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
     expect_render_failure(render(q(good) + " --technique hl2 --env sky --size 0x5 -o " + q(png)), "--size");
     // No Vulkan device matching the selector.
     expect_render_failure(run(HEMI_RENDER_EXE, q(good) + " --technique hl2 --env sky -o " + q(png),
-                              "HEMI_DEVICE=no-such-gpu"),
+                              "HEMI_VALIDATION=1 HEMI_DEVICE=no-such-gpu"),
                           "no-such-gpu");
 }
