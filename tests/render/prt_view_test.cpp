@@ -258,12 +258,13 @@ std::vector<float> expect_cpca_pass_matches_host(const hemi::render::CpcaMatrice
 }
 } // namespace
 
-// The CPCA pass equals its host reference, and with as many vectors as dimensions it equals the dense pass.
+// The CPCA pass equals its host reference (one cluster: the GEMM path; several: per vertex), and with as many
+// vectors as dimensions it equals the dense pass.
 TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 {
     const RandomCpcaCase t = random_cpca_case(1000, 4, 9, 3);
     const uint32_t d = t.k * t.l;
-    for (auto [clusters, vectors] : {std::pair{3u, 5u}, std::pair{2u, d}})
+    for (auto [clusters, vectors] : {std::pair{1u, 7u}, std::pair{3u, 5u}, std::pair{2u, d}, std::pair{1u, d}})
     {
         const hemi::io::PrtCpca c = hemi::bake::compress_cpca(t.dense, t.n, d, clusters, vectors);
         const std::vector<float> gpu = expect_cpca_pass_matches_host(

@@ -4,6 +4,7 @@
 
 #include "hemi/shared/transfer.h"
 
+#include <Eigen/Dense>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -391,7 +392,9 @@ const gpu::Device& TransferPass::device() const { return *impl_->device; }
 
 namespace
 {
-void validate_cpca(const CpcaMatrices& c)
+// Sizes and cluster ids always (memory safety); the values' finiteness when `values` (once, when data are
+// loaded onto the device; read_prt_asset has checked them too).
+void validate_cpca(const CpcaMatrices& c, bool values = true)
 {
     validate_transfer_shape(c.vertex_count, c.k, c.l);
     const size_t d = size_t(c.k) * c.l;
@@ -405,23 +408,26 @@ void validate_cpca(const CpcaMatrices& c)
     for (uint32_t id : c.cluster)
         if (id >= c.clusters)
             throw std::invalid_argument("hemi: CPCA cluster id " + std::to_string(id) + " out of range");
-    for (std::span<const float> values : {c.means, c.basis, c.weights})
-        for (float v : values)
-            if (!std::isfinite(v))
-                throw std::invalid_argument("hemi: CPCA data contain a non-finite value");
+    if (values)
+        for (std::span<const float> array : {c.means, c.basis, c.weights})
+            for (float v : array)
+                if (!std::isfinite(v))
+                    throw std::invalid_argument("hemi: CPCA data contain a non-finite value");
 }
 } // namespace
 
 void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighting, std::span<float> out)
 {
-    validate_cpca(c);
+    validate_cpca(c, false);
     check_lighting(lighting, c.l);
     if (out.size() != size_t(c.vertex_count) * c.k * 4)
         throw std::invalid_argument("hemi: CPCA output has " + std::to_string(out.size()) + " floats, expected " +
                                     std::to_string(size_t(c.vertex_count) * c.k * 4));
-    const size_t d = size_t(c.k) * c.l, rows = size_t(c.clusters) * (c.vectors + 1) * c.k;
-    // Step 1: every cluster row (mean, then the V vectors) times the lighting.
-    std::vector<glm::vec3> projected(rows);
+    const size_t d = size_t(c.k) * c.l;
+    const Eigen::Index rows = Eigen::Index(c.k) * 4, V = c.vectors;
+    // Step 1: per cluster, a (4K) x (V + 1) matrix: column j is row j (the mean, then the V vectors) times
+    // the lighting, RGB plus a zero alpha, already in the output's texel layout.
+    std::vector<Eigen::MatrixXf> projected(c.clusters, Eigen::MatrixXf::Zero(rows, V + 1));
     for (uint32_t cl = 0; cl < c.clusters; ++cl)
         for (uint32_t j = 0; j <= c.vectors; ++j)
         {
@@ -431,23 +437,31 @@ void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighti
                 glm::vec3 sum(0.0f);
                 for (uint32_t i = 0; i < c.l; ++i)
                     sum += m[k * c.l + i] * lighting[i];
-                projected[(size_t(cl) * (c.vectors + 1) + j) * c.k + k] = sum;
+                for (int ch = 0; ch < 3; ++ch)
+                    projected[cl](Eigen::Index(k) * 4 + ch, j) = sum[ch];
             }
         }
-    // Step 2: per vertex, the mean's projection plus the weighted vectors' projections.
-    tbb::parallel_for(uint32_t(0), c.vertex_count, [&](uint32_t v) {
-        const size_t base = size_t(c.cluster[v]) * (c.vectors + 1) * c.k;
-        for (uint32_t k = 0; k < c.k; ++k)
+    // Step 2: out_v = P_c [1; w_v]. With one cluster a block of vertices is one matrix product (Eigen's
+    // vectorised GEMM: the weights, N x V row-major, are a V x N column-major matrix); otherwise one
+    // matrix-vector product per vertex.
+    using ConstMap = Eigen::Map<const Eigen::MatrixXf>;
+    using Map = Eigen::Map<Eigen::MatrixXf>;
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, c.vertex_count, 2048), [&](const tbb::blocked_range<uint32_t>& r) {
+        const Eigen::Index count = Eigen::Index(r.end() - r.begin());
+        Map o(out.data() + size_t(r.begin()) * rows, rows, count);
+        ConstMap w(c.weights.data() + size_t(r.begin()) * V, V, count);
+        if (c.clusters == 1)
         {
-            glm::vec3 sum = projected[base + k];
-            for (uint32_t j = 0; j < c.vectors; ++j)
-                sum += c.weights[size_t(v) * c.vectors + j] * projected[base + (j + 1) * c.k + k];
-            float* o = &out[(size_t(v) * c.k + k) * 4];
-            o[0] = sum.x;
-            o[1] = sum.y;
-            o[2] = sum.z;
-            o[3] = 0.0f;
+            o = projected[0].col(0).replicate(1, count);
+            o.noalias() += projected[0].rightCols(V) * w;
         }
+        else
+            for (Eigen::Index i = 0; i < count; ++i)
+            {
+                const Eigen::MatrixXf& p = projected[c.cluster[r.begin() + uint32_t(i)]];
+                o.col(i) = p.col(0);
+                o.col(i).noalias() += p.rightCols(V) * w.col(i);
+            }
     });
 }
 

@@ -127,7 +127,10 @@ struct CpcaMatrices
     std::span<const float> weights;    // N x V
 };
 
-// Host reference of the CPCA multiply: same output layout as transfer_multiply_host.
+// The CPCA multiply on the host (Eigen GEMM per block of vertices for one cluster, a GEMV per vertex for
+// several; TBB over blocks): same output layout as transfer_multiply_host. Checks sizes and cluster ids on
+// every call; the values' finiteness is checked where data enter (CpcaTransferPass, io::read_prt_asset), not
+// per frame.
 void cpca_multiply_host(const CpcaMatrices& cpca, std::span<const glm::vec3> lighting, std::span<float> out);
 
 // The CPCA path on the device: a small dispatch projecting every cluster's mean and PCA matrices on the
