@@ -55,7 +55,8 @@ struct PrtFrame
 class PrtView
 {
 public:
-    // `asset_path` resolves the asset's texture references (missing textures: io::FormatError naming them).
+    // `asset` must outlive the view. `asset_path` resolves the asset's texture references (missing textures:
+    // io::FormatError naming them).
     // `cpca` selects the CPCA data of the technique (std::invalid_argument when the asset has none).
     PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::filesystem::path& asset_path,
             const std::string& technique, bool cpca, uint32_t width, uint32_t height);
