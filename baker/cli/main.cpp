@@ -112,6 +112,11 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
     std::printf("\n");
     if (s.tangents_generated)
         std::printf("tangents were generated from the UV layout (the scene has none)\n");
+    if (s.ignored_material_primitives)
+        std::fprintf(stderr,
+                     "hemi-bake prt: warning: %zu primitive(s) use other materials than the first; their geometry is "
+                     "baked, but the asset references the first material's textures only\n",
+                     s.ignored_material_primitives);
     if (s.resumed)
         std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1, s.resumed_vertex);
     if (!s.checkpoint_error.empty())

@@ -621,6 +621,7 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
         o.bake.checkpoint = asset_path.string() + ".partial";
     io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress);
     summary.tangents_generated = scene.tangents_generated;
+    summary.ignored_material_primitives = scene.ignored_material_primitives;
     const std::filesystem::path folder = std::filesystem::absolute(asset_path).parent_path();
     auto reference = [&](const std::filesystem::path& texture) -> std::string {
         if (texture.empty())
@@ -647,6 +648,7 @@ void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary
     j["vertices"] = s.vertices;
     j["triangles"] = s.triangles;
     j["tangents_generated"] = s.tangents_generated;
+    j["ignored_material_primitives"] = s.ignored_material_primitives;
     j["rays"] = s.rays;
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;

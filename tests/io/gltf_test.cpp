@@ -198,6 +198,22 @@ TEST(GltfReader, MirroringNodeKeepsTrianglesFacingOut)
         EXPECT_NEAR(glm::length(n - glm::vec3(0, 0, 1)), 0.0f, 1e-6f);
 }
 
+// A scene with a second material: its primitive's geometry is read, and the reader counts it so that the
+// baker can warn that the asset references the first material's textures only.
+TEST(GltfReader, CountsPrimitivesOfOtherMaterials)
+{
+    std::ofstream(dir() / "quad_normal.png") << "png";
+    tinygltf::Model m = quad_model(true);
+    m.materials.push_back(tinygltf::Material{});
+    tinygltf::Primitive second = m.meshes[0].primitives[0];
+    second.material = 1;
+    m.meshes[0].primitives.push_back(second);
+    const hemi::io::GltfScene s = hemi::io::read_gltf(write_model(m, "two_materials.gltf"));
+    EXPECT_EQ(s.mesh.vertex_count(), 8u);
+    EXPECT_EQ(s.ignored_material_primitives, 1u);
+    EXPECT_EQ(s.normal_texture.filename(), "quad_normal.png");
+}
+
 TEST(GltfReader, RejectsMissingMalformedAndInconsistentFiles)
 {
     expect_error_naming(dir() / "nope.gltf", "no such file");

@@ -272,6 +272,8 @@ GltfScene read_gltf(const std::filesystem::path& path)
             }
             if (material < 0)
                 material = prim.material;
+            else if (prim.material >= 0 && prim.material != material)
+                ++scene.ignored_material_primitives;
         }
     };
 

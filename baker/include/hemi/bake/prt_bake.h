@@ -130,6 +130,7 @@ struct PrtBakeSummary
     uint64_t rays = 0;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool tangents_generated = false;
+    size_t ignored_material_primitives = 0; // io::GltfScene's: primitives drawn with the first material
     bool resumed = false; // from a checkpoint, at pass resumed_pass, vertex resumed_vertex
     int resumed_pass = 0;
     uint32_t resumed_vertex = 0;

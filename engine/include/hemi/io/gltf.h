@@ -24,6 +24,9 @@ struct GltfScene
     std::filesystem::path base_color_texture; // empty when the material has none
     std::filesystem::path normal_texture;     // empty when the material has none
     bool tangents_generated = false;
+    // Primitives whose material differs from the first one's: their geometry is read, but the textures are
+    // the first material's (hemi reads one base colour and one normal map per scene for now).
+    size_t ignored_material_primitives = 0;
 };
 
 // Throws FormatError naming the file and the problem: missing or malformed file, truncated .glb, a
