@@ -2,6 +2,7 @@
 // triangle) and fine lat-long quadrature recompute the shadowed irradiance and the first interreflection
 // bounce at chosen vertices; a convex mesh loses nothing above its horizon; the same seed gives the same
 // bytes whatever the thread count.
+#include "../temp_dir.h"
 #include "models.h"
 
 #include <hemi/bake/prt_bake.h>
@@ -19,7 +20,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include <unistd.h>
 
 namespace
 {
@@ -339,8 +339,7 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
     const auto whole = hemi::bake::bake_prt_transfer(knot, o);
     EXPECT_FALSE(whole.resumed);
 
-    const std::filesystem::path checkpoint =
-        std::filesystem::temp_directory_path() / ("hemi_checkpoint_test_" + std::to_string(getpid()) + ".partial");
+    const std::filesystem::path checkpoint = hemi::test::temp_dir("prt_bake_test") / "bake.partial";
     o.checkpoint = checkpoint;
     o.checkpoint_seconds = 0.0; // after every slice
     // Progress calls: one at each pass's start, then one per slice (11 per pass). Stopping after 3 resumes

@@ -1,4 +1,6 @@
 // The .hemi container: round trip, and every way a file can be wrong is a FormatError naming the file.
+#include "../temp_dir.h"
+
 #include <hemi/io/asset.h>
 #include <hemi/io/image.h>
 
@@ -13,9 +15,7 @@ namespace
 {
 fs::path dir()
 {
-    fs::path d = fs::temp_directory_path() / "hemi_asset_test";
-    fs::create_directories(d);
-    return d;
+    return hemi::test::temp_dir("asset_test");
 }
 
 fs::path write_sample(const std::string& name)

@@ -1,5 +1,7 @@
 // glTF reading: a model made in code (tinygltf's writer), node transforms, generated tangents against the
 // UV layout, and malformed input with the file named in the error.
+#include "../temp_dir.h"
+
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 
@@ -18,9 +20,7 @@ namespace
 {
 fs::path dir()
 {
-    fs::path d = fs::temp_directory_path() / "hemi_gltf_test";
-    fs::create_directories(d);
-    return d;
+    return hemi::test::temp_dir("gltf_test");
 }
 
 template <typename T>

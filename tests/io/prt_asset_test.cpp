@@ -1,6 +1,7 @@
 // The baked PRT asset: a round trip keeps every value, and every broken file (truncated, corrupted, a missing
 // or inconsistent section, an unknown technique, an out-of-range index or cluster, NaN) is a FormatError that
 // names the file.
+#include "../temp_dir.h"
 #include "models.h"
 
 #include <hemi/bake/prt_bake.h>
@@ -10,7 +11,6 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -25,9 +25,7 @@ namespace
 
 fs::path dir()
 {
-    fs::path d = fs::temp_directory_path() / ("hemi_prt_asset_test_" + std::to_string(getpid()));
-    fs::create_directories(d);
-    return d;
+    return hemi::test::temp_dir("prt_asset_test");
 }
 
 hemi::io::PrtAsset small_asset()

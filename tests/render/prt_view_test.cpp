@@ -3,6 +3,7 @@
 // the concave knot; the CPCA pass against its host reference and against the dense pass; CPCA 1x24 on the
 // complex object against the uncompressed gold standard.
 #include "../gpu_fixture.h"
+#include "../temp_dir.h"
 
 #include "models.h"
 
@@ -16,7 +17,6 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -34,9 +34,7 @@ class PrtView : public hemi::test::GpuTest
 
 fs::path dir()
 {
-    fs::path d = fs::temp_directory_path() / ("hemi_prt_view_test_" + std::to_string(getpid()));
-    fs::create_directories(d);
-    return d;
+    return hemi::test::temp_dir("prt_view_test");
 }
 
 struct Baked

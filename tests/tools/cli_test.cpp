@@ -1,6 +1,7 @@
 // The command lines pipelines script against, run as processes: hemi-bake prt and hemi-render with the
 // issue's exact forms, their outputs, and their errors on bad input (exit status 1, a message naming the
 // file and the problem, no output file left behind).
+#include "../temp_dir.h"
 #include "models.h"
 
 #include <hemi/io/image.h>
@@ -10,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -23,12 +23,7 @@ namespace
 
 fs::path dir()
 {
-    static const fs::path d = [] {
-        fs::path p = fs::temp_directory_path() / ("hemi_cli_test_" + std::to_string(getpid()));
-        fs::create_directories(p);
-        return p;
-    }();
-    return d;
+    return hemi::test::temp_dir("cli_test");
 }
 
 struct Result

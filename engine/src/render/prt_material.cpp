@@ -1,4 +1,3 @@
-#include <hemi/gpu/commands.h>
 #include <hemi/math/separable_basis.h>
 #include <hemi/render/prt_material.h>
 
@@ -72,20 +71,12 @@ void PrtMaterialRenderer::update(VkCommandBuffer cmd, const PrtMaterialFrame& fr
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)
         u.sep4_weights[j] = glm::vec4(w[j * 4], w[j * 4 + 1], w[j * 4 + 2], w[j * 4 + 3]);
-    // The previous frame's reads finish before the update, which finishes before this frame's draws read it.
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-                        VK_ACCESS_UNIFORM_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
-    vkCmdUpdateBuffer(cmd, uniforms_, 0, sizeof u, &u);
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-                        VK_ACCESS_UNIFORM_READ_BIT);
+    record_uniform_update(cmd, uniforms_, &u, sizeof u);
 }
 
 void PrtMaterialRenderer::draw(VkCommandBuffer cmd) const
 {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program_.pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program_.layout, 0, 1, &set_, 0, nullptr);
-    mesh_.draw(cmd);
+    draw_surface(cmd, program_, set_, mesh_);
 }
 
 } // namespace hemi::render

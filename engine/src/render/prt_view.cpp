@@ -40,14 +40,7 @@ glm::mat4 gltf_to_world()
     return glm::rotate(glm::mat4(1.0f), float(M_PI) / 2.0f, glm::vec3(1.0f, 0.0f, 0.0f));
 }
 
-namespace
-{
-struct Sphere
-{
-    glm::vec3 centre;
-    float radius;
-};
-Sphere bounds(const io::Mesh& mesh, const glm::mat4& model)
+BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model)
 {
     glm::vec3 lo(INFINITY), hi(-INFINITY);
     for (const glm::vec3& p : mesh.positions)
@@ -62,11 +55,10 @@ Sphere bounds(const io::Mesh& mesh, const glm::mat4& model)
         r = std::max(r, glm::length(glm::vec3(model * glm::vec4(p, 1.0f)) - c));
     return {c, std::max(r, 1e-6f)};
 }
-} // namespace
 
 PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect)
 {
-    const Sphere s = bounds(mesh, model);
+    const BoundingSphere s = bounding_sphere(mesh, model);
     PrtCamera c;
     const float half = glm::radians(c.fov_y_degrees) * 0.5f;
     // The sphere fits the narrower of the two fields of view.
@@ -79,7 +71,11 @@ PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect
 
 glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect)
 {
-    const Sphere s = bounds(mesh, model);
+    return camera_matrix(camera, bounding_sphere(mesh, model), aspect);
+}
+
+glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& s, float aspect)
+{
     if (!(glm::length(camera.target - camera.eye) > 0.0f))
         throw std::invalid_argument("hemi: the camera's eye and target coincide");
     // Depth is measured along the view axis, not toward the sphere's centre (the target may be off-centre).
@@ -163,7 +159,14 @@ void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
     const float aspect = float(target_.width()) / float(target_.height());
     PrtMaterialFrame m;
     m.model = frame.model;
-    m.view_projection = camera_matrix(frame.camera, asset_->mesh, frame.model, aspect);
+    // The bounds only change with the model matrix: no pass over the vertices per frame.
+    if (!bounds_valid_ || frame.model != bounds_model_)
+    {
+        bounds_ = bounding_sphere(asset_->mesh, frame.model);
+        bounds_model_ = frame.model;
+        bounds_valid_ = true;
+    }
+    m.view_projection = camera_matrix(frame.camera, bounds_, aspect);
     m.albedo = glm::vec3(1.0f);
     m.use_base_color = !frame.white;
     material_->update(cmd, m);

@@ -43,14 +43,12 @@ void ShNormalMapRenderer::update(VkCommandBuffer cmd, const ShNormalMapFrame& fr
     u.albedo = glm::vec4(frame.albedo, 0.0f);
     for (int i = 0; i < 9; ++i)
         u.irradiance[i] = glm::vec4(frame.irradiance[i], 0.0f);
-    vkCmdUpdateBuffer(cmd, uniforms_, 0, sizeof u, &u);
+    record_uniform_update(cmd, uniforms_, &u, sizeof u);
 }
 
 void ShNormalMapRenderer::draw(VkCommandBuffer cmd) const
 {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program_.pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program_.layout, 0, 1, &set_, 0, nullptr);
-    mesh_.draw(cmd);
+    draw_surface(cmd, program_, set_, mesh_);
 }
 
 glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect)

@@ -1,3 +1,4 @@
+#include <hemi/gpu/commands.h>
 #include <hemi/render/surface.h>
 
 #include <stdexcept>
@@ -63,6 +64,23 @@ void GpuMesh::draw(VkCommandBuffer cmd) const
     vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
     vkCmdBindIndexBuffer(cmd, indices_, 0, VK_INDEX_TYPE_UINT32);
     vkCmdDrawIndexed(cmd, index_count_, 1, 0, 0, 0);
+}
+
+void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, const void* data, size_t size)
+{
+    const VkPipelineStageFlags shaders = VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT;
+    gpu::memory_barrier(cmd, shaders, VK_ACCESS_UNIFORM_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                        VK_ACCESS_TRANSFER_WRITE_BIT);
+    vkCmdUpdateBuffer(cmd, uniforms, 0, size, data);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, shaders,
+                        VK_ACCESS_UNIFORM_READ_BIT);
+}
+
+void draw_surface(VkCommandBuffer cmd, const gpu::Program& program, VkDescriptorSet set, const GpuMesh& mesh)
+{
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.layout, 0, 1, &set, 0, nullptr);
+    mesh.draw(cmd);
 }
 
 SurfacePass surface_pass(const OffscreenTarget& target)

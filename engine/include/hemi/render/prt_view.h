@@ -38,10 +38,19 @@ struct PrtCamera
     glm::vec3 target{0.0f};
     float fov_y_degrees = 35.0f;
 };
+// The model's bounding sphere in world space (under `model`): centred on the bounding box.
+struct BoundingSphere
+{
+    glm::vec3 centre{0.0f};
+    float radius = 1.0f;
+};
+BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model);
+
 // A camera that frames the whole model (its bounding sphere under `model`) from the front and slightly above.
 PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect);
 // View-projection for `camera` with near and far planes that enclose the model's bounding sphere.
 glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
+glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& bounds, float aspect);
 
 struct PrtFrame
 {
@@ -86,6 +95,9 @@ private:
     OffscreenTarget target_;
     std::unique_ptr<CoefficientSource> source_;
     std::unique_ptr<PrtMaterialRenderer> material_;
+    BoundingSphere bounds_;      // under bounds_model_, recomputed only when the frame's model changes
+    glm::mat4 bounds_model_{1.0f};
+    bool bounds_valid_ = false;
 };
 
 } // namespace hemi::render

@@ -49,6 +49,13 @@ struct SurfacePass
     uint32_t color_attachments = 1;
 };
 
+// A material's per-frame uniform update, outside the render pass: the previous frame's vertex and fragment
+// reads finish before the update, which finishes before this frame's draws read it.
+void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, const void* data, size_t size);
+
+// Inside the render pass: binds the material's pipeline and descriptor set, and draws the mesh.
+void draw_surface(VkCommandBuffer cmd, const gpu::Program& program, VkDescriptorSet set, const GpuMesh& mesh);
+
 // hemi's offscreen target as a surface pass (subpass 0, colour + aux attachments).
 SurfacePass surface_pass(const OffscreenTarget& target);
 
