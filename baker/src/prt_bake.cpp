@@ -202,18 +202,8 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
         throw std::invalid_argument("hemi: rays_per_slice must be positive");
     if (!(o.ray_offset >= 0.0f && o.ray_offset < 0.1f))
         throw std::invalid_argument("hemi: ray offset must be in [0, 0.1)");
-    if (mesh.vertex_count() == 0 || mesh.indices.empty() || mesh.indices.size() % 3)
-        throw std::invalid_argument("hemi: PRT bake needs a non-empty triangle mesh");
-    if (mesh.normals.size() != mesh.vertex_count())
-        throw std::invalid_argument("hemi: PRT bake needs a normal per vertex");
-    for (uint32_t i : mesh.indices)
-        if (i >= mesh.vertex_count())
-            throw std::invalid_argument("hemi: PRT bake: index " + std::to_string(i) + " out of range");
-    for (size_t v = 0; v < mesh.vertex_count(); ++v)
-        for (int c = 0; c < 3; ++c)
-            if (!std::isfinite(mesh.positions[v][c]) || !std::isfinite(mesh.normals[v][c]))
-                throw std::invalid_argument("hemi: PRT bake: vertex " + std::to_string(v) +
-                                            " has a non-finite position or normal");
+    if (std::string problem = io::mesh_problem(mesh, io::MeshNeeds::Normals); !problem.empty())
+        throw std::invalid_argument("hemi: PRT bake: " + problem);
 }
 
 // Where a bake stands: passes before `pass` are complete, and so are vertices [0, next_vertex) of `pass`.

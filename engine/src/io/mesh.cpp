@@ -6,6 +6,37 @@
 namespace hemi::io
 {
 
+namespace
+{
+template <typename T>
+bool all_finite(const std::vector<T>& values)
+{
+    for (const T& v : values)
+        for (int c = 0; c < int(sizeof(T) / sizeof(float)); ++c)
+            if (!std::isfinite(v[c]))
+                return false;
+    return true;
+}
+} // namespace
+
+std::string mesh_problem(const Mesh& m, MeshNeeds needs)
+{
+    const size_t n = m.vertex_count();
+    if (n == 0 || m.indices.empty() || m.indices.size() % 3)
+        return "the mesh needs vertices and a non-empty triangle list (" + std::to_string(m.indices.size()) +
+               " indices)";
+    for (uint32_t i : m.indices)
+        if (i >= n)
+            return "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)";
+    if (m.normals.size() != n)
+        return "the mesh needs a normal per vertex";
+    if (needs == MeshNeeds::Frames && (m.tangents.size() != n || m.uvs.size() != n))
+        return "the mesh needs a normal, tangent and UV for each of its " + std::to_string(n) + " vertices";
+    if (!all_finite(m.positions) || !all_finite(m.normals) || !all_finite(m.tangents) || !all_finite(m.uvs))
+        return "the mesh has a non-finite position or attribute";
+    return {};
+}
+
 Mesh make_uv_sphere(float radius, uint32_t segments, uint32_t rings)
 {
     if (segments < 3 || rings < 2 || !(radius > 0.0f))

@@ -49,19 +49,9 @@ bool finite(const std::vector<T>& v)
 // The problem with an asset, or an empty string.
 std::string problem(const PrtAsset& a)
 {
-    const Mesh& m = a.mesh;
-    const size_t n = m.vertex_count();
-    if (n == 0)
-        return "the mesh has no vertices";
-    if (m.normals.size() != n || m.tangents.size() != n || m.uvs.size() != n)
-        return "the mesh needs a normal, tangent and UV for each of its " + std::to_string(n) + " vertices";
-    if (m.indices.empty() || m.indices.size() % 3)
-        return "the mesh's index count " + std::to_string(m.indices.size()) + " is not a positive multiple of 3";
-    for (uint32_t i : m.indices)
-        if (i >= n)
-            return "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)";
-    if (!finite(m.positions) || !finite(m.normals) || !finite(m.tangents) || !finite(m.uvs))
-        return "the mesh has a non-finite attribute";
+    const size_t n = a.mesh.vertex_count();
+    if (std::string p = mesh_problem(a.mesh, MeshNeeds::Frames); !p.empty())
+        return p;
     if (a.order < 3 || a.order > 6)
         return "lighting order " + std::to_string(a.order) + " is not in [3, 6]";
     if (a.transfer_kind > 2)

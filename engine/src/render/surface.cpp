@@ -20,14 +20,8 @@ struct Vertex
 GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh)
 {
     const size_t n = mesh.positions.size();
-    if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3 != 0)
-        throw std::invalid_argument("hemi: a mesh needs vertices and a non-empty triangle list");
-    if (mesh.normals.size() != n || mesh.tangents.size() != n || mesh.uvs.size() != n)
-        throw std::invalid_argument("hemi: a mesh needs a normal, tangent and UV per vertex");
-    for (uint32_t i : mesh.indices)
-        if (i >= n)
-            throw std::invalid_argument("hemi: mesh index " + std::to_string(i) + " out of range (" +
-                                        std::to_string(n) + " vertices)");
+    if (std::string problem = io::mesh_problem(mesh, io::MeshNeeds::Frames); !problem.empty())
+        throw std::invalid_argument("hemi: " + problem);
     std::vector<Vertex> vertices(n);
     for (size_t i = 0; i < n; ++i)
         vertices[i] = {{mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z},

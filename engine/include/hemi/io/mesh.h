@@ -8,6 +8,7 @@
 #include <glm/vec4.hpp>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace hemi::io
@@ -23,6 +24,18 @@ struct Mesh
 
     size_t vertex_count() const { return positions.size(); }
 };
+
+// What a consumer of a mesh needs beyond positions and triangles.
+enum class MeshNeeds
+{
+    Normals, // a normal per vertex (the bake)
+    Frames,  // a normal, tangent and UV per vertex (materials, baked assets)
+};
+
+// The first problem with `mesh`, or an empty string: no vertices or triangles, an index count that is not a
+// multiple of 3, an index out of range, a missing attribute, a non-finite position or attribute. The one
+// check every reader, baker and renderer of meshes shares.
+std::string mesh_problem(const Mesh& mesh, MeshNeeds needs);
 
 // A UV sphere of radius `radius` centred at the origin, z up: u = phi / 2pi (around z, from +x),
 // v = theta / pi (from +z down). `segments` >= 3 around, `rings` >= 2 from pole to pole; the seam and the
