@@ -113,7 +113,7 @@ int main(int argc, char** argv)
     CLI::App app{"prt_normalmap: Sloan 2006's technique comparison, baked and rendered with hemi"};
     std::string out_dir = "prt_normalmap", image_path = "prt_normalmap.png", table_path = "prt_normalmap.md",
                 kinds_path = "prt_transfer_kinds.png";
-    int rays = 256, tile = 300;
+    int rays = 256, tile = 180;
     float detail = 1.0f, exposure = 0.6f, rotate = 30.0f;
     app.add_option("--dir", out_dir, "folder for the models, textures and baked assets")->capture_default_str();
     app.add_option("-o,--output", image_path, "comparison image (PNG)")->capture_default_str();
