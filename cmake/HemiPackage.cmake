@@ -1,8 +1,9 @@
-# Installation and the CMake package: find_package(hemi) + target_link_libraries(app hemi::hemi).
+# Installation and the CMake package: find_package(hemi) + target_link_libraries(app hemi::hemi)
+# (hemi::core for math + io alone, hemi::baker for the offline side); bin/ gets hemi-bake and hemi-render.
 include(CMakePackageConfigHelpers)
 
 set(HEMI_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/hemi)
-set(hemi_install_targets hemi)
+set(hemi_install_targets hemi_core hemi)
 if(TARGET hemi_baker)
     list(APPEND hemi_install_targets hemi_baker)
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/baker/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})

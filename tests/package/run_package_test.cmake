@@ -6,6 +6,13 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_
 if(rc)
     message(FATAL_ERROR "cmake --install failed (${rc})")
 endif()
+# The two command-line tools are part of the package.
+foreach(tool hemi-bake hemi-render)
+    execute_process(COMMAND ${WORK_DIR}/prefix/bin/${tool} --help RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+    if(rc)
+        message(FATAL_ERROR "the installed ${WORK_DIR}/prefix/bin/${tool} does not run (${rc})")
+    endif()
+endforeach()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -DCMAKE_BUILD_TYPE=Release
                         -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
                 RESULT_VARIABLE rc)

@@ -4,6 +4,8 @@
 #include <hemi/gpu/device.h>
 #include <hemi/render/transfer.h>
 
+#include <glm/vec4.hpp>
+
 #include <cstdio>
 #include <vector>
 
@@ -18,6 +20,11 @@ int main()
     std::vector<glm::vec3> light(l, glm::vec3(1.0f, 2.0f, 3.0f));
     std::vector<float> host(size_t(n) * k * 4);
     hemi::render::transfer_multiply_host(m, light, host);
+
+    // hemi exports no GLM settings: an engine's colour swizzles still compile against its headers.
+    const glm::vec4 colour(0.25f, 0.5f, 0.75f, 1.0f);
+    if (colour.r != 0.25f || colour.b != 0.75f)
+        return 1;
 
     hemi::gpu::Device device;
     hemi::render::TransferPass pass(device, m);
