@@ -31,6 +31,10 @@
 #include <hemi/bake/cpca.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/gpu/commands.h>
+#include <hemi/gpu/upload.h>
+#include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/material/material_instance.h>
 #include <hemi/render/prt_view.h>
 #include <hemi/gpu/device.h>
 #include <hemi/math/sh.h>
@@ -275,7 +279,7 @@ void table1(benchmark::State& state, std::string model_name, std::string techniq
     const Table1Model& model = table1_model(model_name);
     const hemi::io::PrtAsset asset = table1_asset(model, technique, cpca);
     const uint32_t w = 640, h = 480;
-    hemi::render::PrtView view(device, asset, "", technique, cpca, w, h);
+    hemi::render::PrtView view(device, asset, technique, cpca, w, h);
     hemi::render::PrtFrame frame;
     frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
     frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, float(w) / float(h));
@@ -352,6 +356,83 @@ void table1(benchmark::State& state, std::string model_name, std::string techniq
     }
 }
 
+// The material system's cost: the PRT material (gs, per-vertex coefficients, basis per pixel, normal and
+// base colour maps) against the trivial material (Technique::Constant: one colour, no texture, no
+// coefficient) on the same mesh at the same resolution, both timed by GPU timestamps in every iteration, so
+// `overhead_ratio` compares two draws of one run.
+void material_overhead(benchmark::State& state)
+{
+    hemi::gpu::Device& device = bench_device();
+    const Table1Model& model = table1_model("complex");
+    const hemi::io::PrtAsset asset = table1_asset(model, "gs", false);
+    const uint32_t w = 640, h = 480;
+    hemi::render::PrtView view(device, asset, "gs", false, w, h);
+    hemi::render::PrtFrame frame;
+    frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
+    frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, float(w) / float(h));
+
+    // The trivial material, drawn with the view's own material system, frame set and mesh.
+    hemi::render::MaterialSystem& system = view.materials();
+    hemi::gpu::UploadBatch upload(device);
+    const hemi::io::Material plain;
+    hemi::render::TextureSet textures(device, std::span<const hemi::io::EncodedImage>(),
+                                      std::span<const hemi::io::Material>(&plain, 1), upload);
+    hemi::render::MaterialInstance instance(system, textures, plain, upload);
+    hemi::render::ProbeCoefficients probe(system);
+    hemi::render::FrameSet constant_frame(system);
+    upload.submit_and_wait();
+    hemi::render::MaterialKey key;
+    key.technique = hemi::render::Technique::Constant;
+    key.source = hemi::render::CoefficientSourceKind::Uniform;
+    key.frame = hemi::render::ShadingFrame::World;
+    hemi::render::DrawBindings constant;
+    constant.type = &system.type(key);
+    constant.frame = constant_frame.set();
+    constant.material = instance.set();
+    constant.source = probe.set();
+    constant.push.model = frame.model;
+
+    hemi::gpu::CommandContext ctx(device);
+    hemi::gpu::TimestampQueries queries(device, 3);
+    auto record = [&](VkCommandBuffer cmd, bool timed) {
+        view.record_transfer(cmd, frame);
+        hemi::render::FrameData f;
+        f.view_projection = hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, float(w) / float(h));
+        constant_frame.record_update(cmd, f);
+        if (timed)
+            queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        view.record_raster(cmd);
+        if (timed)
+            queries.write(cmd, 1, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        view.target().begin(cmd);
+        hemi::render::bind_material(cmd, constant);
+        view.model().mesh().bind(cmd);
+        view.model().mesh().draw(cmd, 0, view.model().mesh().index_count());
+        view.target().end(cmd);
+        if (timed)
+            queries.write(cmd, 2, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+    };
+    for (int i = 0; i < 3; ++i) // warm-up
+        ctx.run([&](VkCommandBuffer cmd) { record(cmd, false); });
+    double prt = 0.0, trivial = 0.0;
+    for (auto _ : state)
+    {
+        VkCommandBuffer cmd = ctx.begin();
+        queries.reset(cmd);
+        record(cmd, true);
+        ctx.submit_and_wait();
+        const std::vector<double> ns = queries.read_ns();
+        prt += (ns[1] - ns[0]) * 1e-9;
+        trivial += (ns[2] - ns[1]) * 1e-9;
+        state.SetIterationTime((ns[2] - ns[0]) * 1e-9);
+    }
+    const double iters = double(state.iterations());
+    state.counters["vertices"] = double(asset.mesh.vertex_count());
+    state.counters["prt_ms"] = prt / iters * 1e3;
+    state.counters["constant_ms"] = trivial / iters * 1e3;
+    state.counters["overhead_ratio"] = prt / trivial;
+}
+
 void bake_complex(benchmark::State& state)
 {
     const hemi::io::Mesh mesh = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex);
@@ -409,6 +490,10 @@ int main(int argc, char** argv)
                     ->UseManualTime()
                     ->MinTime(0.2);
             }
+    benchmark::RegisterBenchmark("material/overhead/complex/640x480", material_overhead)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
+        ->MinTime(0.5);
     benchmark::RegisterBenchmark("bake/complex", bake_complex)->Unit(benchmark::kMillisecond)->UseManualTime()
         ->Iterations(2);
     benchmark::RunSpecifiedBenchmarks();

@@ -1,4 +1,9 @@
-# hemi_add_shaders(<target> SOURCES <glsl>... INCLUDE_DIRS <dir>...)
+# hemi_add_shaders(<target> SOURCES <glsl>... [VARIANTS <name>|<glsl>|<DEF=VAL,...>...] INCLUDE_DIRS <dir>...)
+#
+# VARIANTS compile one source several times with different preprocessor definitions, each embedded
+# under its own name (e.g. "surface_uniform_aux.frag|surface.frag|HEMI_SOURCE=2,HEMI_AUX=1"): the
+# material system's axes that change bindings or outputs are variants, those that change only code are
+# specialization constants.
 #
 # Compiles each GLSL file with glslangValidator into SPIR-V wrapped in a C header (--vn), and
 # generates <target>'s embedded shader table, so that applications need no shader files at run time.
@@ -7,7 +12,7 @@
 find_program(GLSLANG_VALIDATOR glslangValidator REQUIRED)
 
 function(hemi_add_shaders target)
-    cmake_parse_arguments(ARG "" "" "SOURCES;INCLUDE_DIRS" ${ARGN})
+    cmake_parse_arguments(ARG "" "" "SOURCES;VARIANTS;INCLUDE_DIRS" ${ARGN})
     set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spv)
     file(MAKE_DIRECTORY ${out_dir})
     set(include_flags)
@@ -18,14 +23,31 @@ function(hemi_add_shaders target)
     set(headers)
     set(table_includes "")
     set(table_entries "")
+    set(jobs)
     foreach(src ${ARG_SOURCES})
-        get_filename_component(abs ${src} ABSOLUTE)
         get_filename_component(name ${src} NAME)
+        list(APPEND jobs "${name}|${src}|")
+    endforeach()
+    list(APPEND jobs ${ARG_VARIANTS})
+    foreach(job ${jobs})
+        string(REPLACE "|" ";" parts "${job}")
+        list(LENGTH parts part_count)
+        list(GET parts 0 name)
+        list(GET parts 1 src)
+        set(define_flags)
+        if(part_count GREATER 2)
+            list(GET parts 2 defines)
+            string(REPLACE "," ";" defines "${defines}")
+            foreach(d ${defines})
+                list(APPEND define_flags -D${d})
+            endforeach()
+        endif()
+        get_filename_component(abs ${src} ABSOLUTE)
         string(MAKE_C_IDENTIFIER "hemi_spv_${name}" ident)
         set(header ${out_dir}/${name}.h)
         add_custom_command(
             OUTPUT ${header}
-            COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.1 ${include_flags}
+            COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.1 ${include_flags} ${define_flags}
                     --depfile ${header}.d --vn ${ident} -o ${header} ${abs}
             DEPENDS ${abs}
             DEPFILE ${header}.d

@@ -100,8 +100,10 @@ std::vector<std::string> split(const std::string& list)
 }
 
 void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::PrtAssetOptions& o,
-                       const std::string& asset)
+                       const std::string& scene, const std::string& asset)
 {
+    for (const std::string& w : s.warnings)
+        std::fprintf(stderr, "hemi-bake: warning: %s: %s\n", scene.c_str(), w.c_str());
     std::printf("baked %s: %u vertices, %u triangles, %s transfer, order %d (L = %d)", asset.c_str(), s.vertices,
                 s.triangles, std::string(hemi::bake::to_string(o.bake.kind)).c_str(), o.bake.order,
                 o.bake.order * o.bake.order);
@@ -110,13 +112,10 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
     if (o.bake.kind == hemi::bake::TransferKind::Interreflected)
         std::printf(", %d bounces, albedo %.2f", o.bake.bounces, o.bake.albedo);
     std::printf("\n");
+    std::printf("surfaces: %zu material(s), %zu primitive(s), %zu image(s) embedded in the asset\n",
+                s.materials, s.primitives, s.images);
     if (s.tangents_generated)
         std::printf("tangents were generated from the UV layout (the scene has none)\n");
-    if (s.ignored_material_primitives)
-        std::fprintf(stderr,
-                     "hemi-bake prt: warning: %zu primitive(s) use other materials than the first; their geometry is "
-                     "baked, but the asset references the first material's textures only\n",
-                     s.ignored_material_primitives);
     if (s.resumed)
         std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1, s.resumed_vertex);
     if (!s.checkpoint_error.empty())
@@ -203,7 +202,7 @@ int main(int argc, char** argv)
             }
             ProgressLine line;
             hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
-            print_prt_summary(s, prt_options, asset);
+            print_prt_summary(s, prt_options, scene, asset);
             if (!prt_json.empty())
             {
                 hemi::bake::write_prt_bake_json(prt_json, s, prt_options);

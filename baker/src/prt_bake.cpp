@@ -562,7 +562,12 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     asset.rays = options.bake.kind == TransferKind::Unshadowed ? 0 : uint32_t(options.bake.rays);
     asset.seed = options.bake.seed;
     asset.albedo = options.bake.albedo;
+    asset.materials = {io::Material{}};
+    asset.materials[0].name = "default";
+    asset.primitives = {io::Primitive{0, uint32_t(mesh.indices.size()), 0}};
     summary = {};
+    summary.materials = 1;
+    summary.primitives = 1;
     summary.vertices = uint32_t(mesh.vertex_count());
     summary.triangles = uint32_t(mesh.indices.size() / 3);
     summary.rays = transfer.rays_traced;
@@ -609,17 +614,15 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     PrtAssetOptions o = options;
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = asset_path.string() + ".partial";
-    io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress);
+    io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress); // scene.mesh: uvs1 included
     summary.tangents_generated = scene.tangents_generated;
-    summary.ignored_material_primitives = scene.ignored_material_primitives;
-    const std::filesystem::path folder = std::filesystem::absolute(asset_path).parent_path();
-    auto reference = [&](const std::filesystem::path& texture) -> std::string {
-        if (texture.empty())
-            return {};
-        return std::filesystem::absolute(texture).lexically_relative(folder).generic_string();
-    };
-    asset.base_color_texture = reference(scene.base_color_texture);
-    asset.normal_texture = reference(scene.normal_texture);
+    asset.materials = scene.materials;
+    asset.images = scene.images;
+    asset.primitives = scene.primitives;
+    summary.materials = asset.materials.size();
+    summary.primitives = asset.primitives.size();
+    summary.images = asset.images.size();
+    summary.warnings = scene.warnings;
     io::write_prt_asset(asset_path, asset);
     std::error_code ignored;
     std::filesystem::remove(o.bake.checkpoint, ignored); // the finished work is in the asset now
@@ -638,7 +641,10 @@ void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary
     j["vertices"] = s.vertices;
     j["triangles"] = s.triangles;
     j["tangents_generated"] = s.tangents_generated;
-    j["ignored_material_primitives"] = s.ignored_material_primitives;
+    j["materials"] = s.materials;
+    j["primitives"] = s.primitives;
+    j["images"] = s.images;
+    j["warnings"] = s.warnings;
     j["rays"] = s.rays;
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;

@@ -77,7 +77,7 @@ int main(int argc, char** argv)
                              message.data());
         };
         hemi::gpu::Device device(desc);
-        hemi::render::PrtView view(device, asset, asset_path, technique, cpca, w, h);
+        hemi::render::PrtView view(device, asset, technique, cpca, w, h);
         hemi::render::PrtFrame frame;
         frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
         frame.rotate_degrees = rotate;

@@ -159,7 +159,7 @@ int main(int argc, char** argv)
             std::vector<hemi::io::ImageRgba> images;
             for (const Column& c : kColumns)
             {
-                hemi::render::PrtView view(device, asset, asset_path, c.technique, c.cpca, t, t);
+                hemi::render::PrtView view(device, asset, c.technique, c.cpca, t, t);
                 images.push_back(view.render(frame));
             }
             const hemi::io::ImageRgba& gold = images[1];
@@ -199,7 +199,7 @@ int main(int argc, char** argv)
                              std::string(hemi::bake::to_string(kind)).c_str(), bounces);
                 hemi::bake::bake_prt_file(gltf, asset_path, options);
                 const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
-                hemi::render::PrtView view(device, asset, asset_path, "gs", false, kt, kt);
+                hemi::render::PrtView view(device, asset, "gs", false, kt, kt);
                 hemi::render::PrtFrame frame;
                 frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
                 frame.rotate_degrees = rotate;

@@ -3,7 +3,11 @@
 #include <hemi/bake/normal_map.h>
 #include <hemi/gpu/commands.h>
 #include <hemi/render/offscreen.h>
-#include <hemi/render/sh_normalmap.h>
+#include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/material/material_instance.h>
+#include <hemi/render/prt_view.h>
+#include <hemi/render/scene/gpu_mesh.h>
 
 #include <algorithm>
 #include <cmath>
@@ -63,18 +67,42 @@ ShNormalMapScene make_sh_normalmap_scene(Environment environment)
 io::ImageRgba render_sh_normalmap(const gpu::Device& device, const ShNormalMapScene& scene, uint32_t width,
                                   uint32_t height, io::ImageRgba* aux)
 {
+    // The SH9 probe material of the material system: world-frame SH9 irradiance from a uniform source,
+    // evaluated at the normal-map normal turned into world space.
     render::OffscreenTarget target(device, width, height);
-    render::ShNormalMapRenderer renderer(device, target, scene.mesh, scene.normal_map, scene.map_width,
-                                         scene.map_height);
-    render::ShNormalMapFrame frame;
-    frame.view_projection =
-        render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(width) / float(height));
-    frame.albedo = scene.albedo;
-    frame.irradiance = scene.irradiance;
+    render::MaterialSystem system(device, target.desc());
+    gpu::UploadBatch upload(device);
+    render::GpuMesh mesh(device, scene.mesh, upload);
+    io::Material material;
+    material.base_color_factor = glm::vec4(scene.albedo, 1.0f);
+    material.normal.image = 0;
+    material.normal.sampler.mipmaps = false; // bilinear from mip 0 (glTF minFilter LINEAR), as the test's CPU reference
+    const io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
+    render::TextureSet textures(device, std::span<const io::ImageRgba8>(&normal_map, 1),
+                                std::span<const io::Material>(&material, 1), upload);
+    render::MaterialInstance instance(system, textures, material, upload);
+    render::ProbeCoefficients probe(system);
+    render::FrameSet frame(system);
+    render::MaterialKey key;
+    key.source = render::CoefficientSourceKind::Uniform;
+    key.basis = HEMI_BASIS_SH9;
+    key.frame = render::ShadingFrame::World;
+    render::DrawBindings draw;
+    draw.type = &system.type(key);
+    draw.frame = frame.set();
+    draw.material = instance.set();
+    draw.source = probe.set();
+    draw.push.model = glm::mat4(1.0f);
     gpu::one_shot(device, [&](VkCommandBuffer cmd) {
-        renderer.update(cmd, frame);
+        upload.record(cmd);
+        render::FrameData f;
+        f.view_projection = render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(width) / float(height));
+        frame.record_update(cmd, f);
+        probe.record_update(cmd, scene.irradiance);
         target.begin(cmd, glm::vec4(0.0f));
-        renderer.draw(cmd);
+        render::bind_material(cmd, draw);
+        mesh.bind(cmd);
+        mesh.draw(cmd, 0, mesh.index_count());
         target.end(cmd);
     });
     if (aux)

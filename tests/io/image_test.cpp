@@ -9,9 +9,12 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 namespace fs = std::filesystem;
 
@@ -174,4 +177,239 @@ TEST(ExrReader, PlacesTheDataWindowInsideTheDisplayWindow)
     EXPECT_EQ(img.at(5, 2)[0], 8.0f);
     EXPECT_EQ(img.at(2, 1)[3], 1.0f); // missing alpha reads as 1 inside the data window
     EXPECT_EQ(img.at(7, 3)[3], 0.0f); // and 0 outside it
+}
+
+// ---- 8-bit textures: PNG and JPEG decoding (the images glTF scenes and assets carry) ----
+
+namespace
+{
+uint32_t crc32_of(const uint8_t* p, size_t n)
+{
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i)
+    {
+        c ^= p[i];
+        for (int k = 0; k < 8; ++k)
+            c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return c ^ 0xFFFFFFFFu;
+}
+
+void put_be32(std::vector<uint8_t>& out, uint32_t v)
+{
+    for (int s = 24; s >= 0; s -= 8)
+        out.push_back(uint8_t(v >> s));
+}
+
+void put_chunk(std::vector<uint8_t>& out, const char* type, const std::vector<uint8_t>& data)
+{
+    put_be32(out, uint32_t(data.size()));
+    const size_t at = out.size();
+    out.insert(out.end(), type, type + 4);
+    out.insert(out.end(), data.begin(), data.end());
+    put_be32(out, crc32_of(out.data() + at, 4 + data.size()));
+}
+
+// A PNG written by hand (stb_image_write writes 8-bit RGBA only): `rows` are the raw scanlines without their
+// filter byte; the image data is zlib with stored (uncompressed) blocks. `empty_idat` puts a zero-length IDAT
+// chunk before the data, which the PNG specification allows.
+std::vector<uint8_t> handmade_png(uint32_t w, uint32_t h, uint8_t depth, uint8_t colour_type,
+                                  const std::vector<std::vector<uint8_t>>& rows, bool empty_idat = false)
+{
+    std::vector<uint8_t> raw;
+    for (const auto& row : rows)
+    {
+        raw.push_back(0); // filter: none
+        raw.insert(raw.end(), row.begin(), row.end());
+    }
+    std::vector<uint8_t> z = {0x78, 0x01};
+    for (size_t at = 0; at < raw.size() || at == 0; at += 65535)
+    {
+        const size_t n = std::min<size_t>(65535, raw.size() - at);
+        z.push_back(at + n == raw.size() ? 1 : 0);
+        z.push_back(uint8_t(n)), z.push_back(uint8_t(n >> 8));
+        z.push_back(uint8_t(~n)), z.push_back(uint8_t(~n >> 8));
+        z.insert(z.end(), raw.begin() + long(at), raw.begin() + long(at + n));
+        if (raw.empty())
+            break;
+    }
+    uint32_t a = 1, b = 0;
+    for (uint8_t c : raw)
+        a = (a + c) % 65521, b = (b + a) % 65521;
+    put_be32(z, b << 16 | a);
+    std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::vector<uint8_t> ihdr;
+    put_be32(ihdr, w);
+    put_be32(ihdr, h);
+    ihdr.insert(ihdr.end(), {depth, colour_type, 0, 0, 0});
+    put_chunk(png, "IHDR", ihdr);
+    if (empty_idat)
+        put_chunk(png, "IDAT", {});
+    put_chunk(png, "IDAT", z);
+    put_chunk(png, "IEND", {});
+    return png;
+}
+
+hemi::io::EncodedImage encoded(const std::string& name, const std::string& mime, std::vector<uint8_t> bytes)
+{
+    return {name, mime, std::move(bytes)};
+}
+
+void expect_decode_error(const hemi::io::EncodedImage& image, const std::string& part)
+{
+    try
+    {
+        hemi::io::decode_image(image);
+        ADD_FAILURE() << image.name << " was decoded; expected an error about '" << part << "'";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(image.name), std::string::npos) << what;
+        EXPECT_NE(what.find(part), std::string::npos) << what;
+    }
+}
+
+hemi::io::ImageRgba8 smooth(uint32_t w, uint32_t h)
+{
+    hemi::io::ImageRgba8 img{w, h, std::vector<uint8_t>(size_t(w) * h * 4)};
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+        {
+            uint8_t* p = &img.pixels[(size_t(y) * w + x) * 4];
+            p[0] = uint8_t(30 + 150 * x / w), p[1] = uint8_t(200 - 100 * y / h),
+            p[2] = uint8_t(90 + (x + y) % 8);
+            p[3] = 255;
+        }
+    return img;
+}
+} // namespace
+
+TEST(ImageDecode, PngIsExactAndJpegIsClose)
+{
+    hemi::io::ImageRgba8 img{7, 5, std::vector<uint8_t>(7 * 5 * 4)};
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+        img.pixels[i] = uint8_t(i * 53 % 251);
+    const hemi::io::ImageRgba8 png =
+        hemi::io::decode_image(encoded("a.png", "image/png", hemi::io::encode_png(img)));
+    EXPECT_EQ(png.width, 7u);
+    EXPECT_EQ(png.height, 5u);
+    EXPECT_EQ(png.pixels, img.pixels);
+
+    const hemi::io::ImageRgba8 want = smooth(32, 24);
+    const hemi::io::ImageRgba8 jpeg =
+        hemi::io::decode_image(encoded("a.jpg", "image/jpeg", hemi::io::encode_jpeg(want, 95)));
+    ASSERT_EQ(jpeg.width, 32u);
+    ASSERT_EQ(jpeg.height, 24u);
+    double sum = 0.0;
+    int worst = 0;
+    for (size_t i = 0; i < want.pixels.size(); ++i)
+    {
+        const int e = std::abs(int(jpeg.pixels[i]) - int(want.pixels[i]));
+        worst = std::max(worst, e);
+        sum += e;
+    }
+    EXPECT_LE(worst, 10);
+    EXPECT_LT(sum / double(want.pixels.size()), 2.0);
+    EXPECT_EQ(jpeg.pixels[3], 255) << "JPEG has no alpha: opaque";
+    // An empty mime type means "by the signature".
+    EXPECT_EQ(hemi::io::decode_image(encoded("b.png", "", hemi::io::encode_png(img))).pixels, img.pixels);
+}
+
+// Grey and RGB get alpha 255; 16-bit samples are rounded to 8 bits (511 -> 2, which truncation makes 1).
+TEST(ImageDecode, ExpandsChannelsAndRounds16BitSamples)
+{
+    const std::vector<uint8_t> grey = handmade_png(3, 1, 8, 0, {{0, 128, 255}});
+    const hemi::io::ImageRgba8 g = hemi::io::decode_image(encoded("grey.png", "image/png", grey));
+    EXPECT_EQ(g.pixels, (std::vector<uint8_t>{0, 0, 0, 255, 128, 128, 128, 255, 255, 255, 255, 255}));
+    const std::vector<uint8_t> rgb = handmade_png(2, 1, 8, 2, {{1, 2, 3, 4, 5, 6}});
+    EXPECT_EQ(hemi::io::decode_image(encoded("rgb.png", "image/png", rgb)).pixels,
+              (std::vector<uint8_t>{1, 2, 3, 255, 4, 5, 6, 255}));
+
+    // RGBA, 16 bits per sample, big-endian: 0, 65535, 511 (-> 2), 32896 (-> 128) / 0x7F7F (-> 127), 257 (->
+    // 1), 65279 (-> 254), 1000 (-> 4).
+    const std::vector<uint16_t> samples = {0, 65535, 511, 32896, 0x7F7F, 257, 65279, 1000};
+    std::vector<uint8_t> row;
+    for (uint16_t s : samples)
+        row.push_back(uint8_t(s >> 8)), row.push_back(uint8_t(s));
+    const std::vector<uint8_t> wide = handmade_png(2, 1, 16, 6, {row});
+    const hemi::io::ImageRgba8 w = hemi::io::decode_image(encoded("wide.png", "image/png", wide));
+    ASSERT_EQ(w.width, 2u);
+    std::vector<uint8_t> want;
+    for (uint16_t s : samples)
+        want.push_back(uint8_t(std::lround(double(s) * 255.0 / 65535.0)));
+    EXPECT_EQ(w.pixels, want);
+    EXPECT_EQ(w.pixels[2], 2);
+    // A 16-bit grey image.
+    const std::vector<uint8_t> grey16 = handmade_png(1, 2, 16, 0, {{0x01, 0xFF}, {0xFF, 0xFF}});
+    EXPECT_EQ(hemi::io::decode_image(encoded("grey16.png", "image/png", grey16)).pixels,
+              (std::vector<uint8_t>{2, 2, 2, 255, 255, 255, 255, 255}));
+    // A zero-length IDAT chunk before the data is legal PNG (and would make stb copy to a null pointer).
+    const std::vector<uint8_t> empty_first = handmade_png(3, 1, 8, 0, {{0, 128, 255}}, true);
+    EXPECT_EQ(hemi::io::decode_image(encoded("empty_idat.png", "image/png", empty_first)).pixels, g.pixels);
+}
+
+TEST(ImageDecode, RefusesBrokenImagesNamingThem)
+{
+    hemi::io::ImageRgba8 img{6, 4, std::vector<uint8_t>(6 * 4 * 4, 77)};
+    const std::vector<uint8_t> png = hemi::io::encode_png(img);
+    const std::vector<uint8_t> jpeg = hemi::io::encode_jpeg(smooth(16, 16), 90);
+    expect_decode_error(encoded("empty.png", "image/png", {}), "empty image (0 bytes)");
+    expect_decode_error(encoded("anim.gif", "image/gif", {'G', 'I', 'F', '8', '9', 'a', 1, 0, 1, 0}),
+                        "neither a PNG nor a JPEG");
+    expect_decode_error(encoded("liar.jpg", "image/jpeg", png),
+                        "declared image/jpeg, but the bytes are image/png");
+    expect_decode_error(encoded("liar.png", "image/png", jpeg),
+                        "declared image/png, but the bytes are image/jpeg");
+    // Every truncation of either format (the signature kept) is refused, none decoded to a partial image.
+    for (const auto& [name, mime, bytes] :
+         {std::tuple{"cut.png", "image/png", png}, std::tuple{"cut.jpg", "image/jpeg", jpeg}})
+        for (size_t n = 8; n < bytes.size(); ++n)
+        {
+            const hemi::io::EncodedImage cut =
+                encoded(name, mime, std::vector<uint8_t>(bytes.begin(), bytes.begin() + long(n)));
+            EXPECT_THROW(hemi::io::decode_image(cut), hemi::io::FormatError)
+                << name << " cut to " << n << " bytes";
+        }
+    expect_decode_error(encoded("cut.png", "image/png", std::vector<uint8_t>(png.begin(), png.end() - 5)),
+                        "truncated PNG");
+    expect_decode_error(encoded("cut.jpg", "image/jpeg", std::vector<uint8_t>(jpeg.begin(), jpeg.end() - 2)),
+                        "truncated JPEG");
+    // A flipped bit inside the image data: the chunk's CRC no longer matches.
+    std::vector<uint8_t> flipped = png;
+    flipped[png.size() - 20] ^= 0x04;
+    expect_decode_error(encoded("flipped.png", "image/png", flipped), "fails its CRC check");
+    // A zero-sized image, and a first chunk that is not IHDR.
+    expect_decode_error(encoded("zero.png", "image/png", handmade_png(0, 1, 8, 0, {})), "0x1 pixels (empty)");
+    std::vector<uint8_t> no_ihdr = handmade_png(3, 1, 8, 0, {{1, 2, 3}});
+    std::memcpy(no_ihdr.data() + 12, "ABCD", 4);
+    expect_decode_error(encoded("no_ihdr.png", "image/png", no_ihdr), "corrupt PNG");
+    // A chunk length that points far beyond the file.
+    std::vector<uint8_t> long_chunk = png;
+    long_chunk[8] = 0x7F;
+    expect_decode_error(encoded("long_chunk.png", "image/png", long_chunk), "truncated PNG");
+}
+
+TEST(ImageDecode, EncodedFilesAreTypedByTheirSignature)
+{
+    hemi::io::ImageRgba8 img{2, 2, std::vector<uint8_t>(16, 200)};
+    const fs::path misnamed = temp_dir() / "really_a_png.jpg";
+    hemi::io::write_png(misnamed, img);
+    const hemi::io::EncodedImage e = hemi::io::read_encoded_image(misnamed);
+    EXPECT_EQ(e.mime_type, "image/png");
+    EXPECT_EQ(e.name, misnamed.string());
+    EXPECT_EQ(hemi::io::decode_image(e).pixels, img.pixels);
+    const fs::path jpeg = temp_dir() / "photo.png";
+    const std::vector<uint8_t> jpeg_bytes = hemi::io::encode_jpeg(img, 80);
+    std::ofstream(jpeg, std::ios::binary)
+        .write(reinterpret_cast<const char*>(jpeg_bytes.data()), long(jpeg_bytes.size()));
+    EXPECT_EQ(hemi::io::read_encoded_image(jpeg).mime_type, "image/jpeg");
+    EXPECT_THROW(hemi::io::read_png(jpeg), hemi::io::FormatError);
+    const fs::path text = temp_dir() / "notes.png";
+    std::ofstream(text) << "hello";
+    EXPECT_THROW(hemi::io::read_encoded_image(text), hemi::io::FormatError);
+    EXPECT_THROW(hemi::io::read_encoded_image(temp_dir() / "absent.png"), hemi::io::FormatError);
+    EXPECT_THROW(hemi::io::encode_jpeg(img, 0), std::invalid_argument);
+    EXPECT_THROW(hemi::io::encode_png(hemi::io::ImageRgba8{2, 2, std::vector<uint8_t>(3)}),
+                 std::invalid_argument);
 }

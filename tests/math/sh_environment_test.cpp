@@ -5,6 +5,7 @@
 #include <hemi/math/sh_environment.h>
 
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,7 +27,8 @@ std::vector<float> equirect_of(uint32_t w, uint32_t h, glm::vec3 (*f)(const glm:
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x)
         {
-            double theta = M_PI * (y + 0.5) / h, phi = 2 * M_PI * (x + 0.5) / w;
+            // Blender's mapping, inverted: u = 0.5 - phi / 2pi, v (up) = 1 - theta / pi.
+            double theta = M_PI * (y + 0.5) / h, phi = M_PI - 2 * M_PI * (x + 0.5) / w;
             glm::vec3 d(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
                         float(std::cos(theta)));
             glm::vec3 l = f(d);
@@ -89,6 +91,31 @@ TEST(EnvironmentProjection, ImagesAgreeWithAnalyticProjection)
             EXPECT_NEAR(eq[i][ch], exact[i][ch], 2e-3) << "equirect coefficient " << i;
             EXPECT_NEAR(cube[i][ch], exact[i][ch], 2e-3) << "cube coefficient " << i;
         }
+}
+
+// A bright spot placed where Blender's world mapping puts direction d (Cycles' direction_to_equirectangular:
+// u = 0.5 - atan2(d.y, d.x) / 2pi, v = 1 - acos(d.z) / pi, v measured up the image) must come out of the
+// projection pointing along d: the linear band of SH is a dipole along the mean direction, (-c3, -c1, c2) in
+// hemi's sign convention. A mirrored azimuth (the pre-Blender mapping) turns (x, y) into (x, -y).
+TEST(EquirectProjection, BrightSpotLandsWhereBlenderShowsIt)
+{
+    const uint32_t w = 512, h = 256;
+    for (glm::vec3 d : {glm::normalize(glm::vec3(0.3f, 0.8f, 0.4f)), glm::normalize(glm::vec3(-0.7f, -0.2f, -0.3f)),
+                        glm::normalize(glm::vec3(0.9f, -0.4f, 0.1f))})
+    {
+        const double u = 0.5 - std::atan2(double(d.y), double(d.x)) / (2 * M_PI);
+        const double v = 1.0 - std::acos(double(d.z)) / M_PI;
+        const int cx = int(u * w), cy = int((1.0 - v) * h); // image rows go down, Blender's v goes up
+        std::vector<float> px(size_t(w) * h * 4, 0.0f);
+        for (int y = cy - 1; y <= cy + 1; ++y)
+            for (int x = cx - 1; x <= cx + 1; ++x)
+                px[(size_t(y) * w + size_t((x + w) % w)) * 4] = 1000.0f;
+        const std::vector<glm::vec3> c = project_equirect(2, w, h, px);
+        const glm::vec3 dipole = glm::normalize(glm::vec3(-c[3].x, -c[1].x, c[2].x));
+        EXPECT_GT(glm::dot(dipole, d), std::cos(glm::radians(1.0f)))
+            << "spot for (" << d.x << ", " << d.y << ", " << d.z << ") came out along (" << dipole.x << ", " << dipole.y
+            << ", " << dipole.z << ")";
+    }
 }
 
 TEST(EnvironmentProjection, RejectsBadSizesAndNaN)

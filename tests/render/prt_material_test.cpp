@@ -12,9 +12,11 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/offscreen.h>
-#include <hemi/render/prt_material.h>
-#include <hemi/render/sh_normalmap.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/prt_view.h>
 #include <hemi/render/transfer.h>
+
+#include "surface_object.h"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/packing.hpp>
@@ -52,16 +54,20 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
                                      folded_matrices(scene.mesh, basis));
     hemi::render::TransferPass pass(dev, m);
     hemi::render::OffscreenTarget target(dev, w, h);
+    hemi::render::MaterialSystem system(dev, target.desc());
     const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
-    hemi::render::PrtMaterialRenderer material(dev, target, scene.mesh, normal_map, nullptr, basis, pass);
-    hemi::render::PrtMaterialFrame frame;
-    frame.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
-    frame.albedo = albedo;
+    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(albedo), basis, &pass);
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
     hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
+        object.upload.record(cmd);
         pass.record(cmd, lighting);
-        material.update(cmd, frame);
+        hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                                  VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+        frame.record_update(cmd, f);
         target.begin(cmd);
-        material.draw(cmd);
+        object.draw(cmd, frame.set());
         target.end(cmd);
     });
     return {target.read_color(), target.read_aux()};
@@ -238,16 +244,22 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
                                      folded_matrices(scene.mesh, basis));
     hemi::render::TransferPass pass(dev, m);
     const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
-    hemi::render::PrtMaterialRenderer material(dev, hemi::render::SurfacePass{render_pass, 0, 1}, scene.mesh,
-                                               normal_map, nullptr, basis, pass);
-    hemi::render::PrtMaterialFrame frame;
-    frame.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    hemi::render::RenderTargetDesc target;
+    target.render_pass = render_pass;
+    target.color_attachments = 1;
+    hemi::render::MaterialSystem system(dev, target);
+    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(glm::vec3(1.0f)), basis,
+                                     &pass);
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
     const float clear[4] = {0.25f, 0.5f, 0.75f, 1.0f};
     hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
         pass.record(cmd, lighting);
         hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                                   VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-        material.update(cmd, frame);
+        object.upload.record(cmd);
+        frame.record_update(cmd, f);
         VkClearValue clears[2];
         std::memcpy(clears[0].color.float32, clear, sizeof clear);
         clears[1].depthStencil = {1.0f, 0};
@@ -262,7 +274,7 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
         VkRect2D scissor{{0, 0}, {w, h}};
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         vkCmdSetScissor(cmd, 0, 1, &scissor);
-        material.draw(cmd);
+        object.draw(cmd, frame.set());
         vkCmdEndRenderPass(cmd);
     });
     const std::vector<std::byte> bytes = hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);

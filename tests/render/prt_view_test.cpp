@@ -56,7 +56,7 @@ Baked bake(hemi::samples::PrtModel model, float detail, const hemi::bake::PrtAss
 hemi::io::ImageRgba render(const Baked& b, const std::string& technique, bool cpca, const std::string& env,
                            bool white, uint32_t w = 160, uint32_t h = 120)
 {
-    hemi::render::PrtView view(hemi::test::device(), b.asset, b.path, technique, cpca, w, h);
+    hemi::render::PrtView view(hemi::test::device(), b.asset, technique, cpca, w, h);
     hemi::render::PrtFrame frame;
     frame.world_lighting = hemi::render::environment_lighting(env, int(b.asset.order));
     frame.rotate_degrees = 40.0f;
@@ -302,7 +302,7 @@ TEST_F(PrtView, LightingIsTurnedIntoObjectSpace)
     o.bake.order = 6;
     o.techniques = {"gs"};
     const Baked b = bake(hemi::samples::PrtModel::Simple, 0.3f, o, "turn");
-    hemi::render::PrtView view(hemi::test::device(), b.asset, b.path, "gs", false, 8, 8);
+    hemi::render::PrtView view(hemi::test::device(), b.asset, "gs", false, 8, 8);
     const glm::vec3 w = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
     hemi::render::PrtFrame frame;
     frame.world_lighting = hemi::math::project_sh(6, [&](const glm::vec3& d) {
@@ -359,15 +359,19 @@ TEST_F(PrtView, RefusesWhatTheAssetDoesNotHold)
     EXPECT_THROW(render(b, "gs", false, "sky", false), std::invalid_argument);
     EXPECT_THROW(render(b, "hl2", true, "sky", false), std::invalid_argument);
     EXPECT_THROW(render(b, "hl2", false, (dir() / "no_such.exr").string(), false), hemi::io::FormatError);
-    hemi::io::PrtAsset missing_texture = b.asset;
-    missing_texture.normal_texture = "gone.png";
+    // The asset carries its images: a corrupt one (signature intact, a bit flipped inside; a checksummed .hemi
+    // file never holds one, a PrtAsset made in memory can) is refused naming the image.
+    hemi::io::PrtAsset corrupt_image = b.asset;
+    ASSERT_FALSE(corrupt_image.images.empty());
+    hemi::io::EncodedImage& image = corrupt_image.images.back();
+    image.bytes[image.bytes.size() / 2] ^= 0x20;
     try
     {
-        hemi::render::PrtView view(hemi::test::device(), missing_texture, b.path, "hl2", false, 32, 32);
-        ADD_FAILURE() << "a missing normal map was accepted";
+        hemi::render::PrtView view(hemi::test::device(), corrupt_image, "hl2", false, 32, 32);
+        ADD_FAILURE() << "a corrupt embedded image was accepted";
     }
     catch (const hemi::io::FormatError& e)
     {
-        EXPECT_NE(std::string(e.what()).find("gone.png"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(image.name), std::string::npos) << e.what();
     }
 }

@@ -84,6 +84,14 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_EQ(report["order"], 4);
     EXPECT_EQ(report["techniques"].size(), 7u);
     EXPECT_GT(report["techniques"][0]["cpca_rms_error"].get<double>(), 0.0);
+    // The surfaces the asset carries: the sample's one material, one primitive and two PNGs; nothing
+    // simplified.
+    EXPECT_EQ(report["materials"], 1);
+    EXPECT_EQ(report["primitives"], 1);
+    EXPECT_EQ(report["images"], 2);
+    ASSERT_TRUE(report["warnings"].is_array());
+    EXPECT_TRUE(report["warnings"].empty()) << report["warnings"];
+    EXPECT_EQ(b.err.find("warning"), std::string::npos) << b.err;
 
     const fs::path exr = dir() / "white.exr";
     const Result r = render(q(asset) + " --technique h4 --env uniform --white --size 96x64 -o " + q(exr));
@@ -129,6 +137,26 @@ TEST(Cli, BakeThenRenderEndToEnd)
                                        "--camera 0,-4,1,0,0,0 -o " + q(png));
     ASSERT_EQ(c.status, 0) << c.err;
     EXPECT_EQ(hemi::io::read_png(png).width, 64u);
+}
+
+// What the scene reader simplifies is printed as a warning naming the file, and listed in the JSON report.
+TEST(Cli, BakeWarnsAboutWhatTheSceneReaderSimplifies)
+{
+    nlohmann::json scene = nlohmann::json::parse(slurp(knot()));
+    scene["materials"][0]["alphaMode"] = "BLEND";
+    const fs::path blend = knot().parent_path() / "blend.gltf"; // beside the knot's textures
+    std::ofstream(blend) << scene.dump();
+    const fs::path asset = dir() / "blend.hemi", json = dir() / "blend.json";
+    const Result r =
+        bake(q(blend) + " -o " + q(asset) + " --bases prt --transfer unshadowed --order 3 --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("hemi-bake: warning: " + blend.string() + ": alphaMode BLEND drawn opaque"),
+              std::string::npos)
+        << r.err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(json));
+    ASSERT_EQ(report["warnings"].size(), 1u);
+    EXPECT_NE(report["warnings"][0].get<std::string>().find("alphaMode BLEND"), std::string::npos);
+    EXPECT_EQ(hemi::io::read_prt_asset(asset).images.size(), 2u);
 }
 
 TEST(Cli, SameSeedSameBytes)

@@ -164,7 +164,12 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = desc.application_name.c_str();
     app.pEngineName = "hemi";
-    app.apiVersion = VK_API_VERSION_1_1;
+    // The highest version hemi uses (1.3 for dynamic rendering); it still runs on 1.1 devices.
+    uint32_t loader_version = VK_API_VERSION_1_0;
+    if (auto enumerate = reinterpret_cast<PFN_vkEnumerateInstanceVersion>(
+            vkGetInstanceProcAddr(nullptr, "vkEnumerateInstanceVersion")))
+        enumerate(&loader_version);
+    app.apiVersion = loader_version >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_1;
 
     VkDebugUtilsMessengerCreateInfoEXT messenger_info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
     messenger_info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
@@ -208,6 +213,21 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         queue_info.pQueuePriorities = &priority;
 
         VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        VkPhysicalDeviceProperties props{};
+        vkGetPhysicalDeviceProperties(physical_device_, &props);
+        VkPhysicalDeviceVulkan13Features features13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+        if (app.apiVersion >= VK_API_VERSION_1_3 && props.apiVersion >= VK_API_VERSION_1_3)
+        {
+            VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+            features.pNext = &features13;
+            vkGetPhysicalDeviceFeatures2(physical_device_, &features);
+            const bool dynamic = features13.dynamicRendering;
+            features13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+            features13.dynamicRendering = dynamic;
+            dynamic_rendering_ = dynamic;
+            if (dynamic)
+                device_info.pNext = &features13;
+        }
         device_info.queueCreateInfoCount = 1;
         device_info.pQueueCreateInfos = &queue_info;
         HEMI_VK_CHECK(vkCreateDevice(physical_device_, &device_info, nullptr, &device_));
@@ -232,7 +252,8 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
 
 Device::Device(const ExternalDevice& external)
     : instance_(external.instance), physical_device_(external.physical_device), device_(external.device),
-      queue_(external.queue), queue_family_(external.queue_family), owns_(false), log_(external.log)
+      queue_(external.queue), queue_family_(external.queue_family), owns_(false),
+      dynamic_rendering_(external.dynamic_rendering), log_(external.log)
 {
     if (!instance_ || !physical_device_ || !device_ || !queue_)
         throw std::invalid_argument("hemi: ExternalDevice needs instance, physical_device, device and queue");

@@ -41,12 +41,8 @@ ShaderModule create_shader_module(const Device& device, std::span<const uint32_t
     return ShaderModule(device.device(), module);
 }
 
-namespace
+DescriptorSetLayout create_set_layout(const Device& device, const std::vector<Binding>& bindings)
 {
-
-void create_layouts(const Device& device, const std::vector<Binding>& bindings, uint32_t push_size, Program& p)
-{
-    VkDevice d = device.device();
     std::vector<VkDescriptorSetLayoutBinding> vk_bindings;
     for (const Binding& b : bindings)
         vk_bindings.push_back({b.binding, b.type, b.count, b.stages, nullptr});
@@ -54,13 +50,29 @@ void create_layouts(const Device& device, const std::vector<Binding>& bindings, 
     set_info.bindingCount = uint32_t(vk_bindings.size());
     set_info.pBindings = vk_bindings.data();
     VkDescriptorSetLayout set_layout;
-    HEMI_VK_CHECK(vkCreateDescriptorSetLayout(d, &set_info, nullptr, &set_layout));
-    p.set_layout = DescriptorSetLayout(d, set_layout);
+    HEMI_VK_CHECK(vkCreateDescriptorSetLayout(device.device(), &set_info, nullptr, &set_layout));
+    return DescriptorSetLayout(device.device(), set_layout);
+}
+
+namespace
+{
+
+void create_layouts(const Device& device, const std::vector<Binding>& bindings,
+                    std::vector<VkDescriptorSetLayout> shared_layouts, uint32_t push_size, Program& p)
+{
+    VkDevice d = device.device();
+    if (shared_layouts.empty())
+    {
+        p.set_layout = create_set_layout(device, bindings);
+        shared_layouts.push_back(p.set_layout);
+    }
+    else if (!bindings.empty())
+        throw std::invalid_argument("hemi: a program takes either bindings or shared set layouts, not both");
 
     VkPushConstantRange range{VK_SHADER_STAGE_ALL, 0, push_size};
     VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    layout_info.setLayoutCount = 1;
-    layout_info.pSetLayouts = &set_layout;
+    layout_info.setLayoutCount = uint32_t(shared_layouts.size());
+    layout_info.pSetLayouts = shared_layouts.data();
     layout_info.pushConstantRangeCount = push_size ? 1 : 0;
     layout_info.pPushConstantRanges = &range;
     VkPipelineLayout layout;
@@ -90,7 +102,7 @@ Program create_compute_program(const Device& device, const ComputeProgramDesc& d
 {
     Program p;
     p.bind_point = VK_PIPELINE_BIND_POINT_COMPUTE;
-    create_layouts(device, desc.bindings, desc.push_constant_size, p);
+    create_layouts(device, desc.bindings, {}, desc.push_constant_size, p);
     ShaderModule module = create_shader_module(device, desc.shader);
     Specialization spec(desc.specialization);
 
@@ -109,11 +121,15 @@ Program create_compute_program(const Device& device, const ComputeProgramDesc& d
 
 Program create_graphics_program(const Device& device, const GraphicsProgramDesc& desc)
 {
-    if (!desc.render_pass)
-        throw std::invalid_argument("hemi: create_graphics_program needs a render pass");
+    const bool dynamic_rendering = desc.render_pass == VK_NULL_HANDLE;
+    if (dynamic_rendering && !device.dynamic_rendering())
+        throw std::invalid_argument("hemi: a pipeline without a render pass needs dynamic rendering, which device " +
+                                    std::string(device.name()) + " does not have enabled");
+    if (dynamic_rendering && desc.color_formats.size() != desc.color_attachments)
+        throw std::invalid_argument("hemi: dynamic rendering needs one colour format per colour attachment");
     Program p;
     p.bind_point = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    create_layouts(device, desc.bindings, desc.push_constant_size, p);
+    create_layouts(device, desc.bindings, desc.set_layouts, desc.push_constant_size, p);
     ShaderModule vs = create_shader_module(device, desc.vertex_shader);
     ShaderModule fs = create_shader_module(device, desc.fragment_shader);
     Specialization spec(desc.specialization);
@@ -149,12 +165,12 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     raster.lineWidth = 1.0f;
 
     VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+    multisample.rasterizationSamples = desc.samples;
 
     VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
     depth.depthTestEnable = desc.depth_test;
-    depth.depthWriteEnable = desc.depth_test;
-    depth.depthCompareOp = VK_COMPARE_OP_LESS;
+    depth.depthWriteEnable = desc.depth_test && desc.depth_write;
+    depth.depthCompareOp = desc.depth_compare;
 
     std::vector<VkPipelineColorBlendAttachmentState> blend(desc.color_attachments);
     for (auto& b : blend)
@@ -183,8 +199,17 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     info.layout = p.layout;
     info.renderPass = desc.render_pass;
     info.subpass = desc.subpass;
+    VkPipelineRenderingCreateInfoKHR rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
+    if (dynamic_rendering)
+    {
+        rendering.colorAttachmentCount = uint32_t(desc.color_formats.size());
+        rendering.pColorAttachmentFormats = desc.color_formats.data();
+        rendering.depthAttachmentFormat = desc.depth_format;
+        info.pNext = &rendering;
+        info.subpass = 0;
+    }
     VkPipeline pipeline;
-    HEMI_VK_CHECK(vkCreateGraphicsPipelines(device.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
+    HEMI_VK_CHECK(vkCreateGraphicsPipelines(device.device(), desc.cache, 1, &info, nullptr, &pipeline));
     p.pipeline = Pipeline(device.device(), pipeline);
     return p;
 }

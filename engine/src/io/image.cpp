@@ -18,17 +18,21 @@
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC
 #define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
 #include <stb/stb_image.h>
 #if defined(__GNUC__)
 #pragma GCC diagnostic pop
 #endif
 
 #include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <optional>
 
 namespace hemi::io
 {
@@ -185,21 +189,288 @@ void write_png(const std::filesystem::path& path, const ImageRgba8& image)
     });
 }
 
-ImageRgba8 read_png(const std::filesystem::path& path)
+namespace
 {
+
+std::vector<uint8_t> read_file(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw FormatError(path.string() + ": no such file or not readable");
     std::ifstream f(path, std::ios::binary);
     if (!f)
         throw FormatError(path.string() + ": no such file or not readable");
-    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-    if (bytes.size() < 8 || std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) != 0)
-        throw FormatError(path.string() + ": not a PNG file");
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    if (f.bad())
+        throw FormatError(path.string() + ": read error");
+    return bytes;
+}
+
+uint32_t be32(const uint8_t* p)
+{
+    return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+uint32_t crc32(const uint8_t* p, size_t n)
+{
+    static const std::array<uint32_t, 256> table = []
+    {
+        std::array<uint32_t, 256> t{};
+        for (uint32_t i = 0; i < 256; ++i)
+        {
+            uint32_t c = i;
+            for (int k = 0; k < 8; ++k)
+                c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+            t[i] = c;
+        }
+        return t;
+    }();
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i)
+        c = table[(c ^ p[i]) & 0xFF] ^ (c >> 8);
+    return c ^ 0xFFFFFFFFu;
+}
+
+// Walks a PNG's chunks before stb_image sees them. stb trusts the container: it does not check CRCs (a
+// flipped bit decodes to a wrong image) and a zero-length IDAT before any image data makes it copy zero bytes
+// to a null pointer (undefined behaviour). Like libpng, a bad CRC fails critical chunks and is ignored in
+// ancillary ones. Returns a copy without the empty IDAT chunks when there are any (legal, but rare), else
+// nothing.
+std::optional<std::vector<uint8_t>> check_png(const std::vector<uint8_t>& b, const std::string& name)
+{
+    auto fail = [&](const std::string& what) -> FormatError { return FormatError(name + ": " + what); };
+    const size_t n = b.size();
+    size_t pos = 8;
+    bool idat = false;
+    std::vector<size_t> empty_idat;
+    for (bool first = true;; first = false)
+    {
+        if (n - pos < 12)
+            throw fail("truncated PNG (" + std::to_string(n) + " bytes, no IEND chunk)");
+        const uint32_t length = be32(&b[pos]);
+        const uint8_t* type = &b[pos + 4];
+        const std::string tag(reinterpret_cast<const char*>(type), 4);
+        for (int i = 0; i < 4; ++i)
+            if (!((type[i] >= 'A' && type[i] <= 'Z') || (type[i] >= 'a' && type[i] <= 'z')))
+                throw fail("corrupt PNG: invalid chunk type at byte " + std::to_string(pos));
+        if (length > 0x7FFFFFFFu)
+            throw fail("corrupt PNG: chunk '" + tag + "' at byte " + std::to_string(pos) + " claims " +
+                       std::to_string(length) + " bytes");
+        if (length > n - pos - 12)
+            throw fail("truncated PNG: chunk '" + tag + "' at byte " + std::to_string(pos) + " needs " +
+                       std::to_string(length) + " bytes, the file ends first");
+        const bool critical = type[0] >= 'A' && type[0] <= 'Z'; // bit 5 of the first letter clear
+        if (critical && crc32(type, 4 + size_t(length)) != be32(&b[pos + 8 + length]))
+            throw fail("corrupt PNG: chunk '" + tag + "' at byte " + std::to_string(pos) +
+                       " fails its CRC check");
+        if (first)
+        {
+            if (tag != "IHDR" || length != 13)
+                throw fail("corrupt PNG: the first chunk is not a 13-byte IHDR");
+            const uint32_t w = be32(&b[pos + 8]), h = be32(&b[pos + 12]);
+            if (w == 0 || h == 0)
+                throw fail("PNG of " + std::to_string(w) + "x" + std::to_string(h) + " pixels (empty)");
+        }
+        if (tag == "IDAT")
+        {
+            idat = true;
+            if (length == 0)
+                empty_idat.push_back(pos);
+        }
+        if (tag == "IEND")
+            break;
+        pos += 12 + size_t(length);
+    }
+    if (!idat)
+        throw fail("corrupt PNG: no IDAT chunk (no image data)");
+    if (empty_idat.empty())
+        return std::nullopt;
+    std::vector<uint8_t> out;
+    out.reserve(n);
+    size_t from = 0;
+    for (size_t at : empty_idat)
+    {
+        out.insert(out.end(), b.begin() + long(from), b.begin() + long(at));
+        from = at + 12;
+    }
+    out.insert(out.end(), b.begin() + long(from), b.end());
+    return out;
+}
+
+// Walks a JPEG's segments to its EOI marker: stb_image reads past the end of a truncated JPEG as zeros and
+// returns an image whose lower part is garbage, so truncation is caught here. Entropy-coded data after each
+// SOS (several in a progressive JPEG) is skipped to the next marker (FF not followed by 00, FF or RSTn).
+void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
+{
+    auto fail = [&](const std::string& what) -> FormatError { return FormatError(name + ": " + what); };
+    auto truncated = [&]
+    { return fail("truncated JPEG (" + std::to_string(b.size()) + " bytes, no EOI marker)"); };
+    const size_t n = b.size();
+    size_t pos = 2; // after SOI
+    bool frame = false, scan = false;
+    while (true)
+    {
+        if (pos >= n)
+            throw truncated();
+        if (b[pos] != 0xFF)
+            throw fail("corrupt JPEG: no marker at byte " + std::to_string(pos));
+        while (pos < n && b[pos] == 0xFF) // fill bytes
+            ++pos;
+        if (pos >= n)
+            throw truncated();
+        const uint8_t marker = b[pos++];
+        if (marker == 0xD9) // EOI
+            break;
+        if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) // TEM, RSTn: no length
+            continue;
+        if (marker == 0x00 || marker == 0xD8)
+            throw fail("corrupt JPEG: unexpected marker at byte " + std::to_string(pos - 1));
+        if (n - pos < 2)
+            throw truncated();
+        const size_t length = size_t(b[pos]) << 8 | b[pos + 1];
+        if (length < 2)
+            throw fail("corrupt JPEG: segment of length " + std::to_string(length) + " at byte " +
+                       std::to_string(pos));
+        if (length > n - pos)
+            throw truncated();
+        // SOF0..SOF15, except DHT (C4), JPG (C8) and DAC (CC).
+        if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC)
+            frame = true;
+        pos += length;
+        if (marker != 0xDA) // SOS: entropy-coded data follows
+            continue;
+        if (!frame)
+            throw fail("corrupt JPEG: a scan before the frame header");
+        scan = true;
+        while (true)
+        {
+            const void* ff = pos < n ? std::memchr(&b[pos], 0xFF, n - pos) : nullptr;
+            if (!ff)
+                throw truncated();
+            pos = size_t(static_cast<const uint8_t*>(ff) - b.data());
+            if (pos + 1 >= n)
+                throw truncated();
+            const uint8_t next = b[pos + 1];
+            if (next == 0x00 || (next >= 0xD0 && next <= 0xD7))
+                pos += 2;
+            else if (next == 0xFF)
+                pos += 1;
+            else
+                break; // a marker: the outer loop reads it
+        }
+    }
+    if (!frame || !scan)
+        throw fail("corrupt JPEG: no frame header or no scan before EOI");
+}
+
+void check_rgba8(const ImageRgba8& image, const char* what)
+{
+    if (image.width == 0 || image.height == 0 || image.width > (1u << 24) || image.height > (1u << 24) ||
+        image.pixels.size() != size_t(image.width) * image.height * 4)
+        throw std::invalid_argument(std::string("hemi: ") + what + ": RGBA8 image of " +
+                                    std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                    " has " + std::to_string(image.pixels.size()) + " bytes");
+}
+
+void append_bytes(void* context, void* data, int size)
+{
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    const auto* p = static_cast<const uint8_t*>(data);
+    out->insert(out->end(), p, p + size);
+}
+
+} // namespace
+
+ImageRgba8 decode_image(const EncodedImage& image)
+{
+    const std::string name = image.name.empty() ? std::string("unnamed image") : image.name;
+    auto fail = [&](const std::string& what) -> FormatError { return FormatError(name + ": " + what); };
+    const std::vector<uint8_t>& bytes = image.bytes;
+    if (bytes.empty())
+        throw fail("empty image (0 bytes)");
+    const std::string mime = sniff_image_mime_type(bytes.data(), bytes.size());
+    if (mime.empty())
+        throw fail("neither a PNG nor a JPEG image (unknown signature)");
+    if (!image.mime_type.empty() && image.mime_type != mime)
+        throw fail("declared " + image.mime_type + ", but the bytes are " + mime);
+    if (bytes.size() > size_t(INT_MAX))
+        throw fail("larger than 2 GiB");
+    std::optional<std::vector<uint8_t>> cleaned;
+    if (mime == "image/png")
+        cleaned = check_png(bytes, name);
+    else
+        check_jpeg(bytes, name);
+    const std::vector<uint8_t>& data = cleaned ? *cleaned : bytes;
+    const int size = int(data.size());
     int w = 0, h = 0, channels = 0;
-    unsigned char* data = stbi_load_from_memory(bytes.data(), int(bytes.size()), &w, &h, &channels, 4);
-    if (!data)
-        throw FormatError(path.string() + ": corrupt or truncated PNG (" + stbi_failure_reason() + ")");
-    std::unique_ptr<unsigned char, void (*)(void*)> owner(data, stbi_image_free);
-    ImageRgba8 out{uint32_t(w), uint32_t(h), {}};
-    out.pixels.assign(data, data + size_t(w) * h * 4);
+    if (!stbi_info_from_memory(data.data(), size, &w, &h, &channels))
+        throw fail("corrupt or unsupported " + mime.substr(6) + " (" + stbi_failure_reason() + ")");
+    if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > (uint64_t(1) << 28))
+        throw fail(std::to_string(w) + "x" + std::to_string(h) +
+                   " pixels is empty or larger than 2^28 pixels");
+    ImageRgba8 out{uint32_t(w), uint32_t(h), std::vector<uint8_t>(size_t(w) * size_t(h) * 4)};
+    if (mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
+    {
+        // stb reduces 16 to 8 bits by dropping the low byte; round instead (65535 -> 255, 32896 -> 128).
+        stbi_us* wide = stbi_load_16_from_memory(data.data(), size, &w, &h, &channels, 4);
+        if (!wide)
+            throw fail("corrupt PNG (" + std::string(stbi_failure_reason()) + ")");
+        std::unique_ptr<stbi_us, void (*)(void*)> owner(wide, stbi_image_free);
+        for (size_t i = 0; i < out.pixels.size(); ++i)
+            out.pixels[i] = uint8_t((uint32_t(wide[i]) * 255u + 32767u) / 65535u);
+        return out;
+    }
+    unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
+    if (!narrow)
+        throw fail("corrupt or unsupported " + mime.substr(6) + " (" + stbi_failure_reason() + ")");
+    std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
+    std::memcpy(out.pixels.data(), narrow, out.pixels.size());
+    return out;
+}
+
+EncodedImage read_encoded_image(const std::filesystem::path& path)
+{
+    EncodedImage image;
+    image.name = path.string();
+    image.bytes = read_file(path);
+    image.mime_type = sniff_image_mime_type(image.bytes.data(), image.bytes.size());
+    if (image.mime_type.empty())
+        throw FormatError(path.string() + ": neither a PNG nor a JPEG file" +
+                          (image.bytes.empty() ? std::string(" (empty)") : std::string()));
+    return image;
+}
+
+ImageRgba8 read_png(const std::filesystem::path& path)
+{
+    EncodedImage image;
+    image.name = path.string();
+    image.bytes = read_file(path);
+    if (sniff_image_mime_type(image.bytes.data(), image.bytes.size()) != "image/png")
+        throw FormatError(path.string() + ": not a PNG file");
+    image.mime_type = "image/png";
+    return decode_image(image);
+}
+
+std::vector<uint8_t> encode_png(const ImageRgba8& image)
+{
+    check_rgba8(image, "encode_png");
+    std::vector<uint8_t> out;
+    if (!stbi_write_png_to_func(append_bytes, &out, int(image.width), int(image.height), 4,
+                                image.pixels.data(), int(image.width * 4)))
+        throw std::runtime_error("hemi: encoding PNG failed (stb_image_write)");
+    return out;
+}
+
+std::vector<uint8_t> encode_jpeg(const ImageRgba8& image, int quality)
+{
+    check_rgba8(image, "encode_jpeg");
+    if (quality < 1 || quality > 100)
+        throw std::invalid_argument("hemi: encode_jpeg: quality " + std::to_string(quality) +
+                                    " is not in [1, 100]");
+    std::vector<uint8_t> out;
+    if (!stbi_write_jpg_to_func(append_bytes, &out, int(image.width), int(image.height), 4,
+                                image.pixels.data(), quality))
+        throw std::runtime_error("hemi: encoding JPEG failed (stb_image_write)");
     return out;
 }
 

@@ -32,7 +32,11 @@ std::string mesh_problem(const Mesh& m, MeshNeeds needs)
         return "the mesh needs a normal per vertex";
     if (needs == MeshNeeds::Frames && (m.tangents.size() != n || m.uvs.size() != n))
         return "the mesh needs a normal, tangent and UV for each of its " + std::to_string(n) + " vertices";
-    if (!all_finite(m.positions) || !all_finite(m.normals) || !all_finite(m.tangents) || !all_finite(m.uvs))
+    if (!m.uvs1.empty() && m.uvs1.size() != n)
+        return "the mesh has " + std::to_string(m.uvs1.size()) + " second UVs (TEXCOORD_1) for " +
+               std::to_string(n) + " vertices";
+    if (!all_finite(m.positions) || !all_finite(m.normals) || !all_finite(m.tangents) || !all_finite(m.uvs) ||
+        !all_finite(m.uvs1))
         return "the mesh has a non-finite position or attribute";
     return {};
 }

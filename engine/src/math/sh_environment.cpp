@@ -44,7 +44,7 @@ std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t heig
         double solid_angle = dphi * (std::cos(theta0) - std::cos(theta1));
         for (uint32_t x = 0; x < width; ++x)
         {
-            double phi = (x + 0.5) * dphi;
+            double phi = M_PI - (x + 0.5) * dphi; // Blender's azimuth (sh_environment.h)
             glm::vec3 d(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
                         float(std::cos(theta)));
             accumulate(order, d, solid_angle, &rgba[(size_t(y) * width + x) * 4], acc);

@@ -117,4 +117,14 @@ io::ImageRgba OffscreenTarget::read(const gpu::Image& image) const
 io::ImageRgba OffscreenTarget::read_color() const { return read(color_); }
 io::ImageRgba OffscreenTarget::read_aux() const { return read(aux_); }
 
+RenderTargetDesc OffscreenTarget::desc() const
+{
+    RenderTargetDesc d;
+    d.render_pass = render_pass_;
+    d.subpass = 0;
+    d.color_attachments = kColorAttachments;
+    d.aux_output = true;
+    return d;
+}
+
 } // namespace hemi::render

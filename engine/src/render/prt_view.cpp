@@ -34,12 +34,6 @@ std::vector<glm::vec3> environment_lighting(const std::string& environment, int 
     return math::project_equirect(order, image.width, image.height, image.pixels);
 }
 
-glm::mat4 gltf_to_world()
-{
-    // (x, y, z)_glTF -> (x, -z, y)_world: +90 degrees about x.
-    return glm::rotate(glm::mat4(1.0f), float(M_PI) / 2.0f, glm::vec3(1.0f, 0.0f, 0.0f));
-}
-
 BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model)
 {
     glm::vec3 lo(INFINITY), hi(-INFINITY);
@@ -92,73 +86,40 @@ glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& s, float 
     return proj * view;
 }
 
-PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::filesystem::path& asset_path,
-                 const std::string& technique, bool cpca, uint32_t width, uint32_t height)
-    : device_(&device), asset_(&asset), basis_(&math::technique(technique)), target_(device, width, height)
+glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect)
 {
-    const io::PrtTechnique& t = asset.technique(technique);
-    if (cpca)
-    {
-        if (!t.cpca)
-            throw std::invalid_argument("hemi: the asset has no CPCA data for '" + technique +
-                                        "' (bake it with --cpca)");
-        const io::PrtCpca& c = *t.cpca;
-        source_ = std::make_unique<CpcaTransferPass>(
-            device, CpcaMatrices{uint32_t(asset.mesh.vertex_count()), t.k, asset.l(), c.clusters, c.vectors, c.means,
-                                 c.basis, c.cluster, c.weights});
-    }
-    else
-    {
-        if (t.matrices.empty())
-            throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + technique + "' (use --cpca)");
-        source_ = std::make_unique<TransferPass>(
-            device, TransferMatrices(uint32_t(asset.mesh.vertex_count()), t.k, asset.l(), t.matrices));
-    }
-    const io::ImageRgba8 flat{1, 1, {128, 128, 255, 255}};
-    io::ImageRgba8 normal_map = flat, base_color;
-    if (!asset.normal_texture.empty())
-        normal_map = io::read_png(io::resolve_texture(asset_path, asset.normal_texture));
-    if (!asset.base_color_texture.empty())
-        base_color = io::read_png(io::resolve_texture(asset_path, asset.base_color_texture));
-    material_ = std::make_unique<PrtMaterialRenderer>(device, target_, asset.mesh, normal_map,
-                                                      base_color.pixels.empty() ? nullptr : &base_color, *basis_,
-                                                      *source_);
+    glm::mat4 view = glm::lookAt(eye, target, glm::vec3(0.0f, 0.0f, 1.0f));
+    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(fov_y_degrees), aspect, 0.05f, 100.0f);
+    proj[1][1] *= -1.0f; // Vulkan clip space: y down
+    return proj * view;
+}
+
+PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::string& technique, bool cpca,
+                 uint32_t width, uint32_t height)
+    : device_(&device), asset_(&asset), target_(device, width, height), system_(device, target_.desc()),
+      frame_set_(system_)
+{
+    gpu::UploadBatch upload(device);
+    model_ = std::make_unique<PrtModel>(system_, asset, PrtModelDesc{technique, cpca, 1}, upload);
+    upload.submit_and_wait();
 }
 
 PrtView::~PrtView() = default;
 
 std::vector<glm::vec3> PrtView::object_lighting(const PrtFrame& frame) const
 {
-    const int order = int(asset_->order);
-    const size_t l = asset_->l();
-    if (frame.world_lighting.size() < l)
-        throw std::invalid_argument("hemi: the lighting has " + std::to_string(frame.world_lighting.size()) +
-                                    " SH coefficients, the asset needs " + std::to_string(l));
-    // The environment turned about world z (g(d) = f(Rz^T d): coefficients D(Rz) l, math::ShRotation's
-    // contract), then seen in object coordinates (f_o(d) = g(M d): D(M^T)); D(A) D(B) = D(AB).
-    const glm::mat3 world_to_object = glm::transpose(glm::mat3(frame.model));
-    const glm::mat3 turn = glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(frame.rotate_degrees),
-                                                 glm::vec3(0.0f, 0.0f, 1.0f)));
-    const math::ShRotation rotation(order, world_to_object * turn);
-    std::vector<glm::vec3> out(l);
-    rotation.apply(std::span<const glm::vec3>(frame.world_lighting.data(), l), out);
-    return out;
+    return render::object_lighting(frame.world_lighting, int(asset_->order), frame.model, frame.rotate_degrees);
 }
 
 void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
 {
-    const std::vector<glm::vec3> lighting = object_lighting(frame);
-    source_->record(cmd, lighting);
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    model_->record_transfer_object_space(cmd, object_lighting(frame));
     record_material(cmd, frame);
 }
 
 void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
 {
     const float aspect = float(target_.width()) / float(target_.height());
-    PrtMaterialFrame m;
-    m.model = frame.model;
     // The bounds only change with the model matrix: no pass over the vertices per frame.
     if (!bounds_valid_ || frame.model != bounds_model_)
     {
@@ -166,16 +127,17 @@ void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
         bounds_model_ = frame.model;
         bounds_valid_ = true;
     }
-    m.view_projection = camera_matrix(frame.camera, bounds_, aspect);
-    m.albedo = glm::vec3(1.0f);
-    m.use_base_color = !frame.white;
-    material_->update(cmd, m);
+    FrameData f;
+    f.view_projection = camera_matrix(frame.camera, bounds_, aspect);
+    f.lighting_only = frame.white;
+    frame_set_.record_update(cmd, f);
+    model_matrix_ = frame.model;
 }
 
 void PrtView::record_raster(VkCommandBuffer cmd) const
 {
     target_.begin(cmd);
-    material_->draw(cmd);
+    model_->draw(cmd, frame_set_.set(), 0, model_matrix_);
     target_.end(cmd);
 }
 

@@ -214,10 +214,44 @@ void transfer_multiply_host(const TransferMatrices& matrices, std::span<const gl
 // ---------------------------------------------------------------------------------------------------------
 // Device path
 
+namespace
+{
+uint64_t align_up(uint64_t value, uint64_t alignment)
+{
+    alignment = std::max<uint64_t>(1, alignment);
+    return (value + alignment - 1) / alignment * alignment;
+}
+
+// Instances of one source: instance i's lighting at i * stride bytes of the lighting buffer (a dynamic
+// uniform offset), its coefficients at i * stride texels of the output (views at aligned offsets).
+struct InstanceLayout
+{
+    uint32_t count = 1;
+    VkDeviceSize lighting_stride = 0; // bytes
+    uint64_t coefficient_stride = 0;  // texels
+};
+
+InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, uint32_t n, uint32_t k)
+{
+    if (instances == 0)
+        throw std::invalid_argument("hemi: a coefficient source needs at least one instance");
+    const VkPhysicalDeviceLimits& limits = device.limits();
+    InstanceLayout layout;
+    layout.count = instances;
+    layout.lighting_stride = align_up(HEMI_TRANSFER_MAX_L * 16, limits.minUniformBufferOffsetAlignment);
+    layout.coefficient_stride = align_up(uint64_t(n) * k * 16, std::lcm<uint64_t>(16, std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment))) / 16;
+    if (layout.coefficient_stride * instances > limits.maxTexelBufferElements)
+        throw std::invalid_argument("hemi: " + std::to_string(instances) + " instances of " + std::to_string(n) +
+                                    " vertices' coefficients exceed the device's maxTexelBufferElements");
+    return layout;
+}
+} // namespace
+
 struct TransferPass::Impl
 {
     const gpu::Device* device;
     uint32_t n, k, l;
+    InstanceLayout instances;
     gpu::Buffer matrices;
     gpu::Buffer lighting;
     gpu::Buffer coefficients;
@@ -230,19 +264,21 @@ struct TransferPass::Impl
         VkDescriptorSet set;
         uint32_t vertex_count;
     };
-    std::vector<Segment> segments;
+    std::vector<Segment> segments; // instance i's segment s at i * segment_count + s
+    uint32_t segment_count = 0;
 };
 
 static std::vector<gpu::Binding> transfer_bindings()
 {
     return {
         {HEMI_TRANSFER_BINDING_MATRICES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
-        {HEMI_TRANSFER_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, VK_SHADER_STAGE_COMPUTE_BIT},
         {HEMI_TRANSFER_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
     };
 }
 
-TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m, uint64_t max_view_texels)
+TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m, uint64_t max_view_texels,
+                           uint32_t instances)
     : impl_(std::make_unique<Impl>())
 {
     Impl& s = *impl_;
@@ -250,12 +286,13 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     s.n = m.vertex_count();
     s.k = m.k();
     s.l = m.l();
+    s.instances = instance_layout(device, instances, s.n, s.k);
 
     const VkDeviceSize matrix_bytes = m.data().size_bytes();
     s.matrices = gpu::create_buffer(device, {matrix_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
     gpu::write_buffer(device, s.matrices, m.data().data(), matrix_bytes);
-    s.lighting = gpu::create_buffer(device, {HEMI_TRANSFER_MAX_L * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    const VkDeviceSize coefficient_bytes = VkDeviceSize(s.n) * s.k * 16;
+    s.lighting = gpu::create_buffer(device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
     s.coefficients = gpu::create_buffer(
         device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
 
@@ -288,9 +325,12 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
 
     const uint32_t total_blocks = m.block_count();
     const uint32_t segment_count = uint32_t((total_blocks + blocks_per_segment - 1) / blocks_per_segment);
-    s.pool = gpu::create_descriptor_pool(device, bindings, segment_count);
+    s.segment_count = segment_count;
+    s.pool = gpu::create_descriptor_pool(device, bindings, segment_count * instances);
+    for (uint32_t instance = 0; instance < instances; ++instance)
     for (uint32_t i = 0; i < segment_count; ++i)
     {
+        const VkDeviceSize instance_base = instance * s.instances.coefficient_stride * 16;
         uint64_t first_block = i * blocks_per_segment;
         uint64_t blocks = std::min<uint64_t>(blocks_per_segment, total_blocks - first_block);
         uint64_t first_vertex = first_block * HEMI_TRANSFER_BLOCK_VERTICES;
@@ -299,15 +339,16 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
         seg.matrix_view = gpu::create_buffer_view(device, s.matrices, VK_FORMAT_R32G32B32A32_SFLOAT,
                                                   first_block * block_bytes, blocks * block_bytes);
         seg.coefficient_view = gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                       first_vertex * s.k * 16, uint64_t(seg.vertex_count) * s.k * 16);
+                                                       instance_base + first_vertex * s.k * 16,
+                                                       uint64_t(seg.vertex_count) * s.k * 16);
         seg.set = gpu::allocate_descriptor_set(device, s.pool, s.program.set_layout);
         gpu::DescriptorWrite writes[3];
         writes[0].binding = HEMI_TRANSFER_BINDING_MATRICES;
         writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
         writes[0].texel_view = seg.matrix_view;
         writes[1].binding = HEMI_TRANSFER_BINDING_LIGHTING;
-        writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-        writes[1].buffer = {s.lighting, 0, VK_WHOLE_SIZE};
+        writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+        writes[1].buffer = {s.lighting, 0, HEMI_TRANSFER_MAX_L * 16};
         writes[2].binding = HEMI_TRANSFER_BINDING_COEFFICIENTS;
         writes[2].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
         writes[2].texel_view = seg.coefficient_view;
@@ -320,18 +361,33 @@ TransferPass::~TransferPass() = default;
 
 namespace
 {
-// The per-frame lighting update both passes start with.
-void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std::span<const glm::vec3> lighting,
-                            uint32_t l)
+// How many instances `lighting` holds (L coefficients each); throws when it is not a whole number of them
+// within the capacity.
+uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity)
 {
-    check_lighting(lighting, l);
-    float packed[HEMI_TRANSFER_MAX_L * 4] = {};
-    for (uint32_t j = 0; j < l; ++j)
-    {
-        packed[j * 4 + 0] = lighting[j].x;
-        packed[j * 4 + 1] = lighting[j].y;
-        packed[j * 4 + 2] = lighting[j].z;
-    }
+    if (lighting.empty() || lighting.size() % l != 0 || lighting.size() / l > capacity)
+        throw std::invalid_argument("hemi: lighting has " + std::to_string(lighting.size()) +
+                                    " SH coefficients: expected L = " + std::to_string(l) + " per instance for 1 to " +
+                                    std::to_string(capacity) + " instances");
+    for (size_t i = 0; i < lighting.size(); i += l)
+        check_lighting(lighting.subspan(i, l), l);
+    return uint32_t(lighting.size() / l);
+}
+
+// The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
+void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std::span<const glm::vec3> lighting,
+                            uint32_t l, VkDeviceSize stride)
+{
+    const size_t instances = lighting.size() / l;
+    std::vector<float> packed(instances * stride / 4, 0.0f);
+    for (size_t i = 0; i < instances; ++i)
+        for (uint32_t j = 0; j < l; ++j)
+        {
+            float* p = &packed[i * stride / 4 + j * 4];
+            p[0] = lighting[i * l + j].x;
+            p[1] = lighting[i * l + j].y;
+            p[2] = lighting[i * l + j].z;
+        }
     // Earlier reads of the lighting (a previous frame's dispatch) finish before the update; the update
     // finishes before this frame's dispatch reads it. Earlier reads of the coefficients (vertex shaders)
     // finish before this dispatch overwrites them.
@@ -339,7 +395,11 @@ void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std:
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
                         VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdUpdateBuffer(cmd, buffer, 0, sizeof(float) * 4 * l, packed);
+    // vkCmdUpdateBuffer takes at most 65,536 bytes per call.
+    const VkDeviceSize bytes = packed.size() * 4;
+    for (VkDeviceSize offset = 0; offset < bytes; offset += 65536)
+        vkCmdUpdateBuffer(cmd, buffer, offset, std::min<VkDeviceSize>(65536, bytes - offset),
+                          reinterpret_cast<const std::byte*>(packed.data()) + offset);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
 }
@@ -348,11 +408,14 @@ void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std:
 void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
 {
     Impl& s = *impl_;
-    record_lighting_update(cmd, s.lighting, lighting, s.l);
+    const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count);
+    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.pipeline);
-    for (const Impl::Segment& seg : s.segments)
+    for (uint32_t i = 0; i < instances * s.segment_count; ++i)
     {
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 0, nullptr);
+        const Impl::Segment& seg = s.segments[i];
+        const uint32_t offset = uint32_t((i / s.segment_count) * s.instances.lighting_stride);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 1, &offset);
         TransferPush push{seg.vertex_count};
         vkCmdPushConstants(cmd, s.program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
         uint32_t invocations = (seg.vertex_count + HEMI_TRANSFER_VERTICES_PER_INVOCATION - 1) /
@@ -387,7 +450,9 @@ std::vector<float> CoefficientSource::read_coefficients() const
 uint32_t TransferPass::vertex_count() const { return impl_->n; }
 uint32_t TransferPass::k() const { return impl_->k; }
 uint32_t TransferPass::l() const { return impl_->l; }
-uint32_t TransferPass::segment_count() const { return uint32_t(impl_->segments.size()); }
+uint32_t TransferPass::segment_count() const { return impl_->segment_count; }
+uint32_t TransferPass::instances() const { return impl_->instances.count; }
+uint64_t TransferPass::instance_stride() const { return impl_->instances.coefficient_stride; }
 const gpu::Device& TransferPass::device() const { return *impl_->device; }
 
 namespace
@@ -469,6 +534,8 @@ struct CpcaTransferPass::Impl
 {
     const gpu::Device* device;
     uint32_t n, k, l, rows, per_cluster;
+    InstanceLayout instances;
+    VkDeviceSize projected_instance_bytes = 0; // one instance's projections, aligned
     VkDeviceSize projected_stride; // bytes between clusters' projections (aligned for dynamic offsets)
     struct Run
     {
@@ -479,10 +546,11 @@ struct CpcaTransferPass::Impl
     gpu::BufferView coefficient_view, weight_view;
     gpu::Program project, reconstruct;
     gpu::DescriptorPool pool;
-    VkDescriptorSet project_set = VK_NULL_HANDLE, reconstruct_set = VK_NULL_HANDLE;
+    std::vector<gpu::BufferView> instance_views;
+    std::vector<VkDescriptorSet> project_sets, reconstruct_sets; // one each per instance
 };
 
-CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c)
+CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c, uint32_t instances)
     : impl_(std::make_unique<Impl>())
 {
     validate_cpca(c);
@@ -491,6 +559,7 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     s.n = c.vertex_count;
     s.k = c.k;
     s.l = c.l;
+    s.instances = instance_layout(device, instances, s.n, s.k);
     const size_t d = size_t(c.k) * c.l;
     s.rows = c.clusters * (c.vectors + 1) * c.k;
     s.per_cluster = (c.vectors + 1) * c.k;
@@ -569,20 +638,20 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     if (s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES > limits.maxStorageBufferRange)
         throw std::runtime_error("hemi: CPCA projections of " + std::to_string(c.clusters) +
                                  " clusters exceed the device's maxStorageBufferRange");
-    s.projected = gpu::create_buffer(
-        device, {s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES,
-                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    s.lighting = gpu::create_buffer(device, {HEMI_TRANSFER_MAX_L * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    const VkDeviceSize coefficient_bytes = VkDeviceSize(s.n) * s.k * 16;
+    const VkDeviceSize projected_bytes = s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES;
+    s.projected_instance_bytes =
+        align_up(projected_bytes, std::max(limits.minUniformBufferOffsetAlignment, limits.minStorageBufferOffsetAlignment));
+    s.projected = gpu::create_buffer(device, {s.projected_instance_bytes * instances,
+                                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    s.lighting = gpu::create_buffer(device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
     s.coefficients = gpu::create_buffer(
         device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
-    s.coefficient_view = gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
-                                                 coefficient_bytes);
 
     const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
     const std::vector<gpu::Binding> project_bindings = {
         {HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
-        {HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, cs},
+        {HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, cs},
         {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
     };
     const std::vector<gpu::Binding> reconstruct_bindings = {
@@ -598,36 +667,48 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
                  {s.k, c.vectors}});
     std::vector<gpu::Binding> all = project_bindings;
     all.insert(all.end(), reconstruct_bindings.begin(), reconstruct_bindings.end());
-    s.pool = gpu::create_descriptor_pool(device, all, 2);
-    s.project_set = gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
-    s.reconstruct_set = gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
-    auto buffer_write = [](uint32_t binding, VkDescriptorType type, VkBuffer buffer) {
+    s.pool = gpu::create_descriptor_pool(device, all, 2 * instances);
+    auto buffer_write = [](uint32_t binding, VkDescriptorType type, VkBuffer buffer, VkDeviceSize offset,
+                           VkDeviceSize range) {
         gpu::DescriptorWrite w;
         w.binding = binding;
         w.type = type;
-        w.buffer = {buffer, 0, VK_WHOLE_SIZE};
+        w.buffer = {buffer, offset, range};
         return w;
     };
-    gpu::DescriptorWrite project_writes[3] = {
-        buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer),
-        buffer_write(HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, s.lighting),
-        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected),
-    };
-    gpu::write_descriptors(device, s.project_set, project_writes);
-    gpu::DescriptorWrite reconstruct_writes[4] = {
-        buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.projected),
-        {},
-        buffer_write(HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.slots),
-        {},
-    };
-    reconstruct_writes[0].buffer.range = HEMI_CPCA_PROJECTED_BYTES;
-    reconstruct_writes[1].binding = HEMI_CPCA_BINDING_WEIGHTS;
-    reconstruct_writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-    reconstruct_writes[1].texel_view = s.weight_view;
-    reconstruct_writes[3].binding = HEMI_CPCA_BINDING_COEFFICIENTS;
-    reconstruct_writes[3].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
-    reconstruct_writes[3].texel_view = s.coefficient_view;
-    gpu::write_descriptors(device, s.reconstruct_set, reconstruct_writes);
+    for (uint32_t i = 0; i < instances; ++i)
+    {
+        const VkDeviceSize projected_base = i * s.projected_instance_bytes;
+        const VkDeviceSize coefficient_base = i * s.instances.coefficient_stride * 16;
+        s.instance_views.push_back(gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                           coefficient_base, VkDeviceSize(s.n) * s.k * 16));
+        const VkDescriptorSet project_set = gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
+        const VkDescriptorSet reconstruct_set = gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
+        gpu::DescriptorWrite project_writes[3] = {
+            buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer, 0, VK_WHOLE_SIZE),
+            buffer_write(HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.lighting, 0,
+                         HEMI_TRANSFER_MAX_L * 16),
+            buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected, projected_base,
+                         projected_bytes),
+        };
+        gpu::write_descriptors(device, project_set, project_writes);
+        gpu::DescriptorWrite reconstruct_writes[4] = {
+            buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.projected,
+                         projected_base, HEMI_CPCA_PROJECTED_BYTES),
+            {},
+            buffer_write(HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.slots, 0, VK_WHOLE_SIZE),
+            {},
+        };
+        reconstruct_writes[1].binding = HEMI_CPCA_BINDING_WEIGHTS;
+        reconstruct_writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+        reconstruct_writes[1].texel_view = s.weight_view;
+        reconstruct_writes[3].binding = HEMI_CPCA_BINDING_COEFFICIENTS;
+        reconstruct_writes[3].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+        reconstruct_writes[3].texel_view = s.instance_views.back();
+        gpu::write_descriptors(device, reconstruct_set, reconstruct_writes);
+        s.project_sets.push_back(project_set);
+        s.reconstruct_sets.push_back(reconstruct_set);
+    }
 }
 
 CpcaTransferPass::~CpcaTransferPass() = default;
@@ -635,19 +716,26 @@ CpcaTransferPass::~CpcaTransferPass() = default;
 void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
 {
     Impl& s = *impl_;
-    record_lighting_update(cmd, s.lighting, lighting, s.l);
+    const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count);
+    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &s.project_set, 0, nullptr);
     const CpcaPush push{s.rows, 0, s.per_cluster, uint32_t(s.projected_stride / 16)};
     vkCmdPushConstants(cmd, s.project.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
-    vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    for (uint32_t i = 0; i < instances; ++i)
+    {
+        const uint32_t lighting_offset = uint32_t(i * s.instances.lighting_stride);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &s.project_sets[i], 1,
+                                &lighting_offset);
+        vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+    }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.pipeline);
+    for (uint32_t i = 0; i < instances; ++i)
     for (const Impl::Run& run : s.runs)
     {
         const uint32_t offset = uint32_t(run.cluster * s.projected_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_set, 1,
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_sets[i], 1,
                                 &offset);
         const CpcaPush run_push{run.invocations, run.first_invocation, 0, 0};
         vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof run_push, &run_push);
@@ -656,6 +744,8 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
 }
 
 const gpu::Buffer& CpcaTransferPass::coefficients() const { return impl_->coefficients; }
+uint32_t CpcaTransferPass::instances() const { return impl_->instances.count; }
+uint64_t CpcaTransferPass::instance_stride() const { return impl_->instances.coefficient_stride; }
 uint32_t CpcaTransferPass::vertex_count() const { return impl_->n; }
 uint32_t CpcaTransferPass::k() const { return impl_->k; }
 uint32_t CpcaTransferPass::l() const { return impl_->l; }

@@ -130,7 +130,8 @@ struct PrtBakeSummary
     uint64_t rays = 0;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool tangents_generated = false;
-    size_t ignored_material_primitives = 0; // io::GltfScene's: primitives drawn with the first material
+    size_t materials = 0, primitives = 0, images = 0; // the surfaces the asset carries
+    std::vector<std::string> warnings;                // io::GltfScene's: what the scene reader simplified
     bool resumed = false; // from a checkpoint, at pass resumed_pass, vertex resumed_vertex
     int resumed_pass = 0;
     uint32_t resumed_vertex = 0;
@@ -140,15 +141,17 @@ struct PrtBakeSummary
 };
 
 // Bakes the transfer of `mesh`, folds it for every requested technique and, when asked, compresses each with
-// CPCA (dense matrices are kept too). Texture references are left empty for the caller to fill.
+// CPCA (dense matrices are kept too). The asset's surfaces are one default material over the whole mesh, no
+// images: the caller replaces them with the scene's (bake_prt_file does).
 io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options, PrtBakeSummary& summary,
                             const PrtProgressCallback& progress = {});
 
 // `hemi-bake prt`: reads a glTF 2.0 scene (.gltf or .glb), bakes it and writes the asset atomically, with the
-// scene's textures referenced relative to the asset's folder. Unless options.bake.checkpoint names another
-// file, the bake checkpoints to ASSET.partial (resuming from it when it matches) and removes it once the
-// asset is written. Throws io::FormatError for bad input files and
-// std::invalid_argument for bad options.
+// scene's materials, primitives and images (their encoded bytes: the asset does not refer to the scene's
+// files) and its TEXCOORD_1. The summary carries the scene reader's warnings. Unless options.bake.checkpoint
+// names another file, the bake checkpoints to ASSET.partial (resuming from it when it matches) and removes it
+// once the asset is written. Throws io::FormatError for bad input files and std::invalid_argument for bad
+// options.
 PrtBakeSummary bake_prt_file(const std::filesystem::path& scene, const std::filesystem::path& asset,
                              const PrtAssetOptions& options, const PrtProgressCallback& progress = {});
 

@@ -49,6 +49,9 @@ struct ExternalDevice
     VkQueue queue = VK_NULL_HANDLE;
     uint32_t queue_family = 0;
     LogCallback log;
+    // True when `device` was created with Vulkan 1.3's dynamicRendering feature enabled: then hemi's
+    // materials can also draw inside vkCmdBeginRendering (RenderTargetDesc without a render pass).
+    bool dynamic_rendering = false;
 };
 
 enum class MemoryUsage
@@ -83,6 +86,9 @@ public:
     std::string_view name() const { return properties_.deviceName; }
     // Lanes of a subgroup (8 on lavapipe with AVX2, 32 on NVIDIA, 32/64 on AMD).
     uint32_t subgroup_size() const { return subgroup_size_; }
+    // Whether pipelines may draw with dynamic rendering (Vulkan 1.3 dynamicRendering enabled: hemi enables
+    // it on devices it creates when the device supports it).
+    bool dynamic_rendering() const { return dynamic_rendering_; }
     // Nanoseconds per timestamp tick; 0 when the queue does not support timestamps.
     double timestamp_period_ns() const { return timestamp_period_ns_; }
 
@@ -111,6 +117,7 @@ private:
     VkQueue queue_ = VK_NULL_HANDLE;
     uint32_t queue_family_ = 0;
     bool owns_ = false;
+    bool dynamic_rendering_ = false;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memory_{};
     uint32_t subgroup_size_ = 1;

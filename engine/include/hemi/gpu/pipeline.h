@@ -25,7 +25,12 @@ struct Binding
     uint32_t count = 1;
 };
 
-// One descriptor set (set 0) and one push-constant block visible to every stage.
+// A descriptor-set layout of its own, for programs whose sets are shared (the material system's frame,
+// material and coefficient-source sets).
+DescriptorSetLayout create_set_layout(const Device& device, const std::vector<Binding>& bindings);
+
+// A pipeline, its layout and one push-constant block visible to every stage. Programs made from `bindings`
+// own their single set layout (set 0); programs made from shared `set_layouts` own none.
 struct Program
 {
     DescriptorSetLayout set_layout;
@@ -49,17 +54,26 @@ struct GraphicsProgramDesc
 {
     std::span<const uint32_t> vertex_shader;
     std::span<const uint32_t> fragment_shader;
-    std::vector<Binding> bindings;
+    std::vector<Binding> bindings;              // set 0, owned by the program; or:
+    std::vector<VkDescriptorSetLayout> set_layouts; // sets 0.. in order, owned by the caller (bindings empty)
     uint32_t push_constant_size = 0;
     std::vector<uint32_t> specialization; // shared by both stages
     std::vector<VkVertexInputBindingDescription> vertex_bindings;
     std::vector<VkVertexInputAttributeDescription> vertex_attributes;
+    // Where the pipeline draws: a render pass and subpass, or, with render_pass null, dynamic rendering
+    // (VK_KHR_dynamic_rendering; Device::dynamic_rendering()) into attachments of these formats.
     VkRenderPass render_pass = VK_NULL_HANDLE;
     uint32_t subpass = 0;
     uint32_t color_attachments = 1;
+    std::vector<VkFormat> color_formats;         // dynamic rendering only; color_attachments is their count
+    VkFormat depth_format = VK_FORMAT_UNDEFINED; // dynamic rendering only
+    VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
     bool depth_test = true;
+    bool depth_write = true;
+    VkCompareOp depth_compare = VK_COMPARE_OP_LESS;
     VkCullModeFlags cull_mode = VK_CULL_MODE_BACK_BIT;
     VkFrontFace front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    VkPipelineCache cache = VK_NULL_HANDLE; // the host's pipeline cache, if any
 };
 // Viewport and scissor are dynamic state.
 Program create_graphics_program(const Device& device, const GraphicsProgramDesc& desc);

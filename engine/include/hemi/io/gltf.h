@@ -1,37 +1,57 @@
 #pragma once
-// glTF 2.0 scenes (.gltf with external or embedded buffers, and .glb) into one hemi Mesh in scene space,
-// read with tinygltf (Debian's libtinygltf).
+// glTF 2.0 scenes (.gltf with external or embedded buffers, and .glb) into one hemi Mesh in scene space with
+// its materials and images, read with tinygltf (Debian's libtinygltf); and a writer for such scenes.
 //
 // Every triangle primitive of every mesh node of the default scene (or scene 0, or every mesh when the file
-// has no scene) is transformed by its node's world matrix and appended. Normals are the file's, or
-// area-weighted vertex normals when absent. Tangents are the file's, or generated from the UV layout when
-// absent, with MikkTSpace's construction: each triangle's UV tangent and bitangent, projected into the
-// plane of the corner's vertex normal and normalised, accumulated per vertex weighted by the corner angle,
-// handedness in w. It is not a bit-exact MikkTSpace (which Debian does not package): MikkTSpace also splits
-// vertices whose neighbouring triangles disagree on handedness, where this keeps the file's vertices. Texture references are resolved relative to the
-// file and must exist.
+// has no scene) is transformed by its node's world matrix and appended; each becomes one io::Primitive (a run
+// of mesh.indices, in the order the node tree is walked depth-first) with its own material. Triangle strips
+// and fans become lists; points and lines are skipped with a warning. Attributes may be floats or
+// (normalised) integers (KHR_mesh_quantization), sparse or not. Normals are the file's, or area-weighted
+// vertex normals when absent. Tangents are the file's, or generated from the UV layout when absent, with
+// MikkTSpace's construction: each triangle's UV tangent and bitangent, projected into the plane of the
+// corner's vertex normal and normalised, accumulated per vertex weighted by the corner angle, handedness in
+// w. It is not a bit-exact MikkTSpace (which Debian does not package): MikkTSpace also splits vertices whose
+// neighbouring triangles disagree on handedness, where this keeps the file's vertices.
+//
+// Materials keep what io::Material holds (base colour, normal and emissive factors and textures,
+// KHR_texture_transform, samplers, UV sets 0 and 1, doubleSided; KHR_materials_emissive_strength is folded
+// into the emissive factor). Occlusion and metallic-roughness textures are not read. Images stay encoded, one
+// per glTF image that a material uses, from external files (URIs relative to the glTF file, percent-decoded),
+// .glb buffer views or base64 data URIs; each is checked to be PNG or JPEG by its signature (decoded later,
+// by io::decode_image).
+//
+// What hemi reads as something simpler or ignores is reported in GltfScene::warnings, one line per feature
+// naming it (skins: drawn in the bind pose; morph targets; alphaMode MASK/BLEND: opaque; KHR_materials_*,
+// KHR_lights_punctual, EXT_texture_webp, KHR_texture_basisu, vertex colours, TEXCOORD_2+, animations, ...).
+// What makes the geometry unreadable is a FormatError: Draco or meshopt compression without an uncompressed
+// fallback (KHR_draco_mesh_compression, EXT_meshopt_compression in extensionsRequired), any other required
+// extension hemi does not know, glTF 1.0.
 
+#include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace hemi::io
 {
 
 struct GltfScene
 {
-    Mesh mesh;
-    std::filesystem::path base_color_texture; // empty when the material has none
-    std::filesystem::path normal_texture;     // empty when the material has none
+    Mesh mesh;                         // every primitive, in scene space; mesh.uvs1 when any has TEXCOORD_1
+    std::vector<Material> materials;   // the file's materials, then a default one when a primitive has none
+    std::vector<EncodedImage> images;  // every image a material uses (external, .glb buffer view, data URI)
+    std::vector<Primitive> primitives; // ranges of mesh.indices, in order, covering all of them
+    std::vector<std::string> warnings; // features read as something simpler or ignored, each named once
     bool tangents_generated = false;
-    // Primitives whose material differs from the first one's: their geometry is read, but the textures are
-    // the first material's (hemi reads one base colour and one normal map per scene for now).
-    size_t ignored_material_primitives = 0;
 };
 
-// Throws FormatError naming the file and the problem: missing or malformed file, truncated .glb, a
-// primitive that is not a triangle list or lacks POSITION, an accessor that reads past its buffer, an index
-// out of range, a non-finite attribute, a referenced texture that does not exist, or no triangles at all.
+// Throws FormatError naming the file and the problem: missing or malformed file, glTF 1.0, truncated .glb, a
+// required extension hemi cannot read, a primitive that lacks POSITION or has an unknown mode, an accessor
+// that reads past its buffer, an index out of range, a non-finite attribute or factor, a node hierarchy that
+// is not a forest (a node reached twice), a referenced image that does not exist or is neither PNG nor JPEG,
+// or no triangles at all.
 GltfScene read_gltf(const std::filesystem::path& path);
 
 // Writes `mesh` (positions, normals, tangents and UVs when present, 32-bit indices) as one glTF 2.0 mesh node
@@ -40,5 +60,27 @@ GltfScene read_gltf(const std::filesystem::path& path);
 // caller's. Atomic. Throws std::invalid_argument for an inconsistent mesh, FormatError on I/O failure.
 void write_gltf(const std::filesystem::path& path, const Mesh& mesh, const std::string& base_color_uri = {},
                 const std::string& normal_uri = {});
+
+// Where write_gltf puts an image.
+enum class ImageStorage
+{
+    External,   // a file beside the glTF file: the image's name when it is a plain .png/.jpg file name, else
+                // "<glTF stem>_image<i>.<ext>"; the URI percent-encoded
+    BufferView, // its bytes in the glTF's buffer (the .glb's binary chunk, or the .gltf's embedded buffer)
+    DataUri,    // a base64 data URI in the JSON
+};
+
+// Writes `scene` as a glTF 2.0 file the way exporters such as Blender do: one mesh node, one glTF primitive
+// per io::Primitive with its own attribute accessors (the vertices it uses, in their order) and its
+// material, every material with its textures, samplers and KHR_texture_transform, every image stored as
+// `storage[i]` says (one entry per image; the single-value overload stores all alike). A primitive whose
+// TEXCOORD_1 values are all (0, 0) is written without TEXCOORD_1, which is what read_gltf reads for one
+// without it. A .glb when the path ends in ".glb", else a .gltf with its buffer embedded. Atomic (each file).
+// Throws std::invalid_argument for an inconsistent scene (io::mesh_problem, io::surface_problem) or a
+// storage list of the wrong size, FormatError on I/O failure.
+void write_gltf(const std::filesystem::path& path, const GltfScene& scene,
+                ImageStorage storage = ImageStorage::BufferView);
+void write_gltf(const std::filesystem::path& path, const GltfScene& scene,
+                const std::vector<ImageStorage>& storage);
 
 } // namespace hemi::io

@@ -1,6 +1,9 @@
 #pragma once
 // Linear RGBA float images and their writers: EXR (linear float, the HDR format hemi reads and writes)
-// and PNG (tone-mapped 8-bit sRGB, for people to look at). Both writers are atomic.
+// and PNG (tone-mapped 8-bit sRGB, for people to look at). Both writers are atomic. And 8-bit textures: PNG
+// and JPEG decoding (the images glTF scenes and baked assets carry) and encoding.
+
+#include <hemi/io/material.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -61,6 +64,21 @@ struct ImageRgba8
 // Reads a PNG (any bit depth or channel count; 16-bit is reduced to 8, grey and RGB get alpha 255). Throws
 // FormatError naming `path` when the file is missing, not a PNG, truncated or corrupt.
 ImageRgba8 read_png(const std::filesystem::path& path);
+// Decodes an image as glTF stores it (io/material.h): PNG (8 or 16 bit, 16 rounded to 8) or JPEG (baseline
+// and progressive), grey/RGB get alpha 255. The container is checked before the decoder sees it: a PNG's
+// chunks (lengths, critical chunks' CRCs, IHDR first, IEND present), a JPEG's segments up to its EOI marker;
+// so a truncated or bit-flipped file is refused rather than decoded to garbage. Throws FormatError naming
+// image.name when the bytes are empty, neither PNG nor JPEG, disagree with image.mime_type (when it is set),
+// are truncated or corrupt, or the image is larger than 2^28 pixels.
+ImageRgba8 decode_image(const EncodedImage& image);
+// Reads a PNG or JPEG file into its encoded form (mime type from the bytes' signature, not the extension;
+// name = the path). Throws FormatError naming `path` when it is missing or neither format.
+EncodedImage read_encoded_image(const std::filesystem::path& path);
+// Encodes 8-bit RGBA (stb_image_write): PNG losslessly; JPEG at `quality` in [1, 100], alpha dropped. Throws
+// std::invalid_argument for an empty or inconsistent image or a bad quality.
+std::vector<uint8_t> encode_png(const ImageRgba8& image);
+std::vector<uint8_t> encode_jpeg(const ImageRgba8& image, int quality = 90);
+
 // Writes the bytes as they are (atomic). Throws FormatError naming `path` on a size mismatch or I/O failure.
 void write_png(const std::filesystem::path& path, const ImageRgba8& image);
 

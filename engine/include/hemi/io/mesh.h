@@ -20,6 +20,7 @@ struct Mesh
     std::vector<glm::vec3> normals;
     std::vector<glm::vec4> tangents;
     std::vector<glm::vec2> uvs;
+    std::vector<glm::vec2> uvs1;   // TEXCOORD_1 (lightmap UVs); empty when the source has none
     std::vector<uint32_t> indices; // triangle list, counter-clockwise seen from outside
 
     size_t vertex_count() const { return positions.size(); }
@@ -33,8 +34,8 @@ enum class MeshNeeds
 };
 
 // The first problem with `mesh`, or an empty string: no vertices or triangles, an index count that is not a
-// multiple of 3, an index out of range, a missing attribute, a non-finite position or attribute. The one
-// check every reader, baker and renderer of meshes shares.
+// multiple of 3, an index out of range, a missing attribute, uvs1 neither empty nor one per vertex, a
+// non-finite position or attribute. The one check every reader, baker and renderer of meshes shares.
 std::string mesh_problem(const Mesh& mesh, MeshNeeds needs);
 
 // A UV sphere of radius `radius` centred at the origin, z up: u = phi / 2pi (around z, from +x),

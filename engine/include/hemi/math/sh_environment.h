@@ -2,9 +2,12 @@
 // SH projection of environment maps stored as images, with exact per-texel solid angles.
 //
 // Conventions (z up, like hemi's world and tangent space):
-//  - equirectangular (latitude-longitude): column x covers phi in [2pi x / W, 2pi (x+1) / W), phi measured
-//    from +x toward +y; row y covers theta in [pi y / H, pi (y+1) / H) from +z (row 0 is the zenith);
-//    texel solid angle = (2pi / W) (cos theta0 - cos theta1).
+//  - equirectangular (latitude-longitude), Blender's world mapping for z-up scenes (Cycles'
+//    direction_to_equirectangular: u = 0.5 - atan2(y, x) / 2pi, v = 1 - acos(z) / pi with v up the image):
+//    the image centre looks along +x, the left quarter along +y, the right quarter along -y; column x
+//    (u = (x + 0.5) / W) is azimuth phi = pi - 2pi u, measured from +x toward +y; row y from the top covers
+//    theta in [pi y / H, pi (y+1) / H) from +z (row 0 is the zenith); texel solid angle =
+//    (2pi / W) (cos theta0 - cos theta1). An environment Blender renders behind a scene lights it the same.
 //  - cube map: six square faces in the order +X, -X, +Y, -Y, +Z, -Z with the Vulkan/OpenGL face
 //    orientation (e.g. +X: direction (1, -t, -s) for face coordinates s, t in [-1, 1], t down the rows);
 //    texel solid angle from the exact area integral A(x, y) = atan2(xy, sqrt(x^2 + y^2 + 1)).

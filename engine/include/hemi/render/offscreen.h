@@ -7,6 +7,7 @@
 #include <hemi/gpu/handle.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/io/image.h>
+#include <hemi/render/material/material_system.h>
 
 #include <glm/vec4.hpp>
 
@@ -23,6 +24,8 @@ public:
     void end(VkCommandBuffer cmd) const;
 
     VkRenderPass render_pass() const { return render_pass_; }
+    // The target as the material system sees it: subpass 0, colour + aux attachments, depth LESS.
+    RenderTargetDesc desc() const;
     uint32_t width() const { return width_; }
     uint32_t height() const { return height_; }
     static constexpr uint32_t kColorAttachments = 2;

@@ -1,7 +1,9 @@
 #pragma once
-// A baked PRT asset ready to draw with one technique: the runtime half of Sloan 2006 behind hemi-render, the
-// prt_normalmap sample and the benchmark. Each frame: rotate the world lighting into object space (SH
-// rotation), run the coefficient source (dense transfer pass or CPCA), draw the PRT material.
+// A baked PRT asset drawn with one technique into hemi's own offscreen target: the runtime half of Sloan 2006
+// behind hemi-render, the prt_normalmap sample and the benchmark. Each frame: rotate the world lighting into
+// object space (SH rotation), run the coefficient source (dense transfer pass or CPCA), draw every primitive
+// with its material through the material system. An engine drawing into its own passes uses PrtModel
+// (scene/prt_model.h) and a MaterialSystem for its target directly; PrtView is that plus a target.
 //
 // Conventions: hemi's world is z up; glTF scenes (and so baked assets) are y up and are placed in the world
 // by gltf_to_world() (glTF +y becomes world +z). Environments are world-space SH (math/sh_environment.h).
@@ -9,14 +11,15 @@
 #include <hemi/gpu/device.h>
 #include <hemi/io/image.h>
 #include <hemi/io/prt_asset.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/material/material_system.h>
 #include <hemi/render/offscreen.h>
-#include <hemi/render/prt_material.h>
+#include <hemi/render/scene/prt_model.h>
 #include <hemi/render/transfer.h>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,9 +31,6 @@ namespace hemi::render
 // (math::AnalyticSky) or the path of an equirectangular EXR (io::read_exr, math::project_equirect). Throws
 // io::FormatError for a bad file, std::invalid_argument for a bad order.
 std::vector<glm::vec3> environment_lighting(const std::string& environment, int order);
-
-// The rotation placing glTF's y-up space in hemi's z-up world.
-glm::mat4 gltf_to_world();
 
 struct PrtCamera
 {
@@ -51,6 +51,8 @@ PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect
 // View-projection for `camera` with near and far planes that enclose the model's bounding sphere.
 glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
 glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& bounds, float aspect);
+// A view-projection matrix (Vulkan clip space, near 0.05, far 100) looking from `eye` at `target`, z up.
+glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect);
 
 struct PrtFrame
 {
@@ -64,11 +66,11 @@ struct PrtFrame
 class PrtView
 {
 public:
-    // `asset` must outlive the view. `asset_path` resolves the asset's texture references (missing textures:
-    // io::FormatError naming them).
-    // `cpca` selects the CPCA data of the technique (std::invalid_argument when the asset has none).
-    PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::filesystem::path& asset_path,
-            const std::string& technique, bool cpca, uint32_t width, uint32_t height);
+    // `asset` must outlive the view; it is self-contained (its images travel inside it: a corrupt one is an
+    // io::FormatError naming it). `cpca` selects the CPCA data of the technique (std::invalid_argument when
+    // the asset has none).
+    PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::string& technique, bool cpca,
+            uint32_t width, uint32_t height);
     ~PrtView();
 
     // The object-space lighting the coefficient source receives for `frame`.
@@ -76,7 +78,7 @@ public:
 
     // Outside a render pass: the transfer (or CPCA) pass, then record_material().
     void record_transfer(VkCommandBuffer cmd, const PrtFrame& frame);
-    // Outside a render pass: the material's uniform update only (camera, albedo), for a frame whose
+    // Outside a render pass: the frame set's update only (camera, lighting-only flag), for a frame whose
     // coefficients are already in place (e.g. uploaded by a host-side multiply).
     void record_material(VkCommandBuffer cmd, const PrtFrame& frame);
     // The raster pass into target(): begin, draw, end.
@@ -85,16 +87,19 @@ public:
     io::ImageRgba render(const PrtFrame& frame);
 
     const OffscreenTarget& target() const { return target_; }
-    CoefficientSource& coefficients() { return *source_; }
+    CoefficientSource& coefficients() { return model_->coefficients(); }
     const io::Mesh& mesh() const { return asset_->mesh; }
+    MaterialSystem& materials() { return system_; }
+    PrtModel& model() { return *model_; }
 
 private:
     const gpu::Device* device_;
     const io::PrtAsset* asset_;
-    const math::BasisDesc* basis_;
     OffscreenTarget target_;
-    std::unique_ptr<CoefficientSource> source_;
-    std::unique_ptr<PrtMaterialRenderer> material_;
+    MaterialSystem system_;
+    FrameSet frame_set_;
+    std::unique_ptr<PrtModel> model_;
+    glm::mat4 model_matrix_{1.0f};
     BoundingSphere bounds_;      // under bounds_model_, recomputed only when the frame's model changes
     glm::mat4 bounds_model_{1.0f};
     bool bounds_valid_ = false;

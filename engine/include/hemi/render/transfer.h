@@ -71,12 +71,18 @@ public:
     virtual ~CoefficientSource() = default;
     // Records the lighting update and the compute work. The caller orders later reads of coefficients()
     // with a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
-    // `lighting` must have L entries of finite values.
+    // `lighting` holds L finite entries per instance, for 1 to instances() instances (instance i's at
+    // i * L): every instance shares the matrices and is relit with its own lighting (each object's
+    // environment rotated into its frame), into its own coefficients at instance_offset(i).
     virtual void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) = 0;
+    virtual uint32_t instances() const = 0;
+    // Texels between two instances' coefficients (>= N*K, aligned for texel-buffer views).
+    virtual uint64_t instance_stride() const = 0;
+    uint64_t instance_offset(uint32_t instance) const { return instance * instance_stride(); }
     // Records, submits and waits (with the coefficients made visible to the host): for tools and tests.
     void run(std::span<const glm::vec3> lighting);
     virtual const gpu::Buffer& coefficients() const = 0;
-    // Reads the coefficients back (N*K*4 floats).
+    // Reads instance 0's coefficients back (N*K*4 floats).
     std::vector<float> read_coefficients() const;
     virtual uint32_t vertex_count() const = 0;
     virtual uint32_t k() const = 0;
@@ -91,7 +97,9 @@ class TransferPass : public CoefficientSource
 public:
     // `max_view_texels` bounds the texels of one texel-buffer view (and so one dispatch's segment);
     // 0 means the device's maxTexelBufferElements. Smaller values exist to exercise segmenting in tests.
-    TransferPass(const gpu::Device& device, const TransferMatrices& matrices, uint64_t max_view_texels = 0);
+    // `instances` objects can be relit per frame from the one copy of the matrices.
+    TransferPass(const gpu::Device& device, const TransferMatrices& matrices, uint64_t max_view_texels = 0,
+                 uint32_t instances = 1);
     ~TransferPass();
     TransferPass(const TransferPass&) = delete;
     TransferPass& operator=(const TransferPass&) = delete;
@@ -110,6 +118,8 @@ public:
     uint32_t l() const override;
     const gpu::Device& device() const override;
     uint32_t segment_count() const;
+    uint32_t instances() const override;
+    uint64_t instance_stride() const override;
 
 private:
     struct Impl;
@@ -141,7 +151,7 @@ class CpcaTransferPass : public CoefficientSource
 public:
     // Throws std::invalid_argument on inconsistent sizes, a cluster out of range or a non-finite value, and
     // std::runtime_error when the data exceed the device's storage-buffer range or texel-buffer size.
-    CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca);
+    CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca, uint32_t instances = 1);
     ~CpcaTransferPass();
     CpcaTransferPass(const CpcaTransferPass&) = delete;
     CpcaTransferPass& operator=(const CpcaTransferPass&) = delete;
@@ -152,6 +162,8 @@ public:
     uint32_t k() const override;
     uint32_t l() const override;
     const gpu::Device& device() const override;
+    uint32_t instances() const override;
+    uint64_t instance_stride() const override;
 
 private:
     struct Impl;

@@ -1,0 +1,66 @@
+#pragma once
+// Material instances: one glTF material's factors and textures as descriptor set 1 of the material system,
+// and the GPU textures of a scene's images they sample (decoded once, mipmapped, shared by every material
+// and every object instance that uses them).
+
+#include <hemi/gpu/resources.h>
+#include <hemi/gpu/upload.h>
+#include <hemi/io/image.h>
+#include <hemi/io/material.h>
+#include <hemi/render/material/material_system.h>
+
+#include <map>
+#include <memory>
+#include <span>
+#include <utility>
+#include <vector>
+
+namespace hemi::render
+{
+
+class TextureSet
+{
+public:
+    // Decodes every image (io::decode_image: FormatError naming the image when it is corrupt) and creates
+    // it with a full mip chain, filled through `upload`. `materials` say how each image is used: base colour
+    // and emissive maps are sRGB, normal maps linear (an image used both ways is created twice).
+    TextureSet(const gpu::Device& device, std::span<const io::EncodedImage> images,
+               std::span<const io::Material> materials, gpu::UploadBatch& upload);
+    // The same from decoded RGBA8 images (procedural textures, an engine's own decoder).
+    TextureSet(const gpu::Device& device, std::span<const io::ImageRgba8> images,
+               std::span<const io::Material> materials, gpu::UploadBatch& upload);
+
+    // The image `index` (or, for -1, a 1x1 default: white for colour, the flat normal (0, 0, 1) for normals).
+    const gpu::Image& image(int index, bool srgb) const;
+    // A sampler for glTF's sampler state (cached: one per distinct state).
+    VkSampler sampler(const io::TextureSampler& state);
+
+private:
+    void create(std::span<const io::ImageRgba8> images, std::span<const io::Material> materials,
+                gpu::UploadBatch& upload);
+    const gpu::Device* device_;
+    std::map<std::pair<int, bool>, gpu::Image> images_;
+    std::vector<std::pair<io::TextureSampler, gpu::Sampler>> samplers_;
+};
+
+class MaterialInstance
+{
+public:
+    // Throws std::invalid_argument when the material refers to an image the set does not have.
+    MaterialInstance(const MaterialSystem& system, TextureSet& textures, const io::Material& material,
+                     gpu::UploadBatch& upload);
+    VkDescriptorSet set() const { return set_; }
+    bool double_sided() const { return double_sided_; }
+
+private:
+    gpu::Buffer uniforms_;
+    gpu::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    bool double_sided_ = false;
+};
+
+// The MaterialUniforms block of a material (KHR_texture_transform rows, factors, UV sets): what the surface
+// shader reads, for tests that evaluate the material on the CPU.
+shared::MaterialUniforms material_uniforms(const io::Material& material);
+
+} // namespace hemi::render

@@ -1,0 +1,143 @@
+#pragma once
+// hemi's material system: one surface shader for every technique, compiled into a pipeline per material
+// key (technique x coefficient source x basis x frame x sidedness) for one render target, made once and
+// cached. docs/materials.md describes the design; in short:
+//
+//   - A *material type* (MaterialType) is a compiled pipeline. Its key's axes that change bindings or
+//     outputs (the coefficient source, the aux attachment) pick a SPIR-V variant; those that change code
+//     only (basis, K, frame, technique, double-sidedness) are specialization constants.
+//   - A *material instance* (MaterialInstance, material_instance.h) is one glTF material's factors and
+//     textures: descriptor set 1, shared by every object drawn with it.
+//   - A *coefficient source* (coefficient_source.h) is set 2: per object instance, its transfer-pass
+//     output (per vertex), its coefficient textures (per texel) or its probe (uniform).
+//   - Set 0 is the frame (camera, options: FrameSet, frame_set.h). Per draw, the model matrix and the
+//     object's coefficient offset go by push constants (shared::DrawPush).
+//
+// Clip-space conventions: Vulkan's (x right, y down, depth 0 at the near plane to 1 at the far one, as
+// glm::perspectiveRH_ZO with the y row negated produces). Front faces are counter-clockwise seen from
+// outside in hemi's meshes (glTF's rule); single-sided materials cull back faces. Reverse-Z is the
+// caller's projection plus depth_compare = VK_COMPARE_OP_GREATER(_OR_EQUAL) and a depth clear of 0.
+
+#include <hemi/gpu/device.h>
+#include <hemi/gpu/handle.h>
+#include <hemi/gpu/pipeline.h>
+
+#include "hemi/shared/bases.h"
+#include "hemi/shared/surface.h"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <tuple>
+#include <vector>
+
+namespace hemi::render
+{
+
+enum class Technique : uint32_t
+{
+    Irradiance = HEMI_TECHNIQUE_IRRADIANCE, // basis at the normal: PRT, classic PRT, lightmaps, SH probes
+    Constant = HEMI_TECHNIQUE_CONSTANT,     // the base colour factor alone (a baseline, a debug view)
+};
+
+enum class CoefficientSourceKind : uint32_t
+{
+    Vertex = HEMI_SOURCE_VERTEX,   // transfer or CPCA pass output, interpolated across triangles
+    Texel = HEMI_SOURCE_TEXEL,     // coefficient textures sampled at TEXCOORD_1
+    Uniform = HEMI_SOURCE_UNIFORM, // one set of coefficients for the whole object (an SH probe)
+};
+
+enum class ShadingFrame : uint32_t
+{
+    Tangent = HEMI_FRAME_TANGENT, // coefficients in each vertex's (or texel's) normal-map tangent frame
+    World = HEMI_FRAME_WORLD,     // coefficients in world space (the normal map is turned into it)
+};
+
+struct MaterialKey
+{
+    Technique technique = Technique::Irradiance;
+    CoefficientSourceKind source = CoefficientSourceKind::Vertex;
+    int basis = HEMI_BASIS_SH9; // HEMI_BASIS_*: an entry of math::bases(), or classic PRT's vertex irradiance
+    ShadingFrame frame = ShadingFrame::Tangent;
+    bool double_sided = false; // glTF doubleSided: no culling (world frame: back faces lit with -N)
+
+    auto tie() const { return std::tie(technique, source, basis, frame, double_sided); }
+    bool operator<(const MaterialKey& o) const { return tie() < o.tie(); }
+    bool operator==(const MaterialKey& o) const { return tie() == o.tie(); }
+};
+
+// Where materials draw and how: a subpass of a render pass, or dynamic rendering (render_pass null; the
+// device must have it: gpu::Device::dynamic_rendering()).
+struct RenderTargetDesc
+{
+    VkRenderPass render_pass = VK_NULL_HANDLE;
+    uint32_t subpass = 0;
+    uint32_t color_attachments = 1;      // render pass: colour attachments of the subpass
+    std::vector<VkFormat> color_formats; // dynamic rendering: one per colour attachment
+    VkFormat depth_format = VK_FORMAT_UNDEFINED; // dynamic rendering: UNDEFINED = no depth attachment
+    // Colour attachment 1 receives (u, v, 0, 1) where the mesh covers the pixel (hemi's OffscreenTarget);
+    // otherwise only attachment 0 is written (further attachments are left undefined where drawn).
+    bool aux_output = false;
+    VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
+    bool depth_test = true;
+    bool depth_write = true;
+    VkCompareOp depth_compare = VK_COMPARE_OP_LESS; // reverse-Z: VK_COMPARE_OP_GREATER_OR_EQUAL
+};
+
+// A compiled material type: the pipeline of one key for one target.
+struct MaterialType
+{
+    MaterialKey key;
+    uint32_t k = 0;      // coefficients the basis takes
+    gpu::Program program; // pipeline + layout (sets 0-2 of the system's shared layouts, shared::DrawPush)
+};
+
+class MaterialSystem
+{
+public:
+    // `cache` is the host's VkPipelineCache (or null); it must outlive the system.
+    MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target, VkPipelineCache cache = VK_NULL_HANDLE);
+    ~MaterialSystem();
+    MaterialSystem(const MaterialSystem&) = delete;
+    MaterialSystem& operator=(const MaterialSystem&) = delete;
+
+    // The type of `key`, compiled on first use (at set-up, ideally: prepare() every key a scene needs),
+    // then cached. Throws std::invalid_argument for a basis hemi does not know.
+    const MaterialType& type(const MaterialKey& key);
+    size_t type_count() const { return types_.size(); }
+
+    // The shared layouts of sets 0 (frame), 1 (material) and 2 (per coefficient source).
+    VkDescriptorSetLayout frame_layout() const { return frame_layout_; }
+    VkDescriptorSetLayout material_layout() const { return material_layout_; }
+    VkDescriptorSetLayout source_layout(CoefficientSourceKind kind) const;
+
+    // The bindings of each set, for descriptor pools (frame_set.h, material_instance.h, coefficient_source.h).
+    static std::vector<gpu::Binding> frame_bindings();
+    static std::vector<gpu::Binding> material_bindings();
+    static std::vector<gpu::Binding> source_bindings(CoefficientSourceKind kind);
+
+    const gpu::Device& device() const { return *device_; }
+    const RenderTargetDesc& target() const { return target_; }
+
+private:
+    const gpu::Device* device_;
+    RenderTargetDesc target_;
+    VkPipelineCache cache_;
+    gpu::DescriptorSetLayout frame_layout_, material_layout_;
+    gpu::DescriptorSetLayout source_layouts_[3];
+    std::map<MaterialKey, std::unique_ptr<MaterialType>> types_;
+};
+
+// What one draw binds: the type (pipeline), the three sets, the per-draw push constants.
+struct DrawBindings
+{
+    const MaterialType* type = nullptr;
+    VkDescriptorSet frame = VK_NULL_HANDLE;
+    VkDescriptorSet material = VK_NULL_HANDLE;
+    VkDescriptorSet source = VK_NULL_HANDLE;
+    shared::DrawPush push{};
+};
+// Binds the pipeline, the sets and the push constants (inside the caller's render pass or rendering).
+void bind_material(VkCommandBuffer cmd, const DrawBindings& draw);
+
+} // namespace hemi::render

@@ -1,0 +1,97 @@
+#pragma once
+// A baked PRT asset on the GPU, drawn through the material system: the mesh, the scene's textures and
+// material instances (one per glTF material), and one technique's transfer matrices (dense or CPCA), all
+// shared by every instance of the model. Each instance is an object with its own transform: the library
+// rotates the distant lighting into its object space, and the coefficient pass relights every instance
+// from the one copy of the matrices.
+//
+// Conventions: hemi's world is z up; baked assets are in glTF's y-up scene space and are usually placed in
+// the world by gltf_to_world() (glTF +y becomes world +z). Lighting is world-space SH (math/sh_environment.h).
+
+#include <hemi/gpu/upload.h>
+#include <hemi/io/prt_asset.h>
+#include <hemi/math/basis.h>
+#include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/material_instance.h>
+#include <hemi/render/material/material_system.h>
+#include <hemi/render/scene/gpu_mesh.h>
+#include <hemi/render/transfer.h>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hemi::render
+{
+
+// The rotation placing glTF's y-up space in hemi's z-up world.
+glm::mat4 gltf_to_world();
+
+// `world_lighting` (SH of order >= `order`, truncated) turned by `rotate_degrees` about world z, then seen
+// in the object frame of `model` (a rotation, uniform scale and translation): what that object's transfer
+// matrices multiply.
+std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order, const glm::mat4& model,
+                                       float rotate_degrees = 0.0f);
+
+struct PrtModelDesc
+{
+    std::string technique = "gs"; // math::technique() names: gs, prt, hl2, sal4, h4, h6, sep4, ...
+    bool cpca = false;            // the technique's CPCA data instead of the dense matrices
+    uint32_t instances = 1;       // objects relit per frame from this model
+};
+
+// One object drawn from a model, per frame.
+struct PrtInstance
+{
+    glm::mat4 model = gltf_to_world();
+    std::span<const glm::vec3> world_lighting; // world-space SH of the asset's order or higher
+    float rotate_degrees = 0.0f;               // the environment turns about world z
+};
+
+class PrtModel
+{
+public:
+    // `asset` must outlive the model. Compiles (or finds in `system`) the material type of every primitive.
+    // Uploads go into `upload` (record it, or submit_and_wait(), before the first frame). Throws
+    // std::invalid_argument when the asset lacks the technique (or its CPCA data), io::FormatError when one
+    // of its images is corrupt.
+    PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc, gpu::UploadBatch& upload);
+    ~PrtModel();
+
+    // Outside a render pass: the lighting of instances.size() <= desc.instances objects rotated into their
+    // frames, the coefficient pass, and the barrier to the vertex shaders that read its output.
+    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances);
+    // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
+    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting);
+    // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
+    // with its own material, under `model`, with the frame set of this view.
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const;
+
+    CoefficientSource& coefficients() { return *source_; }
+    const io::PrtAsset& asset() const { return *asset_; }
+    const math::BasisDesc& basis() const { return *basis_; }
+    const GpuMesh& mesh() const { return mesh_; }
+    size_t material_count() const { return materials_.size(); }
+
+private:
+    MaterialSystem* system_;
+    const io::PrtAsset* asset_;
+    const math::BasisDesc* basis_;
+    GpuMesh mesh_;
+    TextureSet textures_;
+    std::vector<std::unique_ptr<MaterialInstance>> materials_;
+    std::unique_ptr<CoefficientSource> source_;
+    std::unique_ptr<VertexCoefficients> coefficient_set_;
+    struct Draw
+    {
+        uint32_t first_index, index_count, material;
+        const MaterialType* type;
+    };
+    std::vector<Draw> draws_;
+};
+
+} // namespace hemi::render

@@ -1,0 +1,149 @@
+#include <hemi/math/basis.h>
+#include <hemi/render/material/material_system.h>
+#include <hemi/render/scene/gpu_mesh.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace hemi::render
+{
+namespace
+{
+const math::BasisDesc& basis_of(int id)
+{
+    if (id == HEMI_BASIS_VERTEX_IRRADIANCE)
+        return math::vertex_irradiance_basis();
+    for (const math::BasisDesc& b : math::bases())
+        if (b.id == id)
+            return b;
+    throw std::invalid_argument("hemi: material key names basis id " + std::to_string(id) + ", which hemi does not know");
+}
+
+const char* source_name(CoefficientSourceKind kind)
+{
+    switch (kind)
+    {
+    case CoefficientSourceKind::Vertex: return "vertex";
+    case CoefficientSourceKind::Texel: return "texel";
+    case CoefficientSourceKind::Uniform: return "uniform";
+    }
+    throw std::invalid_argument("hemi: unknown coefficient source kind");
+}
+} // namespace
+
+std::vector<gpu::Binding> MaterialSystem::frame_bindings()
+{
+    return {{HEMI_FRAME_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT}};
+}
+
+std::vector<gpu::Binding> MaterialSystem::material_bindings()
+{
+    const VkShaderStageFlags fs = VK_SHADER_STAGE_FRAGMENT_BIT;
+    return {
+        {HEMI_MATERIAL_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, fs},
+        {HEMI_MATERIAL_BINDING_BASE_COLOR, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fs},
+        {HEMI_MATERIAL_BINDING_NORMAL, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fs},
+        {HEMI_MATERIAL_BINDING_EMISSIVE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fs},
+    };
+}
+
+std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind kind)
+{
+    switch (kind)
+    {
+    case CoefficientSourceKind::Vertex:
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_VERTEX_BIT}};
+    case CoefficientSourceKind::Texel:
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                 VK_SHADER_STAGE_FRAGMENT_BIT}};
+    case CoefficientSourceKind::Uniform:
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_FRAGMENT_BIT}};
+    }
+    throw std::invalid_argument("hemi: unknown coefficient source kind");
+}
+
+MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target, VkPipelineCache cache)
+    : device_(&device), target_(target), cache_(cache)
+{
+    const bool dynamic = target.render_pass == VK_NULL_HANDLE;
+    const uint32_t colors = dynamic ? uint32_t(target.color_formats.size()) : target.color_attachments;
+    if (colors == 0)
+        throw std::invalid_argument("hemi: a material target needs at least one colour attachment");
+    if (target.aux_output && colors < 2)
+        throw std::invalid_argument("hemi: a material target with aux output needs two colour attachments");
+    if (dynamic && !device.dynamic_rendering())
+        throw std::invalid_argument("hemi: a material target without a render pass needs dynamic rendering, which "
+                                    "device " + std::string(device.name()) + " does not have enabled");
+    frame_layout_ = gpu::create_set_layout(device, frame_bindings());
+    material_layout_ = gpu::create_set_layout(device, material_bindings());
+    for (CoefficientSourceKind kind :
+         {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel, CoefficientSourceKind::Uniform})
+        source_layouts_[uint32_t(kind)] = gpu::create_set_layout(device, source_bindings(kind));
+}
+
+MaterialSystem::~MaterialSystem() = default;
+
+VkDescriptorSetLayout MaterialSystem::source_layout(CoefficientSourceKind kind) const
+{
+    if (uint32_t(kind) > 2)
+        throw std::invalid_argument("hemi: unknown coefficient source kind");
+    return source_layouts_[uint32_t(kind)];
+}
+
+const MaterialType& MaterialSystem::type(const MaterialKey& key)
+{
+    if (auto it = types_.find(key); it != types_.end())
+        return *it->second;
+    const math::BasisDesc& basis = basis_of(key.basis);
+    if (key.frame == ShadingFrame::World && key.basis != HEMI_BASIS_SH9)
+        throw std::invalid_argument("hemi: world-frame materials evaluate SH9 (the sphere), not basis '" +
+                                    std::string(basis.name) + "', a hemispherical basis of the tangent frame");
+    auto type = std::make_unique<MaterialType>();
+    type->key = key;
+    type->k = uint32_t(basis.size);
+
+    const std::string source = source_name(key.source);
+    const std::string vs = key.source == CoefficientSourceKind::Vertex ? "surface_vertex.vert" : "surface_other.vert";
+    const std::string fs = "surface_" + source + (target_.aux_output ? "_aux" : "") + ".frag";
+    gpu::GraphicsProgramDesc desc;
+    desc.vertex_shader = gpu::embedded_spirv(vs);
+    desc.fragment_shader = gpu::embedded_spirv(fs);
+    desc.set_layouts = {frame_layout_, material_layout_, source_layout(key.source)};
+    desc.push_constant_size = sizeof(shared::DrawPush);
+    // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_DOUBLE_SIDED, in order.
+    desc.specialization = {uint32_t(key.basis), uint32_t(basis.size), uint32_t(key.frame), uint32_t(key.technique),
+                           key.double_sided ? 1u : 0u};
+    desc.vertex_bindings = GpuMesh::vertex_bindings();
+    desc.vertex_attributes = GpuMesh::vertex_attributes();
+    desc.render_pass = target_.render_pass;
+    desc.subpass = target_.subpass;
+    const bool dynamic = target_.render_pass == VK_NULL_HANDLE;
+    desc.color_attachments = dynamic ? uint32_t(target_.color_formats.size()) : target_.color_attachments;
+    desc.color_formats = target_.color_formats;
+    desc.depth_format = target_.depth_format;
+    desc.samples = target_.samples;
+    desc.depth_test = target_.depth_test && (!dynamic || target_.depth_format != VK_FORMAT_UNDEFINED);
+    desc.depth_write = target_.depth_write;
+    desc.depth_compare = target_.depth_compare;
+    desc.cull_mode = key.double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT;
+    // Meshes are counter-clockwise seen from outside; with a y-flipped projection (Vulkan clip space) the
+    // facing rule, whose area formula is negated for y-down framebuffers, keeps them counter-clockwise.
+    desc.front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    desc.cache = cache_;
+    type->program = gpu::create_graphics_program(*device_, desc);
+    return *types_.emplace(key, std::move(type)).first->second;
+}
+
+void bind_material(VkCommandBuffer cmd, const DrawBindings& draw)
+{
+    if (!draw.type || !draw.frame || !draw.material || !draw.source)
+        throw std::invalid_argument("hemi: a draw needs a material type and its three descriptor sets");
+    const gpu::Program& p = draw.type->program;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.pipeline);
+    const VkDescriptorSet sets[3] = {draw.frame, draw.material, draw.source};
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.layout, 0, 3, sets, 0, nullptr);
+    vkCmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_ALL, 0, sizeof draw.push, &draw.push);
+}
+
+} // namespace hemi::render

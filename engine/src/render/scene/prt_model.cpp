@@ -1,0 +1,143 @@
+#include <hemi/gpu/commands.h>
+#include <hemi/math/sh.h>
+#include <hemi/render/scene/prt_model.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace hemi::render
+{
+
+glm::mat4 gltf_to_world()
+{
+    // (x, y, z)_glTF -> (x, -z, y)_world: +90 degrees about x.
+    return glm::rotate(glm::mat4(1.0f), float(M_PI) / 2.0f, glm::vec3(1.0f, 0.0f, 0.0f));
+}
+
+std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order, const glm::mat4& model,
+                                       float rotate_degrees)
+{
+    const size_t l = size_t(order) * order;
+    if (order < 1 || order > math::kMaxShOrder)
+        throw std::invalid_argument("hemi: lighting SH order " + std::to_string(order) + " out of range");
+    if (world_lighting.size() < l)
+        throw std::invalid_argument("hemi: the lighting has " + std::to_string(world_lighting.size()) +
+                                    " SH coefficients, the asset needs " + std::to_string(l));
+    // The environment turned about world z (g(d) = f(Rz^T d): coefficients D(Rz) l, math::ShRotation's
+    // contract), then seen in object coordinates (f_o(d) = g(M d): D(M^T)); D(A) D(B) = D(AB). The model's
+    // uniform scale is divided out so that only its rotation acts.
+    glm::mat3 linear(model);
+    const float scale = std::cbrt(std::abs(glm::determinant(linear)));
+    if (!(scale > 0.0f) || !std::isfinite(scale))
+        throw std::invalid_argument("hemi: the model matrix is singular or not finite");
+    linear /= scale;
+    const glm::mat3 world_to_object = glm::transpose(linear);
+    const glm::mat3 turn =
+        glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(rotate_degrees), glm::vec3(0.0f, 0.0f, 1.0f)));
+    const math::ShRotation rotation(order, world_to_object * turn);
+    std::vector<glm::vec3> out(l);
+    rotation.apply(world_lighting.subspan(0, l), out);
+    return out;
+}
+
+namespace
+{
+std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const io::PrtAsset& asset,
+                                               const PrtModelDesc& desc)
+{
+    const io::PrtTechnique& t = asset.technique(desc.technique);
+    const uint32_t n = uint32_t(asset.mesh.vertex_count());
+    if (desc.cpca)
+    {
+        if (!t.cpca)
+            throw std::invalid_argument("hemi: the asset has no CPCA data for '" + desc.technique +
+                                        "' (bake it with --cpca)");
+        const io::PrtCpca& c = *t.cpca;
+        return std::make_unique<CpcaTransferPass>(
+            device, CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
+            desc.instances);
+    }
+    if (t.matrices.empty())
+        throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique + "' (use --cpca)");
+    return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0, desc.instances);
+}
+} // namespace
+
+PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
+                   gpu::UploadBatch& upload)
+    : system_(&system), asset_(&asset), basis_(&math::technique(desc.technique)),
+      mesh_(system.device(), asset.mesh, upload), textures_(system.device(), asset.images, asset.materials, upload)
+{
+    const gpu::Device& device = system.device();
+    source_ = make_source(device, asset, desc);
+    if (int(source_->k()) != basis_->size)
+        throw std::invalid_argument("hemi: technique '" + desc.technique + "' has K = " + std::to_string(source_->k()) +
+                                    " in the asset, its basis needs " + std::to_string(basis_->size));
+    coefficient_set_ = std::make_unique<VertexCoefficients>(system, source_->coefficients(),
+                                                            source_->instance_stride() * source_->instances());
+    std::vector<io::Material> materials = asset.materials;
+    if (materials.empty())
+        materials.emplace_back(); // glTF's default material
+    for (const io::Material& m : materials)
+        materials_.push_back(std::make_unique<MaterialInstance>(system, textures_, m, upload));
+    std::vector<io::Primitive> primitives = asset.primitives;
+    if (primitives.empty())
+        primitives.push_back({0, uint32_t(asset.mesh.indices.size()), 0});
+    for (const io::Primitive& p : primitives)
+    {
+        if (p.material >= materials_.size())
+            throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) + " of " +
+                                        std::to_string(materials_.size()));
+        MaterialKey key;
+        key.source = CoefficientSourceKind::Vertex;
+        key.basis = basis_->id;
+        key.frame = ShadingFrame::Tangent;
+        key.double_sided = materials_[p.material]->double_sided();
+        draws_.push_back({p.first_index, p.index_count, p.material, &system.type(key)});
+    }
+}
+
+PrtModel::~PrtModel() = default;
+
+void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances)
+{
+    std::vector<glm::vec3> lighting;
+    lighting.reserve(instances.size() * asset_->l());
+    for (const PrtInstance& i : instances)
+    {
+        const std::vector<glm::vec3> o = object_lighting(i.world_lighting, int(asset_->order), i.model, i.rotate_degrees);
+        lighting.insert(lighting.end(), o.begin(), o.end());
+    }
+    record_transfer_object_space(cmd, lighting);
+}
+
+void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+{
+    source_->record(cmd, lighting);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+}
+
+void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const
+{
+    if (instance >= source_->instances())
+        throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
+                                    std::to_string(source_->instances()));
+    mesh_.bind(cmd);
+    for (const Draw& d : draws_)
+    {
+        DrawBindings b;
+        b.type = d.type;
+        b.frame = frame;
+        b.material = materials_[d.material]->set();
+        b.source = coefficient_set_->set();
+        b.push.model = model;
+        b.push.coefficient_offset = uint32_t(source_->instance_offset(instance));
+        bind_material(cmd, b);
+        mesh_.draw(cmd, d.first_index, d.index_count);
+    }
+}
+
+} // namespace hemi::render

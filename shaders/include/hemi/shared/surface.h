@@ -1,0 +1,85 @@
+// The material system's surface shader interface, shared by C++ and GLSL (std140/std430-compatible):
+// descriptor sets, bindings, the variant and specialization-constant values, uniform blocks and push
+// constants. docs/materials.md explains the design.
+//
+// Sets: 0 = the frame (camera, options; one per view), 1 = the material (factors and textures; one per
+// glTF material, shared by every object that uses it), 2 = the coefficient source (one per object
+// instance: its transfer-pass output, its coefficient textures, or its SH probe).
+#ifndef HEMI_SHARED_SURFACE_H
+#define HEMI_SHARED_SURFACE_H
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <glm/mat4x4.hpp>
+#include <glm/vec4.hpp>
+namespace hemi::shared
+{
+using mat4 = glm::mat4;
+using vec4 = glm::vec4;
+using uvec4 = glm::uvec4;
+using uint = uint32_t;
+#endif
+
+#define HEMI_SET_FRAME 0
+#define HEMI_SET_MATERIAL 1
+#define HEMI_SET_SOURCE 2
+
+#define HEMI_FRAME_BINDING_UNIFORMS 0
+#define HEMI_MATERIAL_BINDING_UNIFORMS 0
+#define HEMI_MATERIAL_BINDING_BASE_COLOR 1
+#define HEMI_MATERIAL_BINDING_NORMAL 2
+#define HEMI_MATERIAL_BINDING_EMISSIVE 3
+#define HEMI_SOURCE_BINDING_COEFFICIENTS 0
+
+// Coefficient sources (a shader variant each: they bind different descriptor types).
+#define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)
+#define HEMI_SOURCE_TEXEL 1   // 2D array texture, layer k, sampled at TEXCOORD_1 (lightmaps)
+#define HEMI_SOURCE_UNIFORM 2 // uniform block of K vec4 (an SH probe, an environment)
+
+// Frames the coefficients are expressed in (specialization constant).
+#define HEMI_FRAME_TANGENT 0 // the normal-map tangent frame: the map's normal evaluates the basis directly
+#define HEMI_FRAME_WORLD 1   // world space: the map's normal is turned into world space first
+
+// Techniques (specialization constant); one GLSL function each in hemi/surface/techniques.glsl.
+#define HEMI_TECHNIQUE_IRRADIANCE 0 // colour = albedo * sum_k c_k b_k(n) / pi + emissive
+#define HEMI_TECHNIQUE_CONSTANT 1   // colour = the base colour factor: no texture, no coefficient (the
+                                    // baseline hemi-bench measures the other techniques' cost against)
+
+// Specialization constant ids.
+#define HEMI_SPEC_BASIS 0
+#define HEMI_SPEC_K 1
+#define HEMI_SPEC_FRAME 2
+#define HEMI_SPEC_TECHNIQUE 3
+#define HEMI_SPEC_DOUBLE_SIDED 4
+
+struct FrameUniforms
+{
+    mat4 view_projection;
+    vec4 options;         // x = 1: lighting only (albedo 1, no emissive); yzw unused
+    vec4 sep4_weights[9]; // math::sep4_weights() rows, read only by the separable basis
+};
+
+struct MaterialUniforms
+{
+    vec4 base_color_factor; // linear rgba
+    vec4 emissive_factor;   // rgb linear; a = normal scale
+    vec4 uv_transform[6];   // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive
+    uvec4 texcoord;         // UV set (0 or 1) of base colour, normal, emissive; w unused
+};
+
+// Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
+struct DrawPush
+{
+    mat4 model;              // rotation, uniform scale and translation (normals use its upper 3x3)
+    uint coefficient_offset; // texels; vertex source only
+    uint pad0, pad1, pad2;
+};
+
+#ifdef __cplusplus
+static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16, "std140 layout");
+static_assert(sizeof(MaterialUniforms) == 16 * 8 + 16, "std140 layout");
+static_assert(sizeof(DrawPush) == 80, "push constants");
+} // namespace hemi::shared
+#endif
+
+#endif

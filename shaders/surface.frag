@@ -1,0 +1,112 @@
+#version 450
+// The material system's one fragment main, for every technique: fetch the surface inputs (normal-map
+// normal, base colour, emissive, each through its UV set and KHR_texture_transform), fetch the coefficients
+// from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique.
+// HEMI_AUX = 1 adds colour attachment 1 = (u, v, 0, 1) where the mesh covers the pixel (hemi's
+// OffscreenTarget; tests and tools read it).
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
+#include "hemi/shared/surface.h"
+#include "hemi/surface/techniques.glsl"
+
+layout(constant_id = HEMI_SPEC_BASIS) const int kBasis = 0;
+layout(constant_id = HEMI_SPEC_K) const int K = 9;
+layout(constant_id = HEMI_SPEC_FRAME) const int kFrame = HEMI_FRAME_TANGENT;
+layout(constant_id = HEMI_SPEC_TECHNIQUE) const int kTechnique = HEMI_TECHNIQUE_IRRADIANCE;
+layout(constant_id = HEMI_SPEC_DOUBLE_SIDED) const int kDoubleSided = 0;
+
+layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame { FrameUniforms frame; };
+layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_UNIFORMS, std140) uniform Material
+{
+    MaterialUniforms material;
+};
+layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_BASE_COLOR) uniform sampler2D base_color; // sRGB
+layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_NORMAL) uniform sampler2D normal_map;
+layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_EMISSIVE) uniform sampler2D emissive_map; // sRGB
+#if HEMI_SOURCE == HEMI_SOURCE_TEXEL
+layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
+#elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
+layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std140) uniform Probe
+{
+    vec4 probe[HEMI_BASIS_MAX_SIZE];
+};
+#endif
+
+layout(location = 0) in vec4 in_packed[7];
+layout(location = 7) in vec2 in_uv0;
+layout(location = 8) in vec2 in_uv1;
+layout(location = 9) in vec3 in_normal;
+layout(location = 10) in vec4 in_tangent;
+
+layout(location = 0) out vec4 out_color;
+#if HEMI_AUX
+layout(location = 1) out vec4 out_aux;
+#endif
+
+vec2 material_uv(uint set, int transform)
+{
+    vec3 uv = vec3(set == 1u ? in_uv1 : in_uv0, 1.0);
+    return vec2(dot(material.uv_transform[transform * 2].xyz, uv), dot(material.uv_transform[transform * 2 + 1].xyz, uv));
+}
+
+void main()
+{
+    if (kTechnique == HEMI_TECHNIQUE_CONSTANT)
+    {
+        out_color = vec4(material.base_color_factor.rgb, 1.0);
+#if HEMI_AUX
+        out_aux = vec4(in_uv0, 0.0, 1.0);
+#endif
+        return;
+    }
+    vec4 albedo = material.base_color_factor * texture(base_color, material_uv(material.texcoord.x, 0));
+    // Most materials emit nothing: skip the fetch (a branch uniform across the draw).
+    vec3 emissive = vec3(0.0);
+    if (any(notEqual(material.emissive_factor.rgb, vec3(0.0))))
+        emissive = material.emissive_factor.rgb * texture(emissive_map, material_uv(material.texcoord.z, 2)).rgb;
+    vec3 nt = texture(normal_map, material_uv(material.texcoord.y, 1)).xyz * 2.0 - 1.0;
+    nt = normalize(vec3(nt.xy * material.emissive_factor.a, nt.z));
+    if (frame.options.x != 0.0)
+    {
+        albedo = vec4(1.0);
+        emissive = vec3(0.0);
+    }
+
+    vec3 c[HEMI_BASIS_MAX_SIZE];
+    [[unroll]] for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
+    {
+        c[k] = vec3(0.0);
+        if (k < K)
+        {
+#if HEMI_SOURCE == HEMI_SOURCE_VERTEX
+            int i = k * 3;
+            c[k] = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4], in_packed[(i + 2) / 4][(i + 2) % 4]);
+#elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
+            c[k] = texture(coefficient_maps, vec3(in_uv1, float(k))).rgb;
+#else
+            c[k] = probe[k].rgb;
+#endif
+        }
+    }
+
+    vec3 n = nt;
+    if (kFrame == HEMI_FRAME_WORLD)
+    {
+        // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from
+        // behind is lit as the other side (its normal flipped).
+        vec3 N = normalize(in_normal);
+        if (kDoubleSided != 0 && !gl_FrontFacing)
+            N = -N;
+        vec3 T = normalize(in_tangent.xyz - N * dot(N, in_tangent.xyz));
+        vec3 B = cross(N, T) * in_tangent.w;
+        n = normalize(T * nt.x + B * nt.y + N * nt.z);
+    }
+
+    vec3 color = vec3(0.0);
+    if (kTechnique == HEMI_TECHNIQUE_IRRADIANCE)
+        color = hemi_technique_irradiance(kBasis, K, n, c, frame.sep4_weights, albedo.rgb, emissive);
+    out_color = vec4(color, 1.0);
+#if HEMI_AUX
+    out_aux = vec4(in_uv0, 0.0, 1.0);
+#endif
+}
