@@ -16,6 +16,7 @@ install(TARGETS ${hemi_install_targets} EXPORT hemiTargets
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/engine/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 # The shared C++/GLSL headers and the GLSL basis library, for applications' own materials.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(DIRECTORY ${HEMI_GENERATED_INCLUDE_DIR}/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}) # generated basis list
 install(EXPORT hemiTargets NAMESPACE hemi:: DESTINATION ${HEMI_INSTALL_CMAKEDIR})
 
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/hemiConfig.cmake.in

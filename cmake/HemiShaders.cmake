@@ -1,4 +1,5 @@
-# hemi_add_shaders(<target> SOURCES <glsl>... [VARIANTS <name>|<glsl>|<DEF=VAL,...>...] INCLUDE_DIRS <dir>...)
+# hemi_add_shaders(<target> [TABLE <symbol>] SOURCES <glsl>... [VARIANTS <name>|<glsl>|<DEF=VAL,...>...]
+#                  INCLUDE_DIRS <dir>...)
 #
 # VARIANTS compile one source several times with different preprocessor definitions, each embedded
 # under its own name (e.g. "surface_uniform_aux.frag|surface.frag|HEMI_SOURCE=2,HEMI_AUX=1"): the
@@ -7,12 +8,17 @@
 #
 # Compiles each GLSL file with glslangValidator into SPIR-V wrapped in a C header (--vn), and
 # generates <target>'s embedded shader table, so that applications need no shader files at run time.
+# TABLE names the table (hemi::shaders::detail::<symbol>[] and <symbol>Count; default kEmbeddedShaders, the
+# library's own): the tests embed their shaders in a table of their own.
 # A compile error fails the build; glslangValidator prints "ERROR: <file>:<line>: ...".
 # Include dependencies are tracked with glslang's --depfile.
 find_program(GLSLANG_VALIDATOR glslangValidator REQUIRED)
 
 function(hemi_add_shaders target)
-    cmake_parse_arguments(ARG "" "" "SOURCES;VARIANTS;INCLUDE_DIRS" ${ARGN})
+    cmake_parse_arguments(ARG "" "TABLE" "SOURCES;VARIANTS;INCLUDE_DIRS" ${ARGN})
+    if(NOT ARG_TABLE)
+        set(ARG_TABLE kEmbeddedShaders) # the library's table, searched by gpu::embedded_spirv()
+    endif()
     set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spv)
     file(MAKE_DIRECTORY ${out_dir})
     set(include_flags)
@@ -76,9 +82,9 @@ struct EmbeddedShader
 @table_includes@
 namespace hemi::shaders::detail
 {
-extern const EmbeddedShader kEmbeddedShaders[] = {
+extern const EmbeddedShader @ARG_TABLE@[] = {
 @table_entries@};
-extern const size_t kEmbeddedShaderCount = sizeof(kEmbeddedShaders) / sizeof(kEmbeddedShaders[0]);
+extern const size_t @ARG_TABLE@Count = sizeof(@ARG_TABLE@) / sizeof(@ARG_TABLE@[0]);
 }
 " @ONLY)
     add_library(${target} OBJECT ${table} ${headers})

@@ -1,6 +1,7 @@
 #include "gpu_fixture.h"
 
 #include <cstdio>
+#include <stdexcept>
 #include <cstdlib>
 
 namespace hemi::test
@@ -52,3 +53,24 @@ gpu::Device& device()
 }
 
 } // namespace hemi::test
+
+namespace hemi::shaders::detail
+{
+struct EmbeddedShader
+{
+    std::string_view name;
+    const uint32_t* code;
+    size_t words;
+};
+extern const EmbeddedShader kTestShaders[];
+extern const size_t kTestShadersCount;
+} // namespace hemi::shaders::detail
+
+std::span<const uint32_t> hemi::test::test_spirv(std::string_view name)
+{
+    using namespace hemi::shaders::detail;
+    for (size_t i = 0; i < kTestShadersCount; ++i)
+        if (kTestShaders[i].name == name)
+            return {kTestShaders[i].code, kTestShaders[i].words};
+    throw std::invalid_argument("no test shader named '" + std::string(name) + "'");
+}

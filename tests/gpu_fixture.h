@@ -5,6 +5,10 @@
 
 #include <hemi/gpu/device.h>
 
+#include <cstdint>
+#include <span>
+#include <string_view>
+
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -37,6 +41,9 @@ ValidationLog& validation_log();
 gpu::LogCallback recording_log();
 // The shared device (created on first use with validation on).
 gpu::Device& device();
+
+// The SPIR-V of a test-only shader of tests/shaders/ by file name (throws when unknown).
+std::span<const uint32_t> test_spirv(std::string_view name);
 
 class GpuTest : public ::testing::Test
 {

@@ -200,7 +200,7 @@ TEST_F(BasisGlsl, EqualsCppOnTheGpu)
     for (const BasisDesc& b : bases())
     {
         hemi::gpu::Program program = hemi::gpu::create_compute_program(
-            dev, {hemi::gpu::embedded_spirv("basis_eval.comp"), bindings, 4, {uint32_t(b.id)}});
+            dev, {hemi::test::test_spirv("basis_eval.comp"), bindings, 4, {uint32_t(b.id)}});
         hemi::gpu::DescriptorPool pool = hemi::gpu::create_descriptor_pool(dev, bindings, 1);
         VkDescriptorSet set = hemi::gpu::allocate_descriptor_set(dev, pool, program.set_layout);
         hemi::gpu::DescriptorWrite writes[3];

@@ -118,9 +118,15 @@ TEST_F(PrtMaterial, FrameMatchesCpuEvaluationForEveryBasis)
     auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Sky);
     hemi::math::AnalyticSky sky;
     std::vector<glm::vec3> lighting = hemi::math::project_sh(3, [&](const glm::vec3& d) { return sky.radiance(d); }, 64);
-    for (const char* name : {"sh9", "h6", "h4", "sal4", "hl2", "sep4", "zernike6", "prt"})
+    // Every entry of math::bases() (a new basis is covered with no edit here) and classic PRT.
+    std::vector<const hemi::math::BasisDesc*> techniques;
+    for (const hemi::math::BasisDesc& b : hemi::math::bases())
+        techniques.push_back(&b);
+    techniques.push_back(&hemi::math::vertex_irradiance_basis());
+    for (const hemi::math::BasisDesc* technique : techniques)
     {
-        const hemi::math::BasisDesc& b = hemi::math::technique(name);
+        const hemi::math::BasisDesc& b = *technique;
+        const std::string name(b.name);
         const bool classic = b.id == HEMI_BASIS_VERTEX_IRRADIANCE;
         const hemi::bake::TransferFold fold(classic ? hemi::math::basis("sh9") : b);
         const uint32_t W = 160, H = 120;

@@ -14,7 +14,7 @@ struct EmbeddedShader
     size_t words;
 };
 extern const EmbeddedShader kEmbeddedShaders[];
-extern const size_t kEmbeddedShaderCount;
+extern const size_t kEmbeddedShadersCount;
 } // namespace hemi::shaders::detail
 
 namespace hemi::gpu
@@ -23,7 +23,7 @@ namespace hemi::gpu
 std::span<const uint32_t> embedded_spirv(std::string_view name)
 {
     using namespace hemi::shaders::detail;
-    for (size_t i = 0; i < kEmbeddedShaderCount; ++i)
+    for (size_t i = 0; i < kEmbeddedShadersCount; ++i)
         if (kEmbeddedShaders[i].name == name)
             return {kEmbeddedShaders[i].code, kEmbeddedShaders[i].words};
     throw std::invalid_argument("hemi: no embedded shader named '" + std::string(name) + "'");

@@ -51,9 +51,8 @@ struct EncodedImage
 // A material's use of an image.
 struct TextureRef
 {
-    int image = -1; // index into the scene's (or asset's) images; -1 = no texture
-    uint32_t texcoord =
-        0; // the UV set: 0 = TEXCOORD_0, 1 = TEXCOORD_1 (KHR_texture_transform's override applied)
+    int image = -1;        // index into the scene's (or asset's) images; -1 = no texture
+    uint32_t texcoord = 0; // the UV set: 0 = TEXCOORD_0, 1 = TEXCOORD_1 (KHR_texture_transform's applied)
     TextureSampler sampler;
     // KHR_texture_transform: uv' = T(offset) * R(rotation) * S(scale) * uv, rotation in radians,
     // counter-clockwise seen in the UV map (u right, v down): u' = cos r * u + sin r * v,

@@ -14,14 +14,27 @@ namespace hemi::math
 {
 namespace basis_detail
 {
-extern const BasisDesc kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6, kSep4;
+#include "hemi_bases_decl.inc"
 }
 
 std::span<const BasisDesc> bases()
 {
-    using namespace basis_detail;
-    static const BasisDesc table[] = {kSh9, kSh4Ls, kHl2, kH4, kH6, kSal4, kZernike3, kZernike6, kSep4};
-    static_assert(sizeof(table) / sizeof(table[0]) == HEMI_BASIS_COUNT);
+    // The generated list (cmake/HemiBases.cmake), in id order; each entry's id must be its index.
+    static const std::vector<BasisDesc> table = [] {
+        const BasisDesc* entries[] = {
+#include "hemi_bases_table.inc"
+        };
+        static_assert(sizeof(entries) / sizeof(entries[0]) == HEMI_BASIS_COUNT);
+        std::vector<BasisDesc> t;
+        for (const BasisDesc* e : entries)
+        {
+            if (e->id != int(t.size()))
+                throw std::logic_error("hemi: basis '" + std::string(e->name) + "' has id " + std::to_string(e->id) +
+                                       " at position " + std::to_string(t.size()) + " of the table");
+            t.push_back(*e);
+        }
+        return t;
+    }();
     return table;
 }
 

@@ -16,5 +16,5 @@ static void eval_hl2(const glm::vec3& n, float* out)
     out[1] = k * (-a * n.x + b * n.y + c * n.z);
     out[2] = k * (0.816496580927726f * n.x + c * n.z); // sqrt(2/3)
 }
-extern const BasisDesc kHl2{HEMI_BASIS_HL2, "hl2", HEMI_BASIS_SIZE_HL2, true, eval_hl2};
+extern const BasisDesc k_hl2{HEMI_BASIS_HL2, "hl2", HEMI_BASIS_SIZE_HL2, true, eval_hl2};
 } // namespace hemi::math::basis_detail

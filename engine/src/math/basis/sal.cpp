@@ -19,5 +19,5 @@ static void eval_sal4(const glm::vec3& n, float* out)
     out[2] = k1 * (2.0f * n.z - 1.0f);
     out[3] = -k2 * s * n.x;
 }
-extern const BasisDesc kSal4{HEMI_BASIS_SAL4, "sal4", HEMI_BASIS_SIZE_SAL4, true, eval_sal4};
+extern const BasisDesc k_sal4{HEMI_BASIS_SAL4, "sal4", HEMI_BASIS_SIZE_SAL4, true, eval_sal4};
 } // namespace hemi::math::basis_detail

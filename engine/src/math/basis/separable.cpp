@@ -123,7 +123,7 @@ static void eval_sep4(const glm::vec3& n, float* out)
         out[m] = s;
     }
 }
-extern const BasisDesc kSep4{HEMI_BASIS_SEP4, "sep4", HEMI_BASIS_SIZE_SEP4, false, eval_sep4};
+extern const BasisDesc k_sep4{HEMI_BASIS_SEP4, "sep4", HEMI_BASIS_SIZE_SEP4, false, eval_sep4};
 } // namespace basis_detail
 
 } // namespace hemi::math

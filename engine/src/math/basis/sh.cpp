@@ -17,6 +17,6 @@ static void eval_sh4(const glm::vec3& n, float* out)
     for (int i = 0; i < 4; ++i)
         out[i] = y[i];
 }
-extern const BasisDesc kSh9{HEMI_BASIS_SH9, "sh9", HEMI_BASIS_SIZE_SH9, false, eval_sh9};
-extern const BasisDesc kSh4Ls{HEMI_BASIS_SH4LS, "sh4ls", HEMI_BASIS_SIZE_SH4LS, false, eval_sh4};
+extern const BasisDesc k_sh9{HEMI_BASIS_SH9, "sh9", HEMI_BASIS_SIZE_SH9, false, eval_sh9};
+extern const BasisDesc k_sh4ls{HEMI_BASIS_SH4LS, "sh4ls", HEMI_BASIS_SIZE_SH4LS, false, eval_sh4};
 } // namespace hemi::math::basis_detail

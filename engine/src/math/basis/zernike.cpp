@@ -27,6 +27,6 @@ static void eval_zernike(const glm::vec3& n, float* out, int count)
 }
 static void eval_zernike3(const glm::vec3& n, float* out) { eval_zernike(n, out, 3); }
 static void eval_zernike6(const glm::vec3& n, float* out) { eval_zernike(n, out, 6); }
-extern const BasisDesc kZernike3{HEMI_BASIS_ZERNIKE3, "zernike3", HEMI_BASIS_SIZE_ZERNIKE3, true, eval_zernike3};
-extern const BasisDesc kZernike6{HEMI_BASIS_ZERNIKE6, "zernike6", HEMI_BASIS_SIZE_ZERNIKE6, true, eval_zernike6};
+extern const BasisDesc k_zernike3{HEMI_BASIS_ZERNIKE3, "zernike3", HEMI_BASIS_SIZE_ZERNIKE3, true, eval_zernike3};
+extern const BasisDesc k_zernike6{HEMI_BASIS_ZERNIKE6, "zernike6", HEMI_BASIS_SIZE_ZERNIKE6, true, eval_zernike6};
 } // namespace hemi::math::basis_detail

@@ -19,4 +19,22 @@ void hemi_eval_h4(vec3 n, out float b[4])
     b[2] = k1 * (2.0 * n.z - 1.0);
     b[3] = -k1 * n.x;
 }
+// hemi-basis: id=3 name=h4 size=4
+void hemi_basis_h4(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[4];
+    hemi_eval_h4(n, t);
+    for (int i = 0; i < 4; ++i)
+        b[i] = t[i];
+}
+
+// hemi-basis: id=4 name=h6 size=6
+void hemi_basis_h6(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[6];
+    hemi_eval_h6(n, t);
+    for (int i = 0; i < 6; ++i)
+        b[i] = t[i];
+}
+
 #endif

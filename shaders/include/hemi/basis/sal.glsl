@@ -11,4 +11,13 @@ void hemi_eval_sal4(vec3 n, out float b[4])
     b[2] = k1 * (2.0 * n.z - 1.0);
     b[3] = -k2 * s * n.x;
 }
+// hemi-basis: id=5 name=sal4 size=4
+void hemi_basis_sal4(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[4];
+    hemi_eval_sal4(n, t);
+    for (int i = 0; i < 4; ++i)
+        b[i] = t[i];
+}
+
 #endif

@@ -16,4 +16,13 @@ void hemi_eval_sep4(vec3 n, vec4 weights[9], out float b[4])
     b[2] = s.z;
     b[3] = s.w;
 }
+// hemi-basis: id=8 name=sep4 size=4
+void hemi_basis_sep4(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[4];
+    hemi_eval_sep4(n, sep4_weights, t);
+    for (int i = 0; i < 4; ++i)
+        b[i] = t[i];
+}
+
 #endif

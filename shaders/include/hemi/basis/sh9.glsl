@@ -26,4 +26,23 @@ vec3 hemi_eval_sh9_rgb(vec4 coefficients[9], vec3 n)
         sum += coefficients[i].rgb * b[i];
     return sum;
 }
+// hemi-basis: id=0 name=sh9 size=9
+void hemi_basis_sh9(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[9];
+    hemi_eval_sh9(n, t);
+    for (int i = 0; i < 9; ++i)
+        b[i] = t[i];
+}
+
+// Linear SH least-squares fitted on the hemisphere (Habel & Wimmer 2010 Sec. 4.1): the first 4 SH functions.
+// hemi-basis: id=1 name=sh4ls size=4
+void hemi_basis_sh4ls(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[9];
+    hemi_eval_sh9(n, t);
+    for (int i = 0; i < 4; ++i)
+        b[i] = t[i];
+}
+
 #endif

@@ -19,4 +19,22 @@ void hemi_eval_zernike3(vec3 n, out float b[3])
     b[1] = 0.797884560802865 * n.x * r;
     b[2] = 0.797884560802865 * n.y * r;
 }
+// hemi-basis: id=6 name=zernike3 size=3
+void hemi_basis_zernike3(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[3];
+    hemi_eval_zernike3(n, t);
+    for (int i = 0; i < 3; ++i)
+        b[i] = t[i];
+}
+
+// hemi-basis: id=7 name=zernike6 size=6
+void hemi_basis_zernike6(vec3 n, vec4 sep4_weights[9], inout float b[HEMI_BASIS_MAX_SIZE])
+{
+    float t[6];
+    hemi_eval_zernike6(n, t);
+    for (int i = 0; i < 6; ++i)
+        b[i] = t[i];
+}
+
 #endif

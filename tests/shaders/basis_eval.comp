@@ -1,6 +1,7 @@
 #version 450
 // Evaluates one hemispherical basis (specialization constant 0 = HEMI_BASIS_*) at a list of unit normals:
-// out[i * HEMI_BASIS_MAX_SIZE + k] = b_k(n_i). Used to hold the GLSL twins equal to the C++ bases.
+// out[i * HEMI_BASIS_MAX_SIZE + k] = b_k(n_i). A test shader (tests/shaders/): it holds every GLSL twin equal
+// to its C++ basis.
 #extension GL_GOOGLE_include_directive : require
 #include "hemi/basis/all.glsl"
 
