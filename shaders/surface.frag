@@ -2,7 +2,7 @@
 // The material system's one fragment main, for every technique: fetch the surface inputs (normal-map
 // normal, base colour, emissive, each through its UV set and KHR_texture_transform), fetch the coefficients
 // from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique.
-// HEMI_AUX = 1 adds colour attachment 1 = (u, v, 0, 1) where the mesh covers the pixel (hemi's
+// HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1) where the mesh covers the pixel (hemi's
 // OffscreenTarget; tests and tools read it).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -32,6 +32,8 @@ layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std140
 };
 #endif
 
+layout(push_constant) uniform Push { DrawPush draw; };
+
 layout(location = 0) in vec4 in_packed[7];
 layout(location = 7) in vec2 in_uv0;
 layout(location = 8) in vec2 in_uv1;
@@ -55,7 +57,7 @@ void main()
     {
         out_color = vec4(material.base_color_factor.rgb, 1.0);
 #if HEMI_AUX
-        out_aux = vec4(in_uv0, 0.0, 1.0);
+        out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
 #endif
         return;
     }
@@ -107,6 +109,6 @@ void main()
         color = hemi_technique_irradiance(kBasis, K, n, c, frame.sep4_weights, albedo.rgb, emissive);
     out_color = vec4(color, 1.0);
 #if HEMI_AUX
-    out_aux = vec4(in_uv0, 0.0, 1.0);
+    out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
 #endif
 }

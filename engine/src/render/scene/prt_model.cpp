@@ -126,8 +126,9 @@ void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instanc
         throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
                                     std::to_string(source_->instances()));
     mesh_.bind(cmd);
-    for (const Draw& d : draws_)
+    for (size_t i = 0; i < draws_.size(); ++i)
     {
+        const Draw& d = draws_[i];
         DrawBindings b;
         b.type = d.type;
         b.frame = frame;
@@ -135,6 +136,7 @@ void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instanc
         b.source = coefficient_set_->set();
         b.push.model = model;
         b.push.coefficient_offset = uint32_t(source_->instance_offset(instance));
+        b.push.draw_id = uint32_t(i + 1);
         bind_material(cmd, b);
         mesh_.draw(cmd, d.first_index, d.index_count);
     }

@@ -72,7 +72,8 @@ struct DrawPush
 {
     mat4 model;              // rotation, uniform scale and translation (normals use its upper 3x3)
     uint coefficient_offset; // texels; vertex source only
-    uint pad0, pad1, pad2;
+    uint draw_id;            // written to the aux attachment's blue channel (0 = background): picking, tests
+    uint pad0, pad1;
 };
 
 #ifdef __cplusplus

@@ -75,7 +75,8 @@ struct RenderTargetDesc
     uint32_t color_attachments = 1;      // render pass: colour attachments of the subpass
     std::vector<VkFormat> color_formats; // dynamic rendering: one per colour attachment
     VkFormat depth_format = VK_FORMAT_UNDEFINED; // dynamic rendering: UNDEFINED = no depth attachment
-    // Colour attachment 1 receives (u, v, 0, 1) where the mesh covers the pixel (hemi's OffscreenTarget);
+    // Colour attachment 1 receives (u, v, draw id, 1) where the mesh covers the pixel (hemi's OffscreenTarget;
+    // shared::DrawPush::draw_id, e.g. PrtModel's primitive index + 1);
     // otherwise only attachment 0 is written (further attachments are left undefined where drawn).
     bool aux_output = false;
     VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;

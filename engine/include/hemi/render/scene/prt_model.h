@@ -68,7 +68,8 @@ public:
     // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
     void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting);
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
-    // with its own material, under `model`, with the frame set of this view.
+    // with its own material, under `model`, with the frame set of this view. Primitive p is draw id p + 1 in
+    // the aux attachment.
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const;
 
     CoefficientSource& coefficients() { return *source_; }
