@@ -13,7 +13,7 @@
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
 #include <hemi/io/prt_asset.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <CLI/CLI.hpp>
 

@@ -2,11 +2,11 @@
 
 #include <hemi/bake/normal_map.h>
 #include <hemi/gpu/commands.h>
-#include <hemi/render/offscreen.h>
+#include <hemi/render/view/offscreen.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_instance.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 #include <hemi/render/scene/gpu_mesh.h>
 
 #include <algorithm>

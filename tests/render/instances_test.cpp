@@ -17,7 +17,7 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/material/frame_set.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 #include <hemi/render/scene/prt_model.h>
 
 #include <glm/geometric.hpp>

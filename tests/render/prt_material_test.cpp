@@ -11,9 +11,9 @@
 #include <hemi/gpu/commands.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
-#include <hemi/render/offscreen.h>
+#include <hemi/render/view/offscreen.h>
 #include <hemi/render/material/frame_set.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 #include <hemi/render/transfer.h>
 
 #include "surface_object.h"

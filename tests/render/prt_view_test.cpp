@@ -12,7 +12,7 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 #include <hemi/render/transfer.h>
 
 #include <glm/gtc/matrix_transform.hpp>

@@ -18,7 +18,7 @@
 #include <hemi/io/image.h>
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/sh.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <glm/geometric.hpp>
 

@@ -1,7 +1,7 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 #include <hemi/math/sh_environment.h>
-#include <hemi/render/prt_view.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <hemi/gpu/commands.h>
 

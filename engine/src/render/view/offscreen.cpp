@@ -1,5 +1,5 @@
 #include <hemi/gpu/vk_check.h>
-#include <hemi/render/offscreen.h>
+#include <hemi/render/view/offscreen.h>
 
 #include <cstring>
 

@@ -13,7 +13,7 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
-#include <hemi/render/offscreen.h>
+#include <hemi/render/view/offscreen.h>
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/transfer.h>
 
