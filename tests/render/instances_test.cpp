@@ -9,6 +9,7 @@
 // model matrix turns into world space: it must point along d. A library that relit B with the world
 // lighting unrotated would put B's peak 90 degrees away.
 #include "../gpu_fixture.h"
+#include "engine_pass.h"
 
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/transfer_fold.h>
@@ -156,83 +157,21 @@ hemi::gpu::Image attachment(VkFormat format, VkImageUsageFlags usage)
 TEST_F(Instances, TwoInstancesInTheCallersRenderPassAreEachLitInTheirFrame)
 {
     auto& dev = hemi::test::device();
-    hemi::gpu::Image color = attachment(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT);
-    hemi::gpu::Image aux = attachment(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT);
-    hemi::gpu::Image depth = attachment(VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT);
-    VkAttachmentDescription att[3] = {};
-    for (int i = 0; i < 3; ++i)
-    {
-        att[i].format = i == 2 ? VK_FORMAT_D32_SFLOAT : VK_FORMAT_R32G32B32A32_SFLOAT;
-        att[i].samples = VK_SAMPLE_COUNT_1_BIT;
-        att[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-        att[i].storeOp = i == 2 ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
-        att[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-        att[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-        att[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        att[i].finalLayout =
-            i == 2 ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    }
-    VkAttachmentReference refs[2] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-    VkAttachmentReference depth_ref{2, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-    VkSubpassDescription subpass{};
-    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    subpass.colorAttachmentCount = 2;
-    subpass.pColorAttachments = refs;
-    subpass.pDepthStencilAttachment = &depth_ref;
-    VkSubpassDependency dep{};
-    dep.srcSubpass = VK_SUBPASS_EXTERNAL;
-    dep.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
-    dep.dstStageMask = VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT;
-    dep.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-    dep.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
-    VkRenderPassCreateInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-    rp.attachmentCount = 3;
-    rp.pAttachments = att;
-    rp.subpassCount = 1;
-    rp.pSubpasses = &subpass;
-    rp.dependencyCount = 1;
-    rp.pDependencies = &dep;
-    VkRenderPass raw_pass;
-    ASSERT_EQ(vkCreateRenderPass(dev.device(), &rp, nullptr, &raw_pass), VK_SUCCESS);
-    hemi::gpu::RenderPass render_pass(dev.device(), raw_pass);
-    VkImageView views[3] = {color.view(), aux.view(), depth.view()};
-    VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    fb.renderPass = render_pass;
-    fb.attachmentCount = 3;
-    fb.pAttachments = views;
-    fb.width = W;
-    fb.height = H;
-    fb.layers = 1;
-    VkFramebuffer raw_fb;
-    ASSERT_EQ(vkCreateFramebuffer(dev.device(), &fb, nullptr, &raw_fb), VK_SUCCESS);
-    hemi::gpu::Framebuffer framebuffer(dev.device(), raw_fb);
-
+    const hemi::test::EnginePass engine(W, H, {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
     hemi::render::RenderTargetDesc target;
-    target.render_pass = render_pass;
+    target.render_pass = engine.render_pass;
     target.color_attachments = 2;
     target.aux_output = true;
     hemi::render::MaterialSystem system(dev, target);
     check_two_instances(
         system,
         [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw) {
-            VkClearValue clears[3] = {};
-            clears[2].depthStencil = {1.0f, 0};
-            VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-            begin.renderPass = render_pass;
-            begin.framebuffer = framebuffer;
-            begin.renderArea = {{0, 0}, {W, H}};
-            begin.clearValueCount = 3;
-            begin.pClearValues = clears;
-            vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
-            VkViewport viewport{0.0f, 0.0f, float(W), float(H), 0.0f, 1.0f};
-            VkRect2D scissor{{0, 0}, {W, H}};
-            vkCmdSetViewport(cmd, 0, 1, &viewport);
-            vkCmdSetScissor(cmd, 0, 1, &scissor);
+            const float clear[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+            engine.begin(cmd, clear);
             draw(cmd);
             vkCmdEndRenderPass(cmd);
         },
-        color, aux);
+        engine.colors[0], engine.colors[1]);
 }
 
 TEST_F(Instances, TwoInstancesWithDynamicRenderingAndReverseZAreEachLitInTheirFrame)
@@ -281,10 +220,7 @@ TEST_F(Instances, TwoInstancesWithDynamicRenderingAndReverseZAreEachLitInTheirFr
             info.pColorAttachments = colors;
             info.pDepthAttachment = &depth_info;
             vkCmdBeginRendering(cmd, &info);
-            VkViewport viewport{0.0f, 0.0f, float(W), float(H), 0.0f, 1.0f};
-            VkRect2D scissor{{0, 0}, {W, H}};
-            vkCmdSetViewport(cmd, 0, 1, &viewport);
-            vkCmdSetScissor(cmd, 0, 1, &scissor);
+            hemi::test::EnginePass::set_viewport(cmd, W, H);
             draw(cmd);
             vkCmdEndRendering(cmd);
         },

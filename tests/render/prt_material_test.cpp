@@ -16,6 +16,7 @@
 #include <hemi/render/view/prt_view.h>
 #include <hemi/render/transfer.h>
 
+#include "engine_pass.h"
 #include "surface_object.h"
 
 #include <glm/geometric.hpp>
@@ -193,65 +194,15 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
     const Rendered reference = render(scene, basis, lighting, glm::vec3(1.0f), w, h);
 
     // The engine's pass.
-    hemi::gpu::Image color = hemi::gpu::create_image(
-        dev, {w, h, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT});
-    hemi::gpu::Image depth = hemi::gpu::create_image(
-        dev, {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
-    VkAttachmentDescription attachments[2] = {};
-    attachments[0].format = VK_FORMAT_R16G16B16A16_SFLOAT;
-    attachments[0].samples = VK_SAMPLE_COUNT_1_BIT;
-    attachments[0].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    attachments[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    attachments[0].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-    attachments[0].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-    attachments[0].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    attachments[0].finalLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    attachments[1] = attachments[0];
-    attachments[1].format = VK_FORMAT_D32_SFLOAT;
-    attachments[1].storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-    attachments[1].finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    VkAttachmentReference color_ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
-    VkAttachmentReference depth_ref{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-    VkSubpassDescription subpass{};
-    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    subpass.colorAttachmentCount = 1;
-    subpass.pColorAttachments = &color_ref;
-    subpass.pDepthStencilAttachment = &depth_ref;
-    VkSubpassDependency dependency{};
-    dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
-    dependency.dstSubpass = 0;
-    dependency.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
-    dependency.dstStageMask = VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT;
-    dependency.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-    dependency.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
-    VkRenderPassCreateInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-    rp.attachmentCount = 2;
-    rp.pAttachments = attachments;
-    rp.subpassCount = 1;
-    rp.pSubpasses = &subpass;
-    rp.dependencyCount = 1;
-    rp.pDependencies = &dependency;
-    VkRenderPass raw_pass;
-    ASSERT_EQ(vkCreateRenderPass(dev.device(), &rp, nullptr, &raw_pass), VK_SUCCESS);
-    hemi::gpu::RenderPass render_pass(dev.device(), raw_pass);
-    VkImageView views[2] = {color.view(), depth.view()};
-    VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    fb.renderPass = render_pass;
-    fb.attachmentCount = 2;
-    fb.pAttachments = views;
-    fb.width = w;
-    fb.height = h;
-    fb.layers = 1;
-    VkFramebuffer raw_fb;
-    ASSERT_EQ(vkCreateFramebuffer(dev.device(), &fb, nullptr, &raw_fb), VK_SUCCESS);
-    hemi::gpu::Framebuffer framebuffer(dev.device(), raw_fb);
+    const hemi::test::EnginePass engine(w, h, {VK_FORMAT_R16G16B16A16_SFLOAT});
+    const hemi::gpu::Image& color = engine.colors[0];
 
     hemi::render::TransferMatrices m(uint32_t(scene.mesh.vertex_count()), uint32_t(basis.size), 9,
                                      folded_matrices(scene.mesh, basis));
     hemi::render::TransferPass pass(dev, m);
     const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
     hemi::render::RenderTargetDesc target;
-    target.render_pass = render_pass;
+    target.render_pass = engine.render_pass;
     target.color_attachments = 1;
     hemi::render::MaterialSystem system(dev, target);
     hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(glm::vec3(1.0f)), basis,
@@ -266,20 +217,7 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
                                   VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
         object.upload.record(cmd);
         frame.record_update(cmd, f);
-        VkClearValue clears[2];
-        std::memcpy(clears[0].color.float32, clear, sizeof clear);
-        clears[1].depthStencil = {1.0f, 0};
-        VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-        begin.renderPass = render_pass;
-        begin.framebuffer = framebuffer;
-        begin.renderArea = {{0, 0}, {w, h}};
-        begin.clearValueCount = 2;
-        begin.pClearValues = clears;
-        vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
-        VkViewport viewport{0.0f, 0.0f, float(w), float(h), 0.0f, 1.0f};
-        VkRect2D scissor{{0, 0}, {w, h}};
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        engine.begin(cmd, clear);
         object.draw(cmd, frame.set());
         vkCmdEndRenderPass(cmd);
     });
