@@ -1,3 +1,4 @@
+#include <hemi/gpu/allocator.h>
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/vk_check.h>
 
@@ -273,8 +274,12 @@ Device::Device(const ExternalDevice& external)
 Device::~Device()
 {
     if (!owns_)
+    {
+        allocator_.reset(); // the host's device: its memory blocks are hemi's to free
         return;
+    }
     vkDeviceWaitIdle(device_);
+    allocator_.reset();
     vkDestroyDevice(device_, nullptr);
     if (messenger_)
     {
@@ -294,6 +299,7 @@ void Device::init_properties()
     properties_ = props2.properties;
     subgroup_size_ = std::max(1u, subgroup.subgroupSize);
     vkGetPhysicalDeviceMemoryProperties(physical_device_, &memory_);
+    allocator_ = std::make_unique<MemoryAllocator>(*this);
 
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);

@@ -25,16 +25,9 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc)
 
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(d, buffer, &req);
-    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    alloc.allocationSize = req.size;
-    alloc.memoryTypeIndex = device.memory_type(req.memoryTypeBits, desc.memory);
-    VkDeviceMemory memory;
-    HEMI_VK_CHECK(vkAllocateMemory(d, &alloc, nullptr, &memory));
-    b.memory_ = DeviceMemory(d, memory);
-    HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, memory, 0));
-    // Only coherent memory is mapped: hemi never flushes or invalidates ranges.
-    if (device.memory_is_host_coherent(alloc.memoryTypeIndex))
-        HEMI_VK_CHECK(vkMapMemory(d, memory, 0, VK_WHOLE_SIZE, 0, &b.mapped_));
+    b.memory_ = device.allocator().allocate(req, desc.memory, true);
+    HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, b.memory_.memory(), b.memory_.offset()));
+    b.mapped_ = b.memory_.mapped(); // coherent memory only: hemi never flushes or invalidates ranges
     b.size_ = desc.size;
     return b;
 }
@@ -137,13 +130,8 @@ Image create_image(const Device& device, const ImageDesc& desc)
 
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(d, image, &req);
-    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    alloc.allocationSize = req.size;
-    alloc.memoryTypeIndex = device.memory_type(req.memoryTypeBits, MemoryUsage::GpuOnly);
-    VkDeviceMemory memory;
-    HEMI_VK_CHECK(vkAllocateMemory(d, &alloc, nullptr, &memory));
-    img.memory_ = DeviceMemory(d, memory);
-    HEMI_VK_CHECK(vkBindImageMemory(d, image, memory, 0));
+    img.memory_ = device.allocator().allocate(req, MemoryUsage::GpuOnly, false);
+    HEMI_VK_CHECK(vkBindImageMemory(d, image, img.memory_.memory(), img.memory_.offset()));
 
     VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     view_info.image = image;

@@ -7,11 +7,14 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
 namespace hemi::gpu
 {
+
+class MemoryAllocator;
 
 enum class LogLevel
 {
@@ -97,6 +100,9 @@ public:
     bool memory_is_host_visible(uint32_t memory_type) const;
     bool memory_is_host_coherent(uint32_t memory_type) const;
 
+    // Where hemi's buffers and images get their memory (gpu/allocator.h): sub-allocated from few blocks.
+    MemoryAllocator& allocator() const { return *allocator_; }
+
     // Validation-layer warnings and errors seen so far (always 0 without validation).
     uint64_t validation_messages() const { return validation_messages_.load(); }
 
@@ -123,6 +129,7 @@ private:
     uint32_t subgroup_size_ = 1;
     double timestamp_period_ns_ = 0.0;
     LogCallback log_;
+    std::unique_ptr<MemoryAllocator> allocator_;
     std::atomic<uint64_t> validation_messages_{0};
 };
 

@@ -1,8 +1,10 @@
 #pragma once
-// Buffers, images, samplers and buffer views: move-only owners created from small descs with defaults.
-// Destruction is immediate: the caller makes sure the GPU no longer uses the object (every submission
-// in hemi waits on its fence, so objects outlive their command buffers by construction).
+// Buffers, images, samplers and buffer views: move-only owners created from small descs with defaults, their
+// memory sub-allocated by the device's MemoryAllocator (gpu/allocator.h). Destruction is immediate: the
+// caller makes sure the GPU no longer uses the object, e.g. by handing it to a gpu::DeletionQueue
+// (gpu/deletion_queue.h) until the frame that used it has finished.
 
+#include <hemi/gpu/allocator.h>
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/handle.h>
 
@@ -51,7 +53,7 @@ public:
 
 private:
     friend Buffer create_buffer(const Device&, const BufferDesc&);
-    DeviceMemory memory_;
+    Allocation memory_;
     VkBufferHandle buffer_;
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
@@ -89,7 +91,7 @@ public:
 
 private:
     friend Image create_image(const Device&, const ImageDesc&);
-    DeviceMemory memory_;
+    Allocation memory_;
     VkImageHandle image_;
     ImageView view_;
     VkFormat format_ = VK_FORMAT_UNDEFINED;

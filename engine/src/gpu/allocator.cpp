@@ -1,0 +1,197 @@
+#include <hemi/gpu/allocator.h>
+#include <hemi/gpu/vk_check.h>
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+namespace hemi::gpu
+{
+
+Allocation::Allocation(Allocation&& o) noexcept
+    : allocator_(std::exchange(o.allocator_, nullptr)), block_(std::exchange(o.block_, nullptr)),
+      offset_(std::exchange(o.offset_, 0)), size_(std::exchange(o.size_, 0))
+{
+}
+
+Allocation& Allocation::operator=(Allocation&& o) noexcept
+{
+    if (this != &o)
+    {
+        release();
+        allocator_ = std::exchange(o.allocator_, nullptr);
+        block_ = std::exchange(o.block_, nullptr);
+        offset_ = std::exchange(o.offset_, 0);
+        size_ = std::exchange(o.size_, 0);
+    }
+    return *this;
+}
+
+Allocation::~Allocation()
+{
+    release();
+}
+
+void Allocation::release()
+{
+    if (block_)
+        allocator_->free(static_cast<MemoryAllocator::Block*>(block_), offset_, size_);
+    block_ = nullptr;
+    allocator_ = nullptr;
+}
+
+VkDeviceMemory Allocation::memory() const
+{
+    return block_ ? static_cast<const MemoryAllocator::Block*>(block_)->memory : VK_NULL_HANDLE;
+}
+
+uint32_t Allocation::memory_type() const
+{
+    return block_ ? static_cast<const MemoryAllocator::Block*>(block_)->type : 0;
+}
+
+void* Allocation::mapped() const
+{
+    const auto* b = static_cast<const MemoryAllocator::Block*>(block_);
+    return b && b->mapped ? static_cast<std::byte*>(b->mapped) + offset_ : nullptr;
+}
+
+MemoryAllocator::MemoryAllocator(const Device& device, VkDeviceSize block_size)
+    : device_(&device), block_size_(block_size)
+{
+}
+
+MemoryAllocator::~MemoryAllocator()
+{
+    size_t leaked = 0;
+    for (const auto& b : blocks_)
+    {
+        leaked += b->live;
+        vkFreeMemory(device_->device(), b->memory, nullptr);
+    }
+    if (leaked)
+        device_->log(LogLevel::Warning, "hemi: " + std::to_string(leaked) +
+                                            " buffers or images outlived their device's memory allocator");
+}
+
+MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, VkDeviceSize size, bool dedicated)
+{
+    VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    info.allocationSize = size;
+    info.memoryTypeIndex = type;
+    VkDeviceMemory memory;
+    HEMI_VK_CHECK(vkAllocateMemory(device_->device(), &info, nullptr, &memory));
+    auto block = std::make_unique<Block>();
+    block->memory = memory;
+    block->size = size;
+    block->type = type;
+    block->linear = linear;
+    block->dedicated = dedicated;
+    block->free[0] = size;
+    // Only coherent memory is mapped: hemi never flushes or invalidates ranges.
+    if (device_->memory_is_host_coherent(type))
+    {
+        VkResult r = vkMapMemory(device_->device(), memory, 0, VK_WHOLE_SIZE, 0, &block->mapped);
+        if (r != VK_SUCCESS)
+        {
+            vkFreeMemory(device_->device(), memory, nullptr);
+            HEMI_VK_CHECK(r);
+        }
+    }
+    blocks_.push_back(std::move(block));
+    return blocks_.back().get();
+}
+
+Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsage usage, bool linear)
+{
+    const uint32_t type = device_->memory_type(req.memoryTypeBits, usage);
+    const VkDeviceSize align = std::max<VkDeviceSize>(1, req.alignment);
+    std::lock_guard<std::mutex> lock(mutex_);
+    Block* chosen = nullptr;
+    VkDeviceSize offset = 0;
+    if (req.size > block_size_ / 2)
+        chosen = new_block(type, linear, req.size, true);
+    else
+    {
+        // First fit over the blocks of this type and kind.
+        for (const auto& b : blocks_)
+        {
+            if (b->dedicated || b->type != type || b->linear != linear)
+                continue;
+            for (const auto& [start, length] : b->free)
+            {
+                const VkDeviceSize aligned = (start + align - 1) / align * align;
+                if (aligned + req.size <= start + length)
+                {
+                    chosen = b.get();
+                    offset = aligned;
+                    break;
+                }
+            }
+            if (chosen)
+                break;
+        }
+        if (!chosen)
+            chosen = new_block(type, linear, block_size_, false);
+    }
+    // Carve [offset, offset + size) out of the free range holding it.
+    auto it = std::prev(chosen->free.upper_bound(offset));
+    const VkDeviceSize start = it->first, length = it->second;
+    chosen->free.erase(it);
+    if (offset > start)
+        chosen->free[start] = offset - start;
+    if (offset + req.size < start + length)
+        chosen->free[offset + req.size] = start + length - offset - req.size;
+    ++chosen->live;
+    Allocation a;
+    a.allocator_ = this;
+    a.block_ = chosen;
+    a.offset_ = offset;
+    a.size_ = req.size;
+    return a;
+}
+
+void MemoryAllocator::free(Block* block, VkDeviceSize offset, VkDeviceSize size)
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    --block->live;
+    if (block->dedicated)
+    {
+        vkFreeMemory(device_->device(), block->memory, nullptr);
+        blocks_.erase(std::find_if(blocks_.begin(), blocks_.end(), [&](const auto& b) { return b.get() == block; }));
+        return;
+    }
+    auto [it, inserted] = block->free.emplace(offset, size);
+    (void)inserted;
+    // Coalesce with the following and the preceding free ranges.
+    if (auto next = std::next(it); next != block->free.end() && it->first + it->second == next->first)
+    {
+        it->second += next->second;
+        block->free.erase(next);
+    }
+    if (it != block->free.begin())
+        if (auto prev = std::prev(it); prev->first + prev->second == it->first)
+        {
+            prev->second += it->second;
+            block->free.erase(it);
+        }
+}
+
+MemoryAllocator::Stats MemoryAllocator::stats() const
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    Stats s;
+    for (const auto& b : blocks_)
+    {
+        ++s.blocks;
+        s.allocations += b->live;
+        s.block_bytes += b->size;
+        VkDeviceSize free_bytes = 0;
+        for (const auto& [start, length] : b->free)
+            free_bytes += length;
+        s.used_bytes += b->size - free_bytes;
+    }
+    return s;
+}
+
+} // namespace hemi::gpu
