@@ -43,7 +43,7 @@ int main(int argc, char** argv)
         ->capture_default_str();
     app.add_flag("--cpca", cpca, "use the technique's CPCA data (bake with --cpca)");
     app.add_option("--env", env, "uniform (radiance 1 everywhere), sky (analytic) or an equirectangular FILE.exr, "
-                                 "z up")
+                                 "z up, in Blender's world mapping (the image centre looks along +x)")
         ->capture_default_str();
     app.add_option("--rotate", rotate, "turn the environment about the up axis by DEG degrees")->capture_default_str();
     app.add_flag("--white", white, "albedo 1: the lighting-only view");
