@@ -245,3 +245,47 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
         }
     EXPECT_GT(covered, 1000u);
 }
+
+// The constant technique (hemi-bench's baseline) renders exactly its base colour factor, whatever the
+// coefficients and the normal map: every covered pixel, to float precision.
+TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
+{
+    auto& dev = hemi::test::device();
+    auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    scene.mesh = hemi::io::make_uv_sphere(1.0f, 32, 16);
+    const uint32_t w = 64, h = 48;
+    hemi::render::OffscreenTarget target(dev, w, h);
+    hemi::render::MaterialSystem system(dev, target.desc());
+    const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
+    const glm::vec3 factor(0.3f, 0.55f, 0.8f);
+    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(factor),
+                                     hemi::math::basis("sh9"), nullptr);
+    hemi::render::MaterialKey key;
+    key.technique = hemi::render::Technique::Constant;
+    key.source = hemi::render::CoefficientSourceKind::Uniform;
+    key.frame = hemi::render::ShadingFrame::World;
+    object.type = &system.type(key);
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    const std::vector<glm::vec3> probe(9, glm::vec3(100.0f)); // would light the sphere far above the factor
+    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
+        object.upload.record(cmd);
+        frame.record_update(cmd, f);
+        object.probe->record_update(cmd, probe);
+        target.begin(cmd);
+        object.draw(cmd, frame.set());
+        target.end(cmd);
+    });
+    const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
+    size_t covered = 0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+            if (aux.at(x, y)[3] == 1.0f)
+            {
+                ++covered;
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(color.at(x, y)[c], factor[c]) << x << "," << y;
+            }
+    EXPECT_GT(covered, 300u);
+}

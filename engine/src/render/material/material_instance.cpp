@@ -1,3 +1,4 @@
+#include <hemi/gpu/vk_check.h>
 #include <hemi/io/image.h>
 #include <hemi/render/material/material_instance.h>
 
@@ -105,8 +106,7 @@ VkSampler TextureSet::sampler(const io::TextureSampler& state)
     info.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
     info.maxLod = state.mipmaps ? VK_LOD_CLAMP_NONE : 0.0f; // no mipmapped minification: mip 0 only
     VkSampler sampler;
-    if (VkResult r = vkCreateSampler(device_->device(), &info, nullptr, &sampler); r != VK_SUCCESS)
-        throw std::runtime_error("hemi: vkCreateSampler failed (" + std::to_string(int(r)) + ")");
+    HEMI_VK_CHECK(vkCreateSampler(device_->device(), &info, nullptr, &sampler));
     samplers_.emplace_back(state, gpu::Sampler(device_->device(), sampler));
     return samplers_.back().second;
 }

@@ -1,5 +1,6 @@
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/pipeline.h>
+#include <hemi/gpu/upload.h>
 #include <hemi/render/passes/cpca_pass.h>
 
 #include "pass_detail.h"
@@ -35,9 +36,13 @@ struct CpcaTransferPass::Impl
     std::vector<VkDescriptorSet> project_sets, reconstruct_sets; // one each per instance
 };
 
-CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c, uint32_t instances)
+CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c, uint32_t instances,
+                                   gpu::UploadBatch* upload)
     : impl_(std::make_unique<Impl>())
 {
+    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size) {
+        upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size);
+    };
     validate_cpca(c);
     Impl& s = *impl_;
     s.device = &device;
@@ -111,13 +116,13 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
         throw std::runtime_error("hemi: CPCA data of " + std::to_string(s.n) +
                                  " vertices exceed the device's maxTexelBufferElements");
     s.rows_buffer = storage(rows.size() * 4, "cluster matrices");
-    gpu::write_buffer(device, s.rows_buffer, rows.data(), rows.size() * 4);
+    put(s.rows_buffer, rows.data(), rows.size() * 4);
     s.weights = gpu::create_buffer(device, {interleaved.size() * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
-    gpu::write_buffer(device, s.weights, interleaved.data(), interleaved.size() * 4);
+    put(s.weights, interleaved.data(), interleaved.size() * 4);
     s.weight_view = gpu::create_buffer_view(device, s.weights, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
                                             interleaved.size() * 4);
     s.slots = storage(slot_vertex.size() * 4, "vertex slots");
-    gpu::write_buffer(device, s.slots, slot_vertex.data(), slot_vertex.size() * 4);
+    put(s.slots, slot_vertex.data(), slot_vertex.size() * 4);
     // Written by step 1 as a storage buffer, read by step 2 as a uniform block at a dynamic offset: cluster
     // c's projections start at c * stride.
     if (s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES > limits.maxStorageBufferRange)

@@ -1,5 +1,6 @@
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/pipeline.h>
+#include <hemi/gpu/upload.h>
 #include <hemi/render/passes/transfer_pass.h>
 
 #include "pass_detail.h"
@@ -48,9 +49,12 @@ static std::vector<gpu::Binding> transfer_bindings()
 }
 
 TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m, uint64_t max_view_texels,
-                           uint32_t instances)
+                           uint32_t instances, gpu::UploadBatch* upload)
     : impl_(std::make_unique<Impl>())
 {
+    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size) {
+        upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size);
+    };
     Impl& s = *impl_;
     s.device = &device;
     s.n = m.vertex_count();
@@ -60,7 +64,7 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
 
     const VkDeviceSize matrix_bytes = m.data().size_bytes();
     s.matrices = gpu::create_buffer(device, {matrix_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
-    gpu::write_buffer(device, s.matrices, m.data().data(), matrix_bytes);
+    put(s.matrices, m.data().data(), matrix_bytes);
     s.lighting = gpu::create_buffer(device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
     s.coefficients = gpu::create_buffer(

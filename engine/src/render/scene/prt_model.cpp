@@ -45,7 +45,7 @@ std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting
 namespace
 {
 std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const io::PrtAsset& asset,
-                                               const PrtModelDesc& desc)
+                                               const PrtModelDesc& desc, gpu::UploadBatch& upload)
 {
     const io::PrtTechnique& t = asset.technique(desc.technique);
     const uint32_t n = uint32_t(asset.mesh.vertex_count());
@@ -57,11 +57,12 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
         const io::PrtCpca& c = *t.cpca;
         return std::make_unique<CpcaTransferPass>(
             device, CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
-            desc.instances);
+            desc.instances, &upload);
     }
     if (t.matrices.empty())
         throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique + "' (use --cpca)");
-    return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0, desc.instances);
+    return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0, desc.instances,
+                                          &upload);
 }
 } // namespace
 
@@ -71,7 +72,7 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
       mesh_(system.device(), asset.mesh, upload), textures_(system.device(), asset.images, asset.materials, upload)
 {
     const gpu::Device& device = system.device();
-    source_ = make_source(device, asset, desc);
+    source_ = make_source(device, asset, desc, upload);
     if (int(source_->k()) != basis_->size)
         throw std::invalid_argument("hemi: technique '" + desc.technique + "' has K = " + std::to_string(source_->k()) +
                                     " in the asset, its basis needs " + std::to_string(basis_->size));

@@ -6,6 +6,11 @@
 
 #include <memory>
 
+namespace hemi::gpu
+{
+class UploadBatch;
+}
+
 namespace hemi::render
 {
 
@@ -17,7 +22,9 @@ class CpcaTransferPass : public CoefficientSource
 public:
     // Throws std::invalid_argument on inconsistent sizes, a cluster out of range or a non-finite value, and
     // std::runtime_error when the data exceed the device's storage-buffer range or texel-buffer size.
-    CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca, uint32_t instances = 1);
+    // `instances` and `upload` as for TransferPass.
+    CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca, uint32_t instances = 1,
+                     gpu::UploadBatch* upload = nullptr);
     ~CpcaTransferPass();
     CpcaTransferPass(const CpcaTransferPass&) = delete;
     CpcaTransferPass& operator=(const CpcaTransferPass&) = delete;

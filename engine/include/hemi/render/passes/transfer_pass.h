@@ -6,6 +6,11 @@
 
 #include <memory>
 
+namespace hemi::gpu
+{
+class UploadBatch;
+}
+
 namespace hemi::render
 {
 
@@ -16,9 +21,11 @@ class TransferPass : public CoefficientSource
 public:
     // `max_view_texels` bounds the texels of one texel-buffer view (and so one dispatch's segment);
     // 0 means the device's maxTexelBufferElements. Smaller values exist to exercise segmenting in tests.
-    // `instances` objects can be relit per frame from the one copy of the matrices.
+    // `instances` objects can be relit per frame from the one copy of the matrices. With `upload`, the
+    // matrices are staged there (the caller records it before the first record()); without, written now
+    // (a submit-and-wait when the device memory is not host-visible).
     TransferPass(const gpu::Device& device, const TransferMatrices& matrices, uint64_t max_view_texels = 0,
-                 uint32_t instances = 1);
+                 uint32_t instances = 1, gpu::UploadBatch* upload = nullptr);
     ~TransferPass();
     TransferPass(const TransferPass&) = delete;
     TransferPass& operator=(const TransferPass&) = delete;
