@@ -1,7 +1,8 @@
 #version 450
 // The material system's one fragment main, for every technique: fetch the surface inputs (normal-map
 // normal, base colour, emissive, each through its UV set and KHR_texture_transform), fetch the coefficients
-// from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique.
+// from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique
+// (hemi_shade, generated from shaders/include/hemi/techniques/). What a technique ignores, the compiler drops.
 // HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1) where the mesh covers the pixel (hemi's
 // OffscreenTarget; tests and tools read it).
 #extension GL_GOOGLE_include_directive : require
@@ -53,14 +54,6 @@ vec2 material_uv(uint set, int transform)
 
 void main()
 {
-    if (kTechnique == HEMI_TECHNIQUE_CONSTANT)
-    {
-        out_color = vec4(material.base_color_factor.rgb, 1.0);
-#if HEMI_AUX
-        out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
-#endif
-        return;
-    }
     vec4 albedo = material.base_color_factor * texture(base_color, material_uv(material.texcoord.x, 0));
     // Most materials emit nothing: skip the fetch (a branch uniform across the draw).
     vec3 emissive = vec3(0.0);
@@ -104,10 +97,16 @@ void main()
         n = normalize(T * nt.x + B * nt.y + N * nt.z);
     }
 
-    vec3 color = vec3(0.0);
-    if (kTechnique == HEMI_TECHNIQUE_IRRADIANCE)
-        color = hemi_technique_irradiance(kBasis, K, n, c, frame.sep4_weights, albedo.rgb, emissive);
-    out_color = vec4(color, 1.0);
+    HemiSurface s;
+    s.albedo = albedo.rgb;
+    s.emissive = emissive;
+    s.base_color_factor = material.base_color_factor.rgb;
+    s.n = n;
+    s.basis = kBasis;
+    s.k = K;
+    s.c = c;
+    s.sep4_weights = frame.sep4_weights;
+    out_color = vec4(hemi_shade(kTechnique, s), 1.0);
 #if HEMI_AUX
     out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
 #endif

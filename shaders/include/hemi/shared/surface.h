@@ -40,10 +40,9 @@ using uint = uint32_t;
 #define HEMI_FRAME_TANGENT 0 // the normal-map tangent frame: the map's normal evaluates the basis directly
 #define HEMI_FRAME_WORLD 1   // world space: the map's normal is turned into world space first
 
-// Techniques (specialization constant); one GLSL function each in hemi/surface/techniques.glsl.
-#define HEMI_TECHNIQUE_IRRADIANCE 0 // colour = albedo * sum_k c_k b_k(n) / pi + emissive
-#define HEMI_TECHNIQUE_CONSTANT 1   // colour = the base colour factor: no texture, no coefficient (the
-                                    // baseline hemi-bench measures the other techniques' cost against)
+// Techniques (specialization constant): HEMI_TECHNIQUE_<NAME>, generated from the declarations in
+// shaders/include/hemi/techniques/*.glsl (one file each).
+#include "hemi/shared/techniques_generated.h"
 
 // Specialization constant ids.
 #define HEMI_SPEC_BASIS 0
