@@ -22,17 +22,7 @@ class PipelineState : public hemi::test::GpuTest
 {
 };
 
-// A 2 x 2 quad in the xz plane facing -y (towards a camera on -y), UV (0, 0) at its top left.
-hemi::io::Mesh quad()
-{
-    hemi::io::Mesh m;
-    m.positions = {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
-    m.normals.assign(4, glm::vec3(0, -1, 0));
-    m.tangents.assign(4, glm::vec4(1, 0, 0, 1));
-    m.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
-    m.indices = {0, 1, 2, 0, 2, 3};
-    return m;
-}
+using hemi::test::quad;
 
 // Uniform radiance 1 as world-space SH9 irradiance: E = pi for every normal, so colour = albedo.
 std::vector<glm::vec3> furnace_probe()

@@ -289,3 +289,83 @@ TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
             }
     EXPECT_GT(covered, 300u);
 }
+
+// The per-texel coefficient source (directional lightmaps): K = 9 SH9 maps of 16 x 8 half-float texels
+// sampled at TEXCOORD_1, bilinear and clamped. Every sampled pixel equals a CPU evaluation: the bilinear
+// interpolation of the half-rounded texels at the pixel's UV, times the SH9 basis at the (flat) normal,
+// times albedo / pi.
+TEST_F(PrtMaterial, TexelCoefficientMapsMatchCpuEvaluation)
+{
+    auto& dev = hemi::test::device();
+    const uint32_t mw = 16, mh = 8, K = 9, w = 96, h = 96;
+    std::vector<float> maps(size_t(mw) * mh * K * 3);
+    for (uint32_t k = 0; k < K; ++k)
+        for (uint32_t y = 0; y < mh; ++y)
+            for (uint32_t x = 0; x < mw; ++x)
+            {
+                float* t = &maps[((size_t(k) * mh + y) * mw + x) * 3];
+                const float scale = k == 0 ? 3.0f : 1.0f / float(k);
+                t[0] = scale * (0.6f + 0.3f * std::sin(0.4f * x + float(k)));
+                t[1] = scale * (0.5f + 0.2f * std::cos(0.5f * y + 0.7f * float(k)));
+                t[2] = scale * (0.4f + 0.02f * float(x + y));
+            }
+    hemi::render::OffscreenTarget target(dev, w, h);
+    hemi::render::MaterialSystem system(dev, target.desc());
+    const hemi::io::ImageRgba8 flat{1, 1, {128, 128, 255, 255}};
+    const glm::vec3 albedo(0.9f, 0.7f, 0.5f);
+    hemi::io::Material material;
+    material.base_color_factor = glm::vec4(albedo, 1.0f);
+    hemi::test::SurfaceObject object(system, hemi::test::quad(), flat, material, hemi::math::basis("sh9"), nullptr);
+    hemi::render::TexelCoefficients coefficients(system, mw, mh, K, maps, object.upload);
+    hemi::render::MaterialKey key;
+    key.source = hemi::render::CoefficientSourceKind::Texel;
+    key.basis = HEMI_BASIS_SH9;
+    key.frame = hemi::render::ShadingFrame::Tangent;
+    object.type = &system.type(key);
+    object.source_set = coefficients.set();
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
+    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
+        object.upload.record(cmd);
+        frame.record_update(cmd, f);
+        target.begin(cmd);
+        object.draw(cmd, frame.set());
+        target.end(cmd);
+    });
+    const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
+
+    auto texel = [&](uint32_t k, int x, int y) {
+        x = std::clamp(x, 0, int(mw) - 1), y = std::clamp(y, 0, int(mh) - 1);
+        const float* t = &maps[((size_t(k) * mh + uint32_t(y)) * mw + uint32_t(x)) * 3];
+        return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])), glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
+                         glm::unpackHalf1x16(glm::packHalf1x16(t[2])));
+    };
+    float y9[9];
+    hemi::math::sh_eval(3, glm::vec3(0, 0, 1), y9);
+    int compared = 0, failures = 0;
+    for (uint32_t py = 1; py < h; py += 4)
+        for (uint32_t px = 1; px < w; px += 4)
+        {
+            if (aux.at(px, py)[3] != 1.0f)
+                continue;
+            const glm::vec2 uv(aux.at(px, py)[0], aux.at(px, py)[1]);
+            const float fx = uv.x * mw - 0.5f, fy = uv.y * mh - 0.5f;
+            const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+            const float ax = fx - float(x0), ay = fy - float(y0);
+            glm::vec3 e(0.0f);
+            for (uint32_t k = 0; k < K; ++k)
+            {
+                const glm::vec3 c = glm::mix(glm::mix(texel(k, x0, y0), texel(k, x0 + 1, y0), ax),
+                                             glm::mix(texel(k, x0, y0 + 1), texel(k, x0 + 1, y0 + 1), ax), ay);
+                e += c * y9[k];
+            }
+            const glm::vec3 want = albedo * e / float(M_PI);
+            ++compared;
+            for (int ch = 0; ch < 3; ++ch)
+                if (std::abs(color.at(px, py)[ch] - want[ch]) > 0.005f * std::abs(want[ch]) + 1e-3f && failures++ < 5)
+                    ADD_FAILURE() << "pixel " << px << "," << py << " uv " << uv.x << "," << uv.y << " ch " << ch
+                                  << ": GPU " << color.at(px, py)[ch] << ", CPU " << want[ch];
+        }
+    EXPECT_GT(compared, 150);
+}

@@ -25,6 +25,7 @@ struct SurfaceObject
     std::unique_ptr<render::VertexCoefficients> vertex;
     std::unique_ptr<render::ProbeCoefficients> probe;
     const render::MaterialType* type = nullptr;
+    VkDescriptorSet source_set = VK_NULL_HANDLE; // overrides the vertex or probe set (e.g. coefficient maps)
 
     // Per-vertex coefficients from `source` (tangent frame, basis `basis`), or, with source null, an SH9 probe
     // in world space. `normal_map` is image 0.
@@ -62,7 +63,7 @@ struct SurfaceObject
         b.type = type;
         b.frame = frame;
         b.material = instance.set();
-        b.source = vertex ? vertex->set() : probe->set();
+        b.source = source_set ? source_set : vertex ? vertex->set() : probe->set();
         b.push.model = model;
         b.push.coefficient_offset = coefficient_offset;
         render::bind_material(cmd, b);
@@ -73,6 +74,20 @@ struct SurfaceObject
 
 // A material with `albedo` and the normal map as image 0, sampled bilinearly from mip 0 (glTF minFilter
 // LINEAR): what the tests' CPU references evaluate (normal_map_lookup.h).
+// A 2 x 2 quad in the xz plane facing -y (towards a camera on -y), UV (0, 0) at its top left; TEXCOORD_1 =
+// TEXCOORD_0.
+inline io::Mesh quad()
+{
+    io::Mesh m;
+    m.positions = {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
+    m.normals.assign(4, glm::vec3(0, -1, 0));
+    m.tangents.assign(4, glm::vec4(1, 0, 0, 1));
+    m.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+    m.uvs1 = m.uvs;
+    m.indices = {0, 1, 2, 0, 2, 3};
+    return m;
+}
+
 inline io::Material normal_mapped(glm::vec3 albedo)
 {
     io::Material m;

@@ -108,8 +108,8 @@ static bool is_depth(VkFormat f)
 
 Image create_image(const Device& device, const ImageDesc& desc)
 {
-    if (desc.width == 0 || desc.height == 0 || desc.mip_levels == 0)
-        throw std::invalid_argument("hemi: create_image with a zero size or mip count");
+    if (desc.width == 0 || desc.height == 0 || desc.mip_levels == 0 || desc.layers == 0)
+        throw std::invalid_argument("hemi: create_image with a zero size, mip or layer count");
     VkDevice d = device.device();
     Image img;
     img.aspect_ = is_depth(desc.format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
@@ -118,7 +118,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
     info.format = desc.format;
     info.extent = {desc.width, desc.height, 1};
     info.mipLevels = desc.mip_levels;
-    info.arrayLayers = 1;
+    info.arrayLayers = desc.layers;
     info.samples = VK_SAMPLE_COUNT_1_BIT;
     info.tiling = VK_IMAGE_TILING_OPTIMAL;
     info.usage = desc.usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
@@ -135,9 +135,9 @@ Image create_image(const Device& device, const ImageDesc& desc)
 
     VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     view_info.image = image;
-    view_info.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    view_info.viewType = desc.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
     view_info.format = desc.format;
-    view_info.subresourceRange = {img.aspect_, 0, desc.mip_levels, 0, 1};
+    view_info.subresourceRange = {img.aspect_, 0, desc.mip_levels, 0, desc.layers};
     VkImageView view;
     HEMI_VK_CHECK(vkCreateImageView(d, &view_info, nullptr, &view));
     img.view_ = ImageView(d, view);
@@ -145,6 +145,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
     img.width_ = desc.width;
     img.height_ = desc.height;
     img.mip_levels_ = desc.mip_levels;
+    img.layers_ = desc.layers;
     return img;
 }
 
@@ -158,7 +159,7 @@ void transition_image(VkCommandBuffer cmd, const Image& image, VkImageLayout fro
     barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     barrier.image = image.handle();
-    barrier.subresourceRange = {image.aspect(), 0, image.mip_levels(), 0, 1};
+    barrier.subresourceRange = {image.aspect(), 0, image.mip_levels(), 0, image.layers()};
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0, nullptr,
                          0, nullptr, 1, &barrier);
 }

@@ -41,8 +41,8 @@ void UploadBatch::buffer(const Buffer& dst, const void* data, VkDeviceSize size,
 
 namespace
 {
-void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, uint32_t mip, uint32_t mips,
-             VkImageLayout from, VkImageLayout to, VkAccessFlags src_access, VkAccessFlags dst_access,
+void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, uint32_t layers, uint32_t mip,
+             uint32_t mips, VkImageLayout from, VkImageLayout to, VkAccessFlags src_access, VkAccessFlags dst_access,
              VkPipelineStageFlags src_stage, VkPipelineStageFlags dst_stage)
 {
     VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
@@ -52,14 +52,14 @@ void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, uint
     b.newLayout = to;
     b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     b.image = image;
-    b.subresourceRange = {aspect, mip, mips, 0, 1};
+    b.subresourceRange = {aspect, mip, mips, 0, layers};
     vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 0, nullptr, 0, nullptr, 1, &b);
 }
 } // namespace
 
 void UploadBatch::image(const Image& dst, const void* texels, size_t bytes)
 {
-    const size_t expected = size_t(dst.width()) * dst.height() * format_size(dst.format());
+    const size_t expected = size_t(dst.width()) * dst.height() * format_size(dst.format()) * dst.layers();
     if (bytes != expected)
         throw std::invalid_argument("hemi: image upload got " + std::to_string(bytes) + " bytes for a " +
                                     std::to_string(dst.width()) + "x" + std::to_string(dst.height()) +
@@ -80,37 +80,37 @@ void UploadBatch::image(const Image& dst, const void* texels, size_t bytes)
     staging_.push_back(std::move(staging));
     const VkImage image = dst.handle();
     const VkImageAspectFlags aspect = dst.aspect();
-    const uint32_t mips = dst.mip_levels(), width = dst.width(), height = dst.height();
+    const uint32_t mips = dst.mip_levels(), width = dst.width(), height = dst.height(), layers = dst.layers();
     pending_.push_back([=](VkCommandBuffer cmd) {
         const VkImageLayout dst_layout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-        barrier(cmd, image, aspect, 0, mips, VK_IMAGE_LAYOUT_UNDEFINED, dst_layout, 0, VK_ACCESS_TRANSFER_WRITE_BIT,
+        barrier(cmd, image, aspect, layers, 0, mips, VK_IMAGE_LAYOUT_UNDEFINED, dst_layout, 0, VK_ACCESS_TRANSFER_WRITE_BIT,
                 VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
         VkBufferImageCopy region{};
-        region.imageSubresource = {aspect, 0, 0, 1};
+        region.imageSubresource = {aspect, 0, 0, layers}; // layer after layer in `texels`
         region.imageExtent = {width, height, 1};
         vkCmdCopyBufferToImage(cmd, src, image, dst_layout, 1, &region);
         // Mip i from mip i - 1: each source level goes TRANSFER_DST -> TRANSFER_SRC once written.
         int32_t w = int32_t(width), h = int32_t(height);
         for (uint32_t mip = 1; mip < mips; ++mip)
         {
-            barrier(cmd, image, aspect, mip - 1, 1, dst_layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            barrier(cmd, image, aspect, layers, mip - 1, 1, dst_layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                     VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
                     VK_PIPELINE_STAGE_TRANSFER_BIT);
             const int32_t nw = std::max(1, w / 2), nh = std::max(1, h / 2);
             VkImageBlit blit{};
-            blit.srcSubresource = {aspect, mip - 1, 0, 1};
+            blit.srcSubresource = {aspect, mip - 1, 0, layers};
             blit.srcOffsets[1] = {w, h, 1};
-            blit.dstSubresource = {aspect, mip, 0, 1};
+            blit.dstSubresource = {aspect, mip, 0, layers};
             blit.dstOffsets[1] = {nw, nh, 1};
             vkCmdBlitImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image, dst_layout, 1, &blit,
                            VK_FILTER_LINEAR);
             w = nw, h = nh;
         }
         if (mips > 1)
-            barrier(cmd, image, aspect, 0, mips - 1, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            barrier(cmd, image, aspect, layers, 0, mips - 1, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT,
                     VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT);
-        barrier(cmd, image, aspect, mips - 1, 1, dst_layout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+        barrier(cmd, image, aspect, layers, mips - 1, 1, dst_layout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                 VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
                 VK_PIPELINE_STAGE_ALL_COMMANDS_BIT);
     });

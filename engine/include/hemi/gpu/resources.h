@@ -75,6 +75,7 @@ struct ImageDesc
     // TRANSFER_SRC and TRANSFER_DST are always added (uploads, readback).
     VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT;
     uint32_t mip_levels = 1;
+    uint32_t layers = 1;  // > 1: a 2D array image with a 2D_ARRAY view (coefficient maps, one layer each)
 };
 
 class Image
@@ -87,6 +88,7 @@ public:
     uint32_t width() const { return width_; }
     uint32_t height() const { return height_; }
     uint32_t mip_levels() const { return mip_levels_; }
+    uint32_t layers() const { return layers_; }
     VkImageAspectFlags aspect() const { return aspect_; }
 
 private:
@@ -95,11 +97,12 @@ private:
     VkImageHandle image_;
     ImageView view_;
     VkFormat format_ = VK_FORMAT_UNDEFINED;
-    uint32_t width_ = 0, height_ = 0, mip_levels_ = 1;
+    uint32_t width_ = 0, height_ = 0, mip_levels_ = 1, layers_ = 1;
     VkImageAspectFlags aspect_ = VK_IMAGE_ASPECT_COLOR_BIT;
 };
 
-// A 2D image with a view of all its mips, in VK_IMAGE_LAYOUT_UNDEFINED. Depth formats get a depth view.
+// A 2D image (or 2D array image) with a view of all its mips and layers, in VK_IMAGE_LAYOUT_UNDEFINED. Depth
+// formats get a depth view.
 Image create_image(const Device& device, const ImageDesc& desc);
 // Bytes per texel of the formats hemi uses (throws for others).
 uint32_t format_size(VkFormat format);

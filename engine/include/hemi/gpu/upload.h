@@ -21,8 +21,9 @@ public:
     // `size` bytes into `dst` at `offset`: written directly when the buffer is host-mapped (lavapipe, most
     // integrated GPUs), else staged and copied by record(). The data are copied now.
     void buffer(const Buffer& dst, const void* data, VkDeviceSize size, VkDeviceSize offset = 0);
-    // Tightly packed texels of mip 0; when the image has more mips, record() fills them by successive
-    // linear blits (box-filtered halving). Every mip ends in SHADER_READ_ONLY_OPTIMAL.
+    // Tightly packed texels of mip 0 (of every layer, one after another); when the image has more mips,
+    // record() fills them by successive linear blits (box-filtered halving). Every mip ends in
+    // SHADER_READ_ONLY_OPTIMAL.
     void image(const Image& dst, const void* texels, size_t bytes);
 
     // Records every pending copy and blit, with the barriers that make them visible to shader reads

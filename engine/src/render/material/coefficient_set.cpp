@@ -1,6 +1,7 @@
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 
+#include <glm/gtc/packing.hpp>
 #include <glm/vec4.hpp>
 
 #include <cmath>
@@ -58,6 +59,54 @@ void ProbeCoefficients::record_update(VkCommandBuffer cmd, std::span<const glm::
         packed[i] = glm::vec4(c, 0.0f);
     }
     record_uniform_update(cmd, uniforms_, packed, sizeof packed);
+}
+
+TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
+                                     std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision)
+    : k_(k)
+{
+    const gpu::Device& device = system.device();
+    if (k == 0 || k > HEMI_BASIS_MAX_SIZE)
+        throw std::invalid_argument("hemi: coefficient maps need 1 to " + std::to_string(HEMI_BASIS_MAX_SIZE) +
+                                    " layers, got " + std::to_string(k));
+    const size_t texels = size_t(width) * height * k;
+    if (width == 0 || height == 0 || rgb.size() != texels * 3)
+        throw std::invalid_argument("hemi: coefficient maps of " + std::to_string(width) + "x" + std::to_string(height) +
+                                    "x" + std::to_string(k) + " need " + std::to_string(texels * 3) + " floats, got " +
+                                    std::to_string(rgb.size()));
+    for (size_t i = 0; i < rgb.size(); ++i)
+        if (!std::isfinite(rgb[i]) || (!full_precision && std::abs(rgb[i]) > 65504.0f))
+            throw std::invalid_argument("hemi: coefficient map value " + std::to_string(i) +
+                                        (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
+    const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
+    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, k});
+    if (full_precision)
+    {
+        std::vector<float> rgba(texels * 4, 0.0f);
+        for (size_t t = 0; t < texels; ++t)
+            for (int c = 0; c < 3; ++c)
+                rgba[t * 4 + c] = rgb[t * 3 + c];
+        upload.image(maps_, rgba.data(), rgba.size() * sizeof(float));
+    }
+    else
+    {
+        std::vector<uint16_t> rgba(texels * 4, 0);
+        for (size_t t = 0; t < texels; ++t)
+            for (int c = 0; c < 3; ++c)
+                rgba[t * 4 + c] = uint16_t(glm::packHalf1x16(rgb[t * 3 + c]));
+        upload.image(maps_, rgba.data(), rgba.size() * sizeof(uint16_t));
+    }
+    // Bilinear, clamped: a lightmap's charts are padded, and nothing wraps across the atlas's border.
+    sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_NEAREST,
+                                            VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0f});
+    const auto bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Texel);
+    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
+    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Texel));
+    gpu::DescriptorWrite write;
+    write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
+    write.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    write.image = {sampler_, maps_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    gpu::write_descriptors(device, set_, {&write, 1});
 }
 
 } // namespace hemi::render

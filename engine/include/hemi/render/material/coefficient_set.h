@@ -4,8 +4,11 @@
 //                       instance's texel offset into it).
 //   ProbeCoefficients:  one set of K RGB coefficients for the whole object (an SH9 irradiance probe in
 //                       world space, say), updated per frame.
+//   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps): a K-layer 2D
+//                       array image, bilinear, clamped to the edge.
 
 #include <hemi/gpu/resources.h>
+#include <hemi/gpu/upload.h>
 #include <hemi/render/material/material_system.h>
 
 #include <glm/vec3.hpp>
@@ -41,6 +44,27 @@ private:
     gpu::Buffer uniforms_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
+};
+
+class TexelCoefficients
+{
+public:
+    // `rgb` holds K maps of width x height RGB texels, map after map, rows from the top (v = 0), 3 floats a
+    // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored as RGBA16F
+    // (half floats, as lightmaps usually are; `full_precision` stores RGBA32F), uploaded through `upload`.
+    // Throws std::invalid_argument for K outside [1, HEMI_BASIS_MAX_SIZE], a size mismatch or a value that
+    // is not finite or does not fit a half float.
+    TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
+                      std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision = false);
+    VkDescriptorSet set() const { return set_; }
+    uint32_t k() const { return k_; }
+
+private:
+    gpu::Image maps_;
+    gpu::Sampler sampler_;
+    gpu::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    uint32_t k_ = 0;
 };
 
 } // namespace hemi::render
