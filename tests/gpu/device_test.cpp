@@ -172,3 +172,31 @@ TEST_F(DeviceTest, ValidationLayerReportsMisuse)
     ASSERT_FALSE(messages.empty()) << "the validation layer did not report an invalid VkBufferCreateInfo";
     EXPECT_NE(messages[0].find("usage"), std::string::npos) << messages[0];
 }
+
+// Forcing the layer on through the loader (VK_LOADER_LAYERS_ENABLE, a common way to debug) makes the loader
+// say so through the messenger: that note is logged as what it is (Info, not a validation message) and
+// counts as no validation problem, while the layer itself stays live.
+TEST(DeviceValidation, LoaderNotesAreNotValidationMessages)
+{
+    setenv("VK_LOADER_LAYERS_ENABLE", "*validation*", 1);
+    std::vector<std::pair<bool, std::string>> messages;
+    {
+        hemi::gpu::DeviceDesc desc;
+        desc.device_selector = "llvmpipe";
+        desc.validation = true;
+        desc.log = [&](hemi::gpu::LogLevel, bool validation, std::string_view m) {
+            messages.emplace_back(validation, std::string(m));
+        };
+        hemi::gpu::Device device(desc);
+        hemi::gpu::Buffer b = hemi::gpu::create_buffer(device, {256, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+        EXPECT_EQ(device.validation_messages(), 0u);
+    }
+    unsetenv("VK_LOADER_LAYERS_ENABLE");
+    bool loader_note = false;
+    for (const auto& [validation, m] : messages)
+    {
+        EXPECT_FALSE(validation) << "counted as a validation message: " << m;
+        loader_note = loader_note || m.find("VK_LOADER_LAYERS_ENABLE") != std::string::npos;
+    }
+    EXPECT_TRUE(loader_note) << "the loader said nothing: this test no longer exercises its note";
+}

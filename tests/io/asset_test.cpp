@@ -2,11 +2,18 @@
 #include "../temp_dir.h"
 
 #include <hemi/io/asset.h>
+#include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstring>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -108,4 +115,101 @@ TEST(Asset, ErrorsNameTheFileAndTheProblem)
     c[c.size() - 20] ^= 1;
     write_bytes(dir() / "c.hemi", c, c.size());
     expect(dir() / "c.hemi", "checksum mismatch");
+}
+
+namespace
+{
+// Rewrites the checksum of a hand-edited container so that the reader reaches its structure checks.
+void reseal(std::vector<char>& b)
+{
+    const uint64_t sum = XXH64(b.data(), b.size() - 8, 0);
+    std::memcpy(b.data() + b.size() - 8, &sum, 8);
+}
+} // namespace
+
+// Two sections of one name, or sections sharing bytes, are never written by hemi: a file that has them
+// (checksum intact) is refused naming the problem, instead of the last entry silently winning.
+TEST(Asset, DuplicateAndOverlappingSectionsAreRefused)
+{
+    const fs::path p = write_sample("structure.hemi");
+    const std::vector<char> good = bytes_of(p);
+    const size_t table = 16, entry = 48; // header; name[32], offset u64, size u64 per entry
+    {
+        std::vector<char> b = good;
+        std::memcpy(b.data() + table + entry, "matrices\0\0\0\0", 12); // entry 1 ("indices") renamed
+        reseal(b);
+        const fs::path bad = dir() / "duplicate.hemi";
+        write_bytes(bad, b, b.size());
+        try
+        {
+            hemi::io::AssetReader r(bad);
+            ADD_FAILURE() << "a duplicate section was accepted";
+        }
+        catch (const hemi::io::FormatError& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("'matrices' appears twice"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
+        }
+    }
+    {
+        std::vector<char> b = good;
+        uint64_t first = 0;
+        std::memcpy(&first, b.data() + table + 32, 8);
+        const uint64_t inside = first + 4; // entry 1 now starts inside entry 0's 20 bytes
+        std::memcpy(b.data() + table + entry + 32, &inside, 8);
+        reseal(b);
+        const fs::path bad = dir() / "overlap.hemi";
+        write_bytes(bad, b, b.size());
+        try
+        {
+            hemi::io::AssetReader r(bad);
+            ADD_FAILURE() << "overlapping sections were accepted";
+        }
+        catch (const hemi::io::FormatError& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("overlap"), std::string::npos) << e.what();
+        }
+    }
+    {
+        std::vector<char> b = good;
+        const uint64_t into_table = 20; // a section inside the header and table
+        std::memcpy(b.data() + table + 32, &into_table, 8);
+        reseal(b);
+        const fs::path bad = dir() / "into_table.hemi";
+        write_bytes(bad, b, b.size());
+        EXPECT_THROW(hemi::io::AssetReader r(bad), hemi::io::FormatError);
+    }
+}
+
+// Writes fail fast and name the cause: a missing folder is named as such (not "disk full"), a folder in the
+// target's place too; a temporary file that a killed writer left beside the target (its process gone) is
+// removed by the next write, and a running writer's is left alone.
+TEST(AtomicFile, OutputProblemsAreNamedAndStaleTemporariesRemoved)
+{
+    const fs::path missing = dir() / "no_such_folder" / "out.hemi";
+    try
+    {
+        write_sample("../no_such_folder_x/out.hemi");
+        ADD_FAILURE() << "wrote into a missing folder";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+    }
+    EXPECT_NE(hemi::io::output_problem(missing).find("does not exist"), std::string::npos);
+    EXPECT_EQ(hemi::io::output_problem(dir() / "fine.hemi"), "");
+    fs::create_directories(dir() / "a_folder.hemi");
+    EXPECT_NE(hemi::io::output_problem(dir() / "a_folder.hemi").find("folder"), std::string::npos);
+
+    const fs::path target = dir() / "stale.hemi";
+    // pid 2^22 - 1 is above Linux's default pid_max (2^22) for most systems: no such process.
+    const fs::path dead = target.string() + ".tmp4194303.7", alive = target.string() + ".tmp" +
+                                                                     std::to_string(getpid()) + ".99";
+    std::ofstream(dead) << "half";
+    std::ofstream(alive) << "in progress";
+    ASSERT_EQ(hemi::io::stale_temporaries(target), std::vector<fs::path>{dead});
+    write_sample("stale.hemi");
+    EXPECT_FALSE(fs::exists(dead)) << "the killed write's temporary outlived the next write";
+    EXPECT_TRUE(fs::exists(alive)) << "a running writer's temporary was removed";
+    fs::remove(alive);
 }

@@ -179,6 +179,41 @@ TEST(ExrReader, PlacesTheDataWindowInsideTheDisplayWindow)
     EXPECT_EQ(img.at(7, 3)[3], 0.0f); // and 0 outside it
 }
 
+// A few hundred bytes declaring a 16384 x 16384 display window around one pixel of data would make a reader
+// that zero-fills the display window allocate 4 GiB: refused, fast, naming the windows; while an ordinary
+// auto-cropped file (a 4096 x 4096 display around a small data window) still reads.
+TEST(ExrReader, HugeDisplayWindowsAroundTinyDataAreRefusedQuickly)
+{
+    auto write = [](const fs::path& p, int display, int data) {
+        Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(display - 1, display - 1)),
+                           Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(data - 1, data - 1)));
+        header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+        std::vector<float> r(size_t(data) * data, 1.0f);
+        Imf::OutputFile file(p.c_str(), header);
+        Imf::FrameBuffer fb;
+        fb.insert("R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(r.data()), 4, 4 * size_t(data)));
+        file.setFrameBuffer(fb);
+        file.writePixels(data);
+    };
+    const fs::path hostile = temp_dir() / "huge_display.exr";
+    write(hostile, 16384, 1);
+    EXPECT_LT(fs::file_size(hostile), 1000u);
+    try
+    {
+        hemi::io::read_exr(hostile);
+        ADD_FAILURE() << "a 16384x16384 display window around one pixel was read";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        // Refused by the header check, before any pixel is allocated (the caps of io/image.h).
+        EXPECT_NE(std::string(e.what()).find("display window"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(hostile.string()), std::string::npos) << e.what();
+    }
+    const fs::path cropped = temp_dir() / "cropped_4k.exr";
+    write(cropped, 4096, 16);
+    EXPECT_EQ(hemi::io::read_exr(cropped).width, 4096u);
+}
+
 // ---- 8-bit textures: PNG and JPEG decoding (the images glTF scenes and assets carry) ----
 
 namespace

@@ -217,3 +217,18 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
                               "HEMI_VALIDATION=1 HEMI_DEVICE=no-such-gpu"),
                           "no-such-gpu");
 }
+
+// A render target larger than the device can hold is refused before any Vulkan call fails, naming the size
+// and the limit (lavapipe allows 2 GiB per allocation; a 16384 x 16384 RGBA32F attachment is 4 GiB).
+TEST(Cli, RenderTargetsTooLargeForTheDeviceAreRefusedNamingTheLimit)
+{
+    const fs::path asset = dir() / "large.hemi";
+    ASSERT_EQ(bake(q(knot()) + " -o " + q(asset) + " --bases gs --transfer unshadowed --order 3").status, 0);
+    const fs::path out = dir() / "large.png";
+    const Result r = render(q(asset) + " --size 16384x16384 -o " + q(out));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("16384x16384"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("maxMemoryAllocationSize"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("VK_ERROR"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}

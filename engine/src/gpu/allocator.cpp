@@ -106,6 +106,16 @@ Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsag
 {
     const uint32_t type = device_->memory_type(req.memoryTypeBits, usage);
     const VkDeviceSize align = std::max<VkDeviceSize>(1, req.alignment);
+    // Refuse what the device cannot hold before asking it (a raw VK_ERROR_OUT_OF_DEVICE_MEMORY from deep in
+    // a bind names no cause).
+    auto mib = [](VkDeviceSize b) { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20) + " MiB"; };
+    if (device_->max_allocation_size() && req.size > device_->max_allocation_size())
+        throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds device " +
+                                    std::string(device_->name()) + "'s maxMemoryAllocationSize (" +
+                                    mib(device_->max_allocation_size()) + ")");
+    if (req.size > device_->heap_size(type))
+        throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds its memory heap (" +
+                                    mib(device_->heap_size(type)) + ") on device " + std::string(device_->name()));
     std::lock_guard<std::mutex> lock(mutex_);
     Block* chosen = nullptr;
     VkDeviceSize offset = 0;

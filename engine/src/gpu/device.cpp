@@ -127,10 +127,22 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
 } // namespace
 
 VKAPI_ATTR VkBool32 VKAPI_CALL Device::debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
-                                                      VkDebugUtilsMessageTypeFlagsEXT,
+                                                      VkDebugUtilsMessageTypeFlagsEXT types,
                                                       const VkDebugUtilsMessengerCallbackDataEXT* data, void* user)
 {
     auto* self = static_cast<Device*>(user);
+    // The Vulkan loader reports through the same messenger (e.g. "Layer ... forced enabled due to env var
+    // 'VK_LOADER_LAYERS_ENABLE'"): notes about the setup, not validation findings. It names itself in
+    // pMessageIdName and sends general messages only.
+    const bool loader = !(types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                   VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT)) &&
+                        data && data->pMessageIdName && std::string_view(data->pMessageIdName) == "Loader Message";
+    if (loader)
+    {
+        if (self->log_)
+            self->log_(LogLevel::Info, false, data->pMessage ? data->pMessage : "(no message)");
+        return VK_FALSE;
+    }
     LogLevel level = LogLevel::Debug;
     if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)
         level = LogLevel::Error;
@@ -292,12 +304,15 @@ Device::~Device()
 
 void Device::init_properties()
 {
+    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    subgroup.pNext = &maintenance3;
     VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
     props2.pNext = &subgroup;
     vkGetPhysicalDeviceProperties2(physical_device_, &props2);
     properties_ = props2.properties;
     subgroup_size_ = std::max(1u, subgroup.subgroupSize);
+    max_allocation_size_ = maintenance3.maxMemoryAllocationSize;
     vkGetPhysicalDeviceMemoryProperties(physical_device_, &memory_);
     allocator_ = std::make_unique<MemoryAllocator>(*this);
 
@@ -342,6 +357,11 @@ uint32_t Device::memory_type(uint32_t type_bits, MemoryUsage usage) const
         throw std::runtime_error("hemi: no Vulkan memory type for the requested usage on " +
                                  std::string(properties_.deviceName));
     return uint32_t(fallback);
+}
+
+VkDeviceSize Device::heap_size(uint32_t memory_type) const
+{
+    return memory_.memoryHeaps[memory_.memoryTypes[memory_type].heapIndex].size;
 }
 
 bool Device::memory_is_host_visible(uint32_t memory_type) const

@@ -110,6 +110,14 @@ Image create_image(const Device& device, const ImageDesc& desc)
 {
     if (desc.width == 0 || desc.height == 0 || desc.mip_levels == 0 || desc.layers == 0)
         throw std::invalid_argument("hemi: create_image with a zero size, mip or layer count");
+    const VkPhysicalDeviceLimits& limits = device.limits();
+    if (desc.width > limits.maxImageDimension2D || desc.height > limits.maxImageDimension2D)
+        throw std::invalid_argument("hemi: a " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
+                                    " image exceeds device " + std::string(device.name()) + "'s maxImageDimension2D (" +
+                                    std::to_string(limits.maxImageDimension2D) + ")");
+    if (desc.layers > limits.maxImageArrayLayers)
+        throw std::invalid_argument("hemi: " + std::to_string(desc.layers) + " image layers exceed the device's "
+                                    "maxImageArrayLayers (" + std::to_string(limits.maxImageArrayLayers) + ")");
     VkDevice d = device.device();
     Image img;
     img.aspect_ = is_depth(desc.format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;

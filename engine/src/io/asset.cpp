@@ -6,7 +6,11 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
+#include <vector>
 #include <stdexcept>
 
 namespace hemi::io
@@ -74,10 +78,12 @@ void AssetWriter::write(const std::filesystem::path& path) const
     put<uint64_t>(out, XXH64(out.data(), out.size(), 0));
     write_atomically(path, [&](const std::filesystem::path& tmp) {
         std::ofstream f(tmp, std::ios::binary);
+        errno = 0;
         f.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
         f.close();
         if (f.fail())
-            throw FormatError(path.string() + ": writing the asset failed (disk full or not writable?)");
+            throw FormatError(path.string() + ": writing the asset failed: " +
+                              (errno ? std::strerror(errno) : "unknown I/O error"));
     });
 }
 
@@ -113,10 +119,21 @@ AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string(
         char name[kNameBytes + 1] = {};
         std::memcpy(name, data_.data() + at, kNameBytes);
         const uint64_t offset = get<uint64_t>(data_, at + kNameBytes), size = get<uint64_t>(data_, at + kNameBytes + 8);
-        if (offset > body_end || size > body_end - offset)
-            throw FormatError(file_ + ": section '" + name + "' lies outside the file");
-        sections_[name] = {offset, size};
+        const uint64_t table_end = kHeaderBytes + uint64_t(count) * kEntryBytes;
+        if (offset < table_end || offset > body_end || size > body_end - offset)
+            throw FormatError(file_ + ": section '" + name + "' lies outside the file's data");
+        // The writer never writes two sections of one name or overlapping sections; a file that has them
+        // was made by something else, and "the last one wins" would be silent garbage.
+        if (!sections_.emplace(name, std::make_pair(offset, size)).second)
+            throw FormatError(file_ + ": section '" + name + "' appears twice");
     }
+    std::vector<std::pair<uint64_t, uint64_t>> ranges;
+    for (const auto& [name, range] : sections_)
+        ranges.push_back(range);
+    std::sort(ranges.begin(), ranges.end());
+    for (size_t i = 1; i < ranges.size(); ++i)
+        if (ranges[i - 1].first + ranges[i - 1].second > ranges[i].first)
+            throw FormatError(file_ + ": sections overlap (at byte " + std::to_string(ranges[i].first) + ")");
 }
 
 std::span<const std::byte> AssetReader::section(const std::string& name) const

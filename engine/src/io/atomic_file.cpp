@@ -2,16 +2,78 @@
 #include <hemi/io/image.h>
 
 #include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
 #include <system_error>
 #include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 namespace hemi::io
 {
 
+std::string output_problem(const std::filesystem::path& path)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    if (!fs::exists(dir, ec))
+        return "the folder " + dir.string() + " does not exist";
+    if (!fs::is_directory(dir, ec))
+        return dir.string() + " is not a folder";
+    if (fs::is_directory(path, ec))
+        return "it is a folder";
+    if (::access(dir.c_str(), W_OK | X_OK) != 0)
+        return "the folder " + dir.string() + " is not writable (" + std::strerror(errno) + ")";
+    if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0 && errno == EROFS)
+        return "the file system is read-only";
+    struct statvfs st{};
+    if (::statvfs(dir.c_str(), &st) == 0 && st.f_bavail == 0)
+        return "no space left on the device of " + dir.string();
+    return {};
+}
+
+void check_writable(const std::filesystem::path& path)
+{
+    if (std::string problem = output_problem(path); !problem.empty())
+        throw FormatError(path.string() + ": cannot write: " + problem);
+}
+
+std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path& path)
+{
+    namespace fs = std::filesystem;
+    std::vector<fs::path> out;
+    const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    const std::string prefix = path.filename().string() + ".tmp";
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    {
+        const std::string name = it->path().filename().string();
+        if (name.rfind(prefix, 0) != 0)
+            continue;
+        // "<pid>.<n>": digits, a dot, digits.
+        const std::string rest = name.substr(prefix.size());
+        const size_t dot = rest.find('.');
+        if (dot == 0 || dot == std::string::npos || dot + 1 == rest.size() ||
+            rest.find_first_not_of("0123456789.") != std::string::npos || rest.find('.', dot + 1) != std::string::npos)
+            continue;
+        const long pid = std::strtol(rest.substr(0, dot).c_str(), nullptr, 10);
+        if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH)
+            out.push_back(it->path());
+    }
+    return out;
+}
+
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& temporary)>& write)
 {
+    check_writable(path);
+    for (const std::filesystem::path& stale : stale_temporaries(path))
+    {
+        std::error_code ignored;
+        std::filesystem::remove(stale, ignored);
+    }
     static std::atomic<unsigned> counter{0};
     std::filesystem::path tmp = path;
     tmp += ".tmp" + std::to_string(::getpid()) + "." + std::to_string(counter++);

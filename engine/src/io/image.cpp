@@ -68,11 +68,19 @@ ImageRgba read_exr(const std::filesystem::path& path)
         const Imath::Box2i dw = file.header().dataWindow();
         const Imath::Box2i disp = file.header().displayWindow();
         const long w = long(disp.max.x) - disp.min.x + 1, h = long(disp.max.y) - disp.min.y + 1;
-        if (w <= 0 || h <= 0 || w * h > (1l << 28))
+        // Caps (io/image.h): the display window at most kMaxExrPixels, and at most kMaxExrPadding times the data
+        // window unless it is small: an auto-cropped file pads with zeros, a hostile one of a few hundred
+        // bytes would otherwise make us zero-fill gigabytes.
+        if (w <= 0 || h <= 0 || w * h > long(kMaxExrPixels))
             throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
-                              " is empty or larger than 2^28 pixels");
+                              " is empty or larger than " + std::to_string(kMaxExrPixels) + " pixels");
         if (dw.min.x < disp.min.x || dw.min.y < disp.min.y || dw.max.x > disp.max.x || dw.max.y > disp.max.y)
             throw FormatError(path.string() + ": EXR data window extends beyond the display window");
+        const long data = (long(dw.max.x) - dw.min.x + 1) * (long(dw.max.y) - dw.min.y + 1);
+        if (w * h > long(kMaxExrPaddedPixels) && w * h > data * long(kMaxExrPadding))
+            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
+                              " is more than " + std::to_string(kMaxExrPadding) + " times its data window (" +
+                              std::to_string(data) + " pixels): refused rather than zero-filled");
         image.width = uint32_t(w);
         image.height = uint32_t(h);
         image.pixels.assign(size_t(w) * h * 4, 0.0f);

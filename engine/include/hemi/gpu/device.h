@@ -87,6 +87,9 @@ public:
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
     std::string_view name() const { return properties_.deviceName; }
+    // The largest single VkDeviceMemory allocation (maxMemoryAllocationSize) and a memory type's heap size.
+    VkDeviceSize max_allocation_size() const { return max_allocation_size_; }
+    VkDeviceSize heap_size(uint32_t memory_type) const;
     // Lanes of a subgroup (8 on lavapipe with AVX2, 32 on NVIDIA, 32/64 on AMD).
     uint32_t subgroup_size() const { return subgroup_size_; }
     // Whether pipelines may draw with dynamic rendering (Vulkan 1.3 dynamicRendering enabled: hemi enables
@@ -127,6 +130,7 @@ private:
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memory_{};
     uint32_t subgroup_size_ = 1;
+    VkDeviceSize max_allocation_size_ = 0;
     double timestamp_period_ns_ = 0.0;
     LogCallback log_;
     std::unique_ptr<MemoryAllocator> allocator_;

@@ -2,6 +2,8 @@
 #include <hemi/render/view/offscreen.h>
 
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 namespace hemi::render
 {
@@ -10,9 +12,25 @@ OffscreenTarget::OffscreenTarget(const gpu::Device& device, uint32_t width, uint
     : device_(&device), width_(width), height_(height)
 {
     const VkImageUsageFlags color_usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-    color_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
-    aux_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
-    depth_ = gpu::create_image(device, {width, height, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+    const VkPhysicalDeviceLimits& limits = device.limits();
+    const std::string size = std::to_string(width) + "x" + std::to_string(height);
+    if (width > limits.maxFramebufferWidth || height > limits.maxFramebufferHeight)
+        throw std::invalid_argument("hemi: a " + size + " render target exceeds device " + std::string(device.name()) +
+                                    "'s maxFramebufferWidth/Height (" + std::to_string(limits.maxFramebufferWidth) +
+                                    "x" + std::to_string(limits.maxFramebufferHeight) + ")");
+    try
+    {
+        color_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
+        aux_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
+        depth_ = gpu::create_image(device, {width, height, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+    }
+    catch (const std::invalid_argument& e)
+    {
+        std::string why = e.what();
+        if (why.rfind("hemi: ", 0) == 0)
+            why = why.substr(6);
+        throw std::invalid_argument("hemi: a " + size + " render target (two RGBA32F attachments and D32): " + why);
+    }
 
     VkAttachmentDescription attachments[3] = {};
     for (int i = 0; i < 2; ++i)
