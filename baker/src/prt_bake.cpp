@@ -1,5 +1,8 @@
+#include <hemi/bake/checkpoint.h>
 #include <hemi/bake/cpca.h>
+#include <hemi/bake/embree_scene.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/bake/ray_generator.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
@@ -7,28 +10,21 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 
-#include <hemi/io/asset.h>
-
 #include "hemi/shared/transfer.h"
 
-#include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
-#define XXH_INLINE_ALL
-#include <xxhash.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstring>
 #include <fstream>
 #include <cmath>
-#include <memory>
-#include <mutex>
+#include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -58,135 +54,6 @@ TransferKind parse_transfer_kind(std::string_view name)
 namespace
 {
 
-// Counter-based random numbers (SplitMix64 finaliser): the value depends only on its inputs, never on
-// scheduling.
-uint64_t mix(uint64_t z)
-{
-    z += 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-float uniform01(uint64_t seed, uint64_t a, uint64_t b)
-{
-    return float(mix(mix(mix(seed) ^ a) ^ (b * 0x632be59bd9b4e019ull)) >> 40) * (1.0f / 16777216.0f);
-}
-
-// Ray i of R for a vertex: jittered spherical Fibonacci (stratified in z, golden-angle spaced in phi) with a
-// per-vertex random rotation about z. Uniform on the sphere; each ray stands for 4 pi / R steradians.
-glm::vec3 ray_direction(uint64_t seed, uint32_t vertex, int i, int rays)
-{
-    const float z = 1.0f - 2.0f * (float(i) + uniform01(seed, vertex, uint64_t(i) + 1)) / float(rays);
-    const float offset = uniform01(seed, vertex, 0);
-    float frac = float(i) * 0.6180339887f + offset;
-    frac -= std::floor(frac);
-    const float phi = 2.0f * float(M_PI) * frac, s = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return {s * std::cos(phi), s * std::sin(phi), z};
-}
-
-struct EmbreeScene
-{
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-    std::mutex error_mutex; // Embree may report from its worker threads
-    std::string error;
-
-    explicit EmbreeScene(const io::Mesh& mesh)
-    {
-        device = rtcNewDevice(nullptr);
-        if (!device)
-            throw std::runtime_error("hemi: Embree device creation failed (error " +
-                                     std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
-        rtcSetDeviceErrorFunction(
-            device,
-            [](void* user, RTCError, const char* message) {
-                auto* self = static_cast<EmbreeScene*>(user);
-                std::lock_guard<std::mutex> lock(self->error_mutex);
-                self->error = message ? message : "unknown Embree error";
-            },
-            this);
-        scene = rtcNewScene(device);
-        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), mesh.vertex_count()));
-        auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                                  RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                                  mesh.indices.size() / 3));
-        if (!vb || !ib)
-        {
-            rtcReleaseGeometry(geometry);
-            fail("allocating the geometry");
-        }
-        for (size_t v = 0; v < mesh.vertex_count(); ++v)
-            for (int c = 0; c < 3; ++c)
-                vb[v * 3 + c] = mesh.positions[v][c];
-        std::copy(mesh.indices.begin(), mesh.indices.end(), ib);
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(scene, geometry);
-        rtcReleaseGeometry(geometry);
-        rtcCommitScene(scene);
-        bool failed;
-        {
-            std::lock_guard<std::mutex> lock(error_mutex);
-            failed = !error.empty();
-        }
-        if (failed)
-            fail("building the scene");
-    }
-    ~EmbreeScene() { release(); }
-    EmbreeScene(const EmbreeScene&) = delete;
-    EmbreeScene& operator=(const EmbreeScene&) = delete;
-
-    void release()
-    {
-        if (scene)
-            rtcReleaseScene(scene);
-        if (device)
-            rtcReleaseDevice(device);
-        scene = nullptr;
-        device = nullptr;
-    }
-
-    // From the constructor: the destructor will not run, so the handles are released here.
-    [[noreturn]] void fail(const std::string& what)
-    {
-        std::string message;
-        {
-            std::lock_guard<std::mutex> lock(error_mutex);
-            message = "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
-        }
-        release();
-        throw std::runtime_error(message);
-    }
-
-    // Closest hit along the ray; returns false on a miss.
-    bool intersect(const glm::vec3& origin, const glm::vec3& dir, uint32_t& prim, float& u, float& v) const
-    {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRayHit rh{};
-        rh.ray.org_x = origin.x;
-        rh.ray.org_y = origin.y;
-        rh.ray.org_z = origin.z;
-        rh.ray.dir_x = dir.x;
-        rh.ray.dir_y = dir.y;
-        rh.ray.dir_z = dir.z;
-        rh.ray.tnear = 0.0f;
-        rh.ray.tfar = INFINITY;
-        rh.ray.mask = 0xffffffffu;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene, &context, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-            return false;
-        prim = rh.hit.primID;
-        u = rh.hit.u;
-        v = rh.hit.v;
-        return true;
-    }
-};
-
 void check(const io::Mesh& mesh, const PrtBakeOptions& o)
 {
     if (o.order < 3 || o.order > 6)
@@ -206,95 +73,22 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
         throw std::invalid_argument("hemi: PRT bake: " + problem);
 }
 
-// Where a bake stands: passes before `pass` are complete, and so are vertices [0, next_vertex) of `pass`.
-struct BakeState
-{
-    uint32_t pass, next_vertex;
-};
-
 constexpr uint32_t kCheckpointVersion = 2;
 
 // Everything the bake's result depends on: the geometry, every option that changes a number, the layout.
 uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)
 {
-    XXH64_state_t* h = XXH64_createState();
-    XXH64_reset(h, kCheckpointVersion);
-    XXH64_update(h, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
-    XXH64_update(h, mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
-    XXH64_update(h, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+    CheckpointKey key(kCheckpointVersion);
+    key.add_array<glm::vec3>(mesh.positions);
+    key.add_array<glm::vec3>(mesh.normals);
+    key.add_array<uint32_t>(mesh.indices);
     const int ints[4] = {int(o.kind), o.order, o.rays, o.bounces};
     const float floats[2] = {o.albedo, o.ray_offset};
-    XXH64_update(h, ints, sizeof ints);
-    XXH64_update(h, floats, sizeof floats);
-    XXH64_update(h, &o.seed, sizeof o.seed);
-    const int embree_version = RTC_VERSION;
-    XXH64_update(h, &embree_version, sizeof embree_version);
-    const uint64_t key = XXH64_digest(h);
-    XXH64_freeState(h);
-    return key;
-}
-
-void save_checkpoint(const std::filesystem::path& path, uint64_t key, const BakeState& state, const PrtTransfer& t,
-                     const std::vector<float>& exitant, const std::vector<float>& bounce)
-{
-    io::AssetWriter w;
-    w.add_array<uint64_t>("ckpt.key", std::span<const uint64_t>(&key, 1));
-    w.add("ckpt.state", std::as_bytes(std::span<const BakeState>(&state, 1)));
-    w.add_array<float>("ckpt.radiance", t.radiance);
-    w.add_array<float>("ckpt.irradiance", t.irradiance);
-    w.add_array<float>("ckpt.exitant", exitant);
-    w.add_array<float>("ckpt.bounce", bounce);
-    w.write(path);
-}
-
-// Restores a checkpoint written for the same key; false (and nothing touched) when there is none, it is
-// unreadable or corrupt, or it belongs to another mesh or other options.
-bool load_checkpoint(const std::filesystem::path& path, uint64_t key, int passes, BakeState& state, PrtTransfer& t,
-                     std::vector<float>& exitant, std::vector<float>& bounce)
-{
-    if (!std::filesystem::exists(path))
-        return false;
-    try
-    {
-        const io::AssetReader r(path);
-        const std::vector<uint64_t> stored = r.array<uint64_t>("ckpt.key");
-        const std::span<const std::byte> s = r.section("ckpt.state");
-        if (stored.size() != 1 || stored[0] != key || s.size() != sizeof(BakeState))
-            return false;
-        BakeState loaded;
-        std::memcpy(&loaded, s.data(), sizeof loaded);
-        std::vector<float> radiance = r.array<float>("ckpt.radiance"), irradiance = r.array<float>("ckpt.irradiance"),
-                           ex = r.array<float>("ckpt.exitant"), bo = r.array<float>("ckpt.bounce");
-        if (radiance.size() != t.radiance.size() || irradiance.size() != t.irradiance.size() ||
-            ex.size() != exitant.size() || bo.size() != bounce.size())
-            return false;
-        // Only states save_checkpoint writes: inside the bake, never at its very start or end.
-        if (loaded.pass >= uint32_t(passes) || loaded.next_vertex >= t.vertex_count ||
-            (loaded.pass == 0 && loaded.next_vertex == 0))
-            return false;
-        state = loaded;
-        t.radiance = std::move(radiance);
-        t.irradiance = std::move(irradiance);
-        exitant = std::move(ex);
-        bounce = std::move(bo);
-        return true;
-    }
-    catch (const io::FormatError&)
-    {
-        return false;
-    }
-}
-
-// How far ray origins move off the surface along the normal: a fraction of the bounding-box diagonal.
-float ray_offset_distance(const io::Mesh& mesh, const PrtBakeOptions& o)
-{
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    return o.ray_offset * glm::length(hi - lo);
+    key.add_value(ints);
+    key.add_value(floats);
+    key.add_value(o.seed);
+    key.add_value(EmbreeScene::embree_version());
+    return key.digest();
 }
 
 } // namespace
@@ -327,29 +121,34 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
     if (o.kind == TransferKind::Unshadowed)
         return out;
 
-    EmbreeScene embree(mesh);
-    const float offset = ray_offset_distance(mesh, o);
+    const EmbreeScene embree(mesh);
+    const float offset = embree.ray_offset(o.ray_offset);
     const float weight = 4.0f * float(M_PI) / float(o.rays);
     const int passes = 1 + (o.kind == TransferKind::Interreflected ? o.bounces : 0);
 
     // Exit radiance per vertex of the previous pass, as an L-vector over the lighting: (albedo / pi) t_{b-1}.
     std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
-    BakeState state{0, 0};
-    const uint64_t key = checkpoint_key(mesh, o);
-    if (!o.checkpoint.empty() && load_checkpoint(o.checkpoint, key, passes, state, out, exitant, bounce_irradiance))
+    // The finished work, all of it: M and t so far, and the bounce being gathered with its source.
+    SliceCheckpoint checkpoint(o.checkpoint, checkpoint_key(mesh, o), uint32_t(passes), n,
+                               {{"radiance", std::as_writable_bytes(std::span<float>(out.radiance))},
+                                {"irradiance", std::as_writable_bytes(std::span<float>(out.irradiance))},
+                                {"exitant", std::as_writable_bytes(std::span<float>(exitant))},
+                                {"bounce", std::as_writable_bytes(std::span<float>(bounce_irradiance))}},
+                               o.checkpoint_seconds);
+    SlicePosition state;
+    if (const std::optional<SlicePosition> resumed = checkpoint.resume())
     {
+        state = *resumed;
         out.resumed = true;
         out.resumed_pass = int(state.pass);
-        out.resumed_vertex = state.next_vertex;
+        out.resumed_vertex = state.next_item;
     }
-    auto last_checkpoint = std::chrono::steady_clock::now();
-    bool checkpointing = !o.checkpoint.empty();
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
     const uint32_t slice =
         std::max<uint32_t>(256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
-        const bool resuming_mid_pass = pass == int(state.pass) && state.next_vertex > 0;
+        const bool resuming_mid_pass = pass == int(state.pass) && state.next_item > 0;
         if (pass > 0 && !resuming_mid_pass)
         {
             // Bounce 1 gathers the direct (shadowed) irradiance; later bounces the previous bounce's.
@@ -367,13 +166,12 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                 std::fill(m_acc.begin(), m_acc.end(), 0.0f);
                 std::fill(t_acc.begin(), t_acc.end(), 0.0f);
                 const glm::vec3 normal = glm::normalize(mesh.normals[v]);
-                const glm::vec3 origin = mesh.positions[v] + offset * normal;
+                const glm::vec3 origin = offset_ray_origin(mesh.positions[v], normal, offset);
                 for (int r = 0; r < o.rays; ++r)
                 {
-                    const glm::vec3 d = ray_direction(o.seed, v, r, o.rays);
-                    uint32_t prim;
-                    float bu, bv;
-                    if (!embree.intersect(origin, d, prim, bu, bv))
+                    const glm::vec3 d = sphere_direction(o.seed, v, r, o.rays);
+                    const std::optional<RayHit> hit = embree.intersect(origin, d);
+                    if (!hit)
                         continue;
                     math::sh_eval(o.order, d, std::span<float>(y, L));
                     const float cosine_weight = std::max(0.0f, glm::dot(normal, d));
@@ -388,13 +186,11 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                         // Bounced light arrives only from above the surface and leaves only the front of
                         // the surface it hit (counter-clockwise seen from outside): a ray below the tangent
                         // plane that hits the surface next to its origin carries no light to it.
-                        const uint32_t* tri = &mesh.indices[size_t(prim) * 3];
-                        const glm::vec3 face = glm::cross(mesh.positions[tri[1]] - mesh.positions[tri[0]],
-                                                          mesh.positions[tri[2]] - mesh.positions[tri[0]]);
-                        if (cosine_weight <= 0.0f || glm::dot(face, d) >= 0.0f)
+                        if (cosine_weight <= 0.0f ||
+                            glm::dot(embree.geometric_normal(hit->primitive), d) >= 0.0f)
                             continue;
-                        // Embree's barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
-                        const float w0 = 1.0f - bu - bv;
+                        const uint32_t* tri = &mesh.indices[size_t(hit->primitive) * 3];
+                        const float bu = hit->u, bv = hit->v, w0 = 1.0f - bu - bv;
                         for (int c = 0; c < L; ++c)
                             x[c] = w0 * exitant[size_t(tri[0]) * L + c] + bu * exitant[size_t(tri[1]) * L + c] +
                                    bv * exitant[size_t(tri[2]) * L + c];
@@ -414,7 +210,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                     t[c] += sign * t_acc[c];
             }
         };
-        uint32_t first = resuming_mid_pass ? state.next_vertex : 0;
+        uint32_t first = resuming_mid_pass ? state.next_item : 0;
         if (progress)
             progress({pass, passes, first, n});
         while (first < n)
@@ -426,27 +222,12 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
             if (first == n && pass > 0)
                 for (size_t i = 0; i < out.irradiance.size(); ++i)
                     out.irradiance[i] += bounce_irradiance[i];
-            if (checkpointing && (first < n || pass + 1 < passes) &&
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count() >=
-                    o.checkpoint_seconds)
-            {
-                const BakeState now = first < n ? BakeState{uint32_t(pass), first} : BakeState{uint32_t(pass + 1), 0};
-                try
-                {
-                    save_checkpoint(o.checkpoint, key, now, out, exitant, bounce_irradiance);
-                }
-                catch (const std::exception& e)
-                {
-                    // A checkpoint is insurance, not the result: the bake goes on without further ones.
-                    out.checkpoint_error = e.what();
-                    checkpointing = false;
-                }
-                last_checkpoint = std::chrono::steady_clock::now();
-            }
+            checkpoint.slice_done(uint32_t(pass), first);
             if (progress)
                 progress({pass, passes, first, n});
         }
     }
+    out.checkpoint_error = checkpoint.error();
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
@@ -454,8 +235,8 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
 uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& seconds)
 {
     check(mesh, o);
-    EmbreeScene embree(mesh);
-    const float offset = ray_offset_distance(mesh, o);
+    const EmbreeScene embree(mesh);
+    const float offset = embree.ray_offset(o.ray_offset);
     const uint32_t n = uint32_t(mesh.vertex_count());
     std::atomic<uint64_t> hits{0};
     const auto t0 = std::chrono::steady_clock::now();
@@ -463,13 +244,10 @@ uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& 
         uint64_t local = 0;
         for (uint32_t v = range.begin(); v != range.end(); ++v)
         {
-            const glm::vec3 origin = mesh.positions[v] + offset * glm::normalize(mesh.normals[v]);
+            const glm::vec3 origin =
+                offset_ray_origin(mesh.positions[v], glm::normalize(mesh.normals[v]), offset);
             for (int r = 0; r < o.rays; ++r)
-            {
-                uint32_t prim;
-                float bu, bv;
-                local += embree.intersect(origin, ray_direction(o.seed, v, r, o.rays), prim, bu, bv);
-            }
+                local += embree.intersect(origin, sphere_direction(o.seed, v, r, o.rays)).has_value();
         }
         hits += local;
     });
@@ -613,7 +391,7 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     PrtBakeSummary summary;
     PrtAssetOptions o = options;
     if (o.bake.checkpoint.empty())
-        o.bake.checkpoint = asset_path.string() + ".partial";
+        o.bake.checkpoint = checkpoint_path(asset_path);
     io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress); // scene.mesh: uvs1 included
     summary.tangents_generated = scene.tangents_generated;
     asset.materials = scene.materials;
@@ -624,8 +402,7 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     summary.images = asset.images.size();
     summary.warnings = scene.warnings;
     io::write_prt_asset(asset_path, asset);
-    std::error_code ignored;
-    std::filesystem::remove(o.bake.checkpoint, ignored); // the finished work is in the asset now
+    remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
     return summary;
 }
 

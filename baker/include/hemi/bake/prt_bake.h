@@ -17,7 +17,8 @@
 //                    rays, the exit radiance (albedo / pi) * t_{b-1} interpolated at the hit point.
 // Rays per vertex are a jittered spherical Fibonacci set with a per-vertex random offset; the random stream
 // is a counter-based hash of (seed, vertex, ray), so the result does not depend on the thread count and the
-// same seed gives the same bytes.
+// same seed gives the same bytes. The rays, the Embree scene they are traced in and the checkpoints are the
+// baker's shared parts: hemi/bake/ray_generator.h, embree_scene.h and checkpoint.h.
 
 #include <hemi/io/mesh.h>
 #include <hemi/io/prt_asset.h>

@@ -1,0 +1,42 @@
+#pragma once
+// The bakes' random numbers and ray directions, counter-based: every value is a pure function of
+// (seed, item, ray), with no generator state to advance. Whichever thread traces an item, in whatever order,
+// on however many threads, and whether the bake ran through or resumed from a checkpoint, the item gets the
+// same rays; so the same seed gives the same bytes. An "item" is what a bake traces a set of rays from: a
+// vertex for the PRT bake, a texel for a lightmap.
+//
+// Each item's set is a jittered spherical Fibonacci set (stratified in z, golden-angle spaced in phi) turned
+// about z by a random angle of its own: stratified within the item, so R rays integrate smooth functions far
+// better than R independent ones, while neighbouring items do not share the same directions (which would
+// show as banding) and the set does not depend on anything but the seed, the item and R.
+//
+// Estimates: a sphere set integrates f over the sphere as (4 pi / R) sum_i f(d_i); a hemisphere set over the
+// hemisphere z >= 0 as (2 pi / R) sum_i f(d_i). The sets are about +z in whatever frame the caller means:
+// for a surface's hemisphere, d = x T + y B + z N with the tangent frame (T, B, N).
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+
+namespace hemi::bake
+{
+
+// SplitMix64's finaliser: a bijective 64-bit mix, the hash the counters go through.
+uint64_t mix64(uint64_t z);
+
+// A uniform number in [0, 1) with 24 random bits (exact in a float), determined by (seed, a, b) alone.
+// The direction sets below use, for item a, b = 0 (the set's rotation) and b = 1..R (each ray's jitter in
+// z); a bake that needs other random numbers for the same items draws them with another seed, e.g.
+// mix64(seed ^ purpose), so that they are independent of its rays.
+float uniform01(uint64_t seed, uint64_t a, uint64_t b);
+
+// Ray `ray` (0 <= ray < rays) of the sphere set of `rays` directions of `item`: unit, uniform on the sphere,
+// each standing for 4 pi / rays steradians. The PRT bake's rays (item = vertex index).
+glm::vec3 sphere_direction(uint64_t seed, uint64_t item, int ray, int rays);
+
+// Ray `ray` (0 <= ray < rays) of the hemisphere set of `rays` directions of `item`: unit, z >= 0, uniform on
+// the hemisphere, each standing for 2 pi / rays steradians. Built like the sphere set, from the same random
+// numbers of (seed, item): a bake uses one of the two sets per item, not both.
+glm::vec3 hemisphere_direction(uint64_t seed, uint64_t item, int ray, int rays);
+
+} // namespace hemi::bake

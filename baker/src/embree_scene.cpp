@@ -1,0 +1,177 @@
+#include <hemi/bake/embree_scene.h>
+
+#include <embree3/rtcore.h>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::bake
+{
+
+struct EmbreeScene::Impl
+{
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    // Embree's own copies (the geometry's buffers, alive as long as the scene): read by geometric_normal().
+    const float* positions = nullptr;
+    const uint32_t* indices = nullptr;
+    std::mutex error_mutex; // Embree may report from its worker threads
+    std::string error;
+
+    ~Impl()
+    {
+        if (scene)
+            rtcReleaseScene(scene);
+        if (device)
+            rtcReleaseDevice(device);
+    }
+
+    // The message for a failure in `what`, with Embree's last error when it gave one.
+    std::string failure(const std::string& what)
+    {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        return "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
+    }
+};
+
+namespace
+{
+
+void check_mesh(const io::Mesh& mesh)
+{
+    const size_t n = mesh.vertex_count();
+    if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3)
+        throw std::invalid_argument("hemi: EmbreeScene needs vertices and a non-empty triangle list (" +
+                                    std::to_string(mesh.indices.size()) + " indices)");
+    for (uint32_t i : mesh.indices)
+        if (i >= n)
+            throw std::invalid_argument("hemi: EmbreeScene: mesh index " + std::to_string(i) +
+                                        " is out of range (" + std::to_string(n) + " vertices)");
+    for (const glm::vec3& p : mesh.positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw std::invalid_argument("hemi: EmbreeScene: the mesh has a non-finite position");
+}
+
+void init_ray(RTCRay& ray, const glm::vec3& origin, const glm::vec3& direction, float t_near, float t_far)
+{
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.dir_x = direction.x;
+    ray.dir_y = direction.y;
+    ray.dir_z = direction.z;
+    ray.tnear = t_near;
+    ray.tfar = t_far;
+    ray.mask = 0xffffffffu;
+}
+
+} // namespace
+
+EmbreeScene::EmbreeScene(const io::Mesh& mesh) : impl_(std::make_unique<Impl>())
+{
+    check_mesh(mesh);
+    Impl& s = *impl_;
+    // On a throw below, impl_'s destructor releases whatever was created.
+    s.device = rtcNewDevice(nullptr);
+    if (!s.device)
+        throw std::runtime_error("hemi: Embree device creation failed (error " +
+                                 std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    rtcSetDeviceErrorFunction(
+        s.device,
+        [](void* user, RTCError, const char* message) {
+            auto* self = static_cast<Impl*>(user);
+            std::lock_guard<std::mutex> lock(self->error_mutex);
+            self->error = message ? message : "unknown Embree error";
+        },
+        &s);
+    s.scene = rtcNewScene(s.device);
+    rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geometry = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertex_count()));
+    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.indices.size() / 3));
+    if (!vb || !ib)
+    {
+        rtcReleaseGeometry(geometry);
+        throw std::runtime_error(s.failure("allocating the geometry"));
+    }
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+        for (int c = 0; c < 3; ++c)
+            vb[v * 3 + c] = mesh.positions[v][c];
+    std::copy(mesh.indices.begin(), mesh.indices.end(), ib);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(s.scene, geometry);
+    rtcReleaseGeometry(geometry); // the scene keeps it, and with it the buffers
+    rtcCommitScene(s.scene);
+    bool failed;
+    {
+        std::lock_guard<std::mutex> lock(s.error_mutex);
+        failed = !s.error.empty();
+    }
+    if (failed)
+        throw std::runtime_error(s.failure("building the scene"));
+    s.positions = vb;
+    s.indices = ib;
+    triangle_count_ = uint32_t(mesh.indices.size() / 3);
+
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    diagonal_ = glm::length(hi - lo);
+}
+
+EmbreeScene::~EmbreeScene() = default;
+EmbreeScene::EmbreeScene(EmbreeScene&&) noexcept = default;
+EmbreeScene& EmbreeScene::operator=(EmbreeScene&&) noexcept = default;
+
+std::optional<RayHit> EmbreeScene::intersect(const glm::vec3& origin, const glm::vec3& direction,
+                                             float t_near, float t_far) const
+{
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh{};
+    init_ray(rh.ray, origin, direction, t_near, t_far);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return std::nullopt;
+    return RayHit{rh.hit.primID, rh.hit.u, rh.hit.v, rh.ray.tfar};
+}
+
+bool EmbreeScene::occluded(const glm::vec3& origin, const glm::vec3& direction, float t_near,
+                           float t_far) const
+{
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray{};
+    init_ray(ray, origin, direction, t_near, t_far);
+    rtcOccluded1(impl_->scene, &context, &ray);
+    return ray.tfar == -INFINITY; // Embree's mark of an occluded ray
+}
+
+glm::vec3 EmbreeScene::geometric_normal(uint32_t primitive) const
+{
+    const uint32_t* tri = &impl_->indices[size_t(primitive) * 3];
+    const float* p = impl_->positions;
+    const glm::vec3 p0(p[size_t(tri[0]) * 3], p[size_t(tri[0]) * 3 + 1], p[size_t(tri[0]) * 3 + 2]),
+        p1(p[size_t(tri[1]) * 3], p[size_t(tri[1]) * 3 + 1], p[size_t(tri[1]) * 3 + 2]),
+        p2(p[size_t(tri[2]) * 3], p[size_t(tri[2]) * 3 + 1], p[size_t(tri[2]) * 3 + 2]);
+    return glm::cross(p1 - p0, p2 - p0);
+}
+
+int EmbreeScene::embree_version()
+{
+    return RTC_VERSION;
+}
+
+} // namespace hemi::bake

@@ -1,0 +1,206 @@
+// The bakes' ray directions: the same bytes for a seed whatever the thread count and order, unit and uniform
+// (the sphere set's mean is near zero, one ray per z stratum), estimates with the documented weights, and the
+// directions the PRT bake has always drawn (its assets are made of them).
+#include <hemi/bake/ray_generator.h>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+namespace
+{
+
+using hemi::bake::hemisphere_direction;
+using hemi::bake::sphere_direction;
+
+constexpr uint32_t kItems = 2000;
+constexpr int kRays = 64;
+
+// Both sets of every item, drawn by parallel_for on whatever threads TBB gives it.
+std::vector<glm::vec3> draw_all(uint64_t seed)
+{
+    std::vector<glm::vec3> out(size_t(kItems) * kRays * 2);
+    tbb::parallel_for(uint32_t(0), kItems, [&](uint32_t item) {
+        for (int r = 0; r < kRays; ++r)
+        {
+            out[(size_t(item) * kRays + r) * 2] = sphere_direction(seed, item, r, kRays);
+            out[(size_t(item) * kRays + r) * 2 + 1] = hemisphere_direction(seed, item, r, kRays);
+        }
+    });
+    return out;
+}
+
+bool same_bytes(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b)
+{
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0;
+}
+
+} // namespace
+
+TEST(RayGenerator, SameSeedSameBytesWhateverTheThreadCountAndOrder)
+{
+    const std::vector<glm::vec3> parallel = draw_all(5);
+    std::vector<glm::vec3> serial;
+    {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        serial = draw_all(5);
+    }
+    std::vector<glm::vec3> eight;
+    tbb::task_arena(8).execute([&] { eight = draw_all(5); });
+    EXPECT_TRUE(same_bytes(parallel, serial));
+    EXPECT_TRUE(same_bytes(parallel, eight));
+    // Backwards, one ray at a time: no hidden state advances between calls.
+    std::vector<glm::vec3> backwards(parallel.size());
+    for (size_t i = backwards.size() / 2; i-- > 0;)
+    {
+        const uint32_t item = uint32_t(i / kRays);
+        const int r = int(i % kRays);
+        backwards[i * 2] = sphere_direction(5, item, r, kRays);
+        backwards[i * 2 + 1] = hemisphere_direction(5, item, r, kRays);
+    }
+    EXPECT_TRUE(same_bytes(parallel, backwards));
+    EXPECT_FALSE(same_bytes(parallel, draw_all(6))) << "another seed must give other rays";
+    // Each item's set is turned by its own angle: neighbours do not share directions.
+    EXPECT_NE(sphere_direction(5, 0, 3, kRays), sphere_direction(5, 1, 3, kRays));
+}
+
+TEST(RayGenerator, DirectionsAreUnitAndHemispheresPointUp)
+{
+    for (int rays : {1, 2, 7, 64, 1000})
+        for (uint64_t item = 0; item < 50; ++item)
+            for (int r = 0; r < rays; ++r)
+            {
+                const glm::vec3 s = sphere_direction(3, item, r, rays),
+                                h = hemisphere_direction(3, item, r, rays);
+                ASSERT_NEAR(glm::length(s), 1.0f, 1e-6f) << rays << " " << item << " " << r;
+                ASSERT_NEAR(glm::length(h), 1.0f, 1e-6f) << rays << " " << item << " " << r;
+                ASSERT_GE(h.z, 0.0f) << rays << " " << item << " " << r;
+            }
+}
+
+// Ray i lies in the i-th z stratum (of height 2/R on the sphere, 1/R on the hemisphere), top down: what makes
+// the set stratified rather than R independent directions.
+TEST(RayGenerator, OneRayPerStratumOfZ)
+{
+    const int rays = 256;
+    for (uint64_t item = 0; item < 20; ++item)
+        for (int r = 0; r < rays; ++r)
+        {
+            const float s = sphere_direction(11, item, r, rays).z,
+                        h = hemisphere_direction(11, item, r, rays).z;
+            ASSERT_LE(s, 1.0f - 2.0f * float(r) / rays + 1e-6f);
+            ASSERT_GE(s, 1.0f - 2.0f * float(r + 1) / rays - 1e-6f);
+            ASSERT_LE(h, 1.0f - float(r) / rays + 1e-6f);
+            ASSERT_GE(h, 1.0f - float(r + 1) / rays - 1e-6f);
+        }
+}
+
+// The sphere set is balanced: its mean direction is near zero for every item (stratification keeps it far
+// below the 1 / sqrt(R) = 0.06 typical of R independent directions), and nearer still over many items. The
+// hemisphere's mean is (0, 0, 1/2).
+TEST(RayGenerator, MeanOfTheSphereSetIsNearZero)
+{
+    const int rays = 256;
+    glm::dvec3 all(0.0), all_h(0.0);
+    const uint32_t items = 500;
+    for (uint32_t item = 0; item < items; ++item)
+    {
+        glm::dvec3 mean(0.0), mean_h(0.0);
+        for (int r = 0; r < rays; ++r)
+        {
+            mean += glm::dvec3(sphere_direction(1, item, r, rays)) / double(rays);
+            mean_h += glm::dvec3(hemisphere_direction(1, item, r, rays)) / double(rays);
+        }
+        ASSERT_LT(glm::length(mean), 0.01) << "item " << item;
+        ASSERT_LT(glm::length(mean_h - glm::dvec3(0.0, 0.0, 0.5)), 0.01) << "item " << item;
+        all += mean / double(items);
+        all_h += mean_h / double(items);
+    }
+    EXPECT_LT(glm::length(all), 1e-3);
+    EXPECT_LT(glm::length(all_h - glm::dvec3(0.0, 0.0, 0.5)), 1e-3);
+}
+
+// The documented weights: 4 pi / R per sphere ray, 2 pi / R per hemisphere ray.
+TEST(RayGenerator, EstimatesWithTheDocumentedWeights)
+{
+    const int rays = 256;
+    for (uint64_t item = 0; item < 10; ++item)
+    {
+        double sphere = 0.0, cosine = 0.0;
+        for (int r = 0; r < rays; ++r)
+        {
+            const glm::vec3 d = sphere_direction(2, item, r, rays),
+                            h = hemisphere_direction(2, item, r, rays);
+            sphere += (1.0 + d.x + 3.0 * d.z * d.z) * 4.0 * M_PI / rays; // 4 pi + 0 + 4 pi
+            cosine += h.z * 2.0 * M_PI / rays;                           // the clamped cosine: pi
+        }
+        EXPECT_NEAR(sphere, 8.0 * M_PI, 0.02 * 8.0 * M_PI) << item;
+        EXPECT_NEAR(cosine, M_PI, 0.01 * M_PI) << item;
+    }
+}
+
+// The directions of the PRT bake before the generator had a file of its own: the bake's assets and
+// checkpoints are made of them, so a change here is a change of every asset (and needs its checkpoint key
+// bumped). A tolerance rather than bits: the values go through the platform's sin and cos.
+TEST(RayGenerator, DrawsThePrtBakesDirections)
+{
+    struct Ray
+    {
+        uint64_t seed, item;
+        int ray, rays;
+    };
+    struct Pinned
+    {
+        Ray ray;
+        glm::vec3 sphere, hemisphere;
+    };
+    const Pinned pinned[] = {
+        {{1, 0, 0, 256},
+         {-0.020806205f, -0.056139167f, 0.998206139f},
+         {-0.014715634f, -0.039705627f, 0.999103069f}},
+        {{1, 12345, 100, 256},
+         {0.770916939f, 0.598632276f, 0.217546523f},
+         {0.626609862f, 0.486574978f, 0.608773232f}},
+        {{7, 3, 63, 64},
+         {-0.112315327f, -0.033342749f, -0.993113041f},
+         {-0.958643138f, -0.284589797f, 0.003443480f}},
+        {{1, 1, 0, 1},
+         {-0.529688299f, 0.816045403f, -0.231301188f},
+         {-0.502632022f, 0.774362087f, 0.384349406f}},
+    };
+    for (const Pinned& p : pinned)
+    {
+        const Ray& r = p.ray;
+        const glm::vec3 s = sphere_direction(r.seed, r.item, r.ray, r.rays);
+        const glm::vec3 h = hemisphere_direction(r.seed, r.item, r.ray, r.rays);
+        for (int c = 0; c < 3; ++c)
+        {
+            EXPECT_NEAR(s[c], p.sphere[c], 1e-6f) << r.seed << " " << r.item << " " << r.ray;
+            EXPECT_NEAR(h[c], p.hemisphere[c], 1e-6f) << r.seed << " " << r.item << " " << r.ray;
+        }
+    }
+    // The hash itself is integer arithmetic: exact.
+    EXPECT_EQ(hemi::bake::mix64(0), 0xe220a8397b1dcdafull);
+    EXPECT_EQ(hemi::bake::uniform01(1, 2, 3), 0.592672408f);
+}
+
+TEST(RayGenerator, UniformNumbersLieInZeroOne)
+{
+    double sum = 0.0;
+    const int n = 100000;
+    for (int i = 0; i < n; ++i)
+    {
+        const float u = hemi::bake::uniform01(4, uint64_t(i) / 100, uint64_t(i) % 100);
+        ASSERT_GE(u, 0.0f);
+        ASSERT_LT(u, 1.0f);
+        sum += u;
+    }
+    EXPECT_NEAR(sum / n, 0.5, 0.005);
+}
