@@ -4,6 +4,7 @@
 //       [--seed S] [--albedo A] [--cpca CxV] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/io/atomic_file.h>
 
 #include <CLI/CLI.hpp>
 
@@ -61,6 +62,13 @@ class ProgressLine
 public:
     void operator()(const hemi::bake::PrtBakeProgress& p)
     {
+        if (!p.checkpoint_error.empty() && !checkpoint_reported_)
+        {
+            // When it happens, not after the bake: the user may want to free space and restart.
+            std::fprintf(stderr, "%shemi-bake prt: warning: checkpoints stopped: %s\n", tty_ ? "\n" : "",
+                         p.checkpoint_error.c_str());
+            checkpoint_reported_ = true;
+        }
         using clock = std::chrono::steady_clock;
         const double fraction =
             (p.pass + (p.vertex_count ? double(p.vertices_done) / double(p.vertex_count) : 1.0)) / p.passes;
@@ -87,6 +95,10 @@ private:
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
     bool tty_ = isatty(fileno(stderr)) != 0;
     int last_decile_ = -1;
+    bool checkpoint_reported_ = false;
+
+public:
+    bool checkpoint_reported() const { return checkpoint_reported_; }
 };
 
 std::vector<std::string> split(const std::string& list)
@@ -200,6 +212,8 @@ int main(int argc, char** argv)
                 prt_options.cpca_clusters = c;
                 prt_options.cpca_vectors = v;
             }
+            if (!prt_json.empty())
+                hemi::io::check_writable(prt_json); // before the bake, like the asset and its checkpoint
             ProgressLine line;
             hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
             print_prt_summary(s, prt_options, scene, asset);

@@ -212,7 +212,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
         };
         uint32_t first = resuming_mid_pass ? state.next_item : 0;
         if (progress)
-            progress({pass, passes, first, n});
+            progress({pass, passes, first, n, checkpoint.error()});
         while (first < n)
         {
             const uint32_t last = std::min(n, first + slice);
@@ -224,7 +224,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                     out.irradiance[i] += bounce_irradiance[i];
             checkpoint.slice_done(uint32_t(pass), first);
             if (progress)
-                progress({pass, passes, first, n});
+                progress({pass, passes, first, n, checkpoint.error()});
         }
     }
     out.checkpoint_error = checkpoint.error();
@@ -387,11 +387,14 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
 PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std::filesystem::path& asset_path,
                              const PrtAssetOptions& options, const PrtProgressCallback& progress)
 {
-    const io::GltfScene scene = io::read_gltf(scene_path);
-    PrtBakeSummary summary;
     PrtAssetOptions o = options;
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
+    // Fail fast: the outputs' folders are checked before the scene is even read.
+    io::check_writable(asset_path);
+    io::check_writable(o.bake.checkpoint);
+    const io::GltfScene scene = io::read_gltf(scene_path);
+    PrtBakeSummary summary;
     io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress); // scene.mesh: uvs1 included
     summary.tangents_generated = scene.tangents_generated;
     asset.materials = scene.materials;

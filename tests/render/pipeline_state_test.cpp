@@ -85,11 +85,15 @@ TEST_F(PipelineState, MipmappedTexturesAverageWhatAPixelCovers)
                 lo = std::min(lo, color.at(x, y)[0]);
                 hi = std::max(hi, color.at(x, y)[0]);
                 if (mipmaps)
+                {
                     ASSERT_NEAR(color.at(x, y)[0], 0.5f, 0.01f) << "pixel " << x << "," << y;
+                }
             }
         EXPECT_GT(interior, 100) << "mipmaps " << mipmaps;
         if (!mipmaps)
+        {
             EXPECT_GT(hi - lo, 0.5f) << "mip 0 alone must alias (a sampler ignoring mipmaps = false would not)";
+        }
     }
 }
 

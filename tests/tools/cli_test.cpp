@@ -232,3 +232,37 @@ TEST(Cli, RenderTargetsTooLargeForTheDeviceAreRefusedNamingTheLimit)
     EXPECT_EQ(r.err.find("VK_ERROR"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
 }
+
+// A bake to a place it cannot write fails before any work, naming the cause (no progress line: no pass
+// started); a folder where the checkpoint would go is named too; and a temporary file that a bake killed
+// during its final write left beside the asset is gone after the next bake.
+TEST(Cli, BakesFailFastOnUnwritableOutputsAndLeaveNoTemporaries)
+{
+    const Result missing = bake(q(knot()) + " -o " + q(dir() / "no_such_folder" / "x.hemi") + " --rays 512");
+    EXPECT_EQ(missing.status, 1) << missing.err;
+    EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("no_such_folder"), std::string::npos) << missing.err;
+    EXPECT_EQ(missing.err.find("pass 1"), std::string::npos) << "the bake started before the output was checked";
+    const Result json = bake(q(knot()) + " -o " + q(dir() / "json_out.hemi") + " --json " +
+                             q(dir() / "no_such_folder" / "report.json"));
+    EXPECT_EQ(json.status, 1) << json.err;
+    EXPECT_NE(json.err.find("report.json"), std::string::npos) << json.err;
+    EXPECT_EQ(json.err.find("pass 1"), std::string::npos) << "the bake started before its report's folder was checked";
+
+    const fs::path blocked = dir() / "blocked.hemi";
+    fs::create_directories(blocked.string() + ".partial");
+    const Result folder = bake(q(knot()) + " -o " + q(blocked) + " --bases gs --transfer unshadowed --order 3");
+    EXPECT_EQ(folder.status, 1) << folder.err;
+    EXPECT_NE(folder.err.find("blocked.hemi.partial"), std::string::npos) << folder.err;
+    EXPECT_NE(folder.err.find("folder"), std::string::npos) << folder.err;
+    EXPECT_FALSE(fs::exists(blocked));
+    fs::remove_all(blocked.string() + ".partial");
+
+    const fs::path asset = dir() / "after_kill.hemi";
+    const fs::path left = asset.string() + ".tmp4194303.0"; // a pid that no process has
+    std::ofstream(left) << "half an asset";
+    const Result b = bake(q(knot()) + " -o " + q(asset) + " --bases gs --transfer unshadowed --order 3");
+    ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_TRUE(fs::exists(asset));
+    EXPECT_FALSE(fs::exists(left)) << "the killed write's temporary file outlived the next bake";
+}

@@ -69,6 +69,9 @@ struct PrtBakeProgress
     int pass = 0;   // 0: direct (visibility), 1..B: interreflection bounces
     int passes = 1; // total passes
     uint64_t vertices_done = 0, vertex_count = 0;
+    // Set (from then on) once a checkpoint could not be written: why. The bake goes on without checkpoints;
+    // callers report it when it first appears, not after the bake.
+    std::string checkpoint_error;
 };
 using PrtProgressCallback = std::function<void(const PrtBakeProgress&)>;
 
@@ -151,8 +154,10 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
 // scene's materials, primitives and images (their encoded bytes: the asset does not refer to the scene's
 // files) and its TEXCOORD_1. The summary carries the scene reader's warnings. Unless options.bake.checkpoint
 // names another file, the bake checkpoints to ASSET.partial (resuming from it when it matches) and removes it
-// once the asset is written. Throws io::FormatError for bad input files and std::invalid_argument for bad
-// options.
+// once the asset is written. Before any work it checks that the asset and the checkpoint can be written
+// (io::check_writable: a missing or read-only folder, a folder in the way, no space), so a bake to an
+// unwritable place fails in a moment, not after hours. Throws io::FormatError for bad input files or an
+// unwritable output, std::invalid_argument for bad options.
 PrtBakeSummary bake_prt_file(const std::filesystem::path& scene, const std::filesystem::path& asset,
                              const PrtAssetOptions& options, const PrtProgressCallback& progress = {});
 
