@@ -24,6 +24,7 @@ public:
     }
 };
 [[maybe_unused]] ::testing::Environment* const g_env = ::testing::AddGlobalTestEnvironment(new DeviceEnvironment);
+
 } // namespace
 
 ValidationLog& validation_log()

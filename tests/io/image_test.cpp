@@ -2,6 +2,8 @@
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
 
+#include "../hostile_inputs.h"
+
 #include <gtest/gtest.h>
 
 #include <OpenEXR/ImfChannelList.h>
@@ -447,4 +449,24 @@ TEST(ImageDecode, EncodedFilesAreTypedByTheirSignature)
     EXPECT_THROW(hemi::io::encode_jpeg(img, 0), std::invalid_argument);
     EXPECT_THROW(hemi::io::encode_png(hemi::io::ImageRgba8{2, 2, std::vector<uint8_t>(3)}),
                  std::invalid_argument);
+}
+
+// Found by tests/fuzz/fuzz_image: a JPEG Huffman table of more than 256 codes made Debian's stb_image write
+// past its tables. Refused before stb sees it, naming the image and the table.
+TEST(ImageDecode, JpegHuffmanTablesOfMoreThan256CodesAreRefused)
+{
+    const std::vector<uint8_t> jpeg = hemi::io::encode_jpeg(smooth(16, 8), 80);
+    const std::vector<uint8_t> hostile = hemi::test::jpeg_with_oversized_huffman_table(jpeg);
+    ASSERT_FALSE(hostile.empty()) << "the encoder's JPEG has no Huffman table to replace";
+    try
+    {
+        hemi::io::decode_image({"hostile.jpg", "image/jpeg", hostile});
+        ADD_FAILURE() << "a 272-code Huffman table was decoded";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("hostile.jpg"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("Huffman table of 272 codes"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(hemi::io::decode_image({"fine.jpg", "image/jpeg", jpeg}));
 }

@@ -344,6 +344,28 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
         // SOF0..SOF15, except DHT (C4), JPG (C8) and DAC (CC).
         if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC)
             frame = true;
+        if (marker == 0xC4)
+        {
+            // DHT: tables of 1 byte class/id, 16 code counts, then that many symbols. Debian's stb_image
+            // builds each table into 257 bytes without checking that the counts sum to at most 256 (found by
+            // tests/fuzz/fuzz_image): a corrupt table would write past them.
+            size_t at = pos + 2;
+            const size_t end = pos + length;
+            while (at < end)
+            {
+                if (end - at < 17)
+                    throw fail("corrupt JPEG: truncated Huffman table at byte " + std::to_string(at));
+                size_t symbols = 0;
+                for (size_t i = 1; i <= 16; ++i)
+                    symbols += b[at + i];
+                if (symbols > 256)
+                    throw fail("corrupt JPEG: Huffman table of " + std::to_string(symbols) + " codes (at most 256) at byte " +
+                               std::to_string(at));
+                if (end - at - 17 < symbols)
+                    throw fail("corrupt JPEG: Huffman table overruns its segment at byte " + std::to_string(at));
+                at += 17 + symbols;
+            }
+        }
         pos += length;
         if (marker != 0xDA) // SOS: entropy-coded data follows
             continue;

@@ -1,0 +1,31 @@
+// The .hemi container and the PRT asset on it (io::read_prt_asset). The container's XXH64 would turn away
+// almost every mutation before the parsers behind it, so the target re-seals the input: it recomputes the
+// checksum over the mutated bytes, and the section table, the sections' sizes and values, the materials'
+// JSON and the embedded images are what the fuzzer explores.
+#include "fuzz_common.h"
+
+#include <hemi/io/prt_asset.h>
+
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
+#include <cstring>
+#include <vector>
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    static const std::filesystem::path file = hemi::fuzz::scratch(".hemi");
+    std::vector<uint8_t> bytes(data, data + size);
+    if (bytes.size() >= 24)
+    {
+        const uint64_t sum = XXH64(bytes.data(), bytes.size() - 8, 0);
+        std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
+    }
+    hemi::fuzz::write_file(file, bytes.data(), bytes.size());
+    hemi::fuzz::expect_clean([&] {
+        const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(file);
+        for (const hemi::io::EncodedImage& image : asset.images)
+            hemi::fuzz::expect_clean([&] { hemi::io::decode_image(image); });
+    });
+    return 0;
+}

@@ -1,0 +1,42 @@
+#pragma once
+// Hostile inputs that once got through a reader, made in code: shared by the regression tests and the fuzz
+// targets' regression corpora (tests/fuzz/fuzz_seeds.cpp).
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+namespace hemi::test
+{
+
+// `jpeg` with its first Huffman table (DHT) replaced by one whose 16 code counts sum to 272, with 272 symbol
+// bytes: a well-formed segment that Debian's stb_image builds into a 257-byte array (a write out of bounds,
+// found by tests/fuzz/fuzz_image).
+inline std::vector<uint8_t> jpeg_with_oversized_huffman_table(const std::vector<uint8_t>& jpeg)
+{
+    for (size_t at = 2; at + 4 < jpeg.size();)
+    {
+        if (jpeg[at] != 0xFF)
+            break;
+        const uint8_t marker = jpeg[at + 1];
+        const size_t length = size_t(jpeg[at + 2]) << 8 | jpeg[at + 3];
+        if (marker == 0xC4)
+        {
+            std::vector<uint8_t> table = {jpeg[at + 4]}; // class and id of the original first table
+            table.insert(table.end(), 16, 17);           // 16 x 17 = 272 codes
+            for (int i = 0; i < 272; ++i)
+                table.push_back(uint8_t(i));
+            std::vector<uint8_t> out(jpeg.begin(), jpeg.begin() + long(at));
+            const size_t new_length = table.size() + 2;
+            out.insert(out.end(), {0xFF, 0xC4, uint8_t(new_length >> 8), uint8_t(new_length & 0xFF)});
+            out.insert(out.end(), table.begin(), table.end());
+            out.insert(out.end(), jpeg.begin() + long(at + 2 + length), jpeg.end());
+            return out;
+        }
+        if (marker == 0xDA)
+            break;
+        at += 2 + length;
+    }
+    return {};
+}
+
+} // namespace hemi::test
