@@ -19,8 +19,8 @@ packages=(
     libembree-dev libtbb-dev libmeshoptimizer-dev
     # CLI, formatting, hashing, compression
     libcli11-dev libfmt-dev libxxhash-dev libzstd-dev
-    # tests and benchmarks
-    libgtest-dev libgmock-dev libbenchmark-dev
+    # tests and benchmarks; clang's libFuzzer and sanitizer runtimes for the fuzz preset
+    libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
     # plots
     gnuplot-nox
 )
