@@ -470,3 +470,28 @@ TEST(ImageDecode, JpegHuffmanTablesOfMoreThan256CodesAreRefused)
     }
     EXPECT_NO_THROW(hemi::io::decode_image({"fine.jpg", "image/jpeg", jpeg}));
 }
+
+// Found by tests/fuzz/fuzz_image: 760 bytes whose JPEG frame header claims 16392 x 9488 took 13 s and 1.6 GB to
+// decode. A header is refused when its size cannot be coded in the bytes that follow (io/image.cpp says why
+// the bound is below any real file's), before decoding; the same file with its real size decodes.
+TEST(ImageDecode, HeadersClaimingMorePixelsThanTheBytesCanCodeAreRefused)
+{
+    const std::vector<uint8_t> jpeg = hemi::io::encode_jpeg(smooth(16, 8), 80);
+    const std::vector<uint8_t> hostile = hemi::test::jpeg_with_frame_size(jpeg, 16392, 9488);
+    ASSERT_FALSE(hostile.empty());
+    try
+    {
+        hemi::io::decode_image({"huge.jpg", "image/jpeg", hostile});
+        ADD_FAILURE() << "a 16392x9488 frame in " << hostile.size() << " bytes was decoded";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("16392x9488 pixels cannot be coded"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(hemi::io::decode_image({"same.jpg", "image/jpeg", hemi::test::jpeg_with_frame_size(jpeg, 16, 8)}).width,
+              16u);
+    // A real large image is well above the bound: 2048 x 1024 of smooth content.
+    EXPECT_EQ(hemi::io::decode_image({"big.jpg", "image/jpeg", hemi::io::encode_jpeg(smooth(2048, 1024), 50)}).width,
+              2048u);
+    EXPECT_EQ(hemi::io::decode_image({"big.png", "image/png", hemi::io::encode_png(smooth(2048, 1024))}).width, 2048u);
+}

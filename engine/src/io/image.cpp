@@ -438,6 +438,18 @@ ImageRgba8 decode_image(const EncodedImage& image)
     if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > (uint64_t(1) << 28))
         throw fail(std::to_string(w) + "x" + std::to_string(h) +
                    " pixels is empty or larger than 2^28 pixels");
+    // A few hundred bytes must not make us decode hundreds of megapixels (seconds and gigabytes, found by
+    // tests/fuzz/fuzz_image): a header's size has to be plausible for the bytes that follow it. Deflate
+    // compresses at most 1032:1 and a PNG row holds at least a filter byte and one bit a pixel; a baseline or
+    // progressive JPEG (stb reads no arithmetic coding) spends at least one bit on every 8x8 luma block.
+    // Both bounds are lower than any real file's, by a margin of 2.
+    const uint64_t pixels_w = uint64_t(w), pixels_h = uint64_t(h);
+    const uint64_t least = mime == "image/png" ? pixels_h * (1 + (pixels_w + 7) / 8) / 1032 / 2
+                                               : ((pixels_w + 7) / 8) * ((pixels_h + 7) / 8) / 8 / 2;
+    if (uint64_t(data.size()) < least)
+        throw fail(std::to_string(w) + "x" + std::to_string(h) + " pixels cannot be coded in " +
+                   std::to_string(data.size()) + " bytes (at least " + std::to_string(least) +
+                   "): a corrupt or hostile header");
     ImageRgba8 out{uint32_t(w), uint32_t(h), std::vector<uint8_t>(size_t(w) * size_t(h) * 4)};
     if (mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
     {
