@@ -49,9 +49,9 @@ struct ToneMap
 // is missing, not EXR, truncated or corrupt, or holds a non-finite pixel (with its position).
 ImageRgba read_exr(const std::filesystem::path& path);
 // read_exr's caps: the display window holds at most 2^27 pixels (16384 x 8192, 2 GiB of RGBA floats), and
-// one larger than 4096 x 4096 may be at most 64 times its data window (what auto-cropping pads with zeros).
+// one larger than 1024 x 1024 may be at most 64 times its data window (what auto-cropping pads with zeros).
 constexpr uint64_t kMaxExrPixels = uint64_t(1) << 27;
-constexpr uint64_t kMaxExrPaddedPixels = uint64_t(4096) * 4096;
+constexpr uint64_t kMaxExrPaddedPixels = uint64_t(1024) * 1024;
 constexpr uint64_t kMaxExrPadding = 64;
 
 // Throws FormatError naming `path` when the image is inconsistent or the file cannot be written.
