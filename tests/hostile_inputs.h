@@ -8,10 +8,11 @@
 namespace hemi::test
 {
 
-// `jpeg` with its first Huffman table (DHT) replaced by one whose 16 code counts sum to 272, with 272 symbol
-// bytes: a well-formed segment that Debian's stb_image builds into a 257-byte array (a write out of bounds,
-// found by tests/fuzz/fuzz_image).
-inline std::vector<uint8_t> jpeg_with_oversized_huffman_table(const std::vector<uint8_t>& jpeg)
+// `jpeg` with its first Huffman table (DHT) replaced by one of 272 codes, with 272 symbol bytes: a well-formed
+// segment that Debian's stb_image builds into a 257-byte array (a write out of bounds, found by
+// tests/fuzz/fuzz_image).
+// `jpeg` with its first Huffman table (DHT) replaced by `counts` (16 code counts) and as many symbols.
+inline std::vector<uint8_t> jpeg_with_huffman_table(const std::vector<uint8_t>& jpeg, const uint8_t (&counts)[16])
 {
     for (size_t at = 2; at + 4 < jpeg.size();)
     {
@@ -22,8 +23,10 @@ inline std::vector<uint8_t> jpeg_with_oversized_huffman_table(const std::vector<
         if (marker == 0xC4)
         {
             std::vector<uint8_t> table = {jpeg[at + 4]}; // class and id of the original first table
-            table.insert(table.end(), 16, 17);           // 16 x 17 = 272 codes
-            for (int i = 0; i < 272; ++i)
+            size_t symbols = 0;
+            for (uint8_t c : counts)
+                table.push_back(c), symbols += c;
+            for (size_t i = 0; i < symbols; ++i)
                 table.push_back(uint8_t(i));
             std::vector<uint8_t> out(jpeg.begin(), jpeg.begin() + long(at));
             const size_t new_length = table.size() + 2;
@@ -37,6 +40,22 @@ inline std::vector<uint8_t> jpeg_with_oversized_huffman_table(const std::vector<
         at += 2 + length;
     }
     return {};
+}
+
+// Three codes of length 1: no prefix code, and stb_image 2.27 indexes its tables with negative numbers
+// (found by tests/fuzz/fuzz_image).
+inline std::vector<uint8_t> jpeg_with_oversubscribed_huffman_table(const std::vector<uint8_t>& jpeg)
+{
+    const uint8_t counts[16] = {3};
+    return jpeg_with_huffman_table(jpeg, counts);
+}
+
+inline std::vector<uint8_t> jpeg_with_oversized_huffman_table(const std::vector<uint8_t>& jpeg)
+{
+    // 17 codes of length 15 and 255 of length 16: 272 codes, a valid prefix code (Kraft sum 289 of 65536),
+    // more than the 256 a table can hold.
+    const uint8_t counts[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 17, 255};
+    return jpeg_with_huffman_table(jpeg, counts);
 }
 
 // `jpeg` with its frame header claiming `width` x `height`: a few hundred bytes that a decoder trusting the

@@ -136,6 +136,8 @@ int main(int argc, char** argv)
     put(out / "image/regressions/png_zero_length_idat", png_with_empty_idat(png), 0);
     put(out / "image/regressions/jpeg_huge_frame_in_few_bytes",
         test::jpeg_with_frame_size(io::encode_jpeg(pattern(16, 8), 80), 16392, 9488), 1);
+    put(out / "image/regressions/jpeg_oversubscribed_huffman_table",
+        test::jpeg_with_oversubscribed_huffman_table(io::encode_jpeg(pattern(16, 8), 80)), 1);
     put(out / "image/regressions/jpeg_oversized_huffman_table",
         test::jpeg_with_oversized_huffman_table(io::encode_jpeg(pattern(16, 8), 80)), 1);
 

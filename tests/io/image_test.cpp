@@ -498,3 +498,21 @@ TEST(ImageDecode, HeadersClaimingMorePixelsThanTheBytesCanCodeAreRefused)
               2048u);
     EXPECT_EQ(hemi::io::decode_image({"big.png", "image/png", hemi::io::encode_png(smooth(2048, 1024))}).width, 2048u);
 }
+
+// Found by tests/fuzz/fuzz_image: Huffman code lengths that over-subscribe the code space (no prefix code)
+// made stb_image 2.27 index its tables with negative numbers. Refused by the Kraft inequality first.
+TEST(ImageDecode, JpegHuffmanTablesThatAreNoPrefixCodeAreRefused)
+{
+    const std::vector<uint8_t> hostile =
+        hemi::test::jpeg_with_oversubscribed_huffman_table(hemi::io::encode_jpeg(smooth(16, 8), 80));
+    ASSERT_FALSE(hostile.empty());
+    try
+    {
+        hemi::io::decode_image({"prefix.jpg", "image/jpeg", hostile});
+        ADD_FAILURE() << "an over-subscribed Huffman table was decoded";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("not a prefix code"), std::string::npos) << e.what();
+    }
+}

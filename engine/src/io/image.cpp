@@ -356,8 +356,17 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
                 if (end - at < 17)
                     throw fail("corrupt JPEG: truncated Huffman table at byte " + std::to_string(at));
                 size_t symbols = 0;
+                uint64_t code_space = 0; // Kraft: the lengths of a prefix code use at most 2^16 of 2^16
                 for (size_t i = 1; i <= 16; ++i)
+                {
                     symbols += b[at + i];
+                    code_space += uint64_t(b[at + i]) << (16 - i);
+                }
+                // An over-subscribed table is no prefix code: stb_image 2.27 then indexes its tables with
+                // negative numbers (found by tests/fuzz/fuzz_image).
+                if (code_space > (uint64_t(1) << 16))
+                    throw fail("corrupt JPEG: Huffman table is not a prefix code (its code lengths over-subscribe) at "
+                               "byte " + std::to_string(at));
                 if (symbols > 256)
                     throw fail("corrupt JPEG: Huffman table of " + std::to_string(symbols) + " codes (at most 256) at byte " +
                                std::to_string(at));
