@@ -388,3 +388,35 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
     EXPECT_EQ(0, std::memcmp(fresh.radiance.data(), whole.radiance.data(), whole.radiance.size() * 4));
     std::filesystem::remove(checkpoint);
 }
+
+// A checkpoint that cannot be written is reported when it happens, through the progress callback, while the
+// bake goes on (a checkpoint is insurance, not the result): the first report arrives before the last slice,
+// not with the summary. (Its folder does not exist; bake_prt_file would have refused to start, this is the
+// library's lower level, as a disk that fills up mid-bake would reach it.)
+TEST(PrtBake, UnwritableCheckpointsAreReportedWhenTheyHappen)
+{
+    const hemi::io::Mesh mesh = hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple, 1.0f);
+    hemi::bake::PrtBakeOptions o;
+    o.kind = hemi::bake::TransferKind::Shadowed;
+    o.order = 3;
+    o.rays = 64;
+    o.checkpoint = hemi::test::temp_dir("prt_bake_test") / "no_such_folder" / "x.hemi.partial";
+    o.checkpoint_seconds = 0.0;         // save after every slice
+    o.rays_per_slice = uint64_t(256) * 64; // one 256-vertex group a slice: several slices
+    size_t calls = 0, first_report = 0;
+    uint64_t done_at_report = 0, total = 0;
+    const hemi::bake::PrtTransfer t = hemi::bake::bake_prt_transfer(mesh, o, [&](const hemi::bake::PrtBakeProgress& p) {
+        ++calls;
+        total = p.vertex_count;
+        if (!p.checkpoint_error.empty() && first_report == 0)
+        {
+            first_report = calls;
+            done_at_report = p.vertices_done;
+        }
+    });
+    ASSERT_GT(first_report, 0u) << "the failed checkpoint was never reported";
+    EXPECT_LT(done_at_report, total) << "reported only once the bake had finished";
+    EXPECT_FALSE(t.checkpoint_error.empty());
+    EXPECT_NE(t.checkpoint_error.find("no_such_folder"), std::string::npos) << t.checkpoint_error;
+    EXPECT_GT(t.rays_traced, 0u) << "the bake stopped instead of going on without checkpoints";
+}
