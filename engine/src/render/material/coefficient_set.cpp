@@ -10,6 +10,21 @@
 
 namespace hemi::render
 {
+namespace
+{
+// Set 2 of `kind` with its one binding written: every coefficient set is one descriptor in a pool of its own.
+VkDescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind, gpu::DescriptorWrite write,
+                                gpu::DescriptorPool& pool)
+{
+    const gpu::Device& device = system.device();
+    pool = gpu::create_descriptor_pool(device, MaterialSystem::source_bindings(kind), 1);
+    const VkDescriptorSet set = gpu::allocate_descriptor_set(device, pool, system.source_layout(kind));
+    write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
+    gpu::write_descriptors(device, set, {&write, 1});
+    return set;
+}
+} // namespace
+
 
 VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients, uint64_t texels)
 {
@@ -21,28 +36,20 @@ VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::
         throw std::invalid_argument("hemi: " + std::to_string(texels) + " coefficient texels exceed the device's "
                                     "maxTexelBufferElements (" + std::to_string(device.limits().maxTexelBufferElements) + ")");
     view_ = gpu::create_buffer_view(device, coefficients, VK_FORMAT_R32G32B32A32_SFLOAT, 0, texels * 16);
-    const auto bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Vertex);
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Vertex));
     gpu::DescriptorWrite write;
-    write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     write.texel_view = view_;
-    gpu::write_descriptors(device, set_, {&write, 1});
+    set_ = make_source_set(system, CoefficientSourceKind::Vertex, write, pool_);
 }
 
 ProbeCoefficients::ProbeCoefficients(const MaterialSystem& system)
 {
     const gpu::Device& device = system.device();
     uniforms_ = gpu::create_buffer(device, {HEMI_BASIS_MAX_SIZE * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    const auto bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Uniform);
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Uniform));
     gpu::DescriptorWrite write;
-    write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     write.buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    gpu::write_descriptors(device, set_, {&write, 1});
+    set_ = make_source_set(system, CoefficientSourceKind::Uniform, write, pool_);
 }
 
 void ProbeCoefficients::record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const
@@ -99,14 +106,10 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
     // Bilinear, clamped: a lightmap's charts are padded, and nothing wraps across the atlas's border.
     sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_NEAREST,
                                             VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0f});
-    const auto bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Texel);
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Texel));
     gpu::DescriptorWrite write;
-    write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
     write.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     write.image = {sampler_, maps_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    gpu::write_descriptors(device, set_, {&write, 1});
+    set_ = make_source_set(system, CoefficientSourceKind::Texel, write, pool_);
 }
 
 } // namespace hemi::render
