@@ -27,9 +27,13 @@
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device.
 
 #include "models.h"
+#include "relief.h"
 
 #include <hemi/bake/cpca.h>
+#include <hemi/bake/embree_scene.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/bake/ssbump.h>
+#include <hemi/io/mesh.h>
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/render/material/coefficient_set.h>
@@ -464,6 +468,106 @@ void bake_complex(benchmark::State& state)
     state.counters["embree_ratio"] = embree_rays_per_s / bake_rays_per_s;
 }
 
+// Issue 11's speed goal: the 1024 x 1024 SSBump bake at 300 rays per texel (the paper's number), on the
+// sample's deep relief (bricks, rivets, craters; scale 24 texels), tiling.
+void ssbump_bake(benchmark::State& state, bool wrap)
+{
+    const hemi::bake::HeightField field = hemi::samples::make_relief(1024);
+    hemi::bake::SsbumpOptions o;
+    o.scale = 24.0f;
+    o.rays = 300;
+    o.wrap = wrap;
+    hemi::bake::SsbumpMap m;
+    for (auto _ : state)
+    {
+        m = hemi::bake::bake_ssbump(field, o);
+        state.SetIterationTime(m.trace_seconds);
+    }
+    state.counters["seconds"] = m.trace_seconds;
+    state.counters["rays_per_s"] = double(m.rays) / m.trace_seconds;
+}
+
+// The tracer choice: the same height-field rays (the bake's own, from every 8th texel of every 8th row of
+// the 1024^2 relief, without wrapping, as Embree sees the relief) cast one by one by Embree (rtcOccluded1 on
+// the relief's 2M triangles, on the same TBB threads) against the bake's horizon tracer, which answers the
+// rays of an azimuth with one search. Also counts how often the two disagree (grazing ties only).
+void ssbump_tracers(benchmark::State& state)
+{
+    const hemi::bake::HeightField field = hemi::samples::make_relief(1024);
+    const float scale = 24.0f, epsilon = 1e-3f, distance = 1024.0f;
+    const int rays = 300;
+    const hemi::bake::HeightFieldTracer tracer(field, scale, false, epsilon, distance);
+    const hemi::bake::EmbreeScene embree(hemi::bake::height_field_mesh(field, scale));
+    std::vector<uint32_t> texels;
+    for (uint32_t y = 4; y < field.height; y += 8)
+        for (uint32_t x = 4; x < field.width; x += 8)
+            texels.push_back(y * field.width + x);
+    const uint64_t total = uint64_t(texels.size()) * rays;
+    std::vector<uint8_t> by_embree(total), by_horizon(total);
+    double embree_s = 0.0, horizon_s = 0.0;
+    for (auto _ : state)
+    {
+        auto t0 = std::chrono::steady_clock::now();
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+            {
+                const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
+                const glm::vec3 origin(float(x), -float(y), tracer.height_at(x, y) + epsilon);
+                for (int k = 0; k < rays; ++k)
+                {
+                    const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                    const float rho = std::sqrt(d.x * d.x + d.y * d.y);
+                    by_embree[i * rays + size_t(k)] = embree.occluded(origin, d, 0.0f, distance / rho);
+                }
+            }
+        });
+        auto t1 = std::chrono::steady_clock::now();
+        const int azimuths = hemi::bake::ssbump_azimuths(rays);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+            {
+                const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
+                for (int a = 0; a < azimuths; ++a)
+                {
+                    // As the bake does: one search per azimuth from its lowest ray's slope.
+                    double k_min = 1e300, dx = 0.0, dy = 0.0;
+                    for (int k = a; k < rays; k += azimuths)
+                    {
+                        const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                        const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
+                        k_min = std::min(k_min, double(d.z) / rho);
+                        dx = d.x / rho;
+                        dy = d.y / rho;
+                    }
+                    const double h = tracer.horizon(x, y, dx, dy, k_min);
+                    for (int k = a; k < rays; k += azimuths)
+                    {
+                        const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                        const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
+                        by_horizon[i * rays + size_t(k)] = double(d.z) / rho < h;
+                    }
+                }
+            }
+        });
+        auto t2 = std::chrono::steady_clock::now();
+        embree_s = std::chrono::duration<double>(t1 - t0).count();
+        horizon_s = std::chrono::duration<double>(t2 - t1).count();
+        state.SetIterationTime(horizon_s);
+    }
+    uint64_t disagree = 0, blocked = 0;
+    for (uint64_t i = 0; i < total; ++i)
+    {
+        disagree += by_embree[i] != by_horizon[i];
+        blocked += by_embree[i];
+    }
+    state.counters["rays"] = double(total);
+    state.counters["blocked_fraction"] = double(blocked) / double(total);
+    state.counters["disagreements"] = double(disagree);
+    state.counters["embree_rays_per_s"] = double(total) / embree_s;
+    state.counters["horizon_rays_per_s"] = double(total) / horizon_s;
+    state.counters["horizon_vs_embree"] = embree_s / horizon_s;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -508,6 +612,18 @@ int main(int argc, char** argv)
             ->MinTime(0.5);
     benchmark::RegisterBenchmark("bake/complex", bake_complex)->Unit(benchmark::kMillisecond)->UseManualTime()
         ->Iterations(2);
+    benchmark::RegisterBenchmark("ssbump/bake/1024x1024/rays:300", ssbump_bake, true)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
+        ->Iterations(1);
+    benchmark::RegisterBenchmark("ssbump/bake/1024x1024/rays:300/no-wrap", ssbump_bake, false)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
+        ->Iterations(1);
+    benchmark::RegisterBenchmark("ssbump/tracers/1024x1024", ssbump_tracers)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
+        ->Iterations(1);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

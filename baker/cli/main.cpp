@@ -2,15 +2,24 @@
 //   basis-report [--json FILE] [--plot FILE.png] [--signals N] [--seed S]
 //   prt SCENE.gltf|.glb -o ASSET.hemi [--bases ...] [--transfer ...] [--bounces B] [--order N] [--rays R]
 //       [--seed S] [--albedo A] [--cpca CxV] [--json REPORT.json]
+//   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R] [--filter RADIUS,SIGMA]
+//       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
+//   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
 #include <hemi/bake/basis_report.h>
+#include <hemi/bake/checkpoint.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/bake/ssbump.h>
 #include <hemi/io/atomic_file.h>
+#include <hemi/io/image.h>
+
+#include <nlohmann/json.hpp>
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <unistd.h>
 #include <sstream>
 #include <string>
@@ -56,49 +65,62 @@ void print_report(const hemi::bake::BasisReport& r)
     for (const auto& [name, st] : r.imse)
         std::printf("  %-9s %6d %12.5f %10.4f\n", name.c_str(), st.coefficients, st.mean_imse, st.rel_rms);
 }
-// Progress on stderr: one line rewritten in place, with the ETA over all passes.
+// Progress on stderr: one line rewritten in place on a terminal (a line per 10% in a log), with the ETA,
+// and a checkpoint failure reported when it happens, not after the bake (the user may want to free space
+// and restart).
 class ProgressLine
 {
 public:
-    void operator()(const hemi::bake::PrtBakeProgress& p)
+    explicit ProgressLine(std::string tool) : tool_(std::move(tool)) {}
+
+    void checkpoint_error(const std::string& error)
     {
-        if (!p.checkpoint_error.empty() && !checkpoint_reported_)
-        {
-            // When it happens, not after the bake: the user may want to free space and restart.
-            std::fprintf(stderr, "%shemi-bake prt: warning: checkpoints stopped: %s\n", tty_ ? "\n" : "",
-                         p.checkpoint_error.c_str());
-            checkpoint_reported_ = true;
-        }
+        if (error.empty() || checkpoint_reported_)
+            return;
+        std::fprintf(stderr, "%s%s: warning: checkpoints stopped: %s\n", tty_ ? "\n" : "", tool_.c_str(),
+                     error.c_str());
+        checkpoint_reported_ = true;
+    }
+    void update(double fraction, const std::string& what, bool done)
+    {
         using clock = std::chrono::steady_clock;
-        const double fraction =
-            (p.pass + (p.vertex_count ? double(p.vertices_done) / double(p.vertex_count) : 1.0)) / p.passes;
         const double elapsed = std::chrono::duration<double>(clock::now() - start_).count();
-        const char* what = p.pass == 0 ? "visibility" : "bounce";
         char eta[32] = "";
         if (fraction > 0.02 && fraction < 1.0)
             std::snprintf(eta, sizeof eta, ", ETA %.0f s", elapsed * (1.0 - fraction) / fraction);
-        const bool done = p.pass + 1 == p.passes && p.vertices_done == p.vertex_count;
-        // On a terminal one line is rewritten in place; in a log, a line per 10% (and the last).
         const int decile = int(fraction * 10.0);
         if (!tty_ && decile == last_decile_ && !done)
             return;
         last_decile_ = decile;
-        std::fprintf(stderr, "%shemi-bake prt: pass %d/%d (%s%s) %5.1f%%%s%s", tty_ ? "\r" : "", p.pass + 1,
-                     p.passes, what, p.pass == 0 ? "" : (" " + std::to_string(p.pass)).c_str(), 100.0 * fraction,
-                     eta, tty_ ? "      " : "\n");
+        std::fprintf(stderr, "%s%s: %s %5.1f%%%s%s", tty_ ? "\r" : "", tool_.c_str(), what.c_str(),
+                     100.0 * fraction, eta, tty_ ? "      " : "\n");
         if (done && tty_)
             std::fprintf(stderr, "\n");
         std::fflush(stderr);
     }
+    bool checkpoint_reported() const { return checkpoint_reported_; }
 
 private:
+    std::string tool_;
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
     bool tty_ = isatty(fileno(stderr)) != 0;
     int last_decile_ = -1;
     bool checkpoint_reported_ = false;
+};
 
-public:
-    bool checkpoint_reported() const { return checkpoint_reported_; }
+// The PRT bake's progress: over all passes.
+struct PrtProgressLine
+{
+    ProgressLine line{"hemi-bake prt"};
+    void operator()(const hemi::bake::PrtBakeProgress& p)
+    {
+        line.checkpoint_error(p.checkpoint_error);
+        const double fraction =
+            (p.pass + (p.vertex_count ? double(p.vertices_done) / double(p.vertex_count) : 1.0)) / p.passes;
+        const std::string what = "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
+                                 (p.pass == 0 ? std::string("visibility") : "bounce " + std::to_string(p.pass)) + ")";
+        line.update(fraction, what, p.pass + 1 == p.passes && p.vertices_done == p.vertex_count);
+    }
 };
 
 std::vector<std::string> split(const std::string& list)
@@ -145,6 +167,171 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
             std::printf(" %10.2f %12.3e %12.3e", double(t.cpca_bytes) / 1048576.0, t.cpca_rms, t.cpca_relative);
         std::printf("\n");
     }
+}
+
+struct SsbumpCli
+{
+    std::string input, output, from_normal, to_normal, exr, json, channel = "grey", filter, convention = "normalized";
+    hemi::bake::SsbumpOptions options;
+    bool no_occlusion = false, no_wrap = false;
+};
+
+void write_ssbump_png(const std::string& path, const hemi::bake::SsbumpMap& m, std::span<const uint8_t> alpha,
+                      bool normals)
+{
+    hemi::io::ImageRgba8 image{m.width, m.height,
+                               hemi::bake::ssbump_rgba8(normals ? m.normals : m.weights, alpha, normals)};
+    hemi::io::write_png(path, image);
+}
+
+int run_ssbump(SsbumpCli& c)
+{
+    namespace bake = hemi::bake;
+    const int modes = int(!c.input.empty()) + int(!c.from_normal.empty()) + int(!c.to_normal.empty());
+    if (modes != 1)
+        throw std::invalid_argument("give one of HEIGHT (a height map to bake), --from-normal NORMAL.png or "
+                                    "--to-normal SSBUMP.png");
+    const bake::SsbumpConvention convention = bake::parse_ssbump_convention(c.convention);
+    hemi::io::check_writable(c.output);
+    if (!c.exr.empty())
+        hemi::io::check_writable(c.exr);
+    if (!c.json.empty())
+        hemi::io::check_writable(c.json);
+    if (!c.to_normal.empty())
+    {
+        // The way back: a tangent-space ("bent") normal from each texel's weights.
+        const hemi::io::DataImage image = hemi::io::read_data_image(c.to_normal);
+        if (image.bits == 32 || image.channels < 3)
+            throw hemi::io::FormatError(c.to_normal + ": an SSBump map is an RGB(A) PNG");
+        bake::SsbumpMap m;
+        m.width = image.width;
+        m.height = image.height;
+        std::vector<uint8_t> alpha;
+        for (size_t i = 0; i < size_t(image.width) * image.height; ++i)
+        {
+            const float* p = image.pixels.data() + i * 4;
+            m.normals.push_back(bake::ssbump_normal(glm::vec3(p[0], p[1], p[2]), convention));
+            if (image.channels == 4)
+                alpha.push_back(uint8_t(std::lround(p[3] * 255.0f)));
+        }
+        write_ssbump_png(c.output, m, alpha, true);
+        std::printf("wrote %s: %ux%u tangent-space normals from %s weights\n", c.output.c_str(), m.width, m.height,
+                    std::string(to_string(convention)).c_str());
+        return 0;
+    }
+    if (!c.from_normal.empty())
+    {
+        uint32_t w = 0, h = 0;
+        std::vector<uint8_t> alpha;
+        size_t zeros = 0;
+        const std::vector<glm::vec3> normals = bake::read_normal_map(c.from_normal, w, h, alpha, &zeros);
+        if (zeros)
+            std::fprintf(stderr, "hemi-bake ssbump: warning: %s: %zu texel(s) hold a zero vector; read as (0, 0, 1)\n",
+                         c.from_normal.c_str(), zeros);
+        const bake::SsbumpMap m = bake::ssbump_from_normals(w, h, normals, convention);
+        write_ssbump_png(c.output, m, alpha, false);
+        if (!c.exr.empty())
+        {
+            hemi::io::ImageRgba img{w, h, {}};
+            for (const glm::vec3& v : m.weights)
+                img.pixels.insert(img.pixels.end(), {v.x, v.y, v.z, 1.0f});
+            hemi::io::write_exr(c.exr, img);
+        }
+        std::printf("wrote %s: %ux%u SSBump weights (%s, no occlusion) from a normal map\n", c.output.c_str(), w, h,
+                    std::string(to_string(convention)).c_str());
+        return 0;
+    }
+
+    bake::SsbumpOptions& o = c.options;
+    o.convention = convention;
+    o.occlusion = !c.no_occlusion;
+    o.wrap = !c.no_wrap;
+    const bool filter_given = !c.filter.empty();
+    if (filter_given)
+    {
+        int radius = 0;
+        float sigma = 0.0f;
+        char comma = 0, rest = 0;
+        const int got = std::sscanf(c.filter.c_str(), "%d%c%f%c", &radius, &comma, &sigma, &rest);
+        if (!((got == 1 && radius == 0) || (got == 3 && comma == ',')))
+            throw std::invalid_argument("--filter expects RADIUS,SIGMA (e.g. 2,0.02) or 0 for none, got '" + c.filter +
+                                        "'");
+        o.filter = {radius, sigma};
+    }
+    bake::check_ssbump_options(o); // before the map is read: a bad option fails at once
+    o.checkpoint = bake::checkpoint_path(c.output);
+    hemi::io::check_writable(o.checkpoint);
+    const bake::HeightMapFile file = bake::read_height_map(c.input, bake::parse_height_channel(c.channel));
+    if (!filter_given)
+        o.filter = bake::default_filter(file.bits);
+    char filter_text[64] = "off";
+    if (o.filter.enabled())
+        std::snprintf(filter_text, sizeof filter_text, "%d,%g", o.filter.radius, double(o.filter.sigma));
+    std::printf("%s: %ux%u, %d-bit, scale %g texels, %s, %s convention, filter %s%s\n", c.input.c_str(),
+                file.field.width, file.field.height, file.bits, double(o.scale), o.wrap ? "tiling" : "not tiling",
+                std::string(to_string(o.convention)).c_str(), filter_text, filter_given ? "" : " (default)");
+    ProgressLine line("hemi-bake ssbump");
+    const bake::SsbumpMap m = bake::bake_ssbump(file.field, o, [&](const bake::SsbumpProgress& p) {
+        line.checkpoint_error(p.checkpoint_error);
+        if (o.occlusion)
+            line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0, "occlusion",
+                        p.texels_done == p.texels);
+    });
+    write_ssbump_png(c.output, m, file.alpha, false);
+    std::printf("wrote %s\n", c.output.c_str());
+    if (!c.exr.empty())
+    {
+        hemi::io::ImageRgba img{m.width, m.height, {}};
+        img.pixels.reserve(m.weights.size() * 4);
+        for (const glm::vec3& v : m.weights)
+            img.pixels.insert(img.pixels.end(), {v.x, v.y, v.z, 1.0f});
+        hemi::io::write_exr(c.exr, img);
+        std::printf("wrote %s\n", c.exr.c_str());
+    }
+    bake::remove_checkpoint(o.checkpoint); // the finished work is in the outputs now
+    glm::dvec3 mean(0.0);
+    float lowest = 1.0f;
+    for (const glm::vec3& v : m.occlusion)
+    {
+        mean += glm::dvec3(v);
+        lowest = std::min(lowest, std::min(v.x, std::min(v.y, v.z)));
+    }
+    mean /= double(m.occlusion.size());
+    if (o.occlusion)
+        std::printf("occlusion: mean %.3f %.3f %.3f, lowest %.3f; %llu rays in %.2f s = %.2f Mrays/s%s\n", mean.x,
+                    mean.y, mean.z, double(lowest), (unsigned long long)m.rays, m.trace_seconds,
+                    m.trace_seconds > 0 ? double(m.rays) / m.trace_seconds * 1e-6 : 0.0,
+                    m.resumed ? " (resumed from a checkpoint)" : "");
+    if (!c.json.empty())
+    {
+        nlohmann::json j;
+        j["input"] = c.input;
+        j["width"] = m.width;
+        j["height"] = m.height;
+        j["bits"] = file.bits;
+        j["channel"] = c.channel;
+        j["scale"] = o.scale;
+        j["rays_per_texel"] = o.occlusion ? o.rays : 0;
+        j["occlusion"] = o.occlusion;
+        j["wrap"] = o.wrap;
+        j["convention"] = std::string(to_string(o.convention));
+        j["filter"] = {{"radius", o.filter.radius}, {"sigma", o.filter.sigma}};
+        j["seed"] = o.seed;
+        j["epsilon"] = o.epsilon;
+        j["max_distance"] = o.max_distance > 0 ? o.max_distance : float(std::max(m.width, m.height));
+        j["rays"] = m.rays;
+        j["trace_seconds"] = m.trace_seconds;
+        j["rays_per_second"] = m.trace_seconds > 0 ? double(m.rays) / m.trace_seconds : 0.0;
+        j["resumed"] = m.resumed;
+        j["mean_occlusion"] = {mean.x, mean.y, mean.z};
+        j["lowest_occlusion"] = lowest;
+        j["output"] = c.output;
+        if (!c.exr.empty())
+            j["exr"] = c.exr;
+        hemi::io::write_text_atomically(c.json, j.dump(2) + "\n");
+        std::printf("wrote %s\n", c.json.c_str());
+    }
+    return 0;
 }
 
 } // namespace
@@ -195,7 +382,52 @@ int main(int argc, char** argv)
                     "seconds between checkpoints to ASSET.partial (an interrupted bake resumes from it)")
         ->check(CLI::Range(0.0, 1e9))
         ->capture_default_str();
+
+    SsbumpCli sb;
+    CLI::App* ssbump = app.add_subcommand(
+        "ssbump", "bake a self-shadowed bump map (Green 2007) from a height map, or convert to and from normal maps");
+    ssbump->add_option("height", sb.input, "height map: 8- or 16-bit PNG, or EXR (white stands --scale texels above black)");
+    ssbump->add_option("-o,--output", sb.output, "SSBump map (8-bit PNG) to write; a normal map with --to-normal")
+        ->required();
+    ssbump->add_option("--scale", sb.options.scale, "height of white above black, in texel widths")
+        ->capture_default_str();
+    ssbump->add_option("--channel", sb.channel, "channel that holds the heights: grey, r, g, b or a")
+        ->capture_default_str();
+    ssbump->add_option("--rays", sb.options.rays, "rays per texel for the directional occlusion")
+        ->capture_default_str();
+    ssbump->add_option("--filter", sb.filter, "bilateral filter on the heights, RADIUS,SIGMA (texels, height units), "
+                                              "or 0 for none [default: 2,0.02 for 8-bit input, none otherwise]");
+    ssbump->add_flag("--no-occlusion", sb.no_occlusion, "weights of the normal only (no rays)");
+    ssbump->add_flag("--no-wrap", sb.no_wrap, "the map does not tile: the relief ends at its borders");
+    ssbump->add_option("--convention", sb.convention, "normalized (flat = 1/3 each, the paper's Eq. 3) or valve "
+                                                      "(flat = 0.577 each, Source's height2ssbump)")
+        ->capture_default_str();
+    ssbump->add_option("--exr", sb.exr, "also write the weights as a float EXR");
+    ssbump->add_option("--json", sb.json, "write the bake report as JSON to FILE");
+    ssbump->add_option("--from-normal", sb.from_normal, "convert this tangent-space normal map (PNG) instead of baking");
+    ssbump->add_option("--to-normal", sb.to_normal, "convert this SSBump map back to a tangent-space normal map");
+    ssbump->add_option("--seed", sb.options.seed, "seed of the ray directions (same seed, same bytes)")
+        ->capture_default_str();
+    ssbump->add_option("--max-distance", sb.options.max_distance,
+                       "how far rays go, in texel widths (0: the map's larger side)")
+        ->capture_default_str();
+    ssbump->add_option("--checkpoint-interval", sb.options.checkpoint_seconds,
+                       "seconds between checkpoints to OUT.png.partial (an interrupted bake resumes from it)")
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
+
+    if (ssbump->parsed())
+    {
+        try
+        {
+            return run_ssbump(sb);
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "\nhemi-bake ssbump: %s\n", e.what());
+            return 1;
+        }
+    }
 
     if (prt->parsed())
     {
@@ -214,7 +446,7 @@ int main(int argc, char** argv)
             }
             if (!prt_json.empty())
                 hemi::io::check_writable(prt_json); // before the bake, like the asset and its checkpoint
-            ProgressLine line;
+            PrtProgressLine line;
             hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
             print_prt_summary(s, prt_options, scene, asset);
             if (!prt_json.empty())

@@ -185,13 +185,7 @@ void write_basis_report_json(const std::string& path, const BasisReport& r)
     for (const auto& [name, st] : r.imse)
         j["imse"][name] = {{"mean", st.mean_imse}, {"rel_rms", st.rel_rms}, {"coefficients", st.coefficients}};
     j["svd_singular_values"] = {{"A", r.svd_singular_values}, {"A_convolved", r.svd_singular_values_convolved}};
-    io::write_atomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream f(tmp);
-        f << j.dump(2) << "\n";
-        f.close();
-        if (f.fail())
-            throw std::runtime_error(path + ": cannot write the JSON report");
-    });
+    io::write_text_atomically(path, j.dump(2) + "\n");
 }
 
 void plot_basis_report(const std::string& png_path, const BasisReport& r)

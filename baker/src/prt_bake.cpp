@@ -444,13 +444,7 @@ void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary
         }
         j["techniques"].push_back(e);
     }
-    io::write_atomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream f(tmp);
-        f << j.dump(2) << "\n";
-        f.close();
-        if (f.fail())
-            throw io::FormatError(path.string() + ": cannot write the JSON report");
-    });
+    io::write_text_atomically(path, j.dump(2) + "\n");
 }
 
 } // namespace hemi::bake

@@ -1,9 +1,11 @@
 // The command lines pipelines script against, run as processes: hemi-bake prt and hemi-render with the
 // issue's exact forms, their outputs, and their errors on bad input (exit status 1, a message naming the
 // file and the problem, no output file left behind).
+#include "../png_writer.h"
 #include "../temp_dir.h"
 #include "models.h"
 
+#include <hemi/bake/ssbump.h>
 #include <hemi/io/image.h>
 #include <hemi/io/prt_asset.h>
 
@@ -265,4 +267,137 @@ TEST(Cli, BakesFailFastOnUnwritableOutputsAndLeaveNoTemporaries)
     ASSERT_EQ(b.status, 0) << b.err;
     EXPECT_TRUE(fs::exists(asset));
     EXPECT_FALSE(fs::exists(left)) << "the killed write's temporary file outlived the next bake";
+}
+
+namespace
+{
+Result ssbump(const std::string& args) { return run(HEMI_BAKE_EXE, "ssbump " + args); }
+
+void write_file(const fs::path& p, const std::vector<uint8_t>& bytes)
+{
+    std::ofstream f(p, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+} // namespace
+
+// hemi-bake ssbump's three forms (issue 11) end to end: a flat 16-bit height map bakes 1/3 everywhere (85 in
+// the PNG, 1/3 in the EXR) or 0.577 (147) in Valve's convention; a groove's floor is darker with occlusion
+// than without; a normal map converts to weights and back.
+TEST(BakeCli, SsbumpBakesAndConvertsInTheIssuesForms)
+{
+    const fs::path flat = dir() / "flat16.png";
+    write_file(flat, hemi::test::encode_png_samples(16, 12, 1, 16, std::vector<uint16_t>(16 * 12, 30000)));
+    const fs::path png = dir() / "flat_ssbump.png", exr = dir() / "flat_ssbump.exr", json = dir() / "flat.json";
+    const Result r = ssbump(q(flat) + " -o " + q(png) + " --exr " + q(exr) + " --json " + q(json) + " --scale 4");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const hemi::io::ImageRgba8 out = hemi::io::read_png(png);
+    ASSERT_EQ(out.width, 16u);
+    ASSERT_EQ(out.height, 12u);
+    for (size_t i = 0; i < out.pixels.size(); ++i)
+        ASSERT_EQ(int(out.pixels[i]), i % 4 == 3 ? 255 : 85) << "byte " << i;
+    const hemi::io::ImageRgba e = hemi::io::read_exr(exr);
+    for (size_t i = 0; i < size_t(e.width) * e.height; ++i)
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(e.pixels[i * 4 + size_t(c)], 1.0f / 3.0f, 1e-6f);
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["rays_per_texel"], 300);
+    EXPECT_EQ(j["rays"], 16 * 12 * 300);
+    EXPECT_EQ(j["bits"], 16);
+    EXPECT_EQ(j["filter"]["radius"], 0) << "16-bit input gets no default filter";
+    EXPECT_EQ(j["convention"], "normalized");
+    EXPECT_DOUBLE_EQ(j["mean_occlusion"][0].get<double>(), 1.0);
+    EXPECT_FALSE(fs::exists(png.string() + ".partial")) << "the checkpoint outlived the bake";
+
+    const fs::path valve = dir() / "flat_valve.png";
+    ASSERT_EQ(ssbump(q(flat) + " -o " + q(valve) + " --convention valve").status, 0);
+    EXPECT_EQ(int(hemi::io::read_png(valve).pixels[0]), 147); // 255 / sqrt(3) = 147.2
+
+    // A V-groove along the columns (8-bit, alpha kept): its floor is darker with occlusion than without.
+    std::vector<uint16_t> groove(32 * 8 * 2);
+    for (uint32_t y = 0; y < 8; ++y)
+        for (uint32_t x = 0; x < 32; ++x)
+        {
+            groove[(y * 32 + x) * 2] = uint16_t(std::abs(int(x) - 16) * 15);
+            groove[(y * 32 + x) * 2 + 1] = 200;
+        }
+    const fs::path groove_png = dir() / "groove.png";
+    write_file(groove_png, hemi::test::encode_png_samples(32, 8, 2, 8, groove));
+    const fs::path lit = dir() / "groove_occ.png", unlit = dir() / "groove_plain.png";
+    ASSERT_EQ(ssbump(q(groove_png) + " -o " + q(lit) + " --scale 8 --filter 0").status, 0);
+    ASSERT_EQ(ssbump(q(groove_png) + " -o " + q(unlit) + " --scale 8 --filter 0 --no-occlusion").status, 0);
+    const hemi::io::ImageRgba8 a = hemi::io::read_png(lit), b = hemi::io::read_png(unlit);
+    const size_t floor_texel = (3 * 32 + 16) * 4;
+    EXPECT_EQ(int(b.pixels[floor_texel]), 85);
+    EXPECT_LT(int(a.pixels[floor_texel]), 85 - 20) << "the groove's floor sees less of the +x lobe";
+    EXPECT_EQ(int(a.pixels[floor_texel + 3]), 200) << "the input's alpha is kept";
+
+    // --from-normal then --to-normal: normals inside the cone of the three directions come back within the
+    // 8-bit rounding of the weights.
+    std::vector<uint16_t> normals(16 * 16 * 3);
+    std::vector<glm::vec3> truth;
+    for (size_t i = 0; i < 256; ++i)
+    {
+        const glm::vec3 n = glm::normalize(glm::vec3(0.3f * std::sin(0.37f * float(i)), 0.3f * std::cos(0.23f * float(i)), 1.0f));
+        for (int c = 0; c < 3; ++c)
+            normals[i * 3 + size_t(c)] = uint16_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+        truth.push_back(glm::vec3(normals[i * 3] / 255.0f, normals[i * 3 + 1] / 255.0f, normals[i * 3 + 2] / 255.0f) * 2.0f - 1.0f);
+    }
+    const fs::path normal_png = dir() / "normals.png", converted = dir() / "converted.png", back = dir() / "back.png";
+    write_file(normal_png, hemi::test::encode_png_samples(16, 16, 3, 8, normals));
+    const Result from = ssbump("--from-normal " + q(normal_png) + " -o " + q(converted));
+    ASSERT_EQ(from.status, 0) << from.err;
+    const Result to = ssbump("--to-normal " + q(converted) + " -o " + q(back));
+    ASSERT_EQ(to.status, 0) << to.err;
+    const hemi::io::ImageRgba8 weights = hemi::io::read_png(converted), again = hemi::io::read_png(back);
+    double worst = 0.0;
+    for (size_t i = 0; i < 256; ++i)
+    {
+        const glm::vec3 n = glm::normalize(truth[i]);
+        // The weights are Eq. (3) of the decoded normal, rounded to 8 bits.
+        const glm::vec3 w = hemi::bake::ssbump_weights(n, hemi::bake::SsbumpConvention::Normalized);
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(int(weights.pixels[i * 4 + size_t(c)]), std::lround(w[c] * 255.0f), 1) << "texel " << i;
+        const glm::vec3 m = glm::normalize(glm::vec3(again.pixels[i * 4], again.pixels[i * 4 + 1], again.pixels[i * 4 + 2]) / 255.0f * 2.0f - 1.0f);
+        worst = std::max(worst, std::acos(std::min(1.0, double(glm::dot(m, n)))) * 180.0 / M_PI);
+    }
+    EXPECT_LT(worst, 3.0) << "degrees";
+}
+
+// Bad input to hemi-bake ssbump: exit status 1 and a message naming the file and the problem, before any
+// work, with no output left behind.
+TEST(BakeCli, SsbumpRefusesBadInputWithTheFileNamed)
+{
+    const fs::path flat = dir() / "flat8.png";
+    write_file(flat, hemi::test::encode_png_samples(8, 8, 1, 8, std::vector<uint16_t>(64, 100)));
+    const fs::path out = dir() / "bad_out.png";
+    for (const char* scale : {"0", "-1", "nan"})
+    {
+        const Result r = ssbump(q(flat) + " -o " + q(out) + " --scale " + scale);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find("scale"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
+    std::vector<uint16_t> normals(8 * 8 * 3);
+    for (size_t i = 0; i < 64; ++i)
+        normals[i * 3] = uint16_t(128 + (i % 5) * 10), normals[i * 3 + 1] = 128, normals[i * 3 + 2] = 250;
+    const fs::path normal_png = dir() / "a_normal_map.png";
+    write_file(normal_png, hemi::test::encode_png_samples(8, 8, 3, 8, normals));
+    const Result wrong = ssbump(q(normal_png) + " -o " + q(out));
+    EXPECT_EQ(wrong.status, 1);
+    EXPECT_NE(wrong.err.find("a_normal_map.png"), std::string::npos) << wrong.err;
+    EXPECT_NE(wrong.err.find("--from-normal"), std::string::npos) << wrong.err;
+    const Result missing = ssbump(q(dir() / "no_such_height.png") + " -o " + q(out));
+    EXPECT_EQ(missing.status, 1);
+    EXPECT_NE(missing.err.find("no_such_height.png"), std::string::npos) << missing.err;
+    const Result folder = ssbump(q(flat) + " -o " + q(dir() / "no_such_folder" / "x.png"));
+    EXPECT_EQ(folder.status, 1);
+    EXPECT_NE(folder.err.find("no_such_folder"), std::string::npos) << folder.err;
+    EXPECT_EQ(folder.err.find("occlusion"), std::string::npos) << "the bake started before the output was checked";
+    const Result two = ssbump(q(flat) + " --from-normal " + q(normal_png) + " -o " + q(out));
+    EXPECT_EQ(two.status, 1);
+    EXPECT_NE(two.err.find("give one of"), std::string::npos) << two.err;
+    const Result filter = ssbump(q(flat) + " -o " + q(out) + " --filter 2");
+    EXPECT_EQ(filter.status, 1);
+    EXPECT_NE(filter.err.find("RADIUS,SIGMA"), std::string::npos) << filter.err;
+    EXPECT_FALSE(fs::exists(out));
 }

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <fstream>
 #include <system_error>
 #include <fcntl.h>
 #include <sys/statvfs.h>
@@ -63,6 +64,17 @@ std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path
             out.push_back(it->path());
     }
     return out;
+}
+
+void write_text_atomically(const std::filesystem::path& path, std::string_view text)
+{
+    write_atomically(path, [&](const std::filesystem::path& tmp) {
+        std::ofstream f(tmp, std::ios::binary);
+        f.write(text.data(), std::streamsize(text.size()));
+        f.close();
+        if (f.fail())
+            throw FormatError(path.string() + ": cannot write the file (" + std::strerror(errno) + ")");
+    });
 }
 
 void write_atomically(const std::filesystem::path& path,

@@ -420,30 +420,46 @@ void append_bytes(void* context, void* data, int size)
 
 } // namespace
 
-ImageRgba8 decode_image(const EncodedImage& image)
+namespace
 {
-    const std::string name = image.name.empty() ? std::string("unnamed image") : image.name;
+
+// The bytes of a checked PNG or JPEG as stb_image is to see them (a PNG's ancillary chunks may be cleaned),
+// with the size and channel count its header declares.
+struct CheckedImage
+{
+    std::optional<std::vector<uint8_t>> cleaned;
+    const std::vector<uint8_t>* bytes = nullptr;
+    std::string mime;
+    int width = 0, height = 0, channels = 0;
+
+    const std::vector<uint8_t>& data() const { return cleaned ? *cleaned : *bytes; }
+};
+
+CheckedImage check_encoded_image(const EncodedImage& image, const std::string& name)
+{
     auto fail = [&](const std::string& what) -> FormatError { return FormatError(name + ": " + what); };
     const std::vector<uint8_t>& bytes = image.bytes;
     if (bytes.empty())
         throw fail("empty image (0 bytes)");
-    const std::string mime = sniff_image_mime_type(bytes.data(), bytes.size());
-    if (mime.empty())
+    CheckedImage c;
+    c.bytes = &bytes;
+    c.mime = sniff_image_mime_type(bytes.data(), bytes.size());
+    if (c.mime.empty())
         throw fail("neither a PNG nor a JPEG image (unknown signature)");
-    if (!image.mime_type.empty() && image.mime_type != mime)
-        throw fail("declared " + image.mime_type + ", but the bytes are " + mime);
+    if (!image.mime_type.empty() && image.mime_type != c.mime)
+        throw fail("declared " + image.mime_type + ", but the bytes are " + c.mime);
     if (bytes.size() > size_t(INT_MAX))
         throw fail("larger than 2 GiB");
-    std::optional<std::vector<uint8_t>> cleaned;
-    if (mime == "image/png")
-        cleaned = check_png(bytes, name);
+    if (c.mime == "image/png")
+        c.cleaned = check_png(bytes, name);
     else
         check_jpeg(bytes, name);
-    const std::vector<uint8_t>& data = cleaned ? *cleaned : bytes;
+    const std::vector<uint8_t>& data = c.data();
     const int size = int(data.size());
-    int w = 0, h = 0, channels = 0;
-    if (!stbi_info_from_memory(data.data(), size, &w, &h, &channels))
-        throw fail("corrupt or unsupported " + mime.substr(6) + " (" + stbi_failure_reason() + ")");
+    int& w = c.width;
+    int& h = c.height;
+    if (!stbi_info_from_memory(data.data(), size, &w, &h, &c.channels))
+        throw fail("corrupt or unsupported " + c.mime.substr(6) + " (" + stbi_failure_reason() + ")");
     if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > (uint64_t(1) << 28))
         throw fail(std::to_string(w) + "x" + std::to_string(h) +
                    " pixels is empty or larger than 2^28 pixels");
@@ -453,29 +469,106 @@ ImageRgba8 decode_image(const EncodedImage& image)
     // progressive JPEG (stb reads no arithmetic coding) spends at least one bit on every 8x8 luma block.
     // Both bounds are lower than any real file's, by a margin of 2.
     const uint64_t pixels_w = uint64_t(w), pixels_h = uint64_t(h);
-    const uint64_t least = mime == "image/png" ? pixels_h * (1 + (pixels_w + 7) / 8) / 1032 / 2
-                                               : ((pixels_w + 7) / 8) * ((pixels_h + 7) / 8) / 8 / 2;
+    const uint64_t least = c.mime == "image/png" ? pixels_h * (1 + (pixels_w + 7) / 8) / 1032 / 2
+                                                 : ((pixels_w + 7) / 8) * ((pixels_h + 7) / 8) / 8 / 2;
     if (uint64_t(data.size()) < least)
         throw fail(std::to_string(w) + "x" + std::to_string(h) + " pixels cannot be coded in " +
                    std::to_string(data.size()) + " bytes (at least " + std::to_string(least) +
                    "): a corrupt or hostile header");
-    ImageRgba8 out{uint32_t(w), uint32_t(h), std::vector<uint8_t>(size_t(w) * size_t(h) * 4)};
-    if (mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
+    return c;
+}
+
+// RGBA samples at 16 bits (8-bit images scaled by 257, so 255 -> 65535), and the stored bit depth.
+std::vector<uint16_t> decode_rgba16(const CheckedImage& c, const std::string& name, int& bits)
+{
+    const std::vector<uint8_t>& data = c.data();
+    const int size = int(data.size());
+    int w = 0, h = 0, channels = 0;
+    std::vector<uint16_t> out(size_t(c.width) * size_t(c.height) * 4);
+    if (c.mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
     {
-        // stb reduces 16 to 8 bits by dropping the low byte; round instead (65535 -> 255, 32896 -> 128).
+        bits = 16;
         stbi_us* wide = stbi_load_16_from_memory(data.data(), size, &w, &h, &channels, 4);
         if (!wide)
-            throw fail("corrupt PNG (" + std::string(stbi_failure_reason()) + ")");
+            throw FormatError(name + ": corrupt PNG (" + std::string(stbi_failure_reason()) + ")");
         std::unique_ptr<stbi_us, void (*)(void*)> owner(wide, stbi_image_free);
+        std::memcpy(out.data(), wide, out.size() * sizeof(uint16_t));
+        return out;
+    }
+    bits = 8;
+    unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
+    if (!narrow)
+        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" + stbi_failure_reason() +
+                          ")");
+    std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
+    for (size_t i = 0; i < out.size(); ++i)
+        out[i] = uint16_t(narrow[i] * 257u);
+    return out;
+}
+
+} // namespace
+
+ImageRgba8 decode_image(const EncodedImage& image)
+{
+    const std::string name = image.name.empty() ? std::string("unnamed image") : image.name;
+    const CheckedImage c = check_encoded_image(image, name);
+    const std::vector<uint8_t>& data = c.data();
+    const int size = int(data.size());
+    int w = 0, h = 0, channels = 0;
+    ImageRgba8 out{uint32_t(c.width), uint32_t(c.height), std::vector<uint8_t>(size_t(c.width) * size_t(c.height) * 4)};
+    if (c.mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
+    {
+        // stb reduces 16 to 8 bits by dropping the low byte; round instead (65535 -> 255, 32896 -> 128).
+        int bits = 0;
+        const std::vector<uint16_t> wide = decode_rgba16(c, name, bits);
         for (size_t i = 0; i < out.pixels.size(); ++i)
             out.pixels[i] = uint8_t((uint32_t(wide[i]) * 255u + 32767u) / 65535u);
         return out;
     }
     unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
     if (!narrow)
-        throw fail("corrupt or unsupported " + mime.substr(6) + " (" + stbi_failure_reason() + ")");
+        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" + stbi_failure_reason() +
+                          ")");
     std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
     std::memcpy(out.pixels.data(), narrow, out.pixels.size());
+    return out;
+}
+
+DataImage read_data_image(const std::filesystem::path& path)
+{
+    std::vector<uint8_t> head = read_file(path);
+    static const uint8_t exr_magic[4] = {0x76, 0x2f, 0x31, 0x01};
+    if (head.size() >= 4 && std::memcmp(head.data(), exr_magic, 4) == 0)
+    {
+        head.clear();
+        ImageRgba rgba = read_exr(path);
+        DataImage out;
+        out.width = rgba.width;
+        out.height = rgba.height;
+        out.channels = 4;
+        out.bits = 32;
+        out.pixels = std::move(rgba.pixels);
+        return out;
+    }
+    EncodedImage image;
+    image.name = path.string();
+    image.bytes = std::move(head);
+    image.mime_type = sniff_image_mime_type(image.bytes.data(), image.bytes.size());
+    if (image.mime_type != "image/png")
+        throw FormatError(path.string() + ": " +
+                          (image.mime_type.empty() ? std::string("neither a PNG nor an EXR file")
+                                                   : "a JPEG: data images (height maps) must be PNG or EXR, whose "
+                                                     "values are exact (JPEG's are not)") +
+                          (image.bytes.empty() ? std::string(" (empty)") : std::string()));
+    const CheckedImage c = check_encoded_image(image, image.name);
+    DataImage out;
+    out.width = uint32_t(c.width);
+    out.height = uint32_t(c.height);
+    out.channels = c.channels;
+    const std::vector<uint16_t> samples = decode_rgba16(c, image.name, out.bits);
+    out.pixels.resize(samples.size());
+    for (size_t i = 0; i < samples.size(); ++i)
+        out.pixels[i] = float(samples[i]) / 65535.0f;
     return out;
 }
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hemi::io
@@ -16,6 +17,9 @@ namespace hemi::io
 // cannot be written or the rename fails.
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& temporary)>& write);
+
+// Writes `text` to `path` atomically (a JSON report, a table). Throws FormatError naming `path` when it cannot.
+void write_text_atomically(const std::filesystem::path& path, std::string_view text);
 
 // Why a file cannot be written at `path`, or an empty string: its folder does not exist or is not a folder,
 // `path` is a folder, the folder is not writable, or its file system has no space left. Long jobs call this

@@ -79,6 +79,24 @@ ImageRgba8 decode_image(const EncodedImage& image);
 // Reads a PNG or JPEG file into its encoded form (mime type from the bytes' signature, not the extension;
 // name = the path). Throws FormatError naming `path` when it is missing or neither format.
 EncodedImage read_encoded_image(const std::filesystem::path& path);
+// An image read as data rather than colour (height maps, masks): a PNG's samples at their full bit depth (8 or
+// 16) scaled to [0, 1] with no sRGB decode, an EXR's values as read_exr gives them. pixels is always RGBA
+// (grey is copied to R, G and B; a missing alpha reads 1).
+struct DataImage
+{
+    uint32_t width = 0;
+    uint32_t height = 0;
+    int channels = 0; // what the file stores: PNG 1 (grey), 2 (grey + alpha), 3 (RGB), 4 (RGBA); EXR 4
+    int bits = 0;     // PNG 8 or 16; EXR 32 (half and float both read as float)
+    std::vector<float> pixels; // width * height * 4, row-major from the top row
+
+    const float* at(uint32_t x, uint32_t y) const { return pixels.data() + (size_t(y) * width + x) * 4; }
+};
+// Reads a PNG (checked as decode_image checks it) or an OpenEXR file (read_exr) by its signature. Throws
+// FormatError naming `path` when it is missing, empty, a JPEG (lossy: not data), neither format, truncated or
+// corrupt.
+DataImage read_data_image(const std::filesystem::path& path);
+
 // Encodes 8-bit RGBA (stb_image_write): PNG losslessly; JPEG at `quality` in [1, 100], alpha dropped. Throws
 // std::invalid_argument for an empty or inconsistent image or a bad quality.
 std::vector<uint8_t> encode_png(const ImageRgba8& image);
