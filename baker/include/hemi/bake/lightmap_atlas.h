@@ -1,0 +1,89 @@
+#pragma once
+// Lightmap UVs (glTF TEXCOORD_1) turned into the texels a lightmap bake traces from: validation with a clear
+// report, and conservative rasterisation in lightmap UV space.
+//
+// Conventions: texel (x, y) of a W x H atlas covers u in [x / W, (x + 1) / W] and v in [y / H, (y + 1) / H],
+// rows from the top (v = 0, glTF's image origin), as render::TexelCoefficients samples them.
+//
+// Every texel that a triangle's UV footprint touches is covered (conservative rasterisation: the triangle
+// and the texel's square overlap, not only the centre). A texel whose centre lies inside a triangle samples
+// that point; one that the triangle only grazes samples the centroid of the triangle's part inside the
+// texel's square, so every sample is on the surface and inside the texel's footprint. Where several
+// triangles touch a texel, the one containing the centre wins, else the one whose sample is nearest the
+// centre (ties: the lower triangle index), so the result does not depend on the order of the work.
+//
+// Overlaps are texel centres that two triangles claim under a fill rule that gives a point on a shared edge
+// (or vertex) to exactly one of the triangles meeting there: a chart's own triangles never overlap.
+//
+// The frame of a texel is the tangent frame of the normal-map UV set (Habel & Wimmer 2010, Sec. 4.3): the
+// interpolated vertex normal, the interpolated tangent made orthogonal to it, and the bitangent
+// cross(N, T) * tangent.w, as glTF defines it. Lightmap coefficients live in that frame, so that the runtime
+// evaluates them at the normal-map normal with no further transform.
+
+#include <hemi/io/mesh.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hemi::bake
+{
+
+struct LightmapTexel
+{
+    uint32_t x = 0, y = 0;
+    uint32_t triangle = 0;
+    glm::vec3 barycentric{1.0f, 0.0f, 0.0f}; // of the sample point, weights of the triangle's vertices 0, 1, 2
+    bool centre_inside = false;               // the texel centre lies in the triangle (else: a grazed texel)
+    glm::vec3 position{0.0f};                 // the sample point on the surface (mesh units)
+    glm::vec3 normal{0.0f, 0.0f, 1.0f};       // unit, the frame's z
+    glm::vec3 tangent{1.0f, 0.0f, 0.0f};      // unit, the frame's x
+    glm::vec3 bitangent{0.0f, 1.0f, 0.0f};    // unit, the frame's y
+    glm::vec3 geometric_normal{0.0f, 0.0f, 1.0f}; // unit normal of the triangle (counter-clockwise front)
+    float world_size = 0.0f;                  // the texel's footprint on the surface: sqrt(world area / texel area)
+};
+
+struct LightmapAtlas
+{
+    uint32_t width = 0, height = 0;
+    std::vector<int32_t> texel_of;     // width * height: index into texels, or -1 for an empty texel
+    std::vector<LightmapTexel> texels; // covered texels, in row-major order of (y, x)
+};
+
+// What is wrong or notable in a mesh's lightmap UVs.
+struct LightmapUvReport
+{
+    size_t triangles = 0;
+    size_t outside = 0;      // triangles with a lightmap UV outside [0, 1]
+    size_t degenerate = 0;   // triangles of zero area in lightmap UV space (no texel can see them)
+    size_t zero_area = 0;    // triangles of zero area in space (ignored)
+    size_t overlapping_texels = 0; // texel centres inside two or more triangles
+    uint32_t overlap_example[2] = {0, 0}; // two triangles that overlap, when overlapping_texels > 0
+    size_t covered_texels = 0;
+    // Texel density: the world size of a texel, per primitive range of triangles (all triangles when the
+    // caller passes none), min and max over those with UV area.
+    float min_texel_size = 0.0f, max_texel_size = 0.0f;
+    // One line each, with counts and an example. Problems make the lightmap wrong (overlapping UVs: two
+    // surfaces would share texels); warnings lose or waste texels (UVs outside [0, 1], triangles of no UV
+    // area, texel density varying more than 4x between primitives).
+    std::vector<std::string> problems;
+    std::vector<std::string> warnings;
+
+    bool ok() const { return problems.empty(); }
+};
+
+struct TriangleRange
+{
+    uint32_t first = 0, count = 0; // triangles [first, first + count)
+    std::string name;              // for the report
+};
+
+// Validates and rasterises in one pass. The mesh needs positions, normals, tangents and uvs1 (Throws
+// std::invalid_argument naming what is missing, or for a size of 0 or over 16384). `ranges` groups the
+// triangles for the density report (glTF primitives); empty is one group.
+LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
+                                 const std::vector<TriangleRange>& ranges = {});
+
+} // namespace hemi::bake

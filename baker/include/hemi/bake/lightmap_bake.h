@@ -1,0 +1,98 @@
+#pragma once
+// The directional lightmap bake (Habel & Wimmer 2010, "Efficient Irradiance Normal Mapping"): per texel of a
+// lightmap atlas, the incident radiance over the hemisphere of the texel's tangent frame, ray traced with
+// Embree, projected into SH9 and convolved with the clamped cosine; then, from that SH9 irradiance, the
+// coefficients of each basis the runtime evaluates at the normal-map normal.
+//
+// The radiance of a texel is that of the hemisphere around its (shading) normal: rays that hit the scene
+// carry no light yet (no emission or bounces in this first step), rays that escape carry the environment's,
+// and rays below the triangle's own plane are blocked by it. So a texel's SH9 radiance is zero over its lower
+// hemisphere and E(n) = sum_j s_j y_j(n) is its irradiance at any normal n of the tangent frame.
+//
+// Units: radiance in the scene's linear RGB; the sun's value is the irradiance it gives a surface facing it.
+// Directions are in world space, z up, like hemi-render's environments.
+
+#include <hemi/bake/lightmap_atlas.h>
+#include <hemi/io/image.h>
+#include <hemi/io/mesh.h>
+
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hemi::bake
+{
+
+// Light from infinitely far away: the environment (uniform, or an equirectangular EXR in hemi-render's z-up
+// convention, Cycles' mapping: u = 0.5 - atan2(y, x) / 2 pi, v = acos(z) / pi from the top) and a sun.
+struct LightmapLights
+{
+    glm::vec3 uniform{1.0f};  // when `environment` is empty: radiance from every direction
+    io::ImageRgba environment; // equirect radiance (linear), bilinear; empty for the uniform environment
+    float environment_scale = 1.0f;
+
+    bool sun = false;
+    glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun
+    glm::vec3 sun_irradiance{0.0f};            // on a surface facing the sun
+    float sun_diameter_degrees = 0.53f;        // the disc the shadow rays sample; 0 is a point (hard shadows)
+
+    // Radiance of the environment towards the scene from direction `d` (unit, world).
+    glm::vec3 environment_radiance(const glm::vec3& d) const;
+};
+
+struct LightmapBakeOptions
+{
+    int rays = 256;     // hemisphere rays per texel for the environment
+    int sun_rays = 16;  // shadow rays per texel towards the sun's disc
+    uint64_t seed = 1;
+    float ray_offset = 1e-4f; // of the scene's diagonal: how far ray origins leave the surface
+    std::filesystem::path checkpoint; // empty: none
+    double checkpoint_seconds = 30.0;
+};
+
+struct LightmapProgress
+{
+    uint64_t texels_done = 0, texels = 0;
+    std::string checkpoint_error;
+};
+
+// SH9 irradiance per covered texel, in the texel's tangent frame (x = tangent, y = bitangent, z = normal).
+struct LightmapSh
+{
+    uint32_t width = 0, height = 0;
+    std::vector<std::array<glm::vec3, 9>> irradiance; // one per atlas.texels entry
+    uint64_t rays = 0;
+    double trace_seconds = 0.0;
+    bool resumed = false;
+    std::string checkpoint_error;
+};
+
+// Throws std::invalid_argument for bad options or lights (non-finite values, a sun direction of zero length).
+LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
+                            const LightmapBakeOptions& options,
+                            const std::function<void(const LightmapProgress&)>& progress = {});
+
+// The lightmap outputs besides math::bases(): "plain", the non-directional lightmap (K = 1: the irradiance at
+// the surface normal, E(+z)), and "rnm", the three lightmap colours of radiosity normal mapping (K = 3: the
+// irradiance towards each math::rnm_basis() direction, E(B_i); pi each under radiance 1 from the whole
+// sphere, pi (1 + 1/sqrt 3) / 2 = 2.48 each on an open plane, whose lower hemisphere is dark).
+// Every other name is a basis of math::bases(), whose coefficients are its projection_from_sh9 of the SH9
+// irradiance. Throws std::invalid_argument listing the known names.
+int lightmap_output_size(std::string_view name);
+// The coefficients of one texel's SH9 irradiance in the output `name`: lightmap_output_size(name) RGB values.
+std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::array<glm::vec3, 9>& irradiance);
+// Every texel's coefficients as K maps for render::TexelCoefficients (map after map, rows from the top, RGB:
+// coefficient k of texel (x, y) at [((k * height + y) * width + x) * 3 + c]). Texels that no triangle covers
+// take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a chart's
+// border does not pull in black), else 0.
+std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
+                                 int dilate = 2);
+
+} // namespace hemi::bake

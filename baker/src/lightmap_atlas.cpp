@@ -1,0 +1,351 @@
+// Lightmap UV validation and conservative rasterisation (lightmap_atlas.h).
+#include <hemi/bake/lightmap_atlas.h>
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::bake
+{
+namespace
+{
+
+using glm::dvec2;
+
+double cross2(const dvec2& a, const dvec2& b)
+{
+    return a.x * b.y - a.y * b.x;
+}
+
+// Barycentric weights of p in triangle (a, b, c) of signed area2 = cross(b - a, c - a) != 0.
+glm::dvec3 barycentric(const dvec2& p, const dvec2& a, const dvec2& b, const dvec2& c, double area2)
+{
+    const double w1 = cross2(p - a, c - a) / area2;
+    const double w2 = cross2(b - a, p - a) / area2;
+    return {1.0 - w1 - w2, w1, w2};
+}
+
+// Whether triangle (a, b, c) and the square [x0, x0 + 1] x [y0, y0 + 1] overlap (separating axes: the two
+// coordinate axes and the three edge normals).
+bool overlaps_square(const dvec2 t[3], double x0, double y0)
+{
+    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}), hi_x = std::max({t[0].x, t[1].x, t[2].x});
+    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}), hi_y = std::max({t[0].y, t[1].y, t[2].y});
+    if (hi_x < x0 || lo_x > x0 + 1 || hi_y < y0 || lo_y > y0 + 1)
+        return false;
+    const dvec2 corners[4] = {{x0, y0}, {x0 + 1, y0}, {x0, y0 + 1}, {x0 + 1, y0 + 1}};
+    for (int e = 0; e < 3; ++e)
+    {
+        const dvec2 a = t[e], b = t[(e + 1) % 3], other = t[(e + 2) % 3];
+        const dvec2 n(-(b.y - a.y), b.x - a.x);
+        const double side = glm::dot(n, other - a);
+        bool all_out = true;
+        for (const dvec2& q : corners)
+            if (glm::dot(n, q - a) * side >= 0)
+                all_out = false;
+        if (all_out)
+            return false;
+    }
+    return true;
+}
+
+// The part of triangle t inside the square [x0, x0 + 1] x [y0, y0 + 1] (Sutherland-Hodgman) and its
+// centroid: a point of the triangle inside the texel's footprint. False when nothing with area is left.
+bool clipped_centroid(const dvec2 t[3], double x0, double y0, dvec2& centroid)
+{
+    std::vector<dvec2> poly(t, t + 3), next;
+    auto clip = [&](int axis, double bound, bool keep_below) {
+        next.clear();
+        for (size_t i = 0; i < poly.size(); ++i)
+        {
+            const dvec2 a = poly[i], b = poly[(i + 1) % poly.size()];
+            const double da = keep_below ? bound - a[axis] : a[axis] - bound;
+            const double db = keep_below ? bound - b[axis] : b[axis] - bound;
+            if (da >= 0)
+                next.push_back(a);
+            if ((da >= 0) != (db >= 0))
+                next.push_back(a + (b - a) * (da / (da - db)));
+        }
+        poly.swap(next);
+    };
+    clip(0, x0, false);
+    clip(0, x0 + 1, true);
+    clip(1, y0, false);
+    clip(1, y0 + 1, true);
+    if (poly.size() < 3)
+        return false;
+    double area = 0.0;
+    dvec2 c(0.0);
+    for (size_t i = 0; i < poly.size(); ++i)
+    {
+        const dvec2 a = poly[i], b = poly[(i + 1) % poly.size()];
+        const double w = cross2(a, b);
+        area += w;
+        c += (a + b) * w;
+    }
+    if (std::abs(area) < 1e-18)
+        return false;
+    centroid = c / (3.0 * area);
+    return true;
+}
+
+// Whether p is inside triangle t under a fill rule that gives a point on an edge shared by two triangles to
+// exactly one of them (the edge's direction decides), so that a chart's texel centres are each claimed once
+// and only true overlaps count twice.
+bool claims(const dvec2 t[3], double area2, const dvec2& p)
+{
+    for (int e = 0; e < 3; ++e)
+    {
+        // Edges taken counter-clockwise: reverse them for a clockwise triangle.
+        dvec2 a = t[e], b = t[(e + 1) % 3];
+        if (area2 < 0)
+            std::swap(a, b);
+        const double f = cross2(b - a, p - a);
+        if (f < 0)
+            return false;
+        if (f == 0)
+        {
+            const dvec2 d = b - a;
+            if (!(d.y > 0 || (d.y == 0 && d.x > 0)))
+                return false;
+        }
+    }
+    return true;
+}
+
+std::string uv_text(const glm::vec2& uv)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "(%g, %g)", double(uv.x), double(uv.y));
+    return buf;
+}
+
+} // namespace
+
+LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
+                                 const std::vector<TriangleRange>& ranges)
+{
+    if (width == 0 || height == 0 || width > 16384 || height > 16384)
+        throw std::invalid_argument("lightmap size " + std::to_string(width) + "x" + std::to_string(height) +
+                                    " is not in [1, 16384] per side");
+    const size_t n = mesh.positions.size();
+    if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3 != 0)
+        throw std::invalid_argument("the mesh has no triangles");
+    if (mesh.uvs1.size() != n)
+        throw std::invalid_argument("the mesh has no lightmap UVs (TEXCOORD_1): " + std::to_string(mesh.uvs1.size()) +
+                                    " for " + std::to_string(n) + " vertices");
+    if (mesh.normals.size() != n || mesh.tangents.size() != n)
+        throw std::invalid_argument("the mesh needs a normal and a tangent per vertex for lightmap frames");
+    for (uint32_t i : mesh.indices)
+        if (i >= n)
+            throw std::invalid_argument("triangle index " + std::to_string(i) + " out of range");
+    for (size_t i = 0; i < n; ++i)
+        if (!std::isfinite(mesh.uvs1[i].x) || !std::isfinite(mesh.uvs1[i].y) || !std::isfinite(mesh.positions[i].x) ||
+            !std::isfinite(mesh.positions[i].y) || !std::isfinite(mesh.positions[i].z))
+            throw std::invalid_argument("vertex " + std::to_string(i) + " has a non-finite position or lightmap UV");
+
+    report = {};
+    const size_t triangles = mesh.indices.size() / 3;
+    report.triangles = triangles;
+    const size_t texels = size_t(width) * height;
+    std::vector<int32_t> best(texels, -1);
+    std::vector<double> best_distance(texels, std::numeric_limits<double>::infinity());
+    std::vector<glm::dvec3> best_bary(texels);
+    std::vector<uint8_t> inside_count(texels, 0);
+    std::vector<int32_t> first_inside(texels, -1);
+    size_t example_outside = SIZE_MAX, example_degenerate = SIZE_MAX;
+    std::vector<double> world_area(triangles, 0.0), uv_area(triangles, 0.0);
+
+    for (size_t t = 0; t < triangles; ++t)
+    {
+        const uint32_t* idx = &mesh.indices[t * 3];
+        const glm::dvec3 p0(mesh.positions[idx[0]]), p1(mesh.positions[idx[1]]), p2(mesh.positions[idx[2]]);
+        world_area[t] = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+        dvec2 uv[3];
+        bool out = false;
+        for (int k = 0; k < 3; ++k)
+        {
+            const glm::vec2 u = mesh.uvs1[idx[k]];
+            out = out || u.x < 0.0f || u.x > 1.0f || u.y < 0.0f || u.y > 1.0f;
+            uv[k] = dvec2(double(u.x) * width, double(u.y) * height);
+        }
+        if (out)
+        {
+            ++report.outside;
+            if (example_outside == SIZE_MAX)
+                example_outside = t;
+        }
+        if (world_area[t] <= 0.0)
+        {
+            ++report.zero_area;
+            continue;
+        }
+        const double area2 = cross2(uv[1] - uv[0], uv[2] - uv[0]);
+        uv_area[t] = 0.5 * std::abs(area2);
+        if (std::abs(area2) < 1e-12)
+        {
+            ++report.degenerate;
+            if (example_degenerate == SIZE_MAX)
+                example_degenerate = t;
+            continue;
+        }
+        const double lo_x = std::min({uv[0].x, uv[1].x, uv[2].x}), hi_x = std::max({uv[0].x, uv[1].x, uv[2].x});
+        const double lo_y = std::min({uv[0].y, uv[1].y, uv[2].y}), hi_y = std::max({uv[0].y, uv[1].y, uv[2].y});
+        const int64_t x_begin = std::max<int64_t>(0, int64_t(std::floor(lo_x))),
+                      x_end = std::min<int64_t>(width - 1, int64_t(std::floor(hi_x)));
+        const int64_t y_begin = std::max<int64_t>(0, int64_t(std::floor(lo_y))),
+                      y_end = std::min<int64_t>(height - 1, int64_t(std::floor(hi_y)));
+        for (int64_t y = y_begin; y <= y_end; ++y)
+            for (int64_t x = x_begin; x <= x_end; ++x)
+            {
+                if (!overlaps_square(uv, double(x), double(y)))
+                    continue;
+                const size_t texel = size_t(y) * width + size_t(x);
+                const dvec2 centre(double(x) + 0.5, double(y) + 0.5);
+                glm::dvec3 b = barycentric(centre, uv[0], uv[1], uv[2], area2);
+                double distance = 0.0;
+                if (claims(uv, area2, centre))
+                {
+                    if (inside_count[texel] == 0)
+                        first_inside[texel] = int32_t(t);
+                    else if (inside_count[texel] == 1)
+                    {
+                        if (report.overlapping_texels == 0)
+                        {
+                            report.overlap_example[0] = uint32_t(first_inside[texel]);
+                            report.overlap_example[1] = uint32_t(t);
+                        }
+                        ++report.overlapping_texels;
+                    }
+                    inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
+                }
+                if (!(b.x >= 0 && b.y >= 0 && b.z >= 0))
+                {
+                    // A grazed texel: the centroid of the triangle's part inside its square.
+                    dvec2 q;
+                    if (!clipped_centroid(uv, double(x), double(y), q))
+                        continue; // touches the square only along an edge or at a corner
+                    b = barycentric(q, uv[0], uv[1], uv[2], area2);
+                    b = glm::max(b, glm::dvec3(0.0));
+                    b /= (b.x + b.y + b.z);
+                    distance = glm::length(q - centre);
+                }
+                if (distance < best_distance[texel])
+                {
+                    best_distance[texel] = distance;
+                    best[texel] = int32_t(t);
+                    best_bary[texel] = b;
+                }
+            }
+    }
+
+    LightmapAtlas atlas;
+    atlas.width = width;
+    atlas.height = height;
+    atlas.texel_of.assign(texels, -1);
+    for (size_t texel = 0; texel < texels; ++texel)
+    {
+        if (best[texel] < 0)
+            continue;
+        const size_t t = size_t(best[texel]);
+        const uint32_t* idx = &mesh.indices[t * 3];
+        const glm::dvec3 b = best_bary[texel];
+        LightmapTexel out;
+        out.x = uint32_t(texel % width);
+        out.y = uint32_t(texel / width);
+        out.triangle = uint32_t(t);
+        out.barycentric = glm::vec3(b);
+        out.centre_inside = best_distance[texel] == 0.0;
+        const glm::dvec3 p0(mesh.positions[idx[0]]), p1(mesh.positions[idx[1]]), p2(mesh.positions[idx[2]]);
+        out.position = glm::vec3(b.x * p0 + b.y * p1 + b.z * p2);
+        const glm::dvec3 g = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+        out.geometric_normal = glm::vec3(g);
+        glm::dvec3 nrm = b.x * glm::dvec3(mesh.normals[idx[0]]) + b.y * glm::dvec3(mesh.normals[idx[1]]) +
+                         b.z * glm::dvec3(mesh.normals[idx[2]]);
+        nrm = glm::length(nrm) > 1e-12 ? glm::normalize(nrm) : g;
+        const glm::dvec4 t4 = b.x * glm::dvec4(mesh.tangents[idx[0]]) + b.y * glm::dvec4(mesh.tangents[idx[1]]) +
+                              b.z * glm::dvec4(mesh.tangents[idx[2]]);
+        glm::dvec3 tan = glm::dvec3(t4) - nrm * glm::dot(nrm, glm::dvec3(t4));
+        if (glm::length(tan) < 1e-9)
+        {
+            // No usable tangent: any direction orthogonal to the normal.
+            tan = std::abs(nrm.x) < 0.9 ? glm::cross(nrm, glm::dvec3(1, 0, 0)) : glm::cross(nrm, glm::dvec3(0, 1, 0));
+        }
+        tan = glm::normalize(tan);
+        const double w = mesh.tangents[idx[0]].w < 0.0f ? -1.0 : 1.0;
+        out.normal = glm::vec3(nrm);
+        out.tangent = glm::vec3(tan);
+        out.bitangent = glm::vec3(glm::cross(nrm, tan) * w);
+        out.world_size = float(std::sqrt(world_area[t] / uv_area[t]));
+        atlas.texel_of[texel] = int32_t(atlas.texels.size());
+        atlas.texels.push_back(out);
+    }
+    report.covered_texels = atlas.texels.size();
+
+    // Texel density per range.
+    std::vector<TriangleRange> groups = ranges;
+    if (groups.empty())
+        groups.push_back({0, uint32_t(triangles), "the mesh"});
+    report.min_texel_size = std::numeric_limits<float>::infinity();
+    report.max_texel_size = 0.0f;
+    std::string min_name, max_name;
+    for (const TriangleRange& r : groups)
+    {
+        double wa = 0.0, ua = 0.0;
+        for (uint32_t t = r.first; t < r.first + r.count && t < triangles; ++t)
+        {
+            wa += world_area[t];
+            ua += uv_area[t];
+        }
+        if (ua <= 0.0 || wa <= 0.0)
+            continue;
+        const float size = float(std::sqrt(wa / ua));
+        if (size < report.min_texel_size)
+        {
+            report.min_texel_size = size;
+            min_name = r.name;
+        }
+        if (size > report.max_texel_size)
+        {
+            report.max_texel_size = size;
+            max_name = r.name;
+        }
+    }
+    if (report.max_texel_size == 0.0f)
+        report.min_texel_size = 0.0f;
+
+    if (report.overlapping_texels)
+        report.problems.push_back(std::to_string(report.overlapping_texels) +
+                                  " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
+                                  std::to_string(report.overlap_example[0]) + " and " +
+                                  std::to_string(report.overlap_example[1]) +
+                                  "): lightmap UVs (TEXCOORD_1) must not overlap; re-unwrap the scene or bake "
+                                  "with --unwrap");
+    if (report.outside)
+        report.warnings.push_back(std::to_string(report.outside) +
+                                  " triangle(s) have lightmap UVs outside [0, 1] (e.g. triangle " +
+                                  std::to_string(example_outside) + " at " +
+                                  uv_text(mesh.uvs1[mesh.indices[example_outside * 3]]) +
+                                  "): only their part inside the atlas is baked");
+    if (report.degenerate)
+        report.warnings.push_back(std::to_string(report.degenerate) +
+                                  " triangle(s) have no area in lightmap UV space (e.g. triangle " +
+                                  std::to_string(example_degenerate) + "): no texel holds their light");
+    if (report.max_texel_size > 4.0f * report.min_texel_size && report.min_texel_size > 0.0f)
+    {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "texel density varies %.1fx: a texel covers %.3g units on %s and %.3g on %s",
+                      double(report.max_texel_size / report.min_texel_size), double(report.min_texel_size),
+                      min_name.c_str(), double(report.max_texel_size), max_name.c_str());
+        report.warnings.push_back(buf);
+    }
+    return atlas;
+}
+
+} // namespace hemi::bake

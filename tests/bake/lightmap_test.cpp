@@ -1,0 +1,414 @@
+// Lightmap atlases and the directional lightmap bake (Habel & Wimmer 2010) against references that do not
+// call them: dense sampling of UV triangles, analytic furnace and single-light cases with SH typed here, and
+// a least-squares projection by this file's own quadrature.
+#include "../temp_dir.h"
+
+#include <hemi/bake/checkpoint.h>
+#include <hemi/bake/lightmap_atlas.h>
+#include <hemi/bake/lightmap_bake.h>
+#include <hemi/math/basis.h>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <set>
+
+using namespace hemi::bake;
+using hemi::io::Mesh;
+
+namespace
+{
+
+// A quad p0 p1 p2 p3 (counter-clockwise seen from its front), split into (0, 1, 2) and (0, 2, 3), with
+// lightmap UVs spanning [u0, u1] x [v0, v1] and the normal-map UV frame along p1 - p0.
+void add_quad(Mesh& m, glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3, glm::vec4 uv1)
+{
+    const uint32_t base = uint32_t(m.positions.size());
+    const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p3 - p0));
+    const glm::vec3 t = glm::normalize(p1 - p0);
+    const glm::vec3 p[4] = {p0, p1, p2, p3};
+    const glm::vec2 uv[4] = {{uv1.x, uv1.y}, {uv1.z, uv1.y}, {uv1.z, uv1.w}, {uv1.x, uv1.w}};
+    for (int i = 0; i < 4; ++i)
+    {
+        m.positions.push_back(p[i]);
+        m.normals.push_back(n);
+        m.tangents.emplace_back(t, 1.0f);
+        m.uvs.push_back(uv[i]);
+        m.uvs1.push_back(uv[i]);
+    }
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+}
+
+// The plane z = 0 over [-1, 1]^2 as `cells` x `cells` quads, lightmap UVs over [0, 1]^2 (v down the image:
+// v = 0 at y = +1).
+Mesh plane(int cells)
+{
+    Mesh m;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i)
+        {
+            const float u0 = float(i) / cells, u1 = float(i + 1) / cells, v0 = float(j) / cells, v1 = float(j + 1) / cells;
+            auto at = [](float u, float v) { return glm::vec3(2.0f * u - 1.0f, 1.0f - 2.0f * v, 0.0f); };
+            add_quad(m, at(u0, v1), at(u1, v1), at(u1, v0), at(u0, v0), {u0, v1, u1, v0});
+        }
+    return m;
+}
+
+// SH9 in hemi's convention, typed from docs/DESIGN.md.
+std::array<double, 9> sh9(const glm::dvec3& d)
+{
+    return {0.282095, -0.488603 * d.y, 0.488603 * d.z, -0.488603 * d.x, 1.092548 * d.x * d.y, -1.092548 * d.y * d.z,
+            0.315392 * (3 * d.z * d.z - 1), -1.092548 * d.x * d.z, 0.546274 * (d.x * d.x - d.y * d.y)};
+}
+const double kA[9] = {M_PI, 2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4};
+
+double eval_basis(const hemi::math::BasisDesc& b, const std::vector<glm::vec3>& c, int channel, const glm::vec3& n)
+{
+    float v[16];
+    b.eval(n, v);
+    double sum = 0.0;
+    for (int k = 0; k < b.size; ++k)
+        sum += double(v[k]) * c[size_t(k)][channel];
+    return sum;
+}
+
+} // namespace
+
+TEST(LightmapAtlas, FullQuadCoversEveryTexelAtItsCentreWithTheNormalMapFrame)
+{
+    const Mesh m = plane(1);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 8, 8, report);
+    EXPECT_TRUE(report.ok());
+    EXPECT_TRUE(report.warnings.empty());
+    ASSERT_EQ(a.texels.size(), 64u);
+    for (const LightmapTexel& t : a.texels)
+    {
+        EXPECT_TRUE(t.centre_inside);
+        // Texel (x, y)'s centre is u = (x + 0.5) / 8, v = (y + 0.5) / 8: the point (2u - 1, 1 - 2v, 0).
+        EXPECT_NEAR(t.position.x, 2.0f * (t.x + 0.5f) / 8.0f - 1.0f, 1e-6f);
+        EXPECT_NEAR(t.position.y, 1.0f - 2.0f * (t.y + 0.5f) / 8.0f, 1e-6f);
+        EXPECT_EQ(t.normal, glm::vec3(0, 0, 1));
+        EXPECT_EQ(t.tangent, glm::vec3(1, 0, 0));
+        EXPECT_EQ(t.bitangent, glm::vec3(0, 1, 0));
+        EXPECT_NEAR(t.world_size, 0.25f, 1e-6f);
+    }
+    EXPECT_NEAR(report.min_texel_size, 0.25f, 1e-6f);
+}
+
+// Conservative coverage: every texel the triangle touches (found by dense sampling of the triangle) is
+// covered, and every covered texel samples a point of the triangle inside the texel's square.
+TEST(LightmapAtlas, ConservativeCoverageSamplesTheSurfaceInsideEachFootprint)
+{
+    Mesh m;
+    const glm::vec2 uv[3] = {{0.1f, 0.1f}, {0.93f, 0.17f}, {0.31f, 0.86f}};
+    for (int k = 0; k < 3; ++k)
+    {
+        m.positions.emplace_back(uv[k].x * 3.0f, uv[k].y * 3.0f, 0.5f);
+        m.normals.emplace_back(0, 0, 1);
+        m.tangents.emplace_back(1, 0, 0, 1);
+        m.uvs.push_back(uv[k]);
+        m.uvs1.push_back(uv[k]);
+    }
+    m.indices = {0, 1, 2};
+    const uint32_t size = 16;
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, size, size, report);
+    std::set<std::pair<uint32_t, uint32_t>> touched;
+    const int steps = 1500;
+    for (int i = 0; i <= steps; ++i)
+        for (int j = 0; i + j <= steps; ++j)
+        {
+            const double b1 = double(i) / steps, b2 = double(j) / steps, b0 = 1 - b1 - b2;
+            const double u = b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x, v = b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y;
+            touched.insert({std::min(size - 1, uint32_t(u * size)), std::min(size - 1, uint32_t(v * size))});
+        }
+    for (const auto& [x, y] : touched)
+        EXPECT_GE(a.texel_of[y * size + x], 0) << "texel (" << x << ", " << y << ") is touched but not covered";
+    size_t grazed = 0;
+    for (const LightmapTexel& t : a.texels)
+    {
+        const glm::vec3 b = t.barycentric;
+        EXPECT_GE(std::min({b.x, b.y, b.z}), -1e-6f);
+        const glm::vec2 s = b.x * uv[0] + b.y * uv[1] + b.z * uv[2];
+        EXPECT_GE(s.x * size, float(t.x) - 1e-4f);
+        EXPECT_LE(s.x * size, float(t.x + 1) + 1e-4f);
+        EXPECT_GE(s.y * size, float(t.y) - 1e-4f);
+        EXPECT_LE(s.y * size, float(t.y + 1) + 1e-4f);
+        EXPECT_NEAR(t.position.x, s.x * 3.0f, 1e-5f);
+        grazed += !t.centre_inside;
+    }
+    EXPECT_GT(grazed, 10u) << "the edges' texels are covered conservatively";
+    EXPECT_LE(a.texels.size(), touched.size() + 8) << "only texels the triangle touches";
+}
+
+TEST(LightmapAtlas, ReportsOverlapsOutsideUvsDegenerateTrianglesAndDensity)
+{
+    Mesh m = plane(1);
+    Mesh twice = m;
+    add_quad(twice, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, {0.25f, 0.75f, 0.75f, 0.25f}); // on top of it
+    LightmapUvReport report;
+    rasterize_lightmap(twice, 16, 16, report);
+    ASSERT_EQ(report.problems.size(), 1u);
+    EXPECT_NE(report.problems[0].find("overlap"), std::string::npos) << report.problems[0];
+    EXPECT_EQ(report.overlapping_texels, 64u);
+
+    Mesh outside = m;
+    for (glm::vec2& uv : outside.uvs1)
+        uv.x = uv.x * 1.5f;
+    rasterize_lightmap(outside, 16, 16, report);
+    EXPECT_TRUE(report.ok());
+    ASSERT_FALSE(report.warnings.empty());
+    EXPECT_NE(report.warnings[0].find("outside [0, 1]"), std::string::npos) << report.warnings[0];
+    EXPECT_EQ(report.outside, 2u);
+
+    Mesh flat = m;
+    flat.uvs1[2] = flat.uvs1[1]; // triangle 0 and 1 lose their UV area
+    flat.uvs1[3] = flat.uvs1[1];
+    rasterize_lightmap(flat, 16, 16, report);
+    EXPECT_EQ(report.degenerate, 2u);
+
+    // Two objects, one with a texel 5x the size of the other's.
+    Mesh two = plane(1);
+    for (glm::vec2& uv : two.uvs1)
+        uv = uv * 0.5f;
+    add_quad(two, {0, 0, 5}, {10, 0, 5}, {10, 10, 5}, {0, 10, 5}, {0.5f, 1.0f, 1.0f, 0.5f});
+    rasterize_lightmap(two, 32, 32, report, {{0, 2, "floor"}, {2, 2, "roof"}});
+    ASSERT_EQ(report.warnings.size(), 1u);
+    EXPECT_NE(report.warnings[0].find("density varies 5.0x"), std::string::npos) << report.warnings[0];
+    EXPECT_NE(report.warnings[0].find("roof"), std::string::npos) << report.warnings[0];
+
+    Mesh none = plane(1);
+    none.uvs1.clear();
+    EXPECT_THROW(rasterize_lightmap(none, 16, 16, report), std::invalid_argument);
+    Mesh nan = plane(1);
+    nan.positions[1].x = NAN;
+    EXPECT_THROW(rasterize_lightmap(nan, 16, 16, report), std::invalid_argument);
+}
+
+// Done-when line 1: an open plane under uniform radiance 1 bakes E = pi in every texel for sh9, h4, h6, sal4
+// and the plain lightmap (1%); the rnm colours are E towards each direction, pi (1 + 1/sqrt 3) / 2.
+TEST(LightmapBake, OpenPlaneUnderUniformRadianceBakesPi)
+{
+    const Mesh m = plane(4);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 16, 16, report);
+    ASSERT_EQ(a.texels.size(), 256u);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(1.0f);
+    LightmapBakeOptions o;
+    o.rays = 256;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    const glm::vec3 up(0, 0, 1);
+    double worst = 0.0;
+    for (size_t i = 0; i < a.texels.size(); ++i)
+    {
+        for (const char* name : {"sh9", "h4", "h6", "sal4"})
+        {
+            const auto& basis = hemi::math::basis(name);
+            const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
+            for (int ch = 0; ch < 3; ++ch)
+            {
+                const double e = eval_basis(basis, c, ch, up);
+                worst = std::max(worst, std::abs(e / M_PI - 1.0));
+                ASSERT_NEAR(e, M_PI, 0.01 * M_PI) << name << " texel " << i;
+            }
+        }
+        ASSERT_NEAR(lightmap_coefficients("plain", sh.irradiance[i])[0].x, M_PI, 0.01 * M_PI);
+        for (const glm::vec3& rnm : lightmap_coefficients("rnm", sh.irradiance[i]))
+            ASSERT_NEAR(rnm.y, M_PI * (1.0 + 1.0 / std::sqrt(3.0)) / 2.0, 0.01 * M_PI);
+    }
+    EXPECT_LT(worst, 0.01);
+    EXPECT_EQ(sh.rays, 256u * 256u);
+}
+
+// Done-when line 1: a plane under one directional light reproduces each basis's projection of the light's
+// SH9 clamped cosine E A_l y_lm(d) y_lm(n): the SH9 coefficients against the closed form typed here, and
+// every basis against a least-squares fit over the hemisphere by this test's own quadrature.
+TEST(LightmapBake, PlaneUnderOneDirectionalLightMatchesItsProjection)
+{
+    const Mesh m = plane(2);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 8, 8, report);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.3f, -0.2f, 0.8f));
+    lights.sun_irradiance = glm::vec3(1.0f, 0.5f, 0.25f);
+    lights.sun_diameter_degrees = 0.0f;
+    LightmapBakeOptions o;
+    o.rays = 8;
+    o.sun_rays = 4;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    const glm::dvec3 d(lights.sun_direction);
+    const std::array<double, 9> y = sh9(d);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+        for (int j = 0; j < 9; ++j)
+            ASSERT_NEAR(sh.irradiance[i][size_t(j)].x, kA[j] * y[size_t(j)], 1e-5) << "texel " << i << " coefficient " << j;
+
+    // The coefficients live in the tangent frame of the normal-map UVs: turn the tangents to +y (so the
+    // bitangent is cross(z, y) = -x) and the light's direction becomes (d.y, -d.x, d.z) in that frame.
+    Mesh turned = m;
+    for (glm::vec4& t : turned.tangents)
+        t = glm::vec4(0, 1, 0, 1);
+    const LightmapAtlas ta = rasterize_lightmap(turned, 8, 8, report);
+    const LightmapSh tsh = bake_lightmap_sh(turned, ta, lights, o);
+    const std::array<double, 9> yt = sh9({d.y, -d.x, d.z});
+    for (int j = 0; j < 9; ++j)
+        EXPECT_NEAR(tsh.irradiance[3][size_t(j)].x, kA[j] * yt[size_t(j)], 1e-5) << "coefficient " << j;
+
+    // The hemispherical least-squares fit of f(n) = sum_j A_j y_j(d) y_j(n): G c = b by midpoint quadrature.
+    const int nphi = 256, nz = 256;
+    for (const hemi::math::BasisDesc& basis : hemi::math::bases())
+    {
+        const int k = basis.size;
+        std::vector<double> g(size_t(k * k), 0.0), b(size_t(k), 0.0);
+        for (int p = 0; p < nphi; ++p)
+            for (int q = 0; q < nz; ++q)
+            {
+                const double phi = 2 * M_PI * (p + 0.5) / nphi, z = (q + 0.5) / nz, r = std::sqrt(1 - z * z);
+                const glm::dvec3 n(r * std::cos(phi), r * std::sin(phi), z);
+                const std::array<double, 9> yn = sh9(n);
+                double f = 0.0;
+                for (int j = 0; j < 9; ++j)
+                    f += kA[j] * y[size_t(j)] * yn[size_t(j)];
+                float v[16];
+                basis.eval(glm::vec3(n), v);
+                for (int s = 0; s < k; ++s)
+                {
+                    b[size_t(s)] += v[s] * f;
+                    for (int t = 0; t < k; ++t)
+                        g[size_t(s * k + t)] += double(v[s]) * v[t];
+                }
+            }
+        // Gaussian elimination with partial pivoting.
+        for (int c = 0; c < k; ++c)
+        {
+            int pivot = c;
+            for (int r = c + 1; r < k; ++r)
+                if (std::abs(g[size_t(r * k + c)]) > std::abs(g[size_t(pivot * k + c)]))
+                    pivot = r;
+            for (int t = 0; t < k; ++t)
+                std::swap(g[size_t(c * k + t)], g[size_t(pivot * k + t)]);
+            std::swap(b[size_t(c)], b[size_t(pivot)]);
+            for (int r = c + 1; r < k; ++r)
+            {
+                const double f = g[size_t(r * k + c)] / g[size_t(c * k + c)];
+                for (int t = c; t < k; ++t)
+                    g[size_t(r * k + t)] -= f * g[size_t(c * k + t)];
+                b[size_t(r)] -= f * b[size_t(c)];
+            }
+        }
+        std::vector<double> ref(static_cast<size_t>(k));
+        for (int c = k - 1; c >= 0; --c)
+        {
+            double s = b[size_t(c)];
+            for (int t = c + 1; t < k; ++t)
+                s -= g[size_t(c * k + t)] * ref[size_t(t)];
+            ref[size_t(c)] = s / g[size_t(c * k + c)];
+        }
+        const std::vector<glm::vec3> got = lightmap_coefficients(basis.name, sh.irradiance[5]);
+        for (int s = 0; s < k; ++s)
+        {
+            EXPECT_NEAR(got[size_t(s)].x, ref[size_t(s)], 2e-3) << basis.name << " coefficient " << s;
+            EXPECT_NEAR(got[size_t(s)].z, 0.25 * ref[size_t(s)], 1e-3) << basis.name << " coefficient " << s;
+        }
+    }
+    // The light's direction in each texel's tangent frame: the plain lightmap is E max(0, n.d) truncated to
+    // SH9 at n = +z.
+    double plain = 0.0;
+    const std::array<double, 9> yz = sh9({0, 0, 1});
+    for (int j = 0; j < 9; ++j)
+        plain += kA[j] * y[size_t(j)] * yz[size_t(j)];
+    EXPECT_NEAR(lightmap_coefficients("plain", sh.irradiance[0])[0].x, plain, 1e-5);
+}
+
+// Done-when line 3: a sealed room lit only from outside stays black inside.
+TEST(LightmapBake, SealedRoomLitFromOutsideStaysBlack)
+{
+    Mesh m;
+    // The floor inside, lightmap UVs [0, 0.5]^2; the six walls of a closed box around it, each in a cell
+    // of its own.
+    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.0f, 0.5f, 0.5f, 0.0f});
+    const glm::vec3 c[8] = {{-2, -2, -1}, {2, -2, -1}, {2, 2, -1}, {-2, 2, -1},
+                            {-2, -2, 3},  {2, -2, 3},  {2, 2, 3},  {-2, 2, 3}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (int f = 0; f < 6; ++f)
+    {
+        const float u0 = 0.55f + 0.07f * float(f);
+        add_quad(m, c[faces[f][0]], c[faces[f][1]], c[faces[f][2]], c[faces[f][3]], {u0, 0.65f, u0 + 0.06f, 0.6f});
+    }
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 32, 32, report);
+    EXPECT_TRUE(report.ok()) << report.problems[0];
+    LightmapLights lights;
+    lights.uniform = glm::vec3(5.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::vec3(0, 0, 1);
+    lights.sun_irradiance = glm::vec3(100.0f);
+    LightmapBakeOptions o;
+    o.rays = 128;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    size_t floor_texels = 0;
+    for (size_t i = 0; i < a.texels.size(); ++i)
+    {
+        if (a.texels[i].triangle >= 2)
+            continue;
+        ++floor_texels;
+        for (const glm::vec3& v : sh.irradiance[i])
+            ASSERT_EQ(v, glm::vec3(0.0f)) << "texel " << i;
+    }
+    EXPECT_GE(floor_texels, 256u);
+    // Without its roof the same room is lit.
+    Mesh open = m;
+    open.indices.erase(open.indices.begin() + 3 * 4, open.indices.begin() + 3 * 6); // the roof: face 1
+    const LightmapAtlas b = rasterize_lightmap(open, 32, 32, report);
+    const LightmapSh lit = bake_lightmap_sh(open, b, lights, o);
+    EXPECT_GT(lightmap_coefficients("plain", lit.irradiance[b.texel_of[8 * 32 + 8]])[0].x, 10.0f);
+}
+
+// The same bytes on one thread and on all, and after resuming; dilation fills the ring around a chart.
+TEST(LightmapBake, DeterministicResumableAndDilated)
+{
+    const Mesh m = plane(3);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 24, 24, report);
+    LightmapLights lights;
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(1, 1, 1));
+    lights.sun_irradiance = glm::vec3(2.0f);
+    LightmapBakeOptions o;
+    o.rays = 64;
+    const LightmapSh all = bake_lightmap_sh(m, a, lights, o);
+    LightmapSh one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = bake_lightmap_sh(m, a, lights, o);
+    }
+    EXPECT_EQ(0, std::memcmp(all.irradiance.data(), one.irradiance.data(), all.irradiance.size() * sizeof(all.irradiance[0])));
+    o.checkpoint = hemi::test::temp_dir("lightmap_test") / "resume.partial";
+    o.checkpoint_seconds = 0.0;
+    o.rays = 8192; // slices of 256 texels
+    const LightmapSh first = bake_lightmap_sh(m, a, lights, o);
+    const LightmapSh again = bake_lightmap_sh(m, a, lights, o);
+    EXPECT_TRUE(again.resumed);
+    EXPECT_EQ(0, std::memcmp(first.irradiance.data(), again.irradiance.data(), first.irradiance.size() * sizeof(first.irradiance[0])));
+    remove_checkpoint(o.checkpoint);
+
+    // A chart in the middle of the atlas: the ring around it takes its neighbours' values.
+    Mesh small = plane(1);
+    for (glm::vec2& uv : small.uvs1)
+        uv = 0.25f + 0.5f * uv;
+    const LightmapAtlas s = rasterize_lightmap(small, 16, 16, report);
+    o.checkpoint.clear();
+    o.rays = 64;
+    const LightmapSh ssh = bake_lightmap_sh(small, s, lights, o);
+    const std::vector<float> maps = lightmap_maps("plain", s, ssh, 2);
+    EXPECT_LT(s.texel_of[2 * 16 + 2], 0);
+    EXPECT_GT(maps[(2 * 16 + 2) * 3], 0.5f) << "two texels out from the chart";
+    EXPECT_EQ(maps[(0 * 16 + 0) * 3], 0.0f) << "beyond the dilation";
+}
