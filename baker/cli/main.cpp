@@ -5,8 +5,12 @@
 //   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R] [--filter RADIUS,SIGMA]
 //       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
+//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
+//       [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
+//       [--exr-dir DIR] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
+#include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/atomic_file.h>
@@ -334,6 +338,79 @@ int run_ssbump(SsbumpCli& c)
     return 0;
 }
 
+struct LightmapCli
+{
+    std::string scene, asset, env = "uniform", sun, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json;
+    float env_scale = 1.0f;
+    hemi::bake::LightmapFileOptions options;
+};
+
+int run_lightmap(LightmapCli& c)
+{
+    namespace bake = hemi::bake;
+    bake::LightmapFileOptions& o = c.options;
+    o.outputs = split(c.bases);
+    if (!c.size.empty())
+    {
+        unsigned w = 0, h = 0;
+        char x = 0, rest = 0;
+        const int got = std::sscanf(c.size.c_str(), "%u%c%u%c", &w, &x, &h, &rest);
+        if (got == 1)
+            h = w;
+        else if (got != 3 || x != 'x')
+            throw std::invalid_argument("--size expects W or WxH (e.g. 1024x512), got '" + c.size + "'");
+        if (w == 0 || h == 0 || w > 16384 || h > 16384)
+            throw std::invalid_argument("--size " + c.size + ": each side must be in [1, 16384]");
+        o.width = w;
+        o.height = h;
+    }
+    if (!c.sun.empty())
+    {
+        float v[7] = {0, 0, 0, 0, 0, 0, 0.53f};
+        char rest = 0;
+        const int got = std::sscanf(c.sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                                    &v[6], &rest);
+        if (got != 6 && got != 7)
+            throw std::invalid_argument("--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z up; "
+                                        "R,G,B the irradiance on a surface facing it), got '" + c.sun + "'");
+        o.lights.sun = true;
+        o.lights.sun_direction = glm::vec3(v[0], v[1], v[2]);
+        o.lights.sun_irradiance = glm::vec3(v[3], v[4], v[5]);
+        o.lights.sun_diameter_degrees = v[6];
+    }
+    if (c.env != "uniform")
+        o.lights.environment = hemi::io::read_exr(c.env); // names the file when it is missing or not an EXR
+    o.lights.environment_scale = c.env_scale;
+    o.lights.uniform = glm::vec3(c.env_scale);
+    o.exr_dir = c.exr_dir;
+    if (!c.json.empty())
+        hemi::io::check_writable(c.json); // before the bake, like the asset and its checkpoint
+    ProgressLine line("hemi-bake lightmap");
+    const bake::LightmapBakeSummary s = bake::bake_lightmap_file(c.scene, c.asset, o, [&](const bake::LightmapProgress& p) {
+        line.checkpoint_error(p.checkpoint_error);
+        line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0, "texels", p.texels_done == p.texels);
+    });
+    for (const std::string& w : s.warnings)
+        std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
+    std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(), s.width,
+                s.height, s.uv_report.covered_texels, s.triangles, c.bases.c_str());
+    std::printf("texel size %.4g to %.4g units; %d rays per texel", double(s.uv_report.min_texel_size),
+                double(s.uv_report.max_texel_size), o.bake.rays);
+    if (o.lights.sun)
+        std::printf(" + %d towards the sun", o.bake.sun_rays);
+    std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
+                s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0, s.total_seconds,
+                s.resumed ? " (resumed from a checkpoint)" : "");
+    for (const std::filesystem::path& p : s.exr_files)
+        std::printf("wrote %s\n", p.string().c_str());
+    if (!c.json.empty())
+    {
+        bake::write_lightmap_bake_json(c.json, s, o);
+        std::printf("wrote %s\n", c.json.c_str());
+    }
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -414,8 +491,50 @@ int main(int argc, char** argv)
     ssbump->add_option("--checkpoint-interval", sb.options.checkpoint_seconds,
                        "seconds between checkpoints to OUT.png.partial (an interrupted bake resumes from it)")
         ->capture_default_str();
+    LightmapCli lm;
+    CLI::App* lightmap = app.add_subcommand(
+        "lightmap", "bake directional lightmaps (Habel & Wimmer 2010) of a glTF scene's TEXCOORD_1 atlas");
+    lightmap->add_option("scene", lm.scene, "glTF 2.0 scene (.gltf or .glb) with lightmap UVs (TEXCOORD_1)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    lightmap->add_option("-o,--output", lm.asset, "lightmap asset to write (.hemi)")->required();
+    lightmap->add_option("--env", lm.env, "environment: uniform (radiance 1 from every direction) or an equirect EXR "
+                                          "(z up, hemi-render's convention)")
+        ->capture_default_str();
+    lightmap->add_option("--env-scale", lm.env_scale, "multiplies the environment's radiance")->capture_default_str();
+    lightmap->add_option("--sun", lm.sun, "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
+                                          "facing it)[,DIAMETER in degrees, default 0.53]");
+    lightmap->add_option("--bases", lm.bases, "comma-separated outputs: sh9, hl2, h4, h6, sal4 (and every basis of "
+                                              "hemi-bake basis-report), plain (E at the surface normal), rnm (E towards "
+                                              "each radiosity-normal-mapping direction)")
+        ->capture_default_str();
+    lightmap->add_option("--size", lm.size, "atlas size W or WxH [default: from --texel-size, else 512]");
+    lightmap->add_option("--texel-size", lm.options.texel_size,
+                         "world units per texel: the atlas size that gives the scene that texel density");
+    lightmap->add_option("--rays", lm.options.bake.rays, "hemisphere rays per texel")->capture_default_str();
+    lightmap->add_option("--sun-rays", lm.options.bake.sun_rays, "shadow rays per texel towards the sun's disc")
+        ->capture_default_str();
+    lightmap->add_option("--seed", lm.options.bake.seed, "seed of the rays (same seed, same bytes)")
+        ->capture_default_str();
+    lightmap->add_option("--exr-dir", lm.exr_dir, "also write each output as an EXR with named channels into DIR");
+    lightmap->add_option("--json", lm.json, "write the bake summary as JSON to FILE");
+    lightmap->add_option("--checkpoint-interval", lm.options.bake.checkpoint_seconds,
+                         "seconds between checkpoints to LEVEL.hemi.partial (an interrupted bake resumes from it)")
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
 
+    if (lightmap->parsed())
+    {
+        try
+        {
+            return run_lightmap(lm);
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "\nhemi-bake lightmap: %s\n", e.what());
+            return 1;
+        }
+    }
     if (ssbump->parsed())
     {
         try

@@ -22,10 +22,11 @@
 namespace hemi::bake
 {
 
-glm::vec3 LightmapLights::environment_radiance(const glm::vec3& d) const
+glm::vec3 LightmapLights::environment_radiance(const glm::vec3& scene_d) const
 {
     if (environment.pixels.empty())
         return uniform;
+    const glm::vec3 d = scene_to_world * scene_d;
     const uint32_t w = environment.width, h = environment.height;
     const double phi = std::atan2(double(d.y), double(d.x));
     const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0));
@@ -85,6 +86,7 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
     key.add_value(l.uniform).add_value(l.environment.width).add_value(l.environment.height);
     key.add_array(std::span<const float>(l.environment.pixels)).add_value(l.environment_scale);
     key.add_value(l.sun).add_value(l.sun_direction).add_value(l.sun_irradiance).add_value(l.sun_diameter_degrees);
+    key.add_value(l.scene_to_world);
     key.add_value(o.rays).add_value(o.sun_rays).add_value(o.seed).add_value(o.ray_offset);
     key.add_value(EmbreeScene::embree_version());
     return key.digest();
@@ -105,7 +107,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         return out;
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(o.ray_offset);
-    const glm::vec3 sun_axis = lights.sun ? glm::normalize(lights.sun_direction) : glm::vec3(0, 0, 1);
+    // The sun's direction in the mesh's space.
+    const glm::vec3 sun_axis =
+        lights.sun ? glm::normalize(glm::transpose(lights.scene_to_world) * lights.sun_direction) : glm::vec3(0, 0, 1);
     // The sun's disc: directions within half its angular diameter of the axis, uniform in solid angle.
     const double cos_half = std::cos(0.5 * double(lights.sun_diameter_degrees) * M_PI / 180.0);
     glm::vec3 sun_u = std::abs(sun_axis.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);

@@ -6,9 +6,16 @@
 #include "models.h"
 
 #include <hemi/bake/ssbump.h>
+#include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -399,5 +406,120 @@ TEST(BakeCli, SsbumpRefusesBadInputWithTheFileNamed)
     const Result filter = ssbump(q(flat) + " -o " + q(out) + " --filter 2");
     EXPECT_EQ(filter.status, 1);
     EXPECT_NE(filter.err.find("RADIUS,SIGMA"), std::string::npos) << filter.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+namespace
+{
+// A floor in glTF's y-up space (normal +y, world +z once placed by gltf_to_world), cells x cells quads, with
+// TEXCOORD_1 over [0, 1]^2 (or `lightmap_uvs` false: none, or `overlap`: every quad on the same UVs).
+fs::path write_floor_gltf(const std::string& name, int cells, bool lightmap_uvs = true, bool overlap = false)
+{
+    hemi::io::GltfScene s;
+    hemi::io::Mesh& m = s.mesh;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i)
+        {
+            const uint32_t base = uint32_t(m.positions.size());
+            const float u[2] = {float(i) / cells, float(i + 1) / cells}, v[2] = {float(j) / cells, float(j + 1) / cells};
+            // (u, v) -> (2u - 1, 0, 2v - 1): +x along u, +z along v, so the normal (counter-clockwise) is +y.
+            const glm::vec2 corners[4] = {{u[0], v[0]}, {u[0], v[1]}, {u[1], v[1]}, {u[1], v[0]}};
+            for (const glm::vec2& c : corners)
+            {
+                m.positions.emplace_back(2.0f * c.x - 1.0f, 0.0f, 2.0f * c.y - 1.0f);
+                m.normals.emplace_back(0, 1, 0);
+                m.tangents.emplace_back(1, 0, 0, 1);
+                m.uvs.push_back(c);
+                m.uvs1.push_back(overlap ? (c - glm::vec2(u[0], v[0])) * float(cells) * 0.5f + 0.25f : c);
+            }
+            m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+        }
+    if (!lightmap_uvs)
+        m.uvs1.clear();
+    s.materials.emplace_back();
+    s.primitives.push_back({0, uint32_t(m.indices.size()), 0});
+    const fs::path p = dir() / name;
+    hemi::io::write_gltf(p, s);
+    return p;
+}
+
+Result lightmap(const std::string& args) { return run(HEMI_BAKE_EXE, "lightmap " + args); }
+} // namespace
+
+// hemi-bake lightmap in the issue's form: a glTF floor under uniform radiance 1 bakes E = pi in the asset and
+// the EXRs; a sun straight above (world z, glTF +y) gives the SH9 clamped cosine at the normal, so the
+// scene is placed in hemi's z-up world as hemi-render places it.
+TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
+{
+    const fs::path scene = write_floor_gltf("floor.glb", 2);
+    const fs::path asset = dir() / "floor_lightmap.hemi", exrs = dir() / "floor_exr", json = dir() / "floor_lightmap.json";
+    fs::create_directories(exrs);
+    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --env uniform --size 16x16 --rays 256 --exr-dir " +
+                              q(exrs) + " --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    EXPECT_EQ(a.width, 16u);
+    EXPECT_EQ(a.covered_texels, 256u);
+    EXPECT_EQ(hemi::io::asset_kind(asset), "lightmap");
+    const hemi::io::LightmapOutput& plain = a.output("plain");
+    for (size_t i = 0; i < 256; ++i)
+        ASSERT_NEAR(plain.maps[i * 3], M_PI, 0.01 * M_PI) << "texel " << i;
+    EXPECT_EQ(a.output("h6").k, 6u);
+    EXPECT_FALSE(fs::exists(asset.string() + ".partial"));
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["covered_texels"], 256);
+    EXPECT_EQ(j["rays"], 256 * 256);
+    // The EXR of the plain output: channel c0.R holds E, the header names the output.
+    const fs::path exr = exrs / "floor_lightmap.plain.exr";
+    ASSERT_TRUE(fs::exists(exr));
+    {
+        Imf::InputFile file(exr.c_str());
+        const auto* output = file.header().findTypedAttribute<Imf::StringAttribute>("hemi.output");
+        ASSERT_NE(output, nullptr);
+        EXPECT_EQ(output->value(), "plain");
+        ASSERT_NE(file.header().channels().findChannel("c0.R"), nullptr);
+        std::vector<float> values(256);
+        Imf::FrameBuffer fb;
+        fb.insert("c0.R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float), 16 * sizeof(float)));
+        file.setFrameBuffer(fb);
+        file.readPixels(0, 15);
+        for (float v : values)
+            ASSERT_NEAR(v, M_PI, 0.01 * M_PI);
+    }
+    ASSERT_TRUE(fs::exists(exrs / "floor_lightmap.sh9.exr"));
+
+    // The sun straight above in hemi's world: E(+z) = sum_l A_l y_l0(z)^2 = pi/4 + pi/2 * ... (SH9 of max(0, cos)).
+    const fs::path sunny = dir() / "floor_sun.hemi";
+    const Result s = lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun 0,0,1,2,2,2,0 --size 8 --bases plain");
+    ASSERT_EQ(s.status, 0) << s.err;
+    const double expected = 2.0 * (M_PI * 0.282095 * 0.282095 + 2 * M_PI / 3 * 0.488603 * 0.488603 +
+                                   M_PI / 4 * 4 * 0.315392 * 0.315392 * 1.0);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(sunny);
+    EXPECT_NEAR(b.output("plain").maps[0], expected, 1e-3);
+}
+
+// Bad scenes for hemi-bake lightmap: exit status 1 and a message naming the file and the problem.
+TEST(BakeCli, LightmapRefusesScenesWithoutUsableLightmapUvs)
+{
+    const fs::path out = dir() / "bad_lightmap.hemi";
+    const fs::path none = write_floor_gltf("no_uv1.glb", 2, false);
+    const Result a = lightmap(q(none) + " -o " + q(out));
+    EXPECT_EQ(a.status, 1);
+    EXPECT_NE(a.err.find("no_uv1.glb"), std::string::npos) << a.err;
+    EXPECT_NE(a.err.find("TEXCOORD_1"), std::string::npos) << a.err;
+    const fs::path overlap = write_floor_gltf("overlap.glb", 2, true, true);
+    const Result b = lightmap(q(overlap) + " -o " + q(out) + " --size 32");
+    EXPECT_EQ(b.status, 1);
+    EXPECT_NE(b.err.find("overlap.glb"), std::string::npos) << b.err;
+    EXPECT_NE(b.err.find("overlap"), std::string::npos) << b.err;
+    const fs::path floor = write_floor_gltf("floor_for_env.glb", 1);
+    const fs::path png = dir() / "sky.png";
+    hemi::io::write_png(png, hemi::io::ImageRgba8{2, 2, std::vector<uint8_t>(16, 200)});
+    const Result c = lightmap(q(floor) + " -o " + q(out) + " --env " + q(png));
+    EXPECT_EQ(c.status, 1);
+    EXPECT_NE(c.err.find("sky.png"), std::string::npos) << c.err;
+    const Result d = lightmap(q(floor) + " -o " + q(out) + " --bases sh9,h7");
+    EXPECT_EQ(d.status, 1);
+    EXPECT_NE(d.err.find("h7"), std::string::npos) << d.err;
     EXPECT_FALSE(fs::exists(out));
 }

@@ -6,6 +6,8 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <half.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_STATIC
@@ -126,34 +128,69 @@ ImageRgba read_exr(const std::filesystem::path& path)
     return image;
 }
 
-void write_exr(const std::filesystem::path& path, const ImageRgba& image)
+void write_exr_channels(const std::filesystem::path& path, uint32_t width, uint32_t height,
+                        std::span<const ExrChannel> channels,
+                        std::span<const std::pair<std::string, std::string>> attributes)
 {
-    check_image(path, image);
+    if (width == 0 || height == 0 || channels.empty())
+        throw FormatError(path.string() + ": an EXR needs a size and at least one channel");
+    for (const ExrChannel& c : channels)
+    {
+        if (c.name.empty() || !c.data || c.stride == 0)
+            throw FormatError(path.string() + ": EXR channel '" + c.name + "' has no name or no data");
+    }
     write_atomically(path, [&](const std::filesystem::path& tmp) {
         try
         {
-            Imf::Header header(int(image.width), int(image.height));
-            for (const char* c : {"R", "G", "B", "A"})
-                header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+            Imf::Header header(static_cast<int>(width), static_cast<int>(height));
+            for (const ExrChannel& c : channels)
+                header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
+            for (const auto& [key, value] : attributes)
+                header.insert(key, Imf::StringAttribute(value));
+            // OpenEXR converts pixel types when it reads, not when it writes: half channels get half data.
+            std::vector<std::vector<half>> halves;
             {
                 Imf::OutputFile file(tmp.c_str(), header);
                 Imf::FrameBuffer fb;
-                const size_t xs = 4 * sizeof(float), ys = xs * image.width;
-                char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
-                const char* names[4] = {"R", "G", "B", "A"};
-                for (int c = 0; c < 4; ++c)
-                    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+                for (const ExrChannel& c : channels)
+                {
+                    if (c.half)
+                    {
+                        std::vector<half>& h = halves.emplace_back(size_t(width) * height);
+                        for (size_t i = 0; i < h.size(); ++i)
+                            h[i] = half(c.data[i * c.stride]);
+                        fb.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()), sizeof(half),
+                                                     sizeof(half) * width));
+                        continue;
+                    }
+                    const size_t xs = c.stride * sizeof(float), ys = xs * width;
+                    fb.insert(c.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(c.data)), xs, ys));
+                }
                 file.setFrameBuffer(fb);
-                file.writePixels(int(image.height));
+                file.writePixels(int(height));
             } // ~OutputFile writes the offset table and swallows its errors: verify by reading back
             if (!Imf::InputFile(tmp.c_str()).isComplete())
                 throw FormatError(path.string() + ": writing EXR failed (incomplete file)");
+        }
+        catch (const FormatError&)
+        {
+            throw;
         }
         catch (const std::exception& e)
         {
             throw FormatError(path.string() + ": writing EXR failed: " + e.what());
         }
     });
+}
+
+void write_exr(const std::filesystem::path& path, const ImageRgba& image)
+{
+    check_image(path, image);
+    const char* names[4] = {"R", "G", "B", "A"};
+    std::vector<ExrChannel> channels;
+    for (int c = 0; c < 4; ++c)
+        channels.push_back({names[c], image.pixels.data() + c, 4, false});
+    write_exr_channels(path, image.width, image.height, channels);
 }
 
 void write_png(const std::filesystem::path& path, const ImageRgba& image, const ToneMap& tone_map)

@@ -16,6 +16,7 @@
 #include <hemi/io/image.h>
 #include <hemi/io/mesh.h>
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -39,11 +40,16 @@ struct LightmapLights
     float environment_scale = 1.0f;
 
     bool sun = false;
-    glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun
+    glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun (world)
     glm::vec3 sun_irradiance{0.0f};            // on a surface facing the sun
     float sun_diameter_degrees = 0.53f;        // the disc the shadow rays sample; 0 is a point (hard shadows)
 
-    // Radiance of the environment towards the scene from direction `d` (unit, world).
+    // The rotation from the mesh's space to the world the lights are given in: identity for a mesh in
+    // hemi's z-up world; render::gltf_to_world()'s rotation for a glTF scene (y up), which is what
+    // bake_lightmap_file uses, so that lights match hemi-render's.
+    glm::mat3 scene_to_world{1.0f};
+
+    // Radiance of the environment towards the scene from direction `d` (unit, mesh space).
     glm::vec3 environment_radiance(const glm::vec3& d) const;
 };
 
@@ -94,5 +100,43 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
 // border does not pull in black), else 0.
 std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                                  int dilate = 2);
+
+// The whole job hemi-bake lightmap runs: read the glTF scene, rasterise its TEXCOORD_1 atlas (refused when
+// the scene has none or its UVs overlap), bake, and write the lightmap asset (io/lightmap_asset.h) and,
+// with exr_dir, one EXR per output with named channels ("c<k>.R", ".G", ".B", half) and the layout in its
+// header (hemi.output, hemi.k, hemi.layout, hemi.frame). Lights are in hemi's z-up world (the scene is placed
+// there by render::gltf_to_world(), as hemi-render places it).
+struct LightmapFileOptions
+{
+    LightmapBakeOptions bake;
+    LightmapLights lights;
+    uint32_t width = 0, height = 0; // the atlas; 0 x 0: from texel_size, else 512 x 512
+    float texel_size = 0.0f;        // world units per texel: the atlas size that gives the scene that density
+    std::vector<std::string> outputs = {"sh9", "hl2", "h4", "h6", "sal4", "plain", "rnm"};
+    std::filesystem::path exr_dir;  // empty: no EXRs
+    int dilate = 2;
+};
+
+struct LightmapBakeSummary
+{
+    uint32_t width = 0, height = 0;
+    size_t triangles = 0, materials = 0, primitives = 0, images = 0;
+    LightmapUvReport uv_report;
+    std::vector<std::string> warnings; // the scene reader's and the UV report's
+    uint64_t rays = 0;
+    double trace_seconds = 0.0, total_seconds = 0.0;
+    bool resumed = false, tangents_generated = false;
+    std::string checkpoint_error;
+    std::vector<std::filesystem::path> exr_files;
+};
+
+// Checks that every output can be written before reading the scene; checkpoints to ASSET.partial unless
+// options.bake.checkpoint says otherwise. Throws io::FormatError naming the file and the problem, or
+// std::invalid_argument for bad options.
+LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene, const std::filesystem::path& asset,
+                                       const LightmapFileOptions& options,
+                                       const std::function<void(const LightmapProgress&)>& progress = {});
+void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapBakeSummary& summary,
+                              const LightmapFileOptions& options);
 
 } // namespace hemi::bake

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <stdexcept>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hemi::io
@@ -57,6 +59,22 @@ constexpr uint64_t kMaxExrPadding = 64;
 // Throws FormatError naming `path` when the image is inconsistent or the file cannot be written.
 void write_exr(const std::filesystem::path& path, const ImageRgba& image);
 void write_png(const std::filesystem::path& path, const ImageRgba& image, const ToneMap& tone_map = {});
+
+// One channel of a multi-channel EXR: `data` holds width x height values, rows from the top, pixel i at
+// data[i * stride]; stored as half when `half` (values are converted), else as float.
+struct ExrChannel
+{
+    std::string name;
+    const float* data = nullptr;
+    size_t stride = 1;
+    bool half = false;
+};
+// Writes any named channels plus string attributes (metadata an engine's own loader can read: layouts,
+// bases, conventions), atomically. Values are written as they are (like write_exr, NaN included: the readers
+// refuse them). Throws FormatError naming `path` for no channels or an I/O failure.
+void write_exr_channels(const std::filesystem::path& path, uint32_t width, uint32_t height,
+                        std::span<const ExrChannel> channels,
+                        std::span<const std::pair<std::string, std::string>> attributes = {});
 
 // 8-bit RGBA as stored: textures (sRGB base colour, linear normal maps), no conversion either way.
 struct ImageRgba8

@@ -1,0 +1,196 @@
+// hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
+#include <hemi/bake/checkpoint.h>
+#include <hemi/bake/lightmap_bake.h>
+#include <hemi/io/atomic_file.h>
+#include <hemi/io/gltf.h>
+#include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
+
+#include <nlohmann/json.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace hemi::bake
+{
+namespace
+{
+
+// glTF's y-up scene space in hemi's z-up world, (x, y, z) -> (x, -z, y): render::gltf_to_world()'s rotation
+// (the baker links no renderer; the render tests hold the two equal through hemi-render's frames).
+glm::mat3 gltf_scene_to_world()
+{
+    return glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, -1, 0));
+}
+
+std::filesystem::path exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,
+                               const std::string& output)
+{
+    return dir / (asset.stem().string() + "." + output + ".exr");
+}
+
+} // namespace
+
+LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, const std::filesystem::path& asset_path,
+                                       const LightmapFileOptions& options,
+                                       const std::function<void(const LightmapProgress&)>& progress)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    LightmapFileOptions o = options;
+    if (o.outputs.empty())
+        throw std::invalid_argument("no lightmap outputs asked for");
+    for (const std::string& name : o.outputs)
+        lightmap_output_size(name); // throws for an unknown name, listing the known ones
+    if (o.texel_size < 0.0f || !std::isfinite(o.texel_size))
+        throw std::invalid_argument("the texel size must be positive (world units)");
+    if (o.bake.checkpoint.empty())
+        o.bake.checkpoint = checkpoint_path(asset_path);
+    // Fail fast: every output's folder before the scene is even read.
+    io::check_writable(asset_path);
+    io::check_writable(o.bake.checkpoint);
+    if (!o.exr_dir.empty())
+        for (const std::string& name : o.outputs)
+            io::check_writable(exr_path(o.exr_dir, asset_path, name));
+
+    const io::GltfScene scene = io::read_gltf(scene_path);
+    if (scene.mesh.uvs1.size() != scene.mesh.vertex_count())
+        throw io::FormatError(scene_path.string() +
+                              ": has no lightmap UVs (TEXCOORD_1): give every mesh a second UV set laid out for the "
+                              "lightmap (Blender: a second UV map, e.g. from Lightmap Pack); hemi does not unwrap "
+                              "scenes yet");
+    LightmapBakeSummary summary;
+    summary.triangles = scene.mesh.indices.size() / 3;
+    summary.materials = scene.materials.size();
+    summary.primitives = scene.primitives.size();
+    summary.images = scene.images.size();
+    summary.tangents_generated = scene.tangents_generated;
+    summary.warnings = scene.warnings;
+    std::vector<TriangleRange> ranges;
+    for (size_t i = 0; i < scene.primitives.size(); ++i)
+    {
+        const io::Primitive& p = scene.primitives[i];
+        const uint32_t material = p.material;
+        const std::string name = material < scene.materials.size() && !scene.materials[material].name.empty()
+                                     ? "primitive " + std::to_string(i) + " (" + scene.materials[material].name + ")"
+                                     : "primitive " + std::to_string(i);
+        ranges.push_back({p.first_index / 3, p.index_count / 3, name});
+    }
+
+    // The atlas size: given, or from the texel size (the square atlas whose texels cover that much of the
+    // scene on average), else 512.
+    uint32_t w = o.width, h = o.height;
+    if (w == 0 || h == 0)
+    {
+        w = h = 512;
+        if (o.texel_size > 0.0f)
+        {
+            double world = 0.0, uv = 0.0;
+            const io::Mesh& m = scene.mesh;
+            for (size_t t = 0; t + 2 < m.indices.size(); t += 3)
+            {
+                const glm::dvec3 a(m.positions[m.indices[t]]), b(m.positions[m.indices[t + 1]]),
+                    c(m.positions[m.indices[t + 2]]);
+                world += 0.5 * glm::length(glm::cross(b - a, c - a));
+                const glm::dvec2 p(m.uvs1[m.indices[t]]), q(m.uvs1[m.indices[t + 1]]), r(m.uvs1[m.indices[t + 2]]);
+                uv += 0.5 * std::abs((q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x));
+            }
+            const double side = uv > 0.0 ? std::sqrt(world / uv) / double(o.texel_size) : 512.0;
+            w = h = uint32_t(std::clamp(std::ceil(side), 16.0, 8192.0));
+        }
+    }
+    summary.width = w;
+    summary.height = h;
+    LightmapUvReport report;
+    const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
+    summary.uv_report = report;
+    if (!report.ok())
+        throw io::FormatError(scene_path.string() + ": " + report.problems.front());
+    for (const std::string& warning : report.warnings)
+        summary.warnings.push_back(warning);
+
+    o.lights.scene_to_world = gltf_scene_to_world();
+    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, progress);
+    summary.rays = sh.rays;
+    summary.trace_seconds = sh.trace_seconds;
+    summary.resumed = sh.resumed;
+    summary.checkpoint_error = sh.checkpoint_error;
+
+    io::LightmapAsset asset;
+    asset.mesh = scene.mesh;
+    asset.materials = scene.materials;
+    asset.images = scene.images;
+    asset.primitives = scene.primitives;
+    asset.width = w;
+    asset.height = h;
+    asset.rays = uint32_t(o.bake.rays);
+    asset.seed = o.bake.seed;
+    asset.covered_texels = uint32_t(atlas.texels.size());
+    for (const std::string& name : o.outputs)
+        asset.outputs.push_back({name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
+    io::write_lightmap_asset(asset_path, asset);
+    if (!o.exr_dir.empty())
+        for (const io::LightmapOutput& out : asset.outputs)
+        {
+            std::vector<io::ExrChannel> channels;
+            const size_t plane = size_t(w) * h * 3;
+            for (uint32_t k = 0; k < out.k; ++k)
+                for (const char* c : {"R", "G", "B"})
+                {
+                    char name[32];
+                    std::snprintf(name, sizeof name, "c%u.%s", k, c);
+                    const size_t channel = size_t(c[0] == 'R' ? 0 : c[0] == 'G' ? 1 : 2);
+                    channels.push_back({name, out.maps.data() + k * plane + channel, 3, true});
+                }
+            const std::vector<std::pair<std::string, std::string>> attributes = {
+                {"hemi.output", out.name},
+                {"hemi.k", std::to_string(out.k)},
+                {"hemi.layout", "coefficient k of a texel in channels c<k>.R, c<k>.G, c<k>.B; rows from the top "
+                                "(v = 0) of the TEXCOORD_1 atlas"},
+                {"hemi.frame", "irradiance in each texel's tangent frame of the normal-map UV set (TEXCOORD_0): "
+                               "E(n) = sum_k c_k b_k(n), n the tangent-space normal-map normal"}};
+            const std::filesystem::path file = exr_path(o.exr_dir, asset_path, out.name);
+            io::write_exr_channels(file, w, h, channels, attributes);
+            summary.exr_files.push_back(file);
+        }
+    remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
+    summary.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return summary;
+}
+
+void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapBakeSummary& s,
+                              const LightmapFileOptions& o)
+{
+    nlohmann::json j;
+    j["width"] = s.width;
+    j["height"] = s.height;
+    j["covered_texels"] = s.uv_report.covered_texels;
+    j["triangles"] = s.triangles;
+    j["materials"] = s.materials;
+    j["primitives"] = s.primitives;
+    j["images"] = s.images;
+    j["outputs"] = o.outputs;
+    j["rays_per_texel"] = o.bake.rays;
+    j["sun_rays_per_texel"] = o.lights.sun ? o.bake.sun_rays : 0;
+    j["seed"] = o.bake.seed;
+    j["environment"] = o.lights.environment.pixels.empty() ? "uniform" : "image";
+    j["rays"] = s.rays;
+    j["trace_seconds"] = s.trace_seconds;
+    j["total_seconds"] = s.total_seconds;
+    j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;
+    j["resumed"] = s.resumed;
+    j["tangents_generated"] = s.tangents_generated;
+    j["warnings"] = s.warnings;
+    j["texel_size"] = {{"min", s.uv_report.min_texel_size}, {"max", s.uv_report.max_texel_size}};
+    std::vector<std::string> exrs;
+    for (const std::filesystem::path& p : s.exr_files)
+        exrs.push_back(p.string());
+    j["exr_files"] = exrs;
+    io::write_text_atomically(path, j.dump(2) + "\n");
+}
+
+} // namespace hemi::bake
