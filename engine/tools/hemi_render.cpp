@@ -1,13 +1,17 @@
-// hemi-render: renders a baked PRT asset headlessly (Vulkan, lavapipe included) to PNG or EXR: the preview a
-// pipeline takes of a bake, and the samples' building block.
+// hemi-render: renders a baked asset headlessly (Vulkan, lavapipe included) to PNG or EXR: the preview a
+// pipeline takes of a bake, and the samples' building block. The asset's kind is read from the file.
 //
-//   hemi-render ASSET.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
+//   hemi-render PRT.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
 //               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o OUT.png|OUT.exr
+//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain [--white] [--size WxH] [--camera auto|EYE,TARGET]
+//               [--exposure E] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is baked in)
 // HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
 // message from it makes the exit status 2.
 #include <hemi/gpu/device.h>
 #include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
+#include <hemi/render/view/lightmap_view.h>
 #include <hemi/render/view/prt_view.h>
 
 #include <CLI/CLI.hpp>
@@ -15,6 +19,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string_view>
 
 namespace
@@ -33,17 +38,19 @@ glm::vec3 parse_vec3(const std::string& text, const std::string& what)
 
 int main(int argc, char** argv)
 {
-    CLI::App app{"hemi-render: render a baked PRT asset (hemi-bake prt) to PNG or EXR"};
+    CLI::App app{"hemi-render: render a baked PRT (hemi-bake prt) or lightmap (hemi-bake lightmap) asset to PNG or EXR"};
     std::string asset_path, technique = "gs", env = "sky", size = "800x600", camera = "auto", output;
     bool cpca = false, white = false;
     float rotate = 0.0f, exposure = 1.0f;
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
-    app.add_option("--technique", technique, "gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT); "
-                                             "also sh4ls, zernike3, zernike6 when baked")
+    app.add_option("--technique", technique, "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
+                                             "also sh4ls, zernike3, zernike6 when baked; lightmaps: sh9 (gs is the "
+                                             "same), hl2, h4, h6, sal4, plain (non-directional)")
         ->capture_default_str();
     app.add_flag("--cpca", cpca, "use the technique's CPCA data (bake with --cpca)");
-    app.add_option("--env", env, "uniform (radiance 1 everywhere), sky (analytic) or an equirectangular FILE.exr, "
-                                 "z up, in Blender's world mapping (the image centre looks along +x)")
+    CLI::Option* env_option = app.add_option("--env", env, "PRT: uniform (radiance 1 everywhere), sky (analytic) or an "
+                                 "equirectangular FILE.exr, z up, in Blender's world mapping (the image centre looks "
+                                 "along +x); lightmaps carry their lighting")
         ->capture_default_str();
     app.add_option("--rotate", rotate, "turn the environment about the up axis by DEG degrees")->capture_default_str();
     app.add_flag("--white", white, "albedo 1: the lighting-only view");
@@ -68,7 +75,10 @@ int main(int argc, char** argv)
         if (ext != ".png" && ext != ".exr")
             throw std::invalid_argument("-o must end in .png or .exr, got '" + output + "'");
 
-        const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+        const bool lightmap = hemi::io::asset_kind(asset_path) == "lightmap";
+        if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
+            throw std::invalid_argument(asset_path + " is a lightmap asset: its lighting is baked in (--env, --rotate "
+                                                     "and --cpca are for PRT assets)");
         // Vulkan's warnings and errors (the validation layer's too, with HEMI_VALIDATION=1) go to stderr.
         hemi::gpu::DeviceDesc desc;
         desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message) {
@@ -76,16 +86,10 @@ int main(int argc, char** argv)
                 std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "", int(message.size()),
                              message.data());
         };
-        hemi::gpu::Device device(desc);
-        hemi::render::PrtView view(device, asset, technique, cpca, w, h);
-        hemi::render::PrtFrame frame;
-        frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
-        frame.rotate_degrees = rotate;
-        frame.white = white;
         const float aspect = float(w) / float(h);
-        if (camera == "auto")
-            frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, aspect);
-        else
+        hemi::render::PrtCamera view_camera;
+        bool auto_camera = camera == "auto";
+        if (!auto_camera)
         {
             const size_t comma = [&] {
                 size_t c = 0, at = std::string::npos;
@@ -96,10 +100,45 @@ int main(int argc, char** argv)
             }();
             if (comma == std::string::npos)
                 throw std::invalid_argument("--camera expects auto or EYE,TARGET (6 numbers), got '" + camera + "'");
-            frame.camera.eye = parse_vec3(camera.substr(0, comma), "--camera EYE");
-            frame.camera.target = parse_vec3(camera.substr(comma + 1), "--camera TARGET");
+            view_camera.eye = parse_vec3(camera.substr(0, comma), "--camera EYE");
+            view_camera.target = parse_vec3(camera.substr(comma + 1), "--camera TARGET");
         }
-        const hemi::io::ImageRgba image = view.render(frame);
+        hemi::io::ImageRgba image;
+        std::unique_ptr<hemi::gpu::Device> device;
+        if (lightmap)
+        {
+            const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
+            if (technique == "gs")
+                technique = "sh9";
+            try
+            {
+                asset.output(technique);
+            }
+            catch (const std::invalid_argument& e)
+            {
+                throw std::invalid_argument(asset_path + ": " + e.what());
+            }
+            device = std::make_unique<hemi::gpu::Device>(desc);
+            hemi::render::LightmapView view(*device, asset, {technique}, w, h);
+            hemi::render::LightmapFrame frame;
+            frame.technique = technique;
+            frame.white = white;
+            frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            image = view.render(frame);
+            env = "baked";
+        }
+        else
+        {
+            const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+            device = std::make_unique<hemi::gpu::Device>(desc);
+            hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
+            hemi::render::PrtFrame frame;
+            frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
+            frame.rotate_degrees = rotate;
+            frame.white = white;
+            frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            image = view.render(frame);
+        }
         if (ext == ".exr")
             hemi::io::write_exr(output, image);
         else
@@ -107,10 +146,10 @@ int main(int argc, char** argv)
         std::printf("rendered %s (%s%s, %s, %ux%u) in %.2f s -> %s\n", asset_path.c_str(), technique.c_str(),
                     cpca ? " + CPCA" : "", env.c_str(), w, h,
                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), output.c_str());
-        if (device.validation_messages() > 0)
+        if (device->validation_messages() > 0)
         {
             std::fprintf(stderr, "hemi-render: the validation layer reported %llu problem(s)\n",
-                         (unsigned long long)device.validation_messages());
+                         (unsigned long long)device->validation_messages());
             return 2;
         }
     }

@@ -143,7 +143,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
 
     VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     view_info.image = image;
-    view_info.viewType = desc.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+    view_info.viewType = desc.layers > 1 || desc.array ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
     view_info.format = desc.format;
     view_info.subresourceRange = {img.aspect_, 0, desc.mip_levels, 0, desc.layers};
     VkImageView view;

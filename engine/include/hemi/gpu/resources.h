@@ -76,6 +76,7 @@ struct ImageDesc
     VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT;
     uint32_t mip_levels = 1;
     uint32_t layers = 1;  // > 1: a 2D array image with a 2D_ARRAY view (coefficient maps, one layer each)
+    bool array = false;   // a 2D_ARRAY view even for one layer (what a sampler2DArray needs)
 };
 
 class Image

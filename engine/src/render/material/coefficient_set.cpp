@@ -86,7 +86,7 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
             throw std::invalid_argument("hemi: coefficient map value " + std::to_string(i) +
                                         (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
     const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
-    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, k});
+    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, k, true});
     if (full_precision)
     {
         std::vector<float> rgba(texels * 4, 0.0f);

@@ -69,7 +69,8 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
 PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
                    gpu::UploadBatch& upload)
     : system_(&system), asset_(&asset), basis_(&math::technique(desc.technique)),
-      mesh_(system.device(), asset.mesh, upload), textures_(system.device(), asset.images, asset.materials, upload)
+      surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives, CoefficientSourceKind::Vertex,
+                {basis_->id}, upload)
 {
     const gpu::Device& device = system.device();
     source_ = make_source(device, asset, desc, upload);
@@ -78,26 +79,6 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
                                     " in the asset, its basis needs " + std::to_string(basis_->size));
     coefficient_set_ = std::make_unique<VertexCoefficients>(system, source_->coefficients(),
                                                             source_->instance_stride() * source_->instances());
-    std::vector<io::Material> materials = asset.materials;
-    if (materials.empty())
-        materials.emplace_back(); // glTF's default material
-    for (const io::Material& m : materials)
-        materials_.push_back(std::make_unique<MaterialInstance>(system, textures_, m, upload));
-    std::vector<io::Primitive> primitives = asset.primitives;
-    if (primitives.empty())
-        primitives.push_back({0, uint32_t(asset.mesh.indices.size()), 0});
-    for (const io::Primitive& p : primitives)
-    {
-        if (p.material >= materials_.size())
-            throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) + " of " +
-                                        std::to_string(materials_.size()));
-        MaterialKey key;
-        key.source = CoefficientSourceKind::Vertex;
-        key.basis = basis_->id;
-        key.frame = ShadingFrame::Tangent;
-        key.double_sided = materials_[p.material]->double_sided();
-        draws_.push_back({p.first_index, p.index_count, p.material, &system.type(key)});
-    }
 }
 
 PrtModel::~PrtModel() = default;
@@ -126,21 +107,7 @@ void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instanc
     if (instance >= source_->instances())
         throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
                                     std::to_string(source_->instances()));
-    mesh_.bind(cmd);
-    for (size_t i = 0; i < draws_.size(); ++i)
-    {
-        const Draw& d = draws_[i];
-        DrawBindings b;
-        b.type = d.type;
-        b.frame = frame;
-        b.material = materials_[d.material]->set();
-        b.source = coefficient_set_->set();
-        b.push.model = model;
-        b.push.coefficient_offset = uint32_t(source_->instance_offset(instance));
-        b.push.draw_id = uint32_t(i + 1);
-        bind_material(cmd, b);
-        mesh_.draw(cmd, d.first_index, d.index_count);
-    }
+    surfaces_.draw(cmd, frame, coefficient_set_->set(), uint32_t(source_->instance_offset(instance)), model);
 }
 
 } // namespace hemi::render

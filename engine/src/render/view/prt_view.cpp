@@ -94,13 +94,45 @@ glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, floa
     return proj * view;
 }
 
+ViewTarget::ViewTarget(const gpu::Device& device, uint32_t width, uint32_t height)
+    : device_(&device), target_(device, width, height), system_(device, target_.desc()), frame_set_(system_)
+{
+}
+
+void ViewTarget::record_frame(VkCommandBuffer cmd, const PrtCamera& camera, const io::Mesh& mesh,
+                              const glm::mat4& model, bool white)
+{
+    const float aspect = float(target_.width()) / float(target_.height());
+    // The bounds only change with the model matrix: no pass over the vertices per frame.
+    if (!bounds_valid_ || model != bounds_model_)
+    {
+        const BoundingSphere b = bounding_sphere(mesh, model);
+        bounds_centre_ = b.centre;
+        bounds_radius_ = b.radius;
+        bounds_model_ = model;
+        bounds_valid_ = true;
+    }
+    FrameData f;
+    f.view_projection = camera_matrix(camera, BoundingSphere{bounds_centre_, bounds_radius_}, aspect);
+    f.lighting_only = white;
+    frame_set_.record_update(cmd, f);
+}
+
+io::ImageRgba ViewTarget::read() const
+{
+    io::ImageRgba color = target_.read_color();
+    const io::ImageRgba aux = target_.read_aux();
+    for (size_t i = 0; i < color.pixels.size(); i += 4)
+        color.pixels[i + 3] = aux.pixels[i + 3];
+    return color;
+}
+
 PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::string& technique, bool cpca,
                  uint32_t width, uint32_t height)
-    : device_(&device), asset_(&asset), target_(device, width, height), system_(device, target_.desc()),
-      frame_set_(system_)
+    : asset_(&asset), view_(device, width, height)
 {
     gpu::UploadBatch upload(device);
-    model_ = std::make_unique<PrtModel>(system_, asset, PrtModelDesc{technique, cpca, 1}, upload);
+    model_ = std::make_unique<PrtModel>(view_.system(), asset, PrtModelDesc{technique, cpca, 1}, upload);
     upload.submit_and_wait();
 }
 
@@ -119,39 +151,24 @@ void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
 
 void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
 {
-    const float aspect = float(target_.width()) / float(target_.height());
-    // The bounds only change with the model matrix: no pass over the vertices per frame.
-    if (!bounds_valid_ || frame.model != bounds_model_)
-    {
-        bounds_ = bounding_sphere(asset_->mesh, frame.model);
-        bounds_model_ = frame.model;
-        bounds_valid_ = true;
-    }
-    FrameData f;
-    f.view_projection = camera_matrix(frame.camera, bounds_, aspect);
-    f.lighting_only = frame.white;
-    frame_set_.record_update(cmd, f);
+    view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white);
     model_matrix_ = frame.model;
 }
 
 void PrtView::record_raster(VkCommandBuffer cmd) const
 {
-    target_.begin(cmd);
-    model_->draw(cmd, frame_set_.set(), 0, model_matrix_);
-    target_.end(cmd);
+    view_.target().begin(cmd);
+    model_->draw(cmd, view_.frame(), 0, model_matrix_);
+    view_.target().end(cmd);
 }
 
 io::ImageRgba PrtView::render(const PrtFrame& frame)
 {
-    gpu::one_shot(*device_, [&](VkCommandBuffer cmd) {
+    gpu::one_shot(view_.device(), [&](VkCommandBuffer cmd) {
         record_transfer(cmd, frame);
         record_raster(cmd);
     });
-    io::ImageRgba color = target_.read_color();
-    const io::ImageRgba aux = target_.read_aux();
-    for (size_t i = 0; i < color.pixels.size(); i += 4)
-        color.pixels[i + 3] = aux.pixels[i + 3];
-    return color;
+    return view_.read();
 }
 
 } // namespace hemi::render

@@ -15,6 +15,7 @@
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/material/material_system.h>
 #include <hemi/render/scene/gpu_mesh.h>
+#include <hemi/render/scene/scene_surfaces.h>
 #include <hemi/render/transfer.h>
 
 #include <glm/mat4x4.hpp>
@@ -75,24 +76,16 @@ public:
     CoefficientSource& coefficients() { return *source_; }
     const io::PrtAsset& asset() const { return *asset_; }
     const math::BasisDesc& basis() const { return *basis_; }
-    const GpuMesh& mesh() const { return mesh_; }
-    size_t material_count() const { return materials_.size(); }
+    const GpuMesh& mesh() const { return surfaces_.mesh(); }
+    size_t material_count() const { return surfaces_.material_count(); }
 
 private:
     MaterialSystem* system_;
     const io::PrtAsset* asset_;
     const math::BasisDesc* basis_;
-    GpuMesh mesh_;
-    TextureSet textures_;
-    std::vector<std::unique_ptr<MaterialInstance>> materials_;
+    SceneSurfaces surfaces_;
     std::unique_ptr<CoefficientSource> source_;
     std::unique_ptr<VertexCoefficients> coefficient_set_;
-    struct Draw
-    {
-        uint32_t first_index, index_count, material;
-        const MaterialType* type;
-    };
-    std::vector<Draw> draws_;
 };
 
 } // namespace hemi::render

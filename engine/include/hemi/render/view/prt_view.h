@@ -14,6 +14,7 @@
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
 #include <hemi/render/view/offscreen.h>
+#include <hemi/render/view/view_target.h>
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/transfer.h>
 
@@ -32,12 +33,6 @@ namespace hemi::render
 // io::FormatError for a bad file, std::invalid_argument for a bad order.
 std::vector<glm::vec3> environment_lighting(const std::string& environment, int order);
 
-struct PrtCamera
-{
-    glm::vec3 eye{0.0f, -3.0f, 1.0f};
-    glm::vec3 target{0.0f};
-    float fov_y_degrees = 35.0f;
-};
 // The model's bounding sphere in world space (under `model`): centred on the bounding box.
 struct BoundingSphere
 {
@@ -86,23 +81,17 @@ public:
     // Both, submitted and waited for; returns the colour with alpha = coverage (1 where the model is).
     io::ImageRgba render(const PrtFrame& frame);
 
-    const OffscreenTarget& target() const { return target_; }
+    const OffscreenTarget& target() const { return view_.target(); }
     CoefficientSource& coefficients() { return model_->coefficients(); }
     const io::Mesh& mesh() const { return asset_->mesh; }
-    MaterialSystem& materials() { return system_; }
+    MaterialSystem& materials() { return view_.system(); }
     PrtModel& model() { return *model_; }
 
 private:
-    const gpu::Device* device_;
     const io::PrtAsset* asset_;
-    OffscreenTarget target_;
-    MaterialSystem system_;
-    FrameSet frame_set_;
+    ViewTarget view_;
     std::unique_ptr<PrtModel> model_;
     glm::mat4 model_matrix_{1.0f};
-    BoundingSphere bounds_;      // under bounds_model_, recomputed only when the frame's model changes
-    glm::mat4 bounds_model_{1.0f};
-    bool bounds_valid_ = false;
 };
 
 } // namespace hemi::render

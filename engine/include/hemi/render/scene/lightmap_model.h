@@ -1,0 +1,55 @@
+#pragma once
+// A baked lightmap asset (io/lightmap_asset.h) on the GPU, drawn through the material system: the mesh, the
+// scene's materials, and one output's coefficient maps as the per-texel coefficient source (sampled at
+// TEXCOORD_1, evaluated by the basis at the normal-map normal in the tangent frame). Static lighting: nothing
+// to update per frame.
+//
+// Techniques: the bases of math::bases() the asset holds (sh9, hl2, h4, h6, sal4, ...), and "plain", the
+// non-directional lightmap (the irradiance at the surface normal; the normal map does not change it).
+// Several techniques may be loaded at once and switched between per draw: the H6 -> H4 shader level of
+// detail of Habel & Wimmer is technique("h6") near, technique("h4") far.
+
+#include <hemi/gpu/upload.h>
+#include <hemi/io/lightmap_asset.h>
+#include <hemi/math/basis.h>
+#include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/material_system.h>
+#include <hemi/render/scene/scene_surfaces.h>
+
+#include <glm/mat4x4.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hemi::render
+{
+
+// The basis that draws a lightmap output: math::basis(name), or for "plain" the constant function of
+// math::vertex_irradiance_basis(). Throws std::invalid_argument for "rnm" (drawn by the SSBump and radiosity
+// normal mapping materials, not a basis) and unknown names.
+const math::BasisDesc& lightmap_basis(const std::string& output);
+
+class LightmapModel
+{
+public:
+    // `asset` must outlive the model. Loads each of `techniques` (outputs of the asset). Uploads go into
+    // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
+    LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
+                  gpu::UploadBatch& upload);
+    ~LightmapModel();
+
+    // Inside the caller's render pass: every primitive with its material, lit by `technique` (one of those
+    // loaded), under `model`.
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique, const glm::mat4& model) const;
+
+    const io::LightmapAsset& asset() const { return *asset_; }
+
+private:
+    const io::LightmapAsset* asset_;
+    std::vector<std::string> names_;
+    std::unique_ptr<SceneSurfaces> surfaces_; // variant i draws technique names_[i]
+    std::vector<std::unique_ptr<TexelCoefficients>> coefficients_;
+};
+
+} // namespace hemi::render

@@ -1,0 +1,56 @@
+#pragma once
+// What every baked asset draws the same way: its mesh on the GPU, the scene's textures and one material
+// instance per glTF material, and a draw per primitive with the material type of its key. PrtModel and
+// LightmapModel differ only in where the coefficients come from (descriptor set 2) and which basis evaluates
+// them.
+
+#include <hemi/gpu/upload.h>
+#include <hemi/io/material.h>
+#include <hemi/io/mesh.h>
+#include <hemi/render/material/material_instance.h>
+#include <hemi/render/material/material_system.h>
+#include <hemi/render/scene/gpu_mesh.h>
+
+#include <glm/mat4x4.hpp>
+
+#include <memory>
+#include <vector>
+
+namespace hemi::render
+{
+
+class SceneSurfaces
+{
+public:
+    // The mesh, images and materials must outlive the object. Compiles (or finds in `system`) the material type
+    // of every primitive for `source` and each of `bases` (HEMI_BASIS_* ids: the variants a draw picks from).
+    // No primitives draws the whole mesh with material 0; no materials uses glTF's default one. Throws
+    // std::invalid_argument for a primitive whose material does not exist or no bases, io::FormatError when an
+    // image is corrupt.
+    SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
+                  const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
+                  CoefficientSourceKind source, const std::vector<int>& bases, gpu::UploadBatch& upload);
+    ~SceneSurfaces();
+
+    // Inside the caller's render pass: every primitive with its material and the basis bases[variant],
+    // coefficients from `source` at `coefficient_offset` (the DrawPush field), under `model`. Primitive p is
+    // draw id p + 1.
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
+              const glm::mat4& model, size_t variant = 0) const;
+
+    const GpuMesh& mesh() const { return mesh_; }
+    size_t material_count() const { return materials_.size(); }
+
+private:
+    GpuMesh mesh_;
+    TextureSet textures_;
+    std::vector<std::unique_ptr<MaterialInstance>> materials_;
+    struct Draw
+    {
+        uint32_t first_index, index_count, material;
+        std::vector<const MaterialType*> types; // per variant
+    };
+    std::vector<Draw> draws_;
+};
+
+} // namespace hemi::render

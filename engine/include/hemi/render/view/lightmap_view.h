@@ -1,0 +1,53 @@
+#pragma once
+// A baked lightmap asset drawn into hemi's own offscreen target: the runtime half of Habel & Wimmer 2010
+// behind hemi-render. An engine drawing into its own passes uses LightmapModel (scene/lightmap_model.h) with
+// a MaterialSystem for its target; LightmapView is that plus a target. Conventions as PrtView's: hemi's world
+// is z up, the asset is placed by gltf_to_world().
+
+#include <hemi/gpu/device.h>
+#include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
+#include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/prt_model.h>
+#include <hemi/render/view/view_target.h>
+
+#include <glm/mat4x4.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hemi::render
+{
+
+struct LightmapFrame
+{
+    std::string technique;         // one of the view's techniques
+    PrtCamera camera;
+    glm::mat4 model = gltf_to_world();
+    bool white = false;            // albedo 1: the lighting-only view (E / pi)
+};
+
+class LightmapView
+{
+public:
+    // `asset` must outlive the view. Loads `techniques` (outputs of the asset; std::invalid_argument names one
+    // it lacks).
+    LightmapView(const gpu::Device& device, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
+                 uint32_t width, uint32_t height);
+    ~LightmapView();
+
+    // Submitted and waited for; the colour with alpha = coverage.
+    io::ImageRgba render(const LightmapFrame& frame);
+
+    const OffscreenTarget& target() const { return view_.target(); }
+    MaterialSystem& materials() { return view_.system(); }
+    LightmapModel& model() { return *model_; }
+
+private:
+    const io::LightmapAsset* asset_;
+    ViewTarget view_;
+    std::unique_ptr<LightmapModel> model_;
+};
+
+} // namespace hemi::render

@@ -1,0 +1,51 @@
+#include <hemi/render/scene/lightmap_model.h>
+
+#include <stdexcept>
+
+namespace hemi::render
+{
+
+const math::BasisDesc& lightmap_basis(const std::string& output)
+{
+    if (output == "plain")
+        return math::vertex_irradiance_basis();
+    if (output == "rnm")
+        throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the radiosity normal mapping "
+                                    "materials, not by a basis");
+    return math::basis(output);
+}
+
+LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
+                             const std::vector<std::string>& techniques, gpu::UploadBatch& upload)
+    : asset_(&asset)
+{
+    if (techniques.empty())
+        throw std::invalid_argument("hemi: a lightmap model needs at least one technique");
+    std::vector<int> bases;
+    for (const std::string& name : techniques)
+    {
+        const io::LightmapOutput& output = asset.output(name); // lists what the asset has
+        bases.push_back(lightmap_basis(name).id);
+        names_.push_back(name);
+        coefficients_.push_back(
+            std::make_unique<TexelCoefficients>(system, asset.width, asset.height, output.k, output.maps, upload));
+    }
+    surfaces_ = std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
+                                                CoefficientSourceKind::Texel, bases, upload);
+}
+
+LightmapModel::~LightmapModel() = default;
+
+void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
+                         const glm::mat4& model) const
+{
+    for (size_t i = 0; i < names_.size(); ++i)
+        if (names_[i] == technique)
+        {
+            surfaces_->draw(cmd, frame, coefficients_[i]->set(), 0, model, i);
+            return;
+        }
+    throw std::invalid_argument("hemi: technique '" + technique + "' is not loaded in this lightmap model");
+}
+
+} // namespace hemi::render

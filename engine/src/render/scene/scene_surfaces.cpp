@@ -1,0 +1,68 @@
+#include <hemi/render/scene/scene_surfaces.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace hemi::render
+{
+
+SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
+                             const std::vector<io::Material>& asset_materials,
+                             const std::vector<io::Primitive>& asset_primitives, CoefficientSourceKind source,
+                             const std::vector<int>& bases, gpu::UploadBatch& upload)
+    : mesh_(system.device(), mesh, upload), textures_(system.device(), images, asset_materials, upload)
+{
+    if (bases.empty())
+        throw std::invalid_argument("hemi: scene surfaces need at least one basis");
+    std::vector<io::Material> materials = asset_materials;
+    if (materials.empty())
+        materials.emplace_back(); // glTF's default material
+    for (const io::Material& m : materials)
+        materials_.push_back(std::make_unique<MaterialInstance>(system, textures_, m, upload));
+    std::vector<io::Primitive> primitives = asset_primitives;
+    if (primitives.empty())
+        primitives.push_back({0, uint32_t(mesh.indices.size()), 0});
+    for (const io::Primitive& p : primitives)
+    {
+        if (p.material >= materials_.size())
+            throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) + " of " +
+                                        std::to_string(materials_.size()));
+        Draw d{p.first_index, p.index_count, p.material, {}};
+        for (int basis : bases)
+        {
+            MaterialKey key;
+            key.source = source;
+            key.basis = basis;
+            key.frame = ShadingFrame::Tangent;
+            key.double_sided = materials_[p.material]->double_sided();
+            d.types.push_back(&system.type(key));
+        }
+        draws_.push_back(std::move(d));
+    }
+}
+
+SceneSurfaces::~SceneSurfaces() = default;
+
+void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant) const
+{
+    if (draws_.empty() || variant >= draws_.front().types.size())
+        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
+    mesh_.bind(cmd);
+    for (size_t i = 0; i < draws_.size(); ++i)
+    {
+        const Draw& d = draws_[i];
+        DrawBindings b;
+        b.type = d.types[variant];
+        b.frame = frame;
+        b.material = materials_[d.material]->set();
+        b.source = source;
+        b.push.model = model;
+        b.push.coefficient_offset = coefficient_offset;
+        b.push.draw_id = uint32_t(i + 1);
+        bind_material(cmd, b);
+        mesh_.draw(cmd, d.first_index, d.index_count);
+    }
+}
+
+} // namespace hemi::render
