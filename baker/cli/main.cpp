@@ -6,7 +6,7 @@
 //       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
 //   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
-//       [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
+//       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
 //       [--exr-dir DIR] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
@@ -388,14 +388,17 @@ int run_lightmap(LightmapCli& c)
     ProgressLine line("hemi-bake lightmap");
     const bake::LightmapBakeSummary s = bake::bake_lightmap_file(c.scene, c.asset, o, [&](const bake::LightmapProgress& p) {
         line.checkpoint_error(p.checkpoint_error);
-        line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0, "texels", p.texels_done == p.texels);
+        const double fraction = (p.pass + (p.texels ? double(p.texels_done) / double(p.texels) : 1.0)) / p.passes;
+        const std::string what = "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
+                                 (p.pass == 0 ? std::string("direct") : "bounce " + std::to_string(p.pass)) + ")";
+        line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
     });
     for (const std::string& w : s.warnings)
         std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
     std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(), s.width,
                 s.height, s.uv_report.covered_texels, s.triangles, c.bases.c_str());
-    std::printf("texel size %.4g to %.4g units; %d rays per texel", double(s.uv_report.min_texel_size),
-                double(s.uv_report.max_texel_size), o.bake.rays);
+    std::printf("texel size %.4g to %.4g units; %d rays per texel and pass, %d bounce(s)",
+                double(s.uv_report.min_texel_size), double(s.uv_report.max_texel_size), o.bake.rays, o.bake.bounces);
     if (o.lights.sun)
         std::printf(" + %d towards the sun", o.bake.sun_rays);
     std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
@@ -513,6 +516,10 @@ int main(int argc, char** argv)
                          "world units per texel: the atlas size that gives the scene that texel density");
     lightmap->add_option("--rays", lm.options.bake.rays, "hemisphere rays per texel")->capture_default_str();
     lightmap->add_option("--sun-rays", lm.options.bake.sun_rays, "shadow rays per texel towards the sun's disc")
+        ->capture_default_str();
+    lightmap->add_option("--bounces", lm.options.bake.bounces,
+                         "bounces of indirect light, coloured by each surface's base colour")
+        ->check(CLI::Range(0, 16))
         ->capture_default_str();
     lightmap->add_option("--seed", lm.options.bake.seed, "seed of the rays (same seed, same bytes)")
         ->capture_default_str();

@@ -6,6 +6,7 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/rnm_basis.h>
 #include <hemi/math/sh.h>
+#include <hemi/io/image.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -45,10 +46,95 @@ glm::vec3 LightmapLights::environment_radiance(const glm::vec3& scene_d) const
     return (top * (1.0f - ty) + bottom * ty) * environment_scale;
 }
 
+LightmapSurfaces::LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::Material>& materials,
+                                   const std::vector<io::EncodedImage>& images,
+                                   const std::vector<io::Primitive>& primitives)
+    : mesh_(&mesh), materials_(materials)
+{
+    if (materials_.empty())
+        materials_.emplace_back(); // glTF's default material
+    for (const io::EncodedImage& image : images)
+        images_.push_back(io::decode_image(image));
+    const size_t triangles = mesh.indices.size() / 3;
+    material_of_.assign(triangles, 0);
+    for (const io::Primitive& p : primitives)
+    {
+        if (p.material >= materials_.size() || (p.first_index + p.index_count) / 3 > triangles)
+            throw std::invalid_argument("hemi: a primitive's range or material is out of range");
+        for (uint32_t t = p.first_index / 3; t < (p.first_index + p.index_count) / 3; ++t)
+            material_of_[t] = p.material;
+    }
+    for (const io::Material& m : materials_)
+    {
+        for (const io::TextureRef* t : {&m.base_color, &m.emissive})
+            if (t->present() && size_t(t->image) >= images_.size())
+                throw std::invalid_argument("hemi: material '" + m.name + "' uses image " + std::to_string(t->image) +
+                                            " of " + std::to_string(images_.size()));
+        emissive_ = emissive_ || m.emissive_factor != glm::vec3(0.0f);
+    }
+}
+
+glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, float bu, float bv, bool srgb) const
+{
+    if (!t.present())
+        return glm::vec4(1.0f);
+    const std::vector<glm::vec2>& set = t.texcoord == 1 ? mesh_->uvs1 : mesh_->uvs;
+    if (set.empty())
+        return glm::vec4(1.0f);
+    const uint32_t* idx = &mesh_->indices[size_t(triangle) * 3];
+    const glm::vec2 uv = (1.0f - bu - bv) * set[idx[0]] + bu * set[idx[1]] + bv * set[idx[2]];
+    const glm::vec2 st = glm::vec2(t.uv_transform() * glm::vec3(uv, 1.0f));
+    const io::ImageRgba8& im = images_[size_t(t.image)];
+    auto wrap = [](int64_t i, int64_t n, io::Wrap mode) {
+        if (mode == io::Wrap::ClampToEdge)
+            return std::clamp<int64_t>(i, 0, n - 1);
+        if (mode == io::Wrap::MirroredRepeat)
+        {
+            const int64_t period = 2 * n, m = ((i % period) + period) % period;
+            return m < n ? m : period - 1 - m;
+        }
+        return ((i % n) + n) % n;
+    };
+    const double fx = double(st.x) * im.width - 0.5, fy = double(st.y) * im.height - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    const float tx = float(fx - x0), ty = float(fy - y0);
+    auto texel = [&](int64_t x, int64_t y) {
+        const uint8_t* p = &im.pixels[(size_t(wrap(y, im.height, t.sampler.wrap_t)) * im.width +
+                                       size_t(wrap(x, im.width, t.sampler.wrap_s))) * 4];
+        glm::vec4 c(p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f, p[3] / 255.0f);
+        if (srgb)
+            c = glm::vec4(io::srgb_eotf(c.r), io::srgb_eotf(c.g), io::srgb_eotf(c.b), c.a);
+        return c;
+    };
+    const int64_t ix = int64_t(x0), iy = int64_t(y0);
+    const glm::vec4 top = texel(ix, iy) * (1.0f - tx) + texel(ix + 1, iy) * tx;
+    const glm::vec4 bottom = texel(ix, iy + 1) * (1.0f - tx) + texel(ix + 1, iy + 1) * tx;
+    return top * (1.0f - ty) + bottom * ty;
+}
+
+glm::vec3 LightmapSurfaces::albedo(uint32_t triangle, float u, float v) const
+{
+    const io::Material& m = materials_[material_of_[triangle]];
+    return glm::vec3(m.base_color_factor) * glm::vec3(sample(m.base_color, triangle, u, v, true));
+}
+
+glm::vec3 LightmapSurfaces::emission(uint32_t triangle, float u, float v) const
+{
+    const io::Material& m = materials_[material_of_[triangle]];
+    if (m.emissive_factor == glm::vec3(0.0f))
+        return glm::vec3(0.0f);
+    return m.emissive_factor * glm::vec3(sample(m.emissive, triangle, u, v, true));
+}
+
+bool LightmapSurfaces::double_sided(uint32_t triangle) const
+{
+    return materials_[material_of_[triangle]].double_sided;
+}
+
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 1;
+constexpr uint64_t kLightmapCheckpointVersion = 2;
 
 bool finite3(const glm::vec3& v)
 {
@@ -63,6 +149,8 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
         throw std::invalid_argument("sun rays per texel " + std::to_string(o.sun_rays) + " is not in [1, 65536]");
     if (!(o.ray_offset >= 0.0f) || !std::isfinite(o.ray_offset))
         throw std::invalid_argument("the ray offset must be >= 0");
+    if (o.bounces < 0 || o.bounces > 16)
+        throw std::invalid_argument("bounces " + std::to_string(o.bounces) + " is not in [0, 16]");
     if (!finite3(l.uniform) || !std::isfinite(l.environment_scale))
         throw std::invalid_argument("the environment's radiance must be finite");
     if (l.sun)
@@ -76,7 +164,8 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
     }
 }
 
-uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l, const LightmapBakeOptions& o)
+uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l, const LightmapBakeOptions& o,
+                const LightmapSurfaces* surfaces, std::span<const io::Material> materials)
 {
     CheckpointKey key(kLightmapCheckpointVersion);
     key.add_array(std::span<const glm::vec3>(mesh.positions)).add_array(std::span<const uint32_t>(mesh.indices));
@@ -87,17 +176,80 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
     key.add_array(std::span<const float>(l.environment.pixels)).add_value(l.environment_scale);
     key.add_value(l.sun).add_value(l.sun_direction).add_value(l.sun_irradiance).add_value(l.sun_diameter_degrees);
     key.add_value(l.scene_to_world);
-    key.add_value(o.rays).add_value(o.sun_rays).add_value(o.seed).add_value(o.ray_offset);
-    key.add_value(EmbreeScene::embree_version());
+    key.add_value(o.rays).add_value(o.sun_rays).add_value(o.seed).add_value(o.ray_offset).add_value(o.bounces);
+    key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
+    for (const io::Material& m : materials)
+        key.add_value(m.base_color_factor).add_value(m.emissive_factor).add_value(m.double_sided);
+    if (surfaces)
+        for (const io::ImageRgba8& im : surfaces->images())
+            key.add_array(std::span<const uint8_t>(im.pixels));
     return key.digest();
 }
 
 } // namespace
 
+namespace
+{
+// Per texel values spread to the whole atlas: covered texels hold theirs, empty ones within `dilate` texels
+// of a chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel.
+std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate)
+{
+    const uint32_t w = atlas.width, h = atlas.height;
+    const size_t plane = size_t(w) * h;
+    std::vector<glm::vec3> maps(size_t(k) * plane, glm::vec3(0.0f)); // map after map
+    std::vector<uint8_t> filled(plane, 0);
+    for (size_t i = 0; i < atlas.texels.size(); ++i)
+    {
+        const size_t at = size_t(atlas.texels[i].y) * w + atlas.texels[i].x;
+        filled[at] = 1;
+        for (int j = 0; j < k; ++j)
+            maps[size_t(j) * plane + at] = values[i * size_t(k) + size_t(j)];
+    }
+    for (int pass = 0; pass < dilate; ++pass)
+    {
+        std::vector<uint8_t> next = filled;
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+            {
+                const size_t at = size_t(y) * w + x;
+                if (filled[at])
+                    continue;
+                int count = 0;
+                std::vector<glm::dvec3> sum(size_t(k), glm::dvec3(0.0));
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx)
+                    {
+                        const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
+                        if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h))
+                            continue;
+                        const size_t from = size_t(sy) * w + size_t(sx);
+                        if (!filled[from])
+                            continue;
+                        ++count;
+                        for (int j = 0; j < k; ++j)
+                            sum[size_t(j)] += glm::dvec3(maps[size_t(j) * plane + from]);
+                    }
+                if (!count)
+                    continue;
+                for (int j = 0; j < k; ++j)
+                    maps[size_t(j) * plane + at] = glm::vec3(sum[size_t(j)] / double(count));
+                next[at] = 1;
+            }
+        filled.swap(next);
+    }
+    return maps;
+}
+} // namespace
+
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
-                            const LightmapBakeOptions& o, const std::function<void(const LightmapProgress&)>& progress)
+                            const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
+                            const std::function<void(const LightmapProgress&)>& progress)
 {
     check(lights, o);
+    if (o.bounces > 0 && !surfaces)
+        throw std::invalid_argument("bounces need the scene's surfaces (their albedo)");
+    if (o.bounces > 0 && mesh.uvs1.size() != mesh.positions.size())
+        throw std::invalid_argument("bounces need lightmap UVs to look the irradiance of a hit up");
     LightmapSh out;
     out.width = atlas.width;
     out.height = atlas.height;
@@ -117,8 +269,31 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     const glm::vec3 sun_v = glm::cross(sun_axis, sun_u);
     const uint64_t sun_seed = mix64(o.seed ^ 0x53554e5f5241ull); // independent of the hemisphere rays
     const double weight = 2.0 * M_PI / double(o.rays);
+    const int passes = 1 + o.bounces;
 
-    auto texel = [&](uint32_t i) {
+    // The finished work: the SH of the completed passes, the pass being gathered, and the irradiance at each
+    // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
+    std::vector<std::array<glm::vec3, 9>> pass_sh(n);
+    std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
+    std::vector<glm::vec3> previous_map; // `previous` over the whole atlas, dilated, for bilinear lookups
+    auto lookup_previous = [&](uint32_t triangle, float bu, float bv) {
+        const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
+        const glm::vec2 uv = (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
+        const double fx = std::clamp(double(uv.x), 0.0, 1.0) * atlas.width - 0.5;
+        const double fy = std::clamp(double(uv.y), 0.0, 1.0) * atlas.height - 0.5;
+        const double x0 = std::floor(fx), y0 = std::floor(fy);
+        const float tx = float(fx - x0), ty = float(fy - y0);
+        auto at = [&](int64_t x, int64_t y) {
+            x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
+            y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
+            return previous_map[size_t(y) * atlas.width + size_t(x)];
+        };
+        const int64_t ix = int64_t(x0), iy = int64_t(y0);
+        return (at(ix, iy) * (1.0f - tx) + at(ix + 1, iy) * tx) * (1.0f - ty) +
+               (at(ix, iy + 1) * (1.0f - tx) + at(ix + 1, iy + 1) * tx) * ty;
+    };
+
+    auto texel = [&](uint32_t i, int pass) {
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
         const glm::vec3 origin = offset_ray_origin(t.position, t.geometric_normal, offset);
@@ -129,18 +304,42 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             for (int j = 0; j < 9; ++j)
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
         };
+        // Each pass draws its own directions (seed per pass), so the passes' noise does not line up.
+        const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
         for (int r = 0; r < o.rays; ++r)
         {
-            const glm::vec3 h = hemisphere_direction(o.seed, item, r, o.rays);
+            const glm::vec3 h = hemisphere_direction(seed, item, r, o.rays);
             const glm::vec3 d = glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal);
-            if (glm::dot(d, t.geometric_normal) <= 0.0f || scene.occluded(origin, d))
-                continue; // into its own triangle, or blocked by the scene
-            add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+            if (glm::dot(d, t.geometric_normal) <= 0.0f)
+                continue; // into its own triangle
+            const bool needs_hit = surfaces && (pass > 0 || surfaces->emissive());
+            if (!needs_hit)
+            {
+                if (pass == 0 && !scene.occluded(origin, d))
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+                continue;
+            }
+            const std::optional<RayHit> hit = scene.intersect(origin, d);
+            if (!hit)
+            {
+                if (pass == 0)
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+                continue;
+            }
+            // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
+            const bool front = glm::dot(scene.geometric_normal(hit->primitive), d) < 0.0f;
+            if (!front && !surfaces->double_sided(hit->primitive))
+                continue;
+            glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
+                                           : surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                                                 lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
+            if (radiance != glm::vec3(0.0f))
+                add(d, glm::dvec3(radiance) * weight);
         }
-        if (lights.sun)
+        if (lights.sun && pass == 0)
             for (int r = 0; r < o.sun_rays; ++r)
             {
-                // A point of the disc, stratified in the ray index by the counter-based numbers.
+                // A point of the disc, from the counter-based numbers.
                 const double z = 1.0 - (1.0 - cos_half) * double(uniform01(sun_seed, item, uint64_t(2 * r)));
                 const double phi = 2.0 * M_PI * double(uniform01(sun_seed, item, uint64_t(2 * r + 1)));
                 const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
@@ -154,35 +353,58 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         math::Sh9Rgb radiance;
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
-        out.irradiance[i] = math::convolve_cosine(radiance);
+        pass_sh[i] = math::convolve_cosine(radiance);
     };
 
-    SliceCheckpoint checkpoint(o.checkpoint, key_of(mesh, atlas, lights, o), 1, n,
-                               {{"irradiance", std::as_writable_bytes(std::span<std::array<glm::vec3, 9>>(out.irradiance))}},
+    using ShArray = std::array<glm::vec3, 9>;
+    SliceCheckpoint checkpoint(o.checkpoint, key_of(mesh, atlas, lights, o, surfaces,
+                                                    surfaces ? std::span<const io::Material>(surfaces->materials())
+                                                             : std::span<const io::Material>()),
+                               uint32_t(passes), n,
+                               {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
+                                {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
+                                {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))}},
                                o.checkpoint_seconds);
-    uint32_t first = 0;
+    SlicePosition state;
     if (const std::optional<SlicePosition> resumed = checkpoint.resume())
     {
-        first = resumed->next_item;
+        state = *resumed;
         out.resumed = true;
     }
     const uint64_t rays_per_texel = uint64_t(o.rays) + (lights.sun ? uint64_t(o.sun_rays) : 0);
     const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, n));
-    if (progress)
-        progress({first, n, checkpoint.error()});
     const auto t0 = std::chrono::steady_clock::now();
-    while (first < n)
+    for (int pass = int(state.pass); pass < passes; ++pass)
     {
-        const uint32_t last = std::min(n, first + slice);
-        tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 64), [&](const tbb::blocked_range<uint32_t>& r) {
-            for (uint32_t i = r.begin(); i != r.end(); ++i)
-                texel(i);
-        });
-        out.rays += uint64_t(last - first) * rays_per_texel;
-        first = last;
-        checkpoint.slice_done(0, first);
+        uint32_t first = pass == int(state.pass) ? state.next_item : 0;
+        if (pass > 0)
+            previous_map = dilated(atlas, previous, 1, 2);
         if (progress)
-            progress({first, n, checkpoint.error()});
+            progress({pass, passes, first, n, checkpoint.error()});
+        while (first < n)
+        {
+            const uint32_t last = std::min(n, first + slice);
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 64),
+                              [&](const tbb::blocked_range<uint32_t>& r) {
+                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                      texel(i, pass);
+                              });
+            out.rays += uint64_t(last - first) * (pass == 0 ? rays_per_texel : uint64_t(o.rays));
+            first = last;
+            if (first == n)
+            {
+                // The pass is complete: add it, and keep its irradiance at each normal for the next bounce.
+                for (uint32_t i = 0; i < n; ++i)
+                {
+                    for (int j = 0; j < 9; ++j)
+                        out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
+                    previous[i] = math::sh9_eval_rgb(pass_sh[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                }
+            }
+            checkpoint.slice_done(uint32_t(pass), first);
+            if (progress)
+                progress({pass, passes, first, n, checkpoint.error()});
+        }
     }
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();
@@ -241,56 +463,19 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
 std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh, int dilate)
 {
     const int k = lightmap_output_size(name);
-    const uint32_t w = atlas.width, h = atlas.height;
-    const size_t plane = size_t(w) * h;
-    std::vector<float> maps(size_t(k) * plane * 3, 0.0f);
-    std::vector<uint8_t> filled(plane, 0);
+    std::vector<glm::vec3> values;
+    values.reserve(atlas.texels.size() * size_t(k));
     for (size_t i = 0; i < atlas.texels.size(); ++i)
     {
-        const LightmapTexel& t = atlas.texels[i];
         const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
-        const size_t at = size_t(t.y) * w + t.x;
-        filled[at] = 1;
-        for (int j = 0; j < k; ++j)
-            for (int ch = 0; ch < 3; ++ch)
-                maps[(size_t(j) * plane + at) * 3 + size_t(ch)] = c[size_t(j)][ch];
+        values.insert(values.end(), c.begin(), c.end());
     }
-    // Dilation, one ring per pass: an empty texel takes the mean of its filled 8-neighbours.
-    for (int pass = 0; pass < dilate; ++pass)
-    {
-        std::vector<uint8_t> next = filled;
-        for (uint32_t y = 0; y < h; ++y)
-            for (uint32_t x = 0; x < w; ++x)
-            {
-                const size_t at = size_t(y) * w + x;
-                if (filled[at])
-                    continue;
-                int count = 0;
-                std::vector<double> sum(size_t(k) * 3, 0.0);
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx)
-                    {
-                        const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
-                        if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h))
-                            continue;
-                        const size_t from = size_t(sy) * w + size_t(sx);
-                        if (!filled[from])
-                            continue;
-                        ++count;
-                        for (int j = 0; j < k; ++j)
-                            for (int ch = 0; ch < 3; ++ch)
-                                sum[size_t(j) * 3 + size_t(ch)] += maps[(size_t(j) * plane + from) * 3 + size_t(ch)];
-                    }
-                if (!count)
-                    continue;
-                for (int j = 0; j < k; ++j)
-                    for (int ch = 0; ch < 3; ++ch)
-                        maps[(size_t(j) * plane + at) * 3 + size_t(ch)] = float(sum[size_t(j) * 3 + size_t(ch)] / count);
-                next[at] = 1;
-            }
-        filled.swap(next);
-    }
-    return maps;
+    const std::vector<glm::vec3> maps = dilated(atlas, values, k, dilate);
+    std::vector<float> out(maps.size() * 3);
+    for (size_t i = 0; i < maps.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            out[i * 3 + size_t(c)] = maps[i][c];
+    return out;
 }
 
 } // namespace hemi::bake

@@ -114,7 +114,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         summary.warnings.push_back(warning);
 
     o.lights.scene_to_world = gltf_scene_to_world();
-    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, progress);
+    const LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
+    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &surfaces, progress);
     summary.rays = sh.rays;
     summary.trace_seconds = sh.trace_seconds;
     summary.resumed = sh.resumed;
@@ -128,6 +129,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     asset.width = w;
     asset.height = h;
     asset.rays = uint32_t(o.bake.rays);
+    asset.bounces = uint32_t(o.bake.bounces);
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
     for (const std::string& name : o.outputs)
@@ -177,6 +179,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["rays_per_texel"] = o.bake.rays;
     j["sun_rays_per_texel"] = o.lights.sun ? o.bake.sun_rays : 0;
     j["seed"] = o.bake.seed;
+    j["bounces"] = o.bake.bounces;
     j["environment"] = o.lights.environment.pixels.empty() ? "uniform" : "image";
     j["rays"] = s.rays;
     j["trace_seconds"] = s.trace_seconds;

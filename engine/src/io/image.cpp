@@ -57,6 +57,11 @@ float srgb_oetf(float x)
     return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
 }
 
+float srgb_eotf(float c)
+{
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
 ImageRgba read_exr(const std::filesystem::path& path)
 {
     std::error_code ec;

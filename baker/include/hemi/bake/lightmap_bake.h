@@ -53,18 +53,51 @@ struct LightmapLights
     glm::vec3 environment_radiance(const glm::vec3& d) const;
 };
 
+// What a ray that hits the scene sees there: per triangle, its material's albedo (base colour factor times
+// the sRGB-decoded base colour texture, linear RGB) and emission (emissive factor times the emissive
+// texture), looked up bilinearly at the hit's UV set with KHR_texture_transform and the sampler's wrap modes;
+// and whether the material is double-sided (a back-face hit of a single-sided one carries no light).
+class LightmapSurfaces
+{
+public:
+    // Decodes every image once. Throws io::FormatError naming a corrupt image, std::invalid_argument for a
+    // primitive out of range or a material index out of range.
+    LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::Material>& materials,
+                     const std::vector<io::EncodedImage>& images, const std::vector<io::Primitive>& primitives);
+
+    glm::vec3 albedo(uint32_t triangle, float u, float v) const;   // Embree's barycentrics of the hit
+    glm::vec3 emission(uint32_t triangle, float u, float v) const;
+    bool double_sided(uint32_t triangle) const;
+    bool emissive() const { return emissive_; } // any material emits
+    const std::vector<io::Material>& materials() const { return materials_; }
+    const std::vector<io::ImageRgba8>& images() const { return images_; }
+
+private:
+    glm::vec4 sample(const io::TextureRef& t, uint32_t triangle, float u, float v, bool srgb) const;
+    const io::Mesh* mesh_;
+    std::vector<io::Material> materials_;
+    std::vector<io::ImageRgba8> images_;
+    std::vector<uint32_t> material_of_;
+    bool emissive_ = false;
+};
+
 struct LightmapBakeOptions
 {
     int rays = 256;     // hemisphere rays per texel for the environment
     int sun_rays = 16;  // shadow rays per texel towards the sun's disc
     uint64_t seed = 1;
     float ray_offset = 1e-4f; // of the scene's diagonal: how far ray origins leave the surface
+    // Passes of indirect light: a ray that hits a surface carries albedo / pi times the irradiance the
+    // previous pass left at that point (looked up in the atlas at the hit's TEXCOORD_1, bilinearly), so B
+    // bounces add B passes; with surfaces, what a ray hits also emits (in the first pass).
+    int bounces = 0;
     std::filesystem::path checkpoint; // empty: none
     double checkpoint_seconds = 30.0;
 };
 
 struct LightmapProgress
 {
+    int pass = 0, passes = 1; // 0: direct light; 1..B: bounces
     uint64_t texels_done = 0, texels = 0;
     std::string checkpoint_error;
 };
@@ -80,9 +113,10 @@ struct LightmapSh
     std::string checkpoint_error;
 };
 
-// Throws std::invalid_argument for bad options or lights (non-finite values, a sun direction of zero length).
+// Throws std::invalid_argument for bad options or lights (non-finite values, a sun direction of zero length,
+// bounces without surfaces). `surfaces` may be null: hits are then black (no emission, no bounces).
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
-                            const LightmapBakeOptions& options,
+                            const LightmapBakeOptions& options, const LightmapSurfaces* surfaces = nullptr,
                             const std::function<void(const LightmapProgress&)>& progress = {});
 
 // The lightmap outputs besides math::bases(): "plain", the non-directional lightmap (K = 1: the irradiance at

@@ -125,5 +125,7 @@ void write_png(const std::filesystem::path& path, const ImageRgba8& image);
 
 // sRGB transfer function (IEC 61966-2-1) for one linear value in [0, 1].
 float srgb_oetf(float linear);
+// Its inverse: the linear value of an sRGB-encoded one in [0, 1].
+float srgb_eotf(float encoded);
 
 } // namespace hemi::io
