@@ -153,6 +153,10 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
         throw std::invalid_argument("bounces " + std::to_string(o.bounces) + " is not in [0, 16]");
     if (!finite3(l.uniform) || !std::isfinite(l.environment_scale))
         throw std::invalid_argument("the environment's radiance must be finite");
+    for (const io::PunctualLight& p : l.punctual)
+        if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) || !finite3(p.direction) ||
+            glm::length(p.direction) < 1e-6f)
+            throw std::invalid_argument("punctual light '" + p.name + "' has a value that is not finite");
     if (l.sun)
     {
         if (!finite3(l.sun_direction) || glm::length(l.sun_direction) < 1e-6f)
@@ -176,6 +180,9 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
     key.add_array(std::span<const float>(l.environment.pixels)).add_value(l.environment_scale);
     key.add_value(l.sun).add_value(l.sun_direction).add_value(l.sun_irradiance).add_value(l.sun_diameter_degrees);
     key.add_value(l.scene_to_world);
+    for (const io::PunctualLight& p : l.punctual)
+        key.add_value(int(p.type)).add_value(p.color).add_value(p.intensity).add_value(p.range).add_value(p.inner_cone)
+            .add_value(p.outer_cone).add_value(p.position).add_value(p.direction);
     key.add_value(o.rays).add_value(o.sun_rays).add_value(o.seed).add_value(o.ray_offset).add_value(o.bounces);
     key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
     for (const io::Material& m : materials)
@@ -350,6 +357,40 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
                 add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
             }
+        if (pass == 0)
+            for (const io::PunctualLight& p : lights.punctual)
+            {
+                glm::vec3 d;
+                float distance = INFINITY;
+                glm::vec3 e = p.color * p.intensity;
+                if (p.type == io::PunctualLight::Type::Directional)
+                    d = -glm::normalize(p.direction);
+                else
+                {
+                    const glm::vec3 to = p.position - t.position;
+                    distance = glm::length(to);
+                    if (!(distance > 0.0f))
+                        continue;
+                    d = to / distance;
+                    float falloff = 1.0f / (distance * distance);
+                    if (p.range > 0.0f)
+                        falloff *= std::clamp(1.0f - std::pow(distance / p.range, 4.0f), 0.0f, 1.0f);
+                    if (p.type == io::PunctualLight::Type::Spot)
+                    {
+                        const float scale = 1.0f / std::max(0.001f, std::cos(p.inner_cone) - std::cos(p.outer_cone));
+                        const float cd = glm::dot(glm::normalize(p.direction), -d);
+                        const float a = std::clamp((cd - std::cos(p.outer_cone)) * scale, 0.0f, 1.0f);
+                        falloff *= a * a;
+                    }
+                    e *= falloff;
+                }
+                if (e == glm::vec3(0.0f) || glm::dot(d, t.geometric_normal) <= 0.0f)
+                    continue;
+                // The shadow ray stops short of the light (it must not hit geometry behind it).
+                if (scene.occluded(origin, d, 0.0f, std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+                    continue;
+                add(d, glm::dvec3(e));
+            }
         math::Sh9Rgb radiance;
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
@@ -371,7 +412,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         state = *resumed;
         out.resumed = true;
     }
-    const uint64_t rays_per_texel = uint64_t(o.rays) + (lights.sun ? uint64_t(o.sun_rays) : 0);
+    const uint64_t rays_per_texel =
+        uint64_t(o.rays) + (lights.sun ? uint64_t(o.sun_rays) : 0) + uint64_t(lights.punctual.size());
     const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, n));
     const auto t0 = std::chrono::steady_clock::now();
     for (int pass = int(state.pass); pass < passes; ++pass)

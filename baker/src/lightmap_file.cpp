@@ -114,6 +114,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         summary.warnings.push_back(warning);
 
     o.lights.scene_to_world = gltf_scene_to_world();
+    o.lights.punctual = scene.lights; // in the mesh's (scene) space already
+    summary.lights = scene.lights.size();
     const LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
     const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &surfaces, progress);
     summary.rays = sh.rays;
@@ -181,6 +183,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["seed"] = o.bake.seed;
     j["bounces"] = o.bake.bounces;
     j["environment"] = o.lights.environment.pixels.empty() ? "uniform" : "image";
+    j["punctual_lights"] = s.lights;
     j["rays"] = s.rays;
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;

@@ -404,6 +404,10 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     summary.primitives = asset.primitives.size();
     summary.images = asset.images.size();
     summary.warnings = scene.warnings;
+    if (!scene.lights.empty())
+        summary.warnings.push_back(std::to_string(scene.lights.size()) +
+                                   " KHR_lights_punctual light(s) ignored: PRT relights the scene from distant "
+                                   "environments at run time (hemi-bake lightmap bakes them)");
     io::write_prt_asset(asset_path, asset);
     remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
     return summary;

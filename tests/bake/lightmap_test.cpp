@@ -474,3 +474,76 @@ TEST(LightmapBake, ClosedRoomFurnaceAddsEachBounce)
                              first.irradiance.size() * sizeof(first.irradiance[0])));
     remove_checkpoint(o.checkpoint);
 }
+
+// glTF punctual lights: a point light's SH9 is its I / d^2 E y(d) from each texel's sample point (inverse
+// square), a range windows it as glTF recommends, a spot's cone follows glTF's smooth factor, a directional
+// light gives its intensity; all typed here from the KHR_lights_punctual specification.
+TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
+{
+    const Mesh m = plane(2);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 12, 12, report);
+    LightmapBakeOptions o;
+    o.rays = 4;
+    auto bake_one = [&](const hemi::io::PunctualLight& l) {
+        LightmapLights lights;
+        lights.uniform = glm::vec3(0.0f);
+        lights.punctual = {l};
+        return bake_lightmap_sh(m, a, lights, o);
+    };
+    using T = hemi::io::PunctualLight::Type;
+    hemi::io::PunctualLight point;
+    point.type = T::Point;
+    point.color = glm::vec3(1.0f, 0.5f, 0.25f);
+    point.intensity = 10.0f;
+    point.position = glm::vec3(0.3f, -0.2f, 1.5f);
+    hemi::io::PunctualLight ranged = point;
+    ranged.range = 2.0f;
+    hemi::io::PunctualLight spot = point;
+    spot.type = T::Spot;
+    spot.position = glm::vec3(0.0f, 0.0f, 2.0f);
+    spot.direction = glm::vec3(0.0f, 0.0f, -1.0f);
+    spot.inner_cone = 0.15f;
+    spot.outer_cone = 0.4f;
+    hemi::io::PunctualLight sun = point;
+    sun.type = T::Directional;
+    sun.direction = glm::normalize(glm::vec3(-0.2f, 0.1f, -1.0f));
+    int lit_partly = 0, dark = 0;
+    for (const hemi::io::PunctualLight& l : {point, ranged, spot, sun})
+    {
+        const LightmapSh sh = bake_one(l);
+        for (size_t i = 0; i < a.texels.size(); ++i)
+        {
+            const glm::dvec3 p(a.texels[i].position);
+            glm::dvec3 d;
+            double e = l.intensity;
+            if (l.type == T::Directional)
+                d = -glm::dvec3(l.direction);
+            else
+            {
+                const glm::dvec3 to = glm::dvec3(l.position) - p;
+                const double dist = glm::length(to);
+                d = to / dist;
+                e /= dist * dist;
+                if (l.range > 0)
+                    e *= std::clamp(1.0 - std::pow(dist / l.range, 4.0), 0.0, 1.0);
+                if (l.type == T::Spot)
+                {
+                    const double cd = glm::dot(glm::dvec3(l.direction), -d);
+                    const double x = std::clamp((cd - std::cos(double(l.outer_cone))) /
+                                                    (std::cos(double(l.inner_cone)) - std::cos(double(l.outer_cone))),
+                                                0.0, 1.0);
+                    e *= x * x;
+                    lit_partly += x > 0.0 && x < 1.0;
+                    dark += x == 0.0;
+                }
+            }
+            const std::array<double, 9> y = sh9(d);
+            for (int j = 0; j < 9; ++j)
+                ASSERT_NEAR(sh.irradiance[i][size_t(j)].y, 0.5 * e * kA[j] * y[size_t(j)], 2e-5 * std::max(1.0, e))
+                    << "light " << int(l.type) << " texel " << i << " coefficient " << j;
+        }
+    }
+    EXPECT_GT(lit_partly, 10) << "the spot's edge crosses the floor";
+    EXPECT_GT(dark, 10) << "part of the floor is outside the spot's cone";
+}

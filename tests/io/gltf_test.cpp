@@ -723,7 +723,7 @@ TEST(GltfReader, UnsupportedFeaturesAreNamedInWarnings)
              h.j["extensionsUsed"] = {"KHR_lights_punctual"};
              h.j["extensions"] = json::parse(R"({"KHR_lights_punctual": {"lights": [{"type": "point"}]}})");
          },
-         "KHR_lights_punctual ignored"},
+         "light(s) that no node places: ignored"},
         {"lines",
          [](Handmade& h)
          {
@@ -819,6 +819,53 @@ TEST(GltfReader, UnsupportedFeaturesAreNamedInWarnings)
 }
 
 // What makes the geometry unreadable is an error naming the file and the feature.
+// KHR_lights_punctual: each light a node places, in scene space with glTF's units, and bad lights refused.
+TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
+{
+    Handmade h = handmade_quad();
+    h.j["extensionsUsed"] = {"KHR_lights_punctual"};
+    h.j["extensions"] = json::parse(R"({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1, 0.5, 0.25], "intensity": 40, "range": 12, "name": "bulb"},
+        {"type": "spot", "intensity": 7, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}},
+        {"type": "directional", "intensity": 3}]}})");
+    // A point light 2 up, a spot turned +90 degrees about x under a parent moved by (1, 0, 0) (its -Z points
+    // along +y), and a directional light with no transform (pointing along -z).
+    h.j["nodes"].push_back({{"translation", {0, 2, 0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    h.j["nodes"].push_back({{"translation", {1, 0, 0}}, {"children", {3}}});
+    h.j["nodes"].push_back({{"rotation", {0.7071068, 0, 0, 0.7071068}},
+                            {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
+    h.j["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}});
+    h.j["scenes"][0]["nodes"] = {0, 1, 2, 4};
+    const hemi::io::GltfScene s = hemi::io::read_gltf(h.save("lights"));
+    ASSERT_EQ(s.lights.size(), 3u);
+    using T = hemi::io::PunctualLight::Type;
+    EXPECT_EQ(s.lights[0].type, T::Point);
+    EXPECT_EQ(s.lights[0].name, "bulb");
+    EXPECT_EQ(s.lights[0].color, glm::vec3(1, 0.5f, 0.25f));
+    EXPECT_FLOAT_EQ(s.lights[0].intensity, 40.0f);
+    EXPECT_FLOAT_EQ(s.lights[0].range, 12.0f);
+    EXPECT_EQ(s.lights[0].position, glm::vec3(0, 2, 0));
+    EXPECT_EQ(s.lights[1].type, T::Spot);
+    EXPECT_NEAR(glm::length(s.lights[1].position - glm::vec3(1, 0, 0)), 0.0f, 1e-6f);
+    EXPECT_NEAR(glm::length(s.lights[1].direction - glm::vec3(0, 1, 0)), 0.0f, 1e-5f);
+    EXPECT_FLOAT_EQ(s.lights[1].inner_cone, 0.2f);
+    EXPECT_FLOAT_EQ(s.lights[1].outer_cone, 0.6f);
+    EXPECT_EQ(s.lights[2].type, T::Directional);
+    EXPECT_EQ(s.lights[2].direction, glm::vec3(0, 0, -1));
+    for (const std::string& w : s.warnings)
+        EXPECT_EQ(w.find("light"), std::string::npos) << w;
+
+    Handmade bad = h;
+    bad.j["nodes"][4]["extensions"]["KHR_lights_punctual"]["light"] = 5;
+    expect_error_naming(bad.save("light_missing"), "light 5 does not exist");
+    bad = h;
+    bad.j["extensions"]["KHR_lights_punctual"]["lights"][1]["spot"]["innerConeAngle"] = 0.9;
+    expect_error_naming(bad.save("light_cone"), "cone angles");
+    bad = h;
+    bad.j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = -1;
+    expect_error_naming(bad.save("light_negative"), "intensity");
+}
+
 TEST(GltfReader, UnreadableFeaturesAreErrorsNamingThem)
 {
     auto required = [](const std::string& ext)

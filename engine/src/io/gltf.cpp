@@ -144,11 +144,11 @@ class Warnings
 // Extensions hemi reads, and those whose absence only simplifies how the scene looks. Any other extension in
 // extensionsRequired means hemi cannot know what the file's data mean: a FormatError.
 const std::set<std::string> kSupportedExtensions = {"KHR_texture_transform", "KHR_mesh_quantization",
-                                                    "KHR_materials_emissive_strength"};
+                                                    "KHR_materials_emissive_strength", "KHR_lights_punctual"};
 bool appearance_only(const std::string& ext)
 {
     static const std::set<std::string> known = {
-        "KHR_lights_punctual", "KHR_texture_basisu",     "EXT_texture_webp",
+        "KHR_texture_basisu",     "EXT_texture_webp",
         "EXT_texture_avif",    "MSFT_texture_dds",       "KHR_xmp",
         "KHR_xmp_json_ld",     "EXT_lights_image_based", "KHR_animation_pointer"};
     return ext.rfind("KHR_materials_", 0) == 0 || known.count(ext) != 0;
@@ -294,6 +294,7 @@ struct Reader
     bool any_uvs1 = false;
     std::vector<std::string> without_uvs1; // primitives lacking TEXCOORD_1 ("mesh 2 primitive 0")
     size_t skipped = 0;                    // point and line primitives
+    bool lights_placed = false;            // a node placed a KHR_lights_punctual light
 
     [[noreturn]] void fail(const std::string& what) const { throw FormatError(file + ": " + what); }
 
@@ -930,9 +931,62 @@ struct Reader
                     warnings.add("EXT_mesh_gpu_instancing", "EXT_mesh_gpu_instancing ignored: node " +
                                                                 std::to_string(item.node) + " is drawn once");
             }
+            if (const auto light = n.extensions.find("KHR_lights_punctual"); light != n.extensions.end())
+                add_light(item.node, light->second, world);
             for (auto it = n.children.rbegin(); it != n.children.rend(); ++it)
                 stack.push_back({*it, item.node, world});
         }
+    }
+
+    // A node's KHR_lights_punctual reference: the light, checked, placed by the node's world transform.
+    void add_light(int node, const tinygltf::Value& ext, const glm::mat4& world)
+    {
+        const std::string where = "node " + std::to_string(node) + " KHR_lights_punctual";
+        if (!ext.IsObject() || !ext.Has("light") || !ext.Get("light").IsNumber())
+            fail(where + ": no light index");
+        const int index = ext.Get("light").GetNumberAsInt();
+        if (index < 0 || size_t(index) >= model.lights.size())
+            fail(where + ": light " + std::to_string(index) + " does not exist (the file has " +
+                 std::to_string(model.lights.size()) + ")");
+        const tinygltf::Light& l = model.lights[size_t(index)];
+        const std::string what = "light " + std::to_string(index) + (l.name.empty() ? "" : " (" + l.name + ")");
+        PunctualLight out;
+        out.name = l.name;
+        if (l.type == "directional")
+            out.type = PunctualLight::Type::Directional;
+        else if (l.type == "point")
+            out.type = PunctualLight::Type::Point;
+        else if (l.type == "spot")
+            out.type = PunctualLight::Type::Spot;
+        else
+            fail(what + ": unknown type '" + l.type + "'");
+        if (!l.color.empty())
+        {
+            if (l.color.size() != 3)
+                fail(what + ": color must have 3 components");
+            out.color = glm::vec3(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+        }
+        out.intensity = float(l.intensity);
+        out.range = float(l.range);
+        out.inner_cone = float(l.spot.innerConeAngle);
+        out.outer_cone = float(l.spot.outerConeAngle);
+        if (!std::isfinite(out.color.r) || !std::isfinite(out.color.g) || !std::isfinite(out.color.b) ||
+            out.color.r < 0 || out.color.g < 0 || out.color.b < 0)
+            fail(what + ": color must be finite and not negative");
+        if (!std::isfinite(out.intensity) || out.intensity < 0.0f)
+            fail(what + ": intensity must be finite and not negative");
+        if (!std::isfinite(out.range) || out.range < 0.0f)
+            fail(what + ": range must be finite and not negative");
+        if (out.type == PunctualLight::Type::Spot &&
+            !(out.inner_cone >= 0.0f && out.inner_cone < out.outer_cone && out.outer_cone <= float(M_PI / 2) + 1e-6f))
+            fail(what + ": the spot's cone angles must satisfy 0 <= inner < outer <= pi/2");
+        out.position = glm::vec3(world[3]);
+        const glm::vec3 forward = -glm::vec3(world[2]);
+        if (!(glm::length(forward) > 0.0f) || !std::isfinite(out.position.x + out.position.y + out.position.z))
+            fail("node " + std::to_string(node) + " places " + what + " with a degenerate transform");
+        out.direction = glm::normalize(forward);
+        scene.lights.push_back(out);
+        lights_placed = true;
     }
 
     void check_extensions()
@@ -949,11 +1003,7 @@ struct Reader
             fail("requires extension " + ext + ", which hemi does not support");
         }
         for (const std::string& ext : model.extensionsUsed)
-            if (ext == "KHR_lights_punctual")
-                warnings.add(ext,
-                             "KHR_lights_punctual ignored: the scene's lights are not baked (precomputed "
-                             "lighting comes from the environment)");
-            else if (ext == "EXT_meshopt_compression" || ext == "KHR_meshopt_compression")
+            if (ext == "EXT_meshopt_compression" || ext == "KHR_meshopt_compression")
                 warnings.add(ext, ext + " ignored: the uncompressed fallback buffers are read");
         if (!model.animations.empty())
             warnings.add("animations", "animations ignored: the scene is drawn in its rest pose (" +
@@ -1003,6 +1053,9 @@ struct Reader
                         t->texcoord = 0;
                     }
         }
+        if (!model.lights.empty() && !lights_placed)
+            warnings.add("KHR_lights_punctual", "KHR_lights_punctual: " + std::to_string(model.lights.size()) +
+                                                    " light(s) that no node places: ignored");
         scene.warnings = warnings.lines();
         // What this reader builds must be what every consumer of a scene accepts.
         if (std::string p = surface_problem(scene.mesh, scene.materials, scene.images, scene.primitives);

@@ -13,6 +13,7 @@
 // Directions are in world space, z up, like hemi-render's environments.
 
 #include <hemi/bake/lightmap_atlas.h>
+#include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 #include <hemi/io/mesh.h>
 
@@ -43,6 +44,13 @@ struct LightmapLights
     glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun (world)
     glm::vec3 sun_irradiance{0.0f};            // on a surface facing the sun
     float sun_diameter_degrees = 0.53f;        // the disc the shadow rays sample; 0 is a point (hard shadows)
+
+    // glTF punctual lights in the mesh's space (io::GltfScene::lights), one shadow ray each per texel (hard
+    // shadows). A point or spot light of intensity I gives I / d^2 at distance d, times glTF's recommended
+    // range window clamp(1 - (d / range)^4, 0, 1) when it has a range, and a spot light glTF's smooth cone
+    // factor saturate((cos a - cos outer) / (cos inner - cos outer))^2; a directional light gives its
+    // intensity. Times the light's colour.
+    std::vector<io::PunctualLight> punctual;
 
     // The rotation from the mesh's space to the world the lights are given in: identity for a mesh in
     // hemi's z-up world; render::gltf_to_world()'s rotation for a glTF scene (y up), which is what
@@ -154,7 +162,7 @@ struct LightmapFileOptions
 struct LightmapBakeSummary
 {
     uint32_t width = 0, height = 0;
-    size_t triangles = 0, materials = 0, primitives = 0, images = 0;
+    size_t triangles = 0, materials = 0, primitives = 0, images = 0, lights = 0;
     LightmapUvReport uv_report;
     std::vector<std::string> warnings; // the scene reader's and the UV report's
     uint64_t rays = 0;

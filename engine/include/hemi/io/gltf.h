@@ -37,12 +37,35 @@
 namespace hemi::io
 {
 
+// A KHR_lights_punctual light placed by a node, in scene space (the node's world transform applied).
+// Units as glTF's: point and spot intensity in candela (lm/sr), directional in lux (lm/m^2); hemi's lighting
+// unit is glTF's photometric one (a directional light of intensity 1 gives irradiance 1).
+struct PunctualLight
+{
+    enum class Type
+    {
+        Directional,
+        Point,
+        Spot,
+    };
+    Type type = Type::Point;
+    std::string name;
+    glm::vec3 color{1.0f};
+    float intensity = 1.0f;
+    float range = 0.0f;              // 0: infinite (glTF's "undefined")
+    float inner_cone = 0.0f;         // spot: radians, 0 <= inner < outer <= pi/2
+    float outer_cone = 0.785398163f; // pi/4, glTF's default
+    glm::vec3 position{0.0f};        // point, spot
+    glm::vec3 direction{0.0f, 0.0f, -1.0f}; // unit, where the light points (the node's -Z): directional, spot
+};
+
 struct GltfScene
 {
     Mesh mesh;                         // every primitive, in scene space; mesh.uvs1 when any has TEXCOORD_1
     std::vector<Material> materials;   // the file's materials, then a default one when a primitive has none
     std::vector<EncodedImage> images;  // every image a material uses (external, .glb buffer view, data URI)
     std::vector<Primitive> primitives; // ranges of mesh.indices, in order, covering all of them
+    std::vector<PunctualLight> lights; // KHR_lights_punctual lights placed by the scene's nodes
     std::vector<std::string> warnings; // features read as something simpler or ignored, each named once
     bool tangents_generated = false;
 };
