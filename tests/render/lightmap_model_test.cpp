@@ -1,0 +1,225 @@
+// The lightmap material (issue 12, "Done when" line 5): a baked lightmap asset drawn by LightmapModel in one
+// render pass of the caller's, beside a PRT object, equals at sampled pixels a CPU evaluation of the same
+// material: the coefficient maps read bilinearly at TEXCOORD_1 (half floats, as stored), each basis evaluated
+// at the normal-map normal, times albedo / pi. The validation layer is on (GpuTest fails on any message).
+#include "../gpu_fixture.h"
+#include "engine_pass.h"
+
+#include <hemi/bake/lightmap_atlas.h>
+#include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/prt_bake.h>
+#include <hemi/bake/transfer_fold.h>
+#include <hemi/gpu/commands.h>
+#include <hemi/gpu/upload.h>
+#include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
+#include <hemi/math/basis.h>
+#include <hemi/math/sh.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/prt_model.h>
+#include <hemi/render/view/prt_view.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/packing.hpp>
+
+#include <cmath>
+#include <cstring>
+
+namespace
+{
+
+class LightmapMaterial : public hemi::test::GpuTest
+{
+};
+
+constexpr uint32_t W = 160, H = 96, kAtlas = 16;
+
+// A floor z = 0 over [-1, 1]^2 in hemi's world (4 x 4 quads), lightmap UVs over [0, 1]^2 and normal-map UVs
+// twice that (so a shader reading the wrong UV set samples the wrong coefficients); a tilted 1x1 normal map
+// and a coloured base.
+hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm::vec3& albedo, glm::vec3& normal)
+{
+    hemi::io::LightmapAsset a;
+    hemi::io::Mesh& m = a.mesh;
+    const int cells = 4;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i)
+        {
+            const uint32_t base = uint32_t(m.positions.size());
+            const glm::vec2 c[4] = {{float(i) / cells, float(j + 1) / cells}, {float(i + 1) / cells, float(j + 1) / cells},
+                                    {float(i + 1) / cells, float(j) / cells}, {float(i) / cells, float(j) / cells}};
+            for (const glm::vec2& uv : c)
+            {
+                m.positions.emplace_back(2.0f * uv.x - 1.0f, 1.0f - 2.0f * uv.y, 0.0f);
+                m.normals.emplace_back(0, 0, 1);
+                m.tangents.emplace_back(1, 0, 0, 1);
+                m.uvs.push_back(2.0f * uv);
+                m.uvs1.push_back(uv);
+            }
+            m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+        }
+    // The normal map: one texel, (0.3, -0.25, 0.92) encoded.
+    const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.25f, 0.92f));
+    std::vector<uint8_t> texel(4, 255);
+    for (int c = 0; c < 3; ++c)
+        texel[size_t(c)] = uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+    normal = glm::normalize(glm::vec3(texel[0], texel[1], texel[2]) / 255.0f * 2.0f - 1.0f);
+    a.images.push_back({"normal.png", "image/png", hemi::io::encode_png({1, 1, texel})});
+    hemi::io::Material mat;
+    albedo = glm::vec3(0.8f, 0.6f, 0.4f);
+    mat.base_color_factor = glm::vec4(albedo, 1.0f);
+    mat.normal.image = 0;
+    a.materials.push_back(mat);
+    a.primitives.push_back({0, uint32_t(m.indices.size()), 0});
+
+    hemi::bake::LightmapUvReport report;
+    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(m, kAtlas, kAtlas, report);
+    hemi::bake::LightmapLights lights;
+    lights.uniform = glm::vec3(0.3f, 0.35f, 0.4f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.5f, -0.3f, 0.7f));
+    lights.sun_irradiance = glm::vec3(2.0f, 1.8f, 1.5f);
+    // A point light close to the floor: the lighting varies across the atlas (so the UV set matters).
+    hemi::io::PunctualLight bulb;
+    bulb.position = glm::vec3(-0.5f, 0.3f, 0.35f);
+    bulb.intensity = 0.6f;
+    lights.punctual.push_back(bulb);
+    hemi::bake::LightmapBakeOptions o;
+    o.rays = 64;
+    const hemi::bake::LightmapSh sh = hemi::bake::bake_lightmap_sh(m, atlas, lights, o);
+    a.width = a.height = kAtlas;
+    a.covered_texels = uint32_t(atlas.texels.size());
+    for (const std::string& name : outputs)
+        a.outputs.push_back({name, uint32_t(hemi::bake::lightmap_output_size(name)),
+                             hemi::bake::lightmap_maps(name, atlas, sh)});
+    return a;
+}
+
+std::vector<float> floats_of_half(const std::vector<std::byte>& bytes)
+{
+    std::vector<float> out(bytes.size() / 2);
+    for (size_t i = 0; i < out.size(); ++i)
+    {
+        uint16_t h;
+        std::memcpy(&h, bytes.data() + 2 * i, 2);
+        out[i] = glm::unpackHalf1x16(h);
+    }
+    return out;
+}
+
+} // namespace
+
+TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCallersPass)
+{
+    auto& dev = hemi::test::device();
+    const std::vector<std::string> techniques = {"sh9", "hl2", "h4", "h6", "sal4", "plain"};
+    glm::vec3 albedo, normal;
+    const hemi::io::LightmapAsset asset = floor_asset(techniques, albedo, normal);
+
+    // A PRT sphere beside the floor, drawn in the same pass.
+    hemi::io::PrtAsset sphere;
+    sphere.mesh = hemi::io::make_uv_sphere(0.3f, 24, 12);
+    sphere.order = 3;
+    sphere.transfer_kind = 0;
+    sphere.materials.emplace_back();
+    sphere.primitives.push_back({0, uint32_t(sphere.mesh.indices.size()), 0});
+    {
+        hemi::bake::PrtBakeOptions o;
+        o.kind = hemi::bake::TransferKind::Unshadowed;
+        o.order = 3;
+        sphere.techniques.push_back(
+            {"gs", 9, hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(sphere.mesh, o), sphere.mesh, "gs"), {}});
+    }
+
+    const hemi::test::EnginePass engine(W, H, {VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
+    hemi::render::RenderTargetDesc target;
+    target.render_pass = engine.render_pass;
+    target.color_attachments = 2;
+    target.aux_output = true;
+    hemi::render::MaterialSystem system(dev, target);
+    hemi::gpu::UploadBatch upload(dev);
+    hemi::render::LightmapModel floor(system, asset, techniques, upload);
+    hemi::render::PrtModel prt(system, sphere, {"gs", false, 1}, upload);
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -2.2f, 2.2f), glm::vec3(0, 0.1f, 0), 50.0f,
+                                                         float(W) / H);
+    const glm::mat4 identity(1.0f), sphere_model = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.4f, 0.3f));
+    std::vector<glm::vec3> uniform(9, glm::vec3(0.0f));
+    uniform[0] = glm::vec3(2.0f * std::sqrt(float(M_PI)));
+    const hemi::render::PrtInstance instance{sphere_model, uniform, 0.0f};
+
+    for (const std::string& technique : techniques)
+    {
+        const float clear[4] = {0, 0, 0, 0};
+        hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
+            upload.record(cmd);
+            prt.record_transfer(cmd, std::span(&instance, 1));
+            frame.record_update(cmd, f);
+            engine.begin(cmd, clear);
+            floor.draw(cmd, frame.set(), technique, identity);
+            prt.draw(cmd, frame.set(), 0, sphere_model);
+            vkCmdEndRenderPass(cmd);
+        });
+        const std::vector<float> color = floats_of_half(
+            hemi::gpu::read_image(dev, engine.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL));
+        std::vector<float> aux(size_t(W) * H * 4);
+        {
+            const std::vector<std::byte> b = hemi::gpu::read_image(dev, engine.colors[1], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+            std::memcpy(aux.data(), b.data(), b.size());
+        }
+        const hemi::io::LightmapOutput& out = asset.output(technique);
+        const hemi::math::BasisDesc& basis = hemi::render::lightmap_basis(technique);
+        float b[16];
+        basis.eval(normal, b);
+        auto coefficient = [&](uint32_t k, int x, int y) {
+            x = std::clamp(x, 0, int(kAtlas) - 1);
+            y = std::clamp(y, 0, int(kAtlas) - 1);
+            const float* t = &out.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
+            return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])), glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
+                             glm::unpackHalf1x16(glm::packHalf1x16(t[2])));
+        };
+        int compared = 0, failures = 0, sphere_pixels = 0;
+        for (uint32_t py = 0; py < H; py += 3)
+            for (uint32_t px = 0; px < W; px += 3)
+            {
+                const float* a = &aux[(size_t(py) * W + px) * 4];
+                if (a[3] != 1.0f)
+                    continue;
+                const glm::vec2 uv0(a[0], a[1]);
+                // Both draws are draw id 1: the sphere's pixels are told apart by where it projects (they are
+                // the PRT material's, compared elsewhere), with a margin.
+                const glm::vec4 centre = f.view_projection * sphere_model * glm::vec4(0, 0, 0, 1);
+                const glm::vec2 sp((centre.x / centre.w * 0.5f + 0.5f) * W, (centre.y / centre.w * 0.5f + 0.5f) * H);
+                if (glm::length(glm::vec2(px, py) - sp) < 28.0f)
+                {
+                    ++sphere_pixels;
+                    continue;
+                }
+                const glm::vec2 uv1 = uv0 * 0.5f;
+                const float fx = uv1.x * kAtlas - 0.5f, fy = uv1.y * kAtlas - 0.5f;
+                const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+                const float ax = fx - float(x0), ay = fy - float(y0);
+                glm::vec3 e(0.0f);
+                for (uint32_t k = 0; k < out.k; ++k)
+                {
+                    const glm::vec3 c = glm::mix(glm::mix(coefficient(k, x0, y0), coefficient(k, x0 + 1, y0), ax),
+                                                 glm::mix(coefficient(k, x0, y0 + 1), coefficient(k, x0 + 1, y0 + 1), ax), ay);
+                    e += c * b[k];
+                }
+                const glm::vec3 want = albedo * e / float(M_PI);
+                ++compared;
+                for (int ch = 0; ch < 3; ++ch)
+                {
+                    const float got = color[(size_t(py) * W + px) * 4 + size_t(ch)];
+                    if (std::abs(got - want[ch]) > 0.005f * std::abs(want[ch]) + 2e-3f && failures++ < 5)
+                        ADD_FAILURE() << technique << " pixel " << px << "," << py << " uv1 " << uv1.x << "," << uv1.y
+                                      << " ch " << ch << ": GPU " << got << ", CPU " << want[ch];
+                }
+            }
+        EXPECT_GT(compared, 200) << technique;
+        EXPECT_GT(sphere_pixels, 20) << technique << ": the PRT object is drawn in the same pass";
+    }
+}
