@@ -28,9 +28,13 @@
 
 #include "models.h"
 #include "relief.h"
+#include "level.h"
 
 #include <hemi/bake/cpca.h>
 #include <hemi/bake/embree_scene.h>
+#include <hemi/bake/lightmap_atlas.h>
+#include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/ray_generator.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/mesh.h>
@@ -50,6 +54,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <cstdint>
@@ -568,6 +573,77 @@ void ssbump_tracers(benchmark::State& state)
     state.counters["horizon_vs_embree"] = embree_s / horizon_s;
 }
 
+// The peak resident memory of this process so far (VmHWM), in MiB; 0 where /proc is not there.
+double peak_rss_mib()
+{
+    std::FILE* f = std::fopen("/proc/self/status", "r");
+    if (!f)
+        return 0.0;
+    char line[256];
+    double kib = 0.0;
+    while (std::fgets(line, sizeof line, f))
+        if (std::sscanf(line, "VmHWM: %lf kB", &kib) == 1)
+            break;
+    std::fclose(f);
+    return kib / 1024.0;
+}
+
+// Issue 12's bake benchmark: the sample's level (a room with openings and pillars, 1280^2 atlas, over 1M
+// covered texels) under a uniform sky and a sun, 2 bounces, 64 rays per texel and pass; its time, rays/s,
+// texels/s and peak memory. Then Embree's own throughput on the bake's first-pass hemisphere rays of the
+// first 2^16 texels (rtcOccluded1 only, the same directions and origins), and the ratio.
+void lightmap_level(benchmark::State& state)
+{
+    const hemi::io::GltfScene scene = hemi::samples::make_level(1280);
+    hemi::bake::LightmapUvReport report;
+    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, 1280, 1280, report);
+    const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
+    hemi::bake::LightmapLights lights;
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f)); // the mesh's y-up space
+    lights.sun_irradiance = glm::vec3(6.0f);
+    hemi::bake::LightmapBakeOptions o;
+    o.rays = 64;
+    o.bounces = 2;
+    hemi::bake::LightmapSh sh;
+    for (auto _ : state)
+    {
+        sh = hemi::bake::bake_lightmap_sh(scene.mesh, atlas, lights, o, &surfaces);
+        state.SetIterationTime(sh.trace_seconds);
+    }
+    const double peak = peak_rss_mib();
+    // Embree alone on the same rays.
+    const hemi::bake::EmbreeScene embree(scene.mesh);
+    const float offset = embree.ray_offset(o.ray_offset);
+    const uint32_t n = std::min<uint32_t>(uint32_t(atlas.texels.size()), 1u << 16);
+    std::atomic<uint64_t> blocked{0};
+    const auto t0 = std::chrono::steady_clock::now();
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 64), [&](const tbb::blocked_range<uint32_t>& r) {
+        uint64_t b = 0;
+        for (uint32_t i = r.begin(); i != r.end(); ++i)
+        {
+            const hemi::bake::LightmapTexel& t = atlas.texels[i];
+            const glm::vec3 origin = hemi::bake::offset_ray_origin(t.position, t.geometric_normal, offset);
+            for (int k = 0; k < o.rays; ++k)
+            {
+                const glm::vec3 h = hemi::bake::hemisphere_direction(o.seed, uint64_t(t.y) * atlas.width + t.x, k, o.rays);
+                b += embree.occluded(origin, glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal));
+            }
+        }
+        blocked += b;
+    });
+    const double embree_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double embree_rays_per_s = double(n) * o.rays / embree_s;
+    state.counters["covered_texels"] = double(atlas.texels.size());
+    state.counters["seconds"] = sh.trace_seconds;
+    state.counters["rays_per_s"] = double(sh.rays) / sh.trace_seconds;
+    state.counters["texels_per_s"] = double(atlas.texels.size()) * (1 + o.bounces) / sh.trace_seconds;
+    state.counters["peak_rss_MiB"] = peak;
+    state.counters["embree_rays_per_s"] = embree_rays_per_s;
+    state.counters["embree_ratio"] = embree_rays_per_s / (double(sh.rays) / sh.trace_seconds);
+    state.counters["blocked_fraction"] = double(blocked) / (double(n) * o.rays);
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -621,6 +697,10 @@ int main(int argc, char** argv)
         ->UseManualTime()
         ->Iterations(1);
     benchmark::RegisterBenchmark("ssbump/tracers/1024x1024", ssbump_tracers)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
+        ->Iterations(1);
+    benchmark::RegisterBenchmark("lightmap/bake/level/1280x1280/bounces:2/rays:64", lightmap_level)
         ->Unit(benchmark::kMillisecond)
         ->UseManualTime()
         ->Iterations(1);

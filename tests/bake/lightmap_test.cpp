@@ -2,10 +2,12 @@
 // call them: dense sampling of UV triangles, analytic furnace and single-light cases with SH typed here, and
 // a least-squares projection by this file's own quadrature.
 #include "../temp_dir.h"
+#include "level.h"
 
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/io/material.h>
 #include <hemi/math/basis.h>
 
 #include <gtest/gtest.h>
@@ -546,4 +548,32 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
     }
     EXPECT_GT(lit_partly, 10) << "the spot's edge crosses the floor";
     EXPECT_GT(dark, 10) << "part of the floor is outside the spot's cone";
+}
+
+// The sample's level (samples/irradiance_normalmap/level.h, also hemi-bench's): its lightmap charts do not
+// overlap, stay inside the atlas at one texel density, and cover every quad; its walls face into the room.
+TEST(LightmapLevel, ChartsArePackedWithoutOverlapAtOneDensity)
+{
+    const hemi::io::GltfScene level = hemi::samples::make_level(256);
+    EXPECT_TRUE(hemi::io::surface_problem(level.mesh, level.materials, level.images, level.primitives).empty());
+    std::vector<TriangleRange> ranges;
+    for (uint32_t t = 0; t < level.mesh.indices.size() / 3; t += 2)
+        ranges.push_back({t, 2, "quad " + std::to_string(t / 2)});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(level.mesh, 256, 256, report, ranges);
+    EXPECT_TRUE(report.ok()) << report.problems[0];
+    EXPECT_EQ(report.outside, 0u);
+    EXPECT_EQ(report.degenerate, 0u);
+    EXPECT_TRUE(report.warnings.empty()) << report.warnings[0];
+    EXPECT_LT(report.max_texel_size, 1.2f * report.min_texel_size) << "one texel density for every quad";
+    EXPECT_GT(a.texels.size(), size_t(0.5 * 256 * 256));
+    // Every normal faces the room's inside or, for a pillar, away from the pillar's axis.
+    for (size_t v = 0; v < level.mesh.positions.size(); ++v)
+    {
+        const glm::vec3 p = level.mesh.positions[v], n = level.mesh.normals[v];
+        const glm::vec3 pillar(p.x < 0 ? -2.0f : 2.0f, p.y, p.z < 0 ? -2.0f : 2.0f);
+        const bool on_pillar = std::abs(p.x - pillar.x) <= 0.31f && std::abs(p.z - pillar.z) <= 0.31f;
+        const glm::vec3 centre = on_pillar ? pillar : glm::vec3(0.0f, 1.5f, 0.0f);
+        EXPECT_EQ(glm::dot(n, p - centre) > 0.0f, on_pillar) << "vertex " << v;
+    }
 }

@@ -1,0 +1,134 @@
+#include "level.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::samples
+{
+namespace
+{
+
+struct Quad
+{
+    glm::vec3 p0, u, v; // corner and edges (counter-clockwise seen from the front: u then v)
+    uint32_t material;
+};
+
+} // namespace
+
+io::GltfScene make_level(uint32_t atlas)
+{
+    if (atlas < 64)
+        throw std::invalid_argument("make_level: atlas " + std::to_string(atlas) + " is smaller than 64");
+    // glTF space: y up. The room spans x, z in [-4, 4], y in [0, 3]; the walls face inwards.
+    std::vector<Quad> quads;
+    const float h = 3.0f, s = 4.0f;
+    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0});  // floor, facing +y
+    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0});  // ceiling, facing -y
+    // Wall at z = -s (facing +z) in full; wall at z = +s (facing -z) with a window from x -1 to 1, y 1 to 2.
+    quads.push_back({{-s, 0, -s}, {2 * s, 0, 0}, {0, h, 0}, 1});
+    quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});       // right of the window
+    quads.push_back({{-1, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});      // left of the window
+    quads.push_back({{1, 0, s}, {-2, 0, 0}, {0, 1, 0}, 1});              // below it
+    quads.push_back({{1, 2, s}, {-2, 0, 0}, {0, h - 2, 0}, 1});          // above it
+    // Wall at x = -s (facing +x) with a wide opening from z -2 to 2 up to y 2.2; wall at x = +s (facing -x).
+    quads.push_back({{-s, 0, s}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
+    quads.push_back({{-s, 0, -2}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
+    quads.push_back({{-s, 2.2f, 2}, {0, 0, -4}, {0, h - 2.2f, 0}, 2});
+    quads.push_back({{s, 0, -s}, {0, 0, 2 * s}, {0, h, 0}, 3});
+    // Four pillars, 0.6 wide, facing out.
+    for (float px : {-2.0f, 2.0f})
+        for (float pz : {-2.0f, 2.0f})
+        {
+            const float r = 0.3f;
+            quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, h, 0}, 0});   // +z
+            quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, h, 0}, 0});  // -z
+            quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, h, 0}, 0});  // +x
+            quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, h, 0}, 0});   // -x
+        }
+
+    // Pack the charts: each quad's size in texels at the density that fills about 70% of the atlas, shelf by
+    // shelf (tallest first), with a gap of 2 texels.
+    double area = 0.0;
+    for (const Quad& q : quads)
+        area += double(glm::length(q.u)) * double(glm::length(q.v));
+    const double gap = 2.0;
+    double density = std::sqrt(0.7 * double(atlas) * double(atlas) / area); // texels per unit
+    std::vector<size_t> order(quads.size());
+    for (size_t i = 0; i < order.size(); ++i)
+        order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return glm::length(quads[a].v) > glm::length(quads[b].v);
+    });
+    std::vector<glm::vec4> rect(quads.size()); // u0, v0, u1, v1 in texels
+    for (int attempt = 0;; ++attempt)
+    {
+        double x = gap, y = gap, shelf = 0.0;
+        bool fits = true;
+        for (size_t i : order)
+        {
+            const double w = std::ceil(glm::length(quads[i].u) * density), t = std::ceil(glm::length(quads[i].v) * density);
+            if (x + w + gap > atlas)
+            {
+                x = gap;
+                y += shelf + gap;
+                shelf = 0.0;
+            }
+            rect[i] = glm::vec4(float(x), float(y), float(x + w), float(y + t));
+            x += w + gap;
+            shelf = std::max(shelf, t);
+            fits = fits && y + t + gap <= atlas;
+        }
+        if (fits)
+            break;
+        density *= 0.95;
+        if (attempt > 60)
+            throw std::runtime_error("make_level: the charts do not fit");
+    }
+
+    io::GltfScene scene;
+    io::Mesh& m = scene.mesh;
+    const glm::vec4 colours[4] = {{0.75f, 0.75f, 0.72f, 1}, {0.8f, 0.25f, 0.2f, 1}, {0.25f, 0.7f, 0.3f, 1},
+                                  {0.3f, 0.35f, 0.8f, 1}};
+    for (int k = 0; k < 4; ++k)
+    {
+        io::Material mat;
+        mat.name = k == 0 ? "plaster" : k == 1 ? "red wall" : k == 2 ? "green wall" : "blue wall";
+        mat.base_color_factor = colours[k];
+        scene.materials.push_back(mat);
+    }
+    // One primitive per material: quads grouped by material.
+    for (uint32_t material = 0; material < 4; ++material)
+    {
+        const uint32_t first = uint32_t(m.indices.size());
+        for (size_t i = 0; i < quads.size(); ++i)
+        {
+            const Quad& q = quads[i];
+            if (q.material != material)
+                continue;
+            const glm::vec3 n = glm::normalize(glm::cross(q.u, q.v));
+            const glm::vec3 t = glm::normalize(q.u);
+            const uint32_t base = uint32_t(m.positions.size());
+            const glm::vec2 corner[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+            for (const glm::vec2& c : corner)
+            {
+                m.positions.push_back(q.p0 + c.x * q.u + c.y * q.v);
+                m.normals.push_back(n);
+                m.tangents.emplace_back(t, 1.0f);
+                // Normal-map UVs in world units; v grows down the image, so up the quad is -v.
+                m.uvs.emplace_back(c.x * glm::length(q.u), -c.y * glm::length(q.v));
+                const glm::vec4& r = rect[i];
+                m.uvs1.emplace_back((r.x + c.x * (r.z - r.x)) / float(atlas), (r.w - c.y * (r.w - r.y)) / float(atlas));
+            }
+            m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+        }
+        scene.primitives.push_back({first, uint32_t(m.indices.size()) - first, material});
+    }
+    return scene;
+}
+
+} // namespace hemi::samples

@@ -1,0 +1,17 @@
+#pragma once
+// The irradiance_normalmap sample's level, made in code (shared with the tests and hemi-bench): a room with
+// window openings in two walls, four pillars, coloured walls, with normal-map UVs (TEXCOORD_0, one unit of
+// world space per UV unit) and lightmap UVs (TEXCOORD_1: every quad its own chart, packed into the unit
+// square at a uniform texel density with a gap between charts). glTF's y-up space, like a scene from a file.
+
+#include <hemi/io/gltf.h>
+
+#include <cstdint>
+
+namespace hemi::samples
+{
+
+// `atlas` is the lightmap size the charts are packed for (their gaps are 2 texels of it).
+io::GltfScene make_level(uint32_t atlas = 512);
+
+} // namespace hemi::samples
