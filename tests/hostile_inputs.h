@@ -72,4 +72,18 @@ inline std::vector<uint8_t> jpeg_with_frame_size(std::vector<uint8_t> jpeg, uint
     return {};
 }
 
+// `jpeg` with its first scan's first component decoding with AC table 2, which no DHT defines: stb_image 2.27
+// decodes with a zeroed table and reads its symbols out of bounds (found by tests/fuzz/fuzz_image's short
+// campaign in CI).
+inline std::vector<uint8_t> jpeg_with_undefined_huffman_table(std::vector<uint8_t> jpeg)
+{
+    for (size_t at = 2; at + 6 < jpeg.size(); ++at)
+        if (jpeg[at] == 0xFF && jpeg[at + 1] == 0xDA) // SOS: length, Ns, then (Cs, Td << 4 | Ta) per component
+        {
+            jpeg[at + 6] = uint8_t((jpeg[at + 6] & 0xF0) | 0x02);
+            return jpeg;
+        }
+    return {};
+}
+
 } // namespace hemi::test

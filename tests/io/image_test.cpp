@@ -516,3 +516,24 @@ TEST(ImageDecode, JpegHuffmanTablesThatAreNoPrefixCodeAreRefused)
         EXPECT_NE(std::string(e.what()).find("not a prefix code"), std::string::npos) << e.what();
     }
 }
+
+// Found by tests/fuzz/fuzz_image's short campaign in CI: a scan whose component decodes with a Huffman table
+// no DHT defines (stb_image then reads a zeroed table's symbols out of bounds). Refused before decoding; a
+// real JPEG (every table it uses defined) still decodes.
+TEST(ImageDecode, JpegScansWithUndefinedHuffmanTablesAreRefused)
+{
+    const std::vector<uint8_t> good = hemi::io::encode_jpeg(smooth(16, 8), 80);
+    const std::vector<uint8_t> hostile = hemi::test::jpeg_with_undefined_huffman_table(good);
+    ASSERT_FALSE(hostile.empty());
+    try
+    {
+        hemi::io::decode_image({"tables.jpg", "image/jpeg", hostile});
+        ADD_FAILURE() << "a scan with an undefined Huffman table was decoded";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("not defined"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("tables.jpg"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(hemi::io::decode_image({"good.jpg", "image/jpeg", good}).width, 16u);
+}

@@ -358,6 +358,7 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
     const size_t n = b.size();
     size_t pos = 2; // after SOI
     bool frame = false, scan = false;
+    bool defined[2][4] = {}; // Huffman tables defined so far: [class: 0 DC, 1 AC][id]
     while (true)
     {
         if (pos >= n)
@@ -414,7 +415,34 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
                                std::to_string(at));
                 if (end - at - 17 < symbols)
                     throw fail("corrupt JPEG: Huffman table overruns its segment at byte " + std::to_string(at));
+                const uint8_t table_class = b[at] >> 4, table_id = b[at] & 0x0F;
+                if (table_class > 1 || table_id > 3)
+                    throw fail("corrupt JPEG: Huffman table of class " + std::to_string(table_class) + " and id " +
+                               std::to_string(table_id) + " at byte " + std::to_string(at));
+                defined[table_class][table_id] = true;
                 at += 17 + symbols;
+            }
+        }
+        if (marker == 0xDA)
+        {
+            // SOS: every component's tables must be defined before the scan that decodes with them. stb_image
+            // decodes with a zeroed table otherwise and indexes its symbols out of bounds (found by
+            // tests/fuzz/fuzz_image). A first DC scan (Ss = 0, Ah = 0) uses DC tables, a scan of AC
+            // coefficients (Se > 0) AC tables; a DC refinement reads plain bits.
+            const size_t components = length >= 3 ? b[pos + 2] : 0;
+            if (components == 0 || length != 6 + 2 * components)
+                throw fail("corrupt JPEG: scan header of length " + std::to_string(length) + " at byte " +
+                           std::to_string(pos));
+            const size_t tail = pos + 3 + 2 * components;
+            const uint8_t ss = b[tail], se = b[tail + 1], ah = b[tail + 2] >> 4;
+            for (size_t c = 0; c < components; ++c)
+            {
+                const uint8_t tables = b[pos + 4 + 2 * c], dc = tables >> 4, ac = tables & 0x0F;
+                const bool uses_dc = ss == 0 && ah == 0, uses_ac = se > 0;
+                if ((uses_dc && (dc > 3 || !defined[0][dc])) || (uses_ac && (ac > 3 || !defined[1][ac])))
+                    throw fail("corrupt JPEG: the scan at byte " + std::to_string(pos) +
+                               " decodes with a Huffman table that is not defined (DC " + std::to_string(dc) +
+                               ", AC " + std::to_string(ac) + ")");
             }
         }
         pos += length;
