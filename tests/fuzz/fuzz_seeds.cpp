@@ -4,6 +4,7 @@
 // Usage: fuzz_seeds OUT_DIR
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
 
 #include "../hostile_inputs.h"
@@ -201,6 +202,20 @@ int main(int argc, char** argv)
         const uint64_t sum = XXH64(dup.data(), dup.size() - 8, 0);
         std::memcpy(dup.data() + dup.size() - 8, &sum, 8);
         put(out / "asset/regressions/duplicate_section.hemi", dup);
+    }
+    {
+        // A lightmap asset of the same scene: a 2 x 2 atlas, one output of each kind's size.
+        io::LightmapAsset l;
+        l.mesh = s.mesh;
+        l.mesh.uvs1 = l.mesh.uvs;
+        l.materials = s.materials;
+        l.images = s.images;
+        l.primitives = s.primitives;
+        l.width = l.height = 2;
+        l.outputs.push_back({"plain", 1, std::vector<float>(2 * 2 * 3, 0.5f)});
+        l.outputs.push_back({"h4", 4, std::vector<float>(4 * 2 * 2 * 3, 0.25f)});
+        io::write_lightmap_asset(scratch / "tiny_lightmap.hemi", l);
+        put(out / "asset/corpus/tiny_lightmap.hemi", slurp(scratch / "tiny_lightmap.hemi"));
     }
     fs::remove_all(scratch);
     std::printf("fuzz_seeds: wrote %s\n", out.string().c_str());
