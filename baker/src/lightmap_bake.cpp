@@ -14,6 +14,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cstddef>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -31,20 +32,76 @@ glm::vec3 LightmapLights::environment_radiance(const glm::vec3& scene_d) const
     const uint32_t w = environment.width, h = environment.height;
     const double phi = std::atan2(double(d.y), double(d.x));
     const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0));
-    const double fx = (0.5 - phi / (2.0 * M_PI)) * w - 0.5, fy = theta / M_PI * h - 0.5;
-    const double x0 = std::floor(fx), y0 = std::floor(fy);
-    const float tx = float(fx - x0), ty = float(fy - y0);
-    auto texel = [&](int64_t x, int64_t y) {
-        x = ((x % int64_t(w)) + int64_t(w)) % int64_t(w); // the seam wraps
-        y = std::clamp<int64_t>(y, 0, int64_t(h) - 1);   // the poles clamp
-        const float* p = environment.at(uint32_t(x), uint32_t(y));
-        return glm::vec3(p[0], p[1], p[2]);
-    };
-    const int64_t ix = int64_t(x0), iy = int64_t(y0);
-    const glm::vec3 top = texel(ix, iy) * (1.0f - tx) + texel(ix + 1, iy) * tx;
-    const glm::vec3 bottom = texel(ix, iy + 1) * (1.0f - tx) + texel(ix + 1, iy + 1) * tx;
-    return (top * (1.0f - ty) + bottom * ty) * environment_scale;
+    // Piecewise constant over the pixels (what math::project_equirect integrates, and what the importance
+    // sampler's density is proportional to).
+    double u = 0.5 - phi / (2.0 * M_PI);
+    u -= std::floor(u);
+    const uint32_t x = std::min(w - 1, uint32_t(u * w));
+    const uint32_t y = std::min(h - 1, uint32_t(theta / M_PI * h));
+    const float* p = environment.at(x, y);
+    return glm::vec3(p[0], p[1], p[2]) * environment_scale;
 }
+
+namespace
+{
+
+// Directions distributed like an equirect environment's luminance times each pixel's solid angle: a row by
+// the marginal distribution, a pixel of it by the conditional one, then uniformly in solid angle inside the
+// pixel. pdf(d) = weight(pixel) / (sum of weights * solid angle(pixel)). Directions in world space.
+class EnvironmentSampler
+{
+public:
+    explicit EnvironmentSampler(const io::ImageRgba& env) : w_(env.width), h_(env.height)
+    {
+        weight_.resize(size_t(w_) * h_);
+        row_cdf_.assign(h_ + 1, 0.0);
+        column_cdf_.assign(size_t(h_) * (w_ + 1), 0.0);
+        for (uint32_t y = 0; y < h_; ++y)
+        {
+            const double solid = (2.0 * M_PI / w_) * (std::cos(M_PI * y / h_) - std::cos(M_PI * (y + 1) / h_));
+            double row = 0.0;
+            for (uint32_t x = 0; x < w_; ++x)
+            {
+                const float* p = env.at(x, y);
+                const double lum = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+                const double mean = (double(p[0]) + p[1] + p[2]) / 3.0;
+                // Luminance, kept above zero wherever any channel shines (a pure blue pixel is still sampled).
+                const double wgt = std::max(0.0, std::max(lum, 0.01 * mean)) * solid;
+                weight_[size_t(y) * w_ + x] = wgt;
+                row += wgt;
+                column_cdf_[size_t(y) * (w_ + 1) + x + 1] = row;
+            }
+            row_cdf_[y + 1] = row_cdf_[y] + row;
+        }
+        total_ = row_cdf_[h_];
+    }
+    bool empty() const { return !(total_ > 0.0); }
+
+    // A direction from three uniform numbers in [0, 1) (and a fourth for the jitter), with its pdf.
+    glm::dvec3 sample(double u0, double u1, double u2, double u3, double& pdf) const
+    {
+        const double target_row = u0 * total_;
+        const uint32_t y = uint32_t(std::min<ptrdiff_t>(
+            h_ - 1, std::upper_bound(row_cdf_.begin() + 1, row_cdf_.end(), target_row) - (row_cdf_.begin() + 1)));
+        const double* cdf = &column_cdf_[size_t(y) * (w_ + 1)];
+        const double target = u1 * cdf[w_];
+        const uint32_t x = uint32_t(std::min<ptrdiff_t>(w_ - 1, std::upper_bound(cdf + 1, cdf + w_ + 1, target) - (cdf + 1)));
+        const double z0 = std::cos(M_PI * y / h_), z1 = std::cos(M_PI * (y + 1) / h_);
+        const double z = z0 + (z1 - z0) * u2;
+        const double phi = M_PI - 2.0 * M_PI * (x + u3) / w_; // u = 0.5 - phi / 2 pi
+        const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double solid = (2.0 * M_PI / w_) * (z0 - z1);
+        pdf = weight_[size_t(y) * w_ + x] / (total_ * solid);
+        return {s * std::cos(phi), s * std::sin(phi), z};
+    }
+
+private:
+    uint32_t w_, h_;
+    std::vector<double> weight_, row_cdf_, column_cdf_;
+    double total_ = 0.0;
+};
+
+} // namespace
 
 LightmapSurfaces::LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::Material>& materials,
                                    const std::vector<io::EncodedImage>& images,
@@ -277,6 +334,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     const uint64_t sun_seed = mix64(o.seed ^ 0x53554e5f5241ull); // independent of the hemisphere rays
     const double weight = 2.0 * M_PI / double(o.rays);
     const int passes = 1 + o.bounces;
+    // An image environment is importance-sampled by its own rays (the hemisphere rays then gather only what
+    // surfaces send); a uniform one is gathered by the hemisphere rays.
+    const bool image_env = !lights.environment.pixels.empty();
+    const EnvironmentSampler env_sampler = image_env ? EnvironmentSampler(lights.environment)
+                                                     : EnvironmentSampler(io::ImageRgba{1, 1, {0, 0, 0, 0}});
+    const uint64_t env_seed = mix64(o.seed ^ 0x454e565f5241ull);
 
     // The finished work: the SH of the completed passes, the pass being gathered, and the irradiance at each
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
@@ -322,14 +385,14 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             const bool needs_hit = surfaces && (pass > 0 || surfaces->emissive());
             if (!needs_hit)
             {
-                if (pass == 0 && !scene.occluded(origin, d))
+                if (pass == 0 && !image_env && !scene.occluded(origin, d))
                     add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
                 continue;
             }
             const std::optional<RayHit> hit = scene.intersect(origin, d);
             if (!hit)
             {
-                if (pass == 0)
+                if (pass == 0 && !image_env)
                     add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
                 continue;
             }
@@ -343,6 +406,27 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight);
         }
+        if (pass == 0 && image_env && !env_sampler.empty())
+            for (int r = 0; r < o.rays; ++r)
+            {
+                // Stratified along the distribution's CDF (turned by a random offset per texel): the split
+                // between a bright sun and the rest of the sky is then nearly exact in every texel.
+                double stratum = (double(r) + double(uniform01(env_seed, item, uint64_t(4 * r)))) / double(o.rays) +
+                                 double(uniform01(env_seed, item, uint64_t(4 * o.rays)));
+                stratum -= std::floor(stratum);
+                // The second dimension on a golden-ratio lattice against the first: low discrepancy in both.
+                double across = double(r) * 0.6180339887498949 + double(uniform01(env_seed, item, uint64_t(4 * o.rays + 1)));
+                across -= std::floor(across);
+                double pdf = 0.0;
+                const glm::dvec3 world = env_sampler.sample(stratum, across,
+                                                            uniform01(env_seed, item, uint64_t(4 * r + 2)),
+                                                            uniform01(env_seed, item, uint64_t(4 * r + 3)), pdf);
+                const glm::vec3 d = glm::normalize(glm::transpose(lights.scene_to_world) * glm::vec3(world));
+                if (!(pdf > 0.0) || glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
+                    scene.occluded(origin, d))
+                    continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
+                add(d, glm::dvec3(lights.environment_radiance(d)) / (pdf * double(o.rays)));
+            }
         if (lights.sun && pass == 0)
             for (int r = 0; r < o.sun_rays; ++r)
             {
@@ -412,8 +496,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         state = *resumed;
         out.resumed = true;
     }
-    const uint64_t rays_per_texel =
-        uint64_t(o.rays) + (lights.sun ? uint64_t(o.sun_rays) : 0) + uint64_t(lights.punctual.size());
+    const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) + (lights.sun ? uint64_t(o.sun_rays) : 0) +
+                                    uint64_t(lights.punctual.size());
     const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, n));
     const auto t0 = std::chrono::steady_clock::now();
     for (int pass = int(state.pass); pass < passes; ++pass)
