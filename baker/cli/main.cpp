@@ -404,6 +404,9 @@ int run_lightmap(LightmapCli& c)
     std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
                 s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0, s.total_seconds,
                 s.resumed ? " (resumed from a checkpoint)" : "");
+    if (s.pushed || s.invalid)
+        std::printf("%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
+                    "their neighbours)\n", s.pushed, s.invalid);
     for (const std::filesystem::path& p : s.exr_files)
         std::printf("wrote %s\n", p.string().c_str());
     if (!c.json.empty())

@@ -256,7 +256,8 @@ namespace
 {
 // Per texel values spread to the whole atlas: covered texels hold theirs, empty ones within `dilate` texels
 // of a chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel.
-std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate)
+std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
+                               std::span<const uint8_t> valid = {})
 {
     const uint32_t w = atlas.width, h = atlas.height;
     const size_t plane = size_t(w) * h;
@@ -264,6 +265,8 @@ std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::
     std::vector<uint8_t> filled(plane, 0);
     for (size_t i = 0; i < atlas.texels.size(); ++i)
     {
+        if (!valid.empty() && !valid[i])
+            continue; // inside geometry: filled from its valid neighbours like an empty texel
         const size_t at = size_t(atlas.texels[i].y) * w + atlas.texels[i].x;
         filled[at] = 1;
         for (int j = 0; j < k; ++j)
@@ -345,6 +348,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
     std::vector<std::array<glm::vec3, 9>> pass_sh(n);
     std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
+    out.valid.assign(n, 1);
+    std::vector<uint8_t> pushed(n, 0);
     std::vector<glm::vec3> previous_map; // `previous` over the whole atlas, dilated, for bilinear lookups
     auto lookup_previous = [&](uint32_t triangle, float bu, float bv) {
         const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
@@ -363,10 +368,51 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                (at(ix, iy + 1) * (1.0f - tx) + at(ix + 1, iy + 1) * tx) * ty;
     };
 
+    // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
+    // or under one, seen from the wall's back) is moved through that surface to its front, so it sees what
+    // the visible side of its footprint sees. Eight rays in the texel's plane, as long as half the footprint's
+    // diagonal, look for the nearest back face.
+    auto is_back_face = [&](uint32_t primitive, const glm::vec3& d) {
+        return glm::dot(scene.geometric_normal(primitive), d) > 0.0f && !(surfaces && surfaces->double_sided(primitive));
+    };
+    std::vector<glm::vec3> origins(n);
+    tbb::parallel_for(uint32_t(0), n, [&](uint32_t i) {
+        const LightmapTexel& t = atlas.texels[i];
+        glm::vec3 p = t.position;
+        const glm::vec3 g = t.geometric_normal;
+        glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
+        if (glm::length(u) < 1e-6f)
+            u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0)) : glm::cross(g, glm::vec3(0, 1, 0));
+        u = glm::normalize(u);
+        const glm::vec3 v = glm::cross(g, u);
+        const float reach = 0.5f * float(M_SQRT2) * t.world_size;
+        const glm::vec3 from = offset_ray_origin(p, g, offset);
+        float nearest = INFINITY;
+        glm::vec3 along(0.0f);
+        for (int k = 0; k < 8; ++k)
+        {
+            const float a = float(k) * float(M_PI) / 4.0f;
+            const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
+            const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
+            if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
+            {
+                nearest = hit->distance;
+                along = d;
+            }
+        }
+        if (std::isfinite(nearest))
+        {
+            p = p + along * (nearest + 4.0f * offset);
+            pushed[i] = 1;
+        }
+        origins[i] = offset_ray_origin(p, g, offset);
+    });
+
     auto texel = [&](uint32_t i, int pass) {
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
-        const glm::vec3 origin = offset_ray_origin(t.position, t.geometric_normal, offset);
+        const glm::vec3 origin = origins[i];
+        int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
         auto add = [&](const glm::vec3& world, const glm::dvec3& radiance) {
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent), glm::dot(world, t.normal));
@@ -382,13 +428,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             const glm::vec3 d = glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal);
             if (glm::dot(d, t.geometric_normal) <= 0.0f)
                 continue; // into its own triangle
-            const bool needs_hit = surfaces && (pass > 0 || surfaces->emissive());
+            // The first pass always finds the closest hit: it counts the back faces a texel sees.
+            const bool needs_hit = pass == 0 || (surfaces && pass > 0);
             if (!needs_hit)
-            {
-                if (pass == 0 && !image_env && !scene.occluded(origin, d))
-                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
                 continue;
-            }
             const std::optional<RayHit> hit = scene.intersect(origin, d);
             if (!hit)
             {
@@ -397,8 +440,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 continue;
             }
             // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
-            const bool front = glm::dot(scene.geometric_normal(hit->primitive), d) < 0.0f;
-            if (!front && !surfaces->double_sided(hit->primitive))
+            if (is_back_face(hit->primitive, d))
+            {
+                ++back_faces;
+                continue;
+            }
+            if (!surfaces)
                 continue;
             glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
                                            : surfaces->albedo(hit->primitive, hit->u, hit->v) *
@@ -475,6 +522,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     continue;
                 add(d, glm::dvec3(e));
             }
+        // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value comes
+        // from its valid neighbours (dilation), in the outputs and for the bounces.
+        if (pass == 0)
+            out.valid[i] = uint8_t(2 * back_faces <= o.rays);
         math::Sh9Rgb radiance;
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
@@ -504,7 +555,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     {
         uint32_t first = pass == int(state.pass) ? state.next_item : 0;
         if (pass > 0)
-            previous_map = dilated(atlas, previous, 1, 2);
+            previous_map = dilated(atlas, previous, 1, 2, out.valid);
         if (progress)
             progress({pass, passes, first, n, checkpoint.error()});
         while (first < n)
@@ -534,6 +585,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     }
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();
+    for (uint32_t i = 0; i < n; ++i)
+    {
+        out.pushed += pushed[i];
+        out.invalid += !out.valid[i];
+    }
     return out;
 }
 
@@ -596,7 +652,7 @@ std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atl
         const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
         values.insert(values.end(), c.begin(), c.end());
     }
-    const std::vector<glm::vec3> maps = dilated(atlas, values, k, dilate);
+    const std::vector<glm::vec3> maps = dilated(atlas, values, k, dilate, sh.valid);
     std::vector<float> out(maps.size() * 3);
     for (size_t i = 0; i < maps.size(); ++i)
         for (int c = 0; c < 3; ++c)

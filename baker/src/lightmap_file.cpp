@@ -119,6 +119,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     const LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
     const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &surfaces, progress);
     summary.rays = sh.rays;
+    summary.pushed = sh.pushed;
+    summary.invalid = sh.invalid;
     summary.trace_seconds = sh.trace_seconds;
     summary.resumed = sh.resumed;
     summary.checkpoint_error = sh.checkpoint_error;
@@ -185,6 +187,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["environment"] = o.lights.environment.pixels.empty() ? "uniform" : "image";
     j["punctual_lights"] = s.lights;
     j["rays"] = s.rays;
+    j["texels_moved_out_of_walls"] = s.pushed;
+    j["texels_inside_geometry"] = s.invalid;
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;

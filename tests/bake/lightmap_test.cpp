@@ -646,3 +646,60 @@ TEST(LightmapBake, ImageEnvironmentIsImportanceSampled)
     EXPECT_LT(worst, 0.015);
     EXPECT_EQ(sh.rays, uint64_t(a.texels.size()) * 512u) << "256 hemisphere rays and 256 environment samples";
 }
+
+// Light leaking (issue 12): a floor passes under a wall 0.2 thick between a room open to the sky (left) and
+// a sealed one (right). The texel columns whose centres fall inside the wall are moved through the wall's
+// nearer face: the left one sees the sky from the wall's foot, the right one the sealed room's darkness; no
+// texel of the sealed room, and no output texel there, gets any light. Without the push both columns would
+// sit inside the wall, seeing only its back faces.
+TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
+{
+    Mesh m;
+    add_quad(m, {-2, -1, 0}, {2, -1, 0}, {2, 1, 0}, {-2, 1, 0}, {0.0f, 1.0f, 1.0f, 0.0f}); // the floor, facing up
+    // A closed box with outward faces, each quad in its own small cell of the atlas's unused last rows.
+    int cell = 0;
+    auto box = [&](glm::vec3 lo, glm::vec3 hi, bool inward, bool skip_min_x) {
+        const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                                {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+        const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+        for (int f = 0; f < 6; ++f)
+        {
+            if (skip_min_x && f == 5)
+                continue;
+            const float u0 = 0.01f + 0.08f * float(cell++);
+            const int* q = faces[f];
+            if (inward)
+                add_quad(m, c[q[3]], c[q[2]], c[q[1]], c[q[0]], {u0, 0.0f, u0 + 0.06f, 0.0f});
+            else
+                add_quad(m, c[q[0]], c[q[1]], c[q[2]], c[q[3]], {u0, 0.0f, u0 + 0.06f, 0.0f});
+        }
+    };
+    box({-0.1f, -1.2f, -0.3f}, {0.1f, 1.2f, 1.5f}, false, false); // the wall
+    box({0.1f, -1.2f, -0.3f}, {2.2f, 1.2f, 1.5f}, true, true);    // the sealed room, closed by the wall's face
+    // The floor fills the atlas (32 x 16 texels of 0.125); the boxes' quads get zero-height cells on row 0 of
+    // UV space, which no texel centre claims: they are geometry only.
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 32, 16, report);
+    LightmapLights lights; // uniform radiance 1
+    LightmapBakeOptions o;
+    o.rays = 256;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    EXPECT_EQ(sh.pushed, 32u) << "two columns of 16 texels inside the wall";
+    EXPECT_EQ(sh.invalid, 0u);
+    const std::vector<float> plain = lightmap_maps("plain", a, sh);
+    for (uint32_t y = 0; y < 16; ++y)
+    {
+        const int32_t left = a.texel_of[y * 32 + 15], right = a.texel_of[y * 32 + 16];
+        ASSERT_GE(left, 0);
+        ASSERT_GE(right, 0);
+        const float e_left = lightmap_coefficients("plain", sh.irradiance[size_t(left)])[0].x;
+        EXPECT_GT(e_left, 0.3f * float(M_PI)) << "row " << y << ": the wall's foot on the open side sees the sky";
+        for (uint32_t x = 16; x < 32; ++x)
+        {
+            const size_t i = size_t(a.texel_of[y * 32 + x]);
+            for (const glm::vec3& c : sh.irradiance[i])
+                ASSERT_EQ(c, glm::vec3(0.0f)) << "texel (" << x << ", " << y << ") of the sealed room";
+            ASSERT_EQ(plain[(size_t(y) * 32 + x) * 3], 0.0f) << "output texel (" << x << ", " << y << ")";
+        }
+    }
+}

@@ -115,6 +115,11 @@ struct LightmapSh
 {
     uint32_t width = 0, height = 0;
     std::vector<std::array<glm::vec3, 9>> irradiance; // one per atlas.texels entry
+    // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
+    // of single-sided surfaces, after the push below): its outputs come from its valid neighbours.
+    std::vector<uint8_t> valid;
+    size_t pushed = 0;  // texels moved through a back face that their footprint reached (against leaks)
+    size_t invalid = 0; // texels left inside geometry
     uint64_t rays = 0;
     double trace_seconds = 0.0;
     bool resumed = false;
@@ -166,6 +171,7 @@ struct LightmapBakeSummary
     LightmapUvReport uv_report;
     std::vector<std::string> warnings; // the scene reader's and the UV report's
     uint64_t rays = 0;
+    size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
     std::string checkpoint_error;
