@@ -59,7 +59,8 @@ void main()
     vec3 emissive = vec3(0.0);
     if (any(notEqual(material.emissive_factor.rgb, vec3(0.0))))
         emissive = material.emissive_factor.rgb * texture(emissive_map, material_uv(material.texcoord.z, 2)).rgb;
-    vec3 nt = texture(normal_map, material_uv(material.texcoord.y, 1)).xyz * 2.0 - 1.0;
+    const vec3 bump = texture(normal_map, material_uv(material.texcoord.y, 1)).xyz;
+    vec3 nt = bump * 2.0 - 1.0;
     nt = normalize(vec3(nt.xy * material.emissive_factor.a, nt.z));
     if (frame.options.x != 0.0)
     {
@@ -102,6 +103,7 @@ void main()
     s.emissive = emissive;
     s.base_color_factor = material.base_color_factor.rgb;
     s.n = n;
+    s.bump = bump;
     s.basis = kBasis;
     s.k = K;
     s.c = c;

@@ -3,7 +3,7 @@
 //
 //   hemi-render PRT.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
 //               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o OUT.png|OUT.exr
-//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain [--white] [--size WxH] [--camera auto|EYE,TARGET]
+//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH] [--camera auto|EYE,TARGET]
 //               [--exposure E] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is baked in)
 // HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
 // message from it makes the exit status 2.
@@ -45,7 +45,8 @@ int main(int argc, char** argv)
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
     app.add_option("--technique", technique, "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
                                              "also sh4ls, zernike3, zernike6 when baked; lightmaps: sh9 (gs is the "
-                                             "same), hl2, h4, h6, sal4, plain (non-directional)")
+                                             "same), hl2, h4, h6, sal4, plain (non-directional), rnm (radiosity "
+                                             "normal mapping), ssbump (an SSBump map in the normal slot)")
         ->capture_default_str();
     app.add_flag("--cpca", cpca, "use the technique's CPCA data (bake with --cpca)");
     CLI::Option* env_option = app.add_option("--env", env, "PRT: uniform (radiance 1 everywhere), sky (analytic) or an "
@@ -112,7 +113,7 @@ int main(int argc, char** argv)
                 technique = "sh9";
             try
             {
-                asset.output(technique);
+                asset.output(technique == "ssbump" ? "rnm" : technique);
             }
             catch (const std::invalid_argument& e)
             {

@@ -40,7 +40,8 @@ constexpr uint32_t W = 160, H = 96, kAtlas = 16;
 // A floor z = 0 over [-1, 1]^2 in hemi's world (4 x 4 quads), lightmap UVs over [0, 1]^2 and normal-map UVs
 // twice that (so a shader reading the wrong UV set samples the wrong coefficients); a tilted 1x1 normal map
 // and a coloured base.
-hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm::vec3& albedo, glm::vec3& normal)
+hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm::vec3& albedo, glm::vec3& normal,
+                                    const uint8_t* normal_texel = nullptr, bool furnace = false)
 {
     hemi::io::LightmapAsset a;
     hemi::io::Mesh& m = a.mesh;
@@ -65,7 +66,7 @@ hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm
     const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.25f, 0.92f));
     std::vector<uint8_t> texel(4, 255);
     for (int c = 0; c < 3; ++c)
-        texel[size_t(c)] = uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+        texel[size_t(c)] = normal_texel ? normal_texel[c] : uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
     normal = glm::normalize(glm::vec3(texel[0], texel[1], texel[2]) / 255.0f * 2.0f - 1.0f);
     a.images.push_back({"normal.png", "image/png", hemi::io::encode_png({1, 1, texel})});
     hemi::io::Material mat;
@@ -87,8 +88,10 @@ hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm
     bulb.position = glm::vec3(-0.5f, 0.3f, 0.35f);
     bulb.intensity = 0.6f;
     lights.punctual.push_back(bulb);
+    if (furnace)
+        lights = hemi::bake::LightmapLights{}; // uniform radiance 1
     hemi::bake::LightmapBakeOptions o;
-    o.rays = 64;
+    o.rays = furnace ? 1024 : 64;
     const hemi::bake::LightmapSh sh = hemi::bake::bake_lightmap_sh(m, atlas, lights, o);
     a.width = a.height = kAtlas;
     a.covered_texels = uint32_t(atlas.texels.size());
@@ -302,4 +305,117 @@ TEST_F(LightmapMaterial, ChartSeamShowsNoDiscontinuity)
             ASSERT_NEAR(a.at(x, y)[0], b.at(x, y)[0], 0.02f * b.at(x, y)[0] + 1e-3f) << "pixel (" << x << ", " << y << ")";
         }
     EXPECT_GT(compared, 1000);
+}
+
+// Green 2007's two materials on lightmaps, from the baker's "rnm" output: radiosity normal mapping (Listing 1,
+// the normal-map normal's squared, normalised weights of Valve's directions) and the SSBump material
+// (Listing 2, the weights stored in the normal-map slot) each equal a CPU evaluation at sampled pixels; with no
+// relief (an SSBump texel of 1/3 each) the SSBump material equals Listing 1 with a flat normal map; under
+// uniform radiance an open flat floor renders albedo times the mean rnm colour over pi, (1 + 1/sqrt 3) / 2 of
+// the albedo (the rnm colours are E towards each direction, and an open plane's lower hemisphere is dark).
+TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
+{
+    auto& dev = hemi::test::device();
+    const uint8_t ssbump_texel[3] = {150, 60, 20};
+    const uint8_t flat_ssbump[3] = {85, 85, 85};
+    const uint8_t flat_normal[3] = {128, 128, 255};
+    glm::vec3 albedo, normal;
+    const hemi::io::LightmapAsset tilted = floor_asset({"rnm"}, albedo, normal);
+    const glm::vec3 tilted_normal = normal;
+    const hemi::io::LightmapAsset bumped = floor_asset({"rnm"}, albedo, normal, ssbump_texel);
+    const hemi::io::LightmapAsset flat_s = floor_asset({"rnm"}, albedo, normal, flat_ssbump);
+    const hemi::io::LightmapAsset flat_n = floor_asset({"rnm"}, albedo, normal, flat_normal);
+    const uint32_t size = 96;
+    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique, bool white = false) {
+        hemi::render::LightmapView view(dev, a, {technique}, size, size);
+        hemi::render::LightmapFrame frame;
+        frame.technique = technique;
+        frame.model = glm::mat4(1.0f);
+        frame.white = white;
+        frame.camera.eye = glm::vec3(0.0f, -0.3f, 2.6f);
+        frame.camera.target = glm::vec3(0.0f);
+        return view.render(frame);
+    };
+    // Where each pixel lands on the floor: the view's own projection, inverted on the plane z = 0.
+    const glm::mat4 vp = hemi::render::camera_matrix({glm::vec3(0.0f, -0.3f, 2.6f), glm::vec3(0.0f), 35.0f},
+                                                     tilted.mesh, glm::mat4(1.0f), 1.0f);
+    const glm::mat4 inv = glm::inverse(vp);
+    auto floor_point = [&](uint32_t px, uint32_t py) {
+        const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
+        glm::vec4 a = inv * glm::vec4(ndc, 0.0f, 1.0f), b = inv * glm::vec4(ndc, 1.0f, 1.0f);
+        const glm::vec3 p0 = glm::vec3(a) / a.w, p1 = glm::vec3(b) / b.w;
+        return p0 + (p1 - p0) * (p0.z / (p0.z - p1.z));
+    };
+    const hemi::io::LightmapOutput& rnm = tilted.output("rnm");
+    auto lightmap = [&](const glm::vec2& uv1) {
+        std::array<glm::vec3, 3> c{};
+        const float fx = uv1.x * kAtlas - 0.5f, fy = uv1.y * kAtlas - 0.5f;
+        const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+        const float ax = fx - float(x0), ay = fy - float(y0);
+        for (uint32_t k = 0; k < 3; ++k)
+        {
+            auto t = [&](int x, int y) {
+                x = std::clamp(x, 0, int(kAtlas) - 1), y = std::clamp(y, 0, int(kAtlas) - 1);
+                const float* v = &rnm.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
+                return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(v[0])), glm::unpackHalf1x16(glm::packHalf1x16(v[1])),
+                                 glm::unpackHalf1x16(glm::packHalf1x16(v[2])));
+            };
+            c[k] = glm::mix(glm::mix(t(x0, y0), t(x0 + 1, y0), ax), glm::mix(t(x0, y0 + 1), t(x0 + 1, y0 + 1), ax), ay);
+        }
+        return c;
+    };
+    // Valve's bumpBasis, typed from Source.
+    const glm::vec3 basis[3] = {{0.81649658f, 0.0f, 0.57735027f}, {-0.40824829f, 0.70710678f, 0.57735027f},
+                                {-0.40824829f, -0.70710678f, 0.57735027f}};
+    const hemi::io::ImageRgba listing1 = render(tilted, "rnm"), listing2 = render(bumped, "ssbump");
+    int compared = 0;
+    for (uint32_t py = 10; py < size - 10; py += 3)
+        for (uint32_t px = 10; px < size - 10; px += 3)
+        {
+            if (listing1.at(px, py)[3] != 1.0f || listing2.at(px, py)[3] != 1.0f)
+                continue;
+            const glm::vec3 p = floor_point(px, py);
+            if (std::abs(p.x) > 0.95f || std::abs(p.y) > 0.95f)
+                continue;
+            const glm::vec2 uv1((p.x + 1.0f) * 0.5f, (1.0f - p.y) * 0.5f);
+            const std::array<glm::vec3, 3> c = lightmap(uv1);
+            glm::vec3 dp;
+            for (int i = 0; i < 3; ++i)
+                dp[i] = std::pow(std::clamp(glm::dot(tilted_normal, basis[i]), 0.0f, 1.0f), 2.0f);
+            const glm::vec3 e1 = (dp.x * c[0] + dp.y * c[1] + dp.z * c[2]) / (dp.x + dp.y + dp.z);
+            const glm::vec3 e2 = ssbump_texel[0] / 255.0f * c[0] + ssbump_texel[1] / 255.0f * c[1] + ssbump_texel[2] / 255.0f * c[2];
+            for (int ch = 0; ch < 3; ++ch)
+            {
+                const float w1 = albedo[ch] * e1[ch] / float(M_PI), w2 = albedo[ch] * e2[ch] / float(M_PI);
+                ASSERT_NEAR(listing1.at(px, py)[ch], w1, 0.01f * w1 + 2e-3f) << "rnm pixel " << px << "," << py;
+                ASSERT_NEAR(listing2.at(px, py)[ch], w2, 0.01f * w2 + 2e-3f) << "ssbump pixel " << px << "," << py;
+            }
+            ++compared;
+        }
+    EXPECT_GT(compared, 200);
+
+    // No relief: the SSBump material equals Listing 1 with a flat normal map.
+    const hemi::io::ImageRgba s = render(flat_s, "ssbump"), n = render(flat_n, "rnm");
+    for (uint32_t py = 0; py < size; ++py)
+        for (uint32_t px = 0; px < size; ++px)
+        {
+            if (s.at(px, py)[3] != 1.0f)
+                continue;
+            for (int ch = 0; ch < 3; ++ch)
+                ASSERT_NEAR(s.at(px, py)[ch], n.at(px, py)[ch], 0.005f * n.at(px, py)[ch] + 1e-4f) << px << "," << py;
+        }
+
+    // The furnace of an open flat floor under uniform radiance 1.
+    const hemi::io::LightmapAsset furnace = floor_asset({"rnm"}, albedo, normal, flat_ssbump, true);
+    const hemi::io::ImageRgba f = render(furnace, "ssbump", true);
+    const float expected = (1.0f + 0.57735027f) / 2.0f;
+    int covered = 0;
+    for (uint32_t py = 0; py < size; ++py)
+        for (uint32_t px = 0; px < size; ++px)
+            if (f.at(px, py)[3] == 1.0f)
+            {
+                ++covered;
+                ASSERT_NEAR(f.at(px, py)[0], expected, 0.01f * expected) << px << "," << py;
+            }
+    EXPECT_GT(covered, 1000);
 }

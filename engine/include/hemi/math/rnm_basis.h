@@ -8,6 +8,8 @@
 // math::bases()'s "hl2" basis uses the same directions in the order Sloan 2006 and Habel 2010 print them:
 // rnm_basis()[0] is hl2's third, [1] its second, [2] its first.
 
+#include "hemi/shared/rnm.h"
+
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -18,9 +20,9 @@ namespace hemi::math
 inline const std::array<glm::vec3, 3>& rnm_basis()
 {
     static const std::array<glm::vec3, 3> b = {
-        glm::vec3(0.816496580927726f, 0.0f, 0.577350269189626f),                 // ( sqrt(2/3),        0, 1/sqrt3)
-        glm::vec3(-0.408248290463863f, 0.707106781186548f, 0.577350269189626f),  // (-1/sqrt6,  1/sqrt2, 1/sqrt3)
-        glm::vec3(-0.408248290463863f, -0.707106781186548f, 0.577350269189626f), // (-1/sqrt6, -1/sqrt2, 1/sqrt3)
+        glm::vec3(float(HEMI_RNM_SQRT_2_3), 0.0f, float(HEMI_RNM_INV_SQRT_3)),
+        glm::vec3(-float(HEMI_RNM_INV_SQRT_6), float(HEMI_RNM_INV_SQRT_2), float(HEMI_RNM_INV_SQRT_3)),
+        glm::vec3(-float(HEMI_RNM_INV_SQRT_6), -float(HEMI_RNM_INV_SQRT_2), float(HEMI_RNM_INV_SQRT_3)),
     };
     return b;
 }

@@ -9,9 +9,9 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
 {
     if (output == "plain")
         return math::vertex_irradiance_basis();
-    if (output == "rnm")
-        throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the radiosity normal mapping "
-                                    "materials, not by a basis");
+    if (output == "rnm" || output == "ssbump")
+        throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the rnm and ssbump techniques "
+                                    "(radiosity normal mapping), not by a basis");
     return math::basis(output);
 }
 
@@ -21,17 +21,23 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
 {
     if (techniques.empty())
         throw std::invalid_argument("hemi: a lightmap model needs at least one technique");
-    std::vector<int> bases;
+    std::vector<SurfaceVariant> variants;
     for (const std::string& name : techniques)
     {
-        const io::LightmapOutput& output = asset.output(name); // lists what the asset has
-        bases.push_back(lightmap_basis(name).id);
+        // rnm and ssbump draw the "rnm" output (K = 3, carried by the 3-function HL2 basis's id); the others
+        // their own output with their basis.
+        const bool rnm = name == "rnm" || name == "ssbump";
+        const io::LightmapOutput& output = asset.output(rnm ? "rnm" : name); // lists what the asset has
+        if (rnm)
+            variants.push_back({name == "rnm" ? Technique::Rnm : Technique::Ssbump, HEMI_BASIS_HL2});
+        else
+            variants.push_back({Technique::Irradiance, lightmap_basis(name).id});
         names_.push_back(name);
         coefficients_.push_back(
             std::make_unique<TexelCoefficients>(system, asset.width, asset.height, output.k, output.maps, upload));
     }
     surfaces_ = std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
-                                                CoefficientSourceKind::Texel, bases, upload);
+                                                CoefficientSourceKind::Texel, variants, upload);
 }
 
 LightmapModel::~LightmapModel() = default;

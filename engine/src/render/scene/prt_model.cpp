@@ -70,7 +70,7 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
                    gpu::UploadBatch& upload)
     : system_(&system), asset_(&asset), basis_(&math::technique(desc.technique)),
       surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives, CoefficientSourceKind::Vertex,
-                {basis_->id}, upload)
+                {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
 {
     const gpu::Device& device = system.device();
     source_ = make_source(device, asset, desc, upload);

@@ -9,11 +9,11 @@ namespace hemi::render
 SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                              const std::vector<io::Material>& asset_materials,
                              const std::vector<io::Primitive>& asset_primitives, CoefficientSourceKind source,
-                             const std::vector<int>& bases, gpu::UploadBatch& upload)
+                             const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload)
     : mesh_(system.device(), mesh, upload), textures_(system.device(), images, asset_materials, upload)
 {
-    if (bases.empty())
-        throw std::invalid_argument("hemi: scene surfaces need at least one basis");
+    if (variants.empty())
+        throw std::invalid_argument("hemi: scene surfaces need at least one variant");
     std::vector<io::Material> materials = asset_materials;
     if (materials.empty())
         materials.emplace_back(); // glTF's default material
@@ -28,11 +28,12 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const
             throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) + " of " +
                                         std::to_string(materials_.size()));
         Draw d{p.first_index, p.index_count, p.material, {}};
-        for (int basis : bases)
+        for (const SurfaceVariant& v : variants)
         {
             MaterialKey key;
+            key.technique = v.technique;
             key.source = source;
-            key.basis = basis;
+            key.basis = v.basis;
             key.frame = ShadingFrame::Tangent;
             key.double_sided = materials_[p.material]->double_sided();
             d.types.push_back(&system.type(key));

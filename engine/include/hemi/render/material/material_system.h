@@ -38,6 +38,8 @@ enum class Technique : uint32_t
 {
     Irradiance = HEMI_TECHNIQUE_IRRADIANCE, // basis at the normal: PRT, classic PRT, lightmaps, SH probes
     Constant = HEMI_TECHNIQUE_CONSTANT,     // the base colour factor alone (a baseline, a debug view)
+    Rnm = HEMI_TECHNIQUE_RNM,               // radiosity normal mapping, Green 2007 Listing 1 (K = 3: rnm colours)
+    Ssbump = HEMI_TECHNIQUE_SSBUMP,         // self-shadowed bump map in the normal slot, Listing 2 (K = 3)
 };
 
 enum class CoefficientSourceKind : uint32_t

@@ -4,8 +4,11 @@
 // TEXCOORD_1, evaluated by the basis at the normal-map normal in the tangent frame). Static lighting: nothing
 // to update per frame.
 //
-// Techniques: the bases of math::bases() the asset holds (sh9, hl2, h4, h6, sal4, ...), and "plain", the
-// non-directional lightmap (the irradiance at the surface normal; the normal map does not change it).
+// Techniques: the bases of math::bases() the asset holds (sh9, hl2, h4, h6, sal4, ...); "plain", the
+// non-directional lightmap (the irradiance at the surface normal; the normal map does not change it); and,
+// from the asset's "rnm" output (Valve's three lightmap colours), "rnm" (radiosity normal mapping with the
+// material's normal map, Green 2007 Listing 1) and "ssbump" (the material's normal-map slot holds an SSBump
+// map in the normalised convention, Listing 2).
 // Several techniques may be loaded at once and switched between per draw: the H6 -> H4 shader level of
 // detail of Habel & Wimmer is technique("h6") near, technique("h4") far.
 

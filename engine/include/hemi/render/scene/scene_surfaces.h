@@ -19,20 +19,27 @@
 namespace hemi::render
 {
 
+// One way of drawing the surfaces: the technique and the basis of its coefficients (the basis gives K).
+struct SurfaceVariant
+{
+    Technique technique = Technique::Irradiance;
+    int basis = HEMI_BASIS_SH9;
+};
+
 class SceneSurfaces
 {
 public:
     // The mesh, images and materials must outlive the object. Compiles (or finds in `system`) the material type
-    // of every primitive for `source` and each of `bases` (HEMI_BASIS_* ids: the variants a draw picks from).
+    // of every primitive for `source` and each of `variants` (what a draw picks from).
     // No primitives draws the whole mesh with material 0; no materials uses glTF's default one. Throws
     // std::invalid_argument for a primitive whose material does not exist or no bases, io::FormatError when an
     // image is corrupt.
     SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                   const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
-                  CoefficientSourceKind source, const std::vector<int>& bases, gpu::UploadBatch& upload);
+                  CoefficientSourceKind source, const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload);
     ~SceneSurfaces();
 
-    // Inside the caller's render pass: every primitive with its material and the basis bases[variant],
+    // Inside the caller's render pass: every primitive with its material and variants[variant],
     // coefficients from `source` at `coefficient_offset` (the DrawPush field), under `model`. Primitive p is
     // draw id p + 1.
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,

@@ -1,0 +1,25 @@
+// Radiosity normal mapping (Green 2007, Listing 1: Source's original bump mapping): three lightmap colours
+// L_i, the irradiance towards each of Valve's directions B_i (the lightmap baker's "rnm" output, in c[0..2]),
+// blended by the normal-map normal's weights D_i = saturate(n . B_i)^2 / sum_j saturate(n . B_j)^2.
+// colour = albedo * sum_i D_i L_i / pi + emissive. The normal is the tangent-space one.
+#ifndef HEMI_TECHNIQUE_RNM_GLSL
+#define HEMI_TECHNIQUE_RNM_GLSL
+#include "hemi/shared/rnm.h"
+#include "hemi/surface/surface_inputs.glsl"
+
+const vec3 kHemiRnmBasis[3] = vec3[3](vec3(HEMI_RNM_SQRT_2_3, 0.0, HEMI_RNM_INV_SQRT_3),
+                                      vec3(-HEMI_RNM_INV_SQRT_6, HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3),
+                                      vec3(-HEMI_RNM_INV_SQRT_6, -HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3));
+
+// hemi-technique: id=2 name=rnm
+vec3 hemi_technique_rnm(HemiSurface s)
+{
+    vec3 dp = vec3(clamp(dot(s.n, kHemiRnmBasis[0]), 0.0, 1.0), clamp(dot(s.n, kHemiRnmBasis[1]), 0.0, 1.0),
+                   clamp(dot(s.n, kHemiRnmBasis[2]), 0.0, 1.0));
+    dp *= dp;
+    const float sum = dp.x + dp.y + dp.z;
+    const vec3 e = sum > 0.0 ? (dp.x * s.c[0] + dp.y * s.c[1] + dp.z * s.c[2]) / sum : vec3(0.0);
+    return s.albedo * e / kHemiPi + s.emissive;
+}
+
+#endif
