@@ -566,3 +566,45 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
     EXPECT_NE(rnm.err.find("furnace_floor.hemi"), std::string::npos) << rnm.err;
     EXPECT_NE(rnm.err.find("it has: h4, h6, hl2, plain, sal4, sh9"), std::string::npos) << rnm.err;
 }
+
+// hemi-bake lightmap bakes the scene's own KHR_lights_punctual lights: a point light 1 above a glTF floor
+// gives every texel the SH9 of I / d^2 from the light's direction (typed here), and the JSON report counts it.
+TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
+{
+    const fs::path plain_floor = write_floor_gltf("lit_floor_source.gltf", 2);
+    nlohmann::json j = nlohmann::json::parse(slurp(plain_floor));
+    j["extensionsUsed"].push_back("KHR_lights_punctual");
+    j["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}, {"intensity", 2.0}}};
+    j["nodes"].push_back({{"translation", {0.0, 1.0, 0.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+    const fs::path scene = dir() / "lit_floor.gltf";
+    std::ofstream(scene) << j.dump();
+    const fs::path asset = dir() / "lit_floor.hemi", json = dir() / "lit_floor.json";
+    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --env-scale 0 --size 16 --bases plain --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(json))["punctual_lights"], 1);
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    const std::vector<float>& plain = a.output("plain").maps;
+    for (uint32_t y = 0; y < 16; ++y)
+        for (uint32_t x = 0; x < 16; ++x)
+        {
+            // Texel centre (u, v) is the floor point (2u - 1, 0, 2v - 1) (glTF); the light is at (0, 1, 0).
+            const double px = 2.0 * (x + 0.5) / 16.0 - 1.0, pz = 2.0 * (y + 0.5) / 16.0 - 1.0;
+            const double d2 = px * px + pz * pz + 1.0, d = std::sqrt(d2);
+            const double cz = 1.0 / d; // the light's direction's cosine to the normal
+            // sum_l A_l y_l0(dir) y_l0(normal): the m = 0 terms are the only ones y(normal) keeps.
+            const double e = 2.0 / d2 *
+                             (M_PI * 0.282095 * 0.282095 + 2.0 * M_PI / 3.0 * 0.488603 * 0.488603 * cz +
+                              M_PI / 4.0 * 0.315392 * 0.315392 * (3.0 * cz * cz - 1.0) * 2.0);
+            ASSERT_NEAR(plain[(size_t(y) * 16 + x) * 3], e, 2e-3 * e + 1e-4) << "texel (" << x << ", " << y << ")";
+        }
+    // Green 2007's materials through hemi-render, from the rnm colours (validation layer on).
+    const fs::path rnm_asset = dir() / "lit_floor_rnm.hemi";
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(rnm_asset) + " --size 16 --bases rnm").status, 0);
+    for (const char* technique : {"rnm", "ssbump"})
+    {
+        const Result v = render(q(rnm_asset) + " --technique " + technique + " --size 32x32 -o " +
+                                q(dir() / (std::string("lit_floor_") + technique + ".png")));
+        EXPECT_EQ(v.status, 0) << technique << ": " << v.err;
+    }
+}
