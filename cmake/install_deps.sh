@@ -12,7 +12,9 @@ packages=(
     # shaders
     glslang-tools glslang-dev
     # math, scene and image formats
-    libglm-dev libeigen3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libopenexr-dev
+    libglm-dev libeigen3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libopenexr-dev libimath-dev
+    # zlib: the tests write PNGs of any depth (tests/png_writer.h)
+    zlib1g-dev
     # Debian 12's Imath CMake config names its Python binding library; without it every configure warns
     python3-imath
     # baking

@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -602,56 +603,70 @@ int lightmap_output_size(std::string_view name)
     return math::basis(name).size; // throws, listing the bases
 }
 
-std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::array<glm::vec3, 9>& e)
+namespace
 {
-    if (name == "plain")
-        return {math::sh9_eval_rgb(e, glm::vec3(0.0f, 0.0f, 1.0f))};
-    if (name == "rnm")
-    {
-        std::vector<glm::vec3> out;
-        for (const glm::vec3& b : math::rnm_basis())
-            out.push_back(math::sh9_eval_rgb(e, b));
-        return out;
-    }
-    const math::BasisDesc& basis = math::basis(name);
-    if (basis.id == HEMI_BASIS_SH9)
-        return std::vector<glm::vec3>(e.begin(), e.end());
-    // The projection matrix depends only on the basis: computed once per basis (quadrature).
+// Every output is a linear map of the SH9 irradiance: K x 9, row-major. "plain" is the row y(+z), "rnm" the
+// rows y(B_i), "sh9" the identity, every other basis its hemispherical projection (quadrature: computed once
+// per output and kept).
+const std::vector<double>& output_matrix(std::string_view name)
+{
     static std::mutex lock;
-    static std::vector<std::pair<int, std::vector<double>>> cache;
-    const std::vector<double>* p = nullptr;
+    static std::map<std::string, std::vector<double>, std::less<>> cache;
+    std::lock_guard<std::mutex> guard(lock);
+    if (const auto it = cache.find(name); it != cache.end())
+        return it->second;
+    std::vector<double> m;
+    auto row = [&](const glm::vec3& d) {
+        const math::Sh9 y = math::sh9_eval(d);
+        m.insert(m.end(), y.begin(), y.end());
+    };
+    if (name == "plain")
+        row(glm::vec3(0.0f, 0.0f, 1.0f));
+    else if (name == "rnm")
+        for (const glm::vec3& b : math::rnm_basis())
+            row(b);
+    else
     {
-        std::lock_guard<std::mutex> guard(lock);
-        for (const auto& [id, m] : cache)
-            if (id == basis.id)
-                p = &m;
-        if (!p)
+        const math::BasisDesc& basis = math::basis(name); // throws, listing the bases
+        if (basis.id == HEMI_BASIS_SH9)
         {
-            cache.emplace_back(basis.id, math::projection_from_sh9(basis));
-            p = &cache.back().second;
+            m.assign(81, 0.0);
+            for (int j = 0; j < 9; ++j)
+                m[size_t(j) * 10] = 1.0;
         }
+        else
+            m = math::projection_from_sh9(basis);
     }
-    std::vector<glm::vec3> out(size_t(basis.size), glm::vec3(0.0f));
-    for (int k = 0; k < basis.size; ++k)
+    return cache.emplace(std::string(name), std::move(m)).first->second;
+}
+
+void apply(const std::vector<double>& m, const std::array<glm::vec3, 9>& e, glm::vec3* out)
+{
+    for (size_t k = 0; k < m.size() / 9; ++k)
     {
         glm::dvec3 sum(0.0);
-        for (int j = 0; j < 9; ++j)
-            sum += (*p)[size_t(k) * 9 + size_t(j)] * glm::dvec3(e[size_t(j)]);
-        out[size_t(k)] = glm::vec3(sum);
+        for (size_t j = 0; j < 9; ++j)
+            sum += m[k * 9 + j] * glm::dvec3(e[j]);
+        out[k] = glm::vec3(sum);
     }
+}
+} // namespace
+
+std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::array<glm::vec3, 9>& e)
+{
+    const std::vector<double>& m = output_matrix(name);
+    std::vector<glm::vec3> out(m.size() / 9);
+    apply(m, e, out.data());
     return out;
 }
 
 std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh, int dilate)
 {
     const int k = lightmap_output_size(name);
-    std::vector<glm::vec3> values;
-    values.reserve(atlas.texels.size() * size_t(k));
+    const std::vector<double>& m = output_matrix(name); // once, not per texel
+    std::vector<glm::vec3> values(atlas.texels.size() * size_t(k));
     for (size_t i = 0; i < atlas.texels.size(); ++i)
-    {
-        const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
-        values.insert(values.end(), c.begin(), c.end());
-    }
+        apply(m, sh.irradiance[i], &values[i * size_t(k)]);
     const std::vector<glm::vec3> maps = dilated(atlas, values, k, dilate, sh.valid);
     std::vector<float> out(maps.size() * 3);
     for (size_t i = 0; i < maps.size(); ++i)
