@@ -606,7 +606,7 @@ int lightmap_output_size(std::string_view name)
 namespace
 {
 // Every output is a linear map of the SH9 irradiance: K x 9, row-major. "plain" is the row y(+z), "rnm" the
-// rows y(B_i), "sh9" the identity, every other basis its hemispherical projection (quadrature: computed once
+// rows y(B_i) times 2 / (1 + B_i.z), "sh9" the identity, every other basis its hemispherical projection (quadrature: computed once
 // per output and kept).
 const std::vector<double>& output_matrix(std::string_view name)
 {
@@ -624,7 +624,14 @@ const std::vector<double>& output_matrix(std::string_view name)
         row(glm::vec3(0.0f, 0.0f, 1.0f));
     else if (name == "rnm")
         for (const glm::vec3& b : math::rnm_basis())
+        {
             row(b);
+            // Normalised so that uniform radiance 1 over the texel's hemisphere gives pi: E(B_i) is then
+            // pi (1 + B_i.z) / 2 (the part of B_i's hemisphere above the surface), B_i.z = 1 / sqrt 3.
+            const double scale = 2.0 / (1.0 + double(b.z));
+            for (size_t j = m.size() - 9; j < m.size(); ++j)
+                m[j] *= scale;
+        }
     else
     {
         const math::BasisDesc& basis = math::basis(name); // throws, listing the bases

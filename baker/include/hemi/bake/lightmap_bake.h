@@ -134,8 +134,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 
 // The lightmap outputs besides math::bases(): "plain", the non-directional lightmap (K = 1: the irradiance at
 // the surface normal, E(+z)), and "rnm", the three lightmap colours of radiosity normal mapping (K = 3: the
-// irradiance towards each math::rnm_basis() direction, E(B_i); pi each under radiance 1 from the whole
-// sphere, pi (1 + 1/sqrt 3) / 2 = 2.48 each on an open plane, whose lower hemisphere is dark).
+// irradiance towards each math::rnm_basis() direction B_i, normalised so that uniform radiance 1 over the
+// texel's hemisphere gives pi each: E(B_i) * 2 / (1 + B_i.z), B_i.z = 1/sqrt 3. Without the factor an open
+// plane, whose lower hemisphere is dark, would give pi (1 + 1/sqrt 3) / 2 = 2.48, and a flat wall lit by
+// Listing 1 or an SSBump map would render 0.79 of its albedo instead of the plain lightmap's value).
 // Every other name is a basis of math::bases(), whose coefficients are its projection_from_sh9 of the SH9
 // irradiance. Throws std::invalid_argument listing the known names.
 int lightmap_output_size(std::string_view name);
