@@ -8,13 +8,17 @@
 //   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
 //       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
 //       [--exr-dir DIR] [--json REPORT.json]
+//   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera auto|EYE,TARGET]
+//       [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/bake/reference.h>
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+#include <hemi/math/camera.h>
 
 #include <nlohmann/json.hpp>
 
@@ -23,7 +27,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <unistd.h>
 #include <sstream>
 #include <string>
@@ -338,10 +344,67 @@ int run_ssbump(SsbumpCli& c)
     return 0;
 }
 
+// The light options hemi-bake lightmap and hemi-bake reference share: the same words give the same lights.
+struct LightCli
+{
+    std::string env = "uniform", sun;
+    float env_scale = 1.0f;
+
+    void add_to(CLI::App* app)
+    {
+        app->add_option("--env", env, "environment: uniform (radiance 1 from every direction) or an equirect EXR "
+                                      "(z up, hemi-render's convention)")
+            ->capture_default_str();
+        app->add_option("--env-scale", env_scale, "multiplies the environment's radiance")->capture_default_str();
+        app->add_option("--sun", sun, "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
+                                      "facing it)[,DIAMETER in degrees, default 0.53]");
+    }
+
+    hemi::bake::LightmapLights lights() const
+    {
+        hemi::bake::LightmapLights l;
+        if (!sun.empty())
+        {
+            float v[7] = {0, 0, 0, 0, 0, 0, 0.53f};
+            char rest = 0;
+            const int got = std::sscanf(sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4],
+                                        &v[5], &v[6], &rest);
+            if (got != 6 && got != 7)
+                throw std::invalid_argument("--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z "
+                                            "up; R,G,B the irradiance on a surface facing it), got '" + sun + "'");
+            l.sun = true;
+            l.sun_direction = glm::vec3(v[0], v[1], v[2]);
+            l.sun_irradiance = glm::vec3(v[3], v[4], v[5]);
+            l.sun_diameter_degrees = v[6];
+        }
+        if (env != "uniform")
+            l.environment = hemi::io::read_exr(env); // names the file when it is missing or not an EXR
+        l.environment_scale = env_scale;
+        l.uniform = glm::vec3(env_scale);
+        return l;
+    }
+};
+
+// W or WxH, each side in [1, 16384].
+void parse_size(const std::string& text, uint32_t& width, uint32_t& height)
+{
+    unsigned w = 0, h = 0;
+    char x = 0, rest = 0;
+    const int got = std::sscanf(text.c_str(), "%u%c%u%c", &w, &x, &h, &rest);
+    if (got == 1)
+        h = w;
+    else if (got != 3 || x != 'x')
+        throw std::invalid_argument("--size expects W or WxH (e.g. 1024x512), got '" + text + "'");
+    if (w == 0 || h == 0 || w > 16384 || h > 16384)
+        throw std::invalid_argument("--size " + text + ": each side must be in [1, 16384]");
+    width = w;
+    height = h;
+}
+
 struct LightmapCli
 {
-    std::string scene, asset, env = "uniform", sun, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json;
-    float env_scale = 1.0f;
+    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json;
+    LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
 
@@ -351,37 +414,8 @@ int run_lightmap(LightmapCli& c)
     bake::LightmapFileOptions& o = c.options;
     o.outputs = split(c.bases);
     if (!c.size.empty())
-    {
-        unsigned w = 0, h = 0;
-        char x = 0, rest = 0;
-        const int got = std::sscanf(c.size.c_str(), "%u%c%u%c", &w, &x, &h, &rest);
-        if (got == 1)
-            h = w;
-        else if (got != 3 || x != 'x')
-            throw std::invalid_argument("--size expects W or WxH (e.g. 1024x512), got '" + c.size + "'");
-        if (w == 0 || h == 0 || w > 16384 || h > 16384)
-            throw std::invalid_argument("--size " + c.size + ": each side must be in [1, 16384]");
-        o.width = w;
-        o.height = h;
-    }
-    if (!c.sun.empty())
-    {
-        float v[7] = {0, 0, 0, 0, 0, 0, 0.53f};
-        char rest = 0;
-        const int got = std::sscanf(c.sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
-                                    &v[6], &rest);
-        if (got != 6 && got != 7)
-            throw std::invalid_argument("--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z up; "
-                                        "R,G,B the irradiance on a surface facing it), got '" + c.sun + "'");
-        o.lights.sun = true;
-        o.lights.sun_direction = glm::vec3(v[0], v[1], v[2]);
-        o.lights.sun_irradiance = glm::vec3(v[3], v[4], v[5]);
-        o.lights.sun_diameter_degrees = v[6];
-    }
-    if (c.env != "uniform")
-        o.lights.environment = hemi::io::read_exr(c.env); // names the file when it is missing or not an EXR
-    o.lights.environment_scale = c.env_scale;
-    o.lights.uniform = glm::vec3(c.env_scale);
+        parse_size(c.size, o.width, o.height);
+    o.lights = c.light.lights();
     o.exr_dir = c.exr_dir;
     if (!c.json.empty())
         hemi::io::check_writable(c.json); // before the bake, like the asset and its checkpoint
@@ -412,6 +446,60 @@ int run_lightmap(LightmapCli& c)
     if (!c.json.empty())
     {
         bake::write_lightmap_bake_json(c.json, s, o);
+        std::printf("wrote %s\n", c.json.c_str());
+    }
+    return 0;
+}
+
+struct ReferenceCli
+{
+    std::string scene, output, size = "800x600", camera = "auto", json;
+    LightCli light;
+    hemi::bake::ReferenceOptions options;
+};
+
+int run_reference(ReferenceCli& c)
+{
+    namespace bake = hemi::bake;
+    bake::ReferenceOptions& o = c.options;
+    parse_size(c.size, o.width, o.height);
+    const std::optional<hemi::math::Camera> camera = hemi::math::parse_camera(c.camera);
+    o.auto_camera = !camera;
+    if (camera)
+        o.camera = *camera;
+    if (std::filesystem::path(c.output).extension() != ".exr")
+        throw std::invalid_argument("-o must end in .exr (linear RGBA, alpha = coverage), got '" + c.output + "'");
+    if (!c.json.empty())
+        hemi::io::check_writable(c.json);
+    const bake::LightmapLights lights = c.light.lights();
+    ProgressLine line("hemi-bake reference");
+    const bake::ReferenceImage r = bake::render_reference_file(c.scene, c.output, lights, o, [&](uint32_t done, uint32_t rows) {
+        line.update(double(done) / double(rows), "rows " + std::to_string(done) + "/" + std::to_string(rows), done == rows);
+    });
+    std::printf("wrote %s: %ux%u, %d paths per pixel, %d bounce(s)%s; camera %.3g,%.3g,%.3g -> %.3g,%.3g,%.3g\n",
+                c.output.c_str(), o.width, o.height, o.rays, o.bounces, o.white ? ", lighting only (E / pi)" : "",
+                double(r.camera.eye.x), double(r.camera.eye.y), double(r.camera.eye.z), double(r.camera.target.x),
+                double(r.camera.target.y), double(r.camera.target.z));
+    std::printf("rays: %llu in %.2f s = %.2f Mrays/s; noise (standard error of a pixel, RMS) %.3g\n",
+                (unsigned long long)r.rays, r.seconds, r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0, r.noise);
+    if (!c.json.empty())
+    {
+        nlohmann::json j;
+        j["scene"] = c.scene;
+        j["output"] = c.output;
+        j["width"] = o.width;
+        j["height"] = o.height;
+        j["rays_per_pixel"] = o.rays;
+        j["bounces"] = o.bounces;
+        j["white"] = o.white;
+        j["seed"] = o.seed;
+        j["camera"] = {{"eye", {r.camera.eye.x, r.camera.eye.y, r.camera.eye.z}},
+                       {"target", {r.camera.target.x, r.camera.target.y, r.camera.target.z}},
+                       {"fov_y_degrees", r.camera.fov_y_degrees}};
+        j["rays"] = r.rays;
+        j["seconds"] = r.seconds;
+        j["noise"] = r.noise;
+        hemi::io::write_text_atomically(c.json, j.dump(2) + "\n");
         std::printf("wrote %s\n", c.json.c_str());
     }
     return 0;
@@ -504,12 +592,7 @@ int main(int argc, char** argv)
         ->required()
         ->check(CLI::ExistingFile);
     lightmap->add_option("-o,--output", lm.asset, "lightmap asset to write (.hemi)")->required();
-    lightmap->add_option("--env", lm.env, "environment: uniform (radiance 1 from every direction) or an equirect EXR "
-                                          "(z up, hemi-render's convention)")
-        ->capture_default_str();
-    lightmap->add_option("--env-scale", lm.env_scale, "multiplies the environment's radiance")->capture_default_str();
-    lightmap->add_option("--sun", lm.sun, "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
-                                          "facing it)[,DIAMETER in degrees, default 0.53]");
+    lm.light.add_to(lightmap);
     lightmap->add_option("--bases", lm.bases, "comma-separated outputs: sh9, hl2, h4, h6, sal4 (and every basis of "
                                               "hemi-bake basis-report), plain (E at the surface normal), rnm (E towards "
                                               "each radiosity-normal-mapping direction)")
@@ -531,7 +614,37 @@ int main(int argc, char** argv)
     lightmap->add_option("--checkpoint-interval", lm.options.bake.checkpoint_seconds,
                          "seconds between checkpoints to LEVEL.hemi.partial (an interrupted bake resumes from it)")
         ->capture_default_str();
+    ReferenceCli rf;
+    CLI::App* reference = app.add_subcommand(
+        "reference", "path-trace the ground truth a lightmap is measured against, framed like hemi-render's view");
+    reference->add_option("scene", rf.scene, "glTF 2.0 scene (.gltf or .glb)")->required()->check(CLI::ExistingFile);
+    reference->add_option("-o,--output", rf.output, "REF.exr: linear RGBA, alpha = coverage")->required();
+    rf.light.add_to(reference);
+    reference->add_option("--bounces", rf.options.bounces, "surface reflections per path (as hemi-bake lightmap's)")
+        ->check(CLI::Range(0, 16))
+        ->capture_default_str();
+    reference->add_option("--camera", rf.camera, "auto (frames the scene like hemi-render) or EYE,TARGET as "
+                                                 "x,y,z,x,y,z in world space (z up; glTF +y is world +z)")
+        ->capture_default_str();
+    reference->add_option("--size", rf.size, "WIDTHxHEIGHT in pixels")->capture_default_str();
+    reference->add_flag("--white", rf.options.white, "albedo 1 and no emission: the lighting alone, E / pi");
+    reference->add_option("--rays", rf.options.rays, "paths per pixel")->capture_default_str();
+    reference->add_option("--seed", rf.options.seed, "seed of the paths (same seed, same bytes)")->capture_default_str();
+    reference->add_option("--json", rf.json, "write the render's summary (camera, rays, noise) as JSON to FILE");
     CLI11_PARSE(app, argc, argv);
+
+    if (reference->parsed())
+    {
+        try
+        {
+            return run_reference(rf);
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "\nhemi-bake reference: %s\n", e.what());
+            return 1;
+        }
+    }
 
     if (lightmap->parsed())
     {

@@ -1,4 +1,6 @@
 // The directional lightmap bake (lightmap_bake.h).
+#include "light_sampler.h"
+
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_bake.h>
@@ -43,67 +45,6 @@ glm::vec3 LightmapLights::environment_radiance(const glm::vec3& scene_d) const
     return glm::vec3(p[0], p[1], p[2]) * environment_scale;
 }
 
-namespace
-{
-
-// Directions distributed like an equirect environment's luminance times each pixel's solid angle: a row by
-// the marginal distribution, a pixel of it by the conditional one, then uniformly in solid angle inside the
-// pixel. pdf(d) = weight(pixel) / (sum of weights * solid angle(pixel)). Directions in world space.
-class EnvironmentSampler
-{
-public:
-    explicit EnvironmentSampler(const io::ImageRgba& env) : w_(env.width), h_(env.height)
-    {
-        weight_.resize(size_t(w_) * h_);
-        row_cdf_.assign(h_ + 1, 0.0);
-        column_cdf_.assign(size_t(h_) * (w_ + 1), 0.0);
-        for (uint32_t y = 0; y < h_; ++y)
-        {
-            const double solid = (2.0 * M_PI / w_) * (std::cos(M_PI * y / h_) - std::cos(M_PI * (y + 1) / h_));
-            double row = 0.0;
-            for (uint32_t x = 0; x < w_; ++x)
-            {
-                const float* p = env.at(x, y);
-                const double lum = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-                const double mean = (double(p[0]) + p[1] + p[2]) / 3.0;
-                // Luminance, kept above zero wherever any channel shines (a pure blue pixel is still sampled).
-                const double wgt = std::max(0.0, std::max(lum, 0.01 * mean)) * solid;
-                weight_[size_t(y) * w_ + x] = wgt;
-                row += wgt;
-                column_cdf_[size_t(y) * (w_ + 1) + x + 1] = row;
-            }
-            row_cdf_[y + 1] = row_cdf_[y] + row;
-        }
-        total_ = row_cdf_[h_];
-    }
-    bool empty() const { return !(total_ > 0.0); }
-
-    // A direction from three uniform numbers in [0, 1) (and a fourth for the jitter), with its pdf.
-    glm::dvec3 sample(double u0, double u1, double u2, double u3, double& pdf) const
-    {
-        const double target_row = u0 * total_;
-        const uint32_t y = uint32_t(std::min<ptrdiff_t>(
-            h_ - 1, std::upper_bound(row_cdf_.begin() + 1, row_cdf_.end(), target_row) - (row_cdf_.begin() + 1)));
-        const double* cdf = &column_cdf_[size_t(y) * (w_ + 1)];
-        const double target = u1 * cdf[w_];
-        const uint32_t x = uint32_t(std::min<ptrdiff_t>(w_ - 1, std::upper_bound(cdf + 1, cdf + w_ + 1, target) - (cdf + 1)));
-        const double z0 = std::cos(M_PI * y / h_), z1 = std::cos(M_PI * (y + 1) / h_);
-        const double z = z0 + (z1 - z0) * u2;
-        const double phi = M_PI - 2.0 * M_PI * (x + u3) / w_; // u = 0.5 - phi / 2 pi
-        const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-        const double solid = (2.0 * M_PI / w_) * (z0 - z1);
-        pdf = weight_[size_t(y) * w_ + x] / (total_ * solid);
-        return {s * std::cos(phi), s * std::sin(phi), z};
-    }
-
-private:
-    uint32_t w_, h_;
-    std::vector<double> weight_, row_cdf_, column_cdf_;
-    double total_ = 0.0;
-};
-
-} // namespace
-
 LightmapSurfaces::LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::Material>& materials,
                                    const std::vector<io::EncodedImage>& images,
                                    const std::vector<io::Primitive>& primitives)
@@ -124,7 +65,7 @@ LightmapSurfaces::LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::M
     }
     for (const io::Material& m : materials_)
     {
-        for (const io::TextureRef* t : {&m.base_color, &m.emissive})
+        for (const io::TextureRef* t : {&m.base_color, &m.emissive, &m.normal})
             if (t->present() && size_t(t->image) >= images_.size())
                 throw std::invalid_argument("hemi: material '" + m.name + "' uses image " + std::to_string(t->image) +
                                             " of " + std::to_string(images_.size()));
@@ -184,6 +125,17 @@ glm::vec3 LightmapSurfaces::emission(uint32_t triangle, float u, float v) const
     return m.emissive_factor * glm::vec3(sample(m.emissive, triangle, u, v, true));
 }
 
+glm::vec3 LightmapSurfaces::tangent_normal(uint32_t triangle, float u, float v) const
+{
+    const io::Material& m = materials_[material_of_[triangle]];
+    if (!m.normal.present())
+        return glm::vec3(0.0f, 0.0f, 1.0f);
+    const glm::vec3 c = glm::vec3(sample(m.normal, triangle, u, v, false)) * 2.0f - 1.0f;
+    const glm::vec3 n(c.x * m.normal_scale, c.y * m.normal_scale, c.z);
+    const float length = glm::length(n);
+    return length > 0.0f ? n / length : glm::vec3(0.0f, 0.0f, 1.0f);
+}
+
 bool LightmapSurfaces::double_sided(uint32_t triangle) const
 {
     return materials_[material_of_[triangle]].double_sided;
@@ -193,11 +145,6 @@ namespace
 {
 
 constexpr uint64_t kLightmapCheckpointVersion = 2;
-
-bool finite3(const glm::vec3& v)
-{
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -209,21 +156,7 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
         throw std::invalid_argument("the ray offset must be >= 0");
     if (o.bounces < 0 || o.bounces > 16)
         throw std::invalid_argument("bounces " + std::to_string(o.bounces) + " is not in [0, 16]");
-    if (!finite3(l.uniform) || !std::isfinite(l.environment_scale))
-        throw std::invalid_argument("the environment's radiance must be finite");
-    for (const io::PunctualLight& p : l.punctual)
-        if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) || !finite3(p.direction) ||
-            glm::length(p.direction) < 1e-6f)
-            throw std::invalid_argument("punctual light '" + p.name + "' has a value that is not finite");
-    if (l.sun)
-    {
-        if (!finite3(l.sun_direction) || glm::length(l.sun_direction) < 1e-6f)
-            throw std::invalid_argument("the sun's direction must be a finite vector of non-zero length");
-        if (!finite3(l.sun_irradiance))
-            throw std::invalid_argument("the sun's irradiance must be finite");
-        if (!(l.sun_diameter_degrees >= 0.0f) || !(l.sun_diameter_degrees < 90.0f))
-            throw std::invalid_argument("the sun's diameter must be in [0, 90) degrees");
-    }
+    detail::check_lights(l);
 }
 
 uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l, const LightmapBakeOptions& o,
@@ -327,23 +260,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         return out;
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(o.ray_offset);
-    // The sun's direction in the mesh's space.
-    const glm::vec3 sun_axis =
-        lights.sun ? glm::normalize(glm::transpose(lights.scene_to_world) * lights.sun_direction) : glm::vec3(0, 0, 1);
-    // The sun's disc: directions within half its angular diameter of the axis, uniform in solid angle.
-    const double cos_half = std::cos(0.5 * double(lights.sun_diameter_degrees) * M_PI / 180.0);
-    glm::vec3 sun_u = std::abs(sun_axis.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
-    sun_u = glm::normalize(sun_u - sun_axis * glm::dot(sun_axis, sun_u));
-    const glm::vec3 sun_v = glm::cross(sun_axis, sun_u);
-    const uint64_t sun_seed = mix64(o.seed ^ 0x53554e5f5241ull); // independent of the hemisphere rays
     const double weight = 2.0 * M_PI / double(o.rays);
     const int passes = 1 + o.bounces;
     // An image environment is importance-sampled by its own rays (the hemisphere rays then gather only what
     // surfaces send); a uniform one is gathered by the hemisphere rays.
-    const bool image_env = !lights.environment.pixels.empty();
-    const EnvironmentSampler env_sampler = image_env ? EnvironmentSampler(lights.environment)
-                                                     : EnvironmentSampler(io::ImageRgba{1, 1, {0, 0, 0, 0}});
-    const uint64_t env_seed = mix64(o.seed ^ 0x454e565f5241ull);
+    const detail::LightSampler light(lights, o.seed);
+    const bool image_env = light.image_environment();
 
     // The finished work: the SH of the completed passes, the pass being gathered, and the irradiance at each
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
@@ -454,36 +376,20 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight);
         }
-        if (pass == 0 && image_env && !env_sampler.empty())
+        if (pass == 0 && image_env)
             for (int r = 0; r < o.rays; ++r)
             {
-                // Stratified along the distribution's CDF (turned by a random offset per texel): the split
-                // between a bright sun and the rest of the sky is then nearly exact in every texel.
-                double stratum = (double(r) + double(uniform01(env_seed, item, uint64_t(4 * r)))) / double(o.rays) +
-                                 double(uniform01(env_seed, item, uint64_t(4 * o.rays)));
-                stratum -= std::floor(stratum);
-                // The second dimension on a golden-ratio lattice against the first: low discrepancy in both.
-                double across = double(r) * 0.6180339887498949 + double(uniform01(env_seed, item, uint64_t(4 * o.rays + 1)));
-                across -= std::floor(across);
-                double pdf = 0.0;
-                const glm::dvec3 world = env_sampler.sample(stratum, across,
-                                                            uniform01(env_seed, item, uint64_t(4 * r + 2)),
-                                                            uniform01(env_seed, item, uint64_t(4 * r + 3)), pdf);
-                const glm::vec3 d = glm::normalize(glm::transpose(lights.scene_to_world) * glm::vec3(world));
-                if (!(pdf > 0.0) || glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
-                    scene.occluded(origin, d))
+                glm::vec3 d;
+                double w = 0.0;
+                if (!light.environment_ray(item, r, o.rays, d, w) || glm::dot(d, t.geometric_normal) <= 0.0f ||
+                    glm::dot(d, t.normal) <= 0.0f || scene.occluded(origin, d))
                     continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
-                add(d, glm::dvec3(lights.environment_radiance(d)) / (pdf * double(o.rays)));
+                add(d, glm::dvec3(lights.environment_radiance(d)) * w);
             }
         if (lights.sun && pass == 0)
             for (int r = 0; r < o.sun_rays; ++r)
             {
-                // A point of the disc, from the counter-based numbers.
-                const double z = 1.0 - (1.0 - cos_half) * double(uniform01(sun_seed, item, uint64_t(2 * r)));
-                const double phi = 2.0 * M_PI * double(uniform01(sun_seed, item, uint64_t(2 * r + 1)));
-                const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-                const glm::vec3 d = glm::normalize(float(z) * sun_axis + float(s * std::cos(phi)) * sun_u +
-                                                   float(s * std::sin(phi)) * sun_v);
+                const glm::vec3 d = light.sun_ray(item, r);
                 if (glm::dot(d, t.geometric_normal) <= 0.0f || scene.occluded(origin, d))
                     continue;
                 // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
@@ -494,28 +400,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             {
                 glm::vec3 d;
                 float distance = INFINITY;
-                glm::vec3 e = p.color * p.intensity;
-                if (p.type == io::PunctualLight::Type::Directional)
-                    d = -glm::normalize(p.direction);
-                else
-                {
-                    const glm::vec3 to = p.position - t.position;
-                    distance = glm::length(to);
-                    if (!(distance > 0.0f))
-                        continue;
-                    d = to / distance;
-                    float falloff = 1.0f / (distance * distance);
-                    if (p.range > 0.0f)
-                        falloff *= std::clamp(1.0f - std::pow(distance / p.range, 4.0f), 0.0f, 1.0f);
-                    if (p.type == io::PunctualLight::Type::Spot)
-                    {
-                        const float scale = 1.0f / std::max(0.001f, std::cos(p.inner_cone) - std::cos(p.outer_cone));
-                        const float cd = glm::dot(glm::normalize(p.direction), -d);
-                        const float a = std::clamp((cd - std::cos(p.outer_cone)) * scale, 0.0f, 1.0f);
-                        falloff *= a * a;
-                    }
-                    e *= falloff;
-                }
+                const glm::vec3 e = light.punctual(p, t.position, d, distance);
                 if (e == glm::vec3(0.0f) || glm::dot(d, t.geometric_normal) <= 0.0f)
                     continue;
                 // The shadow ray stops short of the light (it must not hit geometry behind it).

@@ -1,6 +1,7 @@
 // hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/math/camera.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
@@ -20,13 +21,6 @@ namespace hemi::bake
 {
 namespace
 {
-
-// glTF's y-up scene space in hemi's z-up world, (x, y, z) -> (x, -z, y): render::gltf_to_world()'s rotation
-// (the baker links no renderer; the render tests hold the two equal through hemi-render's frames).
-glm::mat3 gltf_scene_to_world()
-{
-    return glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, -1, 0));
-}
 
 std::filesystem::path exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,
                                const std::string& output)
@@ -113,7 +107,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     for (const std::string& warning : report.warnings)
         summary.warnings.push_back(warning);
 
-    o.lights.scene_to_world = gltf_scene_to_world();
+    o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
     const LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);

@@ -20,21 +20,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string_view>
-
-namespace
-{
-
-glm::vec3 parse_vec3(const std::string& text, const std::string& what)
-{
-    float x, y, z;
-    char rest;
-    if (std::sscanf(text.c_str(), "%f,%f,%f%c", &x, &y, &z, &rest) != 3)
-        throw std::invalid_argument(what + " expects X,Y,Z, got '" + text + "'");
-    return {x, y, z};
-}
-
-} // namespace
 
 int main(int argc, char** argv)
 {
@@ -88,22 +75,9 @@ int main(int argc, char** argv)
                              message.data());
         };
         const float aspect = float(w) / float(h);
-        hemi::render::PrtCamera view_camera;
-        bool auto_camera = camera == "auto";
-        if (!auto_camera)
-        {
-            const size_t comma = [&] {
-                size_t c = 0, at = std::string::npos;
-                for (size_t i = 0; i < camera.size(); ++i)
-                    if (camera[i] == ',' && ++c == 3)
-                        at = i;
-                return at;
-            }();
-            if (comma == std::string::npos)
-                throw std::invalid_argument("--camera expects auto or EYE,TARGET (6 numbers), got '" + camera + "'");
-            view_camera.eye = parse_vec3(camera.substr(0, comma), "--camera EYE");
-            view_camera.target = parse_vec3(camera.substr(comma + 1), "--camera TARGET");
-        }
+        const std::optional<hemi::math::Camera> chosen = hemi::math::parse_camera(camera);
+        const bool auto_camera = !chosen;
+        const hemi::render::PrtCamera view_camera = chosen.value_or(hemi::render::PrtCamera{});
         hemi::io::ImageRgba image;
         std::unique_ptr<hemi::gpu::Device> device;
         if (lightmap)

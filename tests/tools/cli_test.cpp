@@ -608,3 +608,72 @@ TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
         EXPECT_EQ(v.status, 0) << technique << ": " << v.err;
     }
 }
+
+// hemi-bake reference frames a scene exactly like hemi-render's view of its lightmap asset: with the auto
+// camera at a non-square size the same pixels are covered (every pixel the reference covers fully is drawn,
+// every one it misses is not), and with an explicit camera too; under uniform radiance 1 the lighting-only
+// images agree (E / pi = 1 at the floor's own normal, 1%: the lightmap's precision). The JSON report holds
+// the camera; bad options and an unreadable scene are refused, naming them, with no EXR left behind.
+TEST(BakeCli, ReferenceIsFramedLikeHemiRender)
+{
+    const fs::path scene = write_floor_gltf("reference_floor.glb", 2);
+    const fs::path asset = dir() / "reference_floor.hemi";
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(asset) + " --size 16 --rays 512 --bases plain").status, 0);
+    for (const std::string camera : {"auto", "0.4,-2.2,1.6,0.1,0.2,0"})
+    {
+        const fs::path ref = dir() / "reference.exr", raster = dir() / "raster.exr", json = dir() / "reference.json";
+        const Result r = run(HEMI_BAKE_EXE, "reference " + q(scene) + " --white --size 64x40 --rays 8 --camera " + camera +
+                                                " --json " + q(json) + " -o " + q(ref));
+        ASSERT_EQ(r.status, 0) << r.err;
+        const Result v = render(q(asset) + " --technique plain --white --size 64x40 --camera " + camera + " -o " + q(raster));
+        ASSERT_EQ(v.status, 0) << v.err;
+        const hemi::io::ImageRgba a = hemi::io::read_exr(ref), b = hemi::io::read_exr(raster);
+        ASSERT_EQ(a.width, 64u);
+        ASSERT_EQ(a.height, 40u);
+        int full = 0, empty = 0;
+        for (uint32_t y = 0; y < 40; ++y)
+            for (uint32_t x = 0; x < 64; ++x)
+            {
+                const float coverage = a.at(x, y)[3];
+                if (coverage == 1.0f)
+                {
+                    ++full;
+                    ASSERT_EQ(b.at(x, y)[3], 1.0f) << camera << ": pixel (" << x << ", " << y << ")";
+                    for (int c = 0; c < 3; ++c)
+                    {
+                        ASSERT_NEAR(a.at(x, y)[c], 1.0f, 1e-4f) << camera << ": pixel (" << x << ", " << y << ")";
+                        ASSERT_NEAR(b.at(x, y)[c], a.at(x, y)[c], 0.01f) << camera << ": pixel (" << x << ", " << y << ")";
+                    }
+                }
+                else if (coverage == 0.0f)
+                {
+                    ++empty;
+                    ASSERT_EQ(b.at(x, y)[3], 0.0f) << camera << ": pixel (" << x << ", " << y << ")";
+                }
+            }
+        EXPECT_GT(full, 200) << camera;
+        EXPECT_GT(empty, 200) << camera;
+        const nlohmann::json j = nlohmann::json::parse(slurp(json));
+        EXPECT_EQ(j["rays_per_pixel"], 8);
+        if (camera != "auto")
+        {
+            EXPECT_FLOAT_EQ(j["camera"]["eye"][1].get<float>(), -2.2f);
+        }
+    }
+    const fs::path none = dir() / "never.exr";
+    const Result size = run(HEMI_BAKE_EXE, "reference " + q(scene) + " --size 0x10 -o " + q(none));
+    EXPECT_EQ(size.status, 1);
+    EXPECT_NE(size.err.find("--size"), std::string::npos) << size.err;
+    const Result png = run(HEMI_BAKE_EXE, "reference " + q(scene) + " -o " + q(dir() / "never.png"));
+    EXPECT_EQ(png.status, 1);
+    EXPECT_NE(png.err.find(".exr"), std::string::npos) << png.err;
+    const fs::path broken = dir() / "broken.gltf";
+    std::ofstream(broken) << "{ not json";
+    const Result bad = run(HEMI_BAKE_EXE, "reference " + q(broken) + " --size 8x8 -o " + q(none));
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("broken.gltf"), std::string::npos) << bad.err;
+    const Result env = run(HEMI_BAKE_EXE, "reference " + q(scene) + " --env " + q(scene) + " --size 8x8 -o " + q(none));
+    EXPECT_EQ(env.status, 1);
+    EXPECT_NE(env.err.find("reference_floor.glb"), std::string::npos) << env.err;
+    EXPECT_FALSE(fs::exists(none));
+}

@@ -75,6 +75,10 @@ public:
 
     glm::vec3 albedo(uint32_t triangle, float u, float v) const;   // Embree's barycentrics of the hit
     glm::vec3 emission(uint32_t triangle, float u, float v) const;
+    // The material's tangent-space normal (glTF's: +y up the image): its normal texture's texel c, bilinear,
+    // as (2c - 1) with x and y times the normal scale, normalised, like the material system's shader; +z for
+    // a material without one.
+    glm::vec3 tangent_normal(uint32_t triangle, float u, float v) const;
     bool double_sided(uint32_t triangle) const;
     bool emissive() const { return emissive_; } // any material emits
     const std::vector<io::Material>& materials() const { return materials_; }

@@ -10,12 +10,6 @@
 namespace hemi::render
 {
 
-glm::mat4 gltf_to_world()
-{
-    // (x, y, z)_glTF -> (x, -z, y)_world: +90 degrees about x.
-    return glm::rotate(glm::mat4(1.0f), float(M_PI) / 2.0f, glm::vec3(1.0f, 0.0f, 0.0f));
-}
-
 std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order, const glm::mat4& model,
                                        float rotate_degrees)
 {

@@ -34,66 +34,6 @@ std::vector<glm::vec3> environment_lighting(const std::string& environment, int 
     return math::project_equirect(order, image.width, image.height, image.pixels);
 }
 
-BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model)
-{
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        const glm::vec3 w = glm::vec3(model * glm::vec4(p, 1.0f));
-        lo = glm::min(lo, w);
-        hi = glm::max(hi, w);
-    }
-    const glm::vec3 c = 0.5f * (lo + hi);
-    float r = 0.0f;
-    for (const glm::vec3& p : mesh.positions)
-        r = std::max(r, glm::length(glm::vec3(model * glm::vec4(p, 1.0f)) - c));
-    return {c, std::max(r, 1e-6f)};
-}
-
-PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect)
-{
-    const BoundingSphere s = bounding_sphere(mesh, model);
-    PrtCamera c;
-    const float half = glm::radians(c.fov_y_degrees) * 0.5f;
-    // The sphere fits the narrower of the two fields of view.
-    const float fit = aspect < 1.0f ? std::atan(std::tan(half) * aspect) : half;
-    const float distance = s.radius / std::sin(fit) * 1.02f;
-    c.target = s.centre;
-    c.eye = s.centre + distance * glm::normalize(glm::vec3(0.35f, -1.0f, 0.45f));
-    return c;
-}
-
-glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect)
-{
-    return camera_matrix(camera, bounding_sphere(mesh, model), aspect);
-}
-
-glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& s, float aspect)
-{
-    if (!(glm::length(camera.target - camera.eye) > 0.0f))
-        throw std::invalid_argument("hemi: the camera's eye and target coincide");
-    // Depth is measured along the view axis, not toward the sphere's centre (the target may be off-centre).
-    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
-    const float depth = glm::dot(s.centre - camera.eye, forward);
-    const float far_plane = std::max(depth + s.radius * 1.01f, 1e-3f);
-    const float near_plane = std::max(far_plane * 1e-4f, depth - s.radius * 1.01f);
-    glm::vec3 up(0.0f, 0.0f, 1.0f);
-    if (glm::length(glm::cross(forward, up)) < 1e-3f)
-        up = glm::vec3(0.0f, 1.0f, 0.0f); // looking straight up or down
-    const glm::mat4 view = glm::lookAt(camera.eye, camera.target, up);
-    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(camera.fov_y_degrees), aspect, near_plane, far_plane);
-    proj[1][1] *= -1.0f; // Vulkan clip space: y down
-    return proj * view;
-}
-
-glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect)
-{
-    glm::mat4 view = glm::lookAt(eye, target, glm::vec3(0.0f, 0.0f, 1.0f));
-    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(fov_y_degrees), aspect, 0.05f, 100.0f);
-    proj[1][1] *= -1.0f; // Vulkan clip space: y down
-    return proj * view;
-}
-
 ViewTarget::ViewTarget(const gpu::Device& device, uint32_t width, uint32_t height)
     : device_(&device), target_(device, width, height), system_(device, target_.desc()), frame_set_(system_)
 {

@@ -22,6 +22,8 @@
 #include <glm/vec3.hpp>
 
 #include <memory>
+#include <hemi/math/camera.h>
+
 #include <span>
 #include <string>
 #include <vector>
@@ -29,8 +31,8 @@
 namespace hemi::render
 {
 
-// The rotation placing glTF's y-up space in hemi's z-up world.
-glm::mat4 gltf_to_world();
+// The rotation placing glTF's y-up space in hemi's z-up world (math/camera.h).
+using math::gltf_to_world;
 
 // `world_lighting` (SH of order >= `order`, truncated) turned by `rotate_degrees` about world z, then seen
 // in the object frame of `model` (a rotation, uniform scale and translation): what that object's transfer

@@ -33,21 +33,12 @@ namespace hemi::render
 // io::FormatError for a bad file, std::invalid_argument for a bad order.
 std::vector<glm::vec3> environment_lighting(const std::string& environment, int order);
 
-// The model's bounding sphere in world space (under `model`): centred on the bounding box.
-struct BoundingSphere
-{
-    glm::vec3 centre{0.0f};
-    float radius = 1.0f;
-};
-BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model);
-
-// A camera that frames the whole model (its bounding sphere under `model`) from the front and slightly above.
-PrtCamera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect);
-// View-projection for `camera` with near and far planes that enclose the model's bounding sphere.
-glm::mat4 camera_matrix(const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
-glm::mat4 camera_matrix(const PrtCamera& camera, const BoundingSphere& bounds, float aspect);
-// A view-projection matrix (Vulkan clip space, near 0.05, far 100) looking from `eye` at `target`, z up.
-glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect);
+// The camera math (math/camera.h), shared with the reference tracer so that both frame a scene alike.
+using math::auto_camera;
+using math::bounding_sphere;
+using math::BoundingSphere;
+using math::camera_matrix;
+using math::look_at_projection;
 
 struct PrtFrame
 {

@@ -6,6 +6,7 @@
 #include <hemi/gpu/device.h>
 #include <hemi/io/image.h>
 #include <hemi/io/mesh.h>
+#include <hemi/math/camera.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
 #include <hemi/render/view/offscreen.h>
@@ -16,12 +17,7 @@
 namespace hemi::render
 {
 
-struct PrtCamera
-{
-    glm::vec3 eye{0.0f, -3.0f, 1.0f};
-    glm::vec3 target{0.0f};
-    float fov_y_degrees = 35.0f;
-};
+using PrtCamera = math::Camera; // math/camera.h
 
 class ViewTarget
 {

@@ -1,0 +1,46 @@
+#pragma once
+// Quads and planes for the lightmap and reference tests, with normal-map and lightmap UVs.
+#include <hemi/io/mesh.h>
+
+#include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
+
+namespace hemi::test
+{
+
+// A quad p0 p1 p2 p3 (counter-clockwise seen from its front), split into (0, 1, 2) and (0, 2, 3), with
+// lightmap UVs spanning [u0, u1] x [v0, v1] and the normal-map UV frame along p1 - p0.
+inline void add_quad(io::Mesh& m, glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3, glm::vec4 uv1)
+{
+    const uint32_t base = uint32_t(m.positions.size());
+    const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p3 - p0));
+    const glm::vec3 t = glm::normalize(p1 - p0);
+    const glm::vec3 p[4] = {p0, p1, p2, p3};
+    const glm::vec2 uv[4] = {{uv1.x, uv1.y}, {uv1.z, uv1.y}, {uv1.z, uv1.w}, {uv1.x, uv1.w}};
+    for (int i = 0; i < 4; ++i)
+    {
+        m.positions.push_back(p[i]);
+        m.normals.push_back(n);
+        m.tangents.emplace_back(t, 1.0f);
+        m.uvs.push_back(uv[i]);
+        m.uvs1.push_back(uv[i]);
+    }
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+}
+
+// The plane z = 0 over [-1, 1]^2 as `cells` x `cells` quads, lightmap UVs over [0, 1]^2 (v down the image:
+// v = 0 at y = +1).
+inline io::Mesh plane(int cells)
+{
+    io::Mesh m;
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i)
+        {
+            const float u0 = float(i) / cells, u1 = float(i + 1) / cells, v0 = float(j) / cells, v1 = float(j + 1) / cells;
+            auto at = [](float u, float v) { return glm::vec3(2.0f * u - 1.0f, 1.0f - 2.0f * v, 0.0f); };
+            add_quad(m, at(u0, v1), at(u1, v1), at(u1, v0), at(u0, v0), {u0, v1, u1, v0});
+        }
+    return m;
+}
+
+} // namespace hemi::test

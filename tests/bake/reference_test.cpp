@@ -1,0 +1,229 @@
+// The reference tracer (hemi-bake reference) against analytic cases: the irradiance of a plane at a normal-map
+// normal under uniform radiance (the visible part of the tilted hemisphere) and under one sun (the cosine,
+// which also pins the tangent frame's handedness), and a closed emissive box whose bounces add a geometric
+// series. Every expected value is computed here from the geometry, not by the tracer's code.
+#include "quads.h"
+
+#include <hemi/bake/reference.h>
+#include <hemi/io/image.h>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstring>
+
+using namespace hemi::bake;
+using hemi::io::Mesh;
+
+namespace
+{
+
+// A material whose normal texture is one texel (r, g, b) everywhere.
+struct FlatNormalMap
+{
+    std::vector<hemi::io::Material> materials;
+    std::vector<hemi::io::EncodedImage> images;
+    glm::vec3 tangent_normal; // decoded here: (2c / 255 - 1), normalised (scale 1)
+
+    FlatNormalMap(uint8_t r, uint8_t g, uint8_t b, glm::vec3 albedo = glm::vec3(1.0f))
+    {
+        hemi::io::ImageRgba8 texel{4, 4, {}};
+        for (int i = 0; i < 16; ++i)
+            texel.pixels.insert(texel.pixels.end(), {r, g, b, 255});
+        images.push_back({"flat normal", "image/png", hemi::io::encode_png(texel)});
+        hemi::io::Material m;
+        m.base_color_factor = glm::vec4(albedo, 1.0f);
+        m.normal.image = 0;
+        materials.push_back(m);
+        tangent_normal = glm::normalize(glm::vec3(2.0f * r / 255.0f - 1.0f, 2.0f * g / 255.0f - 1.0f, 2.0f * b / 255.0f - 1.0f));
+    }
+};
+
+// The plane z = 0 over [-1, 1]^2 (tangent +x, bitangent +y, normal +z) seen from straight above.
+ReferenceOptions above(int rays)
+{
+    ReferenceOptions o;
+    o.width = o.height = 24;
+    o.auto_camera = false;
+    o.camera.eye = glm::vec3(0.0f, 0.0f, 2.5f);
+    o.camera.target = glm::vec3(0.0f);
+    o.model = glm::mat4(1.0f);
+    o.rays = rays;
+    o.white = true;
+    return o;
+}
+
+} // namespace
+
+// Under uniform radiance 1 an open plane's irradiance at a normal tilted by theta from its own normal is
+// pi (1 + cos theta) / 2: the tilted hemisphere loses the lune below the plane. White pixels show E / pi. The
+// noise estimate agrees with the pixels' actual scatter about the analytic value (within a factor 1.5).
+TEST(Reference, TiltedNormalUnderUniformRadianceSeesTheHemisphereAboveThePlane)
+{
+    const Mesh m = hemi::test::plane(2);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    for (const uint8_t tilt : {170, 200, 240})
+    {
+        const FlatNormalMap map(tilt, 128, 200);
+        const LightmapSurfaces surfaces(m, map.materials, map.images, primitives);
+        LightmapLights lights; // uniform radiance 1
+        const ReferenceImage r = render_reference(m, surfaces, lights, above(512));
+        const double expected = (1.0 + double(map.tangent_normal.z)) / 2.0;
+        double sum = 0.0, squared = 0.0, worst = 0.0;
+        int covered = 0;
+        for (uint32_t y = 0; y < 24; ++y)
+            for (uint32_t x = 0; x < 24; ++x)
+            {
+                const float* p = r.image.at(x, y);
+                if (p[3] < 1.0f)
+                    continue;
+                ++covered;
+                for (int c = 0; c < 3; ++c)
+                {
+                    sum += p[c];
+                    squared += (p[c] - expected) * (p[c] - expected);
+                    worst = std::max(worst, std::abs(p[c] - expected));
+                }
+            }
+        ASSERT_GT(covered, 200);
+        // The mean over the pixels: unbiased to 0.1%; every pixel within 5 of the reported standard errors.
+        EXPECT_NEAR(sum / (3.0 * covered), expected, 1e-3 * expected) << "tilt " << int(tilt);
+        EXPECT_LT(worst, 5.0 * r.noise) << "tilt " << int(tilt);
+        const double scatter = std::sqrt(squared / (3.0 * covered));
+        EXPECT_GT(r.noise, scatter / 1.5) << "tilt " << int(tilt);
+        EXPECT_LT(r.noise, scatter * 1.5) << "tilt " << int(tilt);
+        EXPECT_LT(r.noise, 0.01) << "tilt " << int(tilt);
+    }
+}
+
+// One sun of irradiance 1 and no sky: a pixel shows max(0, n'.d) / pi at the normal-map normal n'. A tilt
+// towards +x in the map (the tangent) faces a sun on the +x side, one towards +y (up the image: the
+// bitangent, glTF's convention) a sun on the +y side; the opposite tilt turns away from it.
+TEST(Reference, SunLightsTheNormalMapNormalInTheTangentFrame)
+{
+    const Mesh m = hemi::test::plane(2);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    struct Case
+    {
+        uint8_t r, g, b;
+        glm::vec3 sun;
+    };
+    const Case cases[] = {
+        {220, 128, 200, {0.8f, 0.0f, 0.6f}},  // towards the sun along the tangent
+        {36, 128, 200, {0.8f, 0.0f, 0.6f}},   // away from it
+        {128, 220, 200, {0.0f, 0.8f, 0.6f}},  // towards the sun along the bitangent
+        {128, 36, 200, {0.0f, 0.8f, 0.6f}},   // away from it
+    };
+    for (const Case& k : cases)
+    {
+        const FlatNormalMap map(k.r, k.g, k.b);
+        const LightmapSurfaces surfaces(m, map.materials, map.images, primitives);
+        LightmapLights lights;
+        lights.uniform = glm::vec3(0.0f);
+        lights.sun = true;
+        lights.sun_direction = k.sun;
+        lights.sun_irradiance = glm::vec3(1.0f);
+        lights.sun_diameter_degrees = 0.0f;
+        const ReferenceImage r = render_reference(m, surfaces, lights, above(8));
+        // The plane's tangent frame is the world's: n' is the decoded texel itself.
+        const double expected = std::max(0.0f, glm::dot(map.tangent_normal, glm::normalize(k.sun))) / M_PI;
+        int covered = 0;
+        for (uint32_t y = 0; y < 24; ++y)
+            for (uint32_t x = 0; x < 24; ++x)
+                if (r.image.at(x, y)[3] == 1.0f)
+                {
+                    ++covered;
+                    ASSERT_NEAR(r.image.at(x, y)[1], expected, 1e-5) << int(k.r) << "," << int(k.g) << " (" << x << ", " << y << ")";
+                }
+        ASSERT_GT(covered, 200);
+    }
+}
+
+// Inside a closed box whose every surface emits radiance 1 with albedo 0.5, a path of B bounces sees
+// E / pi = sum_{k=0..B} 0.5^k, exactly (every path hits a wall). The camera looks in from outside: the near
+// walls' backs are culled, as the rasteriser does, and the colour view shows emission + albedo E / pi.
+TEST(Reference, ClosedBoxFurnaceAddsEachBounce)
+{
+    Mesh m;
+    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const auto& f : faces)
+        hemi::test::add_quad(m, c[f[3]], c[f[2]], c[f[1]], c[f[0]], {0, 1, 1, 0}); // facing into the box
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
+    materials[0].emissive_factor = glm::vec3(1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    for (int bounces : {0, 1, 3})
+        for (bool white : {true, false})
+        {
+            ReferenceOptions o;
+            o.width = o.height = 16;
+            o.model = glm::mat4(1.0f);
+            o.rays = 16;
+            o.bounces = bounces;
+            o.white = white;
+            const ReferenceImage r = render_reference(m, surfaces, lights, o);
+            double e = 0.0;
+            for (int k = 0; k <= bounces; ++k)
+                e += std::pow(0.5, k);
+            const double expected = white ? e : 1.0 + 0.5 * e;
+            int covered = 0;
+            for (uint32_t y = 0; y < 16; ++y)
+                for (uint32_t x = 0; x < 16; ++x)
+                    if (r.image.at(x, y)[3] == 1.0f)
+                    {
+                        ++covered;
+                        ASSERT_NEAR(r.image.at(x, y)[0], expected, 1e-4 * expected) << bounces << " bounces";
+                    }
+            EXPECT_GT(covered, 100) << "the box fills the auto camera's view";
+            EXPECT_LT(r.noise, 1e-4);
+        }
+}
+
+// The same seed gives the same bytes on one thread and on all of them; bad options are refused.
+TEST(Reference, SameSeedSameBytesAndBadOptionsAreRefused)
+{
+    const Mesh m = hemi::test::plane(2);
+    const FlatNormalMap map(200, 90, 200, glm::vec3(0.8f, 0.5f, 0.3f));
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    const LightmapSurfaces surfaces(m, map.materials, map.images, primitives);
+    LightmapLights lights;
+    lights.sun = true;
+    lights.sun_direction = glm::vec3(0.3f, 0.2f, 1.0f);
+    lights.sun_irradiance = glm::vec3(2.0f);
+    ReferenceOptions o = above(32);
+    o.white = false;
+    const ReferenceImage all = render_reference(m, surfaces, lights, o);
+    ReferenceImage one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = render_reference(m, surfaces, lights, o);
+    }
+    ASSERT_EQ(all.image.pixels.size(), one.image.pixels.size());
+    EXPECT_EQ(std::memcmp(all.image.pixels.data(), one.image.pixels.data(), all.image.pixels.size() * sizeof(float)), 0);
+    o.seed = 2;
+    const ReferenceImage other = render_reference(m, surfaces, lights, o);
+    EXPECT_NE(std::memcmp(all.image.pixels.data(), other.image.pixels.data(), all.image.pixels.size() * sizeof(float)), 0);
+
+    ReferenceOptions bad = above(1);
+    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument) << "one path gives no noise estimate";
+    bad = above(8);
+    bad.bounces = 17;
+    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument);
+    bad = above(8);
+    bad.width = 0;
+    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument);
+    bad = above(8);
+    bad.camera.eye = bad.camera.target;
+    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument);
+    LightmapLights nan = lights;
+    nan.sun_irradiance.x = NAN;
+    EXPECT_THROW(render_reference(m, surfaces, nan, above(8)), std::invalid_argument);
+}
