@@ -1,5 +1,7 @@
 #include "level.h"
 
+#include <hemi/io/image.h>
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -18,9 +20,43 @@ struct Quad
     uint32_t material;
 };
 
+// A tangent-space normal map (glTF's: +y up the image) of the height field `height(u, v)` over one unit of UV
+// (v down the image), by central differences, 8-bit PNG.
+template <class Height>
+io::EncodedImage normal_map(const std::string& name, uint32_t size, Height height)
+{
+    io::ImageRgba8 image{size, size, std::vector<uint8_t>(size_t(size) * size * 4)};
+    const float step = 1.0f / float(size);
+    for (uint32_t y = 0; y < size; ++y)
+        for (uint32_t x = 0; x < size; ++x)
+        {
+            const float u = (float(x) + 0.5f) * step, v = (float(y) + 0.5f) * step;
+            const float hu = (height(u + step, v) - height(u - step, v)) / (2.0f * step);
+            const float hv = (height(u, v + step) - height(u, v - step)) / (2.0f * step);
+            // Tangent x along +u, y along -v (up the image): n ~ (-dh/du, dh/dv, 1).
+            const glm::vec3 n = glm::normalize(glm::vec3(-hu, hv, 1.0f));
+            uint8_t* p = &image.pixels[(size_t(y) * size + x) * 4];
+            for (int c = 0; c < 3; ++c)
+                p[c] = uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+            p[3] = 255;
+        }
+    return {name, "image/png", io::encode_png(image)};
+}
+
+// Height of a bevelled block whose edges are `d` away: rising at `slope` over the bevel `width`, flat on top.
+float bevel(float d, float width, float slope)
+{
+    return std::min(d, width) * slope;
+}
+
+float fract(float x)
+{
+    return x - std::floor(x);
+}
+
 } // namespace
 
-io::GltfScene make_level(uint32_t atlas)
+io::GltfScene make_level(uint32_t atlas, bool normal_maps)
 {
     if (atlas < 64)
         throw std::invalid_argument("make_level: atlas " + std::to_string(atlas) + " is smaller than 64");
@@ -100,6 +136,24 @@ io::GltfScene make_level(uint32_t atlas)
         mat.name = k == 0 ? "plaster" : k == 1 ? "red wall" : k == 2 ? "green wall" : "blue wall";
         mat.base_color_factor = colours[k];
         scene.materials.push_back(mat);
+    }
+    if (normal_maps)
+    {
+        // Tiles of 0.5 units (two per UV unit), bevelled over 0.06 at 45 degrees.
+        scene.images.push_back(normal_map("tiles normal map", 256, [](float u, float v) {
+            const float x = fract(u * 2.0f), y = fract(v * 2.0f);
+            const float d = std::min(std::min(x, 1.0f - x), std::min(y, 1.0f - y)) * 0.5f;
+            return bevel(d, 0.06f, 1.0f);
+        }));
+        // Bricks 0.5 x 0.25 in running bond, mortar joints bevelled over 0.04 at 50 degrees.
+        scene.images.push_back(normal_map("bricks normal map", 256, [](float u, float v) {
+            const float row = std::floor(v * 4.0f);
+            const float x = fract(u * 2.0f + 0.5f * row), y = fract(v * 4.0f);
+            const float d = std::min(std::min(x, 1.0f - x) * 0.5f, std::min(y, 1.0f - y) * 0.25f);
+            return bevel(d, 0.04f, 1.19f);
+        }));
+        for (size_t k = 0; k < scene.materials.size(); ++k)
+            scene.materials[k].normal.image = k == 0 ? 0 : 1;
     }
     // One primitive per material: quads grouped by material.
     for (uint32_t material = 0; material < 4; ++material)

@@ -3,6 +3,9 @@
 // window openings in two walls, four pillars, coloured walls, with normal-map UVs (TEXCOORD_0, one unit of
 // world space per UV unit) and lightmap UVs (TEXCOORD_1: every quad its own chart, packed into the unit
 // square at a uniform texel density with a gap between charts). glTF's y-up space, like a scene from a file.
+// With normal maps (PNG, embedded like a Blender export's), the floor, ceiling and pillars are bevelled tiles
+// of 0.5 units and the walls bricks of 0.5 x 0.25 with deep mortar joints: slopes of up to 50 degrees, which
+// is where the directional lightmap bases differ.
 
 #include <hemi/io/gltf.h>
 
@@ -12,6 +15,6 @@ namespace hemi::samples
 {
 
 // `atlas` is the lightmap size the charts are packed for (their gaps are 2 texels of it).
-io::GltfScene make_level(uint32_t atlas = 512);
+io::GltfScene make_level(uint32_t atlas = 512, bool normal_maps = true);
 
 } // namespace hemi::samples

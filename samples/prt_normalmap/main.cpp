@@ -5,6 +5,7 @@
 // (rows: models; columns: techniques) and a table of each technique's error against the gold standard, and a
 // second image of the complex object's lighting with each transfer kind (unshadowed, shadowed, 1 and 2
 // bounces).
+#include "figure.h"
 #include "models.h"
 
 #include <hemi/bake/gnuplot.h>
@@ -69,41 +70,6 @@ Error compare(const hemi::io::ImageRgba& image, const hemi::io::ImageRgba& refer
     const double mse = display / double(std::max<size_t>(count, 1));
     e.psnr = mse > 0.0 ? 10.0 * std::log10(1.0 / mse) : INFINITY;
     return e;
-}
-
-// Tiles (rows x columns, each t x t, row-major) composed into one PNG with column and row labels, drawn by
-// gnuplot.
-void write_labeled_grid(const std::string& path, const std::vector<hemi::io::ImageRgba>& tiles, uint32_t t,
-                        const std::vector<std::string>& column_labels, const std::vector<std::string>& row_labels,
-                        float exposure)
-{
-    const uint32_t columns = uint32_t(column_labels.size()), rows = uint32_t(row_labels.size());
-    hemi::io::ImageRgba grid{t * columns, t * rows, std::vector<float>(size_t(t) * columns * t * rows * 4, 0.0f)};
-    for (uint32_t r = 0; r < rows; ++r)
-        for (uint32_t c = 0; c < columns; ++c)
-            for (uint32_t y = 0; y < t; ++y)
-                for (uint32_t x = 0; x < t; ++x)
-                    for (int k = 0; k < 4; ++k)
-                        grid.pixels[((size_t(r) * t + y) * grid.width + c * t + x) * 4 + k] =
-                            k == 3 ? 1.0f : tiles[r * columns + c].at(x, y)[k];
-    hemi::bake::run_gnuplot(path, [&](const fs::path& folder, std::ostream& script, const fs::path& output) {
-        hemi::io::write_png(folder / "grid.png", grid, {exposure, hemi::io::ToneMap::Curve::Clamp});
-        const int header = 26, w = int(grid.width), h = int(grid.height);
-        script << "set terminal pngcairo size " << w << "," << h + header
-               << " noenhanced font 'Sans,11' background rgb 'black'\n"
-               << "set output '" << output.string() << "'\n"
-               << "unset border\nunset tics\nunset key\n"
-               << "set lmargin at screen 0\nset rmargin at screen 1\nset bmargin at screen 0\n"
-               << "set tmargin at screen " << double(h) / (h + header) << "\n"
-               << "set xrange [-0.5:" << w - 0.5 << "]\nset yrange [-0.5:" << h - 0.5 << "]\n";
-        for (uint32_t c = 0; c < columns; ++c)
-            script << "set label '" << column_labels[c] << "' at screen " << (c + 0.5) / columns << ", screen "
-                   << 1.0 - 0.5 * header / (h + header) << " center tc rgb 'white'\n";
-        for (uint32_t r = 0; r < rows; ++r)
-            script << "set label '" << row_labels[r] << "' at screen 0.004, screen "
-                   << (double(h) * (1.0 - double(r) / rows) - 14.0) / (h + header) << " left front tc rgb '#c0c0c0'\n";
-        script << "plot '" << (folder / "grid.png").string() << "' binary filetype=png with rgbimage\n";
-    });
 }
 
 } // namespace
@@ -175,7 +141,7 @@ int main(int argc, char** argv)
                 table << line;
             }
         }
-        write_labeled_grid(image_path, tiles, t, column_labels, row_labels, exposure);
+        hemi::samples::write_labeled_grid(image_path, tiles, t, t, column_labels, row_labels, exposure);
 
         // The transfer kinds on the complex object, lighting only (albedo 1), SH9 under the sky: what
         // shadowing and each bounce of interreflection add.
@@ -207,7 +173,7 @@ int main(int argc, char** argv)
                 frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, 1.0f);
                 kinds.push_back(view.render(frame));
             }
-            write_labeled_grid(kinds_path, kinds, kt,
+            hemi::samples::write_labeled_grid(kinds_path, kinds, kt, kt,
                                {"unshadowed", "shadowed", "+ 1 bounce", "+ 2 bounces"},
                                {"lighting only (albedo 1), SH9"}, exposure * 0.7f);
             std::printf("wrote %s\n", kinds_path.c_str());
