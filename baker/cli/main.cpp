@@ -7,7 +7,7 @@
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
 //   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
 //       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
-//       [--exr-dir DIR] [--json REPORT.json]
+//       [--probes NX,NY,NZ] [--probe-rays R] [--exr-dir DIR] [--json REPORT.json]
 //   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera auto|EYE,TARGET]
 //       [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
@@ -403,7 +403,7 @@ void parse_size(const std::string& text, uint32_t& width, uint32_t& height)
 
 struct LightmapCli
 {
-    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json;
+    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes;
     LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
@@ -416,6 +416,15 @@ int run_lightmap(LightmapCli& c)
     if (!c.size.empty())
         parse_size(c.size, o.width, o.height);
     o.lights = c.light.lights();
+    if (!c.probes.empty())
+    {
+        unsigned n[3] = {0, 0, 0};
+        char rest = 0;
+        if (std::sscanf(c.probes.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2], &rest) != 3 || !n[0] || !n[1] || !n[2] ||
+            uint64_t(n[0]) * n[1] * n[2] > (uint64_t(1) << 24))
+            throw std::invalid_argument("--probes expects NX,NY,NZ (at least 1 each, 2^24 in all), got '" + c.probes + "'");
+        o.probes = glm::uvec3(n[0], n[1], n[2]);
+    }
     o.exr_dir = c.exr_dir;
     if (!c.json.empty())
         hemi::io::check_writable(c.json); // before the bake, like the asset and its checkpoint
@@ -438,6 +447,9 @@ int run_lightmap(LightmapCli& c)
     std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
                 s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0, s.total_seconds,
                 s.resumed ? " (resumed from a checkpoint)" : "");
+    if (s.probes)
+        std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes, o.probes.x,
+                    o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);
     if (s.pushed || s.invalid)
         std::printf("%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
                     "their neighbours)\n", s.pushed, s.invalid);
@@ -609,6 +621,9 @@ int main(int argc, char** argv)
         ->capture_default_str();
     lightmap->add_option("--seed", lm.options.bake.seed, "seed of the rays (same seed, same bytes)")
         ->capture_default_str();
+    lightmap->add_option("--probes", lm.probes, "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
+                                                "grid over the scene's bounding box, at the centres of its cells");
+    lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")->capture_default_str();
     lightmap->add_option("--exr-dir", lm.exr_dir, "also write each output as an EXR with named channels into DIR");
     lightmap->add_option("--json", lm.json, "write the bake summary as JSON to FILE");
     lightmap->add_option("--checkpoint-interval", lm.options.bake.checkpoint_seconds,

@@ -240,6 +240,27 @@ std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::
     }
     return maps;
 }
+// A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
+// (Embree's barycentrics): what a ray that lands there picks up.
+glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const std::vector<glm::vec3>& map,
+                       uint32_t triangle, float bu, float bv)
+{
+    const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
+    const glm::vec2 uv = (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
+    const double fx = std::clamp(double(uv.x), 0.0, 1.0) * atlas.width - 0.5;
+    const double fy = std::clamp(double(uv.y), 0.0, 1.0) * atlas.height - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    const float tx = float(fx - x0), ty = float(fy - y0);
+    auto at = [&](int64_t x, int64_t y) {
+        x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
+        y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
+        return map[size_t(y) * atlas.width + size_t(x)];
+    };
+    const int64_t ix = int64_t(x0), iy = int64_t(y0);
+    return (at(ix, iy) * (1.0f - tx) + at(ix + 1, iy) * tx) * (1.0f - ty) +
+           (at(ix, iy + 1) * (1.0f - tx) + at(ix + 1, iy + 1) * tx) * ty;
+}
+
 } // namespace
 
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
@@ -275,20 +296,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     std::vector<uint8_t> pushed(n, 0);
     std::vector<glm::vec3> previous_map; // `previous` over the whole atlas, dilated, for bilinear lookups
     auto lookup_previous = [&](uint32_t triangle, float bu, float bv) {
-        const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
-        const glm::vec2 uv = (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
-        const double fx = std::clamp(double(uv.x), 0.0, 1.0) * atlas.width - 0.5;
-        const double fy = std::clamp(double(uv.y), 0.0, 1.0) * atlas.height - 0.5;
-        const double x0 = std::floor(fx), y0 = std::floor(fy);
-        const float tx = float(fx - x0), ty = float(fy - y0);
-        auto at = [&](int64_t x, int64_t y) {
-            x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
-            y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
-            return previous_map[size_t(y) * atlas.width + size_t(x)];
-        };
-        const int64_t ix = int64_t(x0), iy = int64_t(y0);
-        return (at(ix, iy) * (1.0f - tx) + at(ix + 1, iy) * tx) * (1.0f - ty) +
-               (at(ix, iy + 1) * (1.0f - tx) + at(ix + 1, iy + 1) * tx) * ty;
+        return atlas_lookup(mesh, atlas, previous_map, triangle, bu, bv);
     };
 
     // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
@@ -477,6 +485,103 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         out.invalid += !out.valid[i];
     }
     return out;
+}
+
+void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
+                       const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& o,
+                       const LightmapSurfaces* surfaces)
+{
+    check(lights, o);
+    const uint64_t n = uint64_t(probes.count.x) * probes.count.y * probes.count.z;
+    if (n == 0 || n > (uint64_t(1) << 24))
+        throw std::invalid_argument("a probe grid needs 1 to 2^24 probes");
+    if (!(probes.lo.x <= probes.hi.x && probes.lo.y <= probes.hi.y && probes.lo.z <= probes.hi.z) ||
+        !std::isfinite(probes.lo.x + probes.lo.y + probes.lo.z + probes.hi.x + probes.hi.y + probes.hi.z))
+        throw std::invalid_argument("the probe grid's corners must be finite and ordered");
+    if (sh.irradiance.size() != atlas.texels.size())
+        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
+    if (surfaces && mesh.uvs1.size() != mesh.positions.size())
+        throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
+    const EmbreeScene scene(mesh);
+    const detail::LightSampler light(lights, o.seed);
+    // What a ray that lands on a surface picks up: the lightmap's irradiance at the surface normal.
+    std::vector<glm::vec3> irradiance(atlas.texels.size());
+    for (size_t i = 0; i < atlas.texels.size(); ++i)
+        irradiance[i] = math::sh9_eval_rgb(sh.irradiance[i], glm::vec3(0.0f, 0.0f, 1.0f));
+    const std::vector<glm::vec3> map = dilated(atlas, irradiance, 1, 2, sh.valid);
+    const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
+    probes.irradiance.assign(size_t(n), {});
+    probes.valid.assign(size_t(n), 1);
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1), [&](const tbb::blocked_range<uint64_t>& range) {
+        for (uint64_t at = range.begin(); at != range.end(); ++at)
+        {
+            const uint32_t i = uint32_t(at % probes.count.x), j = uint32_t((at / probes.count.x) % probes.count.y),
+                           k = uint32_t(at / (uint64_t(probes.count.x) * probes.count.y));
+            const glm::vec3 p = probes.position(i, j, k);
+            std::array<glm::dvec3, 9> acc{};
+            auto add = [&](const glm::vec3& d, const glm::dvec3& radiance) {
+                const math::Sh9 y = math::sh9_eval(d);
+                for (int c = 0; c < 9; ++c)
+                    acc[size_t(c)] += radiance * double(y[size_t(c)]);
+            };
+            int back_faces = 0;
+            const double weight = 4.0 * M_PI / double(o.rays);
+            for (int r = 0; r < o.rays; ++r)
+            {
+                const glm::vec3 d = sphere_direction(probe_seed, at, r, o.rays);
+                const std::optional<RayHit> hit = scene.intersect(p, d);
+                if (!hit)
+                {
+                    if (!light.image_environment())
+                        add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+                    continue;
+                }
+                if (glm::dot(scene.geometric_normal(hit->primitive), d) > 0.0f &&
+                    !(surfaces && surfaces->double_sided(hit->primitive)))
+                {
+                    ++back_faces;
+                    continue;
+                }
+                if (!surfaces)
+                    continue;
+                const glm::vec3 radiance = surfaces->emission(hit->primitive, hit->u, hit->v) +
+                                           surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                                               atlas_lookup(mesh, atlas, map, hit->primitive, hit->u, hit->v) /
+                                               float(M_PI);
+                add(d, glm::dvec3(radiance) * weight);
+            }
+            const uint64_t item = uint64_t(1) << 40 | at; // the light samplers' items, apart from the texels'
+            for (int r = 0; r < o.rays && light.image_environment(); ++r)
+            {
+                glm::vec3 d;
+                double w = 0.0;
+                if (light.environment_ray(item, r, o.rays, d, w) && !scene.occluded(p, d))
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * w);
+            }
+            for (int r = 0; r < o.sun_rays && lights.sun; ++r)
+            {
+                const glm::vec3 d = light.sun_ray(item, r);
+                if (!scene.occluded(p, d))
+                    add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
+            }
+            for (const io::PunctualLight& l : lights.punctual)
+            {
+                glm::vec3 d;
+                float distance = INFINITY;
+                const glm::vec3 e = light.punctual(l, p, d, distance);
+                if (e != glm::vec3(0.0f) &&
+                    !scene.occluded(p, d, 0.0f, std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+                    add(d, glm::dvec3(e));
+            }
+            math::Sh9Rgb radiance;
+            for (int c = 0; c < 9; ++c)
+                radiance[size_t(c)] = glm::vec3(acc[size_t(c)]);
+            const math::Sh9Rgb e = math::convolve_cosine(radiance);
+            for (int c = 0; c < 9; ++c)
+                probes.irradiance[at][size_t(c)] = e[size_t(c)];
+            probes.valid[at] = uint8_t(2 * back_faces <= o.rays);
+        }
+    });
 }
 
 int lightmap_output_size(std::string_view name)

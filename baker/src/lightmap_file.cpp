@@ -132,6 +132,28 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     asset.covered_texels = uint32_t(atlas.texels.size());
     for (const std::string& name : o.outputs)
         asset.outputs.push_back({name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
+    if (o.probes != glm::uvec3(0))
+    {
+        if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
+            throw std::invalid_argument("--probes needs at least one probe along each axis");
+        // The scene's bounding box, the probes at the centres of its cells.
+        glm::vec3 lo(INFINITY), hi(-INFINITY);
+        for (const glm::vec3& p : scene.mesh.positions)
+        {
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+        const glm::vec3 cell = (hi - lo) / glm::vec3(o.probes);
+        asset.probes.count = o.probes;
+        asset.probes.lo = lo + 0.5f * cell;
+        asset.probes.hi = hi - 0.5f * cell;
+        LightmapBakeOptions probe_options = o.bake;
+        probe_options.rays = o.probe_rays;
+        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &surfaces);
+        summary.probes = asset.probes.irradiance.size();
+        for (uint8_t v : asset.probes.valid)
+            summary.invalid_probes += !v;
+    }
     io::write_lightmap_asset(asset_path, asset);
     if (!o.exr_dir.empty())
         for (const io::LightmapOutput& out : asset.outputs)
@@ -183,6 +205,9 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["rays"] = s.rays;
     j["texels_moved_out_of_walls"] = s.pushed;
     j["texels_inside_geometry"] = s.invalid;
+    if (s.probes)
+        j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}}, {"count", s.probes},
+                       {"inside_geometry", s.invalid_probes}, {"rays_per_probe", o.probe_rays}};
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;

@@ -672,3 +672,100 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
         }
     }
 }
+
+// Light probes: inside a closed box whose walls emit 1 with albedo 0.5, a lightmap of one bounce leaves the
+// walls' radiance at 1 + 0.5 (1 + 0.5) = 1.75, so every probe sees that from every direction: E(n) = 1.75 pi
+// for every n and no directional coefficients (0.5%: the lightmap's noise). A sun with no sky gives a probe
+// in the open the closed-form SH9 of its clamped cosine, E A_l y_lm(d) (exact for a point sun) with d in the
+// mesh's frame under a turned scene_to_world; under the floor the sun is shadowed (exactly zero). A probe
+// inside a closed box of single-sided outward faces is flagged invalid.
+TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
+{
+    Mesh m;
+    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (int f = 0; f < 6; ++f)
+    {
+        const float u0 = float(f % 3) / 3.0f + 0.02f, v0 = float(f / 3) / 2.0f + 0.03f;
+        add_quad(m, c[faces[f][3]], c[faces[f][2]], c[faces[f][1]], c[faces[f][0]], {u0, v0 + 0.44f, u0 + 0.29f, v0});
+    }
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
+    materials[0].emissive_factor = glm::vec3(1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
+    LightmapLights dark;
+    dark.uniform = glm::vec3(0.0f);
+    LightmapBakeOptions o;
+    o.rays = 256;
+    o.bounces = 1;
+    const LightmapSh sh = bake_lightmap_sh(m, a, dark, o, &surfaces);
+    hemi::io::LightProbes probes;
+    probes.count = glm::uvec3(2, 3, 2);
+    probes.lo = glm::vec3(-0.6f);
+    probes.hi = glm::vec3(0.5f, 0.7f, 0.6f);
+    LightmapBakeOptions po;
+    po.rays = 1024;
+    bake_light_probes(probes, m, a, sh, dark, po, &surfaces);
+    ASSERT_EQ(probes.irradiance.size(), 12u);
+    const double expected = 1.75 * M_PI;
+    for (size_t i = 0; i < probes.irradiance.size(); ++i)
+    {
+        EXPECT_TRUE(probes.valid[i]);
+        const auto& e = probes.irradiance[i];
+        for (const glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(0.6f, -0.8f, 0), glm::vec3(-1, 0, 0)})
+        {
+            const std::array<double, 9> y = sh9(n);
+            double v = 0.0;
+            for (int j = 0; j < 9; ++j)
+                v += e[size_t(j)].x * y[size_t(j)];
+            EXPECT_NEAR(v, expected, 0.005 * expected) << "probe " << i;
+        }
+        for (int j = 1; j < 9; ++j)
+            EXPECT_NEAR(e[size_t(j)].y, 0.0, 0.005 * expected) << "probe " << i << " coefficient " << j;
+    }
+
+    // A sun over a floor, the scene turned like a glTF scene in hemi's world.
+    const Mesh floor = plane(2);
+    const LightmapAtlas fa = rasterize_lightmap(floor, 8, 8, report);
+    LightmapLights sun;
+    sun.uniform = glm::vec3(0.0f);
+    sun.sun = true;
+    sun.sun_diameter_degrees = 0.0f;
+    sun.sun_irradiance = glm::vec3(3.0f, 2.0f, 1.0f);
+    sun.scene_to_world = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, -1, 0)); // y up -> z up
+    sun.sun_direction = glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)); // world
+    const LightmapSh fsh = bake_lightmap_sh(floor, fa, sun, LightmapBakeOptions{}, nullptr);
+    hemi::io::LightProbes open;
+    open.count = glm::uvec3(1, 1, 2);
+    open.lo = glm::vec3(0.0f, 0.0f, -0.5f);
+    open.hi = glm::vec3(0.0f, 0.0f, 0.5f);
+    bake_light_probes(open, floor, fa, fsh, sun, po, nullptr);
+    // The sun's direction in the mesh's space: the transpose of scene_to_world.
+    const glm::dvec3 s = glm::transpose(sun.scene_to_world) * sun.sun_direction;
+    const std::array<double, 9> ys = sh9(s);
+    ASSERT_GT(s.z, 0.0) << "the sun is above the floor in the mesh's space";
+    for (int j = 0; j < 9; ++j)
+    {
+        EXPECT_EQ(open.irradiance[0][size_t(j)], glm::vec3(0.0f)) << "under the floor, coefficient " << j;
+        EXPECT_NEAR(open.irradiance[1][size_t(j)].x, 3.0 * kA[j] * ys[size_t(j)], 1e-4) << "coefficient " << j;
+        EXPECT_NEAR(open.irradiance[1][size_t(j)].z, 1.0 * kA[j] * ys[size_t(j)], 1e-4) << "coefficient " << j;
+    }
+    EXPECT_TRUE(open.valid[0] && open.valid[1]);
+
+    // Inside a closed box of outward (single-sided) faces.
+    Mesh solid;
+    for (const auto& f : faces)
+        add_quad(solid, c[f[0]], c[f[1]], c[f[2]], c[f[3]], {0.1f, 0.9f, 0.9f, 0.1f});
+    const LightmapAtlas sa = rasterize_lightmap(solid, 8, 8, report);
+    const LightmapSh ssh = bake_lightmap_sh(solid, sa, dark, LightmapBakeOptions{}, nullptr);
+    hemi::io::LightProbes inside;
+    inside.count = glm::uvec3(1);
+    bake_light_probes(inside, solid, sa, ssh, dark, po, nullptr);
+    EXPECT_FALSE(inside.valid[0]);
+    hemi::io::LightProbes none;
+    EXPECT_THROW(bake_light_probes(none, solid, sa, ssh, dark, po, nullptr), std::invalid_argument);
+}

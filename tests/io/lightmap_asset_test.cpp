@@ -146,3 +146,89 @@ TEST(LightmapAsset, WriterRefusesInconsistentAssets)
     a.mesh.uvs1.clear();
     refused(a, "lightmap UVs");
 }
+
+namespace
+{
+// A 2 x 2 x 2 probe grid over [0, 2] x [0, 1] x [0, 4] whose probe (i, j, k) holds coefficient c = value
+// (i + 2 j + 4 k) * (c + 1) in every channel.
+hemi::io::LightProbes probe_grid()
+{
+    hemi::io::LightProbes p;
+    p.count = glm::uvec3(2, 2, 2);
+    p.lo = glm::vec3(0.0f);
+    p.hi = glm::vec3(2.0f, 1.0f, 4.0f);
+    for (int at = 0; at < 8; ++at)
+    {
+        std::array<glm::vec3, 9> sh{};
+        for (int c = 0; c < 9; ++c)
+            sh[size_t(c)] = glm::vec3(float(at * (c + 1)));
+        p.irradiance.push_back(sh);
+        p.valid.push_back(1);
+    }
+    return p;
+}
+} // namespace
+
+// Light probes round-trip exactly (32-bit floats) with their grid and valid flags; the writer refuses a grid
+// whose sizes disagree or that holds NaN; interpolation is trilinear over the valid probes of a position's
+// cell (weights renormalised without an invalid one), clamped outside the grid, and falls back to the
+// nearest valid probe when its whole cell is invalid. Expected values are computed here from the grid.
+TEST(LightmapAsset, LightProbesRoundTripAndInterpolate)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    a.probes = probe_grid();
+    a.probes.valid[5] = 0;
+    const fs::path p = dir() / "probes.hemi";
+    hemi::io::write_lightmap_asset(p, a);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(p);
+    EXPECT_EQ(b.probes.count, a.probes.count);
+    EXPECT_EQ(b.probes.lo, a.probes.lo);
+    EXPECT_EQ(b.probes.hi, a.probes.hi);
+    EXPECT_EQ(b.probes.irradiance, a.probes.irradiance);
+    EXPECT_EQ(b.probes.valid, a.probes.valid);
+    hemi::io::write_lightmap_asset(dir() / "no_probes.hemi", small_asset());
+    EXPECT_TRUE(hemi::io::read_lightmap_asset(dir() / "no_probes.hemi").probes.empty());
+
+    const hemi::io::LightProbes all = probe_grid();
+    EXPECT_EQ(all.position(1, 0, 1), glm::vec3(2.0f, 0.0f, 4.0f));
+    // Trilinear: the value is linear in (x / 2, y, z / 4) with weights 1, 2, 4.
+    for (const glm::vec3 q : {glm::vec3(0.5f, 0.25f, 1.0f), glm::vec3(1.9f, 0.8f, 0.3f), glm::vec3(1.0f, 0.5f, 2.0f)})
+    {
+        const float expected = q.x / 2.0f + 2.0f * q.y + 4.0f * q.z / 4.0f;
+        EXPECT_NEAR(all.at(q)[3].y, expected * 4.0f, 1e-5f) << q.x << "," << q.y << "," << q.z;
+    }
+    // Clamped to the grid outside it.
+    EXPECT_NEAR(all.at(glm::vec3(-3.0f, 9.0f, 2.0f))[0].x, 0.0f + 2.0f + 2.0f, 1e-5f);
+    // Probe 5 = (1, 0, 1) invalid: at the centre the mean of the other seven (28 - 5) / 7.
+    EXPECT_NEAR(b.probes.at(glm::vec3(1.0f, 0.5f, 2.0f))[0].x, 23.0f / 7.0f, 1e-5f);
+    // Exactly at probe 5, (2, 0, 4), every other weight is 0: the nearest valid probe, 7 at (2, 1, 4), 1 unit
+    // away (4 is 2 away, 1 is 4 away).
+    EXPECT_EQ(b.probes.at(glm::vec3(2.0f, 0.0f, 4.0f))[0].x, 7.0f);
+    hemi::io::LightProbes lonely = probe_grid();
+    lonely.valid.assign(8, 0);
+    lonely.valid[6] = 1;
+    EXPECT_EQ(lonely.at(glm::vec3(2.0f, 0.0f, 0.0f))[0].x, 6.0f);
+    lonely.valid[6] = 0;
+    EXPECT_EQ(lonely.at(glm::vec3(1.0f))[0].x, 0.0f);
+
+    auto refused = [](hemi::io::LightmapAsset bad, const std::string& what) {
+        try
+        {
+            hemi::io::write_lightmap_asset(dir() / "never_probes.hemi", bad);
+            ADD_FAILURE() << "accepted: " << what;
+        }
+        catch (const std::invalid_argument& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    hemi::io::LightmapAsset bad = a;
+    bad.probes.irradiance.pop_back();
+    refused(bad, "probes and");
+    bad = a;
+    bad.probes.irradiance[2][4].z = NAN;
+    refused(bad, "not finite");
+    bad = a;
+    bad.probes.lo.x = 5.0f;
+    refused(bad, "corners");
+}

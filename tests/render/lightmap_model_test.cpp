@@ -424,3 +424,51 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
             }
     EXPECT_GT(covered, 1000);
 }
+
+// The probes' light for a dynamic object (render::probe_lighting): a level placed by glTF's rotation and
+// moved by (3, -1, 2) hands an object at a world position the probes' interpolation at that position in the
+// level's space, rotated into the world: the world SH9 evaluated at R n equals the level's SH9 at n for any
+// n (SH9 typed here), at a probe's position and between two probes. An asset without probes is refused.
+TEST(LightmapProbes, ProbeLightingRotatesTheLevelsProbesIntoTheWorld)
+{
+    auto sh9 = [](const glm::dvec3& d) {
+        return std::array<double, 9>{0.282095, -0.488603 * d.y, 0.488603 * d.z, -0.488603 * d.x, 1.092548 * d.x * d.y,
+                                     -1.092548 * d.y * d.z, 0.315392 * (3 * d.z * d.z - 1), -1.092548 * d.x * d.z,
+                                     0.546274 * (d.x * d.x - d.y * d.y)};
+    };
+    hemi::io::LightmapAsset asset;
+    asset.probes.count = glm::uvec3(2, 1, 1);
+    asset.probes.lo = glm::vec3(0.0f, 1.0f, 0.0f);
+    asset.probes.hi = glm::vec3(4.0f, 1.0f, 0.0f);
+    for (int p = 0; p < 2; ++p)
+    {
+        std::array<glm::vec3, 9> e{};
+        for (int j = 0; j < 9; ++j)
+            e[size_t(j)] = glm::vec3(std::sin(1.3f * float(j + 1) + float(p)), 0.5f * float(j) - float(p), 1.0f);
+        asset.probes.irradiance.push_back(e);
+        asset.probes.valid.push_back(1);
+    }
+    const glm::mat4 model = glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, -1.0f, 2.0f)) * hemi::render::gltf_to_world();
+    const glm::mat3 r(model);
+    for (const float x : {0.0f, 1.0f, 4.0f})
+    {
+        // Scene point (x, 1, 0): world (x + 3, -1 + 0, 2 + 1) under (x, y, z) -> (x, -z, y).
+        const std::vector<glm::vec3> world = hemi::render::probe_lighting(asset, glm::vec3(x + 3.0f, -1.0f, 3.0f), model);
+        ASSERT_EQ(world.size(), 9u);
+        const float t = x / 4.0f;
+        for (const glm::dvec3 n : {glm::dvec3(0, 0, 1), glm::dvec3(0.6, 0.0, -0.8), glm::dvec3(0.48, -0.6, 0.64)})
+        {
+            const std::array<double, 9> ys = sh9(n), yw = sh9(glm::dvec3(r * glm::vec3(n)));
+            glm::dvec3 scene(0.0), turned(0.0);
+            for (int j = 0; j < 9; ++j)
+            {
+                const glm::vec3 c = (1.0f - t) * asset.probes.irradiance[0][size_t(j)] + t * asset.probes.irradiance[1][size_t(j)];
+                scene += glm::dvec3(c) * ys[size_t(j)];
+                turned += glm::dvec3(world[size_t(j)]) * yw[size_t(j)];
+            }
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(turned[ch], scene[ch], 1e-5) << "x " << x << " channel " << ch;
+        }
+    }
+    EXPECT_THROW(hemi::render::probe_lighting(hemi::io::LightmapAsset{}, glm::vec3(0.0f), model), std::invalid_argument);
+}

@@ -3,6 +3,7 @@
 // file and the problem, no output file left behind).
 #include "../png_writer.h"
 #include "../temp_dir.h"
+#include "level.h"
 #include "models.h"
 
 #include <hemi/bake/ssbump.h>
@@ -676,4 +677,34 @@ TEST(BakeCli, ReferenceIsFramedLikeHemiRender)
     EXPECT_EQ(env.status, 1);
     EXPECT_NE(env.err.find("reference_floor.glb"), std::string::npos) << env.err;
     EXPECT_FALSE(fs::exists(none));
+}
+
+// hemi-bake lightmap --probes: the sample's level (from a .glb, as Blender writes one) gets a 3 x 2 x 3 grid
+// of light probes over its bounding box at the centres of its cells, all outside the pillars and walls
+// (valid), stored in the asset and counted in the JSON report; a malformed grid is refused.
+TEST(BakeCli, LightmapBakesLightProbesForDynamicObjects)
+{
+    const fs::path scene = dir() / "probe_level.glb";
+    hemi::io::write_gltf(scene, hemi::samples::make_level(64));
+    const fs::path asset = dir() / "probe_level.hemi", json = dir() / "probe_level.json";
+    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --size 64 --rays 16 --bases plain --probes 3,2,3 "
+                              "--probe-rays 256 --sun 0.3,-0.5,0.6,4,4,4 --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_EQ(a.probes.count, glm::uvec3(3, 2, 3));
+    // The level spans x, z in [-4, 4] and y in [0, 3] (glTF space): cells of 8/3 x 1.5 x 8/3.
+    EXPECT_NEAR(a.probes.lo.x, -4.0f + 4.0f / 3.0f, 1e-5f);
+    EXPECT_NEAR(a.probes.lo.y, 0.75f, 1e-5f);
+    EXPECT_NEAR(a.probes.hi.z, 4.0f - 4.0f / 3.0f, 1e-5f);
+    for (size_t i = 0; i < a.probes.valid.size(); ++i)
+    {
+        EXPECT_TRUE(a.probes.valid[i]) << "probe " << i;
+        EXPECT_GT(a.probes.irradiance[i][0].x, 0.0f) << "probe " << i << " sees the sky through the openings";
+    }
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["probes"]["count"], 18);
+    EXPECT_EQ(j["probes"]["inside_geometry"], 0);
+    const Result bad = lightmap(q(scene) + " -o " + q(dir() / "never.hemi") + " --probes 3,0,3");
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("--probes"), std::string::npos) << bad.err;
 }

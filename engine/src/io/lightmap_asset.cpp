@@ -8,6 +8,7 @@
 
 #include <glm/gtc/packing.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -42,6 +43,40 @@ uint32_t expected_k(const std::string& name)
     return 0;
 }
 
+static_assert(sizeof(std::array<glm::vec3, 9>) == 108, "a probe is 27 packed floats");
+
+struct ProbeHeader
+{
+    uint32_t nx, ny, nz, zero;
+    float lo[3], hi[3];
+};
+static_assert(sizeof(ProbeHeader) == 40);
+
+bool finite3(const glm::vec3& v)
+{
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+std::string probes_problem(const LightProbes& p)
+{
+    if (p.count == glm::uvec3(0) && p.irradiance.empty() && p.valid.empty())
+        return {};
+    const uint64_t n = uint64_t(p.count.x) * p.count.y * p.count.z;
+    if (n == 0 || n > (uint64_t(1) << 24))
+        return "probe grid " + std::to_string(p.count.x) + "x" + std::to_string(p.count.y) + "x" +
+               std::to_string(p.count.z) + " is empty or larger than 2^24 probes";
+    if (p.irradiance.size() != n || p.valid.size() != n)
+        return "the probe grid holds " + std::to_string(p.irradiance.size()) + " probes and " +
+               std::to_string(p.valid.size()) + " flags, expected " + std::to_string(n);
+    if (!finite3(p.lo) || !finite3(p.hi) || p.lo.x > p.hi.x || p.lo.y > p.hi.y || p.lo.z > p.hi.z)
+        return "the probe grid's corners are not finite or not ordered";
+    for (const auto& probe : p.irradiance)
+        for (const glm::vec3& c : probe)
+            if (!finite3(c))
+                return "a probe holds a value that is not finite";
+    return {};
+}
+
 std::string problem(const LightmapAsset& a)
 {
     if (std::string p = mesh_problem(a.mesh, MeshNeeds::Frames); !p.empty())
@@ -54,6 +89,8 @@ std::string problem(const LightmapAsset& a)
         return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) + " is not in [1, 16384]";
     if (a.outputs.empty())
         return "no outputs";
+    if (std::string p = probes_problem(a.probes); !p.empty())
+        return p;
     for (const LightmapOutput& o : a.outputs)
     {
         const uint32_t k = expected_k(o.name);
@@ -73,6 +110,69 @@ std::string problem(const LightmapAsset& a)
 }
 
 } // namespace
+
+glm::vec3 LightProbes::position(uint32_t i, uint32_t j, uint32_t k) const
+{
+    const glm::vec3 ijk{float(i), float(j), float(k)};
+    const glm::vec3 steps = glm::max(glm::vec3(count) - 1.0f, glm::vec3(1.0f));
+    return lo + (hi - lo) * ijk / steps;
+}
+
+std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
+{
+    std::array<glm::vec3, 9> out{};
+    if (empty())
+        return out;
+    // The cell and the weights along each axis.
+    uint32_t i0[3], i1[3];
+    float t[3];
+    for (int a = 0; a < 3; ++a)
+    {
+        const uint32_t n = count[a];
+        const float extent = hi[a] - lo[a];
+        float f = n > 1 && extent > 0.0f ? (p[a] - lo[a]) / extent * float(n - 1) : 0.0f;
+        f = std::clamp(f, 0.0f, float(n - 1));
+        i0[a] = std::min(uint32_t(f), n - 1);
+        i1[a] = std::min(i0[a] + 1, n - 1);
+        t[a] = f - float(i0[a]);
+    }
+    float total = 0.0f;
+    for (int corner = 0; corner < 8; ++corner)
+    {
+        const uint32_t i = corner & 1 ? i1[0] : i0[0], j = corner & 2 ? i1[1] : i0[1], k = corner & 4 ? i1[2] : i0[2];
+        const size_t at = i + size_t(count.x) * (j + size_t(count.y) * k);
+        const float w = (corner & 1 ? t[0] : 1.0f - t[0]) * (corner & 2 ? t[1] : 1.0f - t[1]) *
+                        (corner & 4 ? t[2] : 1.0f - t[2]);
+        if (!valid[at] || w <= 0.0f)
+            continue;
+        total += w;
+        for (int c = 0; c < 9; ++c)
+            out[size_t(c)] += w * irradiance[at][size_t(c)];
+    }
+    if (total > 0.0f)
+    {
+        for (glm::vec3& c : out)
+            c /= total;
+        return out;
+    }
+    // No valid probe around p: the nearest valid one.
+    float best = INFINITY;
+    size_t nearest = irradiance.size();
+    for (uint32_t k = 0; k < count.z; ++k)
+        for (uint32_t j = 0; j < count.y; ++j)
+            for (uint32_t i = 0; i < count.x; ++i)
+            {
+                const size_t at = i + size_t(count.x) * (j + size_t(count.y) * k);
+                const glm::vec3 d = position(i, j, k) - p;
+                const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+                if (valid[at] && d2 < best)
+                {
+                    best = d2;
+                    nearest = at;
+                }
+            }
+    return nearest < irradiance.size() ? irradiance[nearest] : out;
+}
 
 const LightmapOutput& LightmapAsset::output(const std::string& name) const
 {
@@ -101,6 +201,16 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
         for (size_t i = 0; i < o.maps.size(); ++i)
             halves[i + 2] = glm::packHalf1x16(o.maps[i]);
         w.add("L." + o.name, std::as_bytes(std::span<const uint16_t>(halves)));
+    }
+    if (!a.probes.empty())
+    {
+        const LightProbes& p = a.probes;
+        const ProbeHeader header{p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
+        std::vector<std::byte> bytes(sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size());
+        std::memcpy(bytes.data(), &header, sizeof header);
+        std::memcpy(bytes.data() + sizeof header, p.irradiance.data(), p.irradiance.size() * 27 * 4);
+        std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(), p.valid.size());
+        w.add("lightmap.probes", bytes);
     }
     w.write(path);
 }
@@ -161,6 +271,29 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
             o.maps[i] = glm::unpackHalf1x16(h);
         }
         a.outputs.push_back(std::move(o));
+    }
+    if (r.has("lightmap.probes"))
+    {
+        const std::span<const std::byte> b = r.section("lightmap.probes");
+        ProbeHeader header{};
+        if (b.size() < sizeof header)
+            throw fail("lightmap.probes is too short");
+        std::memcpy(&header, b.data(), sizeof header);
+        const uint64_t n = uint64_t(header.nx) * header.ny * header.nz;
+        if (n == 0 || n > (uint64_t(1) << 24) || header.zero != 0)
+            throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" + std::to_string(header.ny) + "x" +
+                       std::to_string(header.nz) + " probes is not supported");
+        if (b.size() != sizeof header + n * 27 * 4 + n)
+            throw fail("lightmap.probes has " + std::to_string(b.size()) + " bytes, " + std::to_string(n) +
+                       " probes need " + std::to_string(sizeof header + n * 27 * 4 + n));
+        LightProbes& p = a.probes;
+        p.count = glm::uvec3(header.nx, header.ny, header.nz);
+        p.lo = glm::vec3(header.lo[0], header.lo[1], header.lo[2]);
+        p.hi = glm::vec3(header.hi[0], header.hi[1], header.hi[2]);
+        p.irradiance.resize(size_t(n));
+        p.valid.resize(size_t(n));
+        std::memcpy(p.irradiance.data(), b.data() + sizeof header, size_t(n) * 27 * 4);
+        std::memcpy(p.valid.data(), b.data() + sizeof header + size_t(n) * 27 * 4, size_t(n));
     }
     if (std::string p = problem(a); !p.empty())
         throw fail(p);

@@ -15,6 +15,7 @@
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/io/mesh.h>
 
 #include <glm/mat3x3.hpp>
@@ -154,6 +155,20 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
 std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                                  int dilate = 2);
 
+// Light probes for dynamic objects, which the lightmap does not light: at each point of `probes`' grid
+// (probes.count, probes.lo and probes.hi set by the caller, in the mesh's space), the radiance over the whole
+// sphere from `rays` stratified sphere rays, projected into SH9 and convolved with the clamped cosine:
+// irradiance in the mesh's frame (io::LightProbes). A ray that escapes carries the environment (an image
+// environment is importance-sampled by `rays` rays of its own), the sun's disc (sun_rays) and every
+// punctual light add their shadowed light, and a ray that lands on the front of a surface carries its
+// emission plus its albedo / pi times the lightmap's irradiance there (E at the surface normal from `sh`,
+// bilinear at the hit's TEXCOORD_1): the same light and bounces as the lightmap's. A probe more than half of
+// whose rays see the backs of single-sided surfaces is inside geometry (valid 0). Counter-based rays: the
+// same seed gives the same bytes on any thread count. Throws std::invalid_argument for a bad grid or rays.
+void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
+                       const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& options,
+                       const LightmapSurfaces* surfaces = nullptr);
+
 // The whole job hemi-bake lightmap runs: read the glTF scene, rasterise its TEXCOORD_1 atlas (refused when
 // the scene has none or its UVs overlap), bake, and write the lightmap asset (io/lightmap_asset.h) and,
 // with exr_dir, one EXR per output with named channels ("c<k>.R", ".G", ".B", half) and the layout in its
@@ -168,6 +183,10 @@ struct LightmapFileOptions
     std::vector<std::string> outputs = {"sh9", "hl2", "h4", "h6", "sal4", "plain", "rnm"};
     std::filesystem::path exr_dir;  // empty: no EXRs
     int dilate = 2;
+    // Light probes (bake_light_probes) on a grid of this many probes over the scene's bounding box, each half
+    // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.
+    glm::uvec3 probes{0};
+    int probe_rays = 1024;
 };
 
 struct LightmapBakeSummary
@@ -178,6 +197,7 @@ struct LightmapBakeSummary
     std::vector<std::string> warnings; // the scene reader's and the UV report's
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
+    size_t probes = 0, invalid_probes = 0;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
     std::string checkpoint_error;

@@ -13,10 +13,17 @@
 //                  ((k * H + y) * W + x) * 3 + c, rows from the top (v = 0): render::TexelCoefficients' layout.
 //                  The coefficients are irradiance in each texel's tangent frame (the normal-map UV set's), so
 //                  sum_k c_k b_k(n) at the normal-map normal n is E(n); "plain" is E at the surface normal,
-//                  "rnm" E towards each math::rnm_basis() direction.
+//                  "rnm" E towards each math::rnm_basis() direction (normalised to pi under uniform radiance).
+//   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
+//                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
+//                  then NX * NY * NZ u8 valid flags.
 
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
+
+#include <glm/vec3.hpp>
+
+#include <array>
 
 #include <cstdint>
 #include <filesystem>
@@ -33,6 +40,24 @@ struct LightmapOutput
     std::vector<float> maps; // K x H x W x 3, as in L.<output> (stored as half floats)
 };
 
+// Light probes for dynamic objects (hemi-bake lightmap --probes): the SH9 irradiance (hemi's SH order and
+// sign, convolved with the clamped cosine: E(n) = sum_j c_j y_j(n) for any unit n) at the points of a regular
+// grid, in the scene's own frame (the mesh's space), from the same lights and surfaces as the lightmap.
+struct LightProbes
+{
+    glm::uvec3 count{0};          // probes along x, y and z; all 0 when the asset has none
+    glm::vec3 lo{0.0f}, hi{0.0f}; // the grid's corner probes (lo == hi along an axis with one probe)
+    std::vector<std::array<glm::vec3, 9>> irradiance; // probe (i, j, k) at i + NX (j + NY k)
+    std::vector<uint8_t> valid;   // 0: inside geometry (most of its rays saw the backs of surfaces)
+
+    bool empty() const { return irradiance.empty(); }
+    glm::vec3 position(uint32_t i, uint32_t j, uint32_t k) const;
+    // The irradiance at `p` (scene space): trilinear between the 8 probes of p's cell (p clamped to the grid),
+    // over the valid ones, their weights renormalised; the nearest valid probe when none of the 8 is valid;
+    // zero without a valid probe.
+    std::array<glm::vec3, 9> at(const glm::vec3& p) const;
+};
+
 struct LightmapAsset
 {
     Mesh mesh; // with uvs1
@@ -43,6 +68,7 @@ struct LightmapAsset
     uint32_t rays = 0, bounces = 0, covered_texels = 0;
     uint64_t seed = 0;
     std::vector<LightmapOutput> outputs;
+    LightProbes probes; // optional
 
     // Throws std::invalid_argument listing the outputs the asset has.
     const LightmapOutput& output(const std::string& name) const;

@@ -1,5 +1,9 @@
+#include <hemi/math/sh.h>
 #include <hemi/render/scene/lightmap_model.h>
 
+#include <glm/matrix.hpp>
+
+#include <cmath>
 #include <stdexcept>
 
 namespace hemi::render
@@ -13,6 +17,25 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
         throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the rnm and ssbump techniques "
                                     "(radiosity normal mapping), not by a basis");
     return math::basis(output);
+}
+
+std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
+                                      const glm::mat4& model)
+{
+    if (asset.probes.empty())
+        throw std::invalid_argument("hemi: the lightmap asset has no light probes (bake it with --probes)");
+    const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
+    const std::array<glm::vec3, 9> scene = asset.probes.at(p);
+    // The level's irradiance function f in its own frame is g(d) = f(R^T d) in the world: math::ShRotation(R)
+    // with R the model's rotation (its uniform scale divided out).
+    glm::mat3 rotation(model);
+    const float scale = std::cbrt(std::abs(glm::determinant(rotation)));
+    if (!(scale > 0.0f) || !std::isfinite(scale))
+        throw std::invalid_argument("hemi: the model matrix is singular or not finite");
+    rotation /= scale;
+    std::vector<glm::vec3> world(9);
+    math::ShRotation(3, rotation).apply(scene, world);
+    return world;
 }
 
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,

@@ -34,6 +34,14 @@ namespace hemi::render
 // normal mapping materials, not a basis) and unknown names.
 const math::BasisDesc& lightmap_basis(const std::string& output);
 
+// The light of the asset's probes (io::LightProbes, hemi-bake lightmap --probes) for a dynamic object at
+// `world_position` in a level placed by `model` (a rotation, uniform scale and translation): the probes'
+// interpolation at the position in the level's space, rotated into the world, as the 9 world-space SH9
+// irradiance coefficients a ProbeCoefficients source takes (technique "sh9" on the world frame: the object's
+// normal-map normal in world space). Throws std::invalid_argument when the asset has no probes.
+std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
+                                      const glm::mat4& model);
+
 class LightmapModel
 {
 public:
