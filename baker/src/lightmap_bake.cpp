@@ -487,6 +487,24 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     return out;
 }
 
+io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count)
+{
+    if (count.x == 0 || count.y == 0 || count.z == 0)
+        throw std::invalid_argument("a probe grid needs at least one probe along each axis");
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const glm::vec3 cell = (hi - lo) / glm::vec3(count);
+    io::LightProbes g;
+    g.count = count;
+    g.lo = lo + 0.5f * cell;
+    g.hi = hi - 0.5f * cell;
+    return g;
+}
+
 void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
                        const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& o,
                        const LightmapSurfaces* surfaces)

@@ -136,17 +136,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     {
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
             throw std::invalid_argument("--probes needs at least one probe along each axis");
-        // The scene's bounding box, the probes at the centres of its cells.
-        glm::vec3 lo(INFINITY), hi(-INFINITY);
-        for (const glm::vec3& p : scene.mesh.positions)
-        {
-            lo = glm::min(lo, p);
-            hi = glm::max(hi, p);
-        }
-        const glm::vec3 cell = (hi - lo) / glm::vec3(o.probes);
-        asset.probes.count = o.probes;
-        asset.probes.lo = lo + 0.5f * cell;
-        asset.probes.hi = hi - 0.5f * cell;
+        asset.probes = probe_grid(scene.mesh, o.probes);
         LightmapBakeOptions probe_options = o.bake;
         probe_options.rays = o.probe_rays;
         bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &surfaces);

@@ -4,7 +4,8 @@
 //   hemi-render PRT.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
 //               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o OUT.png|OUT.exr
 //   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH] [--camera auto|EYE,TARGET]
-//               [--exposure E] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is baked in)
+//               [--exposure E] [--sphere X,Y,Z,R ...] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is
+//               baked in; each --sphere is a dynamic object lit by the asset's light probes)
 // HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
 // message from it makes the exit status 2.
 #include <hemi/gpu/device.h>
@@ -22,12 +23,14 @@
 #include <memory>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 int main(int argc, char** argv)
 {
     CLI::App app{"hemi-render: render a baked PRT (hemi-bake prt) or lightmap (hemi-bake lightmap) asset to PNG or EXR"};
     std::string asset_path, technique = "gs", env = "sky", size = "800x600", camera = "auto", output;
     bool cpca = false, white = false;
+    std::vector<std::string> spheres;
     float rotate = 0.0f, exposure = 1.0f;
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
     app.add_option("--technique", technique, "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
@@ -46,6 +49,8 @@ int main(int argc, char** argv)
     app.add_option("--camera", camera, "auto (frames the model) or EYE,TARGET as x,y,z,x,y,z in world space (z up; "
                                        "glTF +y is world +z)")
         ->capture_default_str();
+    app.add_option("--sphere", spheres, "lightmap assets baked with --probes: a grey sphere at X,Y,Z (world space) of "
+                                        "radius R, lit by the probes (repeatable, up to 16)");
     app.add_option("--exposure", exposure, "PNG only: multiplies radiance before the sRGB clamp")->capture_default_str();
     app.add_option("-o,--output", output, "OUT.png (tone-mapped sRGB) or OUT.exr (linear RGBA, alpha = coverage)")
         ->required();
@@ -64,6 +69,8 @@ int main(int argc, char** argv)
             throw std::invalid_argument("-o must end in .png or .exr, got '" + output + "'");
 
         const bool lightmap = hemi::io::asset_kind(asset_path) == "lightmap";
+        if (!lightmap && !spheres.empty())
+            throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
         if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
             throw std::invalid_argument(asset_path + " is a lightmap asset: its lighting is baked in (--env, --rotate "
                                                      "and --cpca are for PRT assets)");
@@ -99,6 +106,16 @@ int main(int argc, char** argv)
             frame.technique = technique;
             frame.white = white;
             frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            for (const std::string& text : spheres)
+            {
+                glm::vec4 sphere;
+                char tail = 0;
+                if (std::sscanf(text.c_str(), "%f,%f,%f,%f%c", &sphere.x, &sphere.y, &sphere.z, &sphere.w, &tail) != 4)
+                    throw std::invalid_argument("--sphere expects X,Y,Z,RADIUS, got '" + text + "'");
+                frame.spheres.push_back(sphere);
+            }
+            if (!frame.spheres.empty() && asset.probes.empty())
+                throw std::invalid_argument(asset_path + " has no light probes for --sphere (bake it with --probes)");
             image = view.render(frame);
             env = "baked";
         }

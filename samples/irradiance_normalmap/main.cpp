@@ -248,6 +248,11 @@ int main(int argc, char** argv)
                 asset.outputs.push_back({c.technique, uint32_t(hemi::bake::lightmap_output_size(c.technique)),
                                          hemi::bake::lightmap_maps(c.technique, lightmap_atlas, sh)});
             }
+            // Light probes for dynamic objects, from the same lights and the lightmap's bounces.
+            asset.probes = hemi::bake::probe_grid(level.mesh, glm::uvec3(6, 3, 6));
+            hemi::bake::LightmapBakeOptions probe_options = bake;
+            probe_options.rays = 2048;
+            hemi::bake::bake_light_probes(asset.probes, level.mesh, lightmap_atlas, sh, lights, probe_options, &surfaces);
             const std::string stem = std::string("level_") + setup.file;
             hemi::io::write_lightmap_asset(fs::path(dir) / (stem + ".hemi"), asset);
 
@@ -291,6 +296,8 @@ int main(int argc, char** argv)
             }
             frame.technique = "sh9";
             frame.white = false;
+            // Three dynamic objects, lit by the probes: one in the sun's patch, one in the shade, one by a wall.
+            frame.spheres = {{-1.2f, 0.4f, 0.45f, 0.45f}, {1.2f, 1.4f, 0.6f, 0.6f}, {2.9f, -2.4f, 1.4f, 0.4f}};
             hemi::io::write_png(fs::path(dir) / (stem + "_sh9_colour.png"), view.render(frame),
                                 {exposure, hemi::io::ToneMap::Curve::Clamp});
             tiles.insert(tiles.end(), errors_row.begin(), errors_row.end());

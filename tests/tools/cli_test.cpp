@@ -708,3 +708,32 @@ TEST(BakeCli, LightmapBakesLightProbesForDynamicObjects)
     EXPECT_EQ(bad.status, 1);
     EXPECT_NE(bad.err.find("--probes"), std::string::npos) << bad.err;
 }
+
+// hemi-render --sphere draws dynamic objects lit by a lightmap asset's probes, under the validation layer:
+// a sphere in the level's lit room changes the image where it stands; without probes, or for a PRT asset,
+// it is refused naming the asset.
+TEST(BakeCli, RenderDrawsProbeLitSpheresInTheLevel)
+{
+    const fs::path scene = dir() / "sphere_level.glb";
+    hemi::io::write_gltf(scene, hemi::samples::make_level(64));
+    const fs::path asset = dir() / "sphere_level.hemi", bare = dir() / "sphere_level_bare.hemi";
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(asset) + " --size 64 --rays 16 --bases sh9 --probes 3,2,3 "
+                       "--sun 0.3,-0.5,0.6,4,4,4").status, 0);
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(bare) + " --size 64 --rays 16 --bases sh9").status, 0);
+    const fs::path with = dir() / "with_sphere.exr", without = dir() / "without_sphere.exr";
+    const std::string view = " --technique sh9 --size 64x48 --camera 1.5,-7.5,5,-0.5,0.5,0.6 -o ";
+    const Result a = render(q(asset) + view + q(with) + " --sphere 0,0,1,0.8");
+    ASSERT_EQ(a.status, 0) << a.err;
+    ASSERT_EQ(render(q(asset) + view + q(without)).status, 0);
+    const hemi::io::ImageRgba x = hemi::io::read_exr(with), y = hemi::io::read_exr(without);
+    int changed = 0;
+    for (size_t i = 0; i < x.pixels.size(); i += 4)
+        changed += std::abs(x.pixels[i] - y.pixels[i]) > 1e-3f;
+    EXPECT_GT(changed, 30) << "the sphere covers part of the view";
+    const Result none = render(q(bare) + view + q(dir() / "never.exr") + " --sphere 0,0,1,0.8");
+    EXPECT_EQ(none.status, 1);
+    EXPECT_NE(none.err.find("sphere_level_bare.hemi"), std::string::npos) << none.err;
+    const Result bad = render(q(asset) + view + q(dir() / "never.exr") + " --sphere 0,0,1");
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("--sphere"), std::string::npos) << bad.err;
+}

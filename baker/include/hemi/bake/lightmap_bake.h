@@ -165,6 +165,10 @@ std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atl
 // bilinear at the hit's TEXCOORD_1): the same light and bounces as the lightmap's. A probe more than half of
 // whose rays see the backs of single-sided surfaces is inside geometry (valid 0). Counter-based rays: the
 // same seed gives the same bytes on any thread count. Throws std::invalid_argument for a bad grid or rays.
+// An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
+// hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
+io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
+
 void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
                        const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& options,
                        const LightmapSurfaces* surfaces = nullptr);

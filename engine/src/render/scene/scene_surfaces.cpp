@@ -34,7 +34,7 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const
             key.technique = v.technique;
             key.source = source;
             key.basis = v.basis;
-            key.frame = ShadingFrame::Tangent;
+            key.frame = v.frame;
             key.double_sided = materials_[p.material]->double_sided();
             d.types.push_back(&system.type(key));
         }

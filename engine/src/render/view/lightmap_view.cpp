@@ -3,6 +3,12 @@
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/upload.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
 namespace hemi::render
 {
 
@@ -19,10 +25,40 @@ LightmapView::~LightmapView() = default;
 
 io::ImageRgba LightmapView::render(const LightmapFrame& frame)
 {
+    if (frame.spheres.size() > kMaxSpheres)
+        throw std::invalid_argument("hemi: at most " + std::to_string(kMaxSpheres) + " spheres, got " +
+                                    std::to_string(frame.spheres.size()));
+    std::vector<std::vector<glm::vec3>> lighting;
+    for (const glm::vec4& s : frame.spheres)
+    {
+        if (!(s.w > 0.0f) || !std::isfinite(s.x + s.y + s.z + s.w))
+            throw std::invalid_argument("hemi: a sphere needs a finite centre and a radius > 0");
+        lighting.push_back(probe_lighting(*asset_, glm::vec3(s), frame.model)); // throws without probes
+    }
+    if (!frame.spheres.empty() && !spheres_)
+    {
+        sphere_mesh_ = io::make_uv_sphere(1.0f, 64, 32);
+        io::Material grey;
+        grey.name = "probe-lit sphere";
+        grey.base_color_factor = glm::vec4(0.8f, 0.8f, 0.8f, 1.0f);
+        sphere_material_ = {grey};
+        gpu::UploadBatch upload(view_.device());
+        spheres_ = std::make_unique<ProbeObject>(view_.system(), sphere_mesh_, std::vector<io::EncodedImage>{},
+                                                 sphere_material_, std::vector<io::Primitive>{}, kMaxSpheres, upload);
+        upload.submit_and_wait();
+    }
     gpu::one_shot(view_.device(), [&](VkCommandBuffer cmd) {
         view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white);
+        for (size_t i = 0; i < lighting.size(); ++i)
+            spheres_->record_lighting(cmd, uint32_t(i), lighting[i]);
         view_.target().begin(cmd);
         model_->draw(cmd, view_.frame(), frame.technique, frame.model);
+        for (size_t i = 0; i < frame.spheres.size(); ++i)
+        {
+            const glm::vec4& s = frame.spheres[i];
+            const glm::mat4 m = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(s)), glm::vec3(s.w));
+            spheres_->draw(cmd, view_.frame(), uint32_t(i), m);
+        }
         view_.target().end(cmd);
     });
     return view_.read();

@@ -8,6 +8,7 @@
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/probe_object.h>
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/view/view_target.h>
 
@@ -26,6 +27,10 @@ struct LightmapFrame
     PrtCamera camera;
     glm::mat4 model = gltf_to_world();
     bool white = false;            // albedo 1: the lighting-only view (E / pi)
+    // Dynamic objects: grey spheres (albedo 0.8), centre xyz and radius w in world space, each lit by the
+    // asset's light probes at its centre (render::probe_lighting) in the same render pass as the level. At
+    // most LightmapView::kMaxSpheres; the asset must have probes.
+    std::vector<glm::vec4> spheres;
 };
 
 class LightmapView
@@ -36,6 +41,8 @@ public:
     LightmapView(const gpu::Device& device, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
                  uint32_t width, uint32_t height);
     ~LightmapView();
+
+    static constexpr uint32_t kMaxSpheres = 16;
 
     // Submitted and waited for; the colour with alpha = coverage.
     io::ImageRgba render(const LightmapFrame& frame);
@@ -48,6 +55,9 @@ private:
     const io::LightmapAsset* asset_;
     ViewTarget view_;
     std::unique_ptr<LightmapModel> model_;
+    io::Mesh sphere_mesh_;
+    std::vector<io::Material> sphere_material_;
+    std::unique_ptr<ProbeObject> spheres_; // made at the first frame with spheres
 };
 
 } // namespace hemi::render
