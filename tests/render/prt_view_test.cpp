@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 
@@ -67,9 +68,10 @@ hemi::io::ImageRgba render(const Baked& b, const std::string& technique, bool cp
 
 } // namespace
 
-// --transfer unshadowed, --white, --env uniform: every covered pixel is 1 within 1% for the bases that hold
-// a constant, on both sample models with their strong brick normal map. HL2 and the separable basis cannot;
-// their worst errors are recorded (HL2's near Sloan's Table 2 error for y00).
+// --transfer unshadowed, --white, --env uniform: every covered pixel is 1 for the bases that hold a constant,
+// on both sample models with their strong brick normal map, to 1e-5 on the 32-bit float target (measured at
+// most 5e-6). HL2 and the separable basis cannot; their worst errors are held to the README's digits, 0.50
+// (HL2's least-squares constant 1.5 cos(theta), Sloan's Table 2) and 0.032.
 TEST_F(PrtView, WhiteFurnaceOnTheSampleModels)
 {
     hemi::bake::PrtAssetOptions o;
@@ -93,15 +95,15 @@ TEST_F(PrtView, WhiteFurnaceOnTheSampleModels)
                         worst = std::max(worst, double(std::abs(img.pixels[i + c] - 1.0f)));
                 }
             EXPECT_GT(covered, 2000u) << name << " " << t;
-            RecordProperty(std::string("furnace_worst_") + name + "_" + t, std::to_string(worst));
+            char value[32];
+            std::snprintf(value, sizeof value, "%.3g", worst);
+            RecordProperty(std::string("furnace_worst_") + name + "_" + t, value);
             if (t == "hl2")
-            {
-                EXPECT_GT(worst, 0.05) << "HL2 cannot hold a constant";
-            }
-            else if (t != "sep4")
-            {
-                EXPECT_LT(worst, 0.01) << name << " " << t;
-            }
+                EXPECT_NEAR(worst, 0.50, 0.005) << name << ": HL2's constant is 1.5 cos(theta)";
+            else if (t == "sep4")
+                EXPECT_NEAR(worst, 0.032, 0.0005) << name << ": sep4's worst furnace pixel";
+            else
+                EXPECT_LT(worst, 1e-5) << name << " " << t;
         }
     }
 }
