@@ -5,26 +5,47 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
 using namespace hemi::math;
 
+namespace
+{
+// DESIGN.md Sec. 3's table typed here, so the tests below have an SH9 evaluation that shares no code (and no
+// constant) with the library's.
+std::array<double, 9> design_table_sh9(glm::dvec3 d)
+{
+    const double x = d.x, y = d.y, z = d.z;
+    return {0.282095,           -0.488603 * y,      0.488603 * z,
+            -0.488603 * x,      1.092548 * x * y,   -1.092548 * y * z,
+            0.315392 * (3 * z * z - 1), -1.092548 * x * z, 0.546274 * (x * x - y * y)};
+}
+} // namespace
+
+// At the axes, their negatives and 200 random directions (every octant, so a sign that depends on one
+// coordinate's sign, such as |x| y for xy, is caught), to the table's printed 6 digits.
 TEST(Sh9, MatchesTheConventionTable)
 {
-    glm::vec3 d = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
-    Sh9 y = sh9_eval(d);
-    const float x = d.x, yy = d.y, z = d.z;
-    // DESIGN.md Sec. 3, to the printed 6 digits.
-    EXPECT_NEAR(y[0], 0.282095f, 1e-6f);
-    EXPECT_NEAR(y[1], -0.488603f * yy, 1e-6f);
-    EXPECT_NEAR(y[2], 0.488603f * z, 1e-6f);
-    EXPECT_NEAR(y[3], -0.488603f * x, 1e-6f);
-    EXPECT_NEAR(y[4], 1.092548f * x * yy, 1e-6f);
-    EXPECT_NEAR(y[5], -1.092548f * yy * z, 1e-6f);
-    EXPECT_NEAR(y[6], 0.315392f * (3 * z * z - 1), 1e-6f);
-    EXPECT_NEAR(y[7], -1.092548f * x * z, 1e-6f);
-    EXPECT_NEAR(y[8], 0.546274f * (x * x - yy * yy), 1e-6f);
+    std::mt19937 rng(17);
+    std::normal_distribution<float> g;
+    std::vector<glm::vec3> dirs = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
+                                   glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f))};
+    for (int i = 0; i < 200; ++i)
+        dirs.push_back(glm::normalize(glm::vec3(g(rng), g(rng), g(rng))));
+    for (const glm::vec3& d : dirs)
+    {
+        const Sh9 y = sh9_eval(d);
+        float general[9];
+        sh_eval(3, d, general);
+        const std::array<double, 9> want = design_table_sh9(glm::dvec3(d));
+        for (int k = 0; k < 9; ++k)
+        {
+            ASSERT_NEAR(y[k], want[k], 1e-6) << "sh9_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
+            ASSERT_NEAR(general[k], want[k], 1e-6) << "sh_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
+        }
+    }
 }
 
 TEST(Sh9, ConstantEnvironmentGivesPiIrradiance)
@@ -38,19 +59,28 @@ TEST(Sh9, ConstantEnvironmentGivesPiIrradiance)
     }
 }
 
-// E(n) = integral of L(w) max(0, n.w) dw by brute force, against the SH9 approximation. For a smooth
-// environment SH9 irradiance is accurate to a few percent (Ramamoorthi & Hanrahan 2001); a sign error in
-// any band-1 or band-2 function, or a wrong A_l, moves E by far more.
+// E(n) = integral of L(w) max(0, n.w) dw by brute force, against the SH9 approximation built from the
+// library's projection and A_l but evaluated with DESIGN.md's table typed in this file: projection and
+// evaluation share no y_lm, so a sign error in a basis function cannot cancel (the projected coefficient
+// flips while the evaluation does not). The environment has a component along every band-1 and band-2
+// function so that each sign matters. For a smooth environment SH9 irradiance is accurate to a few percent
+// (Ramamoorthi & Hanrahan 2001); a sign error or a wrong A_l moves E by far more.
 TEST(Sh9, IrradianceOfSmoothSkyMatchesBruteForce)
 {
     AnalyticSky sky;
     sky.sun_color = glm::vec3(0.0f); // keep it smooth: SH9 is a low-pass of the irradiance
     sky.zenith = {0.1f, 0.3f, 1.2f};
-    auto L = [&](const glm::vec3& d) { return sky.radiance(d) + glm::vec3(0.6f * std::max(0.0f, d.x), 0, 0); };
+    auto L = [&](const glm::vec3& d) {
+        const float q = 0.5f + 0.2f * d.x - 0.25f * d.y + 0.3f * d.x * d.y - 0.3f * d.y * d.z + 0.25f * d.x * d.z +
+                        0.2f * (d.x * d.x - d.y * d.y);
+        return sky.radiance(d) + glm::vec3(0.6f * std::max(0.0f, d.x), q, 0.5f * q);
+    };
     Sh9Rgb e = convolve_cosine(project_sh9(L, 128));
     const int steps = 256;
     for (glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0),
-                        glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)), glm::normalize(glm::vec3(-0.5f, 0.5f, -0.2f))})
+                        glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)),
+                        glm::normalize(glm::vec3(-0.5f, 0.5f, -0.2f)), glm::normalize(glm::vec3(0.6f, 0.6f, 0.5f)),
+                        glm::normalize(glm::vec3(-0.6f, -0.6f, 0.5f))})
     {
         glm::dvec3 brute(0.0);
         for (int t = 0; t < steps; ++t)
@@ -62,7 +92,10 @@ TEST(Sh9, IrradianceOfSmoothSkyMatchesBruteForce)
                 double c = std::max(0.0f, glm::dot(n, w));
                 brute += glm::dvec3(L(w)) * c * std::sin(theta) * (M_PI / steps) * (M_PI / steps);
             }
-        glm::vec3 sh = sh9_eval_rgb(e, n);
+        const std::array<double, 9> y = design_table_sh9(glm::dvec3(n));
+        glm::dvec3 sh(0.0);
+        for (int k = 0; k < 9; ++k)
+            sh += glm::dvec3(e[k]) * y[k];
         for (int ch = 0; ch < 3; ++ch)
             EXPECT_NEAR(sh[ch], brute[ch], 0.03 * brute[ch] + 0.01)
                 << "normal " << n.x << "," << n.y << "," << n.z << " channel " << ch;
@@ -114,22 +147,100 @@ TEST(ShEval, RecurrenceMatchesClosedFormsForBandsZeroToThree)
     }
 }
 
+namespace
+{
+// Gauss-Legendre nodes and weights on [-1, 1] by Newton's method on P_n (Bonnet's recursion), written here so
+// that the orthonormality below shares no quadrature with the library.
+void gauss_legendre_nodes(int n, std::vector<double>& x, std::vector<double>& w)
+{
+    x.assign(n, 0.0);
+    w.assign(n, 0.0);
+    for (int i = 0; i < n; ++i)
+    {
+        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 0.0;
+        for (int iter = 0; iter < 100; ++iter)
+        {
+            double p0 = 1.0, p1 = z;
+            for (int k = 2; k <= n; ++k)
+            {
+                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            const double step = p1 / dp;
+            z -= step;
+            if (std::abs(step) < 1e-15)
+                break;
+        }
+        x[i] = z;
+        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+} // namespace
+
+// Every function of order 10 (the largest the library supports, bands 0-9) against every other: the Gram
+// matrix by this file's own Gauss-Legendre x uniform-phi rule (exact for these degrees) is the identity.
 TEST(ShEval, OrthonormalOverTheSphere)
 {
-    const int order = 8, n = sh_count(order);
-    // Project each basis function: the result must be the unit vector (quadrature exact at these degrees).
-    for (int i = 0; i < n; i += 5)
-    {
-        std::vector<glm::vec3> c = project_sh(
-            order,
-            [&](const glm::vec3& d) {
-                float y[64];
-                sh_eval(order, d, y);
-                return glm::vec3(y[i]);
-            },
-            32);
+    ASSERT_EQ(kMaxShOrder, 10);
+    const int order = 10, n = sh_count(order), theta_steps = 16, phi_steps = 32;
+    std::vector<double> zs, ws;
+    gauss_legendre_nodes(theta_steps, zs, ws);
+    std::vector<double> gram(size_t(n) * n, 0.0);
+    float y[100];
+    for (int t = 0; t < theta_steps; ++t)
+        for (int p = 0; p < phi_steps; ++p)
+        {
+            const double z = zs[t], r = std::sqrt(1.0 - z * z), phi = 2.0 * M_PI * (p + 0.5) / phi_steps;
+            sh_eval(order, glm::vec3(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)), y);
+            const double weight = ws[t] * 2.0 * M_PI / phi_steps;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j)
+                    gram[size_t(i) * n + j] += weight * double(y[i]) * y[j];
+        }
+    for (int i = 0; i < n; ++i)
         for (int j = 0; j < n; ++j)
-            EXPECT_NEAR(c[j].x, i == j ? 1.0f : 0.0f, 2e-5f) << "<y" << i << ", y" << j << ">";
+            ASSERT_NEAR(gram[size_t(i) * n + j], i == j ? 1.0 : 0.0, 2e-5) << "<y" << i << ", y" << j << ">";
+}
+
+// A second formulation of the highest bands: the zonal functions sqrt((2l+1)/4pi) P_l(z) (Legendre by
+// Bonnet's recursion) and the sectoral ones sqrt(2) K_ll (-1)^l (2l-1)!! sin^l(theta) {cos, sin}(l phi),
+// for every band up to 9, at random directions.
+TEST(ShEval, ZonalAndSectoralFunctionsMatchClosedFormsUpToBandNine)
+{
+    std::mt19937 rng(23);
+    for (int trial = 0; trial < 50; ++trial)
+    {
+        const glm::vec3 d = random_direction(rng);
+        float y[100];
+        sh_eval(10, d, y);
+        const double z = d.z, st = std::sqrt(double(d.x) * d.x + double(d.y) * d.y), phi = std::atan2(d.y, d.x);
+        double p0 = 1.0, p1 = z;
+        for (int l = 0; l < 10; ++l)
+        {
+            const double pl = l == 0 ? 1.0 : (l == 1 ? z : 0.0);
+            double legendre = pl;
+            if (l >= 2)
+            {
+                const double p2 = ((2.0 * l - 1.0) * z * p1 - (l - 1.0) * p0) / l;
+                p0 = p1;
+                p1 = p2;
+                legendre = p2;
+            }
+            EXPECT_NEAR(y[sh_index(l, 0)], std::sqrt((2 * l + 1) / (4 * M_PI)) * legendre, 2e-6) << "y" << l << ",0";
+            if (l == 0)
+                continue;
+            double fact2l = 1.0, dfact = 1.0; // (2l)!, (2l-1)!!
+            for (int i = 1; i <= 2 * l; ++i)
+                fact2l *= i;
+            for (int i = 1; i <= 2 * l - 1; i += 2)
+                dfact *= i;
+            const double k = std::sqrt(2.0 * (2 * l + 1) / (4 * M_PI) / fact2l) * (l % 2 ? -1.0 : 1.0) * dfact *
+                             std::pow(st, l);
+            EXPECT_NEAR(y[sh_index(l, l)], k * std::cos(l * phi), 2e-6) << "y" << l << "," << l;
+            EXPECT_NEAR(y[sh_index(l, -l)], k * std::sin(l * phi), 2e-6) << "y" << l << "," << -l;
+        }
     }
 }
 
@@ -161,8 +272,15 @@ TEST(ShConvolution, DirectionalLightGivesTheKnownClampedCosineApproximation)
         double expect = 0.25 + 0.5 * c + 0.3125 * 0.5 * (3 * c * c - 1);
         EXPECT_NEAR(E, expect, 1e-5) << "cos " << c;
     }
-    // Peak of the approximation (n = s): 1/4 + 1/2 + 5/16 = 1.0625.
-    EXPECT_NEAR(0.25 + 0.5 + 0.3125, 1.0625, 1e-12);
+    // Peak of the approximation, at n = s: 1/4 + 1/2 + 5/16 = 1.0625, from the library.
+    for (const glm::vec3& s : {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(-0.4f, 0.7f, 0.2f))})
+    {
+        Sh9 ys = sh9_eval(s);
+        Sh9Rgb L;
+        for (int k = 0; k < 9; ++k)
+            L[k] = glm::vec3(ys[k]);
+        EXPECT_NEAR(sh9_eval_rgb(convolve_cosine(L), s).x, 1.0625, 1e-5);
+    }
 }
 
 TEST(ShRotation, RotatedCoefficientsEvaluateAtTheInverselyRotatedDirection)

@@ -23,6 +23,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace
@@ -77,8 +78,10 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
 } // namespace
 
 // Constant radiance 1, albedo 1: every covered pixel is exactly 1 for the bases that hold a constant,
-// whatever the (strong, brick) normal map does. HL2 and the 4-term separable basis cannot; their worst
-// error is reported, HL2's consistent with Sloan's Table 2 (0.125 integrated for y0,0).
+// whatever the (strong, brick) normal map does, to 1e-5 on the 32-bit float target (the README's figure;
+// measured at most 2e-6). HL2 and the 4-term separable basis cannot, and their worst errors are held to the
+// README's digits: HL2's least-squares constant is 1.5 cos(theta) (Sloan's Table 2), so a pixel whose
+// normal-map normal is the surface normal renders 1.5, an error of 0.50; sep4's worst pixel is 0.032 off.
 TEST_F(PrtMaterial, WhiteFurnaceRendersOneForBasesThatHoldAConstant)
 {
     auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
@@ -99,15 +102,15 @@ TEST_F(PrtMaterial, WhiteFurnaceRendersOneForBasesThatHoldAConstant)
                         worst = std::max(worst, double(std::abs(r.color.at(x, y)[c] - 1.0f)));
                 }
         EXPECT_GT(covered, 1000u) << b.name;
-        ::testing::Test::RecordProperty(std::string("furnace_worst_") + std::string(b.name), std::to_string(worst));
+        char value[32];
+        std::snprintf(value, sizeof value, "%.3g", worst);
+        ::testing::Test::RecordProperty(std::string("furnace_worst_") + std::string(b.name), value);
         if (b.name == "hl2")
-        {
-            EXPECT_GT(worst, 0.05) << "HL2 cannot represent a constant";
-        }
-        else if (b.name != "sep4")
-        {
-            EXPECT_LT(worst, 0.01) << b.name;
-        }
+            EXPECT_NEAR(worst, 0.50, 0.005) << "HL2's constant is 1.5 cos(theta)";
+        else if (b.name == "sep4")
+            EXPECT_NEAR(worst, 0.032, 0.0005) << "sep4's worst furnace pixel";
+        else
+            EXPECT_LT(worst, 1e-5) << b.name;
     }
 }
 

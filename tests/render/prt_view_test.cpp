@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 
@@ -67,9 +68,10 @@ hemi::io::ImageRgba render(const Baked& b, const std::string& technique, bool cp
 
 } // namespace
 
-// --transfer unshadowed, --white, --env uniform: every covered pixel is 1 within 1% for the bases that hold
-// a constant, on both sample models with their strong brick normal map. HL2 and the separable basis cannot;
-// their worst errors are recorded (HL2's near Sloan's Table 2 error for y00).
+// --transfer unshadowed, --white, --env uniform: every covered pixel is 1 for the bases that hold a constant,
+// on both sample models with their strong brick normal map, to 1e-5 on the 32-bit float target (measured at
+// most 5e-6). HL2 and the separable basis cannot; their worst errors are held to the README's digits, 0.50
+// (HL2's least-squares constant 1.5 cos(theta), Sloan's Table 2) and 0.032.
 TEST_F(PrtView, WhiteFurnaceOnTheSampleModels)
 {
     hemi::bake::PrtAssetOptions o;
@@ -93,15 +95,15 @@ TEST_F(PrtView, WhiteFurnaceOnTheSampleModels)
                         worst = std::max(worst, double(std::abs(img.pixels[i + c] - 1.0f)));
                 }
             EXPECT_GT(covered, 2000u) << name << " " << t;
-            RecordProperty(std::string("furnace_worst_") + name + "_" + t, std::to_string(worst));
+            char value[32];
+            std::snprintf(value, sizeof value, "%.3g", worst);
+            RecordProperty(std::string("furnace_worst_") + name + "_" + t, value);
             if (t == "hl2")
-            {
-                EXPECT_GT(worst, 0.05) << "HL2 cannot hold a constant";
-            }
-            else if (t != "sep4")
-            {
-                EXPECT_LT(worst, 0.01) << name << " " << t;
-            }
+                EXPECT_NEAR(worst, 0.50, 0.005) << name << ": HL2's constant is 1.5 cos(theta)";
+            else if (t == "sep4")
+                EXPECT_NEAR(worst, 0.032, 0.0005) << name << ": sep4's worst furnace pixel";
+            else
+                EXPECT_LT(worst, 1e-5) << name << " " << t;
         }
     }
 }
@@ -156,6 +158,8 @@ double ringing_bound(const hemi::math::BasisDesc& basis)
 
 TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
 {
+    const float kBounceDarkening = 1e-4f;
+    const double min_gain[2] = {0.01, 0.002};
     ASSERT_NEAR(ringing_bound(hemi::math::basis("sh9")), 0.0307, 0.001) << "the closed-form SH9 bound";
     for (auto [model, name, detail, min_shadowed] : {std::tuple{hemi::samples::PrtModel::Simple, "torus", 1.0f, 0.02},
                                                      std::tuple{hemi::samples::PrtModel::Complex, "knot", 0.3f, 0.1}})
@@ -186,6 +190,7 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
             size_t darker = 0, covered = 0;
             int failures = 0;
             float worst_above = 0.0f, worst_darkening = 0.0f;
+            double gain[2] = {}; // summed brightening by the first and by the second bounce
             for (size_t i = 0; i < img[0].pixels.size(); i += 4)
             {
                 if (img[0].pixels[i + 3] != 1.0f)
@@ -203,7 +208,8 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
                     {
                         const float drop = img[p - 1].pixels[i] - v;
                         worst_darkening = std::max(worst_darkening, drop);
-                        if (drop > o.bake.albedo * ringing && failures++ < 5)
+                        gain[p - 2] += double(-drop);
+                        if (drop > kBounceDarkening && failures++ < 5)
                             ADD_FAILURE() << name << " " << t << " bounce " << p - 1 << " darkened pixel " << i / 4
                                           << " by " << drop;
                     }
@@ -212,6 +218,15 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
             EXPECT_GT(double(darker), min_shadowed * double(covered)) << name << " " << t << ": should shadow itself";
             RecordProperty(std::string("worst_above_unshadowed_") + name + "_" + t, std::to_string(worst_above));
             RecordProperty(std::string("worst_bounce_darkening_") + name + "_" + t, std::to_string(worst_darkening));
+            // Each bounce must add light, or a bake that dropped a bounce would pass: the mean gain over the
+            // covered pixels is at least half of what the right bake gives (measured in the comment above).
+            for (int bounce = 0; bounce < 2; ++bounce)
+            {
+                const double mean_gain = gain[bounce] / double(covered);
+                RecordProperty(std::string("mean_bounce_gain_") + name + "_" + t + "_" + std::to_string(bounce + 1),
+                               std::to_string(mean_gain));
+                EXPECT_GT(mean_gain, min_gain[bounce]) << name << " " << t << ": bounce " << bounce + 1;
+            }
         }
     }
 }
@@ -256,8 +271,10 @@ std::vector<float> expect_cpca_pass_matches_host(const hemi::render::CpcaMatrice
 }
 } // namespace
 
-// The CPCA pass equals its host reference (one cluster: the GEMM path; several: per vertex), and with as many
-// vectors as dimensions it equals the dense pass.
+// The CPCA pass equals its host reference (one cluster: the GEMM path; several: per vertex), and for every V,
+// not only V = D, it equals the dense pass run on the matrices the compression stands for, reconstructed here
+// from the stored means, basis and weights (mean + sum_j w_j b_j, typed in this test, sharing no packing with
+// the CPCA pass or its host multiply).
 TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 {
     const RandomCpcaCase t = random_cpca_case(1000, 4, 9, 3);
@@ -267,13 +284,32 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
         const hemi::io::PrtCpca c = hemi::bake::compress_cpca(t.dense, t.n, d, clusters, vectors);
         const std::vector<float> gpu = expect_cpca_pass_matches_host(
             {t.n, t.k, t.l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights}, t.lighting);
+        std::vector<float> reconstructed(size_t(t.n) * d);
+        for (uint32_t i = 0; i < t.n; ++i)
+            for (uint32_t e = 0; e < d; ++e)
+            {
+                double value = c.means[size_t(c.cluster[i]) * d + e];
+                for (uint32_t j = 0; j < c.vectors; ++j)
+                    value += double(c.weights[size_t(i) * c.vectors + j]) *
+                             c.basis[(size_t(c.cluster[i]) * c.vectors + j) * d + e];
+                reconstructed[size_t(i) * d + e] = float(value);
+            }
+        hemi::render::TransferPass full(hemi::test::device(),
+                                        hemi::render::TransferMatrices(t.n, t.k, t.l, reconstructed));
+        full.run(t.lighting);
+        const std::vector<float> want = full.read_coefficients();
+        ASSERT_EQ(gpu.size(), want.size());
+        for (size_t i = 0; i < gpu.size(); ++i)
+            ASSERT_NEAR(gpu[i], want[i], 1e-3f * (1.0f + std::abs(want[i])))
+                << "clusters " << clusters << " vectors " << vectors << " coefficient " << i;
         if (vectors == d)
         {
-            hemi::render::TransferPass full(hemi::test::device(), hemi::render::TransferMatrices(t.n, t.k, t.l, t.dense));
-            full.run(t.lighting);
-            const std::vector<float> want = full.read_coefficients();
+            // With as many vectors as dimensions the compression is exact: the dense pass on the input.
+            hemi::render::TransferPass input(hemi::test::device(), hemi::render::TransferMatrices(t.n, t.k, t.l, t.dense));
+            input.run(t.lighting);
+            const std::vector<float> exact = input.read_coefficients();
             for (size_t i = 0; i < gpu.size(); ++i)
-                ASSERT_NEAR(gpu[i], want[i], 1e-3f * (1.0f + std::abs(want[i]))) << i;
+                ASSERT_NEAR(gpu[i], exact[i], 1e-3f * (1.0f + std::abs(exact[i]))) << i;
         }
     }
 }
@@ -346,7 +382,7 @@ TEST_F(PrtView, CpcaOnTheComplexObjectStaysCloseToTheGoldStandard)
     ASSERT_GT(count, 3000u);
     const double psnr = 10.0 * std::log10(peak * peak / (mse / double(count)));
     RecordProperty("cpca_1x24_psnr_db", std::to_string(psnr));
-    EXPECT_GT(psnr, 25.0);
+    EXPECT_GT(psnr, 28.5) << "measured 28.95 dB; a tenth more squared error is 28.54";
     EXPECT_LT(psnr, 200.0) << "the CPCA render should not be bit-identical: is the CPCA path used?";
 }
 

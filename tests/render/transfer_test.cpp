@@ -161,23 +161,35 @@ TEST(TransferMatricesTest, StoresElementInterleavedBlocks)
     EXPECT_EQ(m.at(39, 2, 8), t[39 * 27 + 26]);
 }
 
-TEST(TransferMatricesTest, RejectsBadShapes)
+namespace
 {
-    std::vector<float> t(10 * 9 * 25, 0.0f);
-    EXPECT_THROW(TransferMatrices(0, 9, 25, {}), std::invalid_argument);
-    EXPECT_THROW(TransferMatrices(10, 9, 25, std::span<const float>(t).first(t.size() - 1)), std::invalid_argument);
-    EXPECT_THROW(TransferMatrices(10, 10, 25, t), std::invalid_argument);
-    EXPECT_THROW(TransferMatrices(10, 9, 24, t), std::invalid_argument);
-    EXPECT_THROW(TransferMatrices(10, 0, 25, t), std::invalid_argument);
+// Runs `f`, which must throw std::invalid_argument whose message contains `naming` (the problem, stated).
+template <class F> void expect_invalid_argument_naming(F&& f, const std::string& naming)
+{
     try
     {
-        TransferMatrices(10, 9, 25, std::span<const float>(t).first(100));
-        FAIL();
+        f();
+        ADD_FAILURE() << "no exception; expected one naming '" << naming << "'";
     }
     catch (const std::invalid_argument& e)
     {
-        EXPECT_NE(std::string(e.what()).find("expected 2250 floats"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(naming), std::string::npos) << "message: " << e.what();
     }
+}
+} // namespace
+
+// Each bad shape is refused with a message that names what is wrong, not only with the exception's type.
+TEST(TransferMatricesTest, RejectsBadShapes)
+{
+    std::vector<float> t(10 * 9 * 25, 0.0f);
+    expect_invalid_argument_naming([&] { TransferMatrices(0, 9, 25, {}); }, "zero vertices");
+    expect_invalid_argument_naming(
+        [&] { TransferMatrices(10, 9, 25, std::span<const float>(t).first(t.size() - 1)); }, "expected 2250 floats");
+    expect_invalid_argument_naming([&] { TransferMatrices(10, 10, 25, t); }, "K = 10");
+    expect_invalid_argument_naming([&] { TransferMatrices(10, 9, 24, t); }, "L = 24");
+    expect_invalid_argument_naming([&] { TransferMatrices(10, 0, 25, t); }, "K = 0");
+    expect_invalid_argument_naming([&] { TransferMatrices(10, 9, 25, std::span<const float>(t).first(100)); },
+                                   "expected 2250 floats");
 }
 
 TEST(TransferMatricesTest, RejectsNaN)
@@ -201,10 +213,13 @@ TEST_F(TransferPassTest, RejectsMismatchedLightingAndOutput)
     TransferMatrices m(33, 4, 9, t);
     std::vector<glm::vec3> wrong(16, glm::vec3(1.0f)), right(9, glm::vec3(1.0f));
     std::vector<float> out(33 * 4 * 4), short_out(10);
-    EXPECT_THROW(hemi::render::transfer_multiply_host(m, wrong, out), std::invalid_argument);
-    EXPECT_THROW(hemi::render::transfer_multiply_host(m, right, short_out), std::invalid_argument);
-    right[3].y = std::nanf("");
-    EXPECT_THROW(hemi::render::transfer_multiply_host(m, right, out), std::invalid_argument);
+    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, wrong, out); }, "lighting has 16");
+    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, right, short_out); },
+                                   "output has 10 floats");
     TransferPass pass(hemi::test::device(), m);
-    EXPECT_THROW(pass.run(wrong), std::invalid_argument);
+    expect_invalid_argument_naming([&] { pass.run(wrong); }, "lighting has 16");
+    // NaN lighting, on the host path and on the device path.
+    right[3].y = std::nanf("");
+    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, right, out); }, "non-finite");
+    expect_invalid_argument_naming([&] { pass.run(right); }, "non-finite");
 }
