@@ -5,7 +5,7 @@
 //   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R] [--filter RADIUS,SIGMA]
 //       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
-//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
+//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
 //       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
 //       [--probes NX,NY,NZ] [--probe-rays R] [--exr-dir DIR] [--json REPORT.json]
 //   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera auto|EYE,TARGET]
@@ -440,6 +440,9 @@ int run_lightmap(LightmapCli& c)
         std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
     std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(), s.width,
                 s.height, s.uv_report.covered_texels, s.triangles, c.bases.c_str());
+    if (s.unwrapped_charts)
+        std::printf("unwrapped: %zu planar charts at %.4g units per texel\n", s.unwrapped_charts,
+                    double(s.unwrap_texel_size));
     std::printf("texel size %.4g to %.4g units; %d rays per texel and pass, %d bounce(s)",
                 double(s.uv_report.min_texel_size), double(s.uv_report.max_texel_size), o.bake.rays, o.bake.bounces);
     if (o.lights.sun)
@@ -621,6 +624,8 @@ int main(int argc, char** argv)
         ->capture_default_str();
     lightmap->add_option("--seed", lm.options.bake.seed, "seed of the rays (same seed, same bytes)")
         ->capture_default_str();
+    lightmap->add_flag("--unwrap", lm.options.unwrap, "make the lightmap UVs (planar charts at one texel density, "
+                                                      "from --texel-size or to fill --size) instead of reading TEXCOORD_1");
     lightmap->add_option("--probes", lm.probes, "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
                                                 "grid over the scene's bounding box, at the centres of its cells");
     lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")->capture_default_str();

@@ -1,6 +1,7 @@
 // hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/math/camera.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
@@ -51,13 +52,25 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         for (const std::string& name : o.outputs)
             io::check_writable(exr_path(o.exr_dir, asset_path, name));
 
-    const io::GltfScene scene = io::read_gltf(scene_path);
-    if (scene.mesh.uvs1.size() != scene.mesh.vertex_count())
+    io::GltfScene scene = io::read_gltf(scene_path);
+    LightmapBakeSummary summary;
+    if (o.unwrap)
+    {
+        UnwrapOptions u;
+        u.texel_size = o.texel_size;
+        u.width = o.width;
+        u.height = o.height;
+        const UnwrapResult r = unwrap_lightmap(scene.mesh, u);
+        summary.unwrapped_charts = r.charts;
+        summary.unwrap_texel_size = r.texel_size;
+        o.width = r.width;
+        o.height = r.height;
+    }
+    else if (scene.mesh.uvs1.size() != scene.mesh.vertex_count())
         throw io::FormatError(scene_path.string() +
                               ": has no lightmap UVs (TEXCOORD_1): give every mesh a second UV set laid out for the "
-                              "lightmap (Blender: a second UV map, e.g. from Lightmap Pack); hemi does not unwrap "
-                              "scenes yet");
-    LightmapBakeSummary summary;
+                              "lightmap (Blender: a second UV map, e.g. from Lightmap Pack), or let hemi make "
+                              "planar charts with --unwrap");
     summary.triangles = scene.mesh.indices.size() / 3;
     summary.materials = scene.materials.size();
     summary.primitives = scene.primitives.size();
@@ -195,6 +208,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["rays"] = s.rays;
     j["texels_moved_out_of_walls"] = s.pushed;
     j["texels_inside_geometry"] = s.invalid;
+    if (s.unwrapped_charts)
+        j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)
         j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}}, {"count", s.probes},
                        {"inside_geometry", s.invalid_probes}, {"rays_per_probe", o.probe_rays}};

@@ -8,6 +8,7 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/material.h>
 #include <hemi/math/basis.h>
 
@@ -768,4 +769,111 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     EXPECT_FALSE(inside.valid[0]);
     hemi::io::LightProbes none;
     EXPECT_THROW(bake_light_probes(none, solid, sa, ssh, dark, po, nullptr), std::invalid_argument);
+}
+
+// --unwrap: planar charts at one texel density. The sample's level with its lightmap UVs removed unwraps
+// into charts that do not overlap, stay inside the atlas, and give every quad the asked texel size (2%);
+// a UV sphere (curved: bands of charts) unwraps without overlaps; a closed emissive box unwrapped and baked
+// with one bounce gives E = pi (1 + 0.5) in every texel (the bounce looks the irradiance up through the new
+// UVs; 0.2%); an atlas too small for the texel size is refused, naming both.
+TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
+{
+    hemi::io::GltfScene level = hemi::samples::make_level(256);
+    level.mesh.uvs1.clear();
+    const size_t triangles = level.mesh.indices.size() / 3;
+    hemi::bake::UnwrapOptions u;
+    u.texel_size = 0.05f;
+    const hemi::bake::UnwrapResult r = hemi::bake::unwrap_lightmap(level.mesh, u);
+    EXPECT_EQ(level.mesh.indices.size() / 3, triangles);
+    EXPECT_TRUE(hemi::io::mesh_problem(level.mesh, hemi::io::MeshNeeds::Frames).empty());
+    ASSERT_EQ(level.mesh.uvs1.size(), level.mesh.positions.size());
+    EXPECT_GT(r.charts, 20u);
+    EXPECT_FLOAT_EQ(r.texel_size, 0.05f);
+    std::vector<TriangleRange> quads;
+    for (uint32_t t = 0; t < triangles; t += 2)
+        quads.push_back({t, 2, "quad " + std::to_string(t / 2)});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(level.mesh, r.width, r.height, report, quads);
+    EXPECT_TRUE(report.ok()) << report.problems[0];
+    EXPECT_EQ(report.outside, 0u);
+    EXPECT_EQ(report.degenerate, 0u);
+    EXPECT_NEAR(report.min_texel_size, 0.05f, 0.001f);
+    EXPECT_NEAR(report.max_texel_size, 0.05f, 0.001f);
+    EXPECT_GT(a.texels.size(), size_t(0.4 * r.width * r.height)) << "the charts fill the atlas";
+    // No texel is touched by two charts, even conservatively: every triangle's bounding box in texels lies
+    // in texels no other chart's triangles reach.
+    ASSERT_EQ(r.chart_of.size(), triangles);
+    std::vector<uint32_t> owner(size_t(r.width) * r.height, ~0u);
+    for (uint32_t t = 0; t < triangles; ++t)
+    {
+        glm::vec2 lo(INFINITY), hi(-INFINITY);
+        for (int e = 0; e < 3; ++e)
+        {
+            const glm::vec2 uv = level.mesh.uvs1[level.mesh.indices[size_t(t) * 3 + e]] * glm::vec2(r.width, r.height);
+            lo = glm::min(lo, uv);
+            hi = glm::max(hi, uv);
+        }
+        for (int y = int(std::floor(lo.y)); y <= int(std::floor(hi.y)); ++y)
+            for (int x = int(std::floor(lo.x)); x <= int(std::floor(hi.x)); ++x)
+            {
+                ASSERT_TRUE(x >= 0 && y >= 0 && x < int(r.width) && y < int(r.height)) << "triangle " << t;
+                uint32_t& o = owner[size_t(y) * r.width + size_t(x)];
+                ASSERT_TRUE(o == ~0u || o == r.chart_of[t]) << "texel (" << x << ", " << y << ") of charts " << o
+                                                             << " and " << r.chart_of[t];
+                o = r.chart_of[t];
+            }
+    }
+
+    Mesh sphere = hemi::io::make_uv_sphere(1.0f, 48, 24);
+    sphere.uvs1.clear();
+    hemi::bake::UnwrapOptions su;
+    su.width = su.height = 256;
+    const hemi::bake::UnwrapResult sr = hemi::bake::unwrap_lightmap(sphere, su);
+    const LightmapAtlas sa = rasterize_lightmap(sphere, sr.width, sr.height, report);
+    EXPECT_TRUE(report.ok()) << report.problems[0];
+    EXPECT_EQ(report.outside, 0u);
+    EXPECT_GT(sa.texels.size(), 1000u);
+
+    // The closed emissive box, its lightmap UVs made by the unwrap.
+    Mesh box;
+    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const auto& f : faces)
+        add_quad(box, c[f[3]], c[f[2]], c[f[1]], c[f[0]], {0, 1, 1, 0});
+    box.uvs1.clear();
+    hemi::bake::UnwrapOptions bu;
+    bu.width = 48;
+    bu.height = 32;
+    const hemi::bake::UnwrapResult br = hemi::bake::unwrap_lightmap(box, bu);
+    EXPECT_EQ(br.charts, 6u);
+    const LightmapAtlas ba = rasterize_lightmap(box, br.width, br.height, report);
+    ASSERT_TRUE(report.ok()) << report.problems[0];
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
+    materials[0].emissive_factor = glm::vec3(1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(box.indices.size()), 0}};
+    const LightmapSurfaces surfaces(box, materials, {}, primitives);
+    LightmapLights dark;
+    dark.uniform = glm::vec3(0.0f);
+    LightmapBakeOptions o;
+    o.bounces = 1;
+    const LightmapSh sh = bake_lightmap_sh(box, ba, dark, o, &surfaces);
+    for (size_t i = 0; i < ba.texels.size(); ++i)
+        ASSERT_NEAR(lightmap_coefficients("plain", sh.irradiance[i])[0].x, 1.5 * M_PI, 0.002 * 1.5 * M_PI) << "texel " << i;
+
+    Mesh again = hemi::samples::make_level(64).mesh;
+    hemi::bake::UnwrapOptions tight;
+    tight.texel_size = 0.01f;
+    tight.width = tight.height = 64;
+    try
+    {
+        hemi::bake::unwrap_lightmap(again, tight);
+        ADD_FAILURE() << "a 64 x 64 atlas at 1 cm texels accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("64 x 64"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("0.01"), std::string::npos) << e.what();
+    }
 }

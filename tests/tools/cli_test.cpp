@@ -737,3 +737,31 @@ TEST(BakeCli, RenderDrawsProbeLitSpheresInTheLevel)
     EXPECT_EQ(bad.status, 1);
     EXPECT_NE(bad.err.find("--sphere"), std::string::npos) << bad.err;
 }
+
+// hemi-bake lightmap --unwrap: a level exported without a second UV map is refused, the message pointing at
+// --unwrap; with it the scene gets planar charts at the asked texel size (the JSON says how many and the
+// density), the asset keeps the unwrapped mesh, and hemi-render draws it under the validation layer.
+TEST(BakeCli, LightmapUnwrapsScenesWithoutLightmapUvs)
+{
+    hemi::io::GltfScene level = hemi::samples::make_level(64);
+    level.mesh.uvs1.clear();
+    const fs::path scene = dir() / "no_uv1_level.glb";
+    hemi::io::write_gltf(scene, level);
+    const fs::path asset = dir() / "no_uv1_level.hemi", json = dir() / "no_uv1_level.json";
+    const Result refused = lightmap(q(scene) + " -o " + q(asset) + " --rays 8");
+    EXPECT_EQ(refused.status, 1);
+    EXPECT_NE(refused.err.find("no_uv1_level.glb"), std::string::npos) << refused.err;
+    EXPECT_NE(refused.err.find("--unwrap"), std::string::npos) << refused.err;
+    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --unwrap --texel-size 0.1 --rays 16 --bases sh9 --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_GT(j["unwrap"]["charts"].get<int>(), 20);
+    EXPECT_FLOAT_EQ(j["unwrap"]["texel_size"].get<float>(), 0.1f);
+    EXPECT_NEAR(j["texel_size"]["min"].get<float>(), 0.1f, 0.002f);
+    EXPECT_NEAR(j["texel_size"]["max"].get<float>(), 0.1f, 0.002f);
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    EXPECT_EQ(a.mesh.uvs1.size(), a.mesh.positions.size());
+    EXPECT_EQ(a.mesh.indices.size(), level.mesh.indices.size());
+    const Result v = render(q(asset) + " --technique sh9 --size 48x32 -o " + q(dir() / "no_uv1_level.png"));
+    EXPECT_EQ(v.status, 0) << v.err;
+}

@@ -191,6 +191,9 @@ struct LightmapFileOptions
     // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.
     glm::uvec3 probes{0};
     int probe_rays = 1024;
+    // Make the lightmap UVs (unwrap_lightmap: planar charts at one texel density) instead of reading
+    // TEXCOORD_1, with texel_size and width x height as its options; the asset keeps the unwrapped mesh.
+    bool unwrap = false;
 };
 
 struct LightmapBakeSummary
@@ -202,6 +205,8 @@ struct LightmapBakeSummary
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     size_t probes = 0, invalid_probes = 0;
+    size_t unwrapped_charts = 0; // with unwrap
+    float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
     std::string checkpoint_error;
