@@ -40,6 +40,7 @@ layout(location = 7) in vec2 in_uv0;
 layout(location = 8) in vec2 in_uv1;
 layout(location = 9) in vec3 in_normal;
 layout(location = 10) in vec4 in_tangent;
+layout(location = 11) in vec3 in_world;
 
 layout(location = 0) out vec4 out_color;
 #if HEMI_AUX
@@ -85,18 +86,18 @@ void main()
         }
     }
 
+    // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from behind is
+    // lit as the other side (its normal flipped).
+    vec3 N = normalize(in_normal);
+    if (kDoubleSided != 0 && !gl_FrontFacing)
+        N = -N;
+    const vec3 T = normalize(in_tangent.xyz - N * dot(N, in_tangent.xyz));
+    const vec3 B = cross(N, T) * in_tangent.w;
     vec3 n = nt;
     if (kFrame == HEMI_FRAME_WORLD)
-    {
-        // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from
-        // behind is lit as the other side (its normal flipped).
-        vec3 N = normalize(in_normal);
-        if (kDoubleSided != 0 && !gl_FrontFacing)
-            N = -N;
-        vec3 T = normalize(in_tangent.xyz - N * dot(N, in_tangent.xyz));
-        vec3 B = cross(N, T) * in_tangent.w;
         n = normalize(T * nt.x + B * nt.y + N * nt.z);
-    }
+    // World vectors in the coefficients' frame.
+    const mat3 to_frame = kFrame == HEMI_FRAME_WORLD ? mat3(1.0) : transpose(mat3(T, B, N));
 
     HemiSurface s;
     s.albedo = albedo.rgb;
@@ -108,6 +109,18 @@ void main()
     s.k = K;
     s.c = c;
     s.sep4_weights = frame.sep4_weights;
+    s.lights = int(frame.options.y);
+    for (int i = 0; i < HEMI_MAX_LIGHTS; ++i)
+    {
+        const vec4 p = frame.light_position[i];
+        const vec3 to = p.w == 0.0 ? p.xyz : p.xyz - in_world;
+        const float d2 = max(dot(to, to), 1e-12);
+        s.l[i] = to_frame * (to * inversesqrt(d2));
+        s.e[i] = frame.light_irradiance[i].rgb / (p.w == 0.0 ? 1.0 : d2);
+    }
+    s.v = to_frame * normalize(frame.eye.xyz - in_world);
+    s.specular_exponent = frame.options.z;
+    s.specular_strength = frame.options.w;
     out_color = vec4(hemi_shade(kTechnique, s), 1.0);
 #if HEMI_AUX
     out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);

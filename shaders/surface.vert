@@ -27,6 +27,7 @@ layout(location = 7) out vec2 out_uv0;
 layout(location = 8) out vec2 out_uv1;
 layout(location = 9) out vec3 out_normal;
 layout(location = 10) out vec4 out_tangent;
+layout(location = 11) out vec3 out_world;
 
 void main()
 {
@@ -49,5 +50,7 @@ void main()
     mat3 m = mat3(draw.model);
     out_normal = m * in_normal;
     out_tangent = vec4(m * in_tangent.xyz, in_tangent.w);
-    gl_Position = frame.view_projection * (draw.model * vec4(in_position, 1.0));
+    const vec4 world = draw.model * vec4(in_position, 1.0);
+    out_world = world.xyz;
+    gl_Position = frame.view_projection * world;
 }

@@ -544,3 +544,116 @@ TEST_F(LightmapMaterial, SpheresLitByTheAssetsProbesBesideTheLevel)
     hemi::render::LightmapView plain_view(dev, no_probes, {"sh9"}, 16, 16);
     EXPECT_THROW(plain_view.render(frame), std::invalid_argument);
 }
+
+// Dynamic lights on Green's two materials (issue 11): a directional and a point light with a specular term,
+// added to the lightmap. The difference between the frame with the lights and the same frame without them
+// equals, at sampled pixels, what this test computes from the paper's forms: Listing 1 lights the normal-map
+// normal (albedo E max(0, n.l) / pi), the SSBump material projects each light onto Valve's three directions
+// and dots them with the texel (albedo E sqrt(3) sum_i w_i saturate(B_i.l) / pi), each with normalised
+// Blinn-Phong, (m + 8) / (8 pi) (n.h)^m (n.l) E, at its normal (the SSBump one reconstructed as
+// normalize(sum_i w_i B_i)); 1% + 1e-3. A flat SSBump texel under a light straight above gets the light's
+// full E (the sqrt 3 normalisation). Validation layer on (the fixture).
+TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
+{
+    auto& dev = hemi::test::device();
+    const uint8_t ssbump_texel[3] = {150, 60, 20};
+    const uint8_t flat_ssbump[3] = {85, 85, 85};
+    glm::vec3 albedo, normal;
+    const hemi::io::LightmapAsset tilted = floor_asset({"rnm"}, albedo, normal);
+    const glm::vec3 n_map = normal;
+    const hemi::io::LightmapAsset bumped = floor_asset({"rnm"}, albedo, normal, ssbump_texel);
+    const hemi::io::LightmapAsset flat = floor_asset({"rnm"}, albedo, normal, flat_ssbump);
+    const uint32_t size = 96;
+    const glm::vec3 eye(0.0f, -0.3f, 2.6f);
+    std::vector<hemi::render::DynamicLight> lights(2);
+    lights[0].position = glm::vec3(0.5f, -0.4f, 0.8f); // towards the directional light
+    lights[0].irradiance = glm::vec3(1.5f, 1.2f, 1.0f);
+    lights[1].point = true;
+    lights[1].position = glm::vec3(0.4f, 0.3f, 0.6f);
+    lights[1].irradiance = glm::vec3(0.3f, 0.35f, 0.4f);
+    const float exponent = 24.0f, strength = 0.4f;
+    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique, bool lit, float spec,
+                      std::vector<hemi::render::DynamicLight> with) {
+        hemi::render::LightmapView view(dev, a, {technique}, size, size);
+        hemi::render::LightmapFrame frame;
+        frame.technique = technique;
+        frame.model = glm::mat4(1.0f);
+        frame.camera.eye = eye;
+        frame.camera.target = glm::vec3(0.0f);
+        if (lit)
+        {
+            frame.lights = with.empty() ? lights : with;
+            frame.specular_exponent = exponent;
+            frame.specular_strength = spec;
+        }
+        return view.render(frame);
+    };
+    const glm::mat4 inv = glm::inverse(hemi::render::camera_matrix({eye, glm::vec3(0.0f), 35.0f}, tilted.mesh,
+                                                                   glm::mat4(1.0f), 1.0f));
+    auto floor_point = [&](uint32_t px, uint32_t py) {
+        const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
+        glm::vec4 a = inv * glm::vec4(ndc, 0.0f, 1.0f), b = inv * glm::vec4(ndc, 1.0f, 1.0f);
+        const glm::vec3 p0 = glm::vec3(a) / a.w, p1 = glm::vec3(b) / b.w;
+        return p0 + (p1 - p0) * (p0.z / (p0.z - p1.z));
+    };
+    const glm::dvec3 basis[3] = {{0.81649658, 0.0, 0.57735027}, {-0.40824829, 0.70710678, 0.57735027},
+                                 {-0.40824829, -0.70710678, 0.57735027}};
+    const glm::dvec3 w(ssbump_texel[0] / 255.0, ssbump_texel[1] / 255.0, ssbump_texel[2] / 255.0);
+    const glm::dvec3 reconstructed = glm::normalize(w.x * basis[0] + w.y * basis[1] + w.z * basis[2]);
+    for (const std::string technique : {"rnm", "ssbump"})
+    {
+        const hemi::io::LightmapAsset& asset = technique == "rnm" ? tilted : bumped;
+        const hemi::io::ImageRgba on = render(asset, technique, true, strength, {});
+        const hemi::io::ImageRgba off = render(asset, technique, false, 0.0f, {});
+        const glm::dvec3 n = technique == "rnm" ? glm::dvec3(n_map) : reconstructed;
+        int compared = 0;
+        for (uint32_t py = 8; py < size - 8; py += 4)
+            for (uint32_t px = 8; px < size - 8; px += 4)
+            {
+                if (on.at(px, py)[3] != 1.0f)
+                    continue;
+                const glm::dvec3 p(floor_point(px, py));
+                if (std::abs(p.x) > 0.95 || std::abs(p.y) > 0.95)
+                    continue;
+                const glm::dvec3 v = glm::normalize(glm::dvec3(eye) - p);
+                glm::dvec3 diffuse(0.0), specular(0.0);
+                for (const hemi::render::DynamicLight& l : lights)
+                {
+                    glm::dvec3 to = glm::dvec3(l.position) - (l.point ? p : glm::dvec3(0.0));
+                    const double d2 = l.point ? glm::dot(to, to) : 1.0;
+                    to = glm::normalize(to);
+                    const glm::dvec3 e = glm::dvec3(l.irradiance) / d2;
+                    double f = 0.0;
+                    if (technique == "rnm")
+                        f = std::max(0.0, glm::dot(n, to));
+                    else
+                        for (int i = 0; i < 3; ++i)
+                            f += std::sqrt(3.0) * w[i] * std::clamp(glm::dot(basis[i], to), 0.0, 1.0);
+                    diffuse += e * f;
+                    const glm::dvec3 h = glm::normalize(to + v);
+                    specular += e * std::max(0.0, glm::dot(n, to)) * std::pow(std::max(0.0, glm::dot(n, h)), double(exponent));
+                }
+                specular *= strength * (exponent + 8.0) / (8.0 * M_PI);
+                for (int ch = 0; ch < 3; ++ch)
+                {
+                    const double expected = albedo[ch] * diffuse[ch] / M_PI + specular[ch];
+                    ASSERT_NEAR(on.at(px, py)[ch] - off.at(px, py)[ch], expected, 0.01 * expected + 1e-3)
+                        << technique << " pixel (" << px << ", " << py << ") channel " << ch;
+                }
+                ++compared;
+            }
+        EXPECT_GT(compared, 200) << technique;
+    }
+    // A flat SSBump texel under one light straight above, no specular: the light's full E times albedo / pi.
+    std::vector<hemi::render::DynamicLight> overhead(1);
+    overhead[0].irradiance = glm::vec3(2.0f);
+    const hemi::io::ImageRgba a = render(flat, "ssbump", true, 0.0f, overhead), b = render(flat, "ssbump", false, 0.0f, {});
+    for (uint32_t i = 0; i < size * size; i += 7)
+        if (a.pixels[i * 4 + 3] == 1.0f)
+        {
+            ASSERT_NEAR(a.pixels[i * 4] - b.pixels[i * 4], albedo.x * 2.0f * (85.0f / 255.0f * 3.0f) / float(M_PI), 2e-3f);
+        }
+    // Too many lights are refused.
+    EXPECT_THROW(render(flat, "ssbump", true, 0.0f, std::vector<hemi::render::DynamicLight>(HEMI_MAX_LIGHTS + 1)),
+                 std::invalid_argument);
+}

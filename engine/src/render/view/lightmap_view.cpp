@@ -48,7 +48,11 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
         upload.submit_and_wait();
     }
     gpu::one_shot(view_.device(), [&](VkCommandBuffer cmd) {
-        view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white);
+        FrameData dynamic;
+        dynamic.lights = frame.lights;
+        dynamic.specular_exponent = frame.specular_exponent;
+        dynamic.specular_strength = frame.specular_strength;
+        view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
         for (size_t i = 0; i < lighting.size(); ++i)
             spheres_->record_lighting(cmd, uint32_t(i), lighting[i]);
         view_.target().begin(cmd);

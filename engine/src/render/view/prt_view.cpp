@@ -40,7 +40,7 @@ ViewTarget::ViewTarget(const gpu::Device& device, uint32_t width, uint32_t heigh
 }
 
 void ViewTarget::record_frame(VkCommandBuffer cmd, const PrtCamera& camera, const io::Mesh& mesh,
-                              const glm::mat4& model, bool white)
+                              const glm::mat4& model, bool white, const FrameData& lighting)
 {
     const float aspect = float(target_.width()) / float(target_.height());
     // The bounds only change with the model matrix: no pass over the vertices per frame.
@@ -52,9 +52,10 @@ void ViewTarget::record_frame(VkCommandBuffer cmd, const PrtCamera& camera, cons
         bounds_model_ = model;
         bounds_valid_ = true;
     }
-    FrameData f;
+    FrameData f = lighting;
     f.view_projection = camera_matrix(camera, BoundingSphere{bounds_centre_, bounds_radius_}, aspect);
     f.lighting_only = white;
+    f.eye = camera.eye;
     frame_set_.record_update(cmd, f);
 }
 

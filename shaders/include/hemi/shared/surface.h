@@ -51,11 +51,18 @@ using uint = uint32_t;
 #define HEMI_SPEC_TECHNIQUE 3
 #define HEMI_SPEC_DOUBLE_SIDED 4
 
+// Dynamic lights (added to the precomputed lighting by the techniques that take them: rnm, ssbump).
+#define HEMI_MAX_LIGHTS 4
+
 struct FrameUniforms
 {
     mat4 view_projection;
-    vec4 options;         // x = 1: lighting only (albedo 1, no emissive); yzw unused
+    vec4 options;         // x = 1: lighting only (albedo 1, no emissive); y = dynamic lights; z = specular
+                          // exponent, w = specular strength of the dynamic lights
     vec4 sep4_weights[9]; // math::sep4_weights() rows, read only by the separable basis
+    vec4 eye;             // xyz: the camera's position (world)
+    vec4 light_position[HEMI_MAX_LIGHTS]; // w = 0: xyz towards a directional light; w = 1: a point light at xyz
+    vec4 light_irradiance[HEMI_MAX_LIGHTS]; // rgb: on a surface facing it (a point light: at distance 1, / d^2)
 };
 
 struct MaterialUniforms
@@ -76,7 +83,7 @@ struct DrawPush
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16, "std140 layout");
+static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 2 * HEMI_MAX_LIGHTS * 16, "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 8 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 80, "push constants");
 } // namespace hemi::shared

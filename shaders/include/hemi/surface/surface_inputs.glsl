@@ -3,6 +3,7 @@
 #ifndef HEMI_SURFACE_INPUTS_GLSL
 #define HEMI_SURFACE_INPUTS_GLSL
 #include "hemi/basis/all.glsl"
+#include "hemi/shared/surface.h"
 
 const float kHemiPi = 3.14159265358979;
 
@@ -17,6 +18,27 @@ struct HemiSurface
     int k;                  // how many coefficients
     vec3 c[HEMI_BASIS_MAX_SIZE];
     vec4 sep4_weights[9];   // the separable basis's weights (math::sep4_weights())
+    // Dynamic lights in the coefficients' frame (tangent or world), at this pixel.
+    int lights;
+    vec3 l[HEMI_MAX_LIGHTS]; // unit, towards the light
+    vec3 e[HEMI_MAX_LIGHTS]; // irradiance on a surface facing it (a point light's falloff applied)
+    vec3 v;                  // unit, towards the eye
+    float specular_exponent, specular_strength;
 };
+
+// The dynamic lights' normalised Blinn-Phong term at normal n: (m + 8) / (8 pi) (n.h)^m (n.l) E, summed.
+vec3 hemi_dynamic_specular(HemiSurface s, vec3 n)
+{
+    vec3 sum = vec3(0.0);
+    if (s.specular_strength == 0.0)
+        return sum;
+    for (int i = 0; i < s.lights; ++i)
+    {
+        const float nl = max(dot(n, s.l[i]), 0.0);
+        const vec3 h = normalize(s.l[i] + s.v);
+        sum += s.e[i] * nl * pow(max(dot(n, h), 0.0), s.specular_exponent);
+    }
+    return sum * s.specular_strength * (s.specular_exponent + 8.0) / (8.0 * kHemiPi);
+}
 
 #endif

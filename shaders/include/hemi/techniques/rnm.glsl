@@ -1,7 +1,8 @@
 // Radiosity normal mapping (Green 2007, Listing 1: Source's original bump mapping): three lightmap colours
 // L_i, the irradiance towards each of Valve's directions B_i (the lightmap baker's "rnm" output, in c[0..2]),
 // blended by the normal-map normal's weights D_i = saturate(n . B_i)^2 / sum_j saturate(n . B_j)^2.
-// colour = albedo * sum_i D_i L_i / pi + emissive. The normal is the tangent-space one.
+// colour = albedo * (sum_i D_i L_i + sum_k E_k max(0, n . l_k)) / pi + specular + emissive, with the dynamic
+// lights k at the normal-map normal n (tangent space) and their Blinn-Phong term at n.
 #ifndef HEMI_TECHNIQUE_RNM_GLSL
 #define HEMI_TECHNIQUE_RNM_GLSL
 #include "hemi/shared/rnm.h"
@@ -18,8 +19,11 @@ vec3 hemi_technique_rnm(HemiSurface s)
                    clamp(dot(s.n, kHemiRnmBasis[2]), 0.0, 1.0));
     dp *= dp;
     const float sum = dp.x + dp.y + dp.z;
-    const vec3 e = sum > 0.0 ? (dp.x * s.c[0] + dp.y * s.c[1] + dp.z * s.c[2]) / sum : vec3(0.0);
-    return s.albedo * e / kHemiPi + s.emissive;
+    vec3 e = sum > 0.0 ? (dp.x * s.c[0] + dp.y * s.c[1] + dp.z * s.c[2]) / sum : vec3(0.0);
+    // Dynamic lights at the normal-map normal.
+    for (int i = 0; i < s.lights; ++i)
+        e += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
+    return s.albedo * e / kHemiPi + hemi_dynamic_specular(s, s.n) + s.emissive;
 }
 
 #endif

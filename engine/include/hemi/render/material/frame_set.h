@@ -6,14 +6,32 @@
 #include <hemi/render/material/material_system.h>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <vector>
 
 namespace hemi::render
 {
+
+// A dynamic light, added to the precomputed lighting by the techniques that take dynamic lights (rnm and
+// ssbump: Green 2007 projects them onto Valve's three directions). World space, z up.
+struct DynamicLight
+{
+    bool point = false;          // false: directional
+    glm::vec3 position{0.0f, 0.0f, 1.0f}; // a point light's position, or the direction towards a directional one
+    glm::vec3 irradiance{1.0f};  // on a surface facing it (a point light's at distance 1, falling off as 1 / d^2)
+};
 
 struct FrameData
 {
     glm::mat4 view_projection{1.0f}; // Vulkan clip space (material_system.h)
     bool lighting_only = false;      // albedo 1 and no emissive: the "white" view of the lighting alone
+    glm::vec3 eye{0.0f};             // the camera's position (world): the view direction of specular terms
+    std::vector<DynamicLight> lights; // at most HEMI_MAX_LIGHTS (std::invalid_argument else)
+    // The dynamic lights' specular term (normalised Blinn-Phong, (m + 8) / (8 pi) (n.h)^m (n.l) E, at the
+    // technique's normal): exponent m and strength (0: none). A stand-in for per-material gloss.
+    float specular_exponent = 32.0f;
+    float specular_strength = 0.0f;
 };
 
 class FrameSet

@@ -31,6 +31,9 @@ struct LightmapFrame
     // asset's light probes at its centre (render::probe_lighting) in the same render pass as the level. At
     // most LightmapView::kMaxSpheres; the asset must have probes.
     std::vector<glm::vec4> spheres;
+    // Dynamic lights (world space) for the techniques that take them (rnm, ssbump), with their specular term.
+    std::vector<DynamicLight> lights;
+    float specular_exponent = 32.0f, specular_strength = 0.0f;
 };
 
 class LightmapView

@@ -26,8 +26,10 @@ public:
 
     // Outside a render pass: the frame set for `camera` looking at `mesh` under `model` (near and far planes
     // around its bounds, which are recomputed only when `model` changes), albedo 1 when `white`.
+    // `lighting` carries the dynamic lights and their specular term (its view_projection, eye and
+    // lighting_only are set here).
     void record_frame(VkCommandBuffer cmd, const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model,
-                      bool white);
+                      bool white, const FrameData& lighting = {});
     // The target's colour with alpha = coverage (1 where the asset is), after a submitted frame.
     io::ImageRgba read() const;
 
