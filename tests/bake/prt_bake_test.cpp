@@ -327,7 +327,7 @@ struct Interrupt
 
 // An interrupted bake keeps its finished work: the checkpoint written between slices lets the next run resume
 // (from mid-pass as well as from a pass boundary) and give exactly the bytes of an uninterrupted bake. A
-// checkpoint of other options, or a corrupted one, is ignored.
+// checkpoint of another scene, of other options, or a corrupted one, is ignored.
 TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
 {
     const hemi::io::Mesh knot = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex, 0.3f);
@@ -367,6 +367,23 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
         EXPECT_EQ(0, std::memcmp(resumed.irradiance.data(), whole.irradiance.data(), whole.irradiance.size() * 4));
     }
 
+    // Another scene with the same options and the same layout (the same vertex and index counts): one vertex
+    // moved by a thousandth. Its checkpoint is not this bake's and is ignored, and the bake gives that scene's
+    // own bytes, not a resumption of the knot's.
+    {
+        hemi::io::Mesh moved = knot;
+        moved.positions[5] += glm::vec3(1e-3f, 0.0f, 0.0f);
+        PrtBakeOptions plain = o;
+        plain.checkpoint.clear();
+        const auto own = hemi::bake::bake_prt_transfer(moved, plain);
+        PrtBakeOptions scene = o;
+        scene.checkpoint = checkpoint.string() + ".scene";
+        std::filesystem::copy_file(checkpoint, scene.checkpoint);
+        const auto other_scene = hemi::bake::bake_prt_transfer(moved, scene);
+        EXPECT_FALSE(other_scene.resumed) << "a checkpoint of another scene was resumed";
+        EXPECT_EQ(0, std::memcmp(other_scene.radiance.data(), own.radiance.data(), own.radiance.size() * 4));
+        std::filesystem::remove(scene.checkpoint);
+    }
     // Another seed: the checkpoint is not this bake's and is ignored.
     PrtBakeOptions other = o;
     other.seed = 9;
