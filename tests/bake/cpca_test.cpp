@@ -1,11 +1,13 @@
 // CPCA against constructed data whose exact compression is known, and its reported error against an
-// independent reconstruction.
+// independent reconstruction (the stored layout multiplied out here, not bake::reconstruct_cpca).
 #include <hemi/bake/cpca.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+#include <span>
+#include <string>
 
 namespace
 {
@@ -39,17 +41,42 @@ std::vector<float> subspace_data(uint32_t n, uint32_t d, uint32_t clusters, uint
     return out;
 }
 
+// Point i is mean[cluster[i]] + sum_v weights[i][v] * basis[cluster[i]][v] (io::PrtCpca's layout: means C x D,
+// basis C x V x D, weights N x V), multiplied out here in double precision.
 double reconstruction_rms(const hemi::io::PrtCpca& c, std::span<const float> x, uint32_t n, uint32_t d)
 {
-    std::vector<float> row(d);
+    EXPECT_EQ(c.cluster.size(), n);
+    EXPECT_EQ(c.weights.size(), size_t(n) * c.vectors);
+    EXPECT_EQ(c.means.size(), size_t(c.clusters) * d);
+    EXPECT_EQ(c.basis.size(), size_t(c.clusters) * c.vectors * d);
     double sum = 0.0;
     for (uint32_t i = 0; i < n; ++i)
     {
-        hemi::bake::reconstruct_cpca(c, d, i, row);
+        const size_t k = c.cluster[i];
         for (uint32_t e = 0; e < d; ++e)
-            sum += double(row[e] - x[size_t(i) * d + e]) * (row[e] - x[size_t(i) * d + e]);
+        {
+            double v = c.means[k * d + e];
+            for (uint32_t j = 0; j < c.vectors; ++j)
+                v += double(c.weights[size_t(i) * c.vectors + j]) * c.basis[(k * c.vectors + j) * d + e];
+            sum += (v - x[size_t(i) * d + e]) * (v - x[size_t(i) * d + e]);
+        }
     }
     return std::sqrt(sum / (double(n) * d));
+}
+
+// compress_cpca(x, n, d, clusters, vectors) throws std::invalid_argument whose message contains `part`.
+void expect_refused(std::span<const float> x, uint32_t n, uint32_t d, uint32_t clusters, uint32_t vectors,
+                    const std::string& part)
+{
+    try
+    {
+        hemi::bake::compress_cpca(x, n, d, clusters, vectors);
+        ADD_FAILURE() << "accepted; expected a refusal naming '" << part << "'";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
 }
 
 } // namespace
@@ -85,13 +112,14 @@ TEST(Cpca, ClustersFindTheGeneratingSubspaces)
     EXPECT_GT(reconstruction_rms(one, x, n, d), 1.0);
 }
 
+// Each bad input is refused with a message naming the problem.
 TEST(Cpca, RejectsBadInput)
 {
     std::vector<float> x(10 * 4, 1.0f);
-    EXPECT_THROW(hemi::bake::compress_cpca(x, 10, 5, 1, 2), std::invalid_argument); // size mismatch
-    EXPECT_THROW(hemi::bake::compress_cpca(x, 10, 4, 0, 2), std::invalid_argument);
-    EXPECT_THROW(hemi::bake::compress_cpca(x, 10, 4, 11, 2), std::invalid_argument);
-    EXPECT_THROW(hemi::bake::compress_cpca(x, 10, 4, 1, 0), std::invalid_argument);
+    expect_refused(x, 10, 5, 1, 2, "CPCA expects 50 values, got 40");
+    expect_refused(x, 10, 4, 0, 2, "cluster count 0 is not in [1, 10]");
+    expect_refused(x, 10, 4, 11, 2, "cluster count 11 is not in [1, 10]");
+    expect_refused(x, 10, 4, 1, 0, "at least one PCA vector");
     x[7] = NAN;
-    EXPECT_THROW(hemi::bake::compress_cpca(x, 10, 4, 1, 2), std::invalid_argument);
+    expect_refused(x, 10, 4, 1, 2, "non-finite value");
 }

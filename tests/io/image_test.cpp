@@ -47,21 +47,37 @@ TEST(ImageWriters, RejectInconsistentImagesNamingTheFile)
     EXPECT_THROW(hemi::io::write_exr(temp_dir() / "bad.exr", bad), hemi::io::FormatError);
 }
 
+// Both writers' files decode to what was given: the PNG, read back by the decoder, holds at every pixel and
+// channel the sRGB encoding of the clamped linear value (the IEC 61966-2-1 curve, typed here) rounded to 8 bits
+// and the clamped alpha; the EXR holds the values themselves (to half precision, whichever type it stores).
+// Every value differs, so a swapped channel or a transposed row is seen as well as a wrong curve.
 TEST(ImageWriters, WritePngAndExrFiles)
 {
-    hemi::io::ImageRgba img{3, 2, std::vector<float>(3 * 2 * 4, 0.5f)};
+    const uint32_t w = 3, h = 2;
+    hemi::io::ImageRgba img{w, h, std::vector<float>(w * h * 4)};
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+        img.pixels[i] = i % 4 == 3 ? 0.1f + 0.17f * float(i / 4) : 0.001f + 0.05f * float(i);
+    img.pixels[4] = 1.5f; // clamped to white in the PNG, kept in the EXR
     fs::path png = temp_dir() / "ok.png", exr = temp_dir() / "ok.exr";
     hemi::io::write_png(png, img);
     hemi::io::write_exr(exr, img);
-    std::ifstream f(png, std::ios::binary);
-    char sig[8];
-    f.read(sig, 8);
-    EXPECT_EQ(std::string(sig + 1, 3), "PNG");
-    std::ifstream e(exr, std::ios::binary);
-    unsigned char magic[4];
-    e.read(reinterpret_cast<char*>(magic), 4);
-    EXPECT_EQ(magic[0], 0x76); // OpenEXR magic 20000630
-    EXPECT_EQ(magic[1], 0x2f);
+    const hemi::io::ImageRgba8 decoded = hemi::io::read_png(png);
+    ASSERT_EQ(decoded.width, w);
+    ASSERT_EQ(decoded.height, h);
+    ASSERT_EQ(decoded.pixels.size(), img.pixels.size());
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+    {
+        const float v = std::clamp(img.pixels[i], 0.0f, 1.0f);
+        const float encoded =
+            i % 4 == 3 ? v : (v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f);
+        EXPECT_EQ(int(decoded.pixels[i]), int(std::lround(encoded * 255.0f))) << "PNG byte " << i;
+    }
+    const hemi::io::ImageRgba back = hemi::io::read_exr(exr);
+    ASSERT_EQ(back.width, w);
+    ASSERT_EQ(back.height, h);
+    ASSERT_EQ(back.pixels.size(), img.pixels.size());
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+        EXPECT_NEAR(back.pixels[i], img.pixels[i], 1e-3f * img.pixels[i]) << "EXR value " << i;
     for (const auto& entry : fs::directory_iterator(temp_dir()))
         EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary left behind: " << entry.path();
 }

@@ -275,6 +275,26 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                              return true;
                          }),
                  "cluster 7 out of range");
+    // NaN in each stored array of a CPCA section (the rms error, the means, the PCA vectors, the weights),
+    // under a valid container checksum: refused, naming the file, the technique and the problem.
+    {
+        const size_t d = 9, header = 12, means = 2 * d * 4;
+        const std::pair<const char*, size_t> places[] = {
+            {"rms", 8}, {"means", header + 4}, {"vectors", header + means + 8}, {"weights", size_t(-4)}};
+        for (const auto& [what, offset] : places)
+            expect_error(rewrite(good, std::string("cpca_nan_") + what + ".hemi",
+                                 [offset](const std::string& s, std::vector<std::byte>& b) {
+                                     if (s == "C.prt")
+                                     {
+                                         // The weights are the section's last N x V floats.
+                                         const size_t at = offset == size_t(-4) ? b.size() - 4 : offset;
+                                         const float nan = NAN;
+                                         std::memcpy(b.data() + at, &nan, 4);
+                                     }
+                                     return true;
+                                 }),
+                         "technique 'prt': non-finite CPCA value");
+    }
     expect_error(rewrite(good, "unknown.hemi", keep, {{"T.phong", std::vector<std::byte>(16)}}),
                  "unknown technique 'phong'");
     expect_error(rewrite(good, "version.hemi",

@@ -52,6 +52,41 @@ TEST(Bases, OrthonormalOnTheHemisphere)
     }
 }
 
+// Koenderink et al.'s hemispherical Zernike polynomials in their polar closed form, typed here from the disk's
+// definition rather than zernike.cpp's Cartesian one: the direction at (theta, phi) sits at radius
+// rho = sqrt(1 - cos theta) on the unit disk (the equal-area map, d(omega) = 2 rho d(rho) d(phi)), and
+// Z_n^m = N_nm R_n^|m|(rho) cos(m phi) (sin for m < 0) with R_0^0 = 1, R_1^1 = rho, R_2^0 = 2 rho^2 - 1,
+// R_2^2 = rho^2, normalised on the hemisphere by N = sqrt((n + 1) / (2 pi)) for m = 0 and sqrt((n + 1) / pi)
+// otherwise. zernike3 is the first three, zernike6 all six, in the order (0,0), (1,1), (1,-1), (2,0), (2,2),
+// (2,-2).
+TEST(BasisZernike, EqualsThePolarClosedForm)
+{
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 500; ++i)
+    {
+        // Uniform on the hemisphere, plus the pole and the horizon.
+        const double cos_theta = i == 0 ? 1.0 : i == 1 ? 0.0 : u(rng), phi = 2.0 * M_PI * u(rng);
+        const double sin_theta = std::sqrt(1.0 - cos_theta * cos_theta), rho = std::sqrt(1.0 - cos_theta);
+        const double want[6] = {std::sqrt(1.0 / (2.0 * M_PI)),
+                                std::sqrt(2.0 / M_PI) * rho * std::cos(phi),
+                                std::sqrt(2.0 / M_PI) * rho * std::sin(phi),
+                                std::sqrt(3.0 / (2.0 * M_PI)) * (2.0 * rho * rho - 1.0),
+                                std::sqrt(3.0 / M_PI) * rho * rho * std::cos(2.0 * phi),
+                                std::sqrt(3.0 / M_PI) * rho * rho * std::sin(2.0 * phi)};
+        const glm::vec3 n(float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)), float(cos_theta));
+        for (const char* name : {"zernike3", "zernike6"})
+        {
+            const BasisDesc& b = basis(name);
+            float got[HEMI_BASIS_MAX_SIZE];
+            b.eval(n, got);
+            for (int k = 0; k < b.size; ++k)
+                EXPECT_NEAR(got[k], want[k], 2e-6) << name << " function " << k << " at theta "
+                                                  << std::acos(cos_theta) << ", phi " << phi;
+        }
+    }
+}
+
 // Sloan 2006, Appendix 7.2: the printed matrix weights the raw lobes (n . b_i), so it equals
 // sqrt(3 / (2 pi)) times our projection onto the normalised lobes.
 TEST(BasisHl2, ReproducesSloansMatrix)

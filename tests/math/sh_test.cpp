@@ -338,3 +338,26 @@ TEST(ShWindow, WeightsStartAtOneAndDecrease)
     EXPECT_NEAR(sh_window_weight(ShWindow::Hanning, 3, 6), 0.5, 1e-12);
     EXPECT_NEAR(sh_window_weight(ShWindow::Laplacian, 1, 6, 0.25), 0.5, 1e-12);
 }
+
+// The windows' closed forms (sh.h), here as the decimal values of order 6: Lanczos sinc(pi l / 6) =
+// sin(pi l / 6) / (pi l / 6) and Hanning (1 + cos(pi l / 6)) / 2, band by band; apply_window scales every
+// coefficient of band l by its band's weight.
+TEST(ShWindow, LanczosAndHanningEqualTheirClosedForms)
+{
+    const double lanczos[6] = {1.0, 0.954929658551372, 0.826993343132688, 0.636619772367581, 0.413496671566344,
+                               0.190985931710274};
+    const double hanning[6] = {1.0, 0.933012701892219, 0.75, 0.5, 0.25, 0.066987298107781};
+    for (int l = 0; l < 6; ++l)
+    {
+        EXPECT_NEAR(sh_window_weight(ShWindow::Lanczos, l, 6), lanczos[l], 1e-12) << "band " << l;
+        EXPECT_NEAR(sh_window_weight(ShWindow::Hanning, l, 6), hanning[l], 1e-12) << "band " << l;
+    }
+    std::vector<glm::vec3> c(36, glm::vec3(1.0f, 2.0f, -3.0f));
+    apply_window(c, ShWindow::Lanczos);
+    for (int l = 0; l < 6; ++l)
+        for (int m = -l; m <= l; ++m)
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(c[size_t(sh_index(l, m))][ch], float(lanczos[l]) * (ch == 0 ? 1.0f : ch == 1 ? 2.0f : -3.0f),
+                            1e-6f)
+                    << "l " << l << " m " << m;
+}
