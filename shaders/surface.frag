@@ -24,6 +24,7 @@ layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_UNIFORMS, std140
 layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_BASE_COLOR) uniform sampler2D base_color; // sRGB
 layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_NORMAL) uniform sampler2D normal_map;
 layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_EMISSIVE) uniform sampler2D emissive_map; // sRGB
+layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_OCCLUSION) uniform sampler2D occlusion_map; // linear r
 #if HEMI_SOURCE == HEMI_SOURCE_TEXEL
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
@@ -109,6 +110,8 @@ void main()
     s.k = K;
     s.c = c;
     s.sep4_weights = frame.sep4_weights;
+    // glTF: occlusion = 1 + strength (r - 1); only the techniques that read it fetch it.
+    s.occlusion = 1.0 + material.occlusion.x * (texture(occlusion_map, material_uv(material.texcoord.w, 3)).r - 1.0);
     s.lights = int(frame.options.y);
     for (int i = 0; i < HEMI_MAX_LIGHTS; ++i)
     {

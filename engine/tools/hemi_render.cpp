@@ -94,7 +94,7 @@ int main(int argc, char** argv)
                 technique = "sh9";
             try
             {
-                asset.output(technique == "ssbump" ? "rnm" : technique);
+                asset.output(technique == "ssbump" || technique == "rnm_ao" ? "rnm" : technique);
             }
             catch (const std::invalid_argument& e)
             {

@@ -415,6 +415,9 @@ hemi::io::GltfScene blender_like_scene()
                                 Wrap::MirroredRepeat};
     brick.normal.image = 1;
     brick.normal_scale = 0.5f;
+    brick.occlusion.image = 0; // occlusionTexture (red channel) and its strength
+    brick.occlusion.sampler.wrap_s = Wrap::ClampToEdge;
+    brick.occlusion_strength = 0.7f;
     Material panel;
     panel.name = "panel";
     panel.base_color.image = 2;

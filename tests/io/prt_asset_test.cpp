@@ -60,6 +60,9 @@ hemi::io::PrtAsset small_asset()
     brick.normal.scale = {2.0f, 0.5f};
     brick.normal.rotation = 1.25f;
     brick.normal_scale = 0.75f;
+    brick.occlusion.image = 0; // glTF's occlusion texture (its red channel), with its own UV set and strength
+    brick.occlusion.texcoord = 1;
+    brick.occlusion_strength = 0.6f;
     Material glow;
     glow.name = "glow \"quoted\" \u00e9";
     glow.emissive_factor = {1.0f, 0.5f, 0.25f};

@@ -657,3 +657,48 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
     EXPECT_THROW(render(flat, "ssbump", true, 0.0f, std::vector<hemi::render::DynamicLight>(HEMI_MAX_LIGHTS + 1)),
                  std::invalid_argument);
 }
+
+// Green's second baseline, radiosity normal mapping with a plain ambient-occlusion channel (rnm_ao): the
+// material's glTF occlusion texture, 1 + strength (r - 1), multiplies the diffuse light, the lightmap's and a
+// dynamic light's: with a texel r = 0.4 at strength 0.5 every pixel is 0.7 of Listing 1's (1%); without an
+// occlusion texture rnm_ao is Listing 1. Validation layer on.
+TEST_F(LightmapMaterial, AmbientOcclusionBaselineScalesListingOne)
+{
+    auto& dev = hemi::test::device();
+    glm::vec3 albedo, normal;
+    hemi::io::LightmapAsset plain = floor_asset({"rnm"}, albedo, normal);
+    hemi::io::LightmapAsset occluded = plain;
+    occluded.images.push_back({"ao.png", "image/png", hemi::io::encode_png({1, 1, {102, 0, 0, 255}})});
+    occluded.materials[0].occlusion.image = 1;
+    occluded.materials[0].occlusion_strength = 0.5f;
+    const float factor = 1.0f + 0.5f * (102.0f / 255.0f - 1.0f);
+    const uint32_t size = 64;
+    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique) {
+        hemi::render::LightmapView view(dev, a, {technique}, size, size);
+        hemi::render::LightmapFrame frame;
+        frame.technique = technique;
+        frame.model = glm::mat4(1.0f);
+        frame.camera.eye = glm::vec3(0.0f, -0.3f, 2.6f);
+        frame.camera.target = glm::vec3(0.0f);
+        hemi::render::DynamicLight light;
+        light.position = glm::vec3(-0.4f, 0.2f, 0.9f);
+        light.irradiance = glm::vec3(1.0f, 0.8f, 0.6f);
+        frame.lights = {light};
+        return view.render(frame);
+    };
+    const hemi::io::ImageRgba listing1 = render(occluded, "rnm"), ao = render(occluded, "rnm_ao");
+    const hemi::io::ImageRgba listing1_plain = render(plain, "rnm"), ao_plain = render(plain, "rnm_ao");
+    int covered = 0;
+    for (size_t i = 0; i < listing1.pixels.size(); i += 4)
+    {
+        if (listing1.pixels[i + 3] != 1.0f)
+            continue;
+        ++covered;
+        for (int c = 0; c < 3; ++c)
+        {
+            ASSERT_NEAR(ao.pixels[i + c], factor * listing1.pixels[i + c], 0.01f * listing1.pixels[i + c] + 1e-4f);
+            ASSERT_NEAR(ao_plain.pixels[i + c], listing1_plain.pixels[i + c], 1e-4f);
+        }
+    }
+    EXPECT_GT(covered, 500);
+}

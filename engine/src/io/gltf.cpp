@@ -627,6 +627,11 @@ struct Reader
                            "normal texture", label);
         m.emissive = texture(in.emissiveTexture.index, in.emissiveTexture.texCoord,
                              in.emissiveTexture.extensions, "emissive texture", label);
+        m.occlusion = texture(in.occlusionTexture.index, in.occlusionTexture.texCoord,
+                              in.occlusionTexture.extensions, "occlusion texture", label);
+        m.occlusion_strength = float(in.occlusionTexture.strength);
+        if (!std::isfinite(m.occlusion_strength))
+            fail(label + ": non-finite occlusion strength");
         m.double_sided = in.doubleSided;
         if (in.alphaMode == "MASK" || in.alphaMode == "BLEND")
             warnings.add("alphaMode " + in.alphaMode,
@@ -1043,7 +1048,7 @@ struct Reader
             scene.mesh.uvs1.clear();
             for (size_t i = 0; i < scene.materials.size(); ++i)
                 for (TextureRef* t : {&scene.materials[i].base_color, &scene.materials[i].normal,
-                                      &scene.materials[i].emissive})
+                                      &scene.materials[i].emissive, &scene.materials[i].occlusion})
                     if (t->present() && t->texcoord == 1)
                     {
                         warnings.add("TEXCOORD_1 absent",
@@ -1498,6 +1503,9 @@ void write_gltf(const std::filesystem::path& path, const GltfScene& scene,
         out.normalTexture.scale = mat.normal_scale;
         info(mat.emissive, out.emissiveTexture.index, out.emissiveTexture.texCoord,
              out.emissiveTexture.extensions);
+        info(mat.occlusion, out.occlusionTexture.index, out.occlusionTexture.texCoord,
+             out.occlusionTexture.extensions);
+        out.occlusionTexture.strength = mat.occlusion_strength;
         out.emissiveFactor = {mat.emissive_factor.r, mat.emissive_factor.g, mat.emissive_factor.b};
         out.doubleSided = mat.double_sided;
         b.m.materials.push_back(out);

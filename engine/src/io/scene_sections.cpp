@@ -55,8 +55,10 @@ std::string scene_json(const std::vector<Material>& materials_in, const std::vec
             {"normal_scale", m.normal_scale},
             {"emissive_factor", {m.emissive_factor.r, m.emissive_factor.g, m.emissive_factor.b}},
             {"double_sided", m.double_sided}};
+        if (m.occlusion.present())
+            j["occlusion_strength"] = m.occlusion_strength;
         for (const auto& [ref, key] : {std::pair{&m.base_color, "base_color"}, std::pair{&m.normal, "normal"},
-                                       std::pair{&m.emissive, "emissive"}})
+                                       std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
             if (ref->present())
                 j[key] = texture_json(*ref);
         materials.push_back(std::move(j));
@@ -197,9 +199,12 @@ struct SceneJson
             out.double_sided = boolean(m, "double_sided", where);
             for (const auto& [ref, key] :
                  {std::pair{&out.base_color, "base_color"}, std::pair{&out.normal, "normal"},
-                  std::pair{&out.emissive, "emissive"}})
+                  std::pair{&out.emissive, "emissive"}, std::pair{&out.occlusion, "occlusion"}})
                 if (m.contains(key))
                     *ref = texture(m[key], where + " " + key);
+            // Optional (assets written before hemi read occlusion textures have neither key).
+            if (m.contains("occlusion_strength"))
+                out.occlusion_strength = number(m, "occlusion_strength", where);
             materials_out.push_back(std::move(out));
         }
         std::vector<uint64_t> sizes;

@@ -29,7 +29,7 @@ TextureSet::TextureSet(const gpu::Device& device, std::span<const io::EncodedIma
     // Decode only what a material uses (an unused image may be anything).
     std::vector<io::ImageRgba8> decoded(images.size());
     for (const io::Material& m : materials)
-        for (const io::TextureRef* r : {&m.base_color, &m.normal, &m.emissive})
+        for (const io::TextureRef* r : {&m.base_color, &m.normal, &m.emissive, &m.occlusion})
         {
             if (r->image >= 0 && size_t(r->image) >= images.size())
                 throw std::invalid_argument("hemi: material '" + m.name + "' uses image " + std::to_string(r->image) +
@@ -73,6 +73,7 @@ void TextureSet::create(std::span<const io::ImageRgba8> images, std::span<const 
         need(m.base_color.image, true);
         need(m.emissive.image, true);
         need(m.normal.image, false);
+        need(m.occlusion.image, false);
     }
     const uint8_t white[4] = {255, 255, 255, 255}, flat[4] = {128, 128, 255, 255};
     for (bool srgb : {true, false})
@@ -117,15 +118,16 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
     u.base_color_factor = m.base_color_factor;
     // glTF: emissive = factor * texture; without a texture the factor alone (the default image is white).
     u.emissive_factor = glm::vec4(m.emissive_factor, m.normal_scale);
-    const io::TextureRef* refs[3] = {&m.base_color, &m.normal, &m.emissive};
-    for (int t = 0; t < 3; ++t)
+    const io::TextureRef* refs[4] = {&m.base_color, &m.normal, &m.emissive, &m.occlusion};
+    for (int t = 0; t < 4; ++t)
     {
         const glm::mat3 x = refs[t]->present() ? refs[t]->uv_transform() : glm::mat3(1.0f);
         // Rows of the 2x3 affine part: u' = x[0][0] u + x[1][0] v + x[2][0] (glm is column-major).
         u.uv_transform[t * 2] = glm::vec4(x[0][0], x[1][0], x[2][0], 0.0f);
         u.uv_transform[t * 2 + 1] = glm::vec4(x[0][1], x[1][1], x[2][1], 0.0f);
     }
-    u.texcoord = glm::uvec4(m.base_color.texcoord, m.normal.texcoord, m.emissive.texcoord, 0);
+    u.texcoord = glm::uvec4(m.base_color.texcoord, m.normal.texcoord, m.emissive.texcoord, m.occlusion.texcoord);
+    u.occlusion = glm::vec4(m.occlusion_strength, 0.0f, 0.0f, 0.0f);
     return u;
 }
 
@@ -134,7 +136,7 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
     : double_sided_(material.double_sided)
 {
     const gpu::Device& device = system.device();
-    for (const io::TextureRef* r : {&material.base_color, &material.normal, &material.emissive})
+    for (const io::TextureRef* r : {&material.base_color, &material.normal, &material.emissive, &material.occlusion})
         if (r->texcoord > 1)
             throw std::invalid_argument("hemi: material '" + material.name + "' uses TEXCOORD_" +
                                         std::to_string(r->texcoord) + "; hemi reads TEXCOORD_0 and TEXCOORD_1");
@@ -144,16 +146,19 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
     const auto bindings = MaterialSystem::material_bindings();
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, system.material_layout());
-    gpu::DescriptorWrite writes[4];
+    gpu::DescriptorWrite writes[5];
     writes[0].binding = HEMI_MATERIAL_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[0].buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    const std::pair<uint32_t, std::pair<const io::TextureRef*, bool>> maps[3] = {
+    // Without an occlusion texture the default is the white sRGB texel (1: no occlusion), not the flat normal.
+    const bool occlusion_srgb = !material.occlusion.present();
+    const std::pair<uint32_t, std::pair<const io::TextureRef*, bool>> maps[4] = {
         {HEMI_MATERIAL_BINDING_BASE_COLOR, {&material.base_color, true}},
         {HEMI_MATERIAL_BINDING_NORMAL, {&material.normal, false}},
         {HEMI_MATERIAL_BINDING_EMISSIVE, {&material.emissive, true}},
+        {HEMI_MATERIAL_BINDING_OCCLUSION, {&material.occlusion, occlusion_srgb}},
     };
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < 4; ++i)
     {
         const auto& [binding, use] = maps[i];
         writes[i + 1].binding = binding;

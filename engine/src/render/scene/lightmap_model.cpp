@@ -13,7 +13,7 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
 {
     if (output == "plain")
         return math::vertex_irradiance_basis();
-    if (output == "rnm" || output == "ssbump")
+    if (output == "rnm" || output == "ssbump" || output == "rnm_ao")
         throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the rnm and ssbump techniques "
                                     "(radiosity normal mapping), not by a basis");
     return math::basis(output);
@@ -49,14 +49,15 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
     {
         // rnm and ssbump draw the "rnm" output (K = 3, carried by the 3-function HL2 basis's id); the others
         // their own output with their basis.
-        const bool rnm = name == "rnm" || name == "ssbump";
+        const bool rnm = name == "rnm" || name == "ssbump" || name == "rnm_ao";
         if (name == "constant" && asset.outputs.empty())
             throw std::invalid_argument("hemi: the lightmap asset has no outputs");
         // "constant" (the base colour factor: hemi-bench's baseline) binds some output it does not read.
         const std::string source = rnm ? "rnm" : name == "constant" ? asset.outputs.front().name : name;
         const io::LightmapOutput& output = asset.output(source); // lists what the asset has
         if (rnm)
-            variants.push_back({name == "rnm" ? Technique::Rnm : Technique::Ssbump, HEMI_BASIS_HL2});
+            variants.push_back({name == "rnm" ? Technique::Rnm : name == "rnm_ao" ? Technique::RnmAo : Technique::Ssbump,
+                                HEMI_BASIS_HL2});
         else if (source == "rnm")
             variants.push_back({Technique::Constant, HEMI_BASIS_HL2});
         else

@@ -29,6 +29,7 @@ using uint = uint32_t;
 #define HEMI_MATERIAL_BINDING_BASE_COLOR 1
 #define HEMI_MATERIAL_BINDING_NORMAL 2
 #define HEMI_MATERIAL_BINDING_EMISSIVE 3
+#define HEMI_MATERIAL_BINDING_OCCLUSION 4
 #define HEMI_SOURCE_BINDING_COEFFICIENTS 0
 
 // Coefficient sources (a shader variant each: they bind different descriptor types).
@@ -69,8 +70,9 @@ struct MaterialUniforms
 {
     vec4 base_color_factor; // linear rgba
     vec4 emissive_factor;   // rgb linear; a = normal scale
-    vec4 uv_transform[6];   // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive
-    uvec4 texcoord;         // UV set (0 or 1) of base colour, normal, emissive; w unused
+    vec4 uv_transform[8];   // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive, occlusion
+    uvec4 texcoord;         // UV set (0 or 1) of base colour, normal, emissive, occlusion
+    vec4 occlusion;         // x = glTF's occlusion strength; yzw unused
 };
 
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
@@ -84,7 +86,7 @@ struct DrawPush
 
 #ifdef __cplusplus
 static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 2 * HEMI_MAX_LIGHTS * 16, "std140 layout");
-static_assert(sizeof(MaterialUniforms) == 16 * 8 + 16, "std140 layout");
+static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 80, "push constants");
 } // namespace hemi::shared
 #endif

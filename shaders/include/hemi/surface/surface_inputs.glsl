@@ -14,6 +14,7 @@ struct HemiSurface
     vec3 base_color_factor; // the material's factor alone
     vec3 n;                 // normal-map normal in the coefficients' frame (tangent or world)
     vec3 bump;              // the normal-map slot's texel as stored (an SSBump map's weights), linear
+    float occlusion;        // glTF's occlusion (1: none), for the techniques that apply it
     int basis;              // HEMI_BASIS_* of the coefficients
     int k;                  // how many coefficients
     vec3 c[HEMI_BASIS_MAX_SIZE];

@@ -12,8 +12,8 @@ const vec3 kHemiRnmBasis[3] = vec3[3](vec3(HEMI_RNM_SQRT_2_3, 0.0, HEMI_RNM_INV_
                                       vec3(-HEMI_RNM_INV_SQRT_6, HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3),
                                       vec3(-HEMI_RNM_INV_SQRT_6, -HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3));
 
-// hemi-technique: id=2 name=rnm
-vec3 hemi_technique_rnm(HemiSurface s)
+// E: the lightmap's colours blended at the normal-map normal, plus the dynamic lights there.
+vec3 hemi_rnm_irradiance(HemiSurface s)
 {
     vec3 dp = vec3(clamp(dot(s.n, kHemiRnmBasis[0]), 0.0, 1.0), clamp(dot(s.n, kHemiRnmBasis[1]), 0.0, 1.0),
                    clamp(dot(s.n, kHemiRnmBasis[2]), 0.0, 1.0));
@@ -23,7 +23,13 @@ vec3 hemi_technique_rnm(HemiSurface s)
     // Dynamic lights at the normal-map normal.
     for (int i = 0; i < s.lights; ++i)
         e += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
-    return s.albedo * e / kHemiPi + hemi_dynamic_specular(s, s.n) + s.emissive;
+    return e;
+}
+
+// hemi-technique: id=2 name=rnm
+vec3 hemi_technique_rnm(HemiSurface s)
+{
+    return s.albedo * hemi_rnm_irradiance(s) / kHemiPi + hemi_dynamic_specular(s, s.n) + s.emissive;
 }
 
 #endif

@@ -40,6 +40,7 @@ enum class Technique : uint32_t
     Constant = HEMI_TECHNIQUE_CONSTANT,     // the base colour factor alone (a baseline, a debug view)
     Rnm = HEMI_TECHNIQUE_RNM,               // radiosity normal mapping, Green 2007 Listing 1 (K = 3: rnm colours)
     Ssbump = HEMI_TECHNIQUE_SSBUMP,         // self-shadowed bump map in the normal slot, Listing 2 (K = 3)
+    RnmAo = HEMI_TECHNIQUE_RNM_AO,          // Listing 1 times the material's occlusion texture (Green's baseline)
 };
 
 enum class CoefficientSourceKind : uint32_t
