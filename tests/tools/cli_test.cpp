@@ -200,6 +200,40 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_GT(lit, 200u);
 }
 
+// HEMI_VALIDATION=1 makes any validation message an exit status of 2. HEMI_VALIDATION_SELFTEST=1 submits one
+// synthetic validation warning through the device's debug messenger (vkSubmitDebugUtilsMessageEXT), the path
+// the layer's own messages take: hemi-render prints it and exits 2, after writing its image; the same render
+// without the self-test exits 0 with no validation output.
+TEST(Cli, ValidationMessagesMakeExitStatusTwo)
+{
+    const fs::path model =
+        hemi::samples::write_prt_model(dir() / "selftest", "torus", hemi::samples::PrtModel::Simple);
+    const fs::path asset = dir() / "selftest.hemi";
+    const Result b = bake(q(model) + " -o " + q(asset) + " --bases gs --transfer unshadowed --order 3");
+    ASSERT_EQ(b.status, 0) << b.err;
+    const std::string args = q(asset) + " --technique gs --env sky --size 32x24 -o ";
+
+    const fs::path clean = dir() / "selftest_clean.png";
+    const Result ok = render(args + q(clean));
+    EXPECT_EQ(ok.status, 0) << ok.err;
+    EXPECT_EQ(ok.err.find("validation"), std::string::npos) << ok.err;
+    EXPECT_TRUE(fs::exists(clean));
+
+    const fs::path flagged = dir() / "selftest_flagged.png";
+    const Result bad = run(HEMI_RENDER_EXE, args + q(flagged), "HEMI_VALIDATION=1 HEMI_VALIDATION_SELFTEST=1");
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("hemi-render: validation: hemi validation self-test: a synthetic warning"),
+              std::string::npos)
+        << bad.err;
+    EXPECT_NE(bad.err.find("the validation layer reported 1 problem(s)"), std::string::npos) << bad.err;
+    EXPECT_TRUE(fs::exists(flagged)) << "the image is written before the exit status reports the messages";
+
+    // Without validation there is no messenger, so the self-test variable alone changes nothing.
+    const Result off = run(HEMI_RENDER_EXE, args + q(clean), "HEMI_VALIDATION=0 HEMI_VALIDATION_SELFTEST=1");
+    EXPECT_EQ(off.status, 0) << off.err;
+    EXPECT_EQ(off.err.find("validation"), std::string::npos) << off.err;
+}
+
 // What the scene reader simplifies is printed as a warning naming the file, and listed in the JSON report.
 TEST(Cli, BakeWarnsAboutWhatTheSceneReaderSimplifies)
 {
