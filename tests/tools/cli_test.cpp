@@ -200,6 +200,88 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_GT(lit, 200u);
 }
 
+// The white furnace through the command lines: both sample models (the knot and the torus, each with its
+// strong brick normal map) baked unshadowed by hemi-bake prt, rendered by hemi-render --env uniform --white
+// to EXR, are 1 within the README's 1% in every channel of every covered pixel (alpha 1), for every basis
+// that can hold a constant: gs, sal4, h4 and h6. Each frame has at least 500 covered and 500 empty pixels.
+TEST(Cli, WhiteFurnaceThroughTheCommandLinesOnBothModels)
+{
+    const fs::path torus = hemi::samples::write_prt_model(dir() / "furnace", "torus", hemi::samples::PrtModel::Simple);
+    for (const auto& [name, model] : {std::pair<std::string, fs::path>{"knot", knot()}, {"torus", torus}})
+    {
+        const fs::path asset = dir() / (name + "_furnace.hemi");
+        const Result b = bake(q(model) + " -o " + q(asset) +
+                              " --bases gs,sal4,h4,h6 --transfer unshadowed --order 4 --rays 16 --seed 3");
+        ASSERT_EQ(b.status, 0) << name << ": " << b.err;
+        for (const char* technique : {"gs", "sal4", "h4", "h6"})
+        {
+            const fs::path exr = dir() / (name + "_furnace_" + technique + ".exr");
+            const Result r = render(q(asset) + " --technique " + technique +
+                                    " --env uniform --white --size 96x64 -o " + q(exr));
+            ASSERT_EQ(r.status, 0) << name << " " << technique << ": " << r.err;
+            const hemi::io::ImageRgba img = hemi::io::read_exr(exr);
+            ASSERT_EQ(img.width, 96u);
+            ASSERT_EQ(img.height, 64u);
+            size_t covered = 0, empty = 0;
+            float worst = 0.0f;
+            for (size_t i = 0; i < img.pixels.size(); i += 4)
+            {
+                if (img.pixels[i + 3] == 1.0f)
+                {
+                    ++covered;
+                    for (int c = 0; c < 3; ++c)
+                        worst = std::max(worst, std::abs(img.pixels[i + c] - 1.0f));
+                }
+                else
+                {
+                    ASSERT_EQ(img.pixels[i + 3], 0.0f) << name << " " << technique << " pixel " << i / 4;
+                    ++empty;
+                }
+            }
+            EXPECT_LT(worst, 0.01f) << name << " " << technique;
+            char value[32];
+            std::snprintf(value, sizeof value, "%.3g", worst);
+            RecordProperty("cli_furnace_worst_" + name + "_" + technique, value);
+            EXPECT_GT(covered, 500u) << name << " " << technique;
+            EXPECT_GT(empty, 500u) << name << " " << technique;
+        }
+    }
+}
+
+// HEMI_VALIDATION=1 makes any validation message an exit status of 2. HEMI_VALIDATION_SELFTEST=1 submits one
+// synthetic validation warning through the device's debug messenger (vkSubmitDebugUtilsMessageEXT), the path
+// the layer's own messages take: hemi-render prints it and exits 2, after writing its image; the same render
+// without the self-test exits 0 with no validation output.
+TEST(Cli, ValidationMessagesMakeExitStatusTwo)
+{
+    const fs::path model =
+        hemi::samples::write_prt_model(dir() / "selftest", "torus", hemi::samples::PrtModel::Simple);
+    const fs::path asset = dir() / "selftest.hemi";
+    const Result b = bake(q(model) + " -o " + q(asset) + " --bases gs --transfer unshadowed --order 3");
+    ASSERT_EQ(b.status, 0) << b.err;
+    const std::string args = q(asset) + " --technique gs --env sky --size 32x24 -o ";
+
+    const fs::path clean = dir() / "selftest_clean.png";
+    const Result ok = render(args + q(clean));
+    EXPECT_EQ(ok.status, 0) << ok.err;
+    EXPECT_EQ(ok.err.find("validation"), std::string::npos) << ok.err;
+    EXPECT_TRUE(fs::exists(clean));
+
+    const fs::path flagged = dir() / "selftest_flagged.png";
+    const Result bad = run(HEMI_RENDER_EXE, args + q(flagged), "HEMI_VALIDATION=1 HEMI_VALIDATION_SELFTEST=1");
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("hemi-render: validation: hemi validation self-test: a synthetic warning"),
+              std::string::npos)
+        << bad.err;
+    EXPECT_NE(bad.err.find("the validation layer reported 1 problem(s)"), std::string::npos) << bad.err;
+    EXPECT_TRUE(fs::exists(flagged)) << "the image is written before the exit status reports the messages";
+
+    // Without validation there is no messenger, so the self-test variable alone changes nothing.
+    const Result off = run(HEMI_RENDER_EXE, args + q(clean), "HEMI_VALIDATION=0 HEMI_VALIDATION_SELFTEST=1");
+    EXPECT_EQ(off.status, 0) << off.err;
+    EXPECT_EQ(off.err.find("validation"), std::string::npos) << off.err;
+}
+
 // What the scene reader simplifies is printed as a warning naming the file, and listed in the JSON report.
 TEST(Cli, BakeWarnsAboutWhatTheSceneReaderSimplifies)
 {
@@ -815,4 +897,142 @@ TEST(BakeCli, LightmapUnwrapsScenesWithoutLightmapUvs)
     EXPECT_EQ(a.mesh.indices.size(), level.mesh.indices.size());
     const Result v = render(q(asset) + " --technique sh9 --size 48x32 -o " + q(dir() / "no_uv1_level.png"));
     EXPECT_EQ(v.status, 0) << v.err;
+}
+
+// The README's basis-report command line with its defaults (10,000 signals, seed 1): the JSON carries the
+// README's Fig. 3 table to its printed digits, the matrices and Sloan's Table 2 values known in closed form
+// (Sloan 2006, Habel & Wimmer 2010 Eq. 14), and the PNG is gnuplot's 900 x 600 Fig. 3 with one point per
+// distinct error, in the four columns of 3, 4, 6 and 9 coefficients.
+TEST(BakeCli, BasisReportWritesJsonAndPlot)
+{
+    const fs::path json = dir() / "basis_report.json", plot = dir() / "basis_report.png";
+    const Result r = run(HEMI_BAKE_EXE, "basis-report --json " + q(json) + " --plot " + q(plot));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["signals"], 10000);
+    EXPECT_EQ(j["seed"], 1);
+
+    // The README's table, at its three decimals.
+    struct Row
+    {
+        const char* name;
+        int coefficients;
+        double mean, rel_rms;
+    };
+    const Row table[] = {{"hl2", 3, 15.684, 0.475},    {"zernike3", 3, 3.193, 0.214}, {"sal4", 4, 2.055, 0.172},
+                         {"h4", 4, 1.590, 0.151},      {"sh4ls", 4, 1.590, 0.151},    {"sep4", 4, 1.558, 0.150},
+                         {"zernike6", 6, 0.701, 0.100}, {"h6", 6, 0.531, 0.087},      {"sh9", 9, 0.178, 0.051}};
+    ASSERT_EQ(j["imse"].size(), std::size(table));
+    for (const Row& row : table)
+    {
+        const nlohmann::json& e = j["imse"][row.name];
+        EXPECT_EQ(e["coefficients"], row.coefficients) << row.name;
+        EXPECT_NEAR(e["mean"].get<double>(), row.mean, 0.0005) << row.name;
+        EXPECT_NEAR(e["rel_rms"].get<double>(), row.rel_rms, 0.0005) << row.name;
+    }
+    // H4 and least-squares linear SH span the same functions: the same error, not just to three decimals.
+    EXPECT_NEAR(j["imse"]["h4"]["mean"].get<double>(), j["imse"]["sh4ls"]["mean"].get<double>(),
+                1e-9 * j["imse"]["h4"]["mean"].get<double>());
+
+    // Habel's T_h (Eq. 14) in closed form: H6's projection from SH9, and H4's is its first four rows.
+    const double h = 1 / std::sqrt(2.0), qh = 3.0 / 8.0 * std::sqrt(2.5);
+    const double th[6][9] = {{h, 0, 0.5 * std::sqrt(1.5), 0, 0, 0, 0, 0, 0},
+                             {0, h, 0, 0, 0, qh, 0, 0, 0},
+                             {0, 0, 1 / (2 * std::sqrt(2.0)), 0, 0, 0, 0.25 * std::sqrt(7.5), 0, 0},
+                             {0, 0, 0, h, 0, 0, 0, qh, 0},
+                             {0, 0, 0, 0, h, 0, 0, 0, 0},
+                             {0, 0, 0, 0, 0, 0, 0, 0, h}};
+    ASSERT_EQ(j["projection"]["h6"].size(), 6u);
+    ASSERT_EQ(j["projection"]["h4"].size(), 4u);
+    for (int row = 0; row < 6; ++row)
+        for (int col = 0; col < 9; ++col)
+        {
+            EXPECT_NEAR(j["projection"]["h6"][row][col].get<double>(), th[row][col], 1e-6) << row << "," << col;
+            if (row < 4)
+            {
+                EXPECT_NEAR(j["projection"]["h4"][row][col].get<double>(), th[row][col], 1e-6) << row << "," << col;
+            }
+        }
+    EXPECT_FALSE(j["projection"].contains("sh9")) << "SH9's projection is the identity and is not listed";
+
+    // Sloan's Table 2: what a basis represents exactly projects with no error (SAL4: y0,0 and y1,0; HL2: the
+    // three linear functions), HL2's constant loses 0.125 (1.5 cos(theta) against 1: pi/2 over 4 pi), and the
+    // other entries match Table 2's printed digits.
+    const double sal4[9] = {0, 0.046, 0, 0.046, 0.5, 0.045, 0.031, 0.045, 0.5};
+    const double hl2[9] = {0.125, 0, 0, 0, 0.5, 0.15, 0.38, 0.15, 0.5};
+    ASSERT_EQ(j["sloan_table2"]["sal4"].size(), 9u);
+    ASSERT_EQ(j["sloan_table2"]["hl2"].size(), 9u);
+    // Half a unit in the last printed digit: 4.6e-2 to 0.0005, 0.15 to 0.005, 0.5 (one digit) to 0.05.
+    const double sal4_tolerance[9] = {1e-9, 0.0005, 1e-9, 0.0005, 0.05, 0.0005, 0.0005, 0.0005, 0.05};
+    const double hl2_tolerance[9] = {1e-6, 1e-9, 1e-9, 1e-9, 0.05, 0.005, 0.005, 0.005, 0.05};
+    for (int k = 0; k < 9; ++k)
+    {
+        EXPECT_NEAR(j["sloan_table2"]["sal4"][k].get<double>(), sal4[k], sal4_tolerance[k]) << "SAL4 y" << k;
+        EXPECT_NEAR(j["sloan_table2"]["hl2"][k].get<double>(), hl2[k], hl2_tolerance[k]) << "HL2 y" << k;
+    }
+    for (const char* key : {"A", "A_convolved"})
+    {
+        const std::vector<double> s = j["svd_singular_values"][key].get<std::vector<double>>();
+        ASSERT_EQ(s.size(), 9u) << key;
+        EXPECT_GT(s[0], 0.0) << key;
+        for (size_t k = 1; k < s.size(); ++k)
+            EXPECT_LE(s[k], s[k - 1]) << key << " " << k;
+    }
+
+    // The plot: gnuplot's 900 x 600 frame, mostly white background, and its points (#3060c0 at their centres)
+    // in exactly four columns, one per coefficient count, at heights that follow the errors.
+    const hemi::io::ImageRgba8 png = hemi::io::read_png(plot);
+    ASSERT_EQ(png.width, 900u);
+    ASSERT_EQ(png.height, 600u);
+    size_t white = 0, point = 0;
+    std::vector<bool> point_column(png.width, false);
+    for (size_t p = 0; p < size_t(png.width) * png.height; ++p)
+    {
+        const uint8_t* px = &png.pixels[p * 4];
+        if (px[0] == 255 && px[1] == 255 && px[2] == 255)
+            ++white;
+        if (std::abs(px[0] - 0x30) <= 2 && std::abs(px[1] - 0x60) <= 2 && std::abs(px[2] - 0xc0) <= 2)
+        {
+            ++point;
+            point_column[p % png.width] = true;
+        }
+    }
+    EXPECT_GT(white, size_t(png.width) * png.height / 2);
+    EXPECT_LT(white, size_t(png.width) * png.height * 99 / 100);
+    EXPECT_GT(point, 80u) << "eight points (h4 = sh4ls share one)";
+    // Each column's points stand at their errors on the log scale: HL2 and Zernike3 apart at 3; SAL4 above
+    // H4 = SH4LS and sep4 (those two 2 pixels apart, one blob) at 4; Zernike6 above H6 at 6; SH9 alone at 9.
+    // HL2's point is the highest in the frame and SH9's the lowest.
+    std::vector<std::pair<size_t, size_t>> columns; // [first, last] x of each run of point pixels
+    for (size_t x = 0; x < png.width; ++x)
+        if (point_column[x] && (x == 0 || !point_column[x - 1]))
+            columns.push_back({x, x});
+        else if (point_column[x])
+            columns.back().second = x;
+    ASSERT_EQ(columns.size(), 4u) << "points at 3, 4, 6 and 9 coefficients";
+    const size_t expected_blobs[4] = {2, 2, 2, 1};
+    size_t top_column = 0, bottom_column = 0, top = png.height, bottom = 0;
+    for (size_t c = 0; c < columns.size(); ++c)
+    {
+        std::vector<bool> point_row(png.height, false);
+        for (size_t y = 0; y < png.height; ++y)
+            for (size_t x = columns[c].first; x <= columns[c].second; ++x)
+            {
+                const uint8_t* px = &png.pixels[(y * png.width + x) * 4];
+                if (std::abs(px[0] - 0x30) <= 2 && std::abs(px[1] - 0x60) <= 2 && std::abs(px[2] - 0xc0) <= 2)
+                    point_row[y] = true;
+            }
+        size_t blobs = 0;
+        for (size_t y = 0; y < png.height; ++y)
+        {
+            blobs += point_row[y] && (y == 0 || !point_row[y - 1]);
+            if (point_row[y] && y < top)
+                top = y, top_column = c;
+            if (point_row[y] && y > bottom)
+                bottom = y, bottom_column = c;
+        }
+        EXPECT_EQ(blobs, expected_blobs[c]) << "column " << c;
+    }
+    EXPECT_EQ(top_column, 0u) << "HL2 (3 coefficients) has the largest error";
+    EXPECT_EQ(bottom_column, 3u) << "SH9 (9 coefficients) has the smallest error";
 }

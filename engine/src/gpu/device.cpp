@@ -237,6 +237,20 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
             auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
                 vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
             HEMI_VK_CHECK(create(instance_, &messenger_info, nullptr, &messenger_));
+            // HEMI_VALIDATION_SELFTEST=1 (test-only) submits one synthetic validation warning through the
+            // messenger, so that a test can see a real message arrive at debug_callback, be counted by
+            // validation_messages() and reach the log callback, without provoking a driver bug on purpose.
+            if (const char* selftest = std::getenv("HEMI_VALIDATION_SELFTEST");
+                selftest && *selftest && std::string_view(selftest) != "0")
+            {
+                auto submit = reinterpret_cast<PFN_vkSubmitDebugUtilsMessageEXT>(
+                    vkGetInstanceProcAddr(instance_, "vkSubmitDebugUtilsMessageEXT"));
+                VkDebugUtilsMessengerCallbackDataEXT message{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
+                message.pMessageIdName = "hemi-validation-selftest";
+                message.pMessage = "hemi validation self-test: a synthetic warning (HEMI_VALIDATION_SELFTEST=1)";
+                submit(instance_, VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT,
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT, &message);
+            }
         }
 
         std::string selector = desc.device_selector;

@@ -36,7 +36,10 @@ struct DeviceDesc
     // (e.g. "llvmpipe", "NVIDIA").
     std::string device_selector;
     // Enables VK_LAYER_KHRONOS_validation and routes its warnings and errors to `log`.
-    // The HEMI_VALIDATION environment variable ("1"/"0") overrides this.
+    // The HEMI_VALIDATION environment variable ("1"/"0") overrides this. With validation on,
+    // HEMI_VALIDATION_SELFTEST=1 (for tests only) makes the device submit one synthetic validation warning
+    // through its messenger right after creating it: it reaches `log` and counts in validation_messages()
+    // exactly like a message of the layer's own.
     bool validation = false;
     LogCallback log;
     std::string application_name = "hemi";
