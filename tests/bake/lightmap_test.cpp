@@ -390,17 +390,7 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
 // bake resumed in its last bounce gives the same bytes.
 TEST(LightmapBake, ClosedRoomFurnaceAddsEachBounce)
 {
-    Mesh m;
-    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-    // The outward faces of the cube, reversed: every face looks into the box.
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    for (int f = 0; f < 6; ++f)
-    {
-        const float u0 = float(f % 3) / 3.0f + 0.02f, v0 = float(f / 3) / 2.0f + 0.03f;
-        add_quad(m, c[faces[f][3]], c[faces[f][2]], c[faces[f][1]], c[faces[f][0]],
-                 {u0, v0 + 0.44f, u0 + 0.29f, v0});
-    }
+    const Mesh m = hemi::test::unit_box(true); // every face looks into the box
     std::vector<hemi::io::Material> materials(1);
     materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
     materials[0].emissive_factor = glm::vec3(1.0f);
@@ -682,15 +672,7 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
 // inside a closed box of single-sided outward faces is flagged invalid.
 TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
 {
-    Mesh m;
-    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    for (int f = 0; f < 6; ++f)
-    {
-        const float u0 = float(f % 3) / 3.0f + 0.02f, v0 = float(f / 3) / 2.0f + 0.03f;
-        add_quad(m, c[faces[f][3]], c[faces[f][2]], c[faces[f][1]], c[faces[f][0]], {u0, v0 + 0.44f, u0 + 0.29f, v0});
-    }
+    const Mesh m = hemi::test::unit_box(true);
     std::vector<hemi::io::Material> materials(1);
     materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
     materials[0].emissive_factor = glm::vec3(1.0f);
@@ -758,9 +740,7 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     EXPECT_TRUE(open.valid[0] && open.valid[1]);
 
     // Inside a closed box of outward (single-sided) faces.
-    Mesh solid;
-    for (const auto& f : faces)
-        add_quad(solid, c[f[0]], c[f[1]], c[f[2]], c[f[3]], {0.1f, 0.9f, 0.9f, 0.1f});
+    const Mesh solid = hemi::test::unit_box(false);
     const LightmapAtlas sa = rasterize_lightmap(solid, 8, 8, report);
     const LightmapSh ssh = bake_lightmap_sh(solid, sa, dark, LightmapBakeOptions{}, nullptr);
     hemi::io::LightProbes inside;
@@ -835,12 +815,7 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
     EXPECT_GT(sa.texels.size(), 1000u);
 
     // The closed emissive box, its lightmap UVs made by the unwrap.
-    Mesh box;
-    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    for (const auto& f : faces)
-        add_quad(box, c[f[3]], c[f[2]], c[f[1]], c[f[0]], {0, 1, 1, 0});
+    Mesh box = hemi::test::unit_box(true);
     box.uvs1.clear();
     hemi::bake::UnwrapOptions bu;
     bu.width = 48;

@@ -43,4 +43,26 @@ inline io::Mesh plane(int cells)
     return m;
 }
 
+// The cube [-1, 1]^3 as six quads, facing into it (`inward`) or out of it, each face's lightmap UVs in its own
+// cell of a 3 x 2 grid over [0, 1]^2 (with a margin), so the atlas has no overlaps.
+inline io::Mesh unit_box(bool inward)
+{
+    io::Mesh m;
+    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    // Counter-clockwise seen from outside; reversed for the inside.
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (int f = 0; f < 6; ++f)
+    {
+        const float u0 = float(f % 3) / 3.0f + 0.02f, v0 = float(f / 3) / 2.0f + 0.03f;
+        const glm::vec4 uv1(u0, v0 + 0.44f, u0 + 0.29f, v0);
+        const int* q = faces[f];
+        if (inward)
+            add_quad(m, c[q[3]], c[q[2]], c[q[1]], c[q[0]], uv1);
+        else
+            add_quad(m, c[q[0]], c[q[1]], c[q[2]], c[q[3]], uv1);
+    }
+    return m;
+}
+
 } // namespace hemi::test

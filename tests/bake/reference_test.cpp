@@ -147,12 +147,7 @@ TEST(Reference, SunLightsTheNormalMapNormalInTheTangentFrame)
 // walls' backs are culled, as the rasteriser does, and the colour view shows emission + albedo E / pi.
 TEST(Reference, ClosedBoxFurnaceAddsEachBounce)
 {
-    Mesh m;
-    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    for (const auto& f : faces)
-        hemi::test::add_quad(m, c[f[3]], c[f[2]], c[f[1]], c[f[0]], {0, 1, 1, 0}); // facing into the box
+    const Mesh m = hemi::test::unit_box(true); // facing into the box
     std::vector<hemi::io::Material> materials(1);
     materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
     materials[0].emissive_factor = glm::vec3(1.0f);

@@ -37,6 +37,16 @@ class LightmapMaterial : public hemi::test::GpuTest
 
 constexpr uint32_t W = 160, H = 96, kAtlas = 16;
 
+// Where pixel (px, py) of a size x size view lands on the plane z = 0: the view's own projection inverted.
+glm::vec3 point_on_floor(const glm::mat4& inverse_view_projection, uint32_t size, uint32_t px, uint32_t py)
+{
+    const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
+    const glm::vec4 a = inverse_view_projection * glm::vec4(ndc, 0.0f, 1.0f);
+    const glm::vec4 b = inverse_view_projection * glm::vec4(ndc, 1.0f, 1.0f);
+    const glm::vec3 p0 = glm::vec3(a) / a.w, p1 = glm::vec3(b) / b.w;
+    return p0 + (p1 - p0) * (p0.z / (p0.z - p1.z));
+}
+
 // SH9 in hemi's convention, typed from docs/DESIGN.md.
 std::array<double, 9> sh9(const glm::dvec3& d)
 {
@@ -347,12 +357,7 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
     const glm::mat4 vp = hemi::render::camera_matrix({glm::vec3(0.0f, -0.3f, 2.6f), glm::vec3(0.0f), 35.0f},
                                                      tilted.mesh, glm::mat4(1.0f), 1.0f);
     const glm::mat4 inv = glm::inverse(vp);
-    auto floor_point = [&](uint32_t px, uint32_t py) {
-        const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
-        glm::vec4 a = inv * glm::vec4(ndc, 0.0f, 1.0f), b = inv * glm::vec4(ndc, 1.0f, 1.0f);
-        const glm::vec3 p0 = glm::vec3(a) / a.w, p1 = glm::vec3(b) / b.w;
-        return p0 + (p1 - p0) * (p0.z / (p0.z - p1.z));
-    };
+    auto floor_point = [&](uint32_t px, uint32_t py) { return point_on_floor(inv, size, px, py); };
     const hemi::io::LightmapOutput& rnm = tilted.output("rnm");
     auto lightmap = [&](const glm::vec2& uv1) {
         std::array<glm::vec3, 3> c{};
@@ -590,12 +595,7 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
     };
     const glm::mat4 inv = glm::inverse(hemi::render::camera_matrix({eye, glm::vec3(0.0f), 35.0f}, tilted.mesh,
                                                                    glm::mat4(1.0f), 1.0f));
-    auto floor_point = [&](uint32_t px, uint32_t py) {
-        const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
-        glm::vec4 a = inv * glm::vec4(ndc, 0.0f, 1.0f), b = inv * glm::vec4(ndc, 1.0f, 1.0f);
-        const glm::vec3 p0 = glm::vec3(a) / a.w, p1 = glm::vec3(b) / b.w;
-        return p0 + (p1 - p0) * (p0.z / (p0.z - p1.z));
-    };
+    auto floor_point = [&](uint32_t px, uint32_t py) { return point_on_floor(inv, size, px, py); };
     const glm::dvec3 basis[3] = {{0.81649658, 0.0, 0.57735027}, {-0.40824829, 0.70710678, 0.57735027},
                                  {-0.40824829, -0.70710678, 0.57735027}};
     const glm::dvec3 w(ssbump_texel[0] / 255.0, ssbump_texel[1] / 255.0, ssbump_texel[2] / 255.0);
