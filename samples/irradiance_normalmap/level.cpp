@@ -1,5 +1,6 @@
 #include "level.h"
 
+#include <hemi/bake/ssbump.h>
 #include <hemi/io/image.h>
 
 #include <glm/geometric.hpp>
@@ -43,6 +44,21 @@ io::EncodedImage normal_map(const std::string& name, uint32_t size, Height heigh
     return {name, "image/png", io::encode_png(image)};
 }
 
+// The SSBump map (normalised convention, directional occlusion from 300 rays a texel) of the same height
+// field, its highest point `top` world units up: heights over one UV unit of `size` texels.
+template <class Height>
+io::EncodedImage ssbump_map(const std::string& name, uint32_t size, Height height, float top)
+{
+    bake::HeightField field{size, size, std::vector<float>(size_t(size) * size)};
+    for (uint32_t y = 0; y < size; ++y)
+        for (uint32_t x = 0; x < size; ++x)
+            field.heights[size_t(y) * size + x] = height((float(x) + 0.5f) / float(size), (float(y) + 0.5f) / float(size)) / top;
+    bake::SsbumpOptions o;
+    o.scale = top * float(size); // world units to texel widths
+    const bake::SsbumpMap m = bake::bake_ssbump(field, o);
+    return {name, "image/png", io::encode_png({size, size, bake::ssbump_rgba8(m.weights, {}, false)})};
+}
+
 // Height of a bevelled block whose edges are `d` away: rising at `slope` over the bevel `width`, flat on top.
 float bevel(float d, float width, float slope)
 {
@@ -56,7 +72,7 @@ float fract(float x)
 
 } // namespace
 
-io::GltfScene make_level(uint32_t atlas, bool normal_maps)
+io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
 {
     if (atlas < 64)
         throw std::invalid_argument("make_level: atlas " + std::to_string(atlas) + " is smaller than 64");
@@ -137,24 +153,32 @@ io::GltfScene make_level(uint32_t atlas, bool normal_maps)
         mat.base_color_factor = colours[k];
         scene.materials.push_back(mat);
     }
-    if (normal_maps)
+    // Tiles of 0.5 units (two per UV unit), bevelled over 0.06 at 45 degrees; bricks 0.5 x 0.25 in running
+    // bond, mortar joints bevelled over 0.04 at 50 degrees. Heights in world units over one UV unit.
+    const auto tiles = [](float u, float v) {
+        const float x = fract(u * 2.0f), y = fract(v * 2.0f);
+        const float d = std::min(std::min(x, 1.0f - x), std::min(y, 1.0f - y)) * 0.5f;
+        return bevel(d, 0.06f, 1.0f);
+    };
+    const auto bricks = [](float u, float v) {
+        const float row = std::floor(v * 4.0f);
+        const float x = fract(u * 2.0f + 0.5f * row), y = fract(v * 4.0f);
+        const float d = std::min(std::min(x, 1.0f - x) * 0.5f, std::min(y, 1.0f - y) * 0.25f);
+        return bevel(d, 0.04f, 1.19f);
+    };
+    if (maps == LevelMaps::Normal)
     {
-        // Tiles of 0.5 units (two per UV unit), bevelled over 0.06 at 45 degrees.
-        scene.images.push_back(normal_map("tiles normal map", 256, [](float u, float v) {
-            const float x = fract(u * 2.0f), y = fract(v * 2.0f);
-            const float d = std::min(std::min(x, 1.0f - x), std::min(y, 1.0f - y)) * 0.5f;
-            return bevel(d, 0.06f, 1.0f);
-        }));
-        // Bricks 0.5 x 0.25 in running bond, mortar joints bevelled over 0.04 at 50 degrees.
-        scene.images.push_back(normal_map("bricks normal map", 256, [](float u, float v) {
-            const float row = std::floor(v * 4.0f);
-            const float x = fract(u * 2.0f + 0.5f * row), y = fract(v * 4.0f);
-            const float d = std::min(std::min(x, 1.0f - x) * 0.5f, std::min(y, 1.0f - y) * 0.25f);
-            return bevel(d, 0.04f, 1.19f);
-        }));
+        scene.images.push_back(normal_map("tiles normal map", 256, tiles));
+        scene.images.push_back(normal_map("bricks normal map", 256, bricks));
+    }
+    else if (maps == LevelMaps::Ssbump)
+    {
+        scene.images.push_back(ssbump_map("tiles ssbump map", 256, tiles, 0.06f));
+        scene.images.push_back(ssbump_map("bricks ssbump map", 256, bricks, 0.04f * 1.19f));
+    }
+    if (maps != LevelMaps::None)
         for (size_t k = 0; k < scene.materials.size(); ++k)
             scene.materials[k].normal.image = k == 0 ? 0 : 1;
-    }
     // One primitive per material: quads grouped by material.
     for (uint32_t material = 0; material < 4; ++material)
     {

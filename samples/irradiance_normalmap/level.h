@@ -5,7 +5,9 @@
 // square at a uniform texel density with a gap between charts). glTF's y-up space, like a scene from a file.
 // With normal maps (PNG, embedded like a Blender export's), the floor, ceiling and pillars are bevelled tiles
 // of 0.5 units and the walls bricks of 0.5 x 0.25 with deep mortar joints: slopes of up to 50 degrees, which
-// is where the directional lightmap bases differ.
+// is where the directional lightmap bases differ. With SSBump maps (Green 2007) the same reliefs are baked
+// into self-shadowed bump maps (hemi-bake ssbump's bake, normalised convention) held in the normal slot, for
+// the ssbump technique.
 
 #include <hemi/io/gltf.h>
 
@@ -15,6 +17,13 @@ namespace hemi::samples
 {
 
 // `atlas` is the lightmap size the charts are packed for (their gaps are 2 texels of it).
-io::GltfScene make_level(uint32_t atlas = 512, bool normal_maps = true);
+enum class LevelMaps
+{
+    None,
+    Normal, // tangent-space normal maps
+    Ssbump, // SSBump maps with directional occlusion (300 rays a texel)
+};
+
+io::GltfScene make_level(uint32_t atlas = 512, LevelMaps maps = LevelMaps::Normal);
 
 } // namespace hemi::samples

@@ -157,7 +157,7 @@ int main(int argc, char** argv)
     CLI::App app{"irradiance_normalmap: Habel & Wimmer 2010's basis comparison on a lightmapped level, against a "
                  "path-traced reference"};
     std::string dir = "irradiance_normalmap", figure = "irradiance_normalmap.png", table = "irradiance_normalmap.md",
-                plot = "irradiance_normalmap_rmse.png", size = "640x400";
+                plot = "irradiance_normalmap_rmse.png", size = "640x400", ssbump_figure = "irradiance_normalmap_ssbump.png";
     uint32_t atlas = 384;
     int rays = 256, reference_rays = 256, bounces = 1;
 
@@ -165,6 +165,9 @@ int main(int argc, char** argv)
         ->capture_default_str();
     app.add_option("-o,--output", figure, "the comparison figure under the sky and the sun (PNG; FIGURE_sky.png: the "
                                           "sky alone)")
+        ->capture_default_str();
+    app.add_option("--ssbump-figure", ssbump_figure, "Green 2007's room: the level's rnm lightmap with Listing 1 "
+                                                     "and with SSBump maps (PNG; empty: none)")
         ->capture_default_str();
     app.add_option("--table", table, "the errors as a Markdown table")->capture_default_str();
     app.add_option("--plot", plot, "the errors as a bar chart (PNG, gnuplot)")->capture_default_str();
@@ -191,6 +194,8 @@ int main(int argc, char** argv)
         for (const fs::path& p : {fs::path(figure), fs::path(figure).replace_extension().concat("_sky.png"),
                                   fs::path(table), fs::path(plot)})
             hemi::io::check_writable(p);
+        if (!ssbump_figure.empty())
+            hemi::io::check_writable(ssbump_figure);
 
         // The level, as a file too (hemi-bake lightmap / reference read it).
         const hemi::io::GltfScene level = hemi::samples::make_level(atlas);
@@ -300,6 +305,30 @@ int main(int argc, char** argv)
             frame.spheres = {{-1.2f, 0.4f, 0.45f, 0.45f}, {1.2f, 1.4f, 0.6f, 0.6f}, {2.9f, -2.4f, 1.4f, 0.4f}};
             hemi::io::write_png(fs::path(dir) / (stem + "_sh9_colour.png"), view.render(frame),
                                 {exposure, hemi::io::ToneMap::Curve::Clamp});
+            if (setup.sun && !ssbump_figure.empty())
+            {
+                // Green's room: the same lightmap's rnm colours, drawn with Listing 1 and the normal maps, and
+                // with the reliefs baked into SSBump maps (directional occlusion) in the normal slots.
+                hemi::io::LightmapAsset rnm = asset, ssbump = asset;
+                rnm.outputs = {{"rnm", 3, hemi::bake::lightmap_maps("rnm", lightmap_atlas, sh)}};
+                ssbump.outputs = rnm.outputs;
+                const hemi::io::GltfScene ss_level = hemi::samples::make_level(atlas, hemi::samples::LevelMaps::Ssbump);
+                ssbump.images = ss_level.images;
+                ssbump.materials = ss_level.materials;
+                hemi::render::LightmapView rnm_view(device, rnm, {"rnm"}, w, h), ss_view(device, ssbump, {"ssbump"}, w, h);
+                hemi::render::LightmapFrame room;
+                room.camera = frame.camera;
+                room.technique = "rnm";
+                const hemi::io::ImageRgba listing1 = rnm_view.render(room);
+                room.technique = "ssbump";
+                const hemi::io::ImageRgba self_shadowed = ss_view.render(room);
+                hemi::io::write_png(fs::path(dir) / (stem + "_rnm.png"), listing1, {exposure, hemi::io::ToneMap::Curve::Clamp});
+                hemi::io::write_png(fs::path(dir) / (stem + "_ssbump.png"), self_shadowed,
+                                    {exposure, hemi::io::ToneMap::Curve::Clamp});
+                hemi::samples::write_labeled_grid(ssbump_figure, {half(listing1), half(self_shadowed)}, w / 2, h / 2,
+                                                  {"radiosity normal mapping (Listing 1)", "self-shadowed bump maps (SSBump)"},
+                                                  {"the rnm lightmap, sky and sun"}, exposure);
+            }
             tiles.insert(tiles.end(), errors_row.begin(), errors_row.end());
             hemi::samples::write_labeled_grid(setup.figure, tiles, w / 2, h / 2, columns,
                                               {std::string(setup.name) + ": E / pi",
