@@ -92,8 +92,13 @@ void main()
     vec3 N = normalize(in_normal);
     if (kDoubleSided != 0 && !gl_FrontFacing)
         N = -N;
-    const vec3 T = normalize(in_tangent.xyz - N * dot(N, in_tangent.xyz));
-    const vec3 B = cross(N, T) * in_tangent.w;
+    // A degenerate tangent (parallel to N, or zero) falls back to any frame about N, so the lights' directions
+    // stay finite; the handedness is the sign of the interpolated w.
+    vec3 t = in_tangent.xyz - N * dot(N, in_tangent.xyz);
+    if (dot(t, t) < 1e-12)
+        t = abs(N.x) < 0.9 ? vec3(1.0, 0.0, 0.0) - N * N.x : vec3(0.0, 1.0, 0.0) - N * N.y;
+    const vec3 T = normalize(t);
+    const vec3 B = cross(N, T) * (in_tangent.w < 0.0 ? -1.0 : 1.0);
     vec3 n = nt;
     if (kFrame == HEMI_FRAME_WORLD)
         n = normalize(T * nt.x + B * nt.y + N * nt.z);
@@ -110,7 +115,7 @@ void main()
     s.k = K;
     s.c = c;
     s.sep4_weights = frame.sep4_weights;
-    // glTF: occlusion = 1 + strength (r - 1); only the techniques that read it fetch it.
+    // glTF: occlusion = 1 + strength (r - 1); the compiler drops the fetch from techniques that ignore it.
     s.occlusion = 1.0 + material.occlusion.x * (texture(occlusion_map, material_uv(material.texcoord.w, 3)).r - 1.0);
     s.lights = int(frame.options.y);
     for (int i = 0; i < HEMI_MAX_LIGHTS; ++i)

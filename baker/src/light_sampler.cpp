@@ -69,10 +69,21 @@ void check_lights(const LightmapLights& l)
 {
     if (!finite3(l.uniform) || !std::isfinite(l.environment_scale))
         throw std::invalid_argument("the environment's radiance must be finite");
+    if (!l.environment.pixels.empty())
+    {
+        if (l.environment.width == 0 || l.environment.height == 0 ||
+            l.environment.pixels.size() != size_t(l.environment.width) * l.environment.height * 4)
+            throw std::invalid_argument("the environment image's pixels do not match its size");
+        for (float v : l.environment.pixels)
+            if (!std::isfinite(v))
+                throw std::invalid_argument("the environment image holds a value that is not finite");
+    }
     for (const io::PunctualLight& p : l.punctual)
         if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) || !finite3(p.direction) ||
-            glm::length(p.direction) < 1e-6f)
-            throw std::invalid_argument("punctual light '" + p.name + "' has a value that is not finite");
+            glm::length(p.direction) < 1e-6f || !std::isfinite(p.range) || !std::isfinite(p.inner_cone) ||
+            !std::isfinite(p.outer_cone))
+            throw std::invalid_argument("punctual light '" + p.name +
+                                        "' has a value that is not finite or a direction of zero length");
     if (l.sun)
     {
         if (!finite3(l.sun_direction) || glm::length(l.sun_direction) < 1e-6f)

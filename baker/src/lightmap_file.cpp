@@ -43,6 +43,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         lightmap_output_size(name); // throws for an unknown name, listing the known ones
     if (o.texel_size < 0.0f || !std::isfinite(o.texel_size))
         throw std::invalid_argument("the texel size must be positive (world units)");
+    if (o.probes != glm::uvec3(0) && (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0))
+        throw std::invalid_argument("--probes needs at least one probe along each axis");
+    if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
+        throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) + " is not in [1, 2^20]");
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
     // Fail fast: every output's folder before the scene is even read.
@@ -60,7 +64,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         u.texel_size = o.texel_size;
         u.width = o.width;
         u.height = o.height;
-        const UnwrapResult r = unwrap_lightmap(scene.mesh, u);
+        UnwrapResult r;
+        try
+        {
+            r = unwrap_lightmap(scene.mesh, u);
+        }
+        catch (const std::invalid_argument& e)
+        {
+            throw io::FormatError(scene_path.string() + ": --unwrap: " + e.what());
+        }
         summary.unwrapped_charts = r.charts;
         summary.unwrap_texel_size = r.texel_size;
         o.width = r.width;

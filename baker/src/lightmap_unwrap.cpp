@@ -40,7 +40,7 @@ uint32_t pack(std::vector<Chart>& charts, float texel, uint32_t width, uint32_t 
     std::iota(order.begin(), order.end(), size_t(0));
     for (Chart& c : charts)
     {
-        // The chart starts half a texel into its rectangle; +1 covers the texels its far edge touches.
+        // The chart starts a quarter texel into its rectangle; +1 covers the texels its far edge touches.
         c.w = uint32_t(std::ceil(double(c.hi.x - c.lo.x) / texel + 1.0));
         c.h = uint32_t(std::ceil(double(c.hi.y - c.lo.y) / texel + 1.0));
     }
@@ -180,13 +180,20 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
                     }
         }
         std::sort(c.triangles.begin(), c.triangles.end()); // deterministic, whatever the fill order
-        // The plane's u along the chart's longest edge (rectangular walls pack as rectangles).
+        // The plane's u along the chart's longest boundary edge (an edge no other triangle of the chart
+        // shares: interior diagonals would turn a rectangular wall by atan(h / w) in its box).
         float longest = 0.0f;
         c.u = std::abs(c.n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
         for (uint32_t t : c.triangles)
             for (int e = 0; e < 3; ++e)
             {
-                glm::vec3 d = mesh.positions[mesh.indices[size_t(t) * 3 + (e + 1) % 3]] - mesh.positions[mesh.indices[size_t(t) * 3 + e]];
+                const uint32_t a = mesh.indices[size_t(t) * 3 + e], b = mesh.indices[size_t(t) * 3 + (e + 1) % 3];
+                int in_chart = 0;
+                for (uint32_t other : edges[edge_key(weld[a], weld[b])])
+                    in_chart += chart_of[other] == id;
+                if (in_chart != 1)
+                    continue;
+                glm::vec3 d = mesh.positions[b] - mesh.positions[a];
                 d -= c.n * glm::dot(c.n, d);
                 if (glm::length(d) > longest * 1.0001f)
                 {
@@ -226,7 +233,9 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
                 texels += (double(c.hi.x - c.lo.x) / texel + 1.0 + o.padding) * (double(c.hi.y - c.lo.y) / texel + 1.0 + o.padding);
             // The smallest atlas over widths from the area's square root up (aspect at most 2: 1): shelves
             // waste least where the width suits the charts.
-            uint64_t best = ~uint64_t(0);
+            // Failing the 2:1 rule (a chart much wider than the rest is tall), the smallest packing that fits.
+            uint64_t best = ~uint64_t(0), any = ~uint64_t(0);
+            uint32_t any_width = 0, any_height = 0;
             double widest = 0.0;
             for (const Chart& c : charts)
                 widest = std::max(widest, std::ceil(double(c.hi.x - c.lo.x) / texel + 1.0) + 2.0 * o.padding);
@@ -235,12 +244,24 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
             {
                 const uint32_t wide = uint32_t(std::clamp(std::ceil(side * f), 16.0, 16384.0));
                 const uint32_t used = pack(charts, texel, wide, o.padding);
+                if (used != 0 && uint64_t(wide) * used < any)
+                {
+                    any = uint64_t(wide) * used;
+                    any_width = wide;
+                    any_height = used;
+                }
                 if (used != 0 && used <= 2 * wide && wide <= 2 * used && uint64_t(wide) * used < best)
                 {
                     best = uint64_t(wide) * used;
                     width = wide;
                     height = used;
                 }
+            }
+            if (best == ~uint64_t(0) && any != ~uint64_t(0))
+            {
+                best = any;
+                width = any_width;
+                height = any_height;
             }
             if (best == ~uint64_t(0))
                 throw std::invalid_argument("the charts at texel size " + std::to_string(texel) +
@@ -303,8 +324,10 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
                     const Chart& ch = charts[c];
                     const glm::vec3& p = mesh.positions[v];
                     const glm::vec2 q(glm::dot(p, ch.u) - ch.lo.x, glm::dot(p, ch.v) - ch.lo.y);
-                    uv = glm::vec2((float(ch.x) + 0.5f + q.x / texel) / float(width),
-                                   (float(ch.y) + 0.5f + q.y / texel) / float(height));
+                    // A quarter texel in: a chart's corners fall between texel centres, so no texel samples
+                    // a corner of the surface itself (rays from a room's corner would graze out of it).
+                    uv = glm::vec2((float(ch.x) + 0.25f + q.x / texel) / float(width),
+                                   (float(ch.y) + 0.25f + q.y / texel) / float(height));
                 }
                 out.uvs1.push_back(uv);
             }

@@ -131,7 +131,7 @@ std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
         const uint32_t n = count[a];
         const float extent = hi[a] - lo[a];
         float f = n > 1 && extent > 0.0f ? (p[a] - lo[a]) / extent * float(n - 1) : 0.0f;
-        f = std::clamp(f, 0.0f, float(n - 1));
+        f = std::isfinite(f) ? std::clamp(f, 0.0f, float(n - 1)) : 0.0f; // NaN: the first cell, not UB
         i0[a] = std::min(uint32_t(f), n - 1);
         i1[a] = std::min(i0[a] + 1, n - 1);
         t[a] = f - float(i0[a]);

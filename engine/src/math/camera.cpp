@@ -55,6 +55,11 @@ glm::mat4 camera_matrix(const Camera& camera, const io::Mesh& mesh, const glm::m
 
 glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& s, float aspect)
 {
+    const auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    if (!finite(camera.eye) || !finite(camera.target))
+        throw std::invalid_argument("hemi: the camera's eye or target is not finite");
+    if (!(camera.fov_y_degrees > 0.0f && camera.fov_y_degrees < 180.0f))
+        throw std::invalid_argument("hemi: the camera's field of view must be in (0, 180) degrees");
     if (!(glm::length(camera.target - camera.eye) > 0.0f))
         throw std::invalid_argument("hemi: the camera's eye and target coincide");
     // Depth is measured along the view axis, not toward the sphere's centre (the target may be off-centre).

@@ -38,7 +38,7 @@ namespace hemi::bake
 struct LightmapLights
 {
     glm::vec3 uniform{1.0f};  // when `environment` is empty: radiance from every direction
-    io::ImageRgba environment; // equirect radiance (linear), bilinear; empty for the uniform environment
+    io::ImageRgba environment; // equirect radiance (linear), constant over each pixel; empty: uniform
     float environment_scale = 1.0f;
 
     bool sun = false;
@@ -155,6 +155,10 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
 std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                                  int dilate = 2);
 
+// An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
+// hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
+io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
+
 // Light probes for dynamic objects, which the lightmap does not light: at each point of `probes`' grid
 // (probes.count, probes.lo and probes.hi set by the caller, in the mesh's space), the radiance over the whole
 // sphere from `rays` stratified sphere rays, projected into SH9 and convolved with the clamped cosine:
@@ -165,10 +169,6 @@ std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atl
 // bilinear at the hit's TEXCOORD_1): the same light and bounces as the lightmap's. A probe more than half of
 // whose rays see the backs of single-sided surfaces is inside geometry (valid 0). Counter-based rays: the
 // same seed gives the same bytes on any thread count. Throws std::invalid_argument for a bad grid or rays.
-// An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
-// hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
-io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
-
 void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
                        const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& options,
                        const LightmapSurfaces* surfaces = nullptr);

@@ -57,8 +57,8 @@ struct ReferenceImage
     double seconds = 0.0;
 };
 
-// Throws std::invalid_argument for bad options (sizes, rays, bounces, a camera whose eye is its target) or
-// lights, and for a mesh without normals, tangents and UVs where it has a normal texture.
+// Throws std::invalid_argument for bad options (sizes, rays, bounces, a camera that is not finite or whose
+// eye is its target) or lights, and for a mesh without normals, tangents and UVs.
 ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& surfaces, const LightmapLights& lights,
                                 const ReferenceOptions& options,
                                 const std::function<void(uint32_t rows_done, uint32_t rows)>& progress = {});

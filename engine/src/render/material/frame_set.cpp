@@ -42,9 +42,9 @@ void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame) const
     if (frame.lights.size() > HEMI_MAX_LIGHTS)
         throw std::invalid_argument("hemi: at most " + std::to_string(HEMI_MAX_LIGHTS) + " dynamic lights, got " +
                                     std::to_string(frame.lights.size()));
-    if (!(frame.specular_exponent >= 0.0f) || !std::isfinite(frame.specular_exponent) ||
+    if (!(frame.specular_exponent > 0.0f) || !std::isfinite(frame.specular_exponent) ||
         !std::isfinite(frame.specular_strength))
-        throw std::invalid_argument("hemi: the specular exponent and strength must be finite, the exponent >= 0");
+        throw std::invalid_argument("hemi: the specular exponent and strength must be finite, the exponent > 0");
     u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()), frame.specular_exponent,
                           frame.specular_strength);
     u.eye = glm::vec4(frame.eye, 1.0f);

@@ -24,8 +24,8 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
 {
     if (asset.probes.empty())
         throw std::invalid_argument("hemi: the lightmap asset has no light probes (bake it with --probes)");
-    const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
-    const std::array<glm::vec3, 9> scene = asset.probes.at(p);
+    if (!std::isfinite(world_position.x + world_position.y + world_position.z))
+        throw std::invalid_argument("hemi: a probe-lit object's position is not finite");
     // The level's irradiance function f in its own frame is g(d) = f(R^T d) in the world: math::ShRotation(R)
     // with R the model's rotation (its uniform scale divided out).
     glm::mat3 rotation(model);
@@ -33,6 +33,8 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
     if (!(scale > 0.0f) || !std::isfinite(scale))
         throw std::invalid_argument("hemi: the model matrix is singular or not finite");
     rotation /= scale;
+    const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
+    const std::array<glm::vec3, 9> scene = asset.probes.at(p);
     std::vector<glm::vec3> world(9);
     math::ShRotation(3, rotation).apply(scene, world);
     return world;

@@ -52,7 +52,7 @@ using uint = uint32_t;
 #define HEMI_SPEC_TECHNIQUE 3
 #define HEMI_SPEC_DOUBLE_SIDED 4
 
-// Dynamic lights (added to the precomputed lighting by the techniques that take them: rnm, ssbump).
+// Dynamic lights (added to the precomputed lighting by the techniques that take them: rnm, rnm_ao, ssbump).
 #define HEMI_MAX_LIGHTS 4
 
 struct FrameUniforms

@@ -36,8 +36,10 @@ vec3 hemi_dynamic_specular(HemiSurface s, vec3 n)
     for (int i = 0; i < s.lights; ++i)
     {
         const float nl = max(dot(n, s.l[i]), 0.0);
-        const vec3 h = normalize(s.l[i] + s.v);
-        sum += s.e[i] * nl * pow(max(dot(n, h), 0.0), s.specular_exponent);
+        const vec3 lv = s.l[i] + s.v;
+        if (nl == 0.0 || dot(lv, lv) < 1e-12)
+            continue; // no light, or a half vector that does not exist (l = -v)
+        sum += s.e[i] * nl * pow(max(dot(n, normalize(lv)), 1e-6), s.specular_exponent);
     }
     return sum * s.specular_strength * (s.specular_exponent + 8.0) / (8.0 * kHemiPi);
 }

@@ -13,8 +13,8 @@
 namespace hemi::render
 {
 
-// A dynamic light, added to the precomputed lighting by the techniques that take dynamic lights (rnm and
-// ssbump: Green 2007 projects them onto Valve's three directions). World space, z up.
+// A dynamic light, added to the precomputed lighting by the techniques that take dynamic lights (rnm, rnm_ao
+// and ssbump: Green 2007 projects them onto Valve's three directions). World space, z up.
 struct DynamicLight
 {
     bool point = false;          // false: directional
@@ -30,7 +30,7 @@ struct FrameData
     std::vector<DynamicLight> lights; // at most HEMI_MAX_LIGHTS (std::invalid_argument else)
     // The dynamic lights' specular term (normalised Blinn-Phong, (m + 8) / (8 pi) (n.h)^m (n.l) E, at the
     // technique's normal): exponent m and strength (0: none). A stand-in for per-material gloss.
-    float specular_exponent = 32.0f;
+    float specular_exponent = 32.0f; // > 0
     float specular_strength = 0.0f;
 };
 

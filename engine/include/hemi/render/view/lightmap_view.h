@@ -29,7 +29,8 @@ struct LightmapFrame
     bool white = false;            // albedo 1: the lighting-only view (E / pi)
     // Dynamic objects: grey spheres (albedo 0.8), centre xyz and radius w in world space, each lit by the
     // asset's light probes at its centre (render::probe_lighting) in the same render pass as the level. At
-    // most LightmapView::kMaxSpheres; the asset must have probes.
+    // most LightmapView::kMaxSpheres; the asset must have probes. The view's depth range is the level's
+    // bounds: a sphere outside them is clipped.
     std::vector<glm::vec4> spheres;
     // Dynamic lights (world space) for the techniques that take them (rnm, ssbump), with their specular term.
     std::vector<DynamicLight> lights;
