@@ -86,4 +86,21 @@ inline std::vector<uint8_t> jpeg_with_undefined_huffman_table(std::vector<uint8_
     return {};
 }
 
+// A baseline (sequential) JPEG whose scan says Se = 0 and gives its first component AC table 2, which no DHT
+// defines: a sequential decoder reads AC coefficients anyway (the fuzzer found stb_image doing so).
+inline std::vector<uint8_t> jpeg_with_undefined_ac_table_in_a_baseline_scan(std::vector<uint8_t> jpeg)
+{
+    for (size_t at = 2; at + 6 < jpeg.size(); ++at)
+        if (jpeg[at] == 0xFF && jpeg[at + 1] == 0xDA)
+        {
+            const size_t components = jpeg[at + 4];
+            if (at + 6 + 2 * components >= jpeg.size())
+                return {};
+            jpeg[at + 6] = uint8_t((jpeg[at + 6] & 0xF0) | 0x02);
+            jpeg[at + 5 + 2 * components + 1] = 0; // Se
+            return jpeg;
+        }
+    return {};
+}
+
 } // namespace hemi::test

@@ -551,5 +551,9 @@ TEST(ImageDecode, JpegScansWithUndefinedHuffmanTablesAreRefused)
         EXPECT_NE(std::string(e.what()).find("not defined"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("tables.jpg"), std::string::npos) << e.what();
     }
+    // A baseline scan decodes AC coefficients whatever its Se says: an undefined AC table there is refused too.
+    const std::vector<uint8_t> baseline = hemi::test::jpeg_with_undefined_ac_table_in_a_baseline_scan(good);
+    ASSERT_FALSE(baseline.empty());
+    EXPECT_THROW(hemi::io::decode_image({"baseline.jpg", "image/jpeg", baseline}), hemi::io::FormatError);
     EXPECT_EQ(hemi::io::decode_image({"good.jpg", "image/jpeg", good}).width, 16u);
 }

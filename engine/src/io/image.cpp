@@ -357,7 +357,7 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
     { return fail("truncated JPEG (" + std::to_string(b.size()) + " bytes, no EOI marker)"); };
     const size_t n = b.size();
     size_t pos = 2; // after SOI
-    bool frame = false, scan = false;
+    bool frame = false, scan = false, progressive = false;
     bool defined[2][4] = {}; // Huffman tables defined so far: [class: 0 DC, 1 AC][id]
     while (true)
     {
@@ -386,7 +386,11 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
             throw truncated();
         // SOF0..SOF15, except DHT (C4), JPG (C8) and DAC (CC).
         if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC)
+        {
             frame = true;
+            // SOF2, 6, 10, 14: progressive (stb_image reads SOF2); the others sequential.
+            progressive = marker == 0xC2 || marker == 0xC6 || marker == 0xCA || marker == 0xCE;
+        }
         if (marker == 0xC4)
         {
             // DHT: tables of 1 byte class/id, 16 code counts, then that many symbols. Debian's stb_image
@@ -427,8 +431,10 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
         {
             // SOS: every component's tables must be defined before the scan that decodes with them. stb_image
             // decodes with a zeroed table otherwise and indexes its symbols out of bounds (found by
-            // tests/fuzz/fuzz_image). A first DC scan (Ss = 0, Ah = 0) uses DC tables, a scan of AC
-            // coefficients (Se > 0) AC tables; a DC refinement reads plain bits.
+            // tests/fuzz/fuzz_image). A sequential scan decodes every coefficient with both tables, whatever
+            // its Ss and Se say (found by the fuzzer: Se = 0 in a baseline scan); in a progressive frame a first
+            // DC scan (Ss = 0, Ah = 0) uses DC tables, a scan of AC coefficients (Se > 0) AC tables, and a DC
+            // refinement reads plain bits.
             const size_t components = length >= 3 ? b[pos + 2] : 0;
             if (components == 0 || length != 6 + 2 * components)
                 throw fail("corrupt JPEG: scan header of length " + std::to_string(length) + " at byte " +
@@ -438,7 +444,7 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
             for (size_t c = 0; c < components; ++c)
             {
                 const uint8_t tables = b[pos + 4 + 2 * c], dc = tables >> 4, ac = tables & 0x0F;
-                const bool uses_dc = ss == 0 && ah == 0, uses_ac = se > 0;
+                const bool uses_dc = !progressive || (ss == 0 && ah == 0), uses_ac = !progressive || se > 0;
                 if ((uses_dc && (dc > 3 || !defined[0][dc])) || (uses_ac && (ac > 3 || !defined[1][ac])))
                     throw fail("corrupt JPEG: the scan at byte " + std::to_string(pos) +
                                " decodes with a Huffman table that is not defined (DC " + std::to_string(dc) +
