@@ -8,10 +8,15 @@
 //   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
 //       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
 //       [--probes NX,NY,NZ] [--probe-rays R] [--exr-dir DIR] [--json REPORT.json]
+//   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R] [--exponent E]
+//       [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr [--json REPORT.json]
+//   envmap ENV.exr -o ENVMAP.hemi [--size N] [--exponents E1,E2,...] [--ior N1,...] [--exr-dir DIR]
+//       [--report REPORT.json]
 //   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera auto|EYE,TARGET]
 //       [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
+#include <hemi/bake/factored.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/reference.h>
@@ -19,6 +24,8 @@
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
 #include <hemi/math/camera.h>
+#include <hemi/math/paraboloid.h>
+#include <hemi/math/sh_environment.h>
 
 #include <nlohmann/json.hpp>
 
@@ -520,6 +527,172 @@ int run_reference(ReferenceCli& c)
     return 0;
 }
 
+struct BrdfCli
+{
+    hemi::bake::BrdfBakeOptions options;
+    std::string output, json;
+};
+
+void print_brdf_error(const char* what, const hemi::bake::BrdfError& e)
+{
+    std::printf("  %-22s bulk: max %.4f%%  rms %.4f%% (%llu pairs)   grazing (cos < 0.1): max %.4f%%  rms %.4f%% (%llu pairs)\n",
+                what, 100.0 * e.bulk_max, 100.0 * e.bulk_rms, (unsigned long long)e.bulk_samples, 100.0 * e.grazing_max,
+                100.0 * e.grazing_rms, (unsigned long long)e.grazing_samples);
+}
+
+nlohmann::json brdf_error_json(const hemi::bake::BrdfError& e)
+{
+    return {{"bulk_max", e.bulk_max},       {"bulk_rms", e.bulk_rms},       {"bulk_pairs", e.bulk_samples},
+            {"grazing_max", e.grazing_max}, {"grazing_rms", e.grazing_rms}, {"grazing_pairs", e.grazing_samples}};
+}
+
+int run_brdf(BrdfCli& c)
+{
+    hemi::io::check_writable(c.output);
+    if (!c.json.empty())
+        hemi::io::check_writable(c.json);
+    const hemi::bake::BrdfBake b = hemi::bake::bake_brdf(c.options);
+    hemi::bake::write_brdf_exr(c.output, c.options, b);
+    std::printf("wrote %s: %s, %u x %u, %s\n", c.output.c_str(), c.options.model.c_str(), c.options.size,
+                c.options.size, c.options.eight_bit ? "8-bit (scaled)" : "float");
+    std::printf("table product against the model evaluated directly (relative to max(value, 1%% of the peak)):\n");
+    print_brdf_error("float tables", b.float_error);
+    if (c.options.eight_bit)
+        print_brdf_error("8-bit tables", b.error);
+    if (!c.json.empty())
+    {
+        nlohmann::json j;
+        j["output"] = c.output;
+        j["model"] = c.options.model;
+        j["size"] = c.options.size;
+        j["eight_bit"] = c.options.eight_bit;
+        if (c.options.model == "torrance-sparrow")
+        {
+            j["distribution"] = c.options.distribution;
+            j["roughness"] = c.options.roughness;
+            j["ior"] = c.options.ior;
+        }
+        else
+            j["exponent"] = c.options.exponent;
+        j["float_error"] = brdf_error_json(b.float_error);
+        j["error"] = brdf_error_json(b.error);
+        hemi::io::write_text_atomically(c.json, j.dump(2) + "\n");
+        std::printf("wrote %s\n", c.json.c_str());
+    }
+    return 0;
+}
+
+struct EnvmapCli
+{
+    std::string input, output, exponents = "10,100,1000", iors = "1.5", exr_dir, report;
+    hemi::bake::EnvmapBakeOptions options;
+};
+
+std::vector<double> parse_numbers(const std::string& list, const char* option)
+{
+    std::vector<double> out;
+    for (const std::string& item : split(list))
+    {
+        char* end = nullptr;
+        const double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size())
+            throw std::invalid_argument(std::string(option) + " expects comma-separated numbers, got '" + list + "'");
+        out.push_back(v);
+    }
+    if (out.empty())
+        throw std::invalid_argument(std::string(option) + " needs at least one number");
+    return out;
+}
+
+// Texel solid angles of the parabolic halves (texels wholly inside the circle: the paper's factor 4) and of a
+// cube map with the same largest texel (face size N / 2), each measured over its texels.
+nlohmann::json sampling_report(uint32_t n)
+{
+    double pmin = 1e30, pmax = 0.0, total = 0.0;
+    hemi::math::ParabolicImage p;
+    p.size = n;
+    for (uint32_t row = 0; row < n; ++row)
+        for (uint32_t col = 0; col < n; ++col)
+        {
+            const double in = p.solid_angle_in_circle(col, row), whole = p.solid_angle(col, row);
+            total += 2.0 * in;
+            if (std::abs(in - whole) < 1e-15 * (1.0 + whole))
+            {
+                pmin = std::min(pmin, whole);
+                pmax = std::max(pmax, whole);
+            }
+        }
+    const uint32_t m = std::max(1u, n / 2);
+    double cmin = 1e30, cmax = 0.0;
+    for (uint32_t j = 0; j < m; ++j)
+        for (uint32_t i = 0; i < m; ++i)
+        {
+            const double s0 = -1.0 + 2.0 * i / m, t0 = -1.0 + 2.0 * j / m;
+            const double w = hemi::math::cubemap_solid_angle(s0, t0, s0 + 2.0 / m, t0 + 2.0 / m);
+            cmin = std::min(cmin, w);
+            cmax = std::max(cmax, w);
+        }
+    return {{"parabolic", {{"texels", 2ull * n * n},
+                           {"largest_over_smallest", pmax / pmin},
+                           {"solid_angle_sum_in_circles", total}}},
+            {"cube", {{"face_size", m}, {"texels", 6ull * m * m}, {"largest_over_smallest", cmax / cmin}}}};
+}
+
+int run_envmap(EnvmapCli& c)
+{
+    c.options.exponents = parse_numbers(c.exponents, "--exponents");
+    c.options.iors = parse_numbers(c.iors, "--ior");
+    hemi::bake::check_envmap_options(c.options);
+    hemi::io::check_writable(c.output);
+    if (!c.report.empty())
+        hemi::io::check_writable(c.report);
+    const hemi::io::ImageRgba env = hemi::io::read_exr(c.input);
+    hemi::bake::EnvmapBakeStats stats;
+    ProgressLine line("hemi-bake envmap");
+    const auto t0 = std::chrono::steady_clock::now();
+    const hemi::io::EnvmapAsset a = hemi::bake::bake_envmap(env, c.options, &stats, [&](const std::string& stage) {
+        std::fprintf(stderr, "hemi-bake envmap: %s\n", stage.c_str());
+    });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    hemi::io::write_envmap_asset(c.output, a);
+    std::printf("wrote %s: 2 x %u^2 mirror map, %zu mip levels, diffuse %u^2, %zu glossy maps, %zu Fresnel tables "
+                "(%.2f s)\n",
+                c.output.c_str(), a.mirror[0].size, a.mirror.size(), a.diffuse.size, a.glossy.size(), a.iors.size(),
+                seconds);
+    for (size_t i = 0; i < a.glossy.size(); ++i)
+        std::printf("  glossy exponent %-8g %4u^2  %.2f s (%.3g lobe evaluations)\n", double(a.exponents[i]),
+                    a.glossy[i].size, stats.glossy_seconds[i], double(stats.glossy_pairs[i]));
+    if (!c.exr_dir.empty())
+    {
+        const auto files = hemi::bake::write_envmap_exrs(c.exr_dir, a);
+        std::printf("wrote %zu EXR files into %s\n", files.size(), c.exr_dir.c_str());
+    }
+    if (!c.report.empty())
+    {
+        size_t bytes = 0;
+        for (const auto& level : a.mirror)
+            bytes += level.rgb.size() * 4;
+        nlohmann::json j;
+        j["input"] = c.input;
+        j["output"] = c.output;
+        j["size"] = a.mirror[0].size;
+        j["sampling"] = sampling_report(a.mirror[0].size);
+        j["mirror_bytes_f32_rgb"] = bytes;
+        j["seconds"] = {{"resample", stats.resample_seconds}, {"mipmaps", stats.mip_seconds},
+                        {"diffuse", stats.diffuse_seconds}, {"total", seconds}};
+        nlohmann::json glossy = nlohmann::json::array();
+        for (size_t i = 0; i < a.glossy.size(); ++i)
+            glossy.push_back({{"exponent", a.exponents[i]},
+                              {"size", a.glossy[i].size},
+                              {"seconds", stats.glossy_seconds[i]},
+                              {"lobe_evaluations", stats.glossy_pairs[i]}});
+        j["glossy"] = glossy;
+        hemi::io::write_text_atomically(c.report, j.dump(2) + "\n");
+        std::printf("wrote %s\n", c.report.c_str());
+    }
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -651,7 +824,56 @@ int main(int argc, char** argv)
     reference->add_option("--rays", rf.options.rays, "paths per pixel")->capture_default_str();
     reference->add_option("--seed", rf.options.seed, "seed of the paths (same seed, same bytes)")->capture_default_str();
     reference->add_option("--json", rf.json, "write the render's summary (camera, rays, noise) as JSON to FILE");
+    BrdfCli br;
+    CLI::App* brdf = app.add_subcommand(
+        "brdf", "factor a reflection model into 2D lookup tables (Heidrich & Seidel 1999, section 3), written as EXR");
+    brdf->add_option("--model", br.options.model, "torrance-sparrow | banks | phong | blinn-phong | cosine-lobe")
+        ->capture_default_str();
+    brdf->add_option("--ior", br.options.ior, "torrance-sparrow: index of refraction of the Fresnel term (> 1)")
+        ->capture_default_str();
+    brdf->add_option("--roughness", br.options.roughness,
+                     "torrance-sparrow: m, the facets' RMS slope (beckmann) or angle spread in radians (gaussian)")
+        ->capture_default_str();
+    brdf->add_option("--exponent", br.options.exponent, "banks, phong, blinn-phong, cosine-lobe: the lobe's exponent")
+        ->capture_default_str();
+    brdf->add_option("--distribution", br.options.distribution, "torrance-sparrow: beckmann | gaussian")
+        ->capture_default_str();
+    brdf->add_option("--size", br.options.size, "samples per table axis")->capture_default_str();
+    brdf->add_flag("--8bit", br.options.eight_bit,
+                   "store each channel as 8-bit codes / 255 times a scale in the metadata (reports that form's error)");
+    brdf->add_option("-o,--output", br.output, "the tables as EXR (model and parameters in its metadata)")->required();
+    brdf->add_option("--json", br.json, "write the tables' measured error as JSON to FILE");
+    EnvmapCli em;
+    CLI::App* envmap = app.add_subcommand(
+        "envmap", "parabolic environment maps with solid-angle mipmaps, prefiltered glossy and diffuse maps and "
+                  "Fresnel tables (Heidrich & Seidel 1999, section 4)");
+    envmap->add_option("environment", em.input, "equirectangular (2:1) environment, OpenEXR, z up")->required();
+    envmap->add_option("-o,--output", em.output, "environment asset to write (.hemi)")->required();
+    envmap->add_option("--size", em.options.size, "texels per side of each half at level 0 (a power of two)")
+        ->capture_default_str();
+    envmap->add_option("--exponents", em.exponents, "Phong exponents of the prefiltered glossy maps, comma-separated")
+        ->capture_default_str();
+    envmap->add_option("--ior", em.iors, "indices of refraction of the Fresnel tables, comma-separated")
+        ->capture_default_str();
+    envmap->add_option("--fresnel-samples", em.options.fresnel_samples, "samples of each Fresnel table")
+        ->capture_default_str();
+    envmap->add_option("--exr-dir", em.exr_dir, "also write every image (each half, mip level, exponent) as EXR into DIR");
+    envmap->add_option("--report", em.report, "write the sampling comparison with cube maps and the timings as JSON");
     CLI11_PARSE(app, argc, argv);
+
+    if (brdf->parsed() || envmap->parsed())
+    {
+        const char* name = brdf->parsed() ? "brdf" : "envmap";
+        try
+        {
+            return brdf->parsed() ? run_brdf(br) : run_envmap(em);
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "hemi-bake %s: %s\n", name, e.what());
+            return 1;
+        }
+    }
 
     if (reference->parsed())
     {

@@ -8,6 +8,7 @@
 #include <hemi/math/basis.h>
 #include <hemi/math/rnm_basis.h>
 #include <hemi/math/sh.h>
+#include <hemi/math/sh_environment.h>
 #include <hemi/io/image.h>
 
 #include <tbb/blocked_range.h>
@@ -32,15 +33,10 @@ glm::vec3 LightmapLights::environment_radiance(const glm::vec3& scene_d) const
     if (environment.pixels.empty())
         return uniform;
     const glm::vec3 d = scene_to_world * scene_d;
-    const uint32_t w = environment.width, h = environment.height;
-    const double phi = std::atan2(double(d.y), double(d.x));
-    const double theta = std::acos(std::clamp(double(d.z), -1.0, 1.0));
     // Piecewise constant over the pixels (what math::project_equirect integrates, and what the importance
     // sampler's density is proportional to).
-    double u = 0.5 - phi / (2.0 * M_PI);
-    u -= std::floor(u);
-    const uint32_t x = std::min(w - 1, uint32_t(u * w));
-    const uint32_t y = std::min(h - 1, uint32_t(theta / M_PI * h));
+    uint32_t x = 0, y = 0;
+    math::equirect_pixel(glm::dvec3(d), environment.width, environment.height, x, y);
     const float* p = environment.at(x, y);
     return glm::vec3(p[0], p[1], p[2]) * environment_scale;
 }

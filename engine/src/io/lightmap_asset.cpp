@@ -307,7 +307,9 @@ std::string asset_kind(const std::filesystem::path& path)
         return "lightmap";
     if (r.has("prt.info"))
         return "prt";
-    throw FormatError(path.string() + ": a hemi container, but neither a PRT nor a lightmap asset");
+    if (r.has("envmap.info"))
+        return "envmap";
+    throw FormatError(path.string() + ": a hemi container, but not a PRT, lightmap or environment asset");
 }
 
 } // namespace hemi::io

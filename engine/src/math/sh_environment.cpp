@@ -3,6 +3,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -51,6 +52,16 @@ std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t heig
         }
     }
     return to_float(acc);
+}
+
+void equirect_pixel(const glm::dvec3& d, uint32_t width, uint32_t height, uint32_t& x, uint32_t& y)
+{
+    const double phi = std::atan2(d.y, d.x);
+    const double theta = std::acos(std::clamp(d.z, -1.0, 1.0));
+    double u = 0.5 - phi / (2.0 * M_PI);
+    u -= std::floor(u);
+    x = std::min(width - 1, uint32_t(u * width));
+    y = std::min(height - 1, uint32_t(theta / M_PI * height));
 }
 
 glm::vec3 cubemap_direction(int face, float s, float t)

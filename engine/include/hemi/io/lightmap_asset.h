@@ -81,7 +81,7 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
 // sizes that disagree, non-finite values).
 LightmapAsset read_lightmap_asset(const std::filesystem::path& path);
 
-// What a .hemi file holds, from its sections: "prt" or "lightmap". Throws FormatError naming the file when
+// What a .hemi file holds, from its sections: "prt", "lightmap" or "envmap". Throws FormatError naming the file when
 // it is not a hemi asset or neither kind.
 std::string asset_kind(const std::filesystem::path& path);
 

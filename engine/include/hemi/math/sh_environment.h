@@ -25,6 +25,10 @@ namespace hemi::math
 // inconsistent sizes or non-finite texels.
 std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t height, std::span<const float> rgba);
 
+// The pixel (x, y) of a width x height equirectangular image that the unit direction d falls in,
+// by the convention above (every direction falls in exactly one pixel).
+void equirect_pixel(const glm::dvec3& d, uint32_t width, uint32_t height, uint32_t& x, uint32_t& y);
+
 // `faces` holds 6 faces of size x size RGBA floats, one after another in the order above.
 std::vector<glm::vec3> project_cubemap(int order, uint32_t size, std::span<const float> faces);
 

@@ -1,0 +1,89 @@
+#pragma once
+// The bake side of Heidrich & Seidel 1999: factored BRDF lookup tables (hemi-bake brdf) and parabolic
+// environment maps with their mipmaps, prefiltered glossy and diffuse maps and Fresnel tables (hemi-bake envmap).
+// The models and maps themselves live in the math layer (math/brdf.h, math/paraboloid.h); this layer chooses
+// parameters, measures errors and writes files.
+
+#include <hemi/io/envmap_asset.h>
+#include <hemi/io/image.h>
+#include <hemi/math/brdf.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace hemi::bake
+{
+
+struct BrdfBakeOptions
+{
+    std::string model = "torrance-sparrow"; // torrance-sparrow | banks | phong | blinn-phong | cosine-lobe
+    std::string distribution = "beckmann";  // torrance-sparrow: beckmann | gaussian
+    double roughness = 0.3;                 // torrance-sparrow: m
+    double ior = 1.5;                       // torrance-sparrow: index of refraction (> 1)
+    double exponent = 50.0;                 // banks, phong, blinn-phong, cosine-lobe
+    uint32_t size = 256;                    // samples per table axis
+    bool eight_bit = false;                 // store each channel as round(255 v / max) / 255 with max in metadata
+};
+
+// How far the tables' product (bilinear lookups, as a GPU's sampler makes them) is from the model evaluated
+// directly, over a dense set of directions: relative error |table - direct| / max(direct, 1% of the set's
+// largest direct value). The set: l and v each at 1024 directions of the hemisphere (32 cosines at interval
+// midpoints x 32 azimuths; n = +z, Banks' t = +x), every pair. "bulk" is every pair with cos_alpha >= 0.1 and
+// cos_beta >= 0.1, "grazing" the rest (where the paper notes the singularity of G / cos_beta).
+struct BrdfError
+{
+    double bulk_max = 0.0, bulk_rms = 0.0;
+    double grazing_max = 0.0, grazing_rms = 0.0;
+    uint64_t bulk_samples = 0, grazing_samples = 0;
+};
+
+struct BrdfBake
+{
+    std::vector<math::BrdfTable> tables; // as stored (8-bit codes / 255 when eight_bit)
+    std::vector<std::vector<double>> scales; // per table, per channel: stored value x scale = the model's value
+    BrdfError error;                     // of what is stored (with --8bit: of the quantised tables)
+    BrdfError float_error;               // of the float tables (equal to error without --8bit)
+};
+
+// Validates the options (std::invalid_argument naming the option: an unknown model or distribution, ior <= 1,
+// roughness <= 0, exponent <= 0, NaN, a size outside [2, 8192]), builds the tables and measures their errors.
+BrdfBake bake_brdf(const BrdfBakeOptions& options);
+// Writes the tables as one EXR (float channels named "<channel>" for one table, or the tables' channels for
+// Torrance-Sparrow's two: "FD", "G"), with the model, its parameters, each channel's axes and scale and the
+// sampling convention as string attributes "hemi.*" (docs: README, hemi-bake brdf). Atomic.
+void write_brdf_exr(const std::filesystem::path& path, const BrdfBakeOptions& options, const BrdfBake& bake);
+
+struct EnvmapBakeOptions
+{
+    uint32_t size = 512;                          // level 0 of each half: a power of two
+    std::vector<double> exponents{10, 100, 1000}; // Phong exponents of the glossy maps
+    std::vector<double> iors{1.5};                // indices of refraction of the Fresnel tables
+    uint32_t fresnel_samples = 256;
+};
+
+struct EnvmapBakeStats
+{
+    double resample_seconds = 0.0, mip_seconds = 0.0, diffuse_seconds = 0.0;
+    std::vector<double> glossy_seconds; // per exponent
+    std::vector<uint64_t> glossy_pairs; // lobe evaluations per exponent
+};
+
+// Validates the options and the environment (std::invalid_argument: a size that is not a power of two in
+// [8, 4096], an exponent <= 0 or NaN, an ior <= 1 or NaN, an image that is not 2:1 or not finite) and bakes.
+// progress(stage) is called before each stage (may be empty).
+io::EnvmapAsset bake_envmap(const io::ImageRgba& equirect, const EnvmapBakeOptions& options,
+                            EnvmapBakeStats* stats = nullptr,
+                            const std::function<void(const std::string&)>& progress = {});
+// The options' checks alone (what bake_envmap throws for them), for the command line to run before reading the
+// environment.
+void check_envmap_options(const EnvmapBakeOptions& options);
+
+// Writes every image of the asset as EXR into `dir` (created): mirror_L<level>_<front|back>.exr,
+// glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior named
+// "ior<value>"). Returns the paths written.
+std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir, const io::EnvmapAsset& asset);
+
+} // namespace hemi::bake
