@@ -135,7 +135,7 @@ BrdfBake bake_brdf(const BrdfBakeOptions& o)
     {
         check_finite_positive(o.roughness, "--roughness");
         if (!std::isfinite(o.ior) || !(o.ior > 1.0))
-            throw std::invalid_argument("--ior must be a finite number > 1, got " + std::to_string(o.ior));
+            throw std::invalid_argument("--ior, the index of refraction, must be a finite number > 1, got " + std::to_string(o.ior));
         const math::TorranceSparrow m(math::parse_facet_distribution(o.distribution), o.roughness, o.ior);
         b.tables = math::torrance_sparrow_tables(m, o.size);
     }
@@ -227,7 +227,7 @@ void check_envmap_options(const EnvmapBakeOptions& o)
         check_finite_positive(e, "every --exponents value");
     for (double n : o.iors)
         if (!std::isfinite(n) || !(n > 1.0))
-            throw std::invalid_argument("every --ior value must be a finite number > 1, got " + std::to_string(n));
+            throw std::invalid_argument("every --ior value (an index of refraction) must be a finite number > 1, got " + std::to_string(n));
     if (o.fresnel_samples < 2 || o.fresnel_samples > 65536)
         throw std::invalid_argument("the Fresnel table needs 2 to 65536 samples");
 }

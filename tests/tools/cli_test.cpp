@@ -9,6 +9,7 @@
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
+#include <hemi/io/envmap_asset.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
 
@@ -27,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace fs = std::filesystem;
 
@@ -1035,4 +1037,183 @@ TEST(BakeCli, BasisReportWritesJsonAndPlot)
     }
     EXPECT_EQ(top_column, 0u) << "HL2 (3 coefficients) has the largest error";
     EXPECT_EQ(bottom_column, 3u) << "SH9 (9 coefficients) has the smallest error";
+}
+
+// ---- hemi-bake brdf and hemi-bake envmap (Heidrich & Seidel 1999) ----
+
+namespace
+{
+// The EXR's named channel and string attributes, read with OpenEXR directly.
+std::vector<float> exr_channel(const fs::path& path, const std::string& name, int& w, int& h,
+                               std::map<std::string, std::string>* attributes = nullptr)
+{
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    w = dw.max.x - dw.min.x + 1;
+    h = dw.max.y - dw.min.y + 1;
+    std::vector<float> v(size_t(w) * h);
+    Imf::FrameBuffer fb;
+    fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(v.data()) - (dw.min.x + dw.min.y * w) * 4, 4,
+                               size_t(w) * 4));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    if (attributes)
+        for (auto it = file.header().begin(); it != file.header().end(); ++it)
+            if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+                (*attributes)[it.name()] = s->value();
+    return v;
+}
+} // namespace
+
+// The exact form writes the two Torrance-Sparrow tables with the model in the metadata; the samples at
+// the documented coordinates are F(cos theta) D(cos delta) and G / (pi cos beta) of the closed forms typed here
+// (Beckmann, Smith, Schlick-free exact Fresnel at normal incidence); --8bit reports a larger error than float.
+TEST(Cli, BrdfWritesTheFactorTablesWithTheirMetadata)
+{
+    const fs::path out = dir() / "ts.exr", json = dir() / "ts.json";
+    const Result r = run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --ior 1.5 --roughness 0.3 --distribution beckmann "
+                                        "--size 64 -o " + q(out) + " --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    int w = 0, h = 0;
+    std::map<std::string, std::string> attrs;
+    const std::vector<float> fd = exr_channel(out, "FD", w, h, &attrs);
+    const std::vector<float> g = exr_channel(out, "G", w, h);
+    ASSERT_EQ(w, 64);
+    ASSERT_EQ(h, 64);
+    EXPECT_EQ(attrs["hemi.model"], "torrance-sparrow");
+    EXPECT_EQ(attrs["hemi.distribution"], "beckmann");
+    EXPECT_EQ(std::stod(attrs["hemi.roughness"]), 0.3);
+    EXPECT_EQ(std::stod(attrs["hemi.ior"]), 1.5);
+    EXPECT_EQ(attrs["hemi.FD.axis_v"], "sqrt(1-cos_delta) from 0 to 1");
+    // FD at u = cos_theta = 1 (column 63), v = sqrt(1 - cos_delta) = 0 (row 0): F(1) D(1) = 0.04 / (4 m^2).
+    EXPECT_NEAR(fd[63], 0.04 / (4 * 0.09), 1e-6);
+    // FD at cos_theta = 1, row 10: cos_delta = 1 - (10/63)^2.
+    const double s = 10.0 / 63, cd = 1 - s * s, t2 = (1 - cd * cd) / (cd * cd);
+    EXPECT_NEAR(fd[10 * 64 + 63], 0.04 * std::exp(-t2 / 0.09) / (4 * 0.09 * std::pow(cd, 4)), 1e-6);
+    // G / (pi cos beta) at cos_alpha = cos_beta = 1: 1 / pi; at cos_alpha = 1, cos_beta -> 0: G1 ~ 2 sqrt(pi) c / m,
+    // so 2 sqrt(pi) / (m pi).
+    EXPECT_NEAR(g[63 * 64 + 63], 1 / M_PI, 1e-6);
+    EXPECT_NEAR(g[0 * 64 + 63], 2 * std::sqrt(M_PI) / (0.3 * M_PI), 1e-5);
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_LT(j["error"]["bulk_max"].get<double>(), 0.05); // 64^2 here; the README's figures are for 256^2
+
+    const fs::path out8 = dir() / "ts8.exr", json8 = dir() / "ts8.json";
+    const Result r8 = run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --roughness 0.3 --8bit -o " + q(out8) +
+                                             " --json " + q(json8));
+    ASSERT_EQ(r8.status, 0) << r8.err;
+    const nlohmann::json j8 = nlohmann::json::parse(slurp(json8));
+    EXPECT_GT(j8["error"]["bulk_rms"].get<double>(), 5 * j8["float_error"]["bulk_rms"].get<double>());
+    std::map<std::string, std::string> a8;
+    const std::vector<float> q8 = exr_channel(out8, "FD", w, h, &a8);
+    for (float v : q8) // every stored value is an 8-bit code / 255
+        ASSERT_NEAR(v * 255.0f, std::round(v * 255.0f), 1e-3f);
+    EXPECT_GT(std::stod(a8["hemi.FD.scale"]), 0.1);
+    for (const char* model : {"banks", "phong", "blinn-phong", "cosine-lobe"})
+    {
+        const Result m = run(HEMI_BAKE_EXE, std::string("brdf --model ") + model + " --exponent 20 --size 32 -o " +
+                                                q(dir() / (std::string(model) + ".exr")));
+        EXPECT_EQ(m.status, 0) << model << ": " << m.err;
+    }
+}
+
+TEST(Cli, BrdfAndEnvmapRefuseBadInputNamingTheProblem)
+{
+    const fs::path out = dir() / "bad.exr";
+    const std::pair<std::string, std::string> brdf_cases[] = {
+        {"--model torrance-sparrow --ior 1", "index of refraction"},
+        {"--model torrance-sparrow --ior 0.5", "index of refraction"},
+        {"--model torrance-sparrow --roughness 0", "roughness"},
+        {"--model torrance-sparrow --roughness -0.2", "roughness"},
+        {"--model torrance-sparrow --roughness nan", "roughness"},
+        {"--model phong --exponent 0", "exponent"},
+        {"--model banks --exponent nan", "exponent"},
+        {"--model ward", "unknown lobe model 'ward'"},
+        {"--model torrance-sparrow --distribution cauchy", "unknown facet distribution 'cauchy'"},
+    };
+    for (const auto& [args, message] : brdf_cases)
+    {
+        const Result r = run(HEMI_BAKE_EXE, "brdf " + args + " -o " + q(out));
+        EXPECT_EQ(r.status, 1) << args;
+        EXPECT_NE(r.err.find(message), std::string::npos) << args << ": " << r.err;
+        EXPECT_FALSE(fs::exists(out)) << args;
+    }
+    // A valid environment, and inputs that are not.
+    hemi::io::ImageRgba env;
+    env.width = 64;
+    env.height = 32;
+    env.pixels.assign(size_t(64) * 32 * 4, 1.0f);
+    const fs::path good = dir() / "env.exr";
+    hemi::io::write_exr(good, env);
+    const fs::path text = dir() / "env_text.exr";
+    std::ofstream(text) << "not an EXR\n";
+    env.width = env.height = 32;
+    env.pixels.resize(size_t(32) * 32 * 4);
+    const fs::path square = dir() / "env_square.exr";
+    hemi::io::write_exr(square, env);
+    const fs::path asset = dir() / "bad.hemi";
+    const std::pair<std::string, std::string> envmap_cases[] = {
+        {q(text) + " --size 16", text.string()},
+        {q(dir() / "missing.exr") + " --size 16", (dir() / "missing.exr").string()},
+        {q(square) + " --size 16", "2:1"},
+        {q(good) + " --size 100", "power of two"},
+        {q(good) + " --size 16 --exponents 10,0", "--exponents"},
+        {q(good) + " --size 16 --exponents 10,nan", "--exponents"},
+        {q(good) + " --size 16 --exponents 10,x", "--exponents"},
+        {q(good) + " --size 16 --ior 1", "--ior"},
+    };
+    for (const auto& [args, message] : envmap_cases)
+    {
+        const Result r = run(HEMI_BAKE_EXE, "envmap " + args + " -o " + q(asset));
+        EXPECT_EQ(r.status, 1) << args;
+        EXPECT_NE(r.err.find(message), std::string::npos) << args << ": " << r.err;
+        EXPECT_FALSE(fs::exists(asset)) << args;
+    }
+}
+
+// The exact form: the asset holds every mip level down to 1 x 1, a glossy map per exponent at the size
+// its lobe needs, the diffuse map and the Fresnel table (F(1) = 0.04 at n = 1.5); --exr-dir writes each half of
+// every image; the report compares the sampling with cube maps (the paper's 4 against 3 sqrt(3)).
+TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
+{
+    hemi::io::ImageRgba env;
+    env.width = 256;
+    env.height = 128;
+    env.pixels.resize(size_t(256) * 128 * 4);
+    for (uint32_t y = 0; y < 128; ++y)
+        for (uint32_t x = 0; x < 256; ++x)
+        {
+            float* p = env.pixels.data() + (size_t(y) * 256 + x) * 4;
+            p[0] = y < 64 ? 2.0f : 0.5f; // bright sky, dark ground
+            p[1] = 1.0f, p[2] = 1.0f, p[3] = 1.0f;
+        }
+    const fs::path input = dir() / "sky.exr", asset = dir() / "sky.hemi", exrs = dir() / "sky_exr",
+                   report = dir() / "sky.json";
+    hemi::io::write_exr(input, env);
+    const Result r = run(HEMI_BAKE_EXE, "envmap " + q(input) + " -o " + q(asset) +
+                                            " --size 64 --exponents 4,100 --exr-dir " + q(exrs) + " --report " + q(report));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(hemi::io::asset_kind(asset), "envmap");
+    const hemi::io::EnvmapAsset a = hemi::io::read_envmap_asset(asset);
+    ASSERT_EQ(a.mirror.size(), 7u);
+    EXPECT_EQ(a.mirror.back().size, 1u);
+    ASSERT_EQ(a.glossy.size(), 2u);
+    EXPECT_EQ(a.exponents[1], 100.0f);
+    EXPECT_EQ(a.glossy[0].size, 32u);
+    EXPECT_EQ(a.glossy[1].size, 64u);
+    ASSERT_EQ(a.iors.size(), 1u);
+    EXPECT_NEAR(a.fresnel[a.fresnel_samples - 1], 0.04f, 1e-6f);
+    EXPECT_NEAR(a.fresnel[0], 1.0f, 1e-6f);
+    // The sky is brighter than the ground in red, seen from the front (up) half's centre and the back's.
+    EXPECT_NEAR(a.mirror[0].sample({0, 0, 1})[0], 2.0, 1e-5);
+    EXPECT_NEAR(a.mirror[0].sample({0, 0, -1})[0], 0.5, 1e-5);
+    EXPECT_NEAR(a.diffuse.sample({0, 0, 1})[1], 1.0, 0.01); // green is constant: furnace
+    for (const char* name : {"mirror_L0_front.exr", "mirror_L6_back.exr", "glossy_e4_front.exr", "glossy_e100_back.exr",
+                             "diffuse_front.exr", "fresnel.exr"})
+        EXPECT_TRUE(fs::exists(exrs / name)) << name;
+    const nlohmann::json j = nlohmann::json::parse(slurp(report));
+    EXPECT_NEAR(j["sampling"]["parabolic"]["solid_angle_sum_in_circles"].get<double>(), 4 * M_PI, 1e-4);
+    EXPECT_GT(j["sampling"]["parabolic"]["largest_over_smallest"].get<double>(), 3.5);
+    EXPECT_LT(j["sampling"]["parabolic"]["largest_over_smallest"].get<double>(), 4.0);
+    EXPECT_GT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 4.5);
+    EXPECT_LT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 3 * std::sqrt(3.0));
 }

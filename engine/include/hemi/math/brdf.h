@@ -15,7 +15,7 @@
 //   - Gaussian: D = c exp(-(delta / m)^2), m = roughness (radians), c from the normalisation (quadrature).
 //   G is Smith's (uncorrelated masking and shadowing, G = G1(cos_alpha) G1(cos_beta)) for Gaussian slopes of RMS
 //   m: G1(c) = 2 / (1 + erf(a) + exp(-a^2) / (a sqrt(pi))), a = c / (m sqrt(1 - c^2)); the same m serves the
-//   Gaussian distribution. G1(c) / c stays finite as c -> 0 (2 / (m sqrt(pi))): with Smith's term the
+//   Gaussian distribution. G1(c) / c stays finite as c -> 0 (2 sqrt(pi) / m): with Smith's term the
 //   "singularity" at grazing view that the paper notes is a steep but finite ridge.
 //   F is the exact unpolarised Fresnel reflectance of a dielectric of relative index ior > 1.
 //
