@@ -224,7 +224,14 @@ void check_envmap_options(const EnvmapBakeOptions& o)
     if (o.size < 8 || o.size > 4096 || (o.size & (o.size - 1)) != 0)
         throw std::invalid_argument("--size must be a power of two in [8, 4096], got " + std::to_string(o.size));
     for (double e : o.exponents)
+    {
         check_finite_positive(e, "every --exponents value");
+        if (e > math::kMaxPhongExponent)
+            throw std::invalid_argument("every --exponents value must be at most 1e6 (a mirror), got " +
+                                        std::to_string(e));
+    }
+    if (o.exponents.size() > 64 || o.iors.size() > 64)
+        throw std::invalid_argument("at most 64 --exponents and 64 --ior values");
     for (double n : o.iors)
         if (!std::isfinite(n) || !(n > 1.0))
             throw std::invalid_argument("every --ior value (an index of refraction) must be a finite number > 1, got " + std::to_string(n));

@@ -165,6 +165,7 @@ TEST(Brdf, SingleTableModelsMatchTheirLobes)
     // Phong (Eq. 8 normalised): ((e + 1) / 2 pi) max(0, r_v.l)^e; Blinn-Phong x ((e + 8) / 8 pi) (n.h)^e.
     const auto phong = hemi::math::lobe_table(hemi::math::LobeModel::Phong, e, 256);
     const auto blinn = hemi::math::lobe_table(hemi::math::LobeModel::BlinnPhong, e, 256);
+    const auto cosine = hemi::math::lobe_table(hemi::math::LobeModel::CosineLobe, e, 256);
     for (const auto& l : dirs)
         for (size_t j = 0; j < dirs.size(); j += 3)
         {
@@ -175,6 +176,9 @@ TEST(Brdf, SingleTableModelsMatchTheirLobes)
             const double b = l.z * (e + 8) / (8 * kPi) * std::pow(hz, e);
             EXPECT_NEAR(lookup(phong, 0, l.z, glm::dot(r, l)), p, 0.005 * std::max(p, (e + 1) / (2 * kPi) * 0.01));
             EXPECT_NEAR(lookup(blinn, 0, l.z, hz), b, 0.005 * std::max(b, (e + 8) / (8 * kPi) * 0.01));
+            // cosine lobe: x ((e + 2) / 2 pi) max(0, r_v.l)^e
+            const double cl = l.z * (e + 2) / (2 * kPi) * std::pow(std::max(0.0, glm::dot(r, l)), e);
+            EXPECT_NEAR(lookup(cosine, 0, l.z, glm::dot(r, l)), cl, 0.005 * std::max(cl, (e + 2) / (2 * kPi) * 0.01));
         }
 }
 
@@ -183,6 +187,10 @@ TEST(Brdf, BadParametersAreRefused)
     using hemi::math::FacetDistribution;
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.0, 1.5), std::invalid_argument);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, NAN, 1.5), std::invalid_argument);
+    EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 1e-200, 1.5), std::invalid_argument);
+    EXPECT_THROW(hemi::math::lobe_table(hemi::math::LobeModel::Phong, 1e40, 16), std::invalid_argument);
+    // Far from the peak D underflows to 0, not 0 / 0.
+    EXPECT_EQ(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.01, 1.5).distribution_term(1e-100), 0.0);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.3, 1.0), std::invalid_argument);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.3, NAN), std::invalid_argument);
     EXPECT_THROW(hemi::math::banks_table(0.0, 16), std::invalid_argument);
@@ -353,18 +361,10 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
 {
     using namespace hemi::math;
     const uint32_t n = 64;
-    ParabolicImage level0;
-    level0.size = n;
-    level0.extent = parabolic_extent(n);
-    level0.rgb.assign(size_t(2) * n * n * 3, 0.0f);
-    const uint32_t bc = 41, br = 22; // front half, inside the circle, off the centre
-    const float radiance = 1000.0f;
-    for (int k = 0; k < 3; ++k)
-        level0.at(0, bc, br)[k] = radiance;
-    // The texel's solid angle by the test's own midpoint rule of Eq. 6.
-    auto omega = [&](uint32_t size, uint32_t c, uint32_t r) {
-        const double m = level0.extent;
-        const double x0 = m * (-1 + 2.0 * c / size), y1 = m * (1 - 2.0 * r / size), step = 2.0 * m / size;
+    const double m = parabolic_extent(n);
+    // A texel's solid angle by the test's own midpoint rule of Eq. 6, whole or inside the circle.
+    auto omega = [&](uint32_t c, uint32_t r, bool circle) {
+        const double x0 = m * (-1 + 2.0 * c / n), y1 = m * (1 - 2.0 * r / n), step = 2.0 * m / n;
         double s = 0.0;
         const int k = 400;
         for (int i = 0; i < k; ++i)
@@ -372,39 +372,71 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
             {
                 const double x = x0 + (i + 0.5) * step / k, y = y1 - (j + 0.5) * step / k;
                 const double q = 1 + x * x + y * y;
-                s += 4 / (q * q) * step * step / (double(k) * k);
+                if (!circle || x * x + y * y <= 1.0)
+                    s += 4 / (q * q) * step * step / (double(k) * k);
             }
         return s;
     };
-    const double w = omega(n, bc, br);
-    const auto chain = parabolic_mip_chain(level0);
-    // Level 1: the bright texel's share of its 2 x 2 block, by solid angle (a plain average gives 1/4).
-    double block = 0.0;
-    for (uint32_t k = 0; k < 4; ++k)
-        block += omega(n, (bc & ~1u) + (k & 1), (br & ~1u) + (k >> 1));
-    EXPECT_NEAR(chain[1].at(0, bc / 2, br / 2)[0], radiance * w / block, 1e-4 * radiance * w / block);
+    struct Bright
+    {
+        int half;
+        uint32_t col, row;
+    };
+    // Inside the front's circle off its centre, inside the back's, and one the back's circle cuts.
+    for (const Bright b : {Bright{0, 41, 22}, Bright{1, 12, 40}, Bright{1, 62, 31}})
+    {
+        ParabolicImage level0;
+        level0.size = n;
+        level0.extent = m;
+        level0.rgb.assign(size_t(2) * n * n * 3, 0.0f);
+        const float radiance = 1000.0f;
+        for (int k = 0; k < 3; ++k)
+            level0.at(b.half, b.col, b.row)[k] = radiance;
+        const auto chain = parabolic_mip_chain(level0);
+        // Level 1: the bright texel's share of its 2 x 2 block, by solid angle (a plain average gives 1/4).
+        double block = 0.0;
+        for (uint32_t k = 0; k < 4; ++k)
+            block += omega((b.col & ~1u) + (k & 1), (b.row & ~1u) + (k >> 1), false);
+        const double share = radiance * omega(b.col, b.row, false) / block;
+        EXPECT_NEAR(chain[1].at(b.half, b.col / 2, b.row / 2)[0], share, 1e-4 * share);
 
-    const double e = 16.0;
-    ASSERT_EQ(glossy_size(e, n), n);
-    const ParabolicImage g = prefilter_phong(chain, e);
-    const glm::dvec3 d = level0.direction(0, bc, br);
-    int compared = 0;
-    for (int half : {0, 1})
-        for (uint32_t r = 0; r < n; ++r)
-            for (uint32_t c = 0; c < n; ++c)
-            {
-                const double cosine = glm::dot(g.direction(half, c, r), d);
-                const double expect = (e + 1) / (2 * kPi) * std::pow(std::max(0.0, cosine), e) * radiance * w;
-                const double peak = (e + 1) / (2 * kPi) * radiance * w;
-                if (expect > 1e-3 * peak)
+        const double e = 16.0;
+        ASSERT_EQ(glossy_size(e, n), n);
+        const ParabolicImage g = prefilter_phong(chain, e);
+        const glm::dvec3 d = level0.direction(b.half, b.col, b.row);
+        const double w = omega(b.col, b.row, true); // the directions the texel holds for its half
+        const double peak = (e + 1) / (2 * kPi) * radiance * w;
+        int compared = 0;
+        for (int half : {0, 1})
+            for (uint32_t r = 0; r < n; ++r)
+                for (uint32_t c = 0; c < n; ++c)
                 {
-                    ASSERT_NEAR(g.at(half, c, r)[0], expect, 1e-3 * expect) << half << " " << c << "," << r;
-                    ++compared;
+                    const double cosine = glm::dot(g.direction(half, c, r), d);
+                    const double expect = (e + 1) / (2 * kPi) * std::pow(std::max(0.0, cosine), e) * radiance * w;
+                    if (expect > 1e-3 * peak)
+                    {
+                        ASSERT_NEAR(g.at(half, c, r)[0], expect, 1e-3 * expect) << half << " " << c << "," << r;
+                        ++compared;
+                    }
+                    else
+                        ASSERT_LT(g.at(half, c, r)[0], 2e-3 * peak);
                 }
-                else
-                    ASSERT_LT(g.at(half, c, r)[0], 2e-3 * peak);
-            }
-    EXPECT_GT(compared, 200);
+        EXPECT_GT(compared, 200) << b.half << " " << b.col << "," << b.row;
+    }
+}
+
+// A lobe far narrower than a texel (a texel against itself, where a float dot product can exceed 1) gives finite
+// values; one beyond 1e6 is refused.
+TEST(Paraboloid, HugeExponentsStayFinite)
+{
+    using namespace hemi::math;
+    const std::vector<float> px(64 * 32 * 4, 1.0f);
+    const auto chain = parabolic_mip_chain(parabolic_from_equirect(32, 64, 32, px));
+    const ParabolicImage g = prefilter_phong(chain, 3e4);
+    ASSERT_EQ(g.size, 32u);
+    for (float v : g.rgb)
+        ASSERT_TRUE(std::isfinite(v));
+    EXPECT_THROW(prefilter_phong(chain, 2e6), std::invalid_argument);
 }
 
 // The two halves agree along the seam: a smooth environment sampled just above and just below z = 0 (the

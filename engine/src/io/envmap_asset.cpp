@@ -39,6 +39,16 @@ std::string problem(const EnvmapAsset& a)
         return "the diffuse map's size does not match its texels";
     if (a.fresnel.size() != a.iors.size() * a.fresnel_samples || (!a.iors.empty() && a.fresnel_samples < 2))
         return "the Fresnel tables' sizes disagree";
+    if (a.glossy.size() > 64 || a.iors.size() > 64 || a.fresnel_samples > 65536)
+        return "at most 64 glossy maps, 64 Fresnel tables of 65536 samples";
+    if ((a.mirror[0].size & (a.mirror[0].size - 1)) != 0)
+        return "the mirror map's size is not a power of two";
+    for (float e : a.exponents)
+        if (!std::isfinite(e) || !(e > 0.0f))
+            return "a glossy map's exponent is not > 0";
+    for (float n : a.iors)
+        if (!std::isfinite(n) || !(n > 1.0f))
+            return "an index of refraction is not > 1";
     return {};
 }
 
@@ -164,7 +174,8 @@ EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
             throw fail(what + ": extent " + std::to_string(extent) + " is not in [1, 4]");
     };
     check_extent(info.extent, "envmap.info");
-    if (info.glossy > 64 || info.fresnel_tables > 64 || info.fresnel_samples > 65536)
+    if (info.glossy > 64 || info.fresnel_tables > 64 || info.fresnel_samples > 65536 ||
+        (info.fresnel_tables > 0 && info.fresnel_samples < 2))
         throw fail("envmap.info: implausible counts (corrupt)");
 
     EnvmapAsset a;

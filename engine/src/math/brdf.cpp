@@ -15,8 +15,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 void check_exponent(double exponent)
 {
-    if (!std::isfinite(exponent) || !(exponent > 0.0))
-        throw std::invalid_argument("the exponent must be a finite number > 0, got " + std::to_string(exponent));
+    if (!std::isfinite(exponent) || !(exponent > 0.0) || exponent > 1e6)
+        throw std::invalid_argument("the exponent must be in (0, 1e6], got " + std::to_string(exponent));
 }
 void check_size(uint32_t size)
 {
@@ -88,6 +88,9 @@ TorranceSparrow::TorranceSparrow(FacetDistribution distribution, double roughnes
 {
     if (!std::isfinite(roughness) || !(roughness > 0.0))
         throw std::invalid_argument("the roughness must be a finite number > 0, got " + std::to_string(roughness));
+    if (roughness < 1e-3 || roughness > 10.0)
+        throw std::invalid_argument("the roughness must be in [0.001, 10] (a smoother surface is a mirror), got " +
+                                    std::to_string(roughness));
     if (!std::isfinite(ior) || !(ior > 1.0))
         throw std::invalid_argument("the index of refraction must be a finite number > 1, got " + std::to_string(ior));
     if (distribution_ == FacetDistribution::Gaussian)
@@ -120,6 +123,8 @@ double TorranceSparrow::distribution_term(double cos_delta) const
     {
         const double c2 = c * c;
         const double tan2 = (1.0 - c2) / c2;
+        if (tan2 > 700.0 * m_ * m_)
+            return 0.0; // exp underflows long before c^4 does
         return std::exp(-tan2 / (m_ * m_)) / (4.0 * m_ * m_ * c2 * c2);
     }
     const double d = std::acos(c);

@@ -257,9 +257,9 @@ uint32_t glossy_size(double exponent, uint32_t full_size)
 
 ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent, PrefilterStats* stats)
 {
-    if (!std::isfinite(exponent) || !(exponent > 0.0))
-        throw std::invalid_argument("a glossy map's Phong exponent must be a finite number > 0, got " +
-                                    std::to_string(exponent));
+    if (!std::isfinite(exponent) || !(exponent > 0.0) || exponent > kMaxPhongExponent)
+        throw std::invalid_argument("a glossy map's Phong exponent must be in (0, " +
+                                    std::to_string(int(kMaxPhongExponent)) + "], got " + std::to_string(exponent));
     if (chain.empty())
         throw std::invalid_argument("prefilter_phong needs a mipmap chain");
     const auto start = std::chrono::steady_clock::now();
@@ -327,20 +327,26 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
                     const double theta = std::atan2(std::sqrt(r.x * r.x + r.y * r.y), r.z);
                     const double phi = std::atan2(r.y, r.x);
                     auto rho = [&](double t) { return std::sin(t) / (1.0 + sigma * std::cos(t)); };
-                    const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
-                    const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
-                    const double cx = centre * std::cos(phi), cy = centre * std::sin(phi);
-                    // Texel centres within [cx - radius, cx + radius] (one texel of margin for rounding).
-                    auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
-                    auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
-                    const double lo_c = std::floor(to_col(cx - radius)) - 1, hi_c = std::ceil(to_col(cx + radius)) + 1;
-                    const double lo_r = std::floor(to_row(cy + radius)) - 1, hi_r = std::ceil(to_row(cy - radius)) + 1;
-                    if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
-                        continue;
-                    c0 = uint32_t(std::max(0.0, lo_c));
-                    c1 = uint32_t(std::min(double(size - 1), hi_c));
-                    r0 = uint32_t(std::max(0.0, lo_r));
-                    r1 = uint32_t(std::min(double(size - 1), hi_r));
+                    // Near the pole test's edge theta +- gamma can round past the pole: keep the whole square.
+                    const bool near_pole = 1.0 + sigma * std::cos(theta - gamma) < 1e-9 ||
+                                           1.0 + sigma * std::cos(theta + gamma) < 1e-9;
+                    if (!near_pole)
+                    {
+                        const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
+                        const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
+                        const double cx = centre * std::cos(phi), cy = centre * std::sin(phi);
+                        // Texel centres within [cx - radius, cx + radius] (one texel of margin for rounding).
+                        auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
+                        auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
+                        const double lo_c = std::floor(to_col(cx - radius)) - 1, hi_c = std::ceil(to_col(cx + radius)) + 1;
+                        const double lo_r = std::floor(to_row(cy + radius)) - 1, hi_r = std::ceil(to_row(cy - radius)) + 1;
+                        if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
+                            continue;
+                        c0 = uint32_t(std::max(0.0, lo_c));
+                        c1 = uint32_t(std::min(double(size - 1), hi_c));
+                        r0 = uint32_t(std::max(0.0, lo_r));
+                        r1 = uint32_t(std::min(double(size - 1), hi_r));
+                    }
                 }
                 for (uint32_t row = r0; row <= r1; ++row)
                 {
@@ -352,7 +358,8 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
                         const float c = dx[k] * rx + dy[k] * ry + dz[k] * rz;
                         if (c > cut)
                         {
-                            const float s = (1.0f - c) * lobe_scale;
+                            // c may exceed 1 by a rounding step (a texel against itself): clamp to the peak.
+                            const float s = std::clamp((1.0f - c) * lobe_scale, 0.0f, float(kLobe));
                             const int i = int(s);
                             const float f = s - float(i);
                             const float w = lobe[i] + f * (lobe[i + 1] - lobe[i]);

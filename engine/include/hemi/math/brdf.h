@@ -24,7 +24,8 @@
 //   the table holds the two terms in brackets without kd and ks, as functions of (a, b) in [-1, 1]^2.
 //
 // Single-table models (§3.1's last paragraph), specular lobes normalised so that ks = 1 reflects all of a lobe
-// (the same normalisation as the prefiltered glossy environment maps, Eq. 9), with x = n.l:
+// (exactly for Phong, the same normalisation as the prefiltered glossy environment maps, Eq. 9; Blinn-Phong's
+// (e + 8) / 8 pi is the usual approximation, about 1 + 2/e at normal incidence), with x = n.l:
 //   phong:        f_r cos_alpha = ((e + 1) / 2 pi) max(0, r_v.l)^e                 y = r_v.l (r_v = reflected v)
 //   blinn-phong:  f_r cos_alpha = x ((e + 8) / 8 pi) max(0, n.h)^e                 y = n.h
 //   cosine-lobe:  f_r cos_alpha = x ((e + 2) / 2 pi) max(0, r_v.l)^e               y = r_v.l
@@ -66,7 +67,7 @@ const char* facet_distribution_name(FacetDistribution d);
 class TorranceSparrow
 {
 public:
-    // Throws std::invalid_argument for roughness <= 0 or not finite, ior <= 1 or not finite.
+    // Throws std::invalid_argument for roughness outside [0.001, 10] or not finite, ior <= 1 or not finite.
     TorranceSparrow(FacetDistribution distribution, double roughness, double ior);
 
     FacetDistribution distribution() const { return distribution_; }
@@ -142,7 +143,7 @@ struct BrdfTable
 };
 
 // The tables of each model, all of size x size samples, size >= 2. Throws std::invalid_argument for a bad
-// size or exponent (<= 0 or not finite).
+// size or exponent (<= 0, above 1e6 or not finite).
 // Torrance-Sparrow: two tables, "FD" (u = cos_theta, v = sqrt(1 - cos_delta)) and "G" (u = cos_alpha,
 // v = cos_beta); f_r cos_alpha = FD * G.
 std::vector<BrdfTable> torrance_sparrow_tables(const TorranceSparrow& model, uint32_t size);

@@ -37,7 +37,8 @@ glm::dvec2 parabolic_xy(const glm::dvec3& d, int half);
 glm::dvec3 parabolic_direction(int half, double x, double y);
 
 // Solid angle of the rectangle [x0, x1] x [y0, y1] of a half (the integral of Eq. 6; regions outside the unit
-// circle count too), and of its part inside the unit circle (the directions the half owns). Exact to ~1e-12.
+// circle count too; exact to ~1e-12), and of its part inside the unit circle (the directions the half owns; to
+// ~1e-7 for rectangles where the circle meets x = +-1, ~1e-12 elsewhere).
 double parabolic_solid_angle(double x0, double y0, double x1, double y1);
 double parabolic_solid_angle_in_circle(double x0, double y0, double x1, double y1);
 
@@ -64,8 +65,10 @@ struct ParabolicImage
 };
 
 // Resamples an equirectangular environment (sh_environment.h's convention, width x height RGBA floats, constant
-// over each pixel) into both halves at `size` with extent parabolic_extent(size) (a power of two, 2..8192): each texel is the average of a grid of
-// points over its whole square (enough points that each texel sees the equirect pixels it covers). Throws
+// over each pixel) into both halves at `size` with extent parabolic_extent(size) (a power of two, 2..8192): each
+// texel is the solid-angle-weighted average of a grid of n x n points over its whole square, n = 4 width /
+// (pi size) clamped to [2, 16] (two points per equirect pixel at a half's centre). An environment wider than
+// about 12 size is point-sampled by that grid: downsample it first. Throws
 // std::invalid_argument for inconsistent sizes, a size that is not a power of two, or a non-finite pixel.
 ParabolicImage parabolic_from_equirect(uint32_t size, uint32_t width, uint32_t height, std::span<const float> rgba);
 
@@ -93,7 +96,9 @@ struct PrefilterStats
 // texel of both whole squares (extent parabolic_extent of its size). The integral is a sum over the texels of the chain's level of the same size,
 // each at its centre direction with its solid angle inside the circle, over the texels where the lobe exceeds
 // 1e-4 of its peak (found as the stereographic image of that cap). e = 1 gives the diffuse map:
-// (1 / pi) * integral of max(0, n.l) L_i = E(n) / pi. Throws std::invalid_argument for e <= 0 or not finite.
+// (1 / pi) * integral of max(0, n.l) L_i = E(n) / pi. Throws std::invalid_argument for e <= 0, not finite or
+// above kMaxPhongExponent (a lobe far narrower than any texel: a mirror).
+constexpr double kMaxPhongExponent = 1e6;
 ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
                                PrefilterStats* stats = nullptr);
 
