@@ -81,7 +81,7 @@ void main()
             c[k] = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4], in_packed[(i + 2) / 4][(i + 2) % 4]);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
             c[k] = texture(coefficient_maps, vec3(in_uv1, float(k))).rgb;
-#else
+#elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
             c[k] = probe[k].rgb;
 #endif
         }
@@ -110,6 +110,7 @@ void main()
     s.emissive = emissive;
     s.base_color_factor = material.base_color_factor.rgb;
     s.n = n;
+    s.t = kFrame == HEMI_FRAME_WORLD ? T : vec3(1.0, 0.0, 0.0);
     s.bump = bump;
     s.basis = kBasis;
     s.k = K;

@@ -116,6 +116,48 @@ void UploadBatch::image(const Image& dst, const void* texels, size_t bytes)
     });
 }
 
+void UploadBatch::image_levels(const Image& dst, std::span<const std::vector<std::byte>> levels)
+{
+    if (levels.size() != dst.mip_levels())
+        throw std::invalid_argument("hemi: image upload got " + std::to_string(levels.size()) + " mip levels for an image of " +
+                                    std::to_string(dst.mip_levels()));
+    std::vector<VkBufferImageCopy> regions;
+    size_t total = 0;
+    for (uint32_t mip = 0; mip < levels.size(); ++mip)
+    {
+        const uint32_t w = std::max(1u, dst.width() >> mip), h = std::max(1u, dst.height() >> mip);
+        const size_t expected = size_t(w) * h * format_size(dst.format()) * dst.layers();
+        if (levels[mip].size() != expected)
+            throw std::invalid_argument("hemi: mip " + std::to_string(mip) + " upload got " +
+                                        std::to_string(levels[mip].size()) + " bytes, a " + std::to_string(w) + "x" +
+                                        std::to_string(h) + " level needs " + std::to_string(expected));
+        VkBufferImageCopy region{};
+        region.bufferOffset = total;
+        region.imageSubresource = {dst.aspect(), mip, 0, dst.layers()};
+        region.imageExtent = {w, h, 1};
+        regions.push_back(region);
+        total += expected;
+    }
+    Buffer staging = create_buffer(*device_, {total, 0, MemoryUsage::Upload});
+    for (size_t mip = 0; mip < levels.size(); ++mip)
+        std::memcpy(static_cast<std::byte*>(staging.mapped()) + regions[mip].bufferOffset, levels[mip].data(),
+                    levels[mip].size());
+    const VkBuffer src = staging;
+    staging_.push_back(std::move(staging));
+    const VkImage image = dst.handle();
+    const VkImageAspectFlags aspect = dst.aspect();
+    const uint32_t mips = dst.mip_levels(), layers = dst.layers();
+    pending_.push_back([=](VkCommandBuffer cmd) {
+        const VkImageLayout dst_layout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        barrier(cmd, image, aspect, layers, 0, mips, VK_IMAGE_LAYOUT_UNDEFINED, dst_layout, 0, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
+        vkCmdCopyBufferToImage(cmd, src, image, dst_layout, uint32_t(regions.size()), regions.data());
+        barrier(cmd, image, aspect, layers, 0, mips, dst_layout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                VK_PIPELINE_STAGE_ALL_COMMANDS_BIT);
+    });
+}
+
 void UploadBatch::record(VkCommandBuffer cmd)
 {
     for (auto& p : pending_)

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <span>
 #include <vector>
 
 namespace hemi::gpu
@@ -25,6 +26,10 @@ public:
     // record() fills them by successive linear blits (box-filtered halving). Every mip ends in
     // SHADER_READ_ONLY_OPTIMAL.
     void image(const Image& dst, const void* texels, size_t bytes);
+    // Every mip level given, not generated (mips a blit cannot make, e.g. solid-angle-weighted ones):
+    // levels[i] holds mip i's tightly packed texels of every layer; dst.mip_levels() levels. Every mip ends in
+    // SHADER_READ_ONLY_OPTIMAL.
+    void image_levels(const Image& dst, std::span<const std::vector<std::byte>> levels);
 
     // Records every pending copy and blit, with the barriers that make them visible to shader reads
     // (vertex input, index, uniform, sampled) of later commands. Clears the pending list.

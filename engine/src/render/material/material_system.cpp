@@ -26,6 +26,7 @@ const char* source_name(CoefficientSourceKind kind)
     case CoefficientSourceKind::Vertex: return "vertex";
     case CoefficientSourceKind::Texel: return "texel";
     case CoefficientSourceKind::Uniform: return "uniform";
+    case CoefficientSourceKind::Environment: return "environment";
     }
     throw std::invalid_argument("hemi: unknown coefficient source kind");
 }
@@ -60,6 +61,17 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
                  VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Uniform:
         return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_FRAGMENT_BIT}};
+    case CoefficientSourceKind::Environment:
+    {
+        const VkShaderStageFlags fs = VK_SHADER_STAGE_FRAGMENT_BIT;
+        const VkDescriptorType image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+        return {{HEMI_ENV_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, fs},
+                {HEMI_ENV_BINDING_MIRROR, image, fs},
+                {HEMI_ENV_BINDING_GLOSSY, image, fs},
+                {HEMI_ENV_BINDING_DIFFUSE, image, fs},
+                {HEMI_ENV_BINDING_FRESNEL, image, fs},
+                {HEMI_ENV_BINDING_BRDF, image, fs}};
+    }
     }
     throw std::invalid_argument("hemi: unknown coefficient source kind");
 }
@@ -78,8 +90,8 @@ MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc
                                     "device " + std::string(device.name()) + " does not have enabled");
     frame_layout_ = gpu::create_set_layout(device, frame_bindings());
     material_layout_ = gpu::create_set_layout(device, material_bindings());
-    for (CoefficientSourceKind kind :
-         {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel, CoefficientSourceKind::Uniform})
+    for (CoefficientSourceKind kind : {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel,
+                                       CoefficientSourceKind::Uniform, CoefficientSourceKind::Environment})
         source_layouts_[uint32_t(kind)] = gpu::create_set_layout(device, source_bindings(kind));
 }
 
@@ -87,7 +99,7 @@ MaterialSystem::~MaterialSystem() = default;
 
 VkDescriptorSetLayout MaterialSystem::source_layout(CoefficientSourceKind kind) const
 {
-    if (uint32_t(kind) > 2)
+    if (uint32_t(kind) > 3)
         throw std::invalid_argument("hemi: unknown coefficient source kind");
     return source_layouts_[uint32_t(kind)];
 }
@@ -100,6 +112,13 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     if (key.frame == ShadingFrame::World && key.basis != HEMI_BASIS_SH9)
         throw std::invalid_argument("hemi: world-frame materials evaluate SH9 (the sphere), not basis '" +
                                     std::string(basis.name) + "', a hemispherical basis of the tangent frame");
+    const bool environment_technique = key.technique == Technique::Factored || key.technique == Technique::Banks ||
+                                       key.technique == Technique::EnvMirror || key.technique == Technique::EnvGlossy;
+    if (environment_technique != (key.source == CoefficientSourceKind::Environment))
+        throw std::invalid_argument("hemi: the factored, banks, env_mirror and env_glossy techniques, and only they, "
+                                    "take the environment source");
+    if (environment_technique && key.frame != ShadingFrame::World)
+        throw std::invalid_argument("hemi: environment materials shade in the world frame");
     auto type = std::make_unique<MaterialType>();
     type->key = key;
     type->k = uint32_t(basis.size);

@@ -36,6 +36,15 @@ using uint = uint32_t;
 #define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)
 #define HEMI_SOURCE_TEXEL 1   // 2D array texture, layer k, sampled at TEXCOORD_1 (lightmaps)
 #define HEMI_SOURCE_UNIFORM 2 // uniform block of K vec4 (an SH probe, an environment)
+#define HEMI_SOURCE_ENVIRONMENT 3 // parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
+
+// Set 2 of the environment source (render::EnvironmentLighting).
+#define HEMI_ENV_BINDING_UNIFORMS 0
+#define HEMI_ENV_BINDING_MIRROR 1  // sampler2DArray: the mirror map, layer 0 front (z >= 0), 1 back, its mip chain
+#define HEMI_ENV_BINDING_GLOSSY 2  // sampler2DArray: the material's prefiltered glossy map
+#define HEMI_ENV_BINDING_DIFFUSE 3 // sampler2DArray: the diffuse map (E / pi)
+#define HEMI_ENV_BINDING_FRESNEL 4 // sampler2D: the Fresnel table, a row per index of refraction
+#define HEMI_ENV_BINDING_BRDF 5    // sampler2DArray: the factored BRDF's tables (a layer each)
 
 // Frames the coefficients are expressed in (specialization constant).
 #define HEMI_FRAME_TANGENT 0 // the normal-map tangent frame: the map's normal evaluates the basis directly
@@ -75,6 +84,16 @@ struct MaterialUniforms
     vec4 occlusion;         // x = glTF's occlusion strength; yzw unused
 };
 
+// The environment source's uniforms (set 2, binding HEMI_ENV_BINDING_UNIFORMS).
+struct EnvironmentUniforms
+{
+    vec4 extents;         // x, y, z: the mirror, glossy and diffuse maps' extents (math/paraboloid.h); w: unused
+    vec4 material;        // x = kd (diffuse weight), y = ks (specular weight), z = the Fresnel row's v coordinate,
+                          // w = blend: 0 = F L_m + L_d, 1 = F L_m + (1 - F) L_d (a coating, section 4.4)
+    vec4 tables;          // x = the BRDF tables' size, y = the Fresnel table's samples, zw unused
+    vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z: w unused)
+};
+
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
 struct DrawPush
 {
@@ -88,6 +107,7 @@ struct DrawPush
 static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 2 * HEMI_MAX_LIGHTS * 16, "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 80, "push constants");
+static_assert(sizeof(EnvironmentUniforms) == 6 * 16, "std140 layout");
 } // namespace hemi::shared
 #endif
 

@@ -13,6 +13,7 @@ struct HemiSurface
     vec3 emissive;          // emissive factor x texture (0 in the lighting-only view)
     vec3 base_color_factor; // the material's factor alone
     vec3 n;                 // normal-map normal in the coefficients' frame (tangent or world)
+    vec3 t;                 // the surface tangent (glTF's, the normal map's u) in the same frame
     vec3 bump;              // the normal-map slot's texel as stored (an SSBump map's weights), linear
     float occlusion;        // glTF's occlusion (1: none), for the techniques that apply it
     int basis;              // HEMI_BASIS_* of the coefficients

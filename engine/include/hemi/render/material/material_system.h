@@ -41,6 +41,11 @@ enum class Technique : uint32_t
     Rnm = HEMI_TECHNIQUE_RNM,               // radiosity normal mapping, Green 2007 Listing 1 (K = 3: rnm colours)
     Ssbump = HEMI_TECHNIQUE_SSBUMP,         // self-shadowed bump map in the normal slot, Listing 2 (K = 3)
     RnmAo = HEMI_TECHNIQUE_RNM_AO,          // Listing 1 times the material's occlusion texture (Green's baseline)
+    // Heidrich & Seidel 1999, with the environment source (render::EnvironmentLighting), world frame:
+    Factored = HEMI_TECHNIQUE_FACTORED,     // Torrance-Sparrow from its factor tables for the dynamic lights
+    Banks = HEMI_TECHNIQUE_BANKS,           // Banks' anisotropic model from its table for the dynamic lights
+    EnvMirror = HEMI_TECHNIQUE_ENV_MIRROR,  // Fresnel-weighted mirror reflection of the parabolic map + diffuse
+    EnvGlossy = HEMI_TECHNIQUE_ENV_GLOSSY,  // the prefiltered glossy map at the reflection vector + diffuse
 };
 
 enum class CoefficientSourceKind : uint32_t
@@ -48,6 +53,7 @@ enum class CoefficientSourceKind : uint32_t
     Vertex = HEMI_SOURCE_VERTEX,   // transfer or CPCA pass output, interpolated across triangles
     Texel = HEMI_SOURCE_TEXEL,     // coefficient textures sampled at TEXCOORD_1
     Uniform = HEMI_SOURCE_UNIFORM, // one set of coefficients for the whole object (an SH probe)
+    Environment = HEMI_SOURCE_ENVIRONMENT, // parabolic environment maps and BRDF tables (EnvironmentLighting)
 };
 
 enum class ShadingFrame : uint32_t
@@ -128,7 +134,7 @@ private:
     RenderTargetDesc target_;
     VkPipelineCache cache_;
     gpu::DescriptorSetLayout frame_layout_, material_layout_;
-    gpu::DescriptorSetLayout source_layouts_[3];
+    gpu::DescriptorSetLayout source_layouts_[4];
     std::map<MaterialKey, std::unique_ptr<MaterialType>> types_;
 };
 

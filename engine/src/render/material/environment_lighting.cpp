@@ -1,0 +1,171 @@
+#include <hemi/render/material/environment_lighting.h>
+#include <hemi/render/material/frame_set.h>
+
+#include <glm/gtc/packing.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemi::render
+{
+namespace
+{
+bool filters_linearly(const gpu::Device& device, VkFormat format)
+{
+    VkFormatProperties props{};
+    vkGetPhysicalDeviceFormatProperties(device.physical_device(), format, &props);
+    const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+    return (props.optimalTilingFeatures & need) == need;
+}
+
+// RGB floats into RGBA texels of `format` (RGBA32F, or RGBA16F clamped to half's range), alpha 1.
+std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
+{
+    const size_t texels = rgb.size() / 3;
+    std::vector<std::byte> out;
+    if (format == VK_FORMAT_R32G32B32A32_SFLOAT)
+    {
+        out.resize(texels * 16);
+        float* p = reinterpret_cast<float*>(out.data());
+        for (size_t i = 0; i < texels; ++i)
+            p[i * 4] = rgb[i * 3], p[i * 4 + 1] = rgb[i * 3 + 1], p[i * 4 + 2] = rgb[i * 3 + 2], p[i * 4 + 3] = 1.0f;
+    }
+    else
+    {
+        out.resize(texels * 8);
+        uint16_t* p = reinterpret_cast<uint16_t*>(out.data());
+        for (size_t i = 0; i < texels; ++i)
+            for (int c = 0; c < 4; ++c)
+                p[i * 4 + c] = glm::packHalf1x16(c < 3 ? std::min(rgb[i * 3 + c], 65504.0f) : 1.0f);
+    }
+    return out;
+}
+
+gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::ParabolicImage> levels, VkFormat format,
+                           gpu::UploadBatch& upload)
+{
+    gpu::Image image = gpu::create_image(
+        device, {levels[0].size, levels[0].size, format, VK_IMAGE_USAGE_SAMPLED_BIT, uint32_t(levels.size()), 2, true});
+    std::vector<std::vector<std::byte>> bytes;
+    for (const math::ParabolicImage& level : levels)
+        bytes.push_back(pack(level.rgb, format));
+    upload.image_levels(image, bytes);
+    return image;
+}
+} // namespace
+
+EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& env,
+                                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
+                                         gpu::UploadBatch& upload)
+{
+    const gpu::Device& device = system.device();
+    if (env.mirror.empty() || env.mirror.back().size != 1 || env.diffuse.size == 0)
+        throw std::invalid_argument("hemi: an environment needs its mirror map's whole mip chain and a diffuse map");
+    if (!env.glossy.empty() && material.glossy >= env.glossy.size())
+        throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) + " of an environment with " +
+                                    std::to_string(env.glossy.size()));
+    if (!env.iors.empty() && material.fresnel >= env.iors.size())
+        throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
+                                    " of an environment with " + std::to_string(env.iors.size()));
+    for (const math::BrdfTable& t : brdf)
+        if (t.size != brdf[0].size || t.size < 2)
+            throw std::invalid_argument("hemi: the BRDF tables of one material must all have one size (>= 2)");
+    if (brdf.size() > 4)
+        throw std::invalid_argument("hemi: at most 4 BRDF tables");
+
+    map_format_ = filters_linearly(device, VK_FORMAT_R32G32B32A32_SFLOAT) ? VK_FORMAT_R32G32B32A32_SFLOAT
+                                                                          : VK_FORMAT_R16G16B16A16_SFLOAT;
+    mirror_ = parabolic_image(device, env.mirror, map_format_, upload);
+    const math::ParabolicImage& glossy = env.glossy.empty() ? env.diffuse : env.glossy[material.glossy];
+    glossy_ = parabolic_image(device, {&glossy, 1}, map_format_, upload);
+    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload);
+    extents_[0] = float(env.mirror[0].extent);
+    extents_[1] = float(glossy.extent);
+    extents_[2] = float(env.diffuse.extent);
+
+    // The Fresnel tables, a row each (a 2 x 1 table of 1 without any).
+    fresnel_rows_ = std::max<uint32_t>(1, uint32_t(env.iors.size()));
+    fresnel_samples_ = env.iors.empty() ? 2 : env.fresnel_samples;
+    fresnel_row_ = material.fresnel;
+    std::vector<float> fresnel_rgb;
+    for (uint32_t r = 0; r < fresnel_rows_; ++r)
+        for (uint32_t i = 0; i < fresnel_samples_; ++i)
+        {
+            const float f = env.iors.empty() ? 1.0f : env.fresnel[size_t(r) * fresnel_samples_ + i];
+            fresnel_rgb.insert(fresnel_rgb.end(), {f, f, f});
+        }
+    const VkFormat half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
+    fresnel_ = gpu::create_image(device, {fresnel_samples_, fresnel_rows_, half4});
+    const std::vector<std::byte> fresnel_bytes = pack(fresnel_rgb, half4);
+    upload.image(fresnel_, fresnel_bytes.data(), fresnel_bytes.size());
+
+    // The BRDF tables, a layer each, channels into r, g (2 x 2 zeros without any).
+    table_size_ = brdf.empty() ? 2 : brdf[0].size;
+    const uint32_t layers = std::max<uint32_t>(1, uint32_t(brdf.size()));
+    std::vector<float> table_rgb(size_t(table_size_) * table_size_ * layers * 3, 0.0f);
+    for (size_t k = 0; k < brdf.size(); ++k)
+        for (size_t i = 0; i < size_t(table_size_) * table_size_; ++i)
+            for (uint32_t c = 0; c < std::min(brdf[k].channels, 3u); ++c)
+            {
+                const float v = brdf[k].values[i * brdf[k].channels + c];
+                if (!std::isfinite(v) || std::abs(v) > 65504.0f)
+                    throw std::invalid_argument("hemi: a BRDF table value does not fit a half float");
+                table_rgb[(k * table_size_ * table_size_ + i) * 3 + c] = v;
+            }
+    brdf_ = gpu::create_image(device, {table_size_, table_size_, half4, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
+    const std::vector<std::byte> table_bytes = pack(table_rgb, half4);
+    upload.image(brdf_, table_bytes.data(), table_bytes.size());
+
+    sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                                            VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_LOD_CLAMP_NONE});
+    uniforms_ = gpu::create_buffer(device, {sizeof(shared::EnvironmentUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const shared::EnvironmentUniforms u = uniforms(material);
+    upload.buffer(uniforms_, &u, sizeof u);
+
+    const std::vector<gpu::Binding> bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Environment);
+    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
+    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Environment));
+    gpu::DescriptorWrite writes[6];
+    writes[0].binding = HEMI_ENV_BINDING_UNIFORMS;
+    writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    writes[0].buffer = {uniforms_, 0, VK_WHOLE_SIZE};
+    const gpu::Image* images[5] = {&mirror_, &glossy_, &diffuse_, &fresnel_, &brdf_};
+    const uint32_t binding[5] = {HEMI_ENV_BINDING_MIRROR, HEMI_ENV_BINDING_GLOSSY, HEMI_ENV_BINDING_DIFFUSE,
+                                 HEMI_ENV_BINDING_FRESNEL, HEMI_ENV_BINDING_BRDF};
+    for (int i = 0; i < 5; ++i)
+    {
+        writes[1 + i].binding = binding[i];
+        writes[1 + i].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+        writes[1 + i].image = {sampler_, images[i]->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    }
+    gpu::write_descriptors(device, set_, writes);
+}
+
+shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMaterial& m) const
+{
+    if (!std::isfinite(m.kd) || !std::isfinite(m.ks))
+        throw std::invalid_argument("hemi: an environment material's kd and ks must be finite");
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (!std::isfinite(m.world_to_env[i][j]))
+                throw std::invalid_argument("hemi: an environment's rotation must be finite");
+    shared::EnvironmentUniforms u{};
+    u.extents = glm::vec4(extents_[0], extents_[1], extents_[2], 0.0f);
+    u.material = glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(fresnel_rows_), m.coating ? 1.0f : 0.0f);
+    u.tables = glm::vec4(float(table_size_), float(fresnel_samples_), 0.0f, 0.0f);
+    for (int r = 0; r < 3; ++r) // rows of world_to_env (glm is column-major: element [column][row])
+        u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r], 0.0f);
+    return u;
+}
+
+void EnvironmentLighting::record_update(VkCommandBuffer cmd, const EnvironmentMaterial& material) const
+{
+    const shared::EnvironmentUniforms u = uniforms(material);
+    record_uniform_update(cmd, uniforms_, &u, sizeof u);
+}
+
+} // namespace hemi::render

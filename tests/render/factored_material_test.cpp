@@ -1,0 +1,296 @@
+// Heidrich & Seidel's materials (the environment source: factored, banks, env_mirror, env_glossy) drawn through
+// the material system on a normal-mapped sphere, under validation: at sampled pixels the GPU's colour equals a
+// CPU evaluation of the same material at the UV the GPU reports (the analytic sphere frame, a bilinear
+// normal-map lookup, the models of math/brdf.h evaluated directly, the parabolic maps sampled on the CPU); and
+// across the seam between the two parabolic halves the mirror reflection is continuous.
+#include "../gpu_fixture.h"
+
+#include "factored_scene.h"
+#include "normal_map_lookup.h"
+#include "scene.h"
+
+#include <hemi/bake/factored.h>
+#include <hemi/math/paraboloid.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+namespace
+{
+class FactoredMaterial : public hemi::test::GpuTest
+{
+};
+
+// A smooth environment (no edge a tessellated normal could straddle), different in every channel and across
+// the horizon, baked into parabolic maps at 64^2 with one glossy map (exponent 20) and a Fresnel table at 1.5.
+const hemi::io::EnvmapAsset& smooth_environment()
+{
+    static const hemi::io::EnvmapAsset env = [] {
+        hemi::io::ImageRgba img;
+        img.width = 512;
+        img.height = 256;
+        img.pixels.resize(size_t(512) * 256 * 4);
+        for (uint32_t y = 0; y < 256; ++y)
+            for (uint32_t x = 0; x < 512; ++x)
+            {
+                const double phi = M_PI - 2 * M_PI * (x + 0.5) / 512, theta = M_PI * (y + 0.5) / 256;
+                const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+                float* p = img.pixels.data() + (size_t(y) * 512 + x) * 4;
+                p[0] = float(1.0 + 0.6 * d.x);
+                p[1] = float(1.0 + 0.6 * d.y + 0.3 * d.x * d.y);
+                p[2] = float(1.2 + 0.8 * d.z);
+                p[3] = 1.0f;
+            }
+        hemi::bake::EnvmapBakeOptions o;
+        o.size = 64;
+        o.exponents = {20.0};
+        o.iors = {1.5};
+        return hemi::bake::bake_envmap(img, o);
+    }();
+    return env;
+}
+
+struct Pixel
+{
+    glm::vec3 n, t, v; // normal-map normal, surface tangent, towards the eye (world)
+};
+// The analytic sphere frame at uv (io::make_uv_sphere), the normal map looked up on the CPU, the eye's
+// direction from the sphere point.
+Pixel sphere_pixel(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, bool normal_map, float bitangent_sign = 1.0f)
+{
+    const float phi = 2.0f * float(M_PI) * uv.x, theta = float(M_PI) * uv.y;
+    const glm::vec3 N(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    const glm::vec3 T(-std::sin(phi), std::cos(phi), 0.0f);
+    const glm::vec3 B = -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
+    glm::vec3 n = N;
+    if (normal_map)
+    {
+        const glm::vec3 nt = glm::normalize(hemi::test::sample_bilinear(s, uv) * 2.0f - 1.0f);
+        n = glm::normalize(T * nt.x + bitangent_sign * B * nt.y + N * nt.z);
+    }
+    return {n, T, glm::normalize(s.eye - N)};
+}
+
+glm::vec3 sample(const hemi::math::ParabolicImage& map, const glm::vec3& d) { return glm::vec3(map.sample(glm::dvec3(d))); }
+
+struct Comparison
+{
+    int compared = 0, failures = 0, rejected = 0;
+    std::string first_failures; // the first few, for the message when there are too many
+};
+// Every 4th pixel well inside the sphere (not at its silhouette, poles or UV seam): the GPU against `want`,
+// and the same tolerance against `wrong` (a wrong implementation: it must reject many pixels).
+Comparison compare(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& aux,
+                   const std::function<glm::vec3(glm::vec2)>& want, const std::function<glm::vec3(glm::vec2)>& wrong,
+                   float relative, float absolute)
+{
+    Comparison c;
+    for (uint32_t y = 2; y + 2 < color.height; y += 4)
+        for (uint32_t x = 2; x + 2 < color.width; x += 4)
+        {
+            bool interior = true;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx)
+                    interior = interior && aux.at(x + dx, y + dy)[3] == 1.0f;
+            const glm::vec2 uv(aux.at(x, y)[0], aux.at(x, y)[1]);
+            if (!interior || uv.y < 0.1f || uv.y > 0.9f || uv.x < 0.01f || uv.x > 0.99f)
+                continue;
+            const glm::vec3 w = want(uv), bad = wrong(uv);
+            const float* got = color.at(x, y);
+            ++c.compared;
+            bool fails = false, bad_fails = false;
+            for (int k = 0; k < 3; ++k)
+            {
+                fails = fails || std::abs(got[k] - w[k]) > relative * w[k] + absolute;
+                bad_fails = bad_fails || std::abs(got[k] - bad[k]) > relative * bad[k] + absolute;
+            }
+            c.rejected += bad_fails;
+            if (fails && c.failures++ < 8)
+                c.first_failures += "\n  pixel " + std::to_string(x) + "," + std::to_string(y) + ": GPU " +
+                                    std::to_string(got[0]) + "," + std::to_string(got[1]) + "," + std::to_string(got[2]) +
+                                    ", CPU " + std::to_string(w.x) + "," + std::to_string(w.y) + "," + std::to_string(w.z);
+        }
+    return c;
+}
+} // namespace
+
+// Mirror reflection with the Fresnel weight, both blends (F L_m + L_d and the coating's F L_m + (1 - F) L_d), on
+// the sphere without a normal map (the mirror map's mip level then stays near 0, which the CPU samples).
+TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    for (bool coating : {false, true})
+    {
+        hemi::samples::FactoredView view;
+        view.mesh = &scene.mesh;
+        view.eye = scene.eye;
+        view.albedo = glm::vec3(0.7f, 0.5f, 0.3f);
+        view.technique = hemi::render::Technique::EnvMirror;
+        view.environment = &env;
+        view.material.kd = 0.8f;
+        view.material.coating = coating;
+        hemi::io::ImageRgba aux;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+        auto shade = [&](glm::vec2 uv, bool blend) {
+            const Pixel p = sphere_pixel(scene, uv, false);
+            const float nv = glm::dot(p.n, p.v);
+            const glm::vec3 r = 2.0f * nv * p.n - p.v;
+            const float f = float(hemi::math::fresnel_dielectric(nv, 1.5));
+            const glm::vec3 ld = view.material.kd * view.albedo * sample(env.diffuse, p.n);
+            return f * sample(env.mirror[0], r) + (blend ? 1.0f - f : 1.0f) * ld;
+        };
+        const Comparison c = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, coating); }, [&](glm::vec2 uv) { return shade(uv, !coating); },
+            0.01f, 0.003f);
+        EXPECT_GT(c.compared, 300);
+        EXPECT_LE(c.failures, c.compared / 100) << "coating " << coating << c.first_failures;
+        EXPECT_GT(c.rejected, c.compared / 10) << "the other blend would pass this comparison";
+        std::printf("mirror, coating %d: %d of %d pixels outside 1%% + 0.003, the other blend rejected at %d\n",
+                    int(coating), c.failures, c.compared, c.rejected);
+    }
+}
+
+// The glossy map at the normal-map normal's reflection vector and the diffuse map at the normal (neither has
+// mip levels), with the brick normal map; a flipped bitangent is rejected.
+TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    hemi::samples::FactoredView view;
+    view.mesh = &scene.mesh;
+    view.eye = scene.eye;
+    view.normal_map = {scene.map_width, scene.map_height, scene.normal_map};
+    view.albedo = glm::vec3(0.6f, 0.6f, 0.5f);
+    view.technique = hemi::render::Technique::EnvGlossy;
+    view.environment = &env;
+    view.material.kd = 0.5f;
+    view.material.ks = 0.7f;
+    hemi::io::ImageRgba aux;
+    const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+    auto shade = [&](glm::vec2 uv, float sign) {
+        const Pixel p = sphere_pixel(scene, uv, true, sign);
+        const glm::vec3 r = 2.0f * glm::dot(p.n, p.v) * p.n - p.v;
+        return view.material.ks * sample(env.glossy[0], r) + view.material.kd * view.albedo * sample(env.diffuse, p.n);
+    };
+    const Comparison c = compare(
+        color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); }, [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.01f,
+        0.003f);
+    EXPECT_GT(c.compared, 300);
+    EXPECT_LE(c.failures, c.compared / 100) << c.first_failures;
+    EXPECT_GT(c.rejected, c.compared / 20) << "a flipped bitangent would pass this comparison";
+    std::printf("glossy: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n", c.failures,
+                c.compared, c.rejected);
+}
+
+// Torrance-Sparrow from its factor tables and Banks from its table, for a directional light, with the diffuse
+// environment, against the models evaluated directly (the tables' own error, 0.5%, is inside the tolerance).
+TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    const glm::vec3 light = glm::normalize(glm::vec3(0.4f, -0.7f, 0.6f));
+    const glm::vec3 e(2.0f, 1.8f, 1.5f);
+    const hemi::math::TorranceSparrow ts(hemi::math::FacetDistribution::Beckmann, 0.3, 1.5);
+    for (auto technique : {hemi::render::Technique::Factored, hemi::render::Technique::Banks})
+    {
+        const bool banks = technique == hemi::render::Technique::Banks;
+        hemi::samples::FactoredView view;
+        view.mesh = &scene.mesh;
+        view.eye = scene.eye;
+        view.normal_map = {scene.map_width, scene.map_height, scene.normal_map};
+        view.albedo = glm::vec3(0.5f, 0.4f, 0.3f);
+        view.technique = technique;
+        view.environment = &env;
+        view.material.kd = 0.6f;
+        view.material.ks = 0.8f;
+        if (banks)
+            view.brdf = {hemi::math::banks_table(30.0, 256)};
+        else
+            view.brdf = hemi::math::torrance_sparrow_tables(ts, 256);
+        view.lights = {{false, light, e}};
+        hemi::io::ImageRgba aux;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+        auto shade = [&](glm::vec2 uv, float sign) {
+            const Pixel p = sphere_pixel(scene, uv, true, sign);
+            const glm::dvec3 n(p.n), l(light), v(p.v);
+            glm::vec3 out = view.material.kd * view.albedo * sample(env.diffuse, p.n);
+            if (banks)
+            {
+                const glm::dvec3 t = glm::normalize(glm::dvec3(p.t) - n * glm::dot(n, glm::dvec3(p.t)));
+                for (int k = 0; k < 3; ++k)
+                    out[k] += e[k] * float(hemi::math::banks_eval_cos(n, t, l, v, view.material.kd * view.albedo[k],
+                                                                      view.material.ks, 30.0));
+            }
+            else
+            {
+                const float nl = std::max(0.0f, glm::dot(p.n, light));
+                out += e * (view.material.kd * view.albedo * nl / float(M_PI) +
+                            view.material.ks * float(ts.eval_cos(n, l, v)));
+            }
+            return out;
+        };
+        const Comparison c = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); }, [&](glm::vec2 uv) { return shade(uv, -1.0f); },
+            0.02f, 0.004f);
+        EXPECT_GT(c.compared, 300) << (banks ? "banks" : "factored");
+        EXPECT_LE(c.failures, c.compared / 100) << (banks ? "banks" : "factored") << c.first_failures;
+        std::printf("%s: %d of %d pixels outside 2%% + 0.004, a flipped bitangent rejected at %d\n",
+                    banks ? "banks" : "factored", c.failures, c.compared, c.rejected);
+        EXPECT_GT(c.rejected, c.compared / 20) << (banks ? "banks" : "factored") << ": a flipped bitangent would pass";
+    }
+}
+
+// Done-when 3: across the seam between the two halves (reflection vectors with z = 0) the rendered mirror
+// reflection of a smooth environment is continuous: neighbouring pixels on both sides of the seam differ no more
+// than neighbouring pixels beside them on one side.
+TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    hemi::samples::FactoredView view;
+    view.mesh = &scene.mesh;
+    view.eye = scene.eye;
+    view.technique = hemi::render::Technique::EnvMirror;
+    view.environment = &env;
+    view.material.kd = 0.0f;
+    view.environment = &env;
+    hemi::io::ImageRgba aux;
+    const uint32_t W = 240, H = 200;
+    const auto color = hemi::samples::render_factored(hemi::test::device(), view, W, H, &aux);
+    // F L_m(r) with F at n.v: divide F out so the comparison sees L_m alone.
+    auto reflection_z = [&](uint32_t x, uint32_t y) {
+        const Pixel p = sphere_pixel(scene, {aux.at(x, y)[0], aux.at(x, y)[1]}, false);
+        return glm::dot(2.0f * glm::dot(p.n, p.v) * p.n - p.v, glm::vec3(0, 0, 1));
+    };
+    auto radiance = [&](uint32_t x, uint32_t y) {
+        const Pixel p = sphere_pixel(scene, {aux.at(x, y)[0], aux.at(x, y)[1]}, false);
+        const float f = float(hemi::math::fresnel_dielectric(glm::dot(p.n, p.v), 1.5));
+        return glm::vec3(color.at(x, y)[0], color.at(x, y)[1], color.at(x, y)[2]) / f;
+    };
+    int pairs = 0;
+    double across = 0.0, beside = 0.0;
+    for (uint32_t x = 4; x + 4 < W; ++x)
+        for (uint32_t y = 3; y + 3 < H; ++y)
+        {
+            bool interior = true;
+            for (int d = -3; d <= 3; ++d)
+                interior = interior && aux.at(x, y + d)[3] == 1.0f && aux.at(x - 1, y + d)[3] == 1.0f &&
+                           aux.at(x + 1, y + d)[3] == 1.0f;
+            if (!interior || (reflection_z(x, y) >= 0.0f) == (reflection_z(x, y + 1) >= 0.0f))
+                continue;
+            // y | y + 1 straddles the seam; (y - 2, y - 1) and (y + 2, y + 3) are neighbours on one side each.
+            ++pairs;
+            across += glm::length(radiance(x, y + 1) - radiance(x, y));
+            beside += 0.5 * (glm::length(radiance(x, y - 1) - radiance(x, y - 2)) +
+                             glm::length(radiance(x, y + 3) - radiance(x, y + 2)));
+        }
+    ASSERT_GT(pairs, 40);
+    EXPECT_LT(across, 1.5 * beside + 0.002 * pairs) << pairs << " pairs";
+    std::printf("seam: %d pixel pairs across it, mean step %.4f across, %.4f beside\n", pairs, across / pairs,
+                beside / pairs);
+}
