@@ -169,6 +169,8 @@ io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& vie
             math::look_at_projection(view.eye, view.target, view.fov_y_degrees, float(width) / float(height));
         f.eye = view.eye;
         f.lights = view.lights;
+        f.specular_exponent = view.specular_exponent;
+        f.specular_strength = view.specular_strength;
         frame.record_update(cmd, f);
         target.begin(cmd, glm::vec4(0.0f));
         render::bind_material(cmd, draw);

@@ -47,6 +47,7 @@ struct FactoredView
     std::vector<math::BrdfTable> brdf; // the factored BRDF's tables (factored, banks)
     render::EnvironmentMaterial material;
     std::vector<render::DynamicLight> lights;
+    float specular_exponent = 32.0f, specular_strength = 0.0f; // the lights' Blinn-Phong (env_mirror, env_glossy)
     glm::mat4 model{1.0f};
     glm::vec3 eye{0.0f, -3.5f, 1.2f}, target{0.0f};
     float fov_y_degrees = 40.0f;

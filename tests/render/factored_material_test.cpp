@@ -156,7 +156,8 @@ TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
 }
 
 // The glossy map at the normal-map normal's reflection vector and the diffuse map at the normal (neither has
-// mip levels), with the brick normal map; a flipped bitangent is rejected.
+// mip levels), with the brick normal map and a directional light's Lambert and Blinn-Phong terms; a flipped
+// bitangent is rejected.
 TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
@@ -170,12 +171,21 @@ TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
     view.environment = &env;
     view.material.kd = 0.5f;
     view.material.ks = 0.7f;
+    // A directional light: Lambert and the frame's Blinn-Phong on top of the environment (the paper's Fig. 10).
+    const glm::vec3 light = glm::normalize(glm::vec3(-0.5f, -0.6f, 0.6f)), e(1.5f, 1.4f, 1.2f);
+    view.lights = {{false, light, e}};
+    view.specular_exponent = 40.0f;
+    view.specular_strength = 0.3f;
     hemi::io::ImageRgba aux;
     const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
     auto shade = [&](glm::vec2 uv, float sign) {
         const Pixel p = sphere_pixel(scene, uv, true, sign);
         const glm::vec3 r = 2.0f * glm::dot(p.n, p.v) * p.n - p.v;
-        return view.material.ks * sample(env.glossy[0], r) + view.material.kd * view.albedo * sample(env.diffuse, p.n);
+        const float nl = std::max(0.0f, glm::dot(p.n, light));
+        const float nh = std::max(0.0f, glm::dot(p.n, glm::normalize(light + p.v)));
+        const glm::vec3 specular = e * nl * std::pow(nh, 40.0f) * 0.3f * (40.0f + 8.0f) / (8.0f * float(M_PI));
+        return view.material.ks * sample(env.glossy[0], r) +
+               view.material.kd * view.albedo * (sample(env.diffuse, p.n) + e * nl / float(M_PI)) + specular;
     };
     const Comparison c = compare(
         color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); }, [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.01f,
@@ -183,7 +193,7 @@ TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
     EXPECT_GT(c.compared, 300);
     EXPECT_LE(c.failures, c.compared / 100) << c.first_failures;
     EXPECT_GT(c.rejected, c.compared / 20) << "a flipped bitangent would pass this comparison";
-    std::printf("glossy: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n", c.failures,
+    std::printf("glossy + light: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n", c.failures,
                 c.compared, c.rejected);
 }
 

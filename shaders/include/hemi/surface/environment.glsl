@@ -6,6 +6,16 @@
 #ifndef HEMI_SURFACE_ENVIRONMENT_GLSL
 #define HEMI_SURFACE_ENVIRONMENT_GLSL
 #include "hemi/shared/surface.h"
+#include "hemi/surface/surface_inputs.glsl"
+
+// The dynamic lights' irradiance over pi at the normal: sum_i E_i max(0, n.l_i) / pi.
+vec3 hemi_env_lambert(HemiSurface s)
+{
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < s.lights; ++i)
+        sum += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
+    return sum / kHemiPi;
+}
 
 #if HEMI_SOURCE == HEMI_SOURCE_ENVIRONMENT
 layout(set = HEMI_SET_SOURCE, binding = HEMI_ENV_BINDING_UNIFORMS, std140) uniform Environment
