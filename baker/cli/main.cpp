@@ -687,6 +687,26 @@ int run_envmap(EnvmapCli& c)
                               {"seconds", stats.glossy_seconds[i]},
                               {"lobe_evaluations", stats.glossy_pairs[i]}});
         j["glossy"] = glossy;
+        std::fprintf(stderr, "hemi-bake envmap: comparing with cube maps against the reference (Eq. 9 over every "
+                             "pixel of the environment)\n");
+        const auto comparisons = hemi::bake::compare_prefiltered_maps(env, a);
+        nlohmann::json prefiltered = nlohmann::json::array();
+        std::printf("prefiltered maps against the reference at 1024 directions (RMSE, relative to the reference's RMS):\n"
+                    "  %-9s %-22s %-22s\n", "exponent", "parabolic", "cube (faces of half the size)");
+        for (const auto& cmp : comparisons)
+        {
+            prefiltered.push_back({{"exponent", cmp.exponent},
+                                   {"parabolic", {{"size", cmp.parabolic_size}, {"texels", cmp.parabolic_texels},
+                                                  {"rmse", cmp.parabolic_rmse}}},
+                                   {"cube", {{"face_size", cmp.cube_size}, {"texels", cmp.cube_texels},
+                                             {"rmse", cmp.cube_rmse}, {"seconds", cmp.cube_seconds}}},
+                                   {"reference_rms", cmp.reference_rms}});
+            char p[64], q[64];
+            std::snprintf(p, sizeof p, "%u^2 x 2: %.4f%%", cmp.parabolic_size, 100.0 * cmp.parabolic_rmse / cmp.reference_rms);
+            std::snprintf(q, sizeof q, "%u^2 x 6: %.4f%%", cmp.cube_size, 100.0 * cmp.cube_rmse / cmp.reference_rms);
+            std::printf("  %-9g %-22s %-22s\n", cmp.exponent, p, q);
+        }
+        j["prefiltered"] = prefiltered;
         hemi::io::write_text_atomically(c.report, j.dump(2) + "\n");
         std::printf("wrote %s\n", c.report.c_str());
     }

@@ -7,7 +7,7 @@
 //   Fig. 10 the normal map with the environment alone and with local illumination added, from four views
 // One comparison image (-o) and each figure on its own (--dir). The environment is baked with hemi-bake envmap's
 // code (bake::bake_envmap), the tables with hemi-bake brdf's (math/brdf.h).
-//   factored_shading [-o FIGURE.png] [--dir DIR] [--size N]
+//   factored_shading [-o FIGURE.png] [--dir DIR] [--size N] [--environment STUDIO.exr]
 #include "factored_scene.h"
 #include "figure.h"
 
@@ -72,6 +72,9 @@ int main(int argc, char** argv)
     app.add_option("-o,--output", out, "the comparison image (PNG)")->capture_default_str();
     app.add_option("--dir", dir, "where each figure is written on its own")->capture_default_str();
     app.add_option("--size", size, "pixels per side of each tile")->capture_default_str();
+    std::string environment_out;
+    app.add_option("--environment", environment_out,
+                   "also write the studio environment as an equirectangular EXR (hemi-bake envmap's input)");
     CLI11_PARSE(app, argc, argv);
     try
     {
@@ -79,6 +82,8 @@ int main(int argc, char** argv)
         std::filesystem::create_directories(dir);
         hemi::gpu::Device device(hemi::gpu::DeviceDesc{});
         const hemi::io::ImageRgba studio = hemi::samples::studio_environment(1024, 512);
+        if (!environment_out.empty())
+            hemi::io::write_exr(environment_out, studio);
         hemi::bake::EnvmapBakeOptions options;
         options.size = 256;
         options.exponents = {20.0};

@@ -1184,7 +1184,8 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
         {
             float* p = env.pixels.data() + (size_t(y) * 256 + x) * 4;
             p[0] = y < 64 ? 2.0f : 0.5f; // bright sky, dark ground
-            p[1] = 1.0f, p[2] = 1.0f, p[3] = 1.0f;
+            p[1] = x < 128 ? 1.5f : 0.5f; // two halves of azimuth: a map turned or mirrored about z is caught
+            p[2] = 1.0f, p[3] = 1.0f;
         }
     const fs::path input = dir() / "sky.exr", asset = dir() / "sky.hemi", exrs = dir() / "sky_exr",
                    report = dir() / "sky.json";
@@ -1206,7 +1207,7 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
     // The sky is brighter than the ground in red, seen from the front (up) half's centre and the back's.
     EXPECT_NEAR(a.mirror[0].sample({0, 0, 1})[0], 2.0, 1e-5);
     EXPECT_NEAR(a.mirror[0].sample({0, 0, -1})[0], 0.5, 1e-5);
-    EXPECT_NEAR(a.diffuse.sample({0, 0, 1})[1], 1.0, 0.01); // green is constant: furnace
+    EXPECT_NEAR(a.diffuse.sample({0, 0, 1})[2], 1.0, 0.01); // blue is constant: furnace
     for (const char* name : {"mirror_L0_front.exr", "mirror_L6_back.exr", "glossy_e4_front.exr", "glossy_e100_back.exr",
                              "diffuse_front.exr", "fresnel.exr"})
         EXPECT_TRUE(fs::exists(exrs / name)) << name;
@@ -1216,4 +1217,17 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
     EXPECT_LT(j["sampling"]["parabolic"]["largest_over_smallest"].get<double>(), 4.0);
     EXPECT_GT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 4.5);
     EXPECT_LT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 3 * std::sqrt(3.0));
+    // The prefiltered maps against Eq. 9 integrated over the equirect's pixels: the diffuse map and both glossy
+    // maps, parabolic and cube, within 3% RMS of the reference (a map in the wrong orientation is ~50% off).
+    ASSERT_EQ(j["prefiltered"].size(), 3u);
+    EXPECT_EQ(j["prefiltered"][0]["exponent"].get<double>(), 1.0);
+    EXPECT_EQ(j["prefiltered"][2]["exponent"].get<double>(), 100.0);
+    for (const auto& p : j["prefiltered"])
+    {
+        const double rms = p["reference_rms"].get<double>();
+        EXPECT_GT(rms, 0.5);
+        EXPECT_LT(p["parabolic"]["rmse"].get<double>(), 0.03 * rms) << p.dump();
+        EXPECT_LT(p["cube"]["rmse"].get<double>(), 0.03 * rms) << p.dump();
+        EXPECT_EQ(p["cube"]["face_size"].get<uint32_t>() * 2, p["parabolic"]["size"].get<uint32_t>());
+    }
 }

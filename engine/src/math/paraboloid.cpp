@@ -287,19 +287,10 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
                 wr[k] = float(w * t[0]), wg[k] = float(w * t[1]), wb[k] = float(w * t[2]);
             }
 
-    // The lobe max(0, c)^e over the cap where it exceeds 1e-4 of its peak, tabulated against
-    // s = (1 - c) / (1 - cos_cut) (about 9 e-folds over the table: linear interpolation is exact to ~1e-6).
-    const double cos_cut = std::pow(1e-4, 1.0 / exponent);
-    const double gamma = std::acos(cos_cut);
-    constexpr int kLobe = 4096;
-    std::vector<float> lobe(kLobe + 2);
-    for (int i = 0; i <= kLobe + 1; ++i)
-    {
-        const double c = 1.0 - std::min(1.0, double(i) / kLobe) * (1.0 - cos_cut);
-        lobe[i] = float(std::pow(c, exponent));
-    }
-    const float lobe_scale = float(kLobe / (1.0 - cos_cut));
-    const float cut = float(cos_cut);
+    const PhongLobe lobe(exponent);
+    const double gamma = lobe.angle();
+    const double cos_cut = std::cos(gamma);
+    const float cut = lobe.cos_cut();
     const double norm = (exponent + 1.0) / (2.0 * kPi);
 
     ParabolicImage out;
@@ -358,11 +349,7 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
                         const float c = dx[k] * rx + dy[k] * ry + dz[k] * rz;
                         if (c > cut)
                         {
-                            // c may exceed 1 by a rounding step (a texel against itself): clamp to the peak.
-                            const float s = std::clamp((1.0f - c) * lobe_scale, 0.0f, float(kLobe));
-                            const int i = int(s);
-                            const float f = s - float(i);
-                            const float w = lobe[i] + f * (lobe[i + 1] - lobe[i]);
+                            const float w = lobe(c); // c may exceed 1 by a rounding step: the lobe clamps it
                             ar += w * wr[k];
                             ag += w * wg[k];
                             ab += w * wb[k];
@@ -384,6 +371,20 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
         stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     return out;
+}
+
+PhongLobe::PhongLobe(double exponent, double cutoff)
+{
+    const double cos_cut = std::pow(cutoff, 1.0 / exponent);
+    angle_ = std::acos(cos_cut);
+    cut_ = float(cos_cut);
+    scale_ = float(kIntervals / (1.0 - cos_cut));
+    table_.resize(kIntervals + 2);
+    for (int i = 0; i <= kIntervals + 1; ++i)
+    {
+        const double c = 1.0 - std::min(1.0, double(i) / kIntervals) * (1.0 - cos_cut);
+        table_[i] = float(std::pow(c, exponent));
+    }
 }
 
 std::vector<float> fresnel_table(double ior, uint32_t size)

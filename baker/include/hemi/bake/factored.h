@@ -81,6 +81,26 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& equirect, const EnvmapBakeOptio
 // environment.
 void check_envmap_options(const EnvmapBakeOptions& options);
 
+// The comparison report's measurements (hemi-bake envmap --report): for each prefiltered map of the asset (the
+// diffuse map as exponent 1, then each glossy map), its parabolic lookup and a cube-map implementation of the
+// same filter against the reference, at `directions` reflection directions spread evenly over the sphere
+// (a Fibonacci lattice). The reference is Eq. 9 integrated over every pixel of the source equirect where the lobe
+// exceeds 1e-4 of its peak (each pixel at its centre with its exact solid angle): a ray per pixel, what a
+// ray tracer converges to. The cube map has faces of half the parabolic map's size (the same largest texel),
+// resampled from the same equirect and filtered by the same windowed sum (math::PhongLobe) over its own
+// texels, and is looked up bilinearly with seamless filtering across its faces.
+struct PrefilterComparison
+{
+    double exponent = 0.0;
+    uint32_t parabolic_size = 0, cube_size = 0;   // per side: each half, each face
+    uint64_t parabolic_texels = 0, cube_texels = 0;
+    double parabolic_rmse = 0.0, cube_rmse = 0.0; // of the luminance-free mean over RGB, in radiance
+    double reference_rms = 0.0;                   // RMS of the reference, for relative errors
+    double cube_seconds = 0.0;
+};
+std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& equirect, const io::EnvmapAsset& asset,
+                                                          uint32_t directions = 1024);
+
 // Writes every image of the asset as EXR into `dir` (created): mirror_L<level>_<front|back>.exr,
 // glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior named
 // "ior<value>"). Returns the paths written.

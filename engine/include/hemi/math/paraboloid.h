@@ -23,6 +23,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -101,6 +102,31 @@ struct PrefilterStats
 constexpr double kMaxPhongExponent = 1e6;
 ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
                                PrefilterStats* stats = nullptr);
+
+// max(0, c)^e over the cap where it exceeds `cutoff` of its peak, tabulated (4096 intervals against
+// (1 - c) / (1 - cos_cut): linear interpolation exact to ~1e-6 of the peak): what prefilter_phong sums, shared
+// with the cube-map implementation of the same filter the envmap report compares against.
+class PhongLobe
+{
+public:
+    PhongLobe(double exponent, double cutoff = 1e-4);
+    float cos_cut() const { return cut_; }
+    double angle() const { return angle_; } // acos(cos_cut)
+    // The lobe at c (> cos_cut; c may exceed 1 by rounding).
+    float operator()(float c) const
+    {
+        const float s = std::clamp((1.0f - c) * scale_, 0.0f, float(kIntervals));
+        const int i = int(s);
+        const float f = s - float(i);
+        return table_[i] + f * (table_[i + 1] - table_[i]);
+    }
+
+private:
+    static constexpr int kIntervals = 4096;
+    std::vector<float> table_;
+    float cut_ = 0.0f, scale_ = 0.0f;
+    double angle_ = 0.0;
+};
 
 // The Fresnel term of §4.4 as a 1D table: sample i of `size` (>= 2) at cos = i / (size - 1). Throws
 // std::invalid_argument for ior <= 1 or not finite.
