@@ -292,6 +292,15 @@ glm::dvec3 reference(const io::ImageRgba& env, const Columns& columns, const mat
 }
 } // namespace
 
+std::vector<glm::dvec3> phong_reference(const io::ImageRgba& env, double exponent, std::span<const glm::dvec3> dirs)
+{
+    const math::PhongLobe lobe(exponent);
+    const Columns columns(env.width);
+    std::vector<glm::dvec3> out(dirs.size());
+    tbb::parallel_for(size_t(0), dirs.size(), [&](size_t i) { out[i] = reference(env, columns, lobe, exponent, dirs[i]); });
+    return out;
+}
+
 std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& env, const io::EnvmapAsset& asset,
                                                           uint32_t directions)
 {

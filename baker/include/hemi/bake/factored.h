@@ -8,9 +8,12 @@
 #include <hemi/io/image.h>
 #include <hemi/math/brdf.h>
 
+#include <glm/vec3.hpp>
+
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -100,6 +103,9 @@ struct PrefilterComparison
 };
 std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& equirect, const io::EnvmapAsset& asset,
                                                           uint32_t directions = 1024);
+// The reference alone: Eq. 9 for Phong exponent e integrated over the equirect's pixels, at each direction.
+std::vector<glm::dvec3> phong_reference(const io::ImageRgba& equirect, double exponent,
+                                        std::span<const glm::dvec3> directions);
 
 // Writes every image of the asset as EXR into `dir` (created): mirror_L<level>_<front|back>.exr,
 // glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior named

@@ -117,7 +117,9 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
     shared::MaterialUniforms u{};
     u.base_color_factor = m.base_color_factor;
     // glTF: emissive = factor * texture; without a texture the factor alone (the default image is white).
-    u.emissive_factor = glm::vec4(m.emissive_factor, m.normal_scale);
+    // Without a normal texture the default texel (128, 128, 255) decodes to a normal tilted by 0.32 degrees
+    // (8 bits have no 0.5): a normal scale of 0 makes it the surface normal exactly (mirror reflections show it).
+    u.emissive_factor = glm::vec4(m.emissive_factor, m.normal.present() ? m.normal_scale : 0.0f);
     const io::TextureRef* refs[4] = {&m.base_color, &m.normal, &m.emissive, &m.occlusion};
     for (int t = 0; t < 4; ++t)
     {
