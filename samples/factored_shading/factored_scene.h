@@ -22,7 +22,8 @@
 namespace hemi::samples
 {
 
-// A torus about z: major radius R, minor r; u around z from +x (tangent along it, w = +1), v around the tube.
+// A torus about z: major radius R, minor r; u around z from +x (the tangent along it, w = -1: glTF's bitangent
+// points towards decreasing v, down the outside of the tube), v around the tube.
 io::Mesh make_torus(float major, float minor, uint32_t segments, uint32_t rings);
 // A disk in the xy plane facing +z, radius r: u = angle / 2pi, v = radius; the tangent runs around the centre
 // (the direction of brushing of a turned metal disk, what Banks' model needs).

@@ -26,7 +26,8 @@ class FactoredMaterial : public hemi::test::GpuTest
 };
 
 // A smooth environment (no edge a tessellated normal could straddle), different in every channel and across
-// the horizon, baked into parabolic maps at 64^2 with one glossy map (exponent 20) and a Fresnel table at 1.5.
+// the horizon, baked into parabolic maps at 64^2 with glossy maps at exponents 20 and 60 and Fresnel tables at
+// 1.5 and 200.
 const hemi::io::EnvmapAsset& smooth_environment()
 {
     static const hemi::io::EnvmapAsset env = [] {
@@ -47,8 +48,8 @@ const hemi::io::EnvmapAsset& smooth_environment()
             }
         hemi::bake::EnvmapBakeOptions o;
         o.size = 64;
-        o.exponents = {20.0};
-        o.iors = {1.5};
+        o.exponents = {20.0, 60.0};
+        o.iors = {1.5, 200.0};
         return hemi::bake::bake_envmap(img, o);
     }();
     return env;
@@ -303,4 +304,53 @@ TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
     EXPECT_LT(across, 1.5 * beside + 0.002 * pairs) << pairs << " pairs";
     std::printf("seam: %d pixel pairs across it, mean step %.4f across, %.4f beside\n", pairs, across / pairs,
                 beside / pairs);
+}
+
+// The second Fresnel table (n = 200) and the second glossy map (e = 60) of the asset, with the environment turned
+// 90 degrees about z (world_to_env): the GPU equals the CPU evaluation at the turned directions, and rejects the
+// unturned one (so the rotation's packing, the Fresnel row and the glossy index are all held).
+TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    const glm::mat3 turn(glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1)); // columns: x -> y, y -> -x
+    for (auto technique : {hemi::render::Technique::EnvMirror, hemi::render::Technique::EnvGlossy})
+    {
+        const bool mirror = technique == hemi::render::Technique::EnvMirror;
+        hemi::samples::FactoredView view;
+        view.mesh = &scene.mesh;
+        view.eye = scene.eye;
+        view.albedo = glm::vec3(0.6f, 0.5f, 0.4f);
+        view.technique = technique;
+        view.environment = &env;
+        view.material.kd = 0.4f;
+        view.material.ks = 0.9f;
+        view.material.fresnel = 1;
+        view.material.glossy = 1;
+        view.material.world_to_env = turn;
+        hemi::io::ImageRgba aux;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+        auto shade = [&](glm::vec2 uv, const glm::mat3& m, size_t glossy, double ior) {
+            const Pixel p = sphere_pixel(scene, uv, false);
+            const float nv = glm::dot(p.n, p.v);
+            const glm::vec3 r = 2.0f * nv * p.n - p.v;
+            const glm::vec3 ld = view.material.kd * view.albedo * sample(env.diffuse, m * p.n);
+            if (!mirror)
+                return view.material.ks * sample(env.glossy[glossy], m * r) + ld;
+            return float(hemi::math::fresnel_dielectric(nv, ior)) * sample(env.mirror[0], m * r) + ld;
+        };
+        const Comparison c = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, turn, 1, 200.0); },
+            [&](glm::vec2 uv) { return shade(uv, glm::mat3(1.0f), 1, 200.0); }, 0.01f, 0.003f);
+        EXPECT_GT(c.compared, 300);
+        EXPECT_LE(c.failures, c.compared / 100) << (mirror ? "mirror" : "glossy") << c.first_failures;
+        EXPECT_GT(c.rejected, c.compared / 4) << "the unturned environment would pass this comparison";
+        // The first table or map instead of the second: rejected too.
+        const Comparison first = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, turn, 1, 200.0); },
+            [&](glm::vec2 uv) { return shade(uv, turn, 0, 1.5); }, 0.01f, 0.003f);
+        EXPECT_GT(first.rejected, first.compared / 4) << "the first Fresnel table or glossy map would pass";
+        std::printf("%s turned: %d of %d outside 1%% + 0.003; unturned rejected at %d, the first table/map at %d\n",
+                    mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected, first.rejected);
+    }
 }

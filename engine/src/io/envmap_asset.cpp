@@ -21,7 +21,9 @@ struct Info
 
 size_t image_floats(uint32_t size) { return size_t(2) * size * size * 3; }
 
-std::string problem(const EnvmapAsset& a)
+} // namespace
+
+std::string envmap_problem(const EnvmapAsset& a)
 {
     if (a.mirror.empty())
         return "no mirror map";
@@ -51,6 +53,9 @@ std::string problem(const EnvmapAsset& a)
             return "an index of refraction is not > 1";
     return {};
 }
+
+namespace
+{
 
 // Reads sequentially from a section; every read is checked against its end.
 class Cursor
@@ -108,7 +113,7 @@ void append(std::vector<std::byte>& out, const T* data, size_t count)
 
 void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
 {
-    if (std::string p = problem(a); !p.empty())
+    if (std::string p = envmap_problem(a); !p.empty())
         throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
     AssetWriter w;
     const Info info{kEnvmapLayoutVersion,     a.mirror[0].size,     uint32_t(a.mirror.size()), uint32_t(a.glossy.size()),

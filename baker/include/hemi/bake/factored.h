@@ -99,7 +99,7 @@ struct PrefilterComparison
     uint64_t parabolic_texels = 0, cube_texels = 0;
     double parabolic_rmse = 0.0, cube_rmse = 0.0; // of the luminance-free mean over RGB, in radiance
     double reference_rms = 0.0;                   // RMS of the reference, for relative errors
-    double cube_seconds = 0.0;
+    double cube_seconds = 0.0;                    // resampling the equirect into the cube and filtering it
 };
 std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& equirect, const io::EnvmapAsset& asset,
                                                           uint32_t directions = 1024);

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace hemi::io
@@ -34,6 +35,10 @@ struct EnvmapAsset
     uint32_t fresnel_samples = 0;
     std::vector<float> fresnel;      // iors.size() x fresnel_samples
 };
+
+// The first inconsistency of an asset (sizes, counts, exponents, indices of refraction), or an empty string: what
+// the writer refuses and what render::EnvironmentLighting checks.
+std::string envmap_problem(const EnvmapAsset& asset);
 
 // Throws std::invalid_argument for an inconsistent asset, FormatError naming the file when it cannot be written.
 void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& asset);

@@ -2,6 +2,7 @@
 #include <hemi/render/material/frame_set.h>
 
 #include <glm/gtc/packing.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -63,8 +64,8 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
                                          gpu::UploadBatch& upload)
 {
     const gpu::Device& device = system.device();
-    if (env.mirror.empty() || env.mirror.back().size != 1 || env.diffuse.size == 0)
-        throw std::invalid_argument("hemi: an environment needs its mirror map's whole mip chain and a diffuse map");
+    if (const std::string problem = io::envmap_problem(env); !problem.empty())
+        throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
     if (!env.glossy.empty() && material.glossy >= env.glossy.size())
         throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) + " of an environment with " +
                                     std::to_string(env.glossy.size()));
@@ -74,8 +75,13 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
     for (const math::BrdfTable& t : brdf)
         if (t.size != brdf[0].size || t.size < 2)
             throw std::invalid_argument("hemi: the BRDF tables of one material must all have one size (>= 2)");
-    if (brdf.size() > 4)
-        throw std::invalid_argument("hemi: at most 4 BRDF tables");
+    // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one two-channel
+    // table (banks).
+    const bool torrance_sparrow = brdf.size() == 2 && brdf[0].channels == 1 && brdf[1].channels == 1;
+    const bool banks = brdf.size() == 1 && brdf[0].channels == 2;
+    if (!brdf.empty() && !torrance_sparrow && !banks)
+        throw std::invalid_argument("hemi: BRDF tables must be Torrance-Sparrow's two (FD, G) or Banks' one "
+                                    "(diffuse, specular)");
 
     map_format_ = filters_linearly(device, VK_FORMAT_R32G32B32A32_SFLOAT) ? VK_FORMAT_R32G32B32A32_SFLOAT
                                                                           : VK_FORMAT_R16G16B16A16_SFLOAT;
@@ -149,10 +155,11 @@ shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMater
 {
     if (!std::isfinite(m.kd) || !std::isfinite(m.ks))
         throw std::invalid_argument("hemi: an environment material's kd and ks must be finite");
+    const glm::mat3 identity = glm::transpose(m.world_to_env) * m.world_to_env;
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
-            if (!std::isfinite(m.world_to_env[i][j]))
-                throw std::invalid_argument("hemi: an environment's rotation must be finite");
+            if (!std::isfinite(m.world_to_env[i][j]) || std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
+                throw std::invalid_argument("hemi: an environment's world_to_env must be a rotation (orthonormal)");
     shared::EnvironmentUniforms u{};
     u.extents = glm::vec4(extents_[0], extents_[1], extents_[2], 0.0f);
     u.material = glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(fresnel_rows_), m.coating ? 1.0f : 0.0f);

@@ -95,9 +95,10 @@ float hemi_torrance_sparrow_table(sampler2DArray tables, float size, vec3 n, vec
     if (ca <= 0.0 || cb <= 0.0)
         return 0.0;
     const vec3 h = normalize(l + v);
-    const float fd = texture(tables, vec3(hemi_table_coord(dot(l, h), size),
-                                          hemi_table_coord(hemi_axis_sqrt(dot(n, h)), size), 0.0)).r;
-    const float g = texture(tables, vec3(hemi_table_coord(ca, size), hemi_table_coord(cb, size), 1.0)).r;
+    // textureLod: tables have one level, and these lookups sit in non-uniform control flow.
+    const float fd = textureLod(tables, vec3(hemi_table_coord(dot(l, h), size),
+                                             hemi_table_coord(hemi_axis_sqrt(dot(n, h)), size), 0.0), 0.0).r;
+    const float g = textureLod(tables, vec3(hemi_table_coord(ca, size), hemi_table_coord(cb, size), 1.0), 0.0).r;
     return fd * g;
 }
 
@@ -107,8 +108,8 @@ float hemi_banks_table(sampler2D table, float size, vec3 n, vec3 t, vec3 l, vec3
     const float ca = dot(n, l);
     if (ca <= 0.0 || dot(n, v) <= 0.0)
         return 0.0;
-    const vec2 ds = texture(table, vec2(hemi_table_coord(hemi_axis_angle(dot(t, l)), size),
-                                        hemi_table_coord(hemi_axis_angle(dot(t, v)), size))).rg;
+    const vec2 ds = textureLod(table, vec2(hemi_table_coord(hemi_axis_angle(dot(t, l)), size),
+                                           hemi_table_coord(hemi_axis_angle(dot(t, v)), size)), 0.0).rg;
     return ca * (kd * ds.x + ks * ds.y);
 }
 
@@ -121,7 +122,7 @@ float hemi_phong_table(sampler2D table, float size, vec3 n, vec3 l, vec3 v)
     const float y = dot(2.0 * nv * n - v, l);
     if (y <= 0.0)
         return 0.0;
-    return texture(table, vec2(hemi_table_coord(dot(n, l), size), hemi_table_coord(hemi_axis_sqrt(y), size))).r;
+    return textureLod(table, vec2(hemi_table_coord(dot(n, l), size), hemi_table_coord(hemi_axis_sqrt(y), size)), 0.0).r;
 }
 
 #endif

@@ -21,8 +21,9 @@ vec3 hemi_technique_banks(HemiSurface s)
         const float nl = dot(s.n, s.l[i]);
         if (nl <= 0.0 || dot(s.n, s.v) <= 0.0)
             continue;
-        const vec2 ds = texture(HEMI_ENV_BRDF_TABLES, vec3(hemi_table_coord(hemi_axis_angle(dot(t, s.l[i])), size),
-                                                           hemi_table_coord(hemi_axis_angle(dot(t, s.v)), size), 0.0)).rg;
+        const vec2 ds = textureLod(HEMI_ENV_BRDF_TABLES,
+                                   vec3(hemi_table_coord(hemi_axis_angle(dot(t, s.l[i])), size),
+                                        hemi_table_coord(hemi_axis_angle(dot(t, s.v)), size), 0.0), 0.0).rg;
         sum += s.e[i] * nl * (hemi_env_kd() * s.albedo * ds.x + hemi_env_ks() * ds.y);
     }
 #endif

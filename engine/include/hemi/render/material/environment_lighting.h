@@ -34,8 +34,9 @@ public:
     // `brdf` holds the factored BRDF's tables, one layer each, all of one size: Torrance-Sparrow's FD and G
     // (channel 0 each), or Banks' one table (channels diffuse, specular); empty binds zero tables (for the
     // env_* techniques). Maps are RGBA32F where the device filters it linearly, else RGBA16F (radiance clamped
-    // to 65504). Throws std::invalid_argument for an inconsistent asset, a glossy or Fresnel index the asset does
-    // not have, tables of different sizes, or weights that are not finite.
+    // to 65504). Throws std::invalid_argument for an inconsistent asset (io::envmap_problem), a glossy or Fresnel
+    // index the asset does not have, tables of different sizes or neither Torrance-Sparrow's nor Banks', weights
+    // that are not finite, or a world_to_env that is not a rotation.
     EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& environment,
                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
                         gpu::UploadBatch& upload);
