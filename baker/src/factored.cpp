@@ -292,6 +292,24 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& env, const EnvmapBakeOptions& o
     return a;
 }
 
+io::ImageRgba parabolic_half_image(const math::ParabolicImage& map, int half)
+{
+    io::ImageRgba out;
+    out.width = out.height = map.size;
+    out.pixels.resize(size_t(map.size) * map.size * 4);
+    for (uint32_t row = 0; row < map.size; ++row)
+        for (uint32_t col = 0; col < map.size; ++col)
+        {
+            const float* t = map.at(half, col, row);
+            float* p = out.pixels.data() + (size_t(row) * map.size + col) * 4;
+            p[0] = t[0], p[1] = t[1], p[2] = t[2];
+            const double x = map.extent * (-1.0 + (col + 0.5) * 2.0 / map.size);
+            const double y = map.extent * (1.0 - (row + 0.5) * 2.0 / map.size);
+            p[3] = x * x + y * y <= 1.0 ? 1.0f : 0.0f;
+        }
+    return out;
+}
+
 std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir, const io::EnvmapAsset& a)
 {
     std::error_code ec;
@@ -302,22 +320,8 @@ std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path
     auto write = [&](const math::ParabolicImage& img, const std::string& stem) {
         for (int half = 0; half < 2; ++half)
         {
-            io::ImageRgba out;
-            out.width = out.height = img.size;
-            out.pixels.resize(size_t(img.size) * img.size * 4);
-            for (uint32_t row = 0; row < img.size; ++row)
-                for (uint32_t col = 0; col < img.size; ++col)
-                {
-                    const float* t = img.at(half, col, row);
-                    float* p = out.pixels.data() + (size_t(row) * img.size + col) * 4;
-                    p[0] = t[0], p[1] = t[1], p[2] = t[2];
-                    // Alpha marks the circle (the directions this half owns), as the paper's alpha channel does.
-                    const double x = img.extent * (-1.0 + (col + 0.5) * 2.0 / img.size);
-                    const double y = img.extent * (1.0 - (row + 0.5) * 2.0 / img.size);
-                    p[3] = x * x + y * y <= 1.0 ? 1.0f : 0.0f;
-                }
             const std::filesystem::path p = dir / (stem + (half == 0 ? "_front.exr" : "_back.exr"));
-            io::write_exr(p, out);
+            io::write_exr(p, parabolic_half_image(img, half));
             written.push_back(p);
         }
     };

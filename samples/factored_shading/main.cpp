@@ -29,20 +29,21 @@ namespace
 {
 using hemi::render::Technique;
 
-// One half of a parabolic map as an image (alpha 1 inside the circle the half owns).
-hemi::io::ImageRgba half_image(const hemi::math::ParabolicImage& map, int half)
+// One half of a parabolic map as a tile of size x size (nearest resampling), opaque.
+hemi::io::ImageRgba half_tile(const hemi::math::ParabolicImage& map, int half, uint32_t size)
 {
-    hemi::io::ImageRgba out;
-    out.width = out.height = map.size;
-    out.pixels.resize(size_t(map.size) * map.size * 4);
-    for (uint32_t row = 0; row < map.size; ++row)
-        for (uint32_t col = 0; col < map.size; ++col)
+    const hemi::io::ImageRgba h = hemi::bake::parabolic_half_image(map, half);
+    hemi::io::ImageRgba t;
+    t.width = t.height = size;
+    t.pixels.resize(size_t(size) * size * 4);
+    for (uint32_t y = 0; y < size; ++y)
+        for (uint32_t x = 0; x < size; ++x)
         {
-            const float* t = map.at(half, col, row);
-            float* p = out.pixels.data() + (size_t(row) * map.size + col) * 4;
-            p[0] = t[0], p[1] = t[1], p[2] = t[2], p[3] = 1.0f;
+            const float* p = h.at(x * h.width / size, y * h.height / size);
+            float* q = t.pixels.data() + (size_t(y) * size + x) * 4;
+            q[0] = p[0], q[1] = p[1], q[2] = p[2], q[3] = 1.0f;
         }
-    return out;
+    return t;
 }
 
 // Brick normal map from the sh_normalmap sample's height field recipe (bevelled running bond).
@@ -152,20 +153,7 @@ int main(int argc, char** argv)
         // Fig. 6: the two parabolic images and a mirror torus from two views.
         std::vector<hemi::io::ImageRgba> fig6;
         for (int half : {0, 1})
-        {
-            hemi::io::ImageRgba h = half_image(env.mirror[0], half);
-            // the tile size: nearest resampling of the 256^2 half
-            hemi::io::ImageRgba t;
-            t.width = t.height = size;
-            t.pixels.resize(size_t(size) * size * 4);
-            for (uint32_t y = 0; y < size; ++y)
-                for (uint32_t x = 0; x < size; ++x)
-                {
-                    const float* p = h.at(x * h.width / size, y * h.height / size);
-                    std::copy(p, p + 4, t.pixels.data() + (size_t(y) * size + x) * 4);
-                }
-            fig6.push_back(t);
-        }
+            fig6.push_back(half_tile(env.mirror[0], half, size));
         for (const glm::vec3 eye : {glm::vec3(0.0f, -4.2f, 1.6f), glm::vec3(3.2f, 2.0f, 2.6f)})
         {
             auto v = base(torus, Technique::EnvMirror);
@@ -194,17 +182,7 @@ int main(int argc, char** argv)
         // Fig. 8: the prefiltered map and a glossy torus.
         std::vector<hemi::io::ImageRgba> fig8;
         {
-            const hemi::io::ImageRgba h = half_image(env.glossy[0], 0);
-            hemi::io::ImageRgba t;
-            t.width = t.height = size;
-            t.pixels.resize(size_t(size) * size * 4);
-            for (uint32_t y = 0; y < size; ++y)
-                for (uint32_t x = 0; x < size; ++x)
-                {
-                    const float* p = h.at(x * h.width / size, y * h.height / size);
-                    std::copy(p, p + 4, t.pixels.data() + (size_t(y) * size + x) * 4);
-                }
-            fig8.push_back(t);
+            fig8.push_back(half_tile(env.glossy[0], 0, size));
             auto v = base(torus, Technique::EnvGlossy);
             v.albedo = glm::vec3(0.2f);
             v.material.kd = 0.3f;

@@ -107,6 +107,10 @@ std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& e
 std::vector<glm::dvec3> phong_reference(const io::ImageRgba& equirect, double exponent,
                                         std::span<const glm::dvec3> directions);
 
+// One half of a parabolic map as an image: its texels' RGB, alpha 1 inside the circle the half owns (as the paper
+// marks it), 0 outside.
+io::ImageRgba parabolic_half_image(const math::ParabolicImage& map, int half);
+
 // Writes every image of the asset as EXR into `dir` (created): mirror_L<level>_<front|back>.exr,
 // glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior named
 // "ior<value>"). Returns the paths written.
