@@ -78,6 +78,17 @@ Pixel sphere_pixel(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, bool 
 
 glm::vec3 sample(const hemi::math::ParabolicImage& map, const glm::vec3& d) { return glm::vec3(map.sample(glm::dvec3(d))); }
 
+// The sphere of the sh_normalmap scene, seen from its eye, lit by the smooth environment through `technique`.
+hemi::samples::FactoredView sphere_view(const hemi::samples::ShNormalMapScene& scene, hemi::render::Technique technique)
+{
+    hemi::samples::FactoredView view;
+    view.mesh = &scene.mesh;
+    view.eye = scene.eye;
+    view.technique = technique;
+    view.environment = &smooth_environment();
+    return view;
+}
+
 struct Comparison
 {
     int compared = 0, failures = 0, rejected = 0;
@@ -93,12 +104,8 @@ Comparison compare(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& 
     for (uint32_t y = 2; y + 2 < color.height; y += 4)
         for (uint32_t x = 2; x + 2 < color.width; x += 4)
         {
-            bool interior = true;
-            for (int dy = -2; dy <= 2; ++dy)
-                for (int dx = -2; dx <= 2; ++dx)
-                    interior = interior && aux.at(x + dx, y + dy)[3] == 1.0f;
-            const glm::vec2 uv(aux.at(x, y)[0], aux.at(x, y)[1]);
-            if (!interior || uv.y < 0.1f || uv.y > 0.9f || uv.x < 0.01f || uv.x > 0.99f)
+            glm::vec2 uv;
+            if (!hemi::test::comparable_sphere_pixel(aux, x, y, uv))
                 continue;
             const glm::vec3 w = want(uv), bad = wrong(uv);
             const float* got = color.at(x, y);
@@ -127,12 +134,8 @@ TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
     const hemi::io::EnvmapAsset& env = smooth_environment();
     for (bool coating : {false, true})
     {
-        hemi::samples::FactoredView view;
-        view.mesh = &scene.mesh;
-        view.eye = scene.eye;
+        hemi::samples::FactoredView view = sphere_view(scene, hemi::render::Technique::EnvMirror);
         view.albedo = glm::vec3(0.7f, 0.5f, 0.3f);
-        view.technique = hemi::render::Technique::EnvMirror;
-        view.environment = &env;
         view.material.kd = 0.8f;
         view.material.coating = coating;
         hemi::io::ImageRgba aux;
@@ -163,13 +166,9 @@ TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
     const hemi::io::EnvmapAsset& env = smooth_environment();
-    hemi::samples::FactoredView view;
-    view.mesh = &scene.mesh;
-    view.eye = scene.eye;
+    hemi::samples::FactoredView view = sphere_view(scene, hemi::render::Technique::EnvGlossy);
     view.normal_map = {scene.map_width, scene.map_height, scene.normal_map};
     view.albedo = glm::vec3(0.6f, 0.6f, 0.5f);
-    view.technique = hemi::render::Technique::EnvGlossy;
-    view.environment = &env;
     view.material.kd = 0.5f;
     view.material.ks = 0.7f;
     // A directional light: Lambert and the frame's Blinn-Phong on top of the environment (the paper's Fig. 10).
@@ -210,13 +209,9 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
     for (auto technique : {hemi::render::Technique::Factored, hemi::render::Technique::Banks})
     {
         const bool banks = technique == hemi::render::Technique::Banks;
-        hemi::samples::FactoredView view;
-        view.mesh = &scene.mesh;
-        view.eye = scene.eye;
+        hemi::samples::FactoredView view = sphere_view(scene, technique);
         view.normal_map = {scene.map_width, scene.map_height, scene.normal_map};
         view.albedo = glm::vec3(0.5f, 0.4f, 0.3f);
-        view.technique = technique;
-        view.environment = &env;
         view.material.kd = 0.6f;
         view.material.ks = 0.8f;
         if (banks)
@@ -262,14 +257,8 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
 TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
-    const hemi::io::EnvmapAsset& env = smooth_environment();
-    hemi::samples::FactoredView view;
-    view.mesh = &scene.mesh;
-    view.eye = scene.eye;
-    view.technique = hemi::render::Technique::EnvMirror;
-    view.environment = &env;
+    hemi::samples::FactoredView view = sphere_view(scene, hemi::render::Technique::EnvMirror);
     view.material.kd = 0.0f;
-    view.environment = &env;
     hemi::io::ImageRgba aux;
     const uint32_t W = 240, H = 200;
     const auto color = hemi::samples::render_factored(hemi::test::device(), view, W, H, &aux);
@@ -317,12 +306,8 @@ TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
     for (auto technique : {hemi::render::Technique::EnvMirror, hemi::render::Technique::EnvGlossy})
     {
         const bool mirror = technique == hemi::render::Technique::EnvMirror;
-        hemi::samples::FactoredView view;
-        view.mesh = &scene.mesh;
-        view.eye = scene.eye;
+        hemi::samples::FactoredView view = sphere_view(scene, technique);
         view.albedo = glm::vec3(0.6f, 0.5f, 0.4f);
-        view.technique = technique;
-        view.environment = &env;
         view.material.kd = 0.4f;
         view.material.ks = 0.9f;
         view.material.fresnel = 1;

@@ -227,12 +227,8 @@ double worst_against_brute_force(const hemi::io::ImageRgba& color, const hemi::i
     for (uint32_t y = 3; y + 3 < color.height; y += 9)
         for (uint32_t x = 3; x + 3 < color.width; x += 9)
         {
-            bool interior = true;
-            for (int dy = -2; dy <= 2; ++dy)
-                for (int dx = -2; dx <= 2; ++dx)
-                    interior = interior && aux.at(x + dx, y + dy)[3] == 1.0f;
-            const glm::vec2 uv(aux.at(x, y)[0], aux.at(x, y)[1]);
-            if (!interior || uv.y < 0.1f || uv.y > 0.9f || uv.x < 0.01f || uv.x > 0.99f)
+            glm::vec2 uv;
+            if (!hemi::test::comparable_sphere_pixel(aux, x, y, uv))
                 continue;
             // make_uv_sphere: u = phi / 2 pi, v = theta / pi, tangent d/d(phi), bitangent N x T (w = +1).
             const double phi = 2 * M_PI * uv.x, theta = M_PI * uv.y;
