@@ -1,53 +1,56 @@
 // hemi-bench: performance of hemi's kernels, reported as ratios measured in the same run.
 //
 //   stream/triad                      a[i] = b[i] + s*c[i] over 3 x 256 MiB, all cores (TBB): the memory
-//                                     bandwidth every other ratio is measured against (STREAM counts 3 arrays).
+//                                     bandwidth every other ratio is measured against (STREAM counts 3
+//                                     arrays).
 //   transfer/{gpu,cpu}/N:n/K:k/L:l    the PRT transfer multiply. Counters:
 //                                       GBps     = matrix bytes (N*K*L*4) / time
 //                                       bw_ratio = time / (matrix bytes / triad bandwidth); 1.0 is the limit.
 //                                     gpu: the reported time is the GPU timestamp difference around the
-//                                     dispatches (UseManualTime); the counter wall_ms is submit + wait on the host.
-//                                     cpu: wall clock of transfer_multiply_host.
+//                                     dispatches (UseManualTime); the counter wall_ms is submit + wait on the
+//                                     host. cpu: wall clock of transfer_multiply_host.
 //   sh/rotate/order:6/rgb             building an order-6 SH rotation and applying it to RGB lighting.
 //   table1/MODEL/TECH[/cpu]           Sloan 2006 Table 1, re-measured: one frame of a baked PRT asset
 //                                     (render::PrtView) at 640 x 480 for MODEL = simple (703 vertices),
-//                                     complex (29,197) and 1M (1,000,688), TECH = gs, sep4, sal4, hl2, h4, h6,
-//                                     gs+cpca, sep4+cpca (1 cluster x 24 vectors). Time = GPU timestamps of the
-//                                     whole frame; counters fps, transfer_ms (coefficient pass), raster_ms,
-//                                     wall_ms. /cpu: the paper's non-GPU path, the multiply on the host
-//                                     (transfer_multiply_host / cpca_multiply_host) then the upload of the
-//                                     coefficients, then the same raster pass; counters cpu_ms, upload_ms,
-//                                     raster_ms. Frame cost does not depend on the matrices' values, so the
-//                                     assets hold unshadowed transfer (the 1M model's CPCA data are random,
-//                                     with the real shapes: CPCA of 1M x 225 values is a bake-time job).
-//   bake/complex                      the PRT bake's first (visibility) pass on the complex model, 64 rays per
+//                                     complex (29,197) and 1M (1,000,688), TECH = gs, sep4, sal4, hl2, h4,
+//                                     h6, gs+cpca, sep4+cpca (1 cluster x 24 vectors). Time = GPU timestamps
+//                                     of the whole frame; counters fps, transfer_ms (coefficient pass),
+//                                     raster_ms, wall_ms. /cpu: the paper's non-GPU path, the multiply on the
+//                                     host (transfer_multiply_host / cpca_multiply_host) then the upload of
+//                                     the coefficients, then the same raster pass; counters cpu_ms,
+//                                     upload_ms, raster_ms. Frame cost does not depend on the matrices'
+//                                     values, so the assets hold unshadowed transfer (the 1M model's CPCA
+//                                     data are random, with the real shapes: CPCA of 1M x 225 values is a
+//                                     bake-time job).
+//   bake/complex                      the PRT bake's first (visibility) pass on the complex model, 64 rays
+//   per
 //                                     vertex: rays_per_s, and embree_ratio = Embree's own rays/s tracing the
 //                                     same rays with nothing else (bake::trace_bake_rays) / the bake's.
 //
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device.
 
+#include "level.h"
 #include "models.h"
 #include "relief.h"
-#include "level.h"
 
 #include <hemi/bake/cpca.h>
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
-#include <hemi/bake/ray_generator.h>
 #include <hemi/bake/prt_bake.h>
+#include <hemi/bake/ray_generator.h>
 #include <hemi/bake/ssbump.h>
-#include <hemi/io/mesh.h>
 #include <hemi/gpu/commands.h>
+#include <hemi/gpu/device.h>
 #include <hemi/gpu/upload.h>
+#include <hemi/io/mesh.h>
+#include <hemi/math/sh.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/scene/lightmap_model.h>
-#include <hemi/render/view/prt_view.h>
-#include <hemi/gpu/device.h>
-#include <hemi/math/sh.h>
 #include <hemi/render/transfer.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -57,10 +60,10 @@
 
 #include <atomic>
 #include <chrono>
-#include <functional>
-#include <map>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -83,11 +86,13 @@ struct Rng
 std::vector<float> random_floats(size_t n, uint64_t seed)
 {
     std::vector<float> v(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
-        Rng rng{seed ^ (r.begin() * 0x9E3779B97F4A7C15ull)};
-        for (size_t i = r.begin(); i != r.end(); ++i)
-            v[i] = rng.next();
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 20),
+                      [&](const tbb::blocked_range<size_t>& r)
+                      {
+                          Rng rng{seed ^ (r.begin() * 0x9E3779B97F4A7C15ull)};
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              v[i] = rng.next();
+                      });
     return v;
 }
 
@@ -95,26 +100,31 @@ void stream_triad(benchmark::State& state)
 {
     const size_t n = size_t(64) << 20; // 64 Mi floats = 256 MiB per array
     std::vector<float> a(n), b(n, 1.0f), c(n, 2.0f);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i)
-            a[i] = 0.0f; // first touch in parallel
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
+                      [&](const tbb::blocked_range<size_t>& r)
+                      {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              a[i] = 0.0f; // first touch in parallel
+                      });
     const float s = 3.0f;
     for (auto _ : state)
     {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-            float* __restrict pa = a.data();
-            const float* __restrict pb = b.data();
-            const float* __restrict pc = c.data();
-            for (size_t i = r.begin(); i != r.end(); ++i)
-                pa[i] = pb[i] + s * pc[i];
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16),
+                          [&](const tbb::blocked_range<size_t>& r)
+                          {
+                              float* __restrict pa = a.data();
+                              const float* __restrict pb = b.data();
+                              const float* __restrict pc = c.data();
+                              for (size_t i = r.begin(); i != r.end(); ++i)
+                                  pa[i] = pb[i] + s * pc[i];
+                          });
         benchmark::DoNotOptimize(a.data());
         benchmark::ClobberMemory();
     }
     double bytes = 3.0 * double(n) * sizeof(float);
     state.SetBytesProcessed(int64_t(bytes) * state.iterations());
-    state.counters["GBps"] = benchmark::Counter(bytes * 1e-9 * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["GBps"] =
+        benchmark::Counter(bytes * 1e-9 * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
 // Derived after the run (the rate counter needs the loop's time): we time the triad once more here.
@@ -126,10 +136,12 @@ double measure_triad_gbps()
     for (int rep = 0; rep < 5; ++rep)
     {
         auto t0 = std::chrono::steady_clock::now();
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i)
-                a[i] = b[i] + 3.0f * c[i];
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16),
+                          [&](const tbb::blocked_range<size_t>& r)
+                          {
+                              for (size_t i = r.begin(); i != r.end(); ++i)
+                                  a[i] = b[i] + 3.0f * c[i];
+                          });
         benchmark::DoNotOptimize(a.data());
         best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
@@ -151,7 +163,8 @@ struct TransferCase
 
 hemi::gpu::Device& bench_device()
 {
-    static std::unique_ptr<hemi::gpu::Device> device = std::make_unique<hemi::gpu::Device>(hemi::gpu::DeviceDesc{});
+    static std::unique_ptr<hemi::gpu::Device> device =
+        std::make_unique<hemi::gpu::Device>(hemi::gpu::DeviceDesc{});
     return *device;
 }
 
@@ -262,9 +275,12 @@ hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& tec
     a.mesh = model.mesh;
     a.order = uint32_t(model.transfer.order);
     // The sample's surface: a brick normal map and base colour (what hemi-bake writes into the asset).
-    static const std::vector<uint8_t> normal_png = hemi::io::encode_png(hemi::samples::brick_normal_map(512, 256));
-    static const std::vector<uint8_t> base_png = hemi::io::encode_png(hemi::samples::brick_base_color(512, 256));
-    a.images = {{"brick_normal.png", "image/png", normal_png}, {"brick_base_color.png", "image/png", base_png}};
+    static const std::vector<uint8_t> normal_png =
+        hemi::io::encode_png(hemi::samples::brick_normal_map(512, 256));
+    static const std::vector<uint8_t> base_png =
+        hemi::io::encode_png(hemi::samples::brick_base_color(512, 256));
+    a.images = {{"brick_normal.png", "image/png", normal_png},
+                {"brick_base_color.png", "image/png", base_png}};
     hemi::io::Material brick;
     brick.name = "brick";
     brick.normal.image = 0;
@@ -278,7 +294,8 @@ hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& tec
     if (!cpca)
         t.matrices = hemi::bake::fold_technique(model.transfer, model.mesh, technique);
     else if (n < 100000)
-        t.cpca = hemi::bake::compress_cpca(hemi::bake::fold_technique(model.transfer, model.mesh, technique), n, d, 1, 24);
+        t.cpca = hemi::bake::compress_cpca(hemi::bake::fold_technique(model.transfer, model.mesh, technique),
+                                           n, d, 1, 24);
     else
     {
         hemi::io::PrtCpca c;
@@ -316,7 +333,8 @@ void table1(benchmark::State& state, std::string model_name, std::string techniq
     if (cpu_path && !cpca)
         host_matrices = std::make_unique<hemi::render::TransferMatrices>(n, t.k, asset.l(), t.matrices);
     if (cpu_path && cpca)
-        host_cpca = {n, t.k, asset.l(), 1, 24, t.cpca->means, t.cpca->basis, t.cpca->cluster, t.cpca->weights};
+        host_cpca = {
+            n, t.k, asset.l(), 1, 24, t.cpca->means, t.cpca->basis, t.cpca->cluster, t.cpca->weights};
     std::vector<float> coefficients(size_t(n) * t.k * 4);
     const std::vector<glm::vec3> lighting = view.object_lighting(frame);
 
@@ -440,10 +458,12 @@ void material_overhead(benchmark::State& state, std::string technique)
     constant.push.model = frame.model;
 
     hemi::gpu::TimestampQueries queries(device, 3);
-    auto record = [&](VkCommandBuffer cmd, bool timed) {
+    auto record = [&](VkCommandBuffer cmd, bool timed)
+    {
         view.record_transfer(cmd, frame);
         hemi::render::FrameData f;
-        f.view_projection = hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, float(w) / float(h));
+        f.view_projection =
+            hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, float(w) / float(h));
         constant_frame.record_update(cmd, f);
         if (timed)
             queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
@@ -526,47 +546,54 @@ void ssbump_tracers(benchmark::State& state)
     for (auto _ : state)
     {
         auto t0 = std::chrono::steady_clock::now();
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i)
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(0, texels.size(), 16),
+            [&](const tbb::blocked_range<size_t>& r)
             {
-                const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
-                const glm::vec3 origin(float(x), -float(y), tracer.height_at(x, y) + epsilon);
-                for (int k = 0; k < rays; ++k)
+                for (size_t i = r.begin(); i != r.end(); ++i)
                 {
-                    const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
-                    const float rho = std::sqrt(d.x * d.x + d.y * d.y);
-                    by_embree[i * rays + size_t(k)] = embree.occluded(origin, d, 0.0f, distance / rho);
+                    const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
+                    const glm::vec3 origin(float(x), -float(y), tracer.height_at(x, y) + epsilon);
+                    for (int k = 0; k < rays; ++k)
+                    {
+                        const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                        const float rho = std::sqrt(d.x * d.x + d.y * d.y);
+                        by_embree[i * rays + size_t(k)] = embree.occluded(origin, d, 0.0f, distance / rho);
+                    }
                 }
-            }
-        });
+            });
         auto t1 = std::chrono::steady_clock::now();
         const int azimuths = hemi::bake::ssbump_azimuths(rays);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i)
-            {
-                const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
-                for (int a = 0; a < azimuths; ++a)
-                {
-                    // As the bake does: one search per azimuth from its lowest ray's slope.
-                    double k_min = 1e300, dx = 0.0, dy = 0.0;
-                    for (int k = a; k < rays; k += azimuths)
-                    {
-                        const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
-                        const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
-                        k_min = std::min(k_min, double(d.z) / rho);
-                        dx = d.x / rho;
-                        dy = d.y / rho;
-                    }
-                    const double h = tracer.horizon(x, y, dx, dy, k_min);
-                    for (int k = a; k < rays; k += azimuths)
-                    {
-                        const glm::vec3 d = hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
-                        const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
-                        by_horizon[i * rays + size_t(k)] = double(d.z) / rho < h;
-                    }
-                }
-            }
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 16),
+                          [&](const tbb::blocked_range<size_t>& r)
+                          {
+                              for (size_t i = r.begin(); i != r.end(); ++i)
+                              {
+                                  const uint32_t x = texels[i] % field.width, y = texels[i] / field.width;
+                                  for (int a = 0; a < azimuths; ++a)
+                                  {
+                                      // As the bake does: one search per azimuth from its lowest ray's slope.
+                                      double k_min = 1e300, dx = 0.0, dy = 0.0;
+                                      for (int k = a; k < rays; k += azimuths)
+                                      {
+                                          const glm::vec3 d =
+                                              hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                                          const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
+                                          k_min = std::min(k_min, double(d.z) / rho);
+                                          dx = d.x / rho;
+                                          dy = d.y / rho;
+                                      }
+                                      const double h = tracer.horizon(x, y, dx, dy, k_min);
+                                      for (int k = a; k < rays; k += azimuths)
+                                      {
+                                          const glm::vec3 d =
+                                              hemi::bake::ssbump_ray(1, texels[i], k, rays).direction;
+                                          const double rho = std::sqrt(double(d.x) * d.x + double(d.y) * d.y);
+                                          by_horizon[i * rays + size_t(k)] = double(d.z) / rho < h;
+                                      }
+                                  }
+                              }
+                          });
         auto t2 = std::chrono::steady_clock::now();
         embree_s = std::chrono::duration<double>(t1 - t0).count();
         horizon_s = std::chrono::duration<double>(t2 - t1).count();
@@ -631,20 +658,26 @@ void lightmap_level(benchmark::State& state)
     const uint32_t n = std::min<uint32_t>(uint32_t(atlas.texels.size()), 1u << 16);
     std::atomic<uint64_t> blocked{0};
     const auto t0 = std::chrono::steady_clock::now();
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 64), [&](const tbb::blocked_range<uint32_t>& r) {
-        uint64_t b = 0;
-        for (uint32_t i = r.begin(); i != r.end(); ++i)
-        {
-            const hemi::bake::LightmapTexel& t = atlas.texels[i];
-            const glm::vec3 origin = hemi::bake::offset_ray_origin(t.position, t.geometric_normal, offset);
-            for (int k = 0; k < o.rays; ++k)
-            {
-                const glm::vec3 h = hemi::bake::hemisphere_direction(o.seed, uint64_t(t.y) * atlas.width + t.x, k, o.rays);
-                b += embree.occluded(origin, glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal));
-            }
-        }
-        blocked += b;
-    });
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 64),
+                      [&](const tbb::blocked_range<uint32_t>& r)
+                      {
+                          uint64_t b = 0;
+                          for (uint32_t i = r.begin(); i != r.end(); ++i)
+                          {
+                              const hemi::bake::LightmapTexel& t = atlas.texels[i];
+                              const glm::vec3 origin =
+                                  hemi::bake::offset_ray_origin(t.position, t.geometric_normal, offset);
+                              for (int k = 0; k < o.rays; ++k)
+                              {
+                                  const glm::vec3 h = hemi::bake::hemisphere_direction(
+                                      o.seed, uint64_t(t.y) * atlas.width + t.x, k, o.rays);
+                                  b += embree.occluded(
+                                      origin,
+                                      glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal));
+                              }
+                          }
+                          blocked += b;
+                      });
     const double embree_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double embree_rays_per_s = double(n) * o.rays / embree_s;
     state.counters["covered_texels"] = double(atlas.texels.size());
@@ -663,7 +696,8 @@ void lightmap_level(benchmark::State& state)
 void lightmap_material(benchmark::State& state, std::string technique)
 {
     hemi::gpu::Device& device = bench_device();
-    static const hemi::io::LightmapAsset asset = [] {
+    static const hemi::io::LightmapAsset asset = []
+    {
         const hemi::io::GltfScene scene = hemi::samples::make_level(512);
         hemi::bake::LightmapUvReport report;
         const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, 512, 512, report);
@@ -692,11 +726,12 @@ void lightmap_material(benchmark::State& state, std::string technique)
     upload.submit_and_wait();
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f),
-                                                         70.0f, float(w) / float(h));
+    f.view_projection = hemi::render::look_at_projection(
+        glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f, float(w) / float(h));
     const glm::mat4 placement = hemi::render::gltf_to_world();
     hemi::gpu::TimestampQueries queries(device, 3);
-    auto record = [&](VkCommandBuffer cmd, bool timed) {
+    auto record = [&](VkCommandBuffer cmd, bool timed)
+    {
         frame.record_update(cmd, f);
         if (timed)
             queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
@@ -729,7 +764,8 @@ int main(int argc, char** argv)
     const TransferCase cases[] = {{31726, 9, 25}, {1000000, 9, 25}};
     for (const TransferCase& c : cases)
     {
-        std::string suffix = "/N:" + std::to_string(c.n) + "/K:" + std::to_string(c.k) + "/L:" + std::to_string(c.l);
+        std::string suffix =
+            "/N:" + std::to_string(c.n) + "/K:" + std::to_string(c.k) + "/L:" + std::to_string(c.l);
         benchmark::RegisterBenchmark(("transfer/gpu" + suffix).c_str(), transfer_gpu, c)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
@@ -737,13 +773,15 @@ int main(int argc, char** argv)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
     }
-    benchmark::RegisterBenchmark("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)
+        ->Unit(benchmark::kMicrosecond);
 
     for (const char* model : {"simple", "complex", "1M"})
         for (const char* tech : {"gs", "sep4", "sal4", "hl2", "h4", "h6", "gs+cpca", "sep4+cpca"})
             for (bool cpu_path : {false, true})
             {
-                const std::string name = std::string("table1/") + model + "/" + tech + (cpu_path ? "/cpu" : "");
+                const std::string name =
+                    std::string("table1/") + model + "/" + tech + (cpu_path ? "/cpu" : "");
                 std::string t = tech;
                 const bool cpca = t.size() > 5 && t.substr(t.size() - 5) == "+cpca";
                 if (cpca)
@@ -759,7 +797,9 @@ int main(int argc, char** argv)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime()
             ->MinTime(0.5);
-    benchmark::RegisterBenchmark("bake/complex", bake_complex)->Unit(benchmark::kMillisecond)->UseManualTime()
+    benchmark::RegisterBenchmark("bake/complex", bake_complex)
+        ->Unit(benchmark::kMillisecond)
+        ->UseManualTime()
         ->Iterations(2);
     benchmark::RegisterBenchmark("ssbump/bake/1024x1024/rays:300", ssbump_bake, true)
         ->Unit(benchmark::kMillisecond)

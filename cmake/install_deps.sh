@@ -18,11 +18,13 @@ packages=(
     # Debian 12's Imath CMake config names its Python binding library; without it every configure warns
     python3-imath
     # baking
-    libembree-dev libtbb-dev libmeshoptimizer-dev
-    # CLI, formatting, hashing, compression
-    libcli11-dev libfmt-dev libxxhash-dev libzstd-dev
+    libembree-dev libtbb-dev
+    # command line, hashing (xxHash, header-only)
+    libcli11-dev libxxhash-dev
     # tests and benchmarks; clang's libFuzzer and sanitizer runtimes for the fuzz preset
     libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
+    # formatting check (.ci/format)
+    clang-format
     # plots
     gnuplot-nox
 )

@@ -24,7 +24,10 @@ layout(set = 0, binding = HEMI_CPCA_BINDING_PROJECTED, std140) uniform Projected
     vec4 p[HEMI_TRANSFER_MAX_K * (HEMI_CPCA_MAX_VECTORS + 1)]; // row j (0: the mean) of output k at j*K + k
 };
 layout(set = 0, binding = HEMI_CPCA_BINDING_WEIGHTS) uniform samplerBuffer weights;
-layout(set = 0, binding = HEMI_CPCA_BINDING_SLOTS, std430) readonly buffer Slots { uvec4 slot_vertex[]; };
+layout(set = 0, binding = HEMI_CPCA_BINDING_SLOTS, std430) readonly buffer Slots
+{
+    uvec4 slot_vertex[];
+};
 layout(set = 0, binding = HEMI_CPCA_BINDING_COEFFICIENTS, rgba32f) uniform writeonly imageBuffer coefficients;
 
 layout(push_constant) uniform Push
@@ -42,8 +45,8 @@ void main()
     const uint lane = invocation % HEMI_TRANSFER_INVOCATIONS_PER_BLOCK;
     const int base = int(block * V * HEMI_TRANSFER_INVOCATIONS_PER_BLOCK + lane);
     vec4 w[V];
-    [[unroll]] for (uint j = 0; j < V; ++j)
-        w[j] = texelFetch(weights, base + int(j * HEMI_TRANSFER_INVOCATIONS_PER_BLOCK));
+    [[unroll]] for (uint j = 0; j < V; ++j) w[j] =
+        texelFetch(weights, base + int(j * HEMI_TRANSFER_INVOCATIONS_PER_BLOCK));
 
     [[unroll]] for (uint k = 0; k < K; ++k)
     {

@@ -27,7 +27,8 @@ layout(set = 0, binding = HEMI_TRANSFER_BINDING_LIGHTING, std140) uniform Lighti
     vec4 light[HEMI_TRANSFER_MAX_L]; // rgb = coefficient j of the lighting, a unused
 };
 // Output: coefficient k of vertex v is texel v*K + k (rgb, a = 0), ready for a vertex shader's texelFetch.
-layout(set = 0, binding = HEMI_TRANSFER_BINDING_COEFFICIENTS, rgba32f) uniform writeonly imageBuffer coefficients;
+layout(set = 0, binding = HEMI_TRANSFER_BINDING_COEFFICIENTS,
+       rgba32f) uniform writeonly imageBuffer coefficients;
 
 layout(push_constant) uniform Push
 {

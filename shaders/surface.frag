@@ -2,8 +2,8 @@
 // The material system's one fragment main, for every technique: fetch the surface inputs (normal-map
 // normal, base colour, emissive, each through its UV set and KHR_texture_transform), fetch the coefficients
 // from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique
-// (hemi_shade, generated from shaders/include/hemi/techniques/). What a technique ignores, the compiler drops.
-// HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1) where the mesh covers the pixel (hemi's
+// (hemi_shade, generated from shaders/include/hemi/techniques/). What a technique ignores, the compiler
+// drops. HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1) where the mesh covers the pixel (hemi's
 // OffscreenTarget; tests and tools read it).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
@@ -16,17 +16,24 @@ layout(constant_id = HEMI_SPEC_FRAME) const int kFrame = HEMI_FRAME_TANGENT;
 layout(constant_id = HEMI_SPEC_TECHNIQUE) const int kTechnique = HEMI_TECHNIQUE_IRRADIANCE;
 layout(constant_id = HEMI_SPEC_DOUBLE_SIDED) const int kDoubleSided = 0;
 
-layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame { FrameUniforms frame; };
+layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame
+{
+    FrameUniforms frame;
+};
 layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_UNIFORMS, std140) uniform Material
 {
     MaterialUniforms material;
 };
-layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_BASE_COLOR) uniform sampler2D base_color; // sRGB
+layout(set = HEMI_SET_MATERIAL,
+       binding = HEMI_MATERIAL_BINDING_BASE_COLOR) uniform sampler2D base_color; // sRGB
 layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_NORMAL) uniform sampler2D normal_map;
-layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_EMISSIVE) uniform sampler2D emissive_map; // sRGB
-layout(set = HEMI_SET_MATERIAL, binding = HEMI_MATERIAL_BINDING_OCCLUSION) uniform sampler2D occlusion_map; // linear r
+layout(set = HEMI_SET_MATERIAL,
+       binding = HEMI_MATERIAL_BINDING_EMISSIVE) uniform sampler2D emissive_map; // sRGB
+layout(set = HEMI_SET_MATERIAL,
+       binding = HEMI_MATERIAL_BINDING_OCCLUSION) uniform sampler2D occlusion_map; // linear r
 #if HEMI_SOURCE == HEMI_SOURCE_TEXEL
-layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
+layout(set = HEMI_SET_SOURCE,
+       binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std140) uniform Probe
 {
@@ -34,7 +41,10 @@ layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std140
 };
 #endif
 
-layout(push_constant) uniform Push { DrawPush draw; };
+layout(push_constant) uniform Push
+{
+    DrawPush draw;
+};
 
 layout(location = 0) in vec4 in_packed[7];
 layout(location = 7) in vec2 in_uv0;
@@ -51,7 +61,8 @@ layout(location = 1) out vec4 out_aux;
 vec2 material_uv(uint set, int transform)
 {
     vec3 uv = vec3(set == 1u ? in_uv1 : in_uv0, 1.0);
-    return vec2(dot(material.uv_transform[transform * 2].xyz, uv), dot(material.uv_transform[transform * 2 + 1].xyz, uv));
+    return vec2(dot(material.uv_transform[transform * 2].xyz, uv),
+                dot(material.uv_transform[transform * 2 + 1].xyz, uv));
 }
 
 void main()
@@ -60,7 +71,8 @@ void main()
     // Most materials emit nothing: skip the fetch (a branch uniform across the draw).
     vec3 emissive = vec3(0.0);
     if (any(notEqual(material.emissive_factor.rgb, vec3(0.0))))
-        emissive = material.emissive_factor.rgb * texture(emissive_map, material_uv(material.texcoord.z, 2)).rgb;
+        emissive =
+            material.emissive_factor.rgb * texture(emissive_map, material_uv(material.texcoord.z, 2)).rgb;
     const vec3 bump = texture(normal_map, material_uv(material.texcoord.y, 1)).xyz;
     vec3 nt = bump * 2.0 - 1.0;
     nt = normalize(vec3(nt.xy * material.emissive_factor.a, nt.z));
@@ -78,7 +90,8 @@ void main()
         {
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
             int i = k * 3;
-            c[k] = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4], in_packed[(i + 2) / 4][(i + 2) % 4]);
+            c[k] = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4],
+                        in_packed[(i + 2) / 4][(i + 2) % 4]);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
             c[k] = texture(coefficient_maps, vec3(in_uv1, float(k))).rgb;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
@@ -87,13 +100,13 @@ void main()
         }
     }
 
-    // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from behind is
-    // lit as the other side (its normal flipped).
+    // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from behind
+    // is lit as the other side (its normal flipped).
     vec3 N = normalize(in_normal);
     if (kDoubleSided != 0 && !gl_FrontFacing)
         N = -N;
-    // A degenerate tangent (parallel to N, or zero) falls back to any frame about N, so the lights' directions
-    // stay finite; the handedness is the sign of the interpolated w.
+    // A degenerate tangent (parallel to N, or zero) falls back to any frame about N, so the lights'
+    // directions stay finite; the handedness is the sign of the interpolated w.
     vec3 t = in_tangent.xyz - N * dot(N, in_tangent.xyz);
     if (dot(t, t) < 1e-12)
         t = abs(N.x) < 0.9 ? vec3(1.0, 0.0, 0.0) - N * N.x : vec3(0.0, 1.0, 0.0) - N * N.y;
@@ -117,7 +130,8 @@ void main()
     s.c = c;
     s.sep4_weights = frame.sep4_weights;
     // glTF: occlusion = 1 + strength (r - 1); the compiler drops the fetch from techniques that ignore it.
-    s.occlusion = 1.0 + material.occlusion.x * (texture(occlusion_map, material_uv(material.texcoord.w, 3)).r - 1.0);
+    s.occlusion =
+        1.0 + material.occlusion.x * (texture(occlusion_map, material_uv(material.texcoord.w, 3)).r - 1.0);
     s.lights = int(frame.options.y);
     for (int i = 0; i < HEMI_MAX_LIGHTS; ++i)
     {

@@ -4,8 +4,8 @@
 // the vertex's K RGB coefficients (texel coefficient_offset + v*K + k of the source's buffer), packed.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-#include "hemi/shared/surface.h"
 #include "hemi/shared/bases.h"
+#include "hemi/shared/surface.h"
 
 layout(constant_id = HEMI_SPEC_K) const int K = 9;
 
@@ -15,8 +15,14 @@ layout(location = 2) in vec4 in_tangent;
 layout(location = 3) in vec2 in_uv0;
 layout(location = 4) in vec2 in_uv1;
 
-layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame { FrameUniforms frame; };
-layout(push_constant) uniform Push { DrawPush draw; };
+layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame
+{
+    FrameUniforms frame;
+};
+layout(push_constant) uniform Push
+{
+    DrawPush draw;
+};
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform samplerBuffer coefficients;
 #endif
@@ -32,8 +38,7 @@ layout(location = 11) out vec3 out_world;
 void main()
 {
     float f[28];
-    [[unroll]] for (int i = 0; i < 28; ++i)
-        f[i] = 0.0;
+    [[unroll]] for (int i = 0; i < 28; ++i) f[i] = 0.0;
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     [[unroll]] for (int k = 0; k < K; ++k)
     {
@@ -43,8 +48,8 @@ void main()
         f[k * 3 + 2] = c.b;
     }
 #endif
-    [[unroll]] for (int i = 0; i < 7; ++i)
-        out_packed[i] = vec4(f[i * 4], f[i * 4 + 1], f[i * 4 + 2], f[i * 4 + 3]);
+    [[unroll]] for (int i = 0; i < 7; ++i) out_packed[i] =
+        vec4(f[i * 4], f[i * 4 + 1], f[i * 4 + 2], f[i * 4 + 3]);
     out_uv0 = in_uv0;
     out_uv1 = in_uv1;
     mat3 m = mat3(draw.model);

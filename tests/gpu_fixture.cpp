@@ -1,8 +1,8 @@
 #include "gpu_fixture.h"
 
 #include <cstdio>
-#include <stdexcept>
 #include <cstdlib>
+#include <stdexcept>
 
 namespace hemi::test
 {
@@ -12,7 +12,7 @@ std::unique_ptr<gpu::Device> g_device;
 
 class DeviceEnvironment : public ::testing::Environment
 {
-public:
+  public:
     void TearDown() override
     {
         g_device.reset();
@@ -23,7 +23,8 @@ public:
             std::_Exit(1); // after gtest's own summary: a leak report fails the run
     }
 };
-[[maybe_unused]] ::testing::Environment* const g_env = ::testing::AddGlobalTestEnvironment(new DeviceEnvironment);
+[[maybe_unused]] ::testing::Environment* const g_env =
+    ::testing::AddGlobalTestEnvironment(new DeviceEnvironment);
 
 } // namespace
 
@@ -35,7 +36,8 @@ ValidationLog& validation_log()
 
 gpu::LogCallback recording_log()
 {
-    return [](gpu::LogLevel level, bool validation, std::string_view message) {
+    return [](gpu::LogLevel level, bool validation, std::string_view message)
+    {
         if (validation && level >= gpu::LogLevel::Warning)
             validation_log().add(std::string(message));
     };

@@ -47,7 +47,7 @@ std::span<const uint32_t> test_spirv(std::string_view name);
 
 class GpuTest : public ::testing::Test
 {
-protected:
+  protected:
     void SetUp() override { validation_log().take(); }
     void TearDown() override
     {

@@ -8,11 +8,12 @@
 namespace hemi::test
 {
 
-// `jpeg` with its first Huffman table (DHT) replaced by one of 272 codes, with 272 symbol bytes: a well-formed
-// segment that Debian's stb_image builds into a 257-byte array (a write out of bounds, found by
+// `jpeg` with its first Huffman table (DHT) replaced by one of 272 codes, with 272 symbol bytes: a
+// well-formed segment that Debian's stb_image builds into a 257-byte array (a write out of bounds, found by
 // tests/fuzz/fuzz_image).
 // `jpeg` with its first Huffman table (DHT) replaced by `counts` (16 code counts) and as many symbols.
-inline std::vector<uint8_t> jpeg_with_huffman_table(const std::vector<uint8_t>& jpeg, const uint8_t (&counts)[16])
+inline std::vector<uint8_t> jpeg_with_huffman_table(const std::vector<uint8_t>& jpeg,
+                                                    const uint8_t (&counts)[16])
 {
     for (size_t at = 2; at + 4 < jpeg.size();)
     {
@@ -78,7 +79,8 @@ inline std::vector<uint8_t> jpeg_with_frame_size(std::vector<uint8_t> jpeg, uint
 inline std::vector<uint8_t> jpeg_with_undefined_huffman_table(std::vector<uint8_t> jpeg)
 {
     for (size_t at = 2; at + 6 < jpeg.size(); ++at)
-        if (jpeg[at] == 0xFF && jpeg[at + 1] == 0xDA) // SOS: length, Ns, then (Cs, Td << 4 | Ta) per component
+        if (jpeg[at] == 0xFF &&
+            jpeg[at + 1] == 0xDA) // SOS: length, Ns, then (Cs, Td << 4 | Ta) per component
         {
             jpeg[at + 6] = uint8_t((jpeg[at + 6] & 0xF0) | 0x02);
             return jpeg;

@@ -36,11 +36,13 @@ inline std::vector<uint8_t> encode_png_samples(uint32_t width, uint32_t height, 
         throw std::runtime_error("encode_png_samples: zlib failed");
     packed.resize(packed_size);
     std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    auto be32 = [](std::vector<uint8_t>& out, uint32_t v) {
+    auto be32 = [](std::vector<uint8_t>& out, uint32_t v)
+    {
         for (int s = 24; s >= 0; s -= 8)
             out.push_back(uint8_t(v >> s));
     };
-    auto chunk = [&](const char* type, const std::vector<uint8_t>& data) {
+    auto chunk = [&](const char* type, const std::vector<uint8_t>& data)
+    {
         be32(png, uint32_t(data.size()));
         std::vector<uint8_t> body(type, type + 4);
         body.insert(body.end(), data.begin(), data.end());

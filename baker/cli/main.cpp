@@ -5,14 +5,18 @@
 //   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R] [--filter RADIUS,SIGMA]
 //       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
-//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X] [--sun X,Y,Z,R,G,B[,DIAMETER]]
-//       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed S]
+//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X] [--sun
+//   X,Y,Z,R,G,B[,DIAMETER]]
+//       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed
+//       S]
 //       [--probes NX,NY,NZ] [--probe-rays R] [--exr-dir DIR] [--json REPORT.json]
-//   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R] [--exponent E]
+//   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R] [--exponent
+//   E]
 //       [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr [--json REPORT.json]
 //   envmap ENV.exr -o ENVMAP.hemi [--size N] [--exponents E1,E2,...] [--ior N1,...] [--exr-dir DIR]
 //       [--report REPORT.json]
-//   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera auto|EYE,TARGET]
+//   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera
+//   auto|EYE,TARGET]
 //       [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
@@ -37,9 +41,9 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <unistd.h>
 #include <sstream>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace
@@ -48,7 +52,8 @@ const char* kRows[9] = {"y0,0", "y1,-1", "y1,0", "y1,1", "y2,-2", "y2,-1", "y2,0
 
 void print_report(const hemi::bake::BasisReport& r)
 {
-    std::printf("Projection matrices from SH9 irradiance (hemispherical least squares), rows = basis functions\n");
+    std::printf(
+        "Projection matrices from SH9 irradiance (hemispherical least squares), rows = basis functions\n");
     for (const auto& [name, rows] : r.projection)
     {
         std::printf("  %s\n", name.c_str());
@@ -87,7 +92,7 @@ void print_report(const hemi::bake::BasisReport& r)
 // and restart).
 class ProgressLine
 {
-public:
+  public:
     explicit ProgressLine(std::string tool) : tool_(std::move(tool)) {}
 
     void checkpoint_error(const std::string& error)
@@ -117,7 +122,7 @@ public:
     }
     bool checkpoint_reported() const { return checkpoint_reported_; }
 
-private:
+  private:
     std::string tool_;
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
     bool tty_ = isatty(fileno(stderr)) != 0;
@@ -134,8 +139,9 @@ struct PrtProgressLine
         line.checkpoint_error(p.checkpoint_error);
         const double fraction =
             (p.pass + (p.vertex_count ? double(p.vertices_done) / double(p.vertex_count) : 1.0)) / p.passes;
-        const std::string what = "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
-                                 (p.pass == 0 ? std::string("visibility") : "bounce " + std::to_string(p.pass)) + ")";
+        const std::string what =
+            "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
+            (p.pass == 0 ? std::string("visibility") : "bounce " + std::to_string(p.pass)) + ")";
         line.update(fraction, what, p.pass + 1 == p.passes && p.vertices_done == p.vertex_count);
     }
 };
@@ -155,9 +161,9 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
 {
     for (const std::string& w : s.warnings)
         std::fprintf(stderr, "hemi-bake: warning: %s: %s\n", scene.c_str(), w.c_str());
-    std::printf("baked %s: %u vertices, %u triangles, %s transfer, order %d (L = %d)", asset.c_str(), s.vertices,
-                s.triangles, std::string(hemi::bake::to_string(o.bake.kind)).c_str(), o.bake.order,
-                o.bake.order * o.bake.order);
+    std::printf("baked %s: %u vertices, %u triangles, %s transfer, order %d (L = %d)", asset.c_str(),
+                s.vertices, s.triangles, std::string(hemi::bake::to_string(o.bake.kind)).c_str(),
+                o.bake.order, o.bake.order * o.bake.order);
     if (o.bake.kind != hemi::bake::TransferKind::Unshadowed)
         std::printf(", %d rays per vertex", o.bake.rays);
     if (o.bake.kind == hemi::bake::TransferKind::Interreflected)
@@ -168,11 +174,12 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
     if (s.tangents_generated)
         std::printf("tangents were generated from the UV layout (the scene has none)\n");
     if (s.resumed)
-        std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1, s.resumed_vertex);
+        std::printf("resumed from a checkpoint at pass %d, vertex %u\n", s.resumed_pass + 1,
+                    s.resumed_vertex);
     if (!s.checkpoint_error.empty())
         std::fprintf(stderr, "hemi-bake prt: warning: checkpoints stopped: %s\n", s.checkpoint_error.c_str());
-    std::printf("rays: %llu in %.2f s = %.2f Mrays/s; total %.2f s\n", (unsigned long long)s.rays, s.trace_seconds,
-                s.rays_per_second() * 1e-6, s.total_seconds);
+    std::printf("rays: %llu in %.2f s = %.2f Mrays/s; total %.2f s\n", (unsigned long long)s.rays,
+                s.trace_seconds, s.rays_per_second() * 1e-6, s.total_seconds);
     std::printf("  %-6s %3s %12s", "tech", "K", "dense MB");
     if (o.cpca_clusters)
         std::printf(" %10s %12s %12s", "CPCA MB", "CPCA RMS", "relative");
@@ -181,14 +188,16 @@ void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::Pr
     {
         std::printf("  %-6s %3d %12.2f", t.name.c_str(), t.k, double(t.dense_bytes) / 1048576.0);
         if (o.cpca_clusters)
-            std::printf(" %10.2f %12.3e %12.3e", double(t.cpca_bytes) / 1048576.0, t.cpca_rms, t.cpca_relative);
+            std::printf(" %10.2f %12.3e %12.3e", double(t.cpca_bytes) / 1048576.0, t.cpca_rms,
+                        t.cpca_relative);
         std::printf("\n");
     }
 }
 
 struct SsbumpCli
 {
-    std::string input, output, from_normal, to_normal, exr, json, channel = "grey", filter, convention = "normalized";
+    std::string input, output, from_normal, to_normal, exr, json, channel = "grey", filter,
+                                                                  convention = "normalized";
     hemi::bake::SsbumpOptions options;
     bool no_occlusion = false, no_wrap = false;
 };
@@ -232,8 +241,8 @@ int run_ssbump(SsbumpCli& c)
                 alpha.push_back(uint8_t(std::lround(p[3] * 255.0f)));
         }
         write_ssbump_png(c.output, m, alpha, true);
-        std::printf("wrote %s: %ux%u tangent-space normals from %s weights\n", c.output.c_str(), m.width, m.height,
-                    std::string(to_string(convention)).c_str());
+        std::printf("wrote %s: %ux%u tangent-space normals from %s weights\n", c.output.c_str(), m.width,
+                    m.height, std::string(to_string(convention)).c_str());
         return 0;
     }
     if (!c.from_normal.empty())
@@ -243,8 +252,9 @@ int run_ssbump(SsbumpCli& c)
         size_t zeros = 0;
         const std::vector<glm::vec3> normals = bake::read_normal_map(c.from_normal, w, h, alpha, &zeros);
         if (zeros)
-            std::fprintf(stderr, "hemi-bake ssbump: warning: %s: %zu texel(s) hold a zero vector; read as (0, 0, 1)\n",
-                         c.from_normal.c_str(), zeros);
+            std::fprintf(
+                stderr, "hemi-bake ssbump: warning: %s: %zu texel(s) hold a zero vector; read as (0, 0, 1)\n",
+                c.from_normal.c_str(), zeros);
         const bake::SsbumpMap m = bake::ssbump_from_normals(w, h, normals, convention);
         write_ssbump_png(c.output, m, alpha, false);
         if (!c.exr.empty())
@@ -254,8 +264,8 @@ int run_ssbump(SsbumpCli& c)
                 img.pixels.insert(img.pixels.end(), {v.x, v.y, v.z, 1.0f});
             hemi::io::write_exr(c.exr, img);
         }
-        std::printf("wrote %s: %ux%u SSBump weights (%s, no occlusion) from a normal map\n", c.output.c_str(), w, h,
-                    std::string(to_string(convention)).c_str());
+        std::printf("wrote %s: %ux%u SSBump weights (%s, no occlusion) from a normal map\n", c.output.c_str(),
+                    w, h, std::string(to_string(convention)).c_str());
         return 0;
     }
 
@@ -271,8 +281,8 @@ int run_ssbump(SsbumpCli& c)
         char comma = 0, rest = 0;
         const int got = std::sscanf(c.filter.c_str(), "%d%c%f%c", &radius, &comma, &sigma, &rest);
         if (!((got == 1 && radius == 0) || (got == 3 && comma == ',')))
-            throw std::invalid_argument("--filter expects RADIUS,SIGMA (e.g. 2,0.02) or 0 for none, got '" + c.filter +
-                                        "'");
+            throw std::invalid_argument("--filter expects RADIUS,SIGMA (e.g. 2,0.02) or 0 for none, got '" +
+                                        c.filter + "'");
         o.filter = {radius, sigma};
     }
     bake::check_ssbump_options(o); // before the map is read: a bad option fails at once
@@ -285,15 +295,19 @@ int run_ssbump(SsbumpCli& c)
     if (o.filter.enabled())
         std::snprintf(filter_text, sizeof filter_text, "%d,%g", o.filter.radius, double(o.filter.sigma));
     std::printf("%s: %ux%u, %d-bit, scale %g texels, %s, %s convention, filter %s%s\n", c.input.c_str(),
-                file.field.width, file.field.height, file.bits, double(o.scale), o.wrap ? "tiling" : "not tiling",
-                std::string(to_string(o.convention)).c_str(), filter_text, filter_given ? "" : " (default)");
+                file.field.width, file.field.height, file.bits, double(o.scale),
+                o.wrap ? "tiling" : "not tiling", std::string(to_string(o.convention)).c_str(), filter_text,
+                filter_given ? "" : " (default)");
     ProgressLine line("hemi-bake ssbump");
-    const bake::SsbumpMap m = bake::bake_ssbump(file.field, o, [&](const bake::SsbumpProgress& p) {
-        line.checkpoint_error(p.checkpoint_error);
-        if (o.occlusion)
-            line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0, "occlusion",
-                        p.texels_done == p.texels);
-    });
+    const bake::SsbumpMap m =
+        bake::bake_ssbump(file.field, o,
+                          [&](const bake::SsbumpProgress& p)
+                          {
+                              line.checkpoint_error(p.checkpoint_error);
+                              if (o.occlusion)
+                                  line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0,
+                                              "occlusion", p.texels_done == p.texels);
+                          });
     write_ssbump_png(c.output, m, file.alpha, false);
     std::printf("wrote %s\n", c.output.c_str());
     if (!c.exr.empty())
@@ -315,8 +329,8 @@ int run_ssbump(SsbumpCli& c)
     }
     mean /= double(m.occlusion.size());
     if (o.occlusion)
-        std::printf("occlusion: mean %.3f %.3f %.3f, lowest %.3f; %llu rays in %.2f s = %.2f Mrays/s%s\n", mean.x,
-                    mean.y, mean.z, double(lowest), (unsigned long long)m.rays, m.trace_seconds,
+        std::printf("occlusion: mean %.3f %.3f %.3f, lowest %.3f; %llu rays in %.2f s = %.2f Mrays/s%s\n",
+                    mean.x, mean.y, mean.z, double(lowest), (unsigned long long)m.rays, m.trace_seconds,
                     m.trace_seconds > 0 ? double(m.rays) / m.trace_seconds * 1e-6 : 0.0,
                     m.resumed ? " (resumed from a checkpoint)" : "");
     if (!c.json.empty())
@@ -359,12 +373,15 @@ struct LightCli
 
     void add_to(CLI::App* app)
     {
-        app->add_option("--env", env, "environment: uniform (radiance 1 from every direction) or an equirect EXR "
-                                      "(z up, hemi-render's convention)")
+        app->add_option("--env", env,
+                        "environment: uniform (radiance 1 from every direction) or an equirect EXR "
+                        "(z up, hemi-render's convention)")
             ->capture_default_str();
-        app->add_option("--env-scale", env_scale, "multiplies the environment's radiance")->capture_default_str();
-        app->add_option("--sun", sun, "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
-                                      "facing it)[,DIAMETER in degrees, default 0.53]");
+        app->add_option("--env-scale", env_scale, "multiplies the environment's radiance")
+            ->capture_default_str();
+        app->add_option("--sun", sun,
+                        "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
+                        "facing it)[,DIAMETER in degrees, default 0.53]");
     }
 
     hemi::bake::LightmapLights lights() const
@@ -374,11 +391,13 @@ struct LightCli
         {
             float v[7] = {0, 0, 0, 0, 0, 0, 0.53f};
             char rest = 0;
-            const int got = std::sscanf(sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4],
-                                        &v[5], &v[6], &rest);
+            const int got = std::sscanf(sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3],
+                                        &v[4], &v[5], &v[6], &rest);
             if (got != 6 && got != 7)
-                throw std::invalid_argument("--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z "
-                                            "up; R,G,B the irradiance on a surface facing it), got '" + sun + "'");
+                throw std::invalid_argument(
+                    "--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z "
+                    "up; R,G,B the irradiance on a surface facing it), got '" +
+                    sun + "'");
             l.sun = true;
             l.sun_direction = glm::vec3(v[0], v[1], v[2]);
             l.sun_irradiance = glm::vec3(v[3], v[4], v[5]);
@@ -427,42 +446,51 @@ int run_lightmap(LightmapCli& c)
     {
         unsigned n[3] = {0, 0, 0};
         char rest = 0;
-        if (std::sscanf(c.probes.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2], &rest) != 3 || !n[0] || !n[1] || !n[2] ||
-            uint64_t(n[0]) * n[1] * n[2] > (uint64_t(1) << 24))
-            throw std::invalid_argument("--probes expects NX,NY,NZ (at least 1 each, 2^24 in all), got '" + c.probes + "'");
+        if (std::sscanf(c.probes.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2], &rest) != 3 || !n[0] || !n[1] ||
+            !n[2] || uint64_t(n[0]) * n[1] * n[2] > (uint64_t(1) << 24))
+            throw std::invalid_argument("--probes expects NX,NY,NZ (at least 1 each, 2^24 in all), got '" +
+                                        c.probes + "'");
         o.probes = glm::uvec3(n[0], n[1], n[2]);
     }
     o.exr_dir = c.exr_dir;
     if (!c.json.empty())
         hemi::io::check_writable(c.json); // before the bake, like the asset and its checkpoint
     ProgressLine line("hemi-bake lightmap");
-    const bake::LightmapBakeSummary s = bake::bake_lightmap_file(c.scene, c.asset, o, [&](const bake::LightmapProgress& p) {
-        line.checkpoint_error(p.checkpoint_error);
-        const double fraction = (p.pass + (p.texels ? double(p.texels_done) / double(p.texels) : 1.0)) / p.passes;
-        const std::string what = "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
-                                 (p.pass == 0 ? std::string("direct") : "bounce " + std::to_string(p.pass)) + ")";
-        line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
-    });
+    const bake::LightmapBakeSummary s = bake::bake_lightmap_file(
+        c.scene, c.asset, o,
+        [&](const bake::LightmapProgress& p)
+        {
+            line.checkpoint_error(p.checkpoint_error);
+            const double fraction =
+                (p.pass + (p.texels ? double(p.texels_done) / double(p.texels) : 1.0)) / p.passes;
+            const std::string what =
+                "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
+                (p.pass == 0 ? std::string("direct") : "bounce " + std::to_string(p.pass)) + ")";
+            line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
+        });
     for (const std::string& w : s.warnings)
         std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
-    std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(), s.width,
-                s.height, s.uv_report.covered_texels, s.triangles, c.bases.c_str());
+    std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(),
+                s.width, s.height, s.uv_report.covered_texels, s.triangles, c.bases.c_str());
     if (s.unwrapped_charts)
         std::printf("unwrapped: %zu planar charts at %.4g units per texel\n", s.unwrapped_charts,
                     double(s.unwrap_texel_size));
     std::printf("texel size %.4g to %.4g units; %d rays per texel and pass, %d bounce(s)",
-                double(s.uv_report.min_texel_size), double(s.uv_report.max_texel_size), o.bake.rays, o.bake.bounces);
+                double(s.uv_report.min_texel_size), double(s.uv_report.max_texel_size), o.bake.rays,
+                o.bake.bounces);
     if (o.lights.sun)
         std::printf(" + %d towards the sun", o.bake.sun_rays);
     std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
-                s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0, s.total_seconds,
-                s.resumed ? " (resumed from a checkpoint)" : "");
+                s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0,
+                s.total_seconds, s.resumed ? " (resumed from a checkpoint)" : "");
     if (s.probes)
         std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes, o.probes.x,
                     o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);
     if (s.pushed || s.invalid)
-        std::printf("%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
-                    "their neighbours)\n", s.pushed, s.invalid);
+        std::printf(
+            "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
+            "their neighbours)\n",
+            s.pushed, s.invalid);
     for (const std::filesystem::path& p : s.exr_files)
         std::printf("wrote %s\n", p.string().c_str());
     if (!c.json.empty())
@@ -490,20 +518,27 @@ int run_reference(ReferenceCli& c)
     if (camera)
         o.camera = *camera;
     if (std::filesystem::path(c.output).extension() != ".exr")
-        throw std::invalid_argument("-o must end in .exr (linear RGBA, alpha = coverage), got '" + c.output + "'");
+        throw std::invalid_argument("-o must end in .exr (linear RGBA, alpha = coverage), got '" + c.output +
+                                    "'");
     if (!c.json.empty())
         hemi::io::check_writable(c.json);
     const bake::LightmapLights lights = c.light.lights();
     ProgressLine line("hemi-bake reference");
-    const bake::ReferenceImage r = bake::render_reference_file(c.scene, c.output, lights, o, [&](uint32_t done, uint32_t rows) {
-        line.update(double(done) / double(rows), "rows " + std::to_string(done) + "/" + std::to_string(rows), done == rows);
-    });
-    std::printf("wrote %s: %ux%u, %d paths per pixel, %d bounce(s)%s; camera %.3g,%.3g,%.3g -> %.3g,%.3g,%.3g\n",
-                c.output.c_str(), o.width, o.height, o.rays, o.bounces, o.white ? ", lighting only (E / pi)" : "",
-                double(r.camera.eye.x), double(r.camera.eye.y), double(r.camera.eye.z), double(r.camera.target.x),
-                double(r.camera.target.y), double(r.camera.target.z));
+    const bake::ReferenceImage r = bake::render_reference_file(
+        c.scene, c.output, lights, o,
+        [&](uint32_t done, uint32_t rows)
+        {
+            line.update(double(done) / double(rows),
+                        "rows " + std::to_string(done) + "/" + std::to_string(rows), done == rows);
+        });
+    std::printf(
+        "wrote %s: %ux%u, %d paths per pixel, %d bounce(s)%s; camera %.3g,%.3g,%.3g -> %.3g,%.3g,%.3g\n",
+        c.output.c_str(), o.width, o.height, o.rays, o.bounces, o.white ? ", lighting only (E / pi)" : "",
+        double(r.camera.eye.x), double(r.camera.eye.y), double(r.camera.eye.z), double(r.camera.target.x),
+        double(r.camera.target.y), double(r.camera.target.z));
     std::printf("rays: %llu in %.2f s = %.2f Mrays/s; noise (standard error of a pixel, RMS) %.3g\n",
-                (unsigned long long)r.rays, r.seconds, r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0, r.noise);
+                (unsigned long long)r.rays, r.seconds,
+                r.seconds > 0 ? double(r.rays) / r.seconds * 1e-6 : 0.0, r.noise);
     if (!c.json.empty())
     {
         nlohmann::json j;
@@ -535,15 +570,17 @@ struct BrdfCli
 
 void print_brdf_error(const char* what, const hemi::bake::BrdfError& e)
 {
-    std::printf("  %-22s bulk: max %.4f%%  rms %.4f%% (%llu pairs)   grazing (cos < 0.1): max %.4f%%  rms %.4f%% (%llu pairs)\n",
-                what, 100.0 * e.bulk_max, 100.0 * e.bulk_rms, (unsigned long long)e.bulk_samples, 100.0 * e.grazing_max,
-                100.0 * e.grazing_rms, (unsigned long long)e.grazing_samples);
+    std::printf("  %-22s bulk: max %.4f%%  rms %.4f%% (%llu pairs)   grazing (cos < 0.1): max %.4f%%  rms "
+                "%.4f%% (%llu pairs)\n",
+                what, 100.0 * e.bulk_max, 100.0 * e.bulk_rms, (unsigned long long)e.bulk_samples,
+                100.0 * e.grazing_max, 100.0 * e.grazing_rms, (unsigned long long)e.grazing_samples);
 }
 
 nlohmann::json brdf_error_json(const hemi::bake::BrdfError& e)
 {
-    return {{"bulk_max", e.bulk_max},       {"bulk_rms", e.bulk_rms},       {"bulk_pairs", e.bulk_samples},
-            {"grazing_max", e.grazing_max}, {"grazing_rms", e.grazing_rms}, {"grazing_pairs", e.grazing_samples}};
+    return {{"bulk_max", e.bulk_max},       {"bulk_rms", e.bulk_rms},
+            {"bulk_pairs", e.bulk_samples}, {"grazing_max", e.grazing_max},
+            {"grazing_rms", e.grazing_rms}, {"grazing_pairs", e.grazing_samples}};
 }
 
 int run_brdf(BrdfCli& c)
@@ -555,7 +592,8 @@ int run_brdf(BrdfCli& c)
     hemi::bake::write_brdf_exr(c.output, c.options, b);
     std::printf("wrote %s: %s, %u x %u, %s\n", c.output.c_str(), c.options.model.c_str(), c.options.size,
                 c.options.size, c.options.eight_bit ? "8-bit (scaled)" : "float");
-    std::printf("table product against the model evaluated directly (relative to max(value, 1%% of the peak)):\n");
+    std::printf(
+        "table product against the model evaluated directly (relative to max(value, 1%% of the peak)):\n");
     print_brdf_error("float tables", b.float_error);
     if (c.options.eight_bit)
         print_brdf_error("8-bit tables", b.error);
@@ -596,7 +634,8 @@ std::vector<double> parse_numbers(const std::string& list, const char* option)
         char* end = nullptr;
         const double v = std::strtod(item.c_str(), &end);
         if (item.empty() || end != item.c_str() + item.size())
-            throw std::invalid_argument(std::string(option) + " expects comma-separated numbers, got '" + list + "'");
+            throw std::invalid_argument(std::string(option) + " expects comma-separated numbers, got '" +
+                                        list + "'");
         out.push_back(v);
     }
     if (out.empty())
@@ -632,9 +671,10 @@ nlohmann::json sampling_report(uint32_t n)
             cmin = std::min(cmin, w);
             cmax = std::max(cmax, w);
         }
-    return {{"parabolic", {{"texels", 2ull * n * n},
-                           {"largest_over_smallest", pmax / pmin},
-                           {"solid_angle_sum_in_circles", total}}},
+    return {{"parabolic",
+             {{"texels", 2ull * n * n},
+              {"largest_over_smallest", pmax / pmin},
+              {"solid_angle_sum_in_circles", total}}},
             {"cube", {{"face_size", m}, {"texels", 6ull * m * m}, {"largest_over_smallest", cmax / cmin}}}};
 }
 
@@ -650,15 +690,16 @@ int run_envmap(EnvmapCli& c)
     hemi::bake::EnvmapBakeStats stats;
     ProgressLine line("hemi-bake envmap");
     const auto t0 = std::chrono::steady_clock::now();
-    const hemi::io::EnvmapAsset a = hemi::bake::bake_envmap(env, c.options, &stats, [&](const std::string& stage) {
-        std::fprintf(stderr, "hemi-bake envmap: %s\n", stage.c_str());
-    });
+    const hemi::io::EnvmapAsset a = hemi::bake::bake_envmap(
+        env, c.options, &stats,
+        [&](const std::string& stage) { std::fprintf(stderr, "hemi-bake envmap: %s\n", stage.c_str()); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     hemi::io::write_envmap_asset(c.output, a);
-    std::printf("wrote %s: 2 x %u^2 mirror map, %zu mip levels, diffuse %u^2, %zu glossy maps, %zu Fresnel tables "
-                "(%.2f s)\n",
-                c.output.c_str(), a.mirror[0].size, a.mirror.size(), a.diffuse.size, a.glossy.size(), a.iors.size(),
-                seconds);
+    std::printf(
+        "wrote %s: 2 x %u^2 mirror map, %zu mip levels, diffuse %u^2, %zu glossy maps, %zu Fresnel tables "
+        "(%.2f s)\n",
+        c.output.c_str(), a.mirror[0].size, a.mirror.size(), a.diffuse.size, a.glossy.size(), a.iors.size(),
+        seconds);
     for (size_t i = 0; i < a.glossy.size(); ++i)
         std::printf("  glossy exponent %-8g %4u^2  %.2f s (%.3g lobe evaluations)\n", double(a.exponents[i]),
                     a.glossy[i].size, stats.glossy_seconds[i], double(stats.glossy_pairs[i]));
@@ -678,8 +719,10 @@ int run_envmap(EnvmapCli& c)
         j["size"] = a.mirror[0].size;
         j["sampling"] = sampling_report(a.mirror[0].size);
         j["mirror_bytes_f32_rgb"] = bytes;
-        j["seconds"] = {{"resample", stats.resample_seconds}, {"mipmaps", stats.mip_seconds},
-                        {"diffuse", stats.diffuse_seconds}, {"total", seconds}};
+        j["seconds"] = {{"resample", stats.resample_seconds},
+                        {"mipmaps", stats.mip_seconds},
+                        {"diffuse", stats.diffuse_seconds},
+                        {"total", seconds}};
         nlohmann::json glossy = nlohmann::json::array();
         for (size_t i = 0; i < a.glossy.size(); ++i)
             glossy.push_back({{"exponent", a.exponents[i]},
@@ -687,23 +730,33 @@ int run_envmap(EnvmapCli& c)
                               {"seconds", stats.glossy_seconds[i]},
                               {"lobe_evaluations", stats.glossy_pairs[i]}});
         j["glossy"] = glossy;
-        std::fprintf(stderr, "hemi-bake envmap: comparing with cube maps against the reference (Eq. 9 over every "
-                             "pixel of the environment)\n");
+        std::fprintf(stderr,
+                     "hemi-bake envmap: comparing with cube maps against the reference (Eq. 9 over every "
+                     "pixel of the environment)\n");
         const auto comparisons = hemi::bake::compare_prefiltered_maps(env, a);
         nlohmann::json prefiltered = nlohmann::json::array();
-        std::printf("prefiltered maps against the reference at 1024 directions (RMSE, relative to the reference's RMS):\n"
-                    "  %-9s %-22s %-22s\n", "exponent", "parabolic", "cube (faces of half the size)");
+        std::printf("prefiltered maps against the reference at 1024 directions (RMSE, relative to the "
+                    "reference's RMS):\n"
+                    "  %-9s %-22s %-22s\n",
+                    "exponent", "parabolic", "cube (faces of half the size)");
         for (const auto& cmp : comparisons)
         {
             prefiltered.push_back({{"exponent", cmp.exponent},
-                                   {"parabolic", {{"size", cmp.parabolic_size}, {"texels", cmp.parabolic_texels},
-                                                  {"rmse", cmp.parabolic_rmse}}},
-                                   {"cube", {{"face_size", cmp.cube_size}, {"texels", cmp.cube_texels},
-                                             {"rmse", cmp.cube_rmse}, {"seconds", cmp.cube_seconds}}},
+                                   {"parabolic",
+                                    {{"size", cmp.parabolic_size},
+                                     {"texels", cmp.parabolic_texels},
+                                     {"rmse", cmp.parabolic_rmse}}},
+                                   {"cube",
+                                    {{"face_size", cmp.cube_size},
+                                     {"texels", cmp.cube_texels},
+                                     {"rmse", cmp.cube_rmse},
+                                     {"seconds", cmp.cube_seconds}}},
                                    {"reference_rms", cmp.reference_rms}});
             char p[64], q[64];
-            std::snprintf(p, sizeof p, "%u^2 x 2: %.4f%%", cmp.parabolic_size, 100.0 * cmp.parabolic_rmse / cmp.reference_rms);
-            std::snprintf(q, sizeof q, "%u^2 x 6: %.4f%%", cmp.cube_size, 100.0 * cmp.cube_rmse / cmp.reference_rms);
+            std::snprintf(p, sizeof p, "%u^2 x 2: %.4f%%", cmp.parabolic_size,
+                          100.0 * cmp.parabolic_rmse / cmp.reference_rms);
+            std::snprintf(q, sizeof q, "%u^2 x 6: %.4f%%", cmp.cube_size,
+                          100.0 * cmp.cube_rmse / cmp.reference_rms);
             std::printf("  %-9g %-22s %-22s\n", cmp.exponent, p, q);
         }
         j["prefiltered"] = prefiltered;
@@ -723,10 +776,13 @@ int main(int argc, char** argv)
     std::string json, plot;
     int signals = 10000;
     uint64_t seed = 1;
-    CLI::App* report = app.add_subcommand("basis-report", "compare the hemispherical bases (Sloan 2006, Habel 2010)");
+    CLI::App* report =
+        app.add_subcommand("basis-report", "compare the hemispherical bases (Sloan 2006, Habel 2010)");
     report->add_option("--json", json, "write the report as JSON to FILE");
-    report->add_option("--plot", plot, "draw Habel's Fig. 3 (mean IMSE vs coefficients) into FILE.png with gnuplot");
-    report->add_option("--signals", signals, "number of random irradiance signals")->check(CLI::Range(1, 10000000))
+    report->add_option("--plot", plot,
+                       "draw Habel's Fig. 3 (mean IMSE vs coefficients) into FILE.png with gnuplot");
+    report->add_option("--signals", signals, "number of random irradiance signals")
+        ->check(CLI::Range(1, 10000000))
         ->capture_default_str();
     report->add_option("--seed", seed, "seed of the random signals")->capture_default_str();
 
@@ -738,24 +794,30 @@ int main(int argc, char** argv)
             all += (all.empty() ? "" : ",") + t;
         bases = all;
     }
-    CLI::App* prt = app.add_subcommand("prt", "bake per-vertex PRT transfer matrices (Sloan 2006) from a glTF scene");
+    CLI::App* prt =
+        app.add_subcommand("prt", "bake per-vertex PRT transfer matrices (Sloan 2006) from a glTF scene");
     prt->add_option("scene", scene, "glTF 2.0 scene (.gltf or .glb)")->required()->check(CLI::ExistingFile);
     prt->add_option("-o,--output", asset, "baked asset to write (.hemi)")->required();
-    prt->add_option("--bases", bases, "comma-separated techniques: gs (SH9, the gold standard), hl2, sal4, h4, h6, "
-                                      "sep4, prt (classic PRT, no normal map); also sh4ls, zernike3, zernike6")
+    prt->add_option("--bases", bases,
+                    "comma-separated techniques: gs (SH9, the gold standard), hl2, sal4, h4, h6, "
+                    "sep4, prt (classic PRT, no normal map); also sh4ls, zernike3, zernike6")
         ->capture_default_str();
     prt->add_option("--transfer", transfer, "unshadowed | shadowed | interreflected")->capture_default_str();
-    prt->add_option("--bounces", prt_options.bake.bounces, "interreflection bounces")->check(CLI::Range(0, 16))
+    prt->add_option("--bounces", prt_options.bake.bounces, "interreflection bounces")
+        ->check(CLI::Range(0, 16))
         ->capture_default_str();
-    prt->add_option("--order", prt_options.bake.order, "lighting SH order n (L = n^2)")->check(CLI::Range(3, 6))
+    prt->add_option("--order", prt_options.bake.order, "lighting SH order n (L = n^2)")
+        ->check(CLI::Range(3, 6))
         ->capture_default_str();
-    prt->add_option("--rays", prt_options.bake.rays, "rays per vertex")->check(CLI::Range(1, 1 << 20))
+    prt->add_option("--rays", prt_options.bake.rays, "rays per vertex")
+        ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
     prt->add_option("--seed", prt_options.bake.seed, "seed of the ray directions (same seed, same bytes)")
         ->capture_default_str();
     prt->add_option("--albedo", prt_options.bake.albedo, "grey albedo for interreflection, in [0, 1)")
         ->capture_default_str();
-    prt->add_option("--cpca", cpca, "compress with CPCA: CLUSTERSxVECTORS, e.g. 1x24 (dense matrices are kept)");
+    prt->add_option("--cpca", cpca,
+                    "compress with CPCA: CLUSTERSxVECTORS, e.g. 1x24 (dense matrices are kept)");
     prt->add_option("--json", prt_json, "write the bake summary as JSON to FILE");
     prt->add_option("--checkpoint-interval", prt_options.bake.checkpoint_seconds,
                     "seconds between checkpoints to ASSET.partial (an interrupted bake resumes from it)")
@@ -764,9 +826,13 @@ int main(int argc, char** argv)
 
     SsbumpCli sb;
     CLI::App* ssbump = app.add_subcommand(
-        "ssbump", "bake a self-shadowed bump map (Green 2007) from a height map, or convert to and from normal maps");
-    ssbump->add_option("height", sb.input, "height map: 8- or 16-bit PNG, or EXR (white stands --scale texels above black)");
-    ssbump->add_option("-o,--output", sb.output, "SSBump map (8-bit PNG) to write; a normal map with --to-normal")
+        "ssbump",
+        "bake a self-shadowed bump map (Green 2007) from a height map, or convert to and from normal maps");
+    ssbump->add_option("height", sb.input,
+                       "height map: 8- or 16-bit PNG, or EXR (white stands --scale texels above black)");
+    ssbump
+        ->add_option("-o,--output", sb.output,
+                     "SSBump map (8-bit PNG) to write; a normal map with --to-normal")
         ->required();
     ssbump->add_option("--scale", sb.options.scale, "height of white above black, in texel widths")
         ->capture_default_str();
@@ -774,24 +840,31 @@ int main(int argc, char** argv)
         ->capture_default_str();
     ssbump->add_option("--rays", sb.options.rays, "rays per texel for the directional occlusion")
         ->capture_default_str();
-    ssbump->add_option("--filter", sb.filter, "bilateral filter on the heights, RADIUS,SIGMA (texels, height units), "
-                                              "or 0 for none [default: 2,0.02 for 8-bit input, none otherwise]");
+    ssbump->add_option("--filter", sb.filter,
+                       "bilateral filter on the heights, RADIUS,SIGMA (texels, height units), "
+                       "or 0 for none [default: 2,0.02 for 8-bit input, none otherwise]");
     ssbump->add_flag("--no-occlusion", sb.no_occlusion, "weights of the normal only (no rays)");
     ssbump->add_flag("--no-wrap", sb.no_wrap, "the map does not tile: the relief ends at its borders");
-    ssbump->add_option("--convention", sb.convention, "normalized (flat = 1/3 each, the paper's Eq. 3) or valve "
-                                                      "(flat = 0.577 each, Source's height2ssbump)")
+    ssbump
+        ->add_option("--convention", sb.convention,
+                     "normalized (flat = 1/3 each, the paper's Eq. 3) or valve "
+                     "(flat = 0.577 each, Source's height2ssbump)")
         ->capture_default_str();
     ssbump->add_option("--exr", sb.exr, "also write the weights as a float EXR");
     ssbump->add_option("--json", sb.json, "write the bake report as JSON to FILE");
-    ssbump->add_option("--from-normal", sb.from_normal, "convert this tangent-space normal map (PNG) instead of baking");
-    ssbump->add_option("--to-normal", sb.to_normal, "convert this SSBump map back to a tangent-space normal map");
+    ssbump->add_option("--from-normal", sb.from_normal,
+                       "convert this tangent-space normal map (PNG) instead of baking");
+    ssbump->add_option("--to-normal", sb.to_normal,
+                       "convert this SSBump map back to a tangent-space normal map");
     ssbump->add_option("--seed", sb.options.seed, "seed of the ray directions (same seed, same bytes)")
         ->capture_default_str();
-    ssbump->add_option("--max-distance", sb.options.max_distance,
-                       "how far rays go, in texel widths (0: the map's larger side)")
+    ssbump
+        ->add_option("--max-distance", sb.options.max_distance,
+                     "how far rays go, in texel widths (0: the map's larger side)")
         ->capture_default_str();
-    ssbump->add_option("--checkpoint-interval", sb.options.checkpoint_seconds,
-                       "seconds between checkpoints to OUT.png.partial (an interrupted bake resumes from it)")
+    ssbump
+        ->add_option("--checkpoint-interval", sb.options.checkpoint_seconds,
+                     "seconds between checkpoints to OUT.png.partial (an interrupted bake resumes from it)")
         ->capture_default_str();
     LightmapCli lm;
     CLI::App* lightmap = app.add_subcommand(
@@ -801,84 +874,115 @@ int main(int argc, char** argv)
         ->check(CLI::ExistingFile);
     lightmap->add_option("-o,--output", lm.asset, "lightmap asset to write (.hemi)")->required();
     lm.light.add_to(lightmap);
-    lightmap->add_option("--bases", lm.bases, "comma-separated outputs: sh9, hl2, h4, h6, sal4 (and every basis of "
-                                              "hemi-bake basis-report), plain (E at the surface normal), rnm (E towards "
-                                              "each radiosity-normal-mapping direction)")
+    lightmap
+        ->add_option("--bases", lm.bases,
+                     "comma-separated outputs: sh9, hl2, h4, h6, sal4 (and every basis of "
+                     "hemi-bake basis-report), plain (E at the surface normal), rnm (E towards "
+                     "each radiosity-normal-mapping direction)")
         ->capture_default_str();
     lightmap->add_option("--size", lm.size, "atlas size W or WxH [default: from --texel-size, else 512]");
     lightmap->add_option("--texel-size", lm.options.texel_size,
                          "world units per texel: the atlas size that gives the scene that texel density");
     lightmap->add_option("--rays", lm.options.bake.rays, "hemisphere rays per texel")->capture_default_str();
-    lightmap->add_option("--sun-rays", lm.options.bake.sun_rays, "shadow rays per texel towards the sun's disc")
+    lightmap
+        ->add_option("--sun-rays", lm.options.bake.sun_rays, "shadow rays per texel towards the sun's disc")
         ->capture_default_str();
-    lightmap->add_option("--bounces", lm.options.bake.bounces,
-                         "bounces of indirect light, coloured by each surface's base colour")
+    lightmap
+        ->add_option("--bounces", lm.options.bake.bounces,
+                     "bounces of indirect light, coloured by each surface's base colour")
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
     lightmap->add_option("--seed", lm.options.bake.seed, "seed of the rays (same seed, same bytes)")
         ->capture_default_str();
-    lightmap->add_flag("--unwrap", lm.options.unwrap, "make the lightmap UVs (planar charts at one texel density, "
-                                                      "from --texel-size or to fill --size) instead of reading TEXCOORD_1");
-    lightmap->add_option("--probes", lm.probes, "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
-                                                "grid over the scene's bounding box, at the centres of its cells");
-    lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")->capture_default_str();
-    lightmap->add_option("--exr-dir", lm.exr_dir, "also write each output as an EXR with named channels into DIR");
+    lightmap->add_flag("--unwrap", lm.options.unwrap,
+                       "make the lightmap UVs (planar charts at one texel density, "
+                       "from --texel-size or to fill --size) instead of reading TEXCOORD_1");
+    lightmap->add_option("--probes", lm.probes,
+                         "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
+                         "grid over the scene's bounding box, at the centres of its cells");
+    lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")
+        ->capture_default_str();
+    lightmap->add_option("--exr-dir", lm.exr_dir,
+                         "also write each output as an EXR with named channels into DIR");
     lightmap->add_option("--json", lm.json, "write the bake summary as JSON to FILE");
-    lightmap->add_option("--checkpoint-interval", lm.options.bake.checkpoint_seconds,
-                         "seconds between checkpoints to LEVEL.hemi.partial (an interrupted bake resumes from it)")
+    lightmap
+        ->add_option(
+            "--checkpoint-interval", lm.options.bake.checkpoint_seconds,
+            "seconds between checkpoints to LEVEL.hemi.partial (an interrupted bake resumes from it)")
         ->capture_default_str();
     ReferenceCli rf;
     CLI::App* reference = app.add_subcommand(
-        "reference", "path-trace the ground truth a lightmap is measured against, framed like hemi-render's view");
-    reference->add_option("scene", rf.scene, "glTF 2.0 scene (.gltf or .glb)")->required()->check(CLI::ExistingFile);
+        "reference",
+        "path-trace the ground truth a lightmap is measured against, framed like hemi-render's view");
+    reference->add_option("scene", rf.scene, "glTF 2.0 scene (.gltf or .glb)")
+        ->required()
+        ->check(CLI::ExistingFile);
     reference->add_option("-o,--output", rf.output, "REF.exr: linear RGBA, alpha = coverage")->required();
     rf.light.add_to(reference);
-    reference->add_option("--bounces", rf.options.bounces, "surface reflections per path (as hemi-bake lightmap's)")
+    reference
+        ->add_option("--bounces", rf.options.bounces,
+                     "surface reflections per path (as hemi-bake lightmap's)")
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
-    reference->add_option("--camera", rf.camera, "auto (frames the scene like hemi-render) or EYE,TARGET as "
-                                                 "x,y,z,x,y,z in world space (z up; glTF +y is world +z)")
+    reference
+        ->add_option("--camera", rf.camera,
+                     "auto (frames the scene like hemi-render) or EYE,TARGET as "
+                     "x,y,z,x,y,z in world space (z up; glTF +y is world +z)")
         ->capture_default_str();
     reference->add_option("--size", rf.size, "WIDTHxHEIGHT in pixels")->capture_default_str();
     reference->add_flag("--white", rf.options.white, "albedo 1 and no emission: the lighting alone, E / pi");
     reference->add_option("--rays", rf.options.rays, "paths per pixel")->capture_default_str();
-    reference->add_option("--seed", rf.options.seed, "seed of the paths (same seed, same bytes)")->capture_default_str();
-    reference->add_option("--json", rf.json, "write the render's summary (camera, rays, noise) as JSON to FILE");
+    reference->add_option("--seed", rf.options.seed, "seed of the paths (same seed, same bytes)")
+        ->capture_default_str();
+    reference->add_option("--json", rf.json,
+                          "write the render's summary (camera, rays, noise) as JSON to FILE");
     BrdfCli br;
-    CLI::App* brdf = app.add_subcommand(
-        "brdf", "factor a reflection model into 2D lookup tables (Heidrich & Seidel 1999, section 3), written as EXR");
-    brdf->add_option("--model", br.options.model, "torrance-sparrow | banks | phong | blinn-phong | cosine-lobe")
+    CLI::App* brdf = app.add_subcommand("brdf", "factor a reflection model into 2D lookup tables (Heidrich & "
+                                                "Seidel 1999, section 3), written as EXR");
+    brdf->add_option("--model", br.options.model,
+                     "torrance-sparrow | banks | phong | blinn-phong | cosine-lobe")
         ->capture_default_str();
-    brdf->add_option("--ior", br.options.ior, "torrance-sparrow: index of refraction of the Fresnel term (> 1)")
+    brdf->add_option("--ior", br.options.ior,
+                     "torrance-sparrow: index of refraction of the Fresnel term (> 1)")
         ->capture_default_str();
-    brdf->add_option("--roughness", br.options.roughness,
-                     "torrance-sparrow: m, the facets' RMS slope (beckmann) or angle spread in radians (gaussian)")
+    brdf->add_option(
+            "--roughness", br.options.roughness,
+            "torrance-sparrow: m, the facets' RMS slope (beckmann) or angle spread in radians (gaussian)")
         ->capture_default_str();
-    brdf->add_option("--exponent", br.options.exponent, "banks, phong, blinn-phong, cosine-lobe: the lobe's exponent")
+    brdf->add_option("--exponent", br.options.exponent,
+                     "banks, phong, blinn-phong, cosine-lobe: the lobe's exponent")
         ->capture_default_str();
     brdf->add_option("--distribution", br.options.distribution, "torrance-sparrow: beckmann | gaussian")
         ->capture_default_str();
     brdf->add_option("--size", br.options.size, "samples per table axis")->capture_default_str();
-    brdf->add_flag("--8bit", br.options.eight_bit,
-                   "store each channel as 8-bit codes / 255 times a scale in the metadata (reports that form's error)");
-    brdf->add_option("-o,--output", br.output, "the tables as EXR (model and parameters in its metadata)")->required();
+    brdf->add_flag(
+        "--8bit", br.options.eight_bit,
+        "store each channel as 8-bit codes / 255 times a scale in the metadata (reports that form's error)");
+    brdf->add_option("-o,--output", br.output, "the tables as EXR (model and parameters in its metadata)")
+        ->required();
     brdf->add_option("--json", br.json, "write the tables' measured error as JSON to FILE");
     EnvmapCli em;
     CLI::App* envmap = app.add_subcommand(
-        "envmap", "parabolic environment maps with solid-angle mipmaps, prefiltered glossy and diffuse maps and "
-                  "Fresnel tables (Heidrich & Seidel 1999, section 4)");
-    envmap->add_option("environment", em.input, "equirectangular (2:1) environment, OpenEXR, z up")->required();
+        "envmap",
+        "parabolic environment maps with solid-angle mipmaps, prefiltered glossy and diffuse maps and "
+        "Fresnel tables (Heidrich & Seidel 1999, section 4)");
+    envmap->add_option("environment", em.input, "equirectangular (2:1) environment, OpenEXR, z up")
+        ->required();
     envmap->add_option("-o,--output", em.output, "environment asset to write (.hemi)")->required();
     envmap->add_option("--size", em.options.size, "texels per side of each half at level 0 (a power of two)")
         ->capture_default_str();
-    envmap->add_option("--exponents", em.exponents, "Phong exponents of the prefiltered glossy maps, comma-separated")
+    envmap
+        ->add_option("--exponents", em.exponents,
+                     "Phong exponents of the prefiltered glossy maps, comma-separated")
         ->capture_default_str();
     envmap->add_option("--ior", em.iors, "indices of refraction of the Fresnel tables, comma-separated")
         ->capture_default_str();
     envmap->add_option("--fresnel-samples", em.options.fresnel_samples, "samples of each Fresnel table")
         ->capture_default_str();
-    envmap->add_option("--exr-dir", em.exr_dir, "also write every image (each half, mip level, exponent) as EXR into DIR");
-    envmap->add_option("--report", em.report, "write the sampling comparison with cube maps and the timings as JSON");
+    envmap->add_option("--exr-dir", em.exr_dir,
+                       "also write every image (each half, mip level, exponent) as EXR into DIR");
+    envmap->add_option("--report", em.report,
+                       "write the sampling comparison with cube maps and the timings as JSON");
     CLI11_PARSE(app, argc, argv);
 
     if (brdf->parsed() || envmap->parsed())
@@ -943,15 +1047,18 @@ int main(int argc, char** argv)
             {
                 unsigned c = 0, v = 0;
                 char x = 0, rest = 0;
-                if (std::sscanf(cpca.c_str(), "%u%c%u%c", &c, &x, &v, &rest) != 3 || x != 'x' || c == 0 || v == 0)
-                    throw std::invalid_argument("--cpca expects CLUSTERSxVECTORS (e.g. 1x24), got '" + cpca + "'");
+                if (std::sscanf(cpca.c_str(), "%u%c%u%c", &c, &x, &v, &rest) != 3 || x != 'x' || c == 0 ||
+                    v == 0)
+                    throw std::invalid_argument("--cpca expects CLUSTERSxVECTORS (e.g. 1x24), got '" + cpca +
+                                                "'");
                 prt_options.cpca_clusters = c;
                 prt_options.cpca_vectors = v;
             }
             if (!prt_json.empty())
                 hemi::io::check_writable(prt_json); // before the bake, like the asset and its checkpoint
             PrtProgressLine line;
-            hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
+            hemi::bake::PrtBakeSummary s =
+                hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
             print_prt_summary(s, prt_options, scene, asset);
             if (!prt_json.empty())
             {

@@ -11,11 +11,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <algorithm>
 #include <fstream>
 #include <map>
 #include <random>
@@ -120,39 +120,41 @@ BasisReport make_basis_report(int signals, uint64_t seed)
     // Per-signal results land in their own slots and are summed in index order afterwards, so the report
     // is the same bytes whatever the thread count.
     std::vector<double> per_signal(size_t(signals) * (nb + 1), 0.0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, signals, 64), [&](const tbb::blocked_range<int>& range) {
-        std::vector<double> exact(nodes.size());
-        for (int s = range.begin(); s != range.end(); ++s)
-        {
-            double* out = &per_signal[size_t(s) * (nb + 1)];
-            Signal sig = random_signal(seed, s);
-            std::array<double, 9> sh = sh9_irradiance(sig);
-            for (size_t i = 0; i < nodes.size(); ++i)
-            {
-                exact[i] = exact_irradiance(sig, nodes[i].n);
-                out[nb] += nodes[i].weight * exact[i] * exact[i];
-            }
-            for (size_t b = 0; b < nb; ++b)
-            {
-                const int k = all[b].size;
-                double coeff[HEMI_BASIS_MAX_SIZE] = {};
-                for (int i = 0; i < k; ++i)
-                    for (int j = 0; j < 9; ++j)
-                        coeff[i] += projections[b][size_t(i) * 9 + j] * sh[j];
-                double err = 0.0;
-                for (size_t i = 0; i < nodes.size(); ++i)
-                {
-                    double fit = 0.0;
-                    const float* v = &values[b][i * k];
-                    for (int m = 0; m < k; ++m)
-                        fit += coeff[m] * v[m];
-                    double d = fit - exact[i];
-                    err += nodes[i].weight * d * d;
-                }
-                out[b] = err;
-            }
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, signals, 64),
+                      [&](const tbb::blocked_range<int>& range)
+                      {
+                          std::vector<double> exact(nodes.size());
+                          for (int s = range.begin(); s != range.end(); ++s)
+                          {
+                              double* out = &per_signal[size_t(s) * (nb + 1)];
+                              Signal sig = random_signal(seed, s);
+                              std::array<double, 9> sh = sh9_irradiance(sig);
+                              for (size_t i = 0; i < nodes.size(); ++i)
+                              {
+                                  exact[i] = exact_irradiance(sig, nodes[i].n);
+                                  out[nb] += nodes[i].weight * exact[i] * exact[i];
+                              }
+                              for (size_t b = 0; b < nb; ++b)
+                              {
+                                  const int k = all[b].size;
+                                  double coeff[HEMI_BASIS_MAX_SIZE] = {};
+                                  for (int i = 0; i < k; ++i)
+                                      for (int j = 0; j < 9; ++j)
+                                          coeff[i] += projections[b][size_t(i) * 9 + j] * sh[j];
+                                  double err = 0.0;
+                                  for (size_t i = 0; i < nodes.size(); ++i)
+                                  {
+                                      double fit = 0.0;
+                                      const float* v = &values[b][i * k];
+                                      for (int m = 0; m < k; ++m)
+                                          fit += coeff[m] * v[m];
+                                      double d = fit - exact[i];
+                                      err += nodes[i].weight * d * d;
+                                  }
+                                  out[b] = err;
+                              }
+                          }
+                      });
     struct Sums
     {
         std::vector<double> imse;
@@ -183,51 +185,57 @@ void write_basis_report_json(const std::string& path, const BasisReport& r)
     j["projection"] = r.projection;
     j["sloan_table2"] = r.sloan_table2;
     for (const auto& [name, st] : r.imse)
-        j["imse"][name] = {{"mean", st.mean_imse}, {"rel_rms", st.rel_rms}, {"coefficients", st.coefficients}};
-    j["svd_singular_values"] = {{"A", r.svd_singular_values}, {"A_convolved", r.svd_singular_values_convolved}};
+        j["imse"][name] = {
+            {"mean", st.mean_imse}, {"rel_rms", st.rel_rms}, {"coefficients", st.coefficients}};
+    j["svd_singular_values"] = {{"A", r.svd_singular_values},
+                                {"A_convolved", r.svd_singular_values_convolved}};
     io::write_text_atomically(path, j.dump(2) + "\n");
 }
 
 void plot_basis_report(const std::string& png_path, const BasisReport& r)
 {
     namespace fs = std::filesystem;
-    run_gnuplot(png_path, [&](const fs::path& dir, std::ostream& script, const fs::path& output) {
-        // Bases with the same count crowd one column: merge identical points (h4 = sh4ls) and put the
-        // labels of a column alternately left and right of their points, in order of error.
-        std::map<int, std::vector<std::pair<double, std::string>>> columns;
-        for (const auto& [name, st] : r.imse)
+    run_gnuplot(
+        png_path,
+        [&](const fs::path& dir, std::ostream& script, const fs::path& output)
         {
-            auto& col = columns[st.coefficients];
-            bool merged = false;
-            for (auto& [value, label] : col)
-                if (std::abs(value - st.mean_imse) <= 1e-9 * std::abs(value))
-                {
-                    label += " = " + name;
-                    merged = true;
-                }
-            if (!merged)
-                col.push_back({st.mean_imse, name});
-        }
-        std::ofstream data(dir / "imse.dat");
-        script << "set terminal pngcairo size 900,600 noenhanced font 'Sans,11'\n"
-               << "set output '" << output.string() << "'\n"
-               << "set title 'Mean IMSE over the hemisphere of " << r.signals
-               << " random irradiance signals (cf. Habel and Wimmer 2010, Fig. 3)'\n"
-               << "set xlabel 'number of coefficients'\nset ylabel 'mean integrated squared error'\n"
-               << "set logscale y\nset xrange [2:10]\nset xtics 1\nset grid\nunset key\n";
-        for (auto& [count, col] : columns)
-        {
-            std::sort(col.begin(), col.end());
-            for (size_t i = 0; i < col.size(); ++i)
+            // Bases with the same count crowd one column: merge identical points (h4 = sh4ls) and put the
+            // labels of a column alternately left and right of their points, in order of error.
+            std::map<int, std::vector<std::pair<double, std::string>>> columns;
+            for (const auto& [name, st] : r.imse)
             {
-                data << count << " " << col[i].first << "\n";
-                bool right = i % 2 == 0;
-                script << "set label '" << col[i].second << "' at " << count << "," << col[i].first
-                       << (right ? " left offset 1,0" : " right offset -1,0") << "\n";
+                auto& col = columns[st.coefficients];
+                bool merged = false;
+                for (auto& [value, label] : col)
+                    if (std::abs(value - st.mean_imse) <= 1e-9 * std::abs(value))
+                    {
+                        label += " = " + name;
+                        merged = true;
+                    }
+                if (!merged)
+                    col.push_back({st.mean_imse, name});
             }
-        }
-        script << "plot '" << (dir / "imse.dat").string() << "' using 1:2 with points pt 7 ps 1.5 lc rgb '#3060c0'\n";
-    });
+            std::ofstream data(dir / "imse.dat");
+            script << "set terminal pngcairo size 900,600 noenhanced font 'Sans,11'\n"
+                   << "set output '" << output.string() << "'\n"
+                   << "set title 'Mean IMSE over the hemisphere of " << r.signals
+                   << " random irradiance signals (cf. Habel and Wimmer 2010, Fig. 3)'\n"
+                   << "set xlabel 'number of coefficients'\nset ylabel 'mean integrated squared error'\n"
+                   << "set logscale y\nset xrange [2:10]\nset xtics 1\nset grid\nunset key\n";
+            for (auto& [count, col] : columns)
+            {
+                std::sort(col.begin(), col.end());
+                for (size_t i = 0; i < col.size(); ++i)
+                {
+                    data << count << " " << col[i].first << "\n";
+                    bool right = i % 2 == 0;
+                    script << "set label '" << col[i].second << "' at " << count << "," << col[i].first
+                           << (right ? " left offset 1,0" : " right offset -1,0") << "\n";
+                }
+            }
+            script << "plot '" << (dir / "imse.dat").string()
+                   << "' using 1:2 with points pt 7 ps 1.5 lc rgb '#3060c0'\n";
+        });
 }
 
 } // namespace hemi::bake

@@ -21,7 +21,8 @@ struct ClusterFit
     Eigen::MatrixXf basis; // D x V, orthonormal columns, largest variance first
 };
 
-ClusterFit fit(const Eigen::Map<const RowMatrix>& x, const std::vector<uint32_t>& members, uint32_t d, uint32_t v)
+ClusterFit fit(const Eigen::Map<const RowMatrix>& x, const std::vector<uint32_t>& members, uint32_t d,
+               uint32_t v)
 {
     ClusterFit f;
     f.mean = Eigen::VectorXf::Zero(d);
@@ -56,7 +57,8 @@ ClusterFit fit(const Eigen::Map<const RowMatrix>& x, const std::vector<uint32_t>
 float residual(const Eigen::VectorXf& x, const ClusterFit& f)
 {
     const Eigen::VectorXf c = x - f.mean;
-    return (c - f.basis * (f.basis.transpose() * c)).squaredNorm(); // no cancellation, unlike |c|^2 - |B^T c|^2
+    return (c - f.basis * (f.basis.transpose() * c))
+        .squaredNorm(); // no cancellation, unlike |c|^2 - |B^T c|^2
 }
 } // namespace
 
@@ -67,8 +69,8 @@ io::PrtCpca compress_cpca(std::span<const float> matrices, uint32_t n, uint32_t 
         throw std::invalid_argument("hemi: CPCA expects " + std::to_string(size_t(n) * d) + " values, got " +
                                     std::to_string(matrices.size()));
     if (clusters == 0 || clusters > n)
-        throw std::invalid_argument("hemi: CPCA cluster count " + std::to_string(clusters) + " is not in [1, " +
-                                    std::to_string(n) + "]");
+        throw std::invalid_argument("hemi: CPCA cluster count " + std::to_string(clusters) +
+                                    " is not in [1, " + std::to_string(n) + "]");
     if (vectors == 0)
         throw std::invalid_argument("hemi: CPCA needs at least one PCA vector per cluster");
     for (float value : matrices)
@@ -210,7 +212,8 @@ void reconstruct_cpca(const io::PrtCpca& cpca, uint32_t d, uint32_t vertex, std:
     {
         float value = cpca.means[size_t(c) * d + e];
         for (uint32_t j = 0; j < cpca.vectors; ++j)
-            value += cpca.weights[size_t(vertex) * cpca.vectors + j] * cpca.basis[(size_t(c) * cpca.vectors + j) * d + e];
+            value += cpca.weights[size_t(vertex) * cpca.vectors + j] *
+                     cpca.basis[(size_t(c) * cpca.vectors + j) * d + e];
         out[e] = value;
     }
 }

@@ -83,7 +83,8 @@ EmbreeScene::EmbreeScene(const io::Mesh& mesh) : impl_(std::make_unique<Impl>())
                                  std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
     rtcSetDeviceErrorFunction(
         s.device,
-        [](void* user, RTCError, const char* message) {
+        [](void* user, RTCError, const char* message)
+        {
             auto* self = static_cast<Impl*>(user);
             std::lock_guard<std::mutex> lock(self->error_mutex);
             self->error = message ? message : "unknown Embree error";

@@ -1,4 +1,5 @@
-// hemi-bake envmap --report: parabolic maps against a cube-map implementation of the same filter (factored.h).
+// hemi-bake envmap --report: parabolic maps against a cube-map implementation of the same filter
+// (factored.h).
 #include <hemi/bake/factored.h>
 #include <hemi/math/paraboloid.h>
 #include <hemi/math/sh_environment.h>
@@ -17,13 +18,17 @@ namespace
 {
 constexpr double kPi = 3.14159265358979323846;
 
-// Six faces (sh_environment.h's order and orientation), size x size RGB each: face f, row y (t down), column x.
+// Six faces (sh_environment.h's order and orientation), size x size RGB each: face f, row y (t down), column
+// x.
 struct CubeMap
 {
     uint32_t size = 0;
     std::vector<float> rgb;
     float* at(int f, uint32_t x, uint32_t y) { return rgb.data() + ((size_t(f) * size + y) * size + x) * 3; }
-    const float* at(int f, uint32_t x, uint32_t y) const { return rgb.data() + ((size_t(f) * size + y) * size + x) * 3; }
+    const float* at(int f, uint32_t x, uint32_t y) const
+    {
+        return rgb.data() + ((size_t(f) * size + y) * size + x) * 3;
+    }
 };
 
 const glm::dvec3 kAxis[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
@@ -53,12 +58,18 @@ glm::dvec3 face_direction(int f, double s, double t)
 {
     switch (f)
     {
-    case 0: return glm::normalize(glm::dvec3(1, -t, -s));
-    case 1: return glm::normalize(glm::dvec3(-1, -t, s));
-    case 2: return glm::normalize(glm::dvec3(s, 1, t));
-    case 3: return glm::normalize(glm::dvec3(s, -1, -t));
-    case 4: return glm::normalize(glm::dvec3(s, -t, 1));
-    default: return glm::normalize(glm::dvec3(-s, -t, -1));
+    case 0:
+        return glm::normalize(glm::dvec3(1, -t, -s));
+    case 1:
+        return glm::normalize(glm::dvec3(-1, -t, s));
+    case 2:
+        return glm::normalize(glm::dvec3(s, 1, t));
+    case 3:
+        return glm::normalize(glm::dvec3(s, -1, -t));
+    case 4:
+        return glm::normalize(glm::dvec3(s, -t, 1));
+    default:
+        return glm::normalize(glm::dvec3(-s, -t, -1));
     }
 }
 
@@ -68,29 +79,34 @@ CubeMap cube_from_equirect(uint32_t size, const io::ImageRgba& env)
     c.size = size;
     c.rgb.assign(size_t(6) * size * size * 3, 0.0f);
     const uint32_t n = std::clamp(uint32_t(std::ceil(2.0 * env.width / (kPi * size))), 2u, 16u);
-    tbb::parallel_for(uint32_t(0), 6 * size, [&](uint32_t fy) {
-        const int f = int(fy / size);
-        const uint32_t y = fy % size;
-        for (uint32_t x = 0; x < size; ++x)
+    tbb::parallel_for(
+        uint32_t(0), 6 * size,
+        [&](uint32_t fy)
         {
-            glm::dvec3 sum(0.0);
-            double weight = 0.0;
-            for (uint32_t j = 0; j < n; ++j)
-                for (uint32_t i = 0; i < n; ++i)
-                {
-                    const double s = -1.0 + 2.0 * (x + (i + 0.5) / n) / size, t = -1.0 + 2.0 * (y + (j + 0.5) / n) / size;
-                    const double w = 1.0 / std::pow(1.0 + s * s + t * t, 1.5); // solid angle per unit area
-                    uint32_t px, py;
-                    math::equirect_pixel(face_direction(f, s, t), env.width, env.height, px, py);
-                    const float* p = env.at(px, py);
-                    sum += w * glm::dvec3(p[0], p[1], p[2]);
-                    weight += w;
-                }
-            float* o = c.at(f, x, y);
-            for (int k = 0; k < 3; ++k)
-                o[k] = float(sum[k] / weight);
-        }
-    });
+            const int f = int(fy / size);
+            const uint32_t y = fy % size;
+            for (uint32_t x = 0; x < size; ++x)
+            {
+                glm::dvec3 sum(0.0);
+                double weight = 0.0;
+                for (uint32_t j = 0; j < n; ++j)
+                    for (uint32_t i = 0; i < n; ++i)
+                    {
+                        const double s = -1.0 + 2.0 * (x + (i + 0.5) / n) / size,
+                                     t = -1.0 + 2.0 * (y + (j + 0.5) / n) / size;
+                        const double w =
+                            1.0 / std::pow(1.0 + s * s + t * t, 1.5); // solid angle per unit area
+                        uint32_t px, py;
+                        math::equirect_pixel(face_direction(f, s, t), env.width, env.height, px, py);
+                        const float* p = env.at(px, py);
+                        sum += w * glm::dvec3(p[0], p[1], p[2]);
+                        weight += w;
+                    }
+                float* o = c.at(f, x, y);
+                for (int k = 0; k < 3; ++k)
+                    o[k] = float(sum[k] / weight);
+            }
+        });
     return c;
 }
 
@@ -121,85 +137,103 @@ CubeMap prefilter_cube(const CubeMap& src, double exponent)
     CubeMap out;
     out.size = m;
     out.rgb.assign(texels * 3, 0.0f);
-    tbb::parallel_for(uint32_t(0), 6 * m, [&](uint32_t fy) {
-        const int of = int(fy / m);
-        const uint32_t oy = fy % m;
-        for (uint32_t ox = 0; ox < m; ++ox)
+    tbb::parallel_for(
+        uint32_t(0), 6 * m,
+        [&](uint32_t fy)
         {
-            const glm::dvec3 r = face_direction(of, -1.0 + (2.0 * ox + 1.0) / m, -1.0 + (2.0 * oy + 1.0) / m);
-            // The cap's boundary: 64 points at angle gamma from r.
-            const glm::dvec3 u = glm::normalize(std::abs(r.x) < 0.9 ? glm::cross(r, glm::dvec3(1, 0, 0))
-                                                                    : glm::cross(r, glm::dvec3(0, 1, 0)));
-            const glm::dvec3 w = glm::cross(r, u);
-            glm::dvec3 boundary[64];
-            for (int k = 0; k < 64; ++k)
+            const int of = int(fy / m);
+            const uint32_t oy = fy % m;
+            for (uint32_t ox = 0; ox < m; ++ox)
             {
-                const double a = 2.0 * kPi * k / 64;
-                boundary[k] = std::cos(gamma) * r + std::sin(gamma) * (std::cos(a) * u + std::sin(a) * w);
-            }
-            double acc[3] = {0, 0, 0};
-            for (int f = 0; f < 6; ++f)
-            {
-                double s_lo = -1, s_hi = 1, t_lo = -1, t_hi = 1;
-                if (gamma < 0.5 * kPi)
+                const glm::dvec3 r =
+                    face_direction(of, -1.0 + (2.0 * ox + 1.0) / m, -1.0 + (2.0 * oy + 1.0) / m);
+                // The cap's boundary: 64 points at angle gamma from r.
+                const glm::dvec3 u = glm::normalize(std::abs(r.x) < 0.9 ? glm::cross(r, glm::dvec3(1, 0, 0))
+                                                                        : glm::cross(r, glm::dvec3(0, 1, 0)));
+                const glm::dvec3 w = glm::cross(r, u);
+                glm::dvec3 boundary[64];
+                for (int k = 0; k < 64; ++k)
                 {
-                    bool any_front = glm::dot(r, kAxis[f]) > 0.0, near_plane = false;
-                    double lo_s = 1e30, hi_s = -1e30, lo_t = 1e30, hi_t = -1e30;
-                    for (const glm::dvec3& b : boundary)
-                    {
-                        const double along = glm::dot(b, kAxis[f]);
-                        any_front = any_front || along > 0.0;
-                        near_plane = near_plane || along < 0.02;
-                        if (along > 0.0)
-                        {
-                            double s, t;
-                            const glm::dvec3 p = b / along; // on the face's plane (outside its square or not)
-                            switch (f)
-                            {
-                            case 0: s = -p.z, t = -p.y; break;
-                            case 1: s = p.z, t = -p.y; break;
-                            case 2: s = p.x, t = p.z; break;
-                            case 3: s = p.x, t = -p.z; break;
-                            case 4: s = p.x, t = -p.y; break;
-                            default: s = -p.x, t = -p.y; break;
-                            }
-                            lo_s = std::min(lo_s, s), hi_s = std::max(hi_s, s);
-                            lo_t = std::min(lo_t, t), hi_t = std::max(hi_t, t);
-                        }
-                    }
-                    if (!any_front)
-                        continue;
-                    if (!near_plane)
-                    {
-                        const double margin_s = 0.02 * (hi_s - lo_s) + 2.0 / m, margin_t = 0.02 * (hi_t - lo_t) + 2.0 / m;
-                        s_lo = std::max(-1.0, lo_s - margin_s), s_hi = std::min(1.0, hi_s + margin_s);
-                        t_lo = std::max(-1.0, lo_t - margin_t), t_hi = std::min(1.0, hi_t + margin_t);
-                        if (s_lo > s_hi || t_lo > t_hi)
-                            continue;
-                    }
+                    const double a = 2.0 * kPi * k / 64;
+                    boundary[k] = std::cos(gamma) * r + std::sin(gamma) * (std::cos(a) * u + std::sin(a) * w);
                 }
-                const uint32_t x0 = uint32_t(std::max(0.0, std::floor((s_lo + 1.0) * 0.5 * m)));
-                const uint32_t x1 = uint32_t(std::min(double(m - 1), std::floor((s_hi + 1.0) * 0.5 * m)));
-                const uint32_t y0 = uint32_t(std::max(0.0, std::floor((t_lo + 1.0) * 0.5 * m)));
-                const uint32_t y1 = uint32_t(std::min(double(m - 1), std::floor((t_hi + 1.0) * 0.5 * m)));
-                const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
-                for (uint32_t y = y0; y <= y1; ++y)
-                    for (uint32_t x = x0; x <= x1; ++x)
+                double acc[3] = {0, 0, 0};
+                for (int f = 0; f < 6; ++f)
+                {
+                    double s_lo = -1, s_hi = 1, t_lo = -1, t_hi = 1;
+                    if (gamma < 0.5 * kPi)
                     {
-                        const size_t k = ((size_t(f) * m + y) * m + x) * 3;
-                        const float c = dir[k] * rx + dir[k + 1] * ry + dir[k + 2] * rz;
-                        if (c > lobe.cos_cut())
+                        bool any_front = glm::dot(r, kAxis[f]) > 0.0, near_plane = false;
+                        double lo_s = 1e30, hi_s = -1e30, lo_t = 1e30, hi_t = -1e30;
+                        for (const glm::dvec3& b : boundary)
                         {
-                            const float l = lobe(c);
-                            acc[0] += l * wl[k], acc[1] += l * wl[k + 1], acc[2] += l * wl[k + 2];
+                            const double along = glm::dot(b, kAxis[f]);
+                            any_front = any_front || along > 0.0;
+                            near_plane = near_plane || along < 0.02;
+                            if (along > 0.0)
+                            {
+                                double s, t;
+                                const glm::dvec3 p =
+                                    b / along; // on the face's plane (outside its square or not)
+                                switch (f)
+                                {
+                                case 0:
+                                    s = -p.z, t = -p.y;
+                                    break;
+                                case 1:
+                                    s = p.z, t = -p.y;
+                                    break;
+                                case 2:
+                                    s = p.x, t = p.z;
+                                    break;
+                                case 3:
+                                    s = p.x, t = -p.z;
+                                    break;
+                                case 4:
+                                    s = p.x, t = -p.y;
+                                    break;
+                                default:
+                                    s = -p.x, t = -p.y;
+                                    break;
+                                }
+                                lo_s = std::min(lo_s, s), hi_s = std::max(hi_s, s);
+                                lo_t = std::min(lo_t, t), hi_t = std::max(hi_t, t);
+                            }
+                        }
+                        if (!any_front)
+                            continue;
+                        if (!near_plane)
+                        {
+                            const double margin_s = 0.02 * (hi_s - lo_s) + 2.0 / m,
+                                         margin_t = 0.02 * (hi_t - lo_t) + 2.0 / m;
+                            s_lo = std::max(-1.0, lo_s - margin_s), s_hi = std::min(1.0, hi_s + margin_s);
+                            t_lo = std::max(-1.0, lo_t - margin_t), t_hi = std::min(1.0, hi_t + margin_t);
+                            if (s_lo > s_hi || t_lo > t_hi)
+                                continue;
                         }
                     }
+                    const uint32_t x0 = uint32_t(std::max(0.0, std::floor((s_lo + 1.0) * 0.5 * m)));
+                    const uint32_t x1 = uint32_t(std::min(double(m - 1), std::floor((s_hi + 1.0) * 0.5 * m)));
+                    const uint32_t y0 = uint32_t(std::max(0.0, std::floor((t_lo + 1.0) * 0.5 * m)));
+                    const uint32_t y1 = uint32_t(std::min(double(m - 1), std::floor((t_hi + 1.0) * 0.5 * m)));
+                    const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
+                    for (uint32_t y = y0; y <= y1; ++y)
+                        for (uint32_t x = x0; x <= x1; ++x)
+                        {
+                            const size_t k = ((size_t(f) * m + y) * m + x) * 3;
+                            const float c = dir[k] * rx + dir[k + 1] * ry + dir[k + 2] * rz;
+                            if (c > lobe.cos_cut())
+                            {
+                                const float l = lobe(c);
+                                acc[0] += l * wl[k], acc[1] += l * wl[k + 1], acc[2] += l * wl[k + 2];
+                            }
+                        }
+                }
+                float* o = out.at(of, ox, oy);
+                for (int c = 0; c < 3; ++c)
+                    o[c] = float(norm * acc[c]);
             }
-            float* o = out.at(of, ox, oy);
-            for (int c = 0; c < 3; ++c)
-                o[c] = float(norm * acc[c]);
-        }
-    });
+        });
     return out;
 }
 
@@ -224,7 +258,8 @@ glm::dvec3 cube_sample(const CubeMap& c, const glm::dvec3& d)
         else
         {
             double s2, t2;
-            const int f2 = cube_face(face_direction(f, -1.0 + (2.0 * x + 1.0) / m, -1.0 + (2.0 * y + 1.0) / m), s2, t2);
+            const int f2 =
+                cube_face(face_direction(f, -1.0 + (2.0 * x + 1.0) / m, -1.0 + (2.0 * y + 1.0) / m), s2, t2);
             const uint32_t x2 = std::min(m - 1, uint32_t(std::max(0.0, (s2 + 1.0) * 0.5 * m)));
             const uint32_t y2 = std::min(m - 1, uint32_t(std::max(0.0, (t2 + 1.0) * 0.5 * m)));
             texel = c.at(f2, x2, y2);
@@ -234,8 +269,8 @@ glm::dvec3 cube_sample(const CubeMap& c, const glm::dvec3& d)
     return sum;
 }
 
-// Eq. 9 over the equirect's pixels where the lobe exceeds its cutoff (rows within gamma of r's, and in each the
-// columns within the cap's azimuth span).
+// Eq. 9 over the equirect's pixels where the lobe exceeds its cutoff (rows within gamma of r's, and in each
+// the columns within the cap's azimuth span).
 struct Columns
 {
     std::vector<double> cos_phi, sin_phi; // of each column's centre
@@ -249,8 +284,8 @@ struct Columns
     }
 };
 
-glm::dvec3 reference(const io::ImageRgba& env, const Columns& columns, const math::PhongLobe& lobe, double exponent,
-                     const glm::dvec3& r)
+glm::dvec3 reference(const io::ImageRgba& env, const Columns& columns, const math::PhongLobe& lobe,
+                     double exponent, const glm::dvec3& r)
 {
     const uint32_t w = env.width, h = env.height;
     const double theta_r = std::acos(std::clamp(r.z, -1.0, 1.0)), phi_r = std::atan2(r.y, r.x);
@@ -292,17 +327,19 @@ glm::dvec3 reference(const io::ImageRgba& env, const Columns& columns, const mat
 }
 } // namespace
 
-std::vector<glm::dvec3> phong_reference(const io::ImageRgba& env, double exponent, std::span<const glm::dvec3> dirs)
+std::vector<glm::dvec3> phong_reference(const io::ImageRgba& env, double exponent,
+                                        std::span<const glm::dvec3> dirs)
 {
     const math::PhongLobe lobe(exponent);
     const Columns columns(env.width);
     std::vector<glm::dvec3> out(dirs.size());
-    tbb::parallel_for(size_t(0), dirs.size(), [&](size_t i) { out[i] = reference(env, columns, lobe, exponent, dirs[i]); });
+    tbb::parallel_for(size_t(0), dirs.size(),
+                      [&](size_t i) { out[i] = reference(env, columns, lobe, exponent, dirs[i]); });
     return out;
 }
 
-std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& env, const io::EnvmapAsset& asset,
-                                                          uint32_t directions)
+std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& env,
+                                                          const io::EnvmapAsset& asset, uint32_t directions)
 {
     std::vector<glm::dvec3> dirs(directions);
     const double golden = kPi * (3.0 - std::sqrt(5.0));
@@ -329,13 +366,16 @@ std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& e
         const math::PhongLobe lobe(e);
         const Columns columns(env.width);
         std::vector<double> pe(directions), ce(directions), rr(directions);
-        tbb::parallel_for(uint32_t(0), directions, [&](uint32_t i) {
-            const glm::dvec3 ref = reference(env, columns, lobe, e, dirs[i]);
-            const glm::dvec3 p = map->sample(dirs[i]) - ref, q = cube_sample(cube, dirs[i]) - ref;
-            pe[i] = glm::dot(p, p) / 3.0;
-            ce[i] = glm::dot(q, q) / 3.0;
-            rr[i] = glm::dot(ref, ref) / 3.0;
-        });
+        tbb::parallel_for(uint32_t(0), directions,
+                          [&](uint32_t i)
+                          {
+                              const glm::dvec3 ref = reference(env, columns, lobe, e, dirs[i]);
+                              const glm::dvec3 p = map->sample(dirs[i]) - ref,
+                                               q = cube_sample(cube, dirs[i]) - ref;
+                              pe[i] = glm::dot(p, p) / 3.0;
+                              ce[i] = glm::dot(q, q) / 3.0;
+                              rr[i] = glm::dot(ref, ref) / 3.0;
+                          });
         double sp = 0, sc = 0, sr = 0;
         for (uint32_t i = 0; i < directions; ++i)
             sp += pe[i], sc += ce[i], sr += rr[i];

@@ -19,7 +19,8 @@ constexpr double kPi = 3.14159265358979323846;
 void check_finite_positive(double v, const char* what)
 {
     if (!std::isfinite(v) || !(v > 0.0))
-        throw std::invalid_argument(std::string(what) + " must be a finite number > 0, got " + std::to_string(v));
+        throw std::invalid_argument(std::string(what) + " must be a finite number > 0, got " +
+                                    std::to_string(v));
 }
 
 std::string number(double v)
@@ -29,8 +30,8 @@ std::string number(double v)
     return buf;
 }
 
-// The dense set of direction pairs over which errors are measured, n = +z, t = +x: every (l, v) of a grid over
-// the hemisphere (cosines at midpoints of 32 intervals, 32 azimuths each), i.e. 1024 x 1024 pairs.
+// The dense set of direction pairs over which errors are measured, n = +z, t = +x: every (l, v) of a grid
+// over the hemisphere (cosines at midpoints of 32 intervals, 32 azimuths each), i.e. 1024 x 1024 pairs.
 std::vector<glm::dvec3> hemisphere_grid()
 {
     std::vector<glm::dvec3> out;
@@ -47,8 +48,7 @@ std::vector<glm::dvec3> hemisphere_grid()
     return out;
 }
 
-template <typename Direct, typename Table>
-BrdfError measure(Direct direct, Table table)
+template <typename Direct, typename Table> BrdfError measure(Direct direct, Table table)
 {
     const std::vector<glm::dvec3> grid = hemisphere_grid();
     struct Sample
@@ -95,27 +95,30 @@ BrdfError measure_tables(const BrdfBakeOptions& o, const std::vector<math::BrdfT
                          const std::vector<std::vector<double>>& scales)
 {
     const glm::dvec3 n(0, 0, 1), t(1, 0, 0);
-    auto at = [&](size_t table, uint32_t channel, double u, double v) {
-        return tables[table].lookup(channel, u, v) * scales[table][channel];
-    };
+    auto at = [&](size_t table, uint32_t channel, double u, double v)
+    { return tables[table].lookup(channel, u, v) * scales[table][channel]; };
     if (o.model == "torrance-sparrow")
     {
         const math::TorranceSparrow m(math::parse_facet_distribution(o.distribution), o.roughness, o.ior);
         return measure([&](const glm::dvec3& l, const glm::dvec3& v) { return m.eval_cos(n, l, v); },
-                       [&](const glm::dvec3& l, const glm::dvec3& v) {
+                       [&](const glm::dvec3& l, const glm::dvec3& v)
+                       {
                            const glm::dvec3 h = glm::normalize(l + v);
                            return at(0, 0, glm::dot(l, h), glm::dot(n, h)) * at(1, 0, l.z, v.z);
                        });
     }
     if (o.model == "banks")
-        return measure(
-            [&](const glm::dvec3& l, const glm::dvec3& v) { return math::banks_eval_cos(n, t, l, v, 1.0, 1.0, o.exponent); },
-            [&](const glm::dvec3& l, const glm::dvec3& v) {
-                return l.z * (at(0, 0, glm::dot(t, l), glm::dot(t, v)) + at(0, 1, glm::dot(t, l), glm::dot(t, v)));
-            });
+        return measure([&](const glm::dvec3& l, const glm::dvec3& v)
+                       { return math::banks_eval_cos(n, t, l, v, 1.0, 1.0, o.exponent); },
+                       [&](const glm::dvec3& l, const glm::dvec3& v) {
+                           return l.z * (at(0, 0, glm::dot(t, l), glm::dot(t, v)) +
+                                         at(0, 1, glm::dot(t, l), glm::dot(t, v)));
+                       });
     const math::LobeModel model = math::parse_lobe_model(o.model);
-    return measure([&](const glm::dvec3& l, const glm::dvec3& v) { return math::lobe_eval_cos(model, o.exponent, n, l, v); },
-                   [&](const glm::dvec3& l, const glm::dvec3& v) {
+    return measure([&](const glm::dvec3& l, const glm::dvec3& v)
+                   { return math::lobe_eval_cos(model, o.exponent, n, l, v); },
+                   [&](const glm::dvec3& l, const glm::dvec3& v)
+                   {
                        double y;
                        if (model == math::LobeModel::BlinnPhong)
                            y = glm::dot(n, glm::normalize(l + v));
@@ -135,7 +138,8 @@ BrdfBake bake_brdf(const BrdfBakeOptions& o)
     {
         check_finite_positive(o.roughness, "--roughness");
         if (!std::isfinite(o.ior) || !(o.ior > 1.0))
-            throw std::invalid_argument("--ior, the index of refraction, must be a finite number > 1, got " + std::to_string(o.ior));
+            throw std::invalid_argument("--ior, the index of refraction, must be a finite number > 1, got " +
+                                        std::to_string(o.ior));
         const math::TorranceSparrow m(math::parse_facet_distribution(o.distribution), o.roughness, o.ior);
         b.tables = math::torrance_sparrow_tables(m, o.size);
     }
@@ -165,7 +169,8 @@ BrdfBake bake_brdf(const BrdfBakeOptions& o)
                     peak = std::max(peak, double(t.values[i]));
                 const double scale = peak > 0.0 ? peak : 1.0;
                 for (size_t i = c; i < t.values.size(); i += t.channels)
-                    t.values[i] = float(std::round(std::clamp(t.values[i] / scale, 0.0, 1.0) * 255.0) / 255.0);
+                    t.values[i] =
+                        float(std::round(std::clamp(t.values[i] / scale, 0.0, 1.0) * 255.0) / 255.0);
                 b.scales[k][c] = scale;
             }
         }
@@ -182,17 +187,21 @@ void write_brdf_exr(const std::filesystem::path& path, const BrdfBakeOptions& o,
         {"hemi.kind", "brdf"},
         {"hemi.model", o.model},
         {"hemi.size", std::to_string(size)},
-        {"hemi.encoding", o.eight_bit ? "unorm8 (value = stored * hemi.<channel>.scale; stored = k / 255)" : "float"},
-        {"hemi.sampling", "sample i of an axis at coordinate i / (size - 1); a shader samples coordinate c at "
-                          "(c * (size - 1) + 0.5) / size; row 0 of the image is axis v = its first coordinate"},
-        {"hemi.convention", "f_r cos(alpha) of the model (hemi's math/brdf.h); directions point away from the surface"},
+        {"hemi.encoding",
+         o.eight_bit ? "unorm8 (value = stored * hemi.<channel>.scale; stored = k / 255)" : "float"},
+        {"hemi.sampling",
+         "sample i of an axis at coordinate i / (size - 1); a shader samples coordinate c at "
+         "(c * (size - 1) + 0.5) / size; row 0 of the image is axis v = its first coordinate"},
+        {"hemi.convention",
+         "f_r cos(alpha) of the model (hemi's math/brdf.h); directions point away from the surface"},
     };
     if (o.model == "torrance-sparrow")
     {
         attrs.emplace_back("hemi.distribution", o.distribution);
         attrs.emplace_back("hemi.roughness", number(o.roughness));
         attrs.emplace_back("hemi.ior", number(o.ior));
-        attrs.emplace_back("hemi.product", "f_r cos(alpha) = FD(cos_theta, cos_delta) * G(cos_alpha, cos_beta)");
+        attrs.emplace_back("hemi.product",
+                           "f_r cos(alpha) = FD(cos_theta, cos_delta) * G(cos_alpha, cos_beta)");
     }
     else
     {
@@ -222,7 +231,8 @@ void write_brdf_exr(const std::filesystem::path& path, const BrdfBakeOptions& o,
 void check_envmap_options(const EnvmapBakeOptions& o)
 {
     if (o.size < 8 || o.size > 4096 || (o.size & (o.size - 1)) != 0)
-        throw std::invalid_argument("--size must be a power of two in [8, 4096], got " + std::to_string(o.size));
+        throw std::invalid_argument("--size must be a power of two in [8, 4096], got " +
+                                    std::to_string(o.size));
     for (double e : o.exponents)
     {
         check_finite_positive(e, "every --exponents value");
@@ -234,7 +244,9 @@ void check_envmap_options(const EnvmapBakeOptions& o)
         throw std::invalid_argument("at most 64 --exponents and 64 --ior values");
     for (double n : o.iors)
         if (!std::isfinite(n) || !(n > 1.0))
-            throw std::invalid_argument("every --ior value (an index of refraction) must be a finite number > 1, got " + std::to_string(n));
+            throw std::invalid_argument(
+                "every --ior value (an index of refraction) must be a finite number > 1, got " +
+                std::to_string(n));
     if (o.fresnel_samples < 2 || o.fresnel_samples > 65536)
         throw std::invalid_argument("the Fresnel table needs 2 to 65536 samples");
 }
@@ -246,16 +258,19 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& env, const EnvmapBakeOptions& o
     if (env.width == 0 || env.height == 0 || env.pixels.size() != size_t(env.width) * env.height * 4)
         throw std::invalid_argument("the environment image is empty or inconsistent");
     if (env.width != 2 * env.height)
-        throw std::invalid_argument("the environment must be an equirectangular (latitude-longitude) image, 2:1; got " +
-                                    std::to_string(env.width) + "x" + std::to_string(env.height));
+        throw std::invalid_argument(
+            "the environment must be an equirectangular (latitude-longitude) image, 2:1; got " +
+            std::to_string(env.width) + "x" + std::to_string(env.height));
     EnvmapBakeStats local;
     EnvmapBakeStats& s = stats ? *stats : local;
-    auto say = [&](const std::string& what) {
+    auto say = [&](const std::string& what)
+    {
         if (progress)
             progress(what);
     };
     using clock = std::chrono::steady_clock;
-    auto seconds = [](clock::time_point t0) { return std::chrono::duration<double>(clock::now() - t0).count(); };
+    auto seconds = [](clock::time_point t0)
+    { return std::chrono::duration<double>(clock::now() - t0).count(); };
 
     io::EnvmapAsset a;
     a.source_width = env.width;
@@ -275,7 +290,8 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& env, const EnvmapBakeOptions& o
     s.diffuse_seconds = seconds(t0);
     for (double e : o.exponents)
     {
-        say("glossy map, exponent " + number(e) + " (" + std::to_string(math::glossy_size(e, o.size)) + "^2)");
+        say("glossy map, exponent " + number(e) + " (" + std::to_string(math::glossy_size(e, o.size)) +
+            "^2)");
         math::PrefilterStats ps;
         a.glossy.push_back(math::prefilter_phong(a.mirror, e, &ps));
         a.exponents.push_back(float(e));
@@ -310,14 +326,16 @@ io::ImageRgba parabolic_half_image(const math::ParabolicImage& map, int half)
     return out;
 }
 
-std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir, const io::EnvmapAsset& a)
+std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir,
+                                                     const io::EnvmapAsset& a)
 {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec)
         throw io::FormatError(dir.string() + ": cannot create the directory: " + ec.message());
     std::vector<std::filesystem::path> written;
-    auto write = [&](const math::ParabolicImage& img, const std::string& stem) {
+    auto write = [&](const math::ParabolicImage& img, const std::string& stem)
+    {
         for (int half = 0; half < 2; ++half)
         {
             const std::filesystem::path p = dir / (stem + (half == 0 ? "_front.exr" : "_back.exr"));

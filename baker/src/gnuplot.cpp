@@ -18,8 +18,8 @@ void run_gnuplot(const std::filesystem::path& png_path,
     const fs::path dir = fs::temp_directory_path() / ("hemi_plot_" + std::to_string(std::random_device{}()));
     // The paths are quoted for the shell; a temporary directory with a quote in its name is refused.
     if (dir.string().find('\'') != std::string::npos)
-        throw std::runtime_error(png_path.string() + ": the temporary directory's path contains a quote: " +
-                                 dir.string());
+        throw std::runtime_error(png_path.string() +
+                                 ": the temporary directory's path contains a quote: " + dir.string());
     fs::create_directories(dir);
     struct Cleanup
     {

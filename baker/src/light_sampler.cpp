@@ -47,7 +47,8 @@ glm::dvec3 EnvironmentSampler::sample(double u0, double u1, double u2, double u3
         h_ - 1, std::upper_bound(row_cdf_.begin() + 1, row_cdf_.end(), target_row) - (row_cdf_.begin() + 1)));
     const double* cdf = &column_cdf_[size_t(y) * (w_ + 1)];
     const double target = u1 * cdf[w_];
-    const uint32_t x = uint32_t(std::min<ptrdiff_t>(w_ - 1, std::upper_bound(cdf + 1, cdf + w_ + 1, target) - (cdf + 1)));
+    const uint32_t x =
+        uint32_t(std::min<ptrdiff_t>(w_ - 1, std::upper_bound(cdf + 1, cdf + w_ + 1, target) - (cdf + 1)));
     const double z0 = std::cos(M_PI * y / h_), z1 = std::cos(M_PI * (y + 1) / h_);
     const double z = z0 + (z1 - z0) * u2;
     const double phi = M_PI - 2.0 * M_PI * (x + u3) / w_; // u = 0.5 - phi / 2 pi
@@ -79,9 +80,9 @@ void check_lights(const LightmapLights& l)
                 throw std::invalid_argument("the environment image holds a value that is not finite");
     }
     for (const io::PunctualLight& p : l.punctual)
-        if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) || !finite3(p.direction) ||
-            glm::length(p.direction) < 1e-6f || !std::isfinite(p.range) || !std::isfinite(p.inner_cone) ||
-            !std::isfinite(p.outer_cone))
+        if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) ||
+            !finite3(p.direction) || glm::length(p.direction) < 1e-6f || !std::isfinite(p.range) ||
+            !std::isfinite(p.inner_cone) || !std::isfinite(p.outer_cone))
             throw std::invalid_argument("punctual light '" + p.name +
                                         "' has a value that is not finite or a direction of zero length");
     if (l.sun)
@@ -111,7 +112,8 @@ LightSampler::LightSampler(const LightmapLights& lights, uint64_t seed)
     }
 }
 
-bool LightSampler::environment_ray(uint64_t item, int r, int count, glm::vec3& direction, double& weight) const
+bool LightSampler::environment_ray(uint64_t item, int r, int count, glm::vec3& direction,
+                                   double& weight) const
 {
     if (!image_env_ || env_.empty())
         return false;
@@ -121,7 +123,8 @@ bool LightSampler::environment_ray(uint64_t item, int r, int count, glm::vec3& d
                      double(uniform01(env_seed_, item, uint64_t(4 * count)));
     stratum -= std::floor(stratum);
     // The second dimension on a golden-ratio lattice against the first: low discrepancy in both.
-    double across = double(r) * 0.6180339887498949 + double(uniform01(env_seed_, item, uint64_t(4 * count + 1)));
+    double across =
+        double(r) * 0.6180339887498949 + double(uniform01(env_seed_, item, uint64_t(4 * count + 1)));
     across -= std::floor(across);
     double pdf = 0.0;
     const glm::dvec3 world = env_.sample(stratum, across, uniform01(env_seed_, item, uint64_t(4 * r + 2)),
@@ -138,10 +141,12 @@ glm::vec3 LightSampler::sun_ray(uint64_t item, int r) const
     const double z = 1.0 - (1.0 - cos_half_) * double(uniform01(sun_seed_, item, uint64_t(2 * r)));
     const double phi = 2.0 * M_PI * double(uniform01(sun_seed_, item, uint64_t(2 * r + 1)));
     const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-    return glm::normalize(float(z) * sun_axis_ + float(s * std::cos(phi)) * sun_u_ + float(s * std::sin(phi)) * sun_v_);
+    return glm::normalize(float(z) * sun_axis_ + float(s * std::cos(phi)) * sun_u_ +
+                          float(s * std::sin(phi)) * sun_v_);
 }
 
-glm::vec3 LightSampler::punctual(const io::PunctualLight& p, const glm::vec3& at, glm::vec3& d, float& distance) const
+glm::vec3 LightSampler::punctual(const io::PunctualLight& p, const glm::vec3& at, glm::vec3& d,
+                                 float& distance) const
 {
     distance = INFINITY;
     glm::vec3 e = p.color * p.intensity;

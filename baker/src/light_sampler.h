@@ -19,25 +19,25 @@ namespace hemi::bake::detail
 // pixel. pdf(d) = weight(pixel) / (sum of weights * solid angle(pixel)). Directions in world space.
 class EnvironmentSampler
 {
-public:
+  public:
     explicit EnvironmentSampler(const io::ImageRgba& env);
     bool empty() const { return !(total_ > 0.0); }
     // A direction from four uniform numbers in [0, 1), with its pdf.
     glm::dvec3 sample(double u0, double u1, double u2, double u3, double& pdf) const;
 
-private:
+  private:
     uint32_t w_, h_;
     std::vector<double> weight_, row_cdf_, column_cdf_;
     double total_ = 0.0;
 };
 
-// Throws std::invalid_argument for lights with a value that is not finite, a sun direction of zero length or a
-// sun diameter outside [0, 90) degrees.
+// Throws std::invalid_argument for lights with a value that is not finite, a sun direction of zero length or
+// a sun diameter outside [0, 90) degrees.
 void check_lights(const LightmapLights& lights);
 
 class LightSampler
 {
-public:
+  public:
     // `lights` must outlive the sampler; `seed` is the bake's (the sampler derives its own streams from it).
     LightSampler(const LightmapLights& lights, uint64_t seed);
 
@@ -53,9 +53,10 @@ public:
     // What punctual light `light` gives point `p` (mesh space): the direction towards it, the distance to it
     // (INFINITY for a directional light) and the irradiance on a surface facing it (I / d^2 with glTF's
     // range window and smooth spot cone, times the colour; zero outside the cone or the range).
-    glm::vec3 punctual(const io::PunctualLight& light, const glm::vec3& p, glm::vec3& direction, float& distance) const;
+    glm::vec3 punctual(const io::PunctualLight& light, const glm::vec3& p, glm::vec3& direction,
+                       float& distance) const;
 
-private:
+  private:
     const LightmapLights* lights_;
     bool image_env_;
     EnvironmentSampler env_;

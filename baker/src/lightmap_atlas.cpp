@@ -59,7 +59,8 @@ bool overlaps_square(const dvec2 t[3], double x0, double y0)
 bool clipped_centroid(const dvec2 t[3], double x0, double y0, dvec2& centroid)
 {
     std::vector<dvec2> poly(t, t + 3), next;
-    auto clip = [&](int axis, double bound, bool keep_below) {
+    auto clip = [&](int axis, double bound, bool keep_below)
+    {
         next.clear();
         for (size_t i = 0; i < poly.size(); ++i)
         {
@@ -127,8 +128,8 @@ std::string uv_text(const glm::vec2& uv)
 
 } // namespace
 
-LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
-                                 const std::vector<TriangleRange>& ranges)
+LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
+                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges)
 {
     if (width == 0 || height == 0 || width > 16384 || height > 16384)
         throw std::invalid_argument("lightmap size " + std::to_string(width) + "x" + std::to_string(height) +
@@ -137,17 +138,20 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3 != 0)
         throw std::invalid_argument("the mesh has no triangles");
     if (mesh.uvs1.size() != n)
-        throw std::invalid_argument("the mesh has no lightmap UVs (TEXCOORD_1): " + std::to_string(mesh.uvs1.size()) +
-                                    " for " + std::to_string(n) + " vertices");
+        throw std::invalid_argument(
+            "the mesh has no lightmap UVs (TEXCOORD_1): " + std::to_string(mesh.uvs1.size()) + " for " +
+            std::to_string(n) + " vertices");
     if (mesh.normals.size() != n || mesh.tangents.size() != n)
         throw std::invalid_argument("the mesh needs a normal and a tangent per vertex for lightmap frames");
     for (uint32_t i : mesh.indices)
         if (i >= n)
             throw std::invalid_argument("triangle index " + std::to_string(i) + " out of range");
     for (size_t i = 0; i < n; ++i)
-        if (!std::isfinite(mesh.uvs1[i].x) || !std::isfinite(mesh.uvs1[i].y) || !std::isfinite(mesh.positions[i].x) ||
-            !std::isfinite(mesh.positions[i].y) || !std::isfinite(mesh.positions[i].z))
-            throw std::invalid_argument("vertex " + std::to_string(i) + " has a non-finite position or lightmap UV");
+        if (!std::isfinite(mesh.uvs1[i].x) || !std::isfinite(mesh.uvs1[i].y) ||
+            !std::isfinite(mesh.positions[i].x) || !std::isfinite(mesh.positions[i].y) ||
+            !std::isfinite(mesh.positions[i].z))
+            throw std::invalid_argument("vertex " + std::to_string(i) +
+                                        " has a non-finite position or lightmap UV");
 
     report = {};
     const size_t triangles = mesh.indices.size() / 3;
@@ -194,8 +198,10 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 example_degenerate = t;
             continue;
         }
-        const double lo_x = std::min({uv[0].x, uv[1].x, uv[2].x}), hi_x = std::max({uv[0].x, uv[1].x, uv[2].x});
-        const double lo_y = std::min({uv[0].y, uv[1].y, uv[2].y}), hi_y = std::max({uv[0].y, uv[1].y, uv[2].y});
+        const double lo_x = std::min({uv[0].x, uv[1].x, uv[2].x}),
+                     hi_x = std::max({uv[0].x, uv[1].x, uv[2].x});
+        const double lo_y = std::min({uv[0].y, uv[1].y, uv[2].y}),
+                     hi_y = std::max({uv[0].y, uv[1].y, uv[2].y});
         const int64_t x_begin = std::max<int64_t>(0, int64_t(std::floor(lo_x))),
                       x_end = std::min<int64_t>(width - 1, int64_t(std::floor(hi_x)));
         const int64_t y_begin = std::max<int64_t>(0, int64_t(std::floor(lo_y))),
@@ -268,13 +274,15 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         glm::dvec3 nrm = b.x * glm::dvec3(mesh.normals[idx[0]]) + b.y * glm::dvec3(mesh.normals[idx[1]]) +
                          b.z * glm::dvec3(mesh.normals[idx[2]]);
         nrm = glm::length(nrm) > 1e-12 ? glm::normalize(nrm) : g;
-        const glm::dvec4 t4 = b.x * glm::dvec4(mesh.tangents[idx[0]]) + b.y * glm::dvec4(mesh.tangents[idx[1]]) +
+        const glm::dvec4 t4 = b.x * glm::dvec4(mesh.tangents[idx[0]]) +
+                              b.y * glm::dvec4(mesh.tangents[idx[1]]) +
                               b.z * glm::dvec4(mesh.tangents[idx[2]]);
         glm::dvec3 tan = glm::dvec3(t4) - nrm * glm::dot(nrm, glm::dvec3(t4));
         if (glm::length(tan) < 1e-9)
         {
             // No usable tangent: any direction orthogonal to the normal.
-            tan = std::abs(nrm.x) < 0.9 ? glm::cross(nrm, glm::dvec3(1, 0, 0)) : glm::cross(nrm, glm::dvec3(0, 1, 0));
+            tan = std::abs(nrm.x) < 0.9 ? glm::cross(nrm, glm::dvec3(1, 0, 0))
+                                        : glm::cross(nrm, glm::dvec3(0, 1, 0));
         }
         tan = glm::normalize(tan);
         const double w = mesh.tangents[idx[0]].w < 0.0f ? -1.0 : 1.0;
@@ -320,18 +328,17 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         report.min_texel_size = 0.0f;
 
     if (report.overlapping_texels)
-        report.problems.push_back(std::to_string(report.overlapping_texels) +
-                                  " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
-                                  std::to_string(report.overlap_example[0]) + " and " +
-                                  std::to_string(report.overlap_example[1]) +
-                                  "): lightmap UVs (TEXCOORD_1) must not overlap; re-unwrap the scene or bake "
-                                  "with --unwrap");
+        report.problems.push_back(
+            std::to_string(report.overlapping_texels) +
+            " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
+            std::to_string(report.overlap_example[0]) + " and " + std::to_string(report.overlap_example[1]) +
+            "): lightmap UVs (TEXCOORD_1) must not overlap; re-unwrap the scene or bake "
+            "with --unwrap");
     if (report.outside)
-        report.warnings.push_back(std::to_string(report.outside) +
-                                  " triangle(s) have lightmap UVs outside [0, 1] (e.g. triangle " +
-                                  std::to_string(example_outside) + " at " +
-                                  uv_text(mesh.uvs1[mesh.indices[example_outside * 3]]) +
-                                  "): only their part inside the atlas is baked");
+        report.warnings.push_back(
+            std::to_string(report.outside) + " triangle(s) have lightmap UVs outside [0, 1] (e.g. triangle " +
+            std::to_string(example_outside) + " at " + uv_text(mesh.uvs1[mesh.indices[example_outside * 3]]) +
+            "): only their part inside the atlas is baked");
     if (report.degenerate)
         report.warnings.push_back(std::to_string(report.degenerate) +
                                   " triangle(s) have no area in lightmap UV space (e.g. triangle " +

@@ -5,11 +5,11 @@
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/ray_generator.h>
+#include <hemi/io/image.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/rnm_basis.h>
 #include <hemi/math/sh.h>
 #include <hemi/math/sh_environment.h>
-#include <hemi/io/image.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -17,9 +17,9 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
-#include <cstddef>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -63,13 +63,15 @@ LightmapSurfaces::LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::M
     {
         for (const io::TextureRef* t : {&m.base_color, &m.emissive, &m.normal})
             if (t->present() && size_t(t->image) >= images_.size())
-                throw std::invalid_argument("hemi: material '" + m.name + "' uses image " + std::to_string(t->image) +
-                                            " of " + std::to_string(images_.size()));
+                throw std::invalid_argument("hemi: material '" + m.name + "' uses image " +
+                                            std::to_string(t->image) + " of " +
+                                            std::to_string(images_.size()));
         emissive_ = emissive_ || m.emissive_factor != glm::vec3(0.0f);
     }
 }
 
-glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, float bu, float bv, bool srgb) const
+glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, float bu, float bv,
+                                   bool srgb) const
 {
     if (!t.present())
         return glm::vec4(1.0f);
@@ -80,7 +82,8 @@ glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, f
     const glm::vec2 uv = (1.0f - bu - bv) * set[idx[0]] + bu * set[idx[1]] + bv * set[idx[2]];
     const glm::vec2 st = glm::vec2(t.uv_transform() * glm::vec3(uv, 1.0f));
     const io::ImageRgba8& im = images_[size_t(t.image)];
-    auto wrap = [](int64_t i, int64_t n, io::Wrap mode) {
+    auto wrap = [](int64_t i, int64_t n, io::Wrap mode)
+    {
         if (mode == io::Wrap::ClampToEdge)
             return std::clamp<int64_t>(i, 0, n - 1);
         if (mode == io::Wrap::MirroredRepeat)
@@ -93,9 +96,11 @@ glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, f
     const double fx = double(st.x) * im.width - 0.5, fy = double(st.y) * im.height - 0.5;
     const double x0 = std::floor(fx), y0 = std::floor(fy);
     const float tx = float(fx - x0), ty = float(fy - y0);
-    auto texel = [&](int64_t x, int64_t y) {
+    auto texel = [&](int64_t x, int64_t y)
+    {
         const uint8_t* p = &im.pixels[(size_t(wrap(y, im.height, t.sampler.wrap_t)) * im.width +
-                                       size_t(wrap(x, im.width, t.sampler.wrap_s))) * 4];
+                                       size_t(wrap(x, im.width, t.sampler.wrap_s))) *
+                                      4];
         glm::vec4 c(p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f, p[3] / 255.0f);
         if (srgb)
             c = glm::vec4(io::srgb_eotf(c.r), io::srgb_eotf(c.g), io::srgb_eotf(c.b), c.a);
@@ -147,7 +152,8 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
     if (o.rays < 1 || o.rays > (1 << 20))
         throw std::invalid_argument("rays per texel " + std::to_string(o.rays) + " is not in [1, 2^20]");
     if (o.sun_rays < 1 || o.sun_rays > (1 << 16))
-        throw std::invalid_argument("sun rays per texel " + std::to_string(o.sun_rays) + " is not in [1, 65536]");
+        throw std::invalid_argument("sun rays per texel " + std::to_string(o.sun_rays) +
+                                    " is not in [1, 65536]");
     if (!(o.ray_offset >= 0.0f) || !std::isfinite(o.ray_offset))
         throw std::invalid_argument("the ray offset must be >= 0");
     if (o.bounces < 0 || o.bounces > 16)
@@ -155,22 +161,37 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
     detail::check_lights(l);
 }
 
-uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l, const LightmapBakeOptions& o,
-                const LightmapSurfaces* surfaces, std::span<const io::Material> materials)
+uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l,
+                const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
+                std::span<const io::Material> materials)
 {
     CheckpointKey key(kLightmapCheckpointVersion);
-    key.add_array(std::span<const glm::vec3>(mesh.positions)).add_array(std::span<const uint32_t>(mesh.indices));
+    key.add_array(std::span<const glm::vec3>(mesh.positions))
+        .add_array(std::span<const uint32_t>(mesh.indices));
     key.add_array(std::span<const glm::vec2>(mesh.uvs1)).add_array(std::span<const glm::vec3>(mesh.normals));
     key.add_array(std::span<const glm::vec4>(mesh.tangents));
     key.add_value(atlas.width).add_value(atlas.height);
     key.add_value(l.uniform).add_value(l.environment.width).add_value(l.environment.height);
     key.add_array(std::span<const float>(l.environment.pixels)).add_value(l.environment_scale);
-    key.add_value(l.sun).add_value(l.sun_direction).add_value(l.sun_irradiance).add_value(l.sun_diameter_degrees);
+    key.add_value(l.sun)
+        .add_value(l.sun_direction)
+        .add_value(l.sun_irradiance)
+        .add_value(l.sun_diameter_degrees);
     key.add_value(l.scene_to_world);
     for (const io::PunctualLight& p : l.punctual)
-        key.add_value(int(p.type)).add_value(p.color).add_value(p.intensity).add_value(p.range).add_value(p.inner_cone)
-            .add_value(p.outer_cone).add_value(p.position).add_value(p.direction);
-    key.add_value(o.rays).add_value(o.sun_rays).add_value(o.seed).add_value(o.ray_offset).add_value(o.bounces);
+        key.add_value(int(p.type))
+            .add_value(p.color)
+            .add_value(p.intensity)
+            .add_value(p.range)
+            .add_value(p.inner_cone)
+            .add_value(p.outer_cone)
+            .add_value(p.position)
+            .add_value(p.direction);
+    key.add_value(o.rays)
+        .add_value(o.sun_rays)
+        .add_value(o.seed)
+        .add_value(o.ray_offset)
+        .add_value(o.bounces);
     key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
     for (const io::Material& m : materials)
         key.add_value(m.base_color_factor).add_value(m.emissive_factor).add_value(m.double_sided);
@@ -186,8 +207,8 @@ namespace
 {
 // Per texel values spread to the whole atlas: covered texels hold theirs, empty ones within `dilate` texels
 // of a chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel.
-std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
-                               std::span<const uint8_t> valid = {})
+std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k,
+                               int dilate, std::span<const uint8_t> valid = {})
 {
     const uint32_t w = atlas.width, h = atlas.height;
     const size_t plane = size_t(w) * h;
@@ -242,12 +263,14 @@ glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const s
                        uint32_t triangle, float bu, float bv)
 {
     const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
-    const glm::vec2 uv = (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
+    const glm::vec2 uv =
+        (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
     const double fx = std::clamp(double(uv.x), 0.0, 1.0) * atlas.width - 0.5;
     const double fy = std::clamp(double(uv.y), 0.0, 1.0) * atlas.height - 0.5;
     const double x0 = std::floor(fx), y0 = std::floor(fy);
     const float tx = float(fx - x0), ty = float(fy - y0);
-    auto at = [&](int64_t x, int64_t y) {
+    auto at = [&](int64_t x, int64_t y)
+    {
         x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
         y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
         return map[size_t(y) * atlas.width + size_t(x)];
@@ -291,58 +314,65 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.valid.assign(n, 1);
     std::vector<uint8_t> pushed(n, 0);
     std::vector<glm::vec3> previous_map; // `previous` over the whole atlas, dilated, for bilinear lookups
-    auto lookup_previous = [&](uint32_t triangle, float bu, float bv) {
-        return atlas_lookup(mesh, atlas, previous_map, triangle, bu, bv);
-    };
+    auto lookup_previous = [&](uint32_t triangle, float bu, float bv)
+    { return atlas_lookup(mesh, atlas, previous_map, triangle, bu, bv); };
 
     // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
     // or under one, seen from the wall's back) is moved through that surface to its front, so it sees what
-    // the visible side of its footprint sees. Eight rays in the texel's plane, as long as half the footprint's
-    // diagonal, look for the nearest back face.
-    auto is_back_face = [&](uint32_t primitive, const glm::vec3& d) {
-        return glm::dot(scene.geometric_normal(primitive), d) > 0.0f && !(surfaces && surfaces->double_sided(primitive));
+    // the visible side of its footprint sees. Eight rays in the texel's plane, as long as half the
+    // footprint's diagonal, look for the nearest back face.
+    auto is_back_face = [&](uint32_t primitive, const glm::vec3& d)
+    {
+        return glm::dot(scene.geometric_normal(primitive), d) > 0.0f &&
+               !(surfaces && surfaces->double_sided(primitive));
     };
     std::vector<glm::vec3> origins(n);
-    tbb::parallel_for(uint32_t(0), n, [&](uint32_t i) {
-        const LightmapTexel& t = atlas.texels[i];
-        glm::vec3 p = t.position;
-        const glm::vec3 g = t.geometric_normal;
-        glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
-        if (glm::length(u) < 1e-6f)
-            u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0)) : glm::cross(g, glm::vec3(0, 1, 0));
-        u = glm::normalize(u);
-        const glm::vec3 v = glm::cross(g, u);
-        const float reach = 0.5f * float(M_SQRT2) * t.world_size;
-        const glm::vec3 from = offset_ray_origin(p, g, offset);
-        float nearest = INFINITY;
-        glm::vec3 along(0.0f);
-        for (int k = 0; k < 8; ++k)
-        {
-            const float a = float(k) * float(M_PI) / 4.0f;
-            const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
-            const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
-            if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
-            {
-                nearest = hit->distance;
-                along = d;
-            }
-        }
-        if (std::isfinite(nearest))
-        {
-            p = p + along * (nearest + 4.0f * offset);
-            pushed[i] = 1;
-        }
-        origins[i] = offset_ray_origin(p, g, offset);
-    });
+    tbb::parallel_for(uint32_t(0), n,
+                      [&](uint32_t i)
+                      {
+                          const LightmapTexel& t = atlas.texels[i];
+                          glm::vec3 p = t.position;
+                          const glm::vec3 g = t.geometric_normal;
+                          glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
+                          if (glm::length(u) < 1e-6f)
+                              u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0))
+                                                       : glm::cross(g, glm::vec3(0, 1, 0));
+                          u = glm::normalize(u);
+                          const glm::vec3 v = glm::cross(g, u);
+                          const float reach = 0.5f * float(M_SQRT2) * t.world_size;
+                          const glm::vec3 from = offset_ray_origin(p, g, offset);
+                          float nearest = INFINITY;
+                          glm::vec3 along(0.0f);
+                          for (int k = 0; k < 8; ++k)
+                          {
+                              const float a = float(k) * float(M_PI) / 4.0f;
+                              const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
+                              const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
+                              if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
+                              {
+                                  nearest = hit->distance;
+                                  along = d;
+                              }
+                          }
+                          if (std::isfinite(nearest))
+                          {
+                              p = p + along * (nearest + 4.0f * offset);
+                              pushed[i] = 1;
+                          }
+                          origins[i] = offset_ray_origin(p, g, offset);
+                      });
 
-    auto texel = [&](uint32_t i, int pass) {
+    auto texel = [&](uint32_t i, int pass)
+    {
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
         const glm::vec3 origin = origins[i];
         int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
-        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance) {
-            const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent), glm::dot(world, t.normal));
+        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance)
+        {
+            const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
+                                  glm::dot(world, t.normal));
             const math::Sh9 y = math::sh9_eval(local);
             for (int j = 0; j < 9; ++j)
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
@@ -374,9 +404,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             }
             if (!surfaces)
                 continue;
-            glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
-                                           : surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                                                 lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
+            glm::vec3 radiance = pass == 0
+                                     ? surfaces->emission(hit->primitive, hit->u, hit->v)
+                                     : surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                                           lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight);
         }
@@ -385,8 +416,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             {
                 glm::vec3 d;
                 double w = 0.0;
-                if (!light.environment_ray(item, r, o.rays, d, w) || glm::dot(d, t.geometric_normal) <= 0.0f ||
-                    glm::dot(d, t.normal) <= 0.0f || scene.occluded(origin, d))
+                if (!light.environment_ray(item, r, o.rays, d, w) ||
+                    glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
+                    scene.occluded(origin, d))
                     continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
                 add(d, glm::dvec3(lights.environment_radiance(d)) * w);
             }
@@ -408,12 +440,13 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (e == glm::vec3(0.0f) || glm::dot(d, t.geometric_normal) <= 0.0f)
                     continue;
                 // The shadow ray stops short of the light (it must not hit geometry behind it).
-                if (scene.occluded(origin, d, 0.0f, std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+                if (scene.occluded(origin, d, 0.0f,
+                                   std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
                     continue;
                 add(d, glm::dvec3(e));
             }
-        // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value comes
-        // from its valid neighbours (dilation), in the outputs and for the bounces.
+        // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value
+        // comes from its valid neighbours (dilation), in the outputs and for the bounces.
         if (pass == 0)
             out.valid[i] = uint8_t(2 * back_faces <= o.rays);
         math::Sh9Rgb radiance;
@@ -423,9 +456,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     };
 
     using ShArray = std::array<glm::vec3, 9>;
-    SliceCheckpoint checkpoint(o.checkpoint, key_of(mesh, atlas, lights, o, surfaces,
-                                                    surfaces ? std::span<const io::Material>(surfaces->materials())
-                                                             : std::span<const io::Material>()),
+    SliceCheckpoint checkpoint(o.checkpoint,
+                               key_of(mesh, atlas, lights, o, surfaces,
+                                      surfaces ? std::span<const io::Material>(surfaces->materials())
+                                               : std::span<const io::Material>()),
                                uint32_t(passes), n,
                                {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
                                 {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
@@ -437,7 +471,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         state = *resumed;
         out.resumed = true;
     }
-    const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) + (lights.sun ? uint64_t(o.sun_rays) : 0) +
+    const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
+                                    (lights.sun ? uint64_t(o.sun_rays) : 0) +
                                     uint64_t(lights.punctual.size());
     const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, n));
     const auto t0 = std::chrono::steady_clock::now();
@@ -452,7 +487,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         {
             const uint32_t last = std::min(n, first + slice);
             tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 64),
-                              [&](const tbb::blocked_range<uint32_t>& r) {
+                              [&](const tbb::blocked_range<uint32_t>& r)
+                              {
                                   for (uint32_t i = r.begin(); i != r.end(); ++i)
                                       texel(i, pass);
                               });
@@ -526,76 +562,83 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
-    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, n, 1), [&](const tbb::blocked_range<uint64_t>& range) {
-        for (uint64_t at = range.begin(); at != range.end(); ++at)
+    tbb::parallel_for(
+        tbb::blocked_range<uint64_t>(0, n, 1),
+        [&](const tbb::blocked_range<uint64_t>& range)
         {
-            const uint32_t i = uint32_t(at % probes.count.x), j = uint32_t((at / probes.count.x) % probes.count.y),
-                           k = uint32_t(at / (uint64_t(probes.count.x) * probes.count.y));
-            const glm::vec3 p = probes.position(i, j, k);
-            std::array<glm::dvec3, 9> acc{};
-            auto add = [&](const glm::vec3& d, const glm::dvec3& radiance) {
-                const math::Sh9 y = math::sh9_eval(d);
+            for (uint64_t at = range.begin(); at != range.end(); ++at)
+            {
+                const uint32_t i = uint32_t(at % probes.count.x),
+                               j = uint32_t((at / probes.count.x) % probes.count.y),
+                               k = uint32_t(at / (uint64_t(probes.count.x) * probes.count.y));
+                const glm::vec3 p = probes.position(i, j, k);
+                std::array<glm::dvec3, 9> acc{};
+                auto add = [&](const glm::vec3& d, const glm::dvec3& radiance)
+                {
+                    const math::Sh9 y = math::sh9_eval(d);
+                    for (int c = 0; c < 9; ++c)
+                        acc[size_t(c)] += radiance * double(y[size_t(c)]);
+                };
+                int back_faces = 0;
+                const double weight = 4.0 * M_PI / double(o.rays);
+                for (int r = 0; r < o.rays; ++r)
+                {
+                    const glm::vec3 d = sphere_direction(probe_seed, at, r, o.rays);
+                    const std::optional<RayHit> hit = scene.intersect(p, d);
+                    if (!hit)
+                    {
+                        if (!light.image_environment())
+                            add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+                        continue;
+                    }
+                    if (glm::dot(scene.geometric_normal(hit->primitive), d) > 0.0f &&
+                        !(surfaces && surfaces->double_sided(hit->primitive)))
+                    {
+                        ++back_faces;
+                        continue;
+                    }
+                    if (!surfaces)
+                        continue;
+                    const glm::vec3 radiance =
+                        surfaces->emission(hit->primitive, hit->u, hit->v) +
+                        surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                            atlas_lookup(mesh, atlas, map, hit->primitive, hit->u, hit->v) / float(M_PI);
+                    add(d, glm::dvec3(radiance) * weight);
+                }
+                const uint64_t item =
+                    uint64_t(1) << 40 | at; // the light samplers' items, apart from the texels'
+                for (int r = 0; r < o.rays && light.image_environment(); ++r)
+                {
+                    glm::vec3 d;
+                    double w = 0.0;
+                    if (light.environment_ray(item, r, o.rays, d, w) && !scene.occluded(p, d))
+                        add(d, glm::dvec3(lights.environment_radiance(d)) * w);
+                }
+                for (int r = 0; r < o.sun_rays && lights.sun; ++r)
+                {
+                    const glm::vec3 d = light.sun_ray(item, r);
+                    if (!scene.occluded(p, d))
+                        add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
+                }
+                for (const io::PunctualLight& l : lights.punctual)
+                {
+                    glm::vec3 d;
+                    float distance = INFINITY;
+                    const glm::vec3 e = light.punctual(l, p, d, distance);
+                    if (e != glm::vec3(0.0f) &&
+                        !scene.occluded(p, d, 0.0f,
+                                        std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+                        add(d, glm::dvec3(e));
+                }
+                math::Sh9Rgb radiance;
                 for (int c = 0; c < 9; ++c)
-                    acc[size_t(c)] += radiance * double(y[size_t(c)]);
-            };
-            int back_faces = 0;
-            const double weight = 4.0 * M_PI / double(o.rays);
-            for (int r = 0; r < o.rays; ++r)
-            {
-                const glm::vec3 d = sphere_direction(probe_seed, at, r, o.rays);
-                const std::optional<RayHit> hit = scene.intersect(p, d);
-                if (!hit)
-                {
-                    if (!light.image_environment())
-                        add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
-                    continue;
-                }
-                if (glm::dot(scene.geometric_normal(hit->primitive), d) > 0.0f &&
-                    !(surfaces && surfaces->double_sided(hit->primitive)))
-                {
-                    ++back_faces;
-                    continue;
-                }
-                if (!surfaces)
-                    continue;
-                const glm::vec3 radiance = surfaces->emission(hit->primitive, hit->u, hit->v) +
-                                           surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                                               atlas_lookup(mesh, atlas, map, hit->primitive, hit->u, hit->v) /
-                                               float(M_PI);
-                add(d, glm::dvec3(radiance) * weight);
+                    radiance[size_t(c)] = glm::vec3(acc[size_t(c)]);
+                const math::Sh9Rgb e = math::convolve_cosine(radiance);
+                for (int c = 0; c < 9; ++c)
+                    probes.irradiance[at][size_t(c)] = e[size_t(c)];
+                probes.valid[at] = uint8_t(2 * back_faces <= o.rays);
             }
-            const uint64_t item = uint64_t(1) << 40 | at; // the light samplers' items, apart from the texels'
-            for (int r = 0; r < o.rays && light.image_environment(); ++r)
-            {
-                glm::vec3 d;
-                double w = 0.0;
-                if (light.environment_ray(item, r, o.rays, d, w) && !scene.occluded(p, d))
-                    add(d, glm::dvec3(lights.environment_radiance(d)) * w);
-            }
-            for (int r = 0; r < o.sun_rays && lights.sun; ++r)
-            {
-                const glm::vec3 d = light.sun_ray(item, r);
-                if (!scene.occluded(p, d))
-                    add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
-            }
-            for (const io::PunctualLight& l : lights.punctual)
-            {
-                glm::vec3 d;
-                float distance = INFINITY;
-                const glm::vec3 e = light.punctual(l, p, d, distance);
-                if (e != glm::vec3(0.0f) &&
-                    !scene.occluded(p, d, 0.0f, std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
-                    add(d, glm::dvec3(e));
-            }
-            math::Sh9Rgb radiance;
-            for (int c = 0; c < 9; ++c)
-                radiance[size_t(c)] = glm::vec3(acc[size_t(c)]);
-            const math::Sh9Rgb e = math::convolve_cosine(radiance);
-            for (int c = 0; c < 9; ++c)
-                probes.irradiance[at][size_t(c)] = e[size_t(c)];
-            probes.valid[at] = uint8_t(2 * back_faces <= o.rays);
-        }
-    });
+        });
 }
 
 int lightmap_output_size(std::string_view name)
@@ -610,8 +653,8 @@ int lightmap_output_size(std::string_view name)
 namespace
 {
 // Every output is a linear map of the SH9 irradiance: K x 9, row-major. "plain" is the row y(+z), "rnm" the
-// rows y(B_i) times 2 / (1 + B_i.z), "sh9" the identity, every other basis its hemispherical projection (quadrature: computed once
-// per output and kept).
+// rows y(B_i) times 2 / (1 + B_i.z), "sh9" the identity, every other basis its hemispherical projection
+// (quadrature: computed once per output and kept).
 const std::vector<double>& output_matrix(std::string_view name)
 {
     static std::mutex lock;
@@ -620,7 +663,8 @@ const std::vector<double>& output_matrix(std::string_view name)
     if (const auto it = cache.find(name); it != cache.end())
         return it->second;
     std::vector<double> m;
-    auto row = [&](const glm::vec3& d) {
+    auto row = [&](const glm::vec3& d)
+    {
         const math::Sh9 y = math::sh9_eval(d);
         m.insert(m.end(), y.begin(), y.end());
     };
@@ -671,7 +715,8 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
     return out;
 }
 
-std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh, int dilate)
+std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
+                                 int dilate)
 {
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel

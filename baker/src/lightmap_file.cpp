@@ -2,11 +2,11 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/lightmap_unwrap.h>
-#include <hemi/math/camera.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
+#include <hemi/math/camera.h>
 
 #include <nlohmann/json.hpp>
 
@@ -31,7 +31,8 @@ std::filesystem::path exr_path(const std::filesystem::path& dir, const std::file
 
 } // namespace
 
-LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, const std::filesystem::path& asset_path,
+LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
+                                       const std::filesystem::path& asset_path,
                                        const LightmapFileOptions& options,
                                        const std::function<void(const LightmapProgress&)>& progress)
 {
@@ -46,7 +47,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     if (o.probes != glm::uvec3(0) && (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0))
         throw std::invalid_argument("--probes needs at least one probe along each axis");
     if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
-        throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) + " is not in [1, 2^20]");
+        throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) +
+                                    " is not in [1, 2^20]");
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
     // Fail fast: every output's folder before the scene is even read.
@@ -79,10 +81,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
         o.height = r.height;
     }
     else if (scene.mesh.uvs1.size() != scene.mesh.vertex_count())
-        throw io::FormatError(scene_path.string() +
-                              ": has no lightmap UVs (TEXCOORD_1): give every mesh a second UV set laid out for the "
-                              "lightmap (Blender: a second UV map, e.g. from Lightmap Pack), or let hemi make "
-                              "planar charts with --unwrap");
+        throw io::FormatError(
+            scene_path.string() +
+            ": has no lightmap UVs (TEXCOORD_1): give every mesh a second UV set laid out for the "
+            "lightmap (Blender: a second UV map, e.g. from Lightmap Pack), or let hemi make "
+            "planar charts with --unwrap");
     summary.triangles = scene.mesh.indices.size() / 3;
     summary.materials = scene.materials.size();
     summary.primitives = scene.primitives.size();
@@ -94,9 +97,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     {
         const io::Primitive& p = scene.primitives[i];
         const uint32_t material = p.material;
-        const std::string name = material < scene.materials.size() && !scene.materials[material].name.empty()
-                                     ? "primitive " + std::to_string(i) + " (" + scene.materials[material].name + ")"
-                                     : "primitive " + std::to_string(i);
+        const std::string name =
+            material < scene.materials.size() && !scene.materials[material].name.empty()
+                ? "primitive " + std::to_string(i) + " (" + scene.materials[material].name + ")"
+                : "primitive " + std::to_string(i);
         ranges.push_back({p.first_index / 3, p.index_count / 3, name});
     }
 
@@ -115,7 +119,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
                 const glm::dvec3 a(m.positions[m.indices[t]]), b(m.positions[m.indices[t + 1]]),
                     c(m.positions[m.indices[t + 2]]);
                 world += 0.5 * glm::length(glm::cross(b - a, c - a));
-                const glm::dvec2 p(m.uvs1[m.indices[t]]), q(m.uvs1[m.indices[t + 1]]), r(m.uvs1[m.indices[t + 2]]);
+                const glm::dvec2 p(m.uvs1[m.indices[t]]), q(m.uvs1[m.indices[t + 1]]),
+                    r(m.uvs1[m.indices[t + 2]]);
                 uv += 0.5 * std::abs((q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x));
             }
             const double side = uv > 0.0 ? std::sqrt(world / uv) / double(o.texel_size) : 512.0;
@@ -156,7 +161,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
     for (const std::string& name : o.outputs)
-        asset.outputs.push_back({name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
+        asset.outputs.push_back(
+            {name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
     if (o.probes != glm::uvec3(0))
     {
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
@@ -186,10 +192,12 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path, 
             const std::vector<std::pair<std::string, std::string>> attributes = {
                 {"hemi.output", out.name},
                 {"hemi.k", std::to_string(out.k)},
-                {"hemi.layout", "coefficient k of a texel in channels c<k>.R, c<k>.G, c<k>.B; rows from the top "
-                                "(v = 0) of the TEXCOORD_1 atlas"},
-                {"hemi.frame", "irradiance in each texel's tangent frame of the normal-map UV set (TEXCOORD_0): "
-                               "E(n) = sum_k c_k b_k(n), n the tangent-space normal-map normal"}};
+                {"hemi.layout",
+                 "coefficient k of a texel in channels c<k>.R, c<k>.G, c<k>.B; rows from the top "
+                 "(v = 0) of the TEXCOORD_1 atlas"},
+                {"hemi.frame",
+                 "irradiance in each texel's tangent frame of the normal-map UV set (TEXCOORD_0): "
+                 "E(n) = sum_k c_k b_k(n), n the tangent-space normal-map normal"}};
             const std::filesystem::path file = exr_path(o.exr_dir, asset_path, out.name);
             io::write_exr_channels(file, w, h, channels, attributes);
             summary.exr_files.push_back(file);
@@ -223,8 +231,10 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)
-        j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}}, {"count", s.probes},
-                       {"inside_geometry", s.invalid_probes}, {"rays_per_probe", o.probe_rays}};
+        j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}},
+                       {"count", s.probes},
+                       {"inside_geometry", s.invalid_probes},
+                       {"rays_per_probe", o.probe_rays}};
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;

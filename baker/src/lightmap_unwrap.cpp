@@ -20,7 +20,7 @@ namespace
 
 struct Chart
 {
-    glm::vec3 n, u, v;        // the plane's frame
+    glm::vec3 n, u, v;                     // the plane's frame
     glm::vec2 lo{INFINITY}, hi{-INFINITY}; // extent of the projected vertices, world units
     std::vector<uint32_t> triangles;
     uint32_t x = 0, y = 0, w = 0, h = 0; // its rectangle in the atlas, texels
@@ -44,9 +44,11 @@ uint32_t pack(std::vector<Chart>& charts, float texel, uint32_t width, uint32_t 
         c.w = uint32_t(std::ceil(double(c.hi.x - c.lo.x) / texel + 1.0));
         c.h = uint32_t(std::ceil(double(c.hi.y - c.lo.y) / texel + 1.0));
     }
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return charts[a].h != charts[b].h ? charts[a].h > charts[b].h : charts[a].w > charts[b].w;
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) {
+                         return charts[a].h != charts[b].h ? charts[a].h > charts[b].h
+                                                           : charts[a].w > charts[b].w;
+                     });
     struct Segment
     {
         uint64_t x, y, w; // the skyline is at height y over [x, x + w)
@@ -56,7 +58,8 @@ uint32_t pack(std::vector<Chart>& charts, float texel, uint32_t width, uint32_t 
     for (size_t i : order)
     {
         Chart& c = charts[i];
-        const uint64_t w = uint64_t(c.w) + padding, h = uint64_t(c.h) + padding; // with the gap to the right / above
+        const uint64_t w = uint64_t(c.w) + padding,
+                       h = uint64_t(c.h) + padding; // with the gap to the right / above
         if (uint64_t(c.w) + 2 * padding > width)
             return 0;
         uint64_t best_y = ~uint64_t(0), best_x = 0;
@@ -122,7 +125,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
     if (!(o.max_chart_angle_degrees > 0.0f && o.max_chart_angle_degrees < 90.0f))
         throw std::invalid_argument("the chart angle must be in (0, 90) degrees");
     if (o.padding > 64 || o.width > 16384 || o.height > 16384 || (o.width == 0) != (o.height == 0))
-        throw std::invalid_argument("the atlas must be W x H with both in [1, 16384] (or neither), padding <= 64");
+        throw std::invalid_argument(
+            "the atlas must be W x H with both in [1, 16384] (or neither), padding <= 64");
 
     const size_t triangles = mesh.indices.size() / 3;
     // Weld by position, so that seams of the normal-map UVs (split vertices) do not split charts.
@@ -140,7 +144,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
     for (uint32_t t = 0; t < triangles; ++t)
     {
         const uint32_t* i = &mesh.indices[size_t(t) * 3];
-        const glm::vec3 c = glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]], mesh.positions[i[2]] - mesh.positions[i[0]]);
+        const glm::vec3 c = glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]],
+                                       mesh.positions[i[2]] - mesh.positions[i[0]]);
         area[t] = 0.5 * double(glm::length(c));
         normal[t] = area[t] > 0.0 ? glm::normalize(c) : glm::vec3(0.0f);
         for (int e = 0; e < 3; ++e)
@@ -173,7 +178,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
             const uint32_t* i = &mesh.indices[size_t(t) * 3];
             for (int e = 0; e < 3; ++e)
                 for (uint32_t other : edges[edge_key(weld[i[e]], weld[i[(e + 1) % 3]])])
-                    if (chart_of[other] == kNone && area[other] > 0.0 && glm::dot(normal[other], c.n) >= cos_max)
+                    if (chart_of[other] == kNone && area[other] > 0.0 &&
+                        glm::dot(normal[other], c.n) >= cos_max)
                     {
                         chart_of[other] = id;
                         stack.push_back(other);
@@ -187,7 +193,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
         for (uint32_t t : c.triangles)
             for (int e = 0; e < 3; ++e)
             {
-                const uint32_t a = mesh.indices[size_t(t) * 3 + e], b = mesh.indices[size_t(t) * 3 + (e + 1) % 3];
+                const uint32_t a = mesh.indices[size_t(t) * 3 + e],
+                               b = mesh.indices[size_t(t) * 3 + (e + 1) % 3];
                 int in_chart = 0;
                 for (uint32_t other : edges[edge_key(weld[a], weld[b])])
                     in_chart += chart_of[other] == id;
@@ -230,10 +237,12 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
         {
             double texels = 0.0;
             for (const Chart& c : charts)
-                texels += (double(c.hi.x - c.lo.x) / texel + 1.0 + o.padding) * (double(c.hi.y - c.lo.y) / texel + 1.0 + o.padding);
+                texels += (double(c.hi.x - c.lo.x) / texel + 1.0 + o.padding) *
+                          (double(c.hi.y - c.lo.y) / texel + 1.0 + o.padding);
             // The smallest atlas over widths from the area's square root up (aspect at most 2: 1): shelves
             // waste least where the width suits the charts.
-            // Failing the 2:1 rule (a chart much wider than the rest is tall), the smallest packing that fits.
+            // Failing the 2:1 rule (a chart much wider than the rest is tall), the smallest packing that
+            // fits.
             uint64_t best = ~uint64_t(0), any = ~uint64_t(0);
             uint32_t any_width = 0, any_height = 0;
             double widest = 0.0;
@@ -266,11 +275,13 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
             if (best == ~uint64_t(0))
                 throw std::invalid_argument("the charts at texel size " + std::to_string(texel) +
                                             " do not fit a 16384 x 16384 atlas: choose a larger texel size");
-            pack(charts, texel, width, o.padding); // the chosen packing, its height the shelves' (no wasted rows)
+            pack(charts, texel, width,
+                 o.padding); // the chosen packing, its height the shelves' (no wasted rows)
         }
         else if (const uint32_t used = pack(charts, texel, width, o.padding); used == 0 || used > height)
-            throw std::invalid_argument("the charts at texel size " + std::to_string(texel) + " do not fit a " +
-                                        std::to_string(width) + " x " + std::to_string(height) +
+            throw std::invalid_argument("the charts at texel size " + std::to_string(texel) +
+                                        " do not fit a " + std::to_string(width) + " x " +
+                                        std::to_string(height) +
                                         " atlas: choose a larger atlas or texel size");
     }
     else
@@ -287,8 +298,9 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
                 break;
             density *= 0.97;
             if (attempt > 400)
-                throw std::invalid_argument("cannot pack " + std::to_string(charts.size()) + " charts into a " +
-                                            std::to_string(width) + " x " + std::to_string(height) + " atlas");
+                throw std::invalid_argument("cannot pack " + std::to_string(charts.size()) +
+                                            " charts into a " + std::to_string(width) + " x " +
+                                            std::to_string(height) + " atlas");
         }
     }
     r.width = width;
@@ -297,7 +309,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
 
     // New vertices: one per (vertex, chart) it is used in.
     io::Mesh out;
-    const bool has_normals = !mesh.normals.empty(), has_tangents = !mesh.tangents.empty(), has_uvs = !mesh.uvs.empty();
+    const bool has_normals = !mesh.normals.empty(), has_tangents = !mesh.tangents.empty(),
+               has_uvs = !mesh.uvs.empty();
     std::unordered_map<uint64_t, uint32_t> split;
     out.indices = mesh.indices;
     for (uint32_t t = 0; t < triangles; ++t)
@@ -318,7 +331,8 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
                     out.tangents.push_back(mesh.tangents[v]);
                 if (has_uvs)
                     out.uvs.push_back(mesh.uvs[v]);
-                glm::vec2 uv(float(o.padding) / float(width), float(o.padding) / float(height)); // zero-area triangles
+                glm::vec2 uv(float(o.padding) / float(width),
+                             float(o.padding) / float(height)); // zero-area triangles
                 if (c != kNone)
                 {
                     const Chart& ch = charts[c];

@@ -3,10 +3,10 @@
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/ray_generator.h>
+#include <hemi/bake/transfer_fold.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
-#include <hemi/bake/transfer_fold.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 
@@ -21,8 +21,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <fstream>
 #include <cmath>
+#include <fstream>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -35,9 +35,12 @@ std::string_view to_string(TransferKind kind)
 {
     switch (kind)
     {
-    case TransferKind::Unshadowed: return "unshadowed";
-    case TransferKind::Shadowed: return "shadowed";
-    case TransferKind::Interreflected: return "interreflected";
+    case TransferKind::Unshadowed:
+        return "unshadowed";
+    case TransferKind::Shadowed:
+        return "shadowed";
+    case TransferKind::Interreflected:
+        return "interreflected";
     }
     return "?";
 }
@@ -57,9 +60,11 @@ namespace
 void check(const io::Mesh& mesh, const PrtBakeOptions& o)
 {
     if (o.order < 3 || o.order > 6)
-        throw std::invalid_argument("hemi: PRT lighting order " + std::to_string(o.order) + " is not in [3, 6]");
+        throw std::invalid_argument("hemi: PRT lighting order " + std::to_string(o.order) +
+                                    " is not in [3, 6]");
     if (o.rays < 1 && o.kind != TransferKind::Unshadowed)
-        throw std::invalid_argument("hemi: PRT bake needs at least 1 ray per vertex, got " + std::to_string(o.rays));
+        throw std::invalid_argument("hemi: PRT bake needs at least 1 ray per vertex, got " +
+                                    std::to_string(o.rays));
     if (o.bounces < 0)
         throw std::invalid_argument("hemi: negative bounce count " + std::to_string(o.bounces));
     if (!(o.albedo >= 0.0f && o.albedo < 1.0f))
@@ -93,7 +98,8 @@ uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)
 
 } // namespace
 
-PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, const PrtProgressCallback& progress)
+PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
+                              const PrtProgressCallback& progress)
 {
     check(mesh, o);
     const auto t0 = std::chrono::steady_clock::now();
@@ -110,14 +116,16 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
     for (int l = 0; l < o.order; ++l)
         for (int m = -l; m <= l; ++m)
             cosine[math::sh_index(l, m)] = float(math::clamped_cosine_factor(l));
-    tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
-        for (int i = 0; i < 9; ++i)
-            out.radiance[(size_t(v) * 9 + i) * L + i] = 1.0f;
-        float y[36];
-        math::sh_eval(o.order, glm::normalize(mesh.normals[v]), std::span<float>(y, L));
-        for (int c = 0; c < L; ++c)
-            out.irradiance[size_t(v) * L + c] = cosine[c] * y[c];
-    });
+    tbb::parallel_for(uint32_t(0), n,
+                      [&](uint32_t v)
+                      {
+                          for (int i = 0; i < 9; ++i)
+                              out.radiance[(size_t(v) * 9 + i) * L + i] = 1.0f;
+                          float y[36];
+                          math::sh_eval(o.order, glm::normalize(mesh.normals[v]), std::span<float>(y, L));
+                          for (int c = 0; c < L; ++c)
+                              out.irradiance[size_t(v) * L + c] = cosine[c] * y[c];
+                      });
     if (o.kind == TransferKind::Unshadowed)
         return out;
 
@@ -144,8 +152,8 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
         out.resumed_vertex = state.next_item;
     }
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
-    const uint32_t slice =
-        std::max<uint32_t>(256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
+    const uint32_t slice = std::max<uint32_t>(
+        256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
         const bool resuming_mid_pass = pass == int(state.pass) && state.next_item > 0;
@@ -158,7 +166,8 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
             std::fill(bounce_irradiance.begin(), bounce_irradiance.end(), 0.0f);
         }
         constexpr uint32_t kChunk = 256;
-        auto work = [&](const tbb::blocked_range<uint32_t>& range) {
+        auto work = [&](const tbb::blocked_range<uint32_t>& range)
+        {
             float y[36], x[36];
             std::vector<float> m_acc(size_t(9) * L), t_acc(L);
             for (uint32_t v = range.begin(); v != range.end(); ++v)
@@ -192,7 +201,8 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o, con
                         const uint32_t* tri = &mesh.indices[size_t(hit->primitive) * 3];
                         const float bu = hit->u, bv = hit->v, w0 = 1.0f - bu - bv;
                         for (int c = 0; c < L; ++c)
-                            x[c] = w0 * exitant[size_t(tri[0]) * L + c] + bu * exitant[size_t(tri[1]) * L + c] +
+                            x[c] = w0 * exitant[size_t(tri[0]) * L + c] +
+                                   bu * exitant[size_t(tri[1]) * L + c] +
                                    bv * exitant[size_t(tri[2]) * L + c];
                     }
                     for (int i = 0; i < 9; ++i)
@@ -240,17 +250,20 @@ uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& 
     const uint32_t n = uint32_t(mesh.vertex_count());
     std::atomic<uint64_t> hits{0};
     const auto t0 = std::chrono::steady_clock::now();
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 256), [&](const tbb::blocked_range<uint32_t>& range) {
-        uint64_t local = 0;
-        for (uint32_t v = range.begin(); v != range.end(); ++v)
+    tbb::parallel_for(
+        tbb::blocked_range<uint32_t>(0, n, 256),
+        [&](const tbb::blocked_range<uint32_t>& range)
         {
-            const glm::vec3 origin =
-                offset_ray_origin(mesh.positions[v], glm::normalize(mesh.normals[v]), offset);
-            for (int r = 0; r < o.rays; ++r)
-                local += embree.intersect(origin, sphere_direction(o.seed, v, r, o.rays)).has_value();
-        }
-        hits += local;
-    });
+            uint64_t local = 0;
+            for (uint32_t v = range.begin(); v != range.end(); ++v)
+            {
+                const glm::vec3 origin =
+                    offset_ray_origin(mesh.positions[v], glm::normalize(mesh.normals[v]), offset);
+                for (int r = 0; r < o.rays; ++r)
+                    local += embree.intersect(origin, sphere_direction(o.seed, v, r, o.rays)).has_value();
+            }
+            hits += local;
+        });
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return hits;
 }
@@ -260,7 +273,8 @@ int technique_size(std::string_view technique)
     return math::technique(technique).size;
 }
 
-std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& mesh, std::string_view technique)
+std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& mesh,
+                                  std::string_view technique)
 {
     const math::BasisDesc& basis = math::technique(technique);
     const uint32_t n = transfer.vertex_count;
@@ -272,29 +286,33 @@ std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& m
                                     " needs the baked mesh with a tangent per vertex");
     const TransferFold fold(basis);
     std::vector<float> out(size_t(n) * basis.size * L);
-    tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
-        // Rotate M's rows (SH9 of incident radiance) from object space into the tangent frame.
-        // A file's tangent need not be exactly perpendicular to its normal: Gram-Schmidt, so that the frame
-        // is a rotation.
-        const glm::vec3 nrm = glm::normalize(mesh.normals[v]);
-        glm::vec3 tan = glm::vec3(mesh.tangents[v]) - glm::dot(glm::vec3(mesh.tangents[v]), nrm) * nrm;
-        if (glm::dot(tan, tan) < 1e-12f)
-            tan = std::abs(nrm.x) < 0.9f ? glm::cross(nrm, glm::vec3(1, 0, 0)) : glm::cross(nrm, glm::vec3(0, 1, 0));
-        const glm::mat3 r = object_to_tangent(nrm, glm::normalize(tan), mesh.tangents[v].w);
-        const std::vector<float> d9 = unshadowed_transfer(r, 3); // the 9 x 9 SH9 rotation
-        std::vector<float> rm(size_t(9) * L, 0.0f);
-        const float* m = &transfer.radiance[size_t(v) * 9 * L];
-        for (int i = 0; i < 9; ++i)
-            for (int j = 0; j < 9; ++j)
-            {
-                const float dij = d9[size_t(i) * 9 + j];
-                if (dij != 0.0f)
-                    for (int c = 0; c < L; ++c)
-                        rm[size_t(i) * L + c] += dij * m[size_t(j) * L + c];
-            }
-        const std::vector<float> t = fold.apply(rm, L);
-        std::copy(t.begin(), t.end(), out.begin() + ptrdiff_t(v) * basis.size * L);
-    });
+    tbb::parallel_for(uint32_t(0), n,
+                      [&](uint32_t v)
+                      {
+                          // Rotate M's rows (SH9 of incident radiance) from object space into the tangent
+                          // frame. A file's tangent need not be exactly perpendicular to its normal:
+                          // Gram-Schmidt, so that the frame is a rotation.
+                          const glm::vec3 nrm = glm::normalize(mesh.normals[v]);
+                          glm::vec3 tan =
+                              glm::vec3(mesh.tangents[v]) - glm::dot(glm::vec3(mesh.tangents[v]), nrm) * nrm;
+                          if (glm::dot(tan, tan) < 1e-12f)
+                              tan = std::abs(nrm.x) < 0.9f ? glm::cross(nrm, glm::vec3(1, 0, 0))
+                                                           : glm::cross(nrm, glm::vec3(0, 1, 0));
+                          const glm::mat3 r = object_to_tangent(nrm, glm::normalize(tan), mesh.tangents[v].w);
+                          const std::vector<float> d9 = unshadowed_transfer(r, 3); // the 9 x 9 SH9 rotation
+                          std::vector<float> rm(size_t(9) * L, 0.0f);
+                          const float* m = &transfer.radiance[size_t(v) * 9 * L];
+                          for (int i = 0; i < 9; ++i)
+                              for (int j = 0; j < 9; ++j)
+                              {
+                                  const float dij = d9[size_t(i) * 9 + j];
+                                  if (dij != 0.0f)
+                                      for (int c = 0; c < L; ++c)
+                                          rm[size_t(i) * L + c] += dij * m[size_t(j) * L + c];
+                              }
+                          const std::vector<float> t = fold.apply(rm, L);
+                          std::copy(t.begin(), t.end(), out.begin() + ptrdiff_t(v) * basis.size * L);
+                      });
     return out;
 }
 
@@ -320,7 +338,8 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
         math::technique(options.techniques[i]); // throws for an unknown name
         for (size_t j = 0; j < i; ++j)
             if (options.techniques[j] == options.techniques[i])
-                throw std::invalid_argument("hemi: technique '" + options.techniques[i] + "' requested twice");
+                throw std::invalid_argument("hemi: technique '" + options.techniques[i] +
+                                            "' requested twice");
     }
     if ((options.cpca_clusters == 0) != (options.cpca_vectors == 0))
         throw std::invalid_argument("hemi: CPCA needs both a cluster and a vector count");
@@ -367,7 +386,8 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
         s.dense_bytes = t.matrices.size() * sizeof(float);
         if (options.cpca_clusters)
         {
-            t.cpca = compress_cpca(t.matrices, n, t.k * L, std::min(options.cpca_clusters, n), options.cpca_vectors);
+            t.cpca = compress_cpca(t.matrices, n, t.k * L, std::min(options.cpca_clusters, n),
+                                   options.cpca_vectors);
             const io::PrtCpca& c = *t.cpca;
             s.cpca_bytes = (c.means.size() + c.basis.size() + c.cluster.size() + c.weights.size()) * 4;
             s.cpca_rms = c.rms_error;
@@ -405,9 +425,10 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     summary.images = asset.images.size();
     summary.warnings = scene.warnings;
     if (!scene.lights.empty())
-        summary.warnings.push_back(std::to_string(scene.lights.size()) +
-                                   " KHR_lights_punctual light(s) ignored: PRT relights the scene from distant "
-                                   "environments at run time (hemi-bake lightmap bakes them)");
+        summary.warnings.push_back(
+            std::to_string(scene.lights.size()) +
+            " KHR_lights_punctual light(s) ignored: PRT relights the scene from distant "
+            "environments at run time (hemi-bake lightmap bakes them)");
     io::write_prt_asset(asset_path, asset);
     remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
     return summary;

@@ -31,9 +31,9 @@ constexpr int kMaxBounces = 16;
 // A surface point as a path sees it, in the mesh's space.
 struct SurfacePoint
 {
-    glm::vec3 origin;     // offset off the surface along g, where its rays start
-    glm::vec3 g;          // unit geometric normal of the side seen
-    glm::vec3 n;          // unit interpolated (shading) normal of that side: the hemisphere that is lit
+    glm::vec3 origin; // offset off the surface along g, where its rays start
+    glm::vec3 g;      // unit geometric normal of the side seen
+    glm::vec3 n;      // unit interpolated (shading) normal of that side: the hemisphere that is lit
 };
 
 // A unit frame about `n`.
@@ -46,7 +46,7 @@ void frame_about(const glm::vec3& n, glm::vec3& t, glm::vec3& b)
 
 class Tracer
 {
-public:
+  public:
     Tracer(const io::Mesh& mesh, const LightmapSurfaces& surfaces, const LightmapLights& lights,
            const ReferenceOptions& o)
         : mesh_(mesh), surfaces_(surfaces), lights_(lights), o_(o), scene_(mesh), light_(lights, o.seed),
@@ -59,19 +59,23 @@ public:
     float offset() const { return offset_; }
     const EmbreeScene& scene() const { return scene_; }
 
-    // Whether light leaves the hit towards the ray (the front of a surface, or either side of a double-sided one).
+    // Whether light leaves the hit towards the ray (the front of a surface, or either side of a double-sided
+    // one).
     bool seen(const RayHit& hit, const glm::vec3& d) const
     {
-        return !(glm::dot(scene_.geometric_normal(hit.primitive), d) > 0.0f) || surfaces_.double_sided(hit.primitive);
+        return !(glm::dot(scene_.geometric_normal(hit.primitive), d) > 0.0f) ||
+               surfaces_.double_sided(hit.primitive);
     }
 
     // The surface point of a hit seen along `d`: both normals turned to the side the ray sees.
-    SurfacePoint point(const glm::vec3& from, const glm::vec3& d, const RayHit& hit, glm::vec3* tangent_normal_world) const
+    SurfacePoint point(const glm::vec3& from, const glm::vec3& d, const RayHit& hit,
+                       glm::vec3* tangent_normal_world) const
     {
         const uint32_t* idx = &mesh_.indices[size_t(hit.primitive) * 3];
         const float w0 = 1.0f - hit.u - hit.v;
         glm::vec3 g = glm::normalize(scene_.geometric_normal(hit.primitive));
-        glm::vec3 n = w0 * mesh_.normals[idx[0]] + hit.u * mesh_.normals[idx[1]] + hit.v * mesh_.normals[idx[2]];
+        glm::vec3 n =
+            w0 * mesh_.normals[idx[0]] + hit.u * mesh_.normals[idx[1]] + hit.v * mesh_.normals[idx[2]];
         n = glm::length(n) > 0.0f ? glm::normalize(n) : g;
         if (glm::dot(g, d) > 0.0f) // a double-sided surface seen from behind: lit as the other side
         {
@@ -81,7 +85,8 @@ public:
         if (tangent_normal_world)
         {
             // The material system's frame: T orthogonalised against N, B = cross(N, T) w.
-            const glm::vec4 t4 = w0 * mesh_.tangents[idx[0]] + hit.u * mesh_.tangents[idx[1]] + hit.v * mesh_.tangents[idx[2]];
+            const glm::vec4 t4 =
+                w0 * mesh_.tangents[idx[0]] + hit.u * mesh_.tangents[idx[1]] + hit.v * mesh_.tangents[idx[2]];
             glm::vec3 t = glm::vec3(t4) - n * glm::dot(n, glm::vec3(t4));
             glm::vec3 b;
             if (glm::length(t) > 1e-8f)
@@ -100,8 +105,8 @@ public:
 
     // One path's estimate of the irradiance at `s` towards the unit normal `m` (E(m) over the hemisphere of
     // s.n, dark below s.g's plane): path `r` of `count` of `item` at bounce `level`.
-    glm::dvec3 irradiance(const SurfacePoint& s, const glm::vec3& m, uint64_t item, int r, int count, int level,
-                          uint64_t& rays) const
+    glm::dvec3 irradiance(const SurfacePoint& s, const glm::vec3& m, uint64_t item, int r, int count,
+                          int level, uint64_t& rays) const
     {
         const uint64_t key = item * uint64_t(kMaxBounces + 1) + uint64_t(level);
         auto lit = [&](const glm::vec3& d) { return glm::dot(d, s.g) > 0.0f && glm::dot(d, s.n) > 0.0f; };
@@ -165,13 +170,14 @@ public:
             if (irr == glm::vec3(0.0f) || !(c > 0.0f) || !lit(d))
                 continue;
             ++rays;
-            if (!scene_.occluded(s.origin, d, 0.0f, std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+            if (!scene_.occluded(s.origin, d, 0.0f,
+                                 std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
                 e += glm::dvec3(irr) * double(c);
         }
         return e;
     }
 
-private:
+  private:
     const io::Mesh& mesh_;
     const LightmapSurfaces& surfaces_;
     const LightmapLights& lights_;
@@ -184,8 +190,8 @@ private:
 
 } // namespace
 
-ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& surfaces, const LightmapLights& lights,
-                                const ReferenceOptions& o,
+ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& surfaces,
+                                const LightmapLights& lights, const ReferenceOptions& o,
                                 const std::function<void(uint32_t rows_done, uint32_t rows)>& progress)
 {
     if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
@@ -218,71 +224,75 @@ ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& su
     for (uint32_t first = 0; first < o.height; first += chunk)
     {
         const uint32_t last = std::min(o.height, first + chunk);
-        tbb::parallel_for(tbb::blocked_range<uint32_t>(first * o.width, last * o.width, 16),
-                          [&](const tbb::blocked_range<uint32_t>& range) {
-            uint64_t traced = 0;
-            for (uint32_t pixel = range.begin(); pixel != range.end(); ++pixel)
+        tbb::parallel_for(
+            tbb::blocked_range<uint32_t>(first * o.width, last * o.width, 16),
+            [&](const tbb::blocked_range<uint32_t>& range)
             {
-                const uint32_t px = pixel % o.width, py = pixel / o.width;
-                glm::dvec3 sum[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
-                int hits[2] = {0, 0};
-                for (int r = 0; r < o.rays; ++r)
+                uint64_t traced = 0;
+                for (uint32_t pixel = range.begin(); pixel != range.end(); ++pixel)
                 {
-                    // A uniformly random point of the pixel's square.
-                    const float jx = uniform01(pixel_seed, pixel, uint64_t(2 * r));
-                    const float jy = uniform01(pixel_seed, pixel, uint64_t(2 * r + 1));
-                    const glm::vec2 ndc((float(px) + jx) / float(o.width) * 2.0f - 1.0f,
-                                        (float(py) + jy) / float(o.height) * 2.0f - 1.0f);
-                    glm::vec4 far = inverse * glm::vec4(ndc, 1.0f, 1.0f);
-                    const glm::vec3 target = glm::vec3(to_mesh * glm::vec4(glm::vec3(far) / far.w, 1.0f));
-                    const glm::vec3 d = glm::normalize(target - eye);
-                    // The nearest surface whose side towards the eye is drawn (culled back faces let it through).
-                    float t_near = 0.0f;
-                    std::optional<RayHit> hit;
-                    for (int layer = 0; layer < 256; ++layer)
+                    const uint32_t px = pixel % o.width, py = pixel / o.width;
+                    glm::dvec3 sum[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+                    int hits[2] = {0, 0};
+                    for (int r = 0; r < o.rays; ++r)
                     {
-                        ++traced;
-                        hit = tracer.scene().intersect(eye, d, t_near);
-                        if (!hit || tracer.seen(*hit, d))
-                            break;
-                        t_near = hit->distance + tracer.offset();
-                        hit.reset();
+                        // A uniformly random point of the pixel's square.
+                        const float jx = uniform01(pixel_seed, pixel, uint64_t(2 * r));
+                        const float jy = uniform01(pixel_seed, pixel, uint64_t(2 * r + 1));
+                        const glm::vec2 ndc((float(px) + jx) / float(o.width) * 2.0f - 1.0f,
+                                            (float(py) + jy) / float(o.height) * 2.0f - 1.0f);
+                        glm::vec4 far = inverse * glm::vec4(ndc, 1.0f, 1.0f);
+                        const glm::vec3 target = glm::vec3(to_mesh * glm::vec4(glm::vec3(far) / far.w, 1.0f));
+                        const glm::vec3 d = glm::normalize(target - eye);
+                        // The nearest surface whose side towards the eye is drawn (culled back faces let it
+                        // through).
+                        float t_near = 0.0f;
+                        std::optional<RayHit> hit;
+                        for (int layer = 0; layer < 256; ++layer)
+                        {
+                            ++traced;
+                            hit = tracer.scene().intersect(eye, d, t_near);
+                            if (!hit || tracer.seen(*hit, d))
+                                break;
+                            t_near = hit->distance + tracer.offset();
+                            hit.reset();
+                        }
+                        if (!hit)
+                            continue;
+                        glm::vec3 m;
+                        const SurfacePoint s = tracer.point(eye, d, *hit, &m);
+                        // The even and the odd paths are two independent stratified sets (the noise estimate
+                        // compares them), each over its half of the paths.
+                        const int half = r & 1, halves[2] = {(o.rays + 1) / 2, o.rays / 2};
+                        const glm::dvec3 e = tracer.irradiance(s, m, uint64_t(pixel) * 2 + uint64_t(half),
+                                                               r >> 1, halves[half], 0, traced);
+                        glm::dvec3 colour = e / M_PI;
+                        if (!o.white)
+                            colour = glm::dvec3(surfaces.albedo(hit->primitive, hit->u, hit->v)) * colour +
+                                     glm::dvec3(surfaces.emission(hit->primitive, hit->u, hit->v));
+                        sum[r & 1] += colour;
+                        ++hits[r & 1];
                     }
-                    if (!hit)
-                        continue;
-                    glm::vec3 m;
-                    const SurfacePoint s = tracer.point(eye, d, *hit, &m);
-                    // The even and the odd paths are two independent stratified sets (the noise estimate
-                    // compares them), each over its half of the paths.
-                    const int half = r & 1, halves[2] = {(o.rays + 1) / 2, o.rays / 2};
-                    const glm::dvec3 e =
-                        tracer.irradiance(s, m, uint64_t(pixel) * 2 + uint64_t(half), r >> 1, halves[half], 0, traced);
-                    glm::dvec3 colour = e / M_PI;
-                    if (!o.white)
-                        colour = glm::dvec3(surfaces.albedo(hit->primitive, hit->u, hit->v)) * colour +
-                                 glm::dvec3(surfaces.emission(hit->primitive, hit->u, hit->v));
-                    sum[r & 1] += colour;
-                    ++hits[r & 1];
+                    float* p = out.image.pixels.data() + size_t(pixel) * 4;
+                    const int n = hits[0] + hits[1];
+                    if (n > 0)
+                    {
+                        const glm::dvec3 mean = (sum[0] + sum[1]) / double(n);
+                        p[0] = float(mean.x), p[1] = float(mean.y), p[2] = float(mean.z);
+                    }
+                    p[3] = float(n) / float(o.rays);
+                    if (n == o.rays)
+                    {
+                        // Two independent estimates a, b of n_a and n_b paths: Var(a - b) = s^2 (1/n_a +
+                        // 1/n_b) and the whole mean's variance s^2 / n, so (a - b)^2 n_a n_b / n^2 estimates
+                        // the latter.
+                        const glm::dvec3 diff = sum[0] / double(hits[0]) - sum[1] / double(hits[1]);
+                        const double share = double(hits[0]) * double(hits[1]) / (double(n) * double(n));
+                        error[pixel] = glm::dot(diff, diff) * share / 3.0; // over three channels
+                    }
                 }
-                float* p = out.image.pixels.data() + size_t(pixel) * 4;
-                const int n = hits[0] + hits[1];
-                if (n > 0)
-                {
-                    const glm::dvec3 mean = (sum[0] + sum[1]) / double(n);
-                    p[0] = float(mean.x), p[1] = float(mean.y), p[2] = float(mean.z);
-                }
-                p[3] = float(n) / float(o.rays);
-                if (n == o.rays)
-                {
-                    // Two independent estimates a, b of n_a and n_b paths: Var(a - b) = s^2 (1/n_a + 1/n_b) and
-                    // the whole mean's variance s^2 / n, so (a - b)^2 n_a n_b / n^2 estimates the latter.
-                    const glm::dvec3 diff = sum[0] / double(hits[0]) - sum[1] / double(hits[1]);
-                    const double share = double(hits[0]) * double(hits[1]) / (double(n) * double(n));
-                    error[pixel] = glm::dot(diff, diff) * share / 3.0; // over three channels
-                }
-            }
-            rays += traced;
-        });
+                rays += traced;
+            });
         if (progress)
             progress(last, o.height);
     }
@@ -300,8 +310,9 @@ ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& su
     return out;
 }
 
-ReferenceImage render_reference_file(const std::filesystem::path& scene_path, const std::filesystem::path& exr,
-                                     LightmapLights lights, const ReferenceOptions& options,
+ReferenceImage render_reference_file(const std::filesystem::path& scene_path,
+                                     const std::filesystem::path& exr, LightmapLights lights,
+                                     const ReferenceOptions& options,
                                      const std::function<void(uint32_t rows_done, uint32_t rows)>& progress)
 {
     io::check_writable(exr);

@@ -14,8 +14,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -72,8 +72,8 @@ void check_field(const HeightField& f, const char* what)
 {
     if (f.width == 0 || f.height == 0 || f.heights.size() != size_t(f.width) * f.height)
         throw std::invalid_argument(std::string("hemi: ") + what + ": " + std::to_string(f.heights.size()) +
-                                    " heights for a " + std::to_string(f.width) + "x" + std::to_string(f.height) +
-                                    " map");
+                                    " heights for a " + std::to_string(f.width) + "x" +
+                                    std::to_string(f.height) + " map");
     for (size_t i = 0; i < f.heights.size(); ++i)
         if (!std::isfinite(f.heights[i]))
             throw std::invalid_argument(std::string("hemi: ") + what + ": the height at (" +
@@ -115,31 +115,34 @@ HeightField bilateral_filter(const HeightField& field, const BilateralFilter& fi
     const double range = 1.0 / (2.0 * double(filter.sigma) * double(filter.sigma));
     HeightField out{field.width, field.height, std::vector<float>(field.heights.size())};
     const int64_t w = field.width, h = field.height;
-    tbb::parallel_for(int64_t(0), h, [&](int64_t y) {
-        for (int64_t x = 0; x < w; ++x)
-        {
-            const double centre = field.at(uint32_t(x), uint32_t(y));
-            double sum = 0.0, weight = 0.0;
-            for (int dy = -r; dy <= r; ++dy)
-                for (int dx = -r; dx <= r; ++dx)
-                {
-                    int64_t sx = x + dx, sy = y + dy;
-                    if (wrap)
-                    {
-                        sx = wrap_index(sx, w);
-                        sy = wrap_index(sy, h);
-                    }
-                    else if (sx < 0 || sy < 0 || sx >= w || sy >= h)
-                        continue;
-                    const double v = field.at(uint32_t(sx), uint32_t(sy));
-                    const double k = spatial[size_t(dy + r) * size_t(2 * r + 1) + size_t(dx + r)] *
-                                     std::exp(-(v - centre) * (v - centre) * range);
-                    sum += k * v;
-                    weight += k;
-                }
-            out.heights[size_t(y) * size_t(w) + size_t(x)] = float(sum / weight);
-        }
-    });
+    tbb::parallel_for(int64_t(0), h,
+                      [&](int64_t y)
+                      {
+                          for (int64_t x = 0; x < w; ++x)
+                          {
+                              const double centre = field.at(uint32_t(x), uint32_t(y));
+                              double sum = 0.0, weight = 0.0;
+                              for (int dy = -r; dy <= r; ++dy)
+                                  for (int dx = -r; dx <= r; ++dx)
+                                  {
+                                      int64_t sx = x + dx, sy = y + dy;
+                                      if (wrap)
+                                      {
+                                          sx = wrap_index(sx, w);
+                                          sy = wrap_index(sy, h);
+                                      }
+                                      else if (sx < 0 || sy < 0 || sx >= w || sy >= h)
+                                          continue;
+                                      const double v = field.at(uint32_t(sx), uint32_t(sy));
+                                      const double k =
+                                          spatial[size_t(dy + r) * size_t(2 * r + 1) + size_t(dx + r)] *
+                                          std::exp(-(v - centre) * (v - centre) * range);
+                                      sum += k * v;
+                                      weight += k;
+                                  }
+                              out.heights[size_t(y) * size_t(w) + size_t(x)] = float(sum / weight);
+                          }
+                      });
     return out;
 }
 
@@ -150,7 +153,8 @@ std::vector<glm::vec3> height_normals(const HeightField& field, float scale, boo
     std::vector<glm::vec3> out(field.heights.size());
     // The difference of h along an axis: central (over two texels) inside and on a tiling map, one-sided at
     // the borders of one that does not tile; 0 across a map one texel wide.
-    auto diff = [&](int64_t x, int64_t y, bool ax) -> double {
+    auto diff = [&](int64_t x, int64_t y, bool ax) -> double
+    {
         const int64_t n = ax ? w : h;
         const int64_t c = ax ? x : y;
         int64_t lo = c - 1, hi = c + 1;
@@ -230,7 +234,8 @@ HeightFieldTracer::HeightFieldTracer(const HeightField& field, float scale, bool
     if (!(epsilon >= 0.0f) || !std::isfinite(epsilon))
         throw std::invalid_argument("hemi: ray epsilon " + std::to_string(epsilon) + " must be >= 0");
     if (!(max_distance > 0.0f) || !std::isfinite(max_distance))
-        throw std::invalid_argument("hemi: ray distance " + std::to_string(max_distance) + " must be positive");
+        throw std::invalid_argument("hemi: ray distance " + std::to_string(max_distance) +
+                                    " must be positive");
     z_.resize(field.heights.size());
     z_max_ = -std::numeric_limits<float>::infinity();
     for (size_t i = 0; i < z_.size(); ++i)
@@ -251,8 +256,8 @@ HeightFieldTracer::HeightFieldTracer(const HeightField& field, float scale, bool
         for (uint32_t i = 0; i < cells_x_; ++i)
         {
             const uint32_t i1 = (i + 1) % width_, j1 = (j + 1) % height_;
-            level[size_t(j) * cells_x_ + i] =
-                std::max(std::max(height_at(i, j), height_at(i1, j)), std::max(height_at(i, j1), height_at(i1, j1)));
+            level[size_t(j) * cells_x_ + i] = std::max(std::max(height_at(i, j), height_at(i1, j)),
+                                                       std::max(height_at(i, j1), height_at(i1, j1)));
         }
     uint32_t lw = cells_x_, lh = cells_y_;
     mip_.push_back(std::move(level));
@@ -288,7 +293,8 @@ double HeightFieldTracer::horizon(uint32_t x0, uint32_t y0, double tx, double ty
     const int64_t cx = cells_x_, cy = cells_y_;
     const int64_t step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
     // The cell a coordinate lies in, for a walk going `d` along it: on a grid line, the cell ahead.
-    auto cell_of = [](double v, double d) {
+    auto cell_of = [](double v, double d)
+    {
         double f = std::floor(v);
         if (d < 0 && f == v)
             f -= 1.0;
@@ -299,8 +305,12 @@ double HeightFieldTracer::horizon(uint32_t x0, uint32_t y0, double tx, double ty
         i = cx - 1; // along the right border line: its cell is on the left
     if (dy == 0 && !wrap_ && j >= cy)
         j = cy - 1;
-    auto next_x = [&](int64_t cell) { return dx > 0 ? (double(cell + 1) - ox) / dx : dx < 0 ? (double(cell) - ox) / dx : inf; };
-    auto next_y = [&](int64_t cell) { return dy > 0 ? (double(cell + 1) - oy) / dy : dy < 0 ? (double(cell) - oy) / dy : inf; };
+    auto next_x = [&](int64_t cell) {
+        return dx > 0 ? (double(cell + 1) - ox) / dx : dx < 0 ? (double(cell) - ox) / dx : inf;
+    };
+    auto next_y = [&](int64_t cell) {
+        return dy > 0 ? (double(cell + 1) - oy) / dy : dy < 0 ? (double(cell) - oy) / dy : inf;
+    };
     double t_x = next_x(i), t_y = next_y(j);
     const double delta_x = dx != 0 ? 1.0 / std::abs(dx) : inf, delta_y = dy != 0 ? 1.0 / std::abs(dy) : inf;
     const double rise = double(z_max_) - z0; // the most any point can stand above the origin
@@ -336,7 +346,8 @@ double HeightFieldTracer::horizon(uint32_t x0, uint32_t y0, double tx, double ty
             if (ex <= ey)
             {
                 i = dx > 0 ? x_hi : x_lo - 1;
-                j = ey == ex ? (dy > 0 ? y_hi : y_lo - 1) : std::clamp(cell_of(oy + dy * t, dy), y_lo, y_hi - 1);
+                j = ey == ex ? (dy > 0 ? y_hi : y_lo - 1)
+                             : std::clamp(cell_of(oy + dy * t, dy), y_lo, y_hi - 1);
             }
             else
             {
@@ -357,10 +368,12 @@ double HeightFieldTracer::horizon(uint32_t x0, uint32_t y0, double tx, double ty
                      h11 = height_at(i1, j1);
         const double t_exit = std::min(t_x, t_y);
         const double t_end = std::min(t_exit, limit);
-        auto visit = [&](double s) {
+        auto visit = [&](double s)
+        {
             const double fx = std::clamp(ox + dx * s - double(i), 0.0, 1.0);
             const double fy = std::clamp(oy + dy * s - double(j), 0.0, 1.0);
-            // Triangle (x, y), (x + 1, y), (x + 1, y + 1) where fx >= fy; (x, y), (x, y + 1), (x + 1, y + 1) else.
+            // Triangle (x, y), (x + 1, y), (x + 1, y + 1) where fx >= fy; (x, y), (x, y + 1), (x + 1, y + 1)
+            // else.
             const double hz = fx >= fy ? h00 + fx * (h10 - h00) + fy * (h11 - h10)
                                        : h00 + fy * (h01 - h00) + fx * (h11 - h01);
             slope = std::max(slope, (hz - z0) / s);
@@ -474,7 +487,8 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
     const size_t n = field.heights.size();
     out.occlusion.assign(n, glm::vec3(1.0f));
     out.weights.resize(n);
-    auto finish = [&]() {
+    auto finish = [&]()
+    {
         for (size_t t = 0; t < n; ++t)
             out.weights[t] = ssbump_weights(out.normals[t], o.convention) * out.occlusion[t];
     };
@@ -483,13 +497,15 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
         finish();
         return out;
     }
-    const float distance = o.max_distance > 0.0f ? o.max_distance : float(std::max(field.width, field.height));
+    const float distance =
+        o.max_distance > 0.0f ? o.max_distance : float(std::max(field.width, field.height));
     const HeightFieldTracer tracer(field, o.scale, o.wrap, o.epsilon, distance);
     const auto& basis = math::rnm_basis();
     const int azimuths = ssbump_azimuths(o.rays);
     // The lobes' normalisation does not depend on visibility: the ratio estimator's denominator uses the same
     // rays, so a texel that sees everything gets exactly 1.
-    auto texel = [&](uint32_t x, uint32_t y, std::vector<double>& z) {
+    auto texel = [&](uint32_t x, uint32_t y, std::vector<double>& z)
+    {
         const uint64_t index = uint64_t(y) * field.width + x;
         double seen[3] = {0, 0, 0}, all[3] = {0, 0, 0};
         for (int a = 0; a < azimuths; ++a)
@@ -505,8 +521,8 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
                 z[size_t(e)] = ray_z(o.seed, index, a + e * azimuths, azimuths, in_azimuth);
                 z_min = std::min(z_min, z[size_t(e)]);
             }
-            const double horizon = z_min < 1.0 ? tracer.horizon(x, y, c, s, z_min / std::sqrt(1.0 - z_min * z_min))
-                                               : 0.0;
+            const double horizon =
+                z_min < 1.0 ? tracer.horizon(x, y, c, s, z_min / std::sqrt(1.0 - z_min * z_min)) : 0.0;
             const double weight = 2.0 * M_PI / double(azimuths) / double(in_azimuth);
             for (int e = 0; e < in_azimuth; ++e)
             {
@@ -515,9 +531,9 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
                 for (int i = 0; i < 3; ++i)
                 {
                     const glm::vec3& b = basis[size_t(i)];
-                    const double lobe =
-                        std::max(0.0, double(b.x) * rho * c + double(b.y) * rho * s + double(b.z) * z[size_t(e)]) *
-                        weight;
+                    const double lobe = std::max(0.0, double(b.x) * rho * c + double(b.y) * rho * s +
+                                                          double(b.z) * z[size_t(e)]) *
+                                        weight;
                     all[i] += lobe;
                     if (visible)
                         seen[i] += lobe;
@@ -548,12 +564,14 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
     while (row < field.height)
     {
         const uint32_t last = std::min(field.height, row + slice_rows);
-        tbb::parallel_for(tbb::blocked_range<uint32_t>(row, last, 1), [&](const tbb::blocked_range<uint32_t>& rows) {
-            std::vector<double> z;
-            for (uint32_t y = rows.begin(); y != rows.end(); ++y)
-                for (uint32_t x = 0; x < field.width; ++x)
-                    texel(x, y, z);
-        });
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(row, last, 1),
+                          [&](const tbb::blocked_range<uint32_t>& rows)
+                          {
+                              std::vector<double> z;
+                              for (uint32_t y = rows.begin(); y != rows.end(); ++y)
+                                  for (uint32_t x = 0; x < field.width; ++x)
+                                      texel(x, y, z);
+                          });
         out.rays += uint64_t(last - row) * field.width * uint64_t(o.rays);
         row = last;
         checkpoint.slice_done(0, row);
@@ -571,7 +589,8 @@ SsbumpMap ssbump_from_normals(uint32_t width, uint32_t height, std::span<const g
 {
     if (width == 0 || height == 0 || normals.size() != size_t(width) * height)
         throw std::invalid_argument("hemi: ssbump_from_normals: " + std::to_string(normals.size()) +
-                                    " normals for a " + std::to_string(width) + "x" + std::to_string(height) + " map");
+                                    " normals for a " + std::to_string(width) + "x" + std::to_string(height) +
+                                    " map");
     SsbumpMap out;
     out.width = width;
     out.height = height;
@@ -596,7 +615,8 @@ HeightChannel parse_height_channel(std::string_view name)
         return HeightChannel::B;
     if (name == "a")
         return HeightChannel::A;
-    throw std::invalid_argument("unknown height channel '" + std::string(name) + "' (known: grey, r, g, b, a)");
+    throw std::invalid_argument("unknown height channel '" + std::string(name) +
+                                "' (known: grey, r, g, b, a)");
 }
 
 namespace
@@ -643,9 +663,10 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
         if (has_colour && !rgb_equal)
         {
             if (looks_like_normal_map(image))
-                throw io::FormatError(name + ": this looks like a tangent-space normal map (its texels decode to "
-                                             "unit vectors facing +z), not a height map; convert one with "
-                                             "`hemi-bake ssbump --from-normal`");
+                throw io::FormatError(name +
+                                      ": this looks like a tangent-space normal map (its texels decode to "
+                                      "unit vectors facing +z), not a height map; convert one with "
+                                      "`hemi-bake ssbump --from-normal`");
             bool single_r = exr;
             for (size_t i = 0; i < n && single_r; ++i)
                 single_r = image.pixels[i * 4 + 1] == 0.0f && image.pixels[i * 4 + 2] == 0.0f;
@@ -655,9 +676,15 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
         }
         source = 0;
         break;
-    case HeightChannel::R: source = 0; break;
-    case HeightChannel::G: source = 1; break;
-    case HeightChannel::B: source = 2; break;
+    case HeightChannel::R:
+        source = 0;
+        break;
+    case HeightChannel::G:
+        source = 1;
+        break;
+    case HeightChannel::B:
+        source = 2;
+        break;
     case HeightChannel::A:
         if (!has_alpha)
             throw io::FormatError(name + ": --channel a, but the image has no alpha channel");
@@ -683,8 +710,8 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
         hi = std::max(hi, v);
     }
     if (source == 3 && lo == hi)
-        throw io::FormatError(name + ": --channel a, but the alpha channel is constant (" + std::to_string(lo) +
-                              "): it holds no heights");
+        throw io::FormatError(name + ": --channel a, but the alpha channel is constant (" +
+                              std::to_string(lo) + "): it holds no heights");
     if (has_alpha && source != 3 && !exr)
     {
         out.alpha.resize(n);
@@ -702,8 +729,9 @@ std::vector<glm::vec3> read_normal_map(const std::filesystem::path& path, uint32
     if (image.bits == 32)
         throw io::FormatError(name + ": a normal map must be a PNG (n * 0.5 + 0.5 in RGB)");
     if (image.channels < 3 || !looks_like_normal_map(image))
-        throw io::FormatError(name + ": does not look like a tangent-space normal map (most texels must decode, "
-                                     "as 2 c - 1, to unit vectors facing +z)");
+        throw io::FormatError(name +
+                              ": does not look like a tangent-space normal map (most texels must decode, "
+                              "as 2 c - 1, to unit vectors facing +z)");
     width = image.width;
     height = image.height;
     const size_t n = size_t(width) * height;
@@ -738,8 +766,8 @@ std::vector<uint8_t> ssbump_rgba8(std::span<const glm::vec3> values, std::span<c
                                   bool signed_normal)
 {
     if (!alpha.empty() && alpha.size() != values.size())
-        throw std::invalid_argument("hemi: ssbump_rgba8: " + std::to_string(alpha.size()) + " alpha values for " +
-                                    std::to_string(values.size()) + " texels");
+        throw std::invalid_argument("hemi: ssbump_rgba8: " + std::to_string(alpha.size()) +
+                                    " alpha values for " + std::to_string(values.size()) + " texels");
     std::vector<uint8_t> out(values.size() * 4);
     for (size_t i = 0; i < values.size(); ++i)
     {

@@ -20,8 +20,8 @@ glm::mat3 object_to_tangent(const glm::vec3& n, const glm::vec3& t, float w)
 std::vector<float> unshadowed_transfer(const glm::mat3& object_to_tangent, int lighting_order)
 {
     if (lighting_order < 3 || lighting_order > math::kMaxShOrder)
-        throw std::invalid_argument("hemi: lighting order " + std::to_string(lighting_order) + " is not in [3, " +
-                                    std::to_string(math::kMaxShOrder) + "]");
+        throw std::invalid_argument("hemi: lighting order " + std::to_string(lighting_order) +
+                                    " is not in [3, " + std::to_string(math::kMaxShOrder) + "]");
     // Lighting f(w) in object space; in tangent space the same radiance is g(w_t) = f(R^T w_t), i.e. f
     // rotated by R: its coefficients are D(R) l (math::ShRotation's contract). Bands 0-2 of D l are rows
     // 0-8 of the block-diagonal D.
@@ -35,7 +35,8 @@ std::vector<float> unshadowed_transfer(const glm::mat3& object_to_tangent, int l
     return rm;
 }
 
-TransferFold::TransferFold(const math::BasisDesc& basis) : k_(basis.size), pc_(math::projection_from_sh9(basis))
+TransferFold::TransferFold(const math::BasisDesc& basis)
+    : k_(basis.size), pc_(math::projection_from_sh9(basis))
 {
     for (int i = 0; i < k_; ++i)
         for (int j = 0; j < 9; ++j)
@@ -45,8 +46,8 @@ TransferFold::TransferFold(const math::BasisDesc& basis) : k_(basis.size), pc_(m
 std::vector<float> TransferFold::apply(std::span<const float> rm, int l) const
 {
     if (l <= 0 || rm.size() != size_t(9) * l)
-        throw std::invalid_argument("hemi: fold_transfer expects a 9 x " + std::to_string(l) + " matrix, got " +
-                                    std::to_string(rm.size()) + " values");
+        throw std::invalid_argument("hemi: fold_transfer expects a 9 x " + std::to_string(l) +
+                                    " matrix, got " + std::to_string(rm.size()) + " values");
     std::vector<float> t(size_t(k_) * l, 0.0f);
     for (int i = 0; i < k_; ++i)
         for (int j = 0; j < 9; ++j)

@@ -2,8 +2,10 @@
 // pipeline takes of a bake, and the samples' building block. The asset's kind is read from the file.
 //
 //   hemi-render PRT.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
-//               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o OUT.png|OUT.exr
-//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH] [--camera auto|EYE,TARGET]
+//               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o
+//               OUT.png|OUT.exr
+//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH] [--camera
+//   auto|EYE,TARGET]
 //               [--exposure E] [--sphere X,Y,Z,R ...] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is
 //               baked in; each --sphere is a dynamic object lit by the asset's light probes)
 // HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
@@ -27,32 +29,41 @@
 
 int main(int argc, char** argv)
 {
-    CLI::App app{"hemi-render: render a baked PRT (hemi-bake prt) or lightmap (hemi-bake lightmap) asset to PNG or EXR"};
+    CLI::App app{"hemi-render: render a baked PRT (hemi-bake prt) or lightmap (hemi-bake lightmap) asset to "
+                 "PNG or EXR"};
     std::string asset_path, technique = "gs", env = "sky", size = "800x600", camera = "auto", output;
     bool cpca = false, white = false;
     std::vector<std::string> spheres;
     float rotate = 0.0f, exposure = 1.0f;
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
-    app.add_option("--technique", technique, "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
-                                             "also sh4ls, zernike3, zernike6 when baked; lightmaps: sh9 (gs is the "
-                                             "same), hl2, h4, h6, sal4, plain (non-directional), rnm (radiosity "
-                                             "normal mapping), ssbump (an SSBump map in the normal slot)")
+    app.add_option("--technique", technique,
+                   "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
+                   "also sh4ls, zernike3, zernike6 when baked; lightmaps: sh9 (gs is the "
+                   "same), hl2, h4, h6, sal4, plain (non-directional), rnm (radiosity "
+                   "normal mapping), ssbump (an SSBump map in the normal slot)")
         ->capture_default_str();
     app.add_flag("--cpca", cpca, "use the technique's CPCA data (bake with --cpca)");
-    CLI::Option* env_option = app.add_option("--env", env, "PRT: uniform (radiance 1 everywhere), sky (analytic) or an "
-                                 "equirectangular FILE.exr, z up, in Blender's world mapping (the image centre looks "
-                                 "along +x); lightmaps carry their lighting")
+    CLI::Option* env_option =
+        app.add_option("--env", env,
+                       "PRT: uniform (radiance 1 everywhere), sky (analytic) or an "
+                       "equirectangular FILE.exr, z up, in Blender's world mapping (the image centre looks "
+                       "along +x); lightmaps carry their lighting")
+            ->capture_default_str();
+    app.add_option("--rotate", rotate, "turn the environment about the up axis by DEG degrees")
         ->capture_default_str();
-    app.add_option("--rotate", rotate, "turn the environment about the up axis by DEG degrees")->capture_default_str();
     app.add_flag("--white", white, "albedo 1: the lighting-only view");
     app.add_option("--size", size, "WIDTHxHEIGHT in pixels")->capture_default_str();
-    app.add_option("--camera", camera, "auto (frames the model) or EYE,TARGET as x,y,z,x,y,z in world space (z up; "
-                                       "glTF +y is world +z)")
+    app.add_option("--camera", camera,
+                   "auto (frames the model) or EYE,TARGET as x,y,z,x,y,z in world space (z up; "
+                   "glTF +y is world +z)")
         ->capture_default_str();
-    app.add_option("--sphere", spheres, "lightmap assets baked with --probes: a grey sphere at X,Y,Z (world space) of "
-                                        "radius R, lit by the probes (repeatable, up to 16)");
-    app.add_option("--exposure", exposure, "PNG only: multiplies radiance before the sRGB clamp")->capture_default_str();
-    app.add_option("-o,--output", output, "OUT.png (tone-mapped sRGB) or OUT.exr (linear RGBA, alpha = coverage)")
+    app.add_option("--sphere", spheres,
+                   "lightmap assets baked with --probes: a grey sphere at X,Y,Z (world space) of "
+                   "radius R, lit by the probes (repeatable, up to 16)");
+    app.add_option("--exposure", exposure, "PNG only: multiplies radiance before the sRGB clamp")
+        ->capture_default_str();
+    app.add_option("-o,--output", output,
+                   "OUT.png (tone-mapped sRGB) or OUT.exr (linear RGBA, alpha = coverage)")
         ->required();
     CLI11_PARSE(app, argc, argv);
 
@@ -72,14 +83,16 @@ int main(int argc, char** argv)
         if (!lightmap && !spheres.empty())
             throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
         if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
-            throw std::invalid_argument(asset_path + " is a lightmap asset: its lighting is baked in (--env, --rotate "
-                                                     "and --cpca are for PRT assets)");
+            throw std::invalid_argument(asset_path +
+                                        " is a lightmap asset: its lighting is baked in (--env, --rotate "
+                                        "and --cpca are for PRT assets)");
         // Vulkan's warnings and errors (the validation layer's too, with HEMI_VALIDATION=1) go to stderr.
         hemi::gpu::DeviceDesc desc;
-        desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message) {
+        desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message)
+        {
             if (level >= hemi::gpu::LogLevel::Warning)
-                std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "", int(message.size()),
-                             message.data());
+                std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "",
+                             int(message.size()), message.data());
         };
         const float aspect = float(w) / float(h);
         const std::optional<hemi::math::Camera> chosen = hemi::math::parse_camera(camera);
@@ -105,17 +118,20 @@ int main(int argc, char** argv)
             hemi::render::LightmapFrame frame;
             frame.technique = technique;
             frame.white = white;
-            frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            frame.camera =
+                auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
             for (const std::string& text : spheres)
             {
                 glm::vec4 sphere;
                 char tail = 0;
-                if (std::sscanf(text.c_str(), "%f,%f,%f,%f%c", &sphere.x, &sphere.y, &sphere.z, &sphere.w, &tail) != 4)
+                if (std::sscanf(text.c_str(), "%f,%f,%f,%f%c", &sphere.x, &sphere.y, &sphere.z, &sphere.w,
+                                &tail) != 4)
                     throw std::invalid_argument("--sphere expects X,Y,Z,RADIUS, got '" + text + "'");
                 frame.spheres.push_back(sphere);
             }
             if (!frame.spheres.empty() && asset.probes.empty())
-                throw std::invalid_argument(asset_path + " has no light probes for --sphere (bake it with --probes)");
+                throw std::invalid_argument(asset_path +
+                                            " has no light probes for --sphere (bake it with --probes)");
             image = view.render(frame);
             env = "baked";
         }
@@ -128,7 +144,8 @@ int main(int argc, char** argv)
             frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
             frame.rotate_degrees = rotate;
             frame.white = white;
-            frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            frame.camera =
+                auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
             image = view.render(frame);
         }
         if (ext == ".exr")
@@ -137,7 +154,8 @@ int main(int argc, char** argv)
             hemi::io::write_png(output, image, {exposure, hemi::io::ToneMap::Curve::Clamp});
         std::printf("rendered %s (%s%s, %s, %ux%u) in %.2f s -> %s\n", asset_path.c_str(), technique.c_str(),
                     cpca ? " + CPCA" : "", env.c_str(), w, h,
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), output.c_str());
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                    output.c_str());
         if (device->validation_messages() > 0)
         {
             std::fprintf(stderr, "hemi-render: the validation layer reported %llu problem(s)\n",

@@ -45,8 +45,8 @@ io::Mesh make_torus(float major, float minor, uint32_t segments, uint32_t rings)
             const glm::vec3 n = std::cos(theta) * radial + std::sin(theta) * glm::vec3(0, 0, 1);
             m.positions.push_back(major * radial + minor * n);
             m.normals.push_back(n);
-            // t = dP/du along +phi. glTF's bitangent cross(n, t) w points towards decreasing v; v grows up the
-            // outside of the tube (dP/dv = +z there) while cross(n, t) = +z there: w = -1.
+            // t = dP/du along +phi. glTF's bitangent cross(n, t) w points towards decreasing v; v grows up
+            // the outside of the tube (dP/dv = +z there) while cross(n, t) = +z there: w = -1.
             m.tangents.push_back(glm::vec4(-std::sin(phi), std::cos(phi), 0.0f, -1.0f));
             m.uvs.push_back(glm::vec2(u * 4.0f, v)); // bricks of similar shape around and across the tube
         }
@@ -99,7 +99,8 @@ io::ImageRgba studio_environment(uint32_t width, uint32_t height, float sun)
         for (uint32_t x = 0; x < width; ++x)
         {
             const float phi = kPi - 2.0f * kPi * (x + 0.5f) / width, theta = kPi * (y + 0.5f) / height;
-            const glm::vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const glm::vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                              std::cos(theta));
             glm::vec3 l;
             if (d.z >= 0.0f)
             {
@@ -110,7 +111,8 @@ io::ImageRgba studio_environment(uint32_t width, uint32_t height, float sun)
                 const int panel = int(std::floor(a + 8.0f)) % 8;
                 if (d.z < 0.3f && (a - std::floor(a)) < 0.55f)
                 {
-                    const glm::vec3 colours[4] = {{3.0f, 0.4f, 0.2f}, {0.3f, 2.5f, 0.4f}, {2.5f, 2.2f, 0.3f}, {0.6f, 0.4f, 3.0f}};
+                    const glm::vec3 colours[4] = {
+                        {3.0f, 0.4f, 0.2f}, {0.3f, 2.5f, 0.4f}, {2.5f, 2.2f, 0.3f}, {0.6f, 0.4f, 3.0f}};
                     l = colours[panel % 4];
                 }
                 if (glm::dot(d, s) > std::cos(2.5f * kPi / 180.0f))
@@ -118,7 +120,8 @@ io::ImageRgba studio_environment(uint32_t width, uint32_t height, float sun)
             }
             else
             {
-                const float checker = (int(std::floor(d.x / -d.z * 2.0f)) + int(std::floor(d.y / -d.z * 2.0f))) & 1;
+                const float checker =
+                    (int(std::floor(d.x / -d.z * 2.0f)) + int(std::floor(d.y / -d.z * 2.0f))) & 1;
                 l = glm::vec3(0.35f, 0.25f, 0.15f) * (checker ? 1.0f : 0.6f);
             }
             float* p = img.pixels.data() + (size_t(y) * width + x) * 4;
@@ -127,8 +130,8 @@ io::ImageRgba studio_environment(uint32_t width, uint32_t height, float sun)
     return img;
 }
 
-io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& view, uint32_t width, uint32_t height,
-                              io::ImageRgba* aux)
+io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& view, uint32_t width,
+                              uint32_t height, io::ImageRgba* aux)
 {
     if (!view.mesh || !view.environment)
         throw std::invalid_argument("render_factored needs a mesh and an environment");
@@ -162,22 +165,24 @@ io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& vie
     draw.source = lighting.set();
     draw.push.model = view.model;
     draw.push.draw_id = 1;
-    gpu::one_shot(device, [&](VkCommandBuffer cmd) {
-        upload.record(cmd);
-        render::FrameData f;
-        f.view_projection =
-            math::look_at_projection(view.eye, view.target, view.fov_y_degrees, float(width) / float(height));
-        f.eye = view.eye;
-        f.lights = view.lights;
-        f.specular_exponent = view.specular_exponent;
-        f.specular_strength = view.specular_strength;
-        frame.record_update(cmd, f);
-        target.begin(cmd, glm::vec4(0.0f));
-        render::bind_material(cmd, draw);
-        mesh.bind(cmd);
-        mesh.draw(cmd, 0, mesh.index_count());
-        target.end(cmd);
-    });
+    gpu::one_shot(device,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      upload.record(cmd);
+                      render::FrameData f;
+                      f.view_projection = math::look_at_projection(view.eye, view.target, view.fov_y_degrees,
+                                                                   float(width) / float(height));
+                      f.eye = view.eye;
+                      f.lights = view.lights;
+                      f.specular_exponent = view.specular_exponent;
+                      f.specular_strength = view.specular_strength;
+                      frame.record_update(cmd, f);
+                      target.begin(cmd, glm::vec4(0.0f));
+                      render::bind_material(cmd, draw);
+                      mesh.bind(cmd);
+                      mesh.draw(cmd, 0, mesh.index_count());
+                      target.end(cmd);
+                  });
     if (aux)
         *aux = target.read_aux();
     return target.read_color();

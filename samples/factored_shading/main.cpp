@@ -5,8 +5,8 @@
 //   Fig. 7  Fresnel at n = 1.5 and n = 200, F L_m + L_d (top) and the coating's F L_m + (1 - F) L_d (bottom)
 //   Fig. 8  the prefiltered glossy map (exponent 20), and a glossy torus
 //   Fig. 10 the normal map with the environment alone and with local illumination added, from four views
-// One comparison image (-o) and each figure on its own (--dir). The environment is baked with hemi-bake envmap's
-// code (bake::bake_envmap), the tables with hemi-bake brdf's (math/brdf.h).
+// One comparison image (-o) and each figure on its own (--dir). The environment is baked with hemi-bake
+// envmap's code (bake::bake_envmap), the tables with hemi-bake brdf's (math/brdf.h).
 //   factored_shading [-o FIGURE.png] [--dir DIR] [--size N] [--environment STUDIO.exr]
 #include "factored_scene.h"
 #include "figure.h"
@@ -15,8 +15,8 @@
 #include <hemi/bake/normal_map.h>
 #include <hemi/gpu/device.h>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -101,7 +101,8 @@ int main(int argc, char** argv)
         const hemi::render::DynamicLight light{false, sun, glm::vec3(3.0f)};
         const glm::mat4 tilt = glm::rotate(glm::mat4(1.0f), glm::radians(50.0f), glm::vec3(1, 0, 0));
 
-        auto base = [&](const hemi::io::Mesh& mesh, Technique technique) {
+        auto base = [&](const hemi::io::Mesh& mesh, Technique technique)
+        {
             hemi::samples::FactoredView v;
             v.mesh = &mesh;
             v.environment = &env;
@@ -110,13 +111,13 @@ int main(int argc, char** argv)
             v.eye = glm::vec3(0.0f, -4.2f, 1.6f);
             return v;
         };
-        auto render = [&](const hemi::samples::FactoredView& v) {
-            return hemi::samples::render_factored(device, v, size, size);
-        };
+        auto render = [&](const hemi::samples::FactoredView& v)
+        { return hemi::samples::render_factored(device, v, size, size); };
         auto write = [&](const std::string& name, const std::vector<hemi::io::ImageRgba>& tiles,
-                         const std::vector<std::string>& columns, const std::vector<std::string>& rows) {
-            hemi::samples::write_labeled_grid((std::filesystem::path(dir) / name).string(), tiles, size, size, columns,
-                                              rows, 0.8f);
+                         const std::vector<std::string>& columns, const std::vector<std::string>& rows)
+        {
+            hemi::samples::write_labeled_grid((std::filesystem::path(dir) / name).string(), tiles, size, size,
+                                              columns, rows, 0.8f);
         };
 
         // Fig. 2: Torrance-Sparrow at two roughness values.
@@ -145,7 +146,8 @@ int main(int argc, char** argv)
             v.material.ks = 0.8f;
             // A light from the viewer's side, so that the disk's brushed rings catch it.
             v.lights = {{false, glm::normalize(glm::vec3(-0.6f, -0.7f, 0.6f)), glm::vec3(3.0f)}};
-            v.model = mesh == &disk ? glm::rotate(glm::mat4(1.0f), glm::radians(60.0f), glm::vec3(1, 0, 0)) : tilt;
+            v.model =
+                mesh == &disk ? glm::rotate(glm::mat4(1.0f), glm::radians(60.0f), glm::vec3(1, 0, 0)) : tilt;
             fig3.push_back(render(v));
         }
         write("fig3_banks.png", fig3, {"sphere", "disk"}, {"Fig. 3"});
@@ -162,8 +164,8 @@ int main(int argc, char** argv)
             v.eye = eye;
             fig6.push_back(render(v));
         }
-        write("fig6_parabolic.png", fig6, {"front half (z >= 0)", "back half", "mirror torus", "another view"},
-              {"Fig. 6"});
+        write("fig6_parabolic.png", fig6,
+              {"front half (z >= 0)", "back half", "mirror torus", "another view"}, {"Fig. 6"});
 
         // Fig. 7: Fresnel, n = 1.5 and 200, both blends.
         std::vector<hemi::io::ImageRgba> fig7;
@@ -213,9 +215,9 @@ int main(int argc, char** argv)
         write("fig10_normal_map.png", fig10, {"view 1", "view 2", "view 3", "view 4"},
               {"environment", "+ local light"});
 
-        // The rendered glossy reflection against the reference: a glossy sphere (ks = 1, no diffuse, no normal
-        // map) on the GPU, and at each covered pixel Eq. 9 integrated over the environment's pixels in the
-        // reflection direction of the analytic sphere at the UV the GPU reports.
+        // The rendered glossy reflection against the reference: a glossy sphere (ks = 1, no diffuse, no
+        // normal map) on the GPU, and at each covered pixel Eq. 9 integrated over the environment's pixels in
+        // the reflection direction of the analytic sphere at the UV the GPU reports.
         {
             // A finely tessellated sphere, so that the GPU's interpolated normals are the analytic ones.
             const hemi::io::Mesh fine_sphere = hemi::io::make_uv_sphere(1.2f, 512, 256);
@@ -249,7 +251,8 @@ int main(int argc, char** argv)
                 se += glm::dot(e, e) / 3.0;
                 sr += glm::dot(ref[i], ref[i]) / 3.0;
             }
-            std::printf("rendered glossy sphere (exponent %g, %zu pixels) against the reference: RMSE %.4f, %.3f%% of "
+            std::printf("rendered glossy sphere (exponent %g, %zu pixels) against the reference: RMSE %.4f, "
+                        "%.3f%% of "
                         "the reference's RMS\n",
                         double(env.exponents[0]), dirs.size(), std::sqrt(se / dirs.size()),
                         100.0 * std::sqrt(se / sr));
@@ -259,9 +262,9 @@ int main(int argc, char** argv)
         std::vector<hemi::io::ImageRgba> all = {fig2[0], fig2[1], fig3[0], fig3[1], fig6[0], fig6[2],
                                                 fig7[0], fig7[1], fig7[2], fig7[3], fig8[1], fig10[5]};
         hemi::samples::write_labeled_grid(out, all, size, size,
-                                          {"TS m = 0.15", "TS m = 0.4", "Banks", "Banks disk", "parabolic front",
-                                           "mirror", "n = 1.5", "n = 200", "coat 1.5", "coat 200", "glossy e = 20",
-                                           "normal map + light"},
+                                          {"TS m = 0.15", "TS m = 0.4", "Banks", "Banks disk",
+                                           "parabolic front", "mirror", "n = 1.5", "n = 200", "coat 1.5",
+                                           "coat 200", "glossy e = 20", "normal map + light"},
                                           {""}, 0.8f);
         std::printf("wrote %s and the figures in %s (%.1f s)\n", out.c_str(), dir.c_str(),
                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

@@ -23,8 +23,7 @@ struct Quad
 
 // A tangent-space normal map (glTF's: +y up the image) of the height field `height(u, v)` over one unit of UV
 // (v down the image), by central differences, 8-bit PNG.
-template <class Height>
-io::EncodedImage normal_map(const std::string& name, uint32_t size, Height height)
+template <class Height> io::EncodedImage normal_map(const std::string& name, uint32_t size, Height height)
 {
     io::ImageRgba8 image{size, size, std::vector<uint8_t>(size_t(size) * size * 4)};
     const float step = 1.0f / float(size);
@@ -52,7 +51,8 @@ io::EncodedImage ssbump_map(const std::string& name, uint32_t size, Height heigh
     bake::HeightField field{size, size, std::vector<float>(size_t(size) * size)};
     for (uint32_t y = 0; y < size; ++y)
         for (uint32_t x = 0; x < size; ++x)
-            field.heights[size_t(y) * size + x] = height((float(x) + 0.5f) / float(size), (float(y) + 0.5f) / float(size)) / top;
+            field.heights[size_t(y) * size + x] =
+                height((float(x) + 0.5f) / float(size), (float(y) + 0.5f) / float(size)) / top;
     bake::SsbumpOptions o;
     o.scale = top * float(size); // world units to texel widths
     const bake::SsbumpMap m = bake::bake_ssbump(field, o);
@@ -79,14 +79,14 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
     // glTF space: y up. The room spans x, z in [-4, 4], y in [0, 3]; the walls face inwards.
     std::vector<Quad> quads;
     const float h = 3.0f, s = 4.0f;
-    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0});  // floor, facing +y
-    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0});  // ceiling, facing -y
+    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0}); // floor, facing +y
+    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0}); // ceiling, facing -y
     // Wall at z = -s (facing +z) in full; wall at z = +s (facing -z) with a window from x -1 to 1, y 1 to 2.
     quads.push_back({{-s, 0, -s}, {2 * s, 0, 0}, {0, h, 0}, 1});
-    quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});       // right of the window
-    quads.push_back({{-1, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});      // left of the window
-    quads.push_back({{1, 0, s}, {-2, 0, 0}, {0, 1, 0}, 1});              // below it
-    quads.push_back({{1, 2, s}, {-2, 0, 0}, {0, h - 2, 0}, 1});          // above it
+    quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});  // right of the window
+    quads.push_back({{-1, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1}); // left of the window
+    quads.push_back({{1, 0, s}, {-2, 0, 0}, {0, 1, 0}, 1});        // below it
+    quads.push_back({{1, 2, s}, {-2, 0, 0}, {0, h - 2, 0}, 1});    // above it
     // Wall at x = -s (facing +x) with a wide opening from z -2 to 2 up to y 2.2; wall at x = +s (facing -x).
     quads.push_back({{-s, 0, s}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
     quads.push_back({{-s, 0, -2}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
@@ -97,10 +97,10 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
         for (float pz : {-2.0f, 2.0f})
         {
             const float r = 0.3f;
-            quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, h, 0}, 0});   // +z
-            quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, h, 0}, 0});  // -z
-            quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, h, 0}, 0});  // +x
-            quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, h, 0}, 0});   // -x
+            quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, h, 0}, 0});  // +z
+            quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, h, 0}, 0}); // -z
+            quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, h, 0}, 0}); // +x
+            quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, h, 0}, 0});  // -x
         }
 
     // Pack the charts: each quad's size in texels at the density that fills about 70% of the atlas, shelf by
@@ -113,9 +113,8 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
     std::vector<size_t> order(quads.size());
     for (size_t i = 0; i < order.size(); ++i)
         order[i] = i;
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return glm::length(quads[a].v) > glm::length(quads[b].v);
-    });
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return glm::length(quads[a].v) > glm::length(quads[b].v); });
     std::vector<glm::vec4> rect(quads.size()); // u0, v0, u1, v1 in texels
     for (int attempt = 0;; ++attempt)
     {
@@ -123,7 +122,8 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
         bool fits = true;
         for (size_t i : order)
         {
-            const double w = std::ceil(glm::length(quads[i].u) * density), t = std::ceil(glm::length(quads[i].v) * density);
+            const double w = std::ceil(glm::length(quads[i].u) * density),
+                         t = std::ceil(glm::length(quads[i].v) * density);
             if (x + w + gap > atlas)
             {
                 x = gap;
@@ -144,8 +144,8 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
 
     io::GltfScene scene;
     io::Mesh& m = scene.mesh;
-    const glm::vec4 colours[4] = {{0.75f, 0.75f, 0.72f, 1}, {0.8f, 0.25f, 0.2f, 1}, {0.25f, 0.7f, 0.3f, 1},
-                                  {0.3f, 0.35f, 0.8f, 1}};
+    const glm::vec4 colours[4] = {
+        {0.75f, 0.75f, 0.72f, 1}, {0.8f, 0.25f, 0.2f, 1}, {0.25f, 0.7f, 0.3f, 1}, {0.3f, 0.35f, 0.8f, 1}};
     for (int k = 0; k < 4; ++k)
     {
         io::Material mat;
@@ -155,12 +155,14 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
     }
     // Tiles of 0.5 units (two per UV unit), bevelled over 0.06 at 45 degrees; bricks 0.5 x 0.25 in running
     // bond, mortar joints bevelled over 0.04 at 50 degrees. Heights in world units over one UV unit.
-    const auto tiles = [](float u, float v) {
+    const auto tiles = [](float u, float v)
+    {
         const float x = fract(u * 2.0f), y = fract(v * 2.0f);
         const float d = std::min(std::min(x, 1.0f - x), std::min(y, 1.0f - y)) * 0.5f;
         return bevel(d, 0.06f, 1.0f);
     };
-    const auto bricks = [](float u, float v) {
+    const auto bricks = [](float u, float v)
+    {
         const float row = std::floor(v * 4.0f);
         const float x = fract(u * 2.0f + 0.5f * row), y = fract(v * 4.0f);
         const float d = std::min(std::min(x, 1.0f - x) * 0.5f, std::min(y, 1.0f - y) * 0.25f);
@@ -200,7 +202,8 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
                 // Normal-map UVs in world units; v grows down the image, so up the quad is -v.
                 m.uvs.emplace_back(c.x * glm::length(q.u), -c.y * glm::length(q.v));
                 const glm::vec4& r = rect[i];
-                m.uvs1.emplace_back((r.x + c.x * (r.z - r.x)) / float(atlas), (r.w - c.y * (r.w - r.y)) / float(atlas));
+                m.uvs1.emplace_back((r.x + c.x * (r.z - r.x)) / float(atlas),
+                                    (r.w - c.y * (r.w - r.y)) / float(atlas));
             }
             m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
         }

@@ -49,7 +49,8 @@ struct Column
     const char* label;
 };
 // Habel's order, best first, and the non-directional baseline.
-const Column kTechniques[] = {{"sh9", "SH9"}, {"h6", "H6"}, {"h4", "H4"}, {"hl2", "HL2"}, {"plain", "plain lightmap"}};
+const Column kTechniques[] = {
+    {"sh9", "SH9"}, {"h6", "H6"}, {"h4", "H4"}, {"hl2", "HL2"}, {"plain", "plain lightmap"}};
 
 struct Error
 {
@@ -84,7 +85,8 @@ Error compare(const hemi::io::ImageRgba& image, const hemi::bake::ReferenceImage
     return e;
 }
 
-// |a - b| times `gain`, in every channel the same (the mean of the channels' errors), where both cover the pixel.
+// |a - b| times `gain`, in every channel the same (the mean of the channels' errors), where both cover the
+// pixel.
 hemi::io::ImageRgba error_image(const hemi::io::ImageRgba& a, const hemi::io::ImageRgba& b, float gain)
 {
     hemi::io::ImageRgba out{a.width, a.height, std::vector<float>(a.pixels.size(), 0.0f)};
@@ -110,8 +112,8 @@ hemi::io::ImageRgba half(const hemi::io::ImageRgba& image)
         for (uint32_t x = 0; x < out.width; ++x)
             for (int c = 0; c < 4; ++c)
                 out.pixels[(size_t(y) * out.width + x) * 4 + c] =
-                    0.25f * (image.at(2 * x, 2 * y)[c] + image.at(2 * x + 1, 2 * y)[c] + image.at(2 * x, 2 * y + 1)[c] +
-                             image.at(2 * x + 1, 2 * y + 1)[c]);
+                    0.25f * (image.at(2 * x, 2 * y)[c] + image.at(2 * x + 1, 2 * y)[c] +
+                             image.at(2 * x, 2 * y + 1)[c] + image.at(2 * x + 1, 2 * y + 1)[c]);
     return out;
 }
 
@@ -127,52 +129,66 @@ struct Setup
 
 void write_plot(const fs::path& path, const std::vector<Setup>& setups)
 {
-    hemi::bake::run_gnuplot(path, [&](const fs::path& folder, std::ostream& script, const fs::path& output) {
+    hemi::bake::run_gnuplot(
+        path,
+        [&](const fs::path& folder, std::ostream& script, const fs::path& output)
         {
-            std::ofstream data(folder / "errors.dat");
-            for (size_t i = 0; i < std::size(kTechniques); ++i)
             {
-                data << i << " \"" << kTechniques[i].label << "\"";
-                for (const Setup& setup : setups)
-                    data << " " << setup.errors[i].corrected;
-                data << "\n";
+                std::ofstream data(folder / "errors.dat");
+                for (size_t i = 0; i < std::size(kTechniques); ++i)
+                {
+                    data << i << " \"" << kTechniques[i].label << "\"";
+                    for (const Setup& setup : setups)
+                        data << " " << setup.errors[i].corrected;
+                    data << "\n";
+                }
             }
-        }
-        script << "set terminal pngcairo size 760,420 noenhanced font 'Sans,11'\n"
-               << "set output '" << output.string() << "'\n"
-               << "set title 'Irradiance normal mapping on the sample level: RMSE of E/pi against the path-traced "
-                  "reference'\n"
-               << "set ylabel 'RMSE (linear E/pi, reference noise removed)'\nset style fill solid 0.8 border -1\n"
-               << "set boxwidth 0.35\nset yrange [0:*]\nset grid ytics\nset key top left\n"
-               << "plot '" << (folder / "errors.dat").string()
-               << "' using ($1-0.19):3:xtic(2) with boxes lc rgb '#d08020' title '" << setups[0].name << "', "
-               << "'' using ($1+0.19):4 with boxes lc rgb '#3070b0' title '" << setups[1].name << "'\n";
-    });
+            script << "set terminal pngcairo size 760,420 noenhanced font 'Sans,11'\n"
+                   << "set output '" << output.string() << "'\n"
+                   << "set title 'Irradiance normal mapping on the sample level: RMSE of E/pi against the "
+                      "path-traced "
+                      "reference'\n"
+                   << "set ylabel 'RMSE (linear E/pi, reference noise removed)'\nset style fill solid 0.8 "
+                      "border -1\n"
+                   << "set boxwidth 0.35\nset yrange [0:*]\nset grid ytics\nset key top left\n"
+                   << "plot '" << (folder / "errors.dat").string()
+                   << "' using ($1-0.19):3:xtic(2) with boxes lc rgb '#d08020' title '" << setups[0].name
+                   << "', "
+                   << "'' using ($1+0.19):4 with boxes lc rgb '#3070b0' title '" << setups[1].name << "'\n";
+        });
 }
 
 } // namespace
 
 int main(int argc, char** argv)
 {
-    CLI::App app{"irradiance_normalmap: Habel & Wimmer 2010's basis comparison on a lightmapped level, against a "
-                 "path-traced reference"};
-    std::string dir = "irradiance_normalmap", figure = "irradiance_normalmap.png", table = "irradiance_normalmap.md",
-                plot = "irradiance_normalmap_rmse.png", size = "640x400", ssbump_figure = "irradiance_normalmap_ssbump.png";
+    CLI::App app{
+        "irradiance_normalmap: Habel & Wimmer 2010's basis comparison on a lightmapped level, against a "
+        "path-traced reference"};
+    std::string dir = "irradiance_normalmap", figure = "irradiance_normalmap.png",
+                table = "irradiance_normalmap.md", plot = "irradiance_normalmap_rmse.png", size = "640x400",
+                ssbump_figure = "irradiance_normalmap_ssbump.png";
     uint32_t atlas = 384;
     int rays = 256, reference_rays = 256, bounces = 1;
 
     app.add_option("--dir", dir, "folder for level.glb, level.hemi, the reference EXR and the single images")
         ->capture_default_str();
-    app.add_option("-o,--output", figure, "the comparison figure under the sky and the sun (PNG; FIGURE_sky.png: the "
-                                          "sky alone)")
+    app.add_option("-o,--output", figure,
+                   "the comparison figure under the sky and the sun (PNG; FIGURE_sky.png: the "
+                   "sky alone)")
         ->capture_default_str();
-    app.add_option("--ssbump-figure", ssbump_figure, "Green 2007's room: the level's rnm lightmap with Listing 1 "
-                                                     "and with SSBump maps (PNG; empty: none)")
+    app.add_option("--ssbump-figure", ssbump_figure,
+                   "Green 2007's room: the level's rnm lightmap with Listing 1 "
+                   "and with SSBump maps (PNG; empty: none)")
         ->capture_default_str();
     app.add_option("--table", table, "the errors as a Markdown table")->capture_default_str();
     app.add_option("--plot", plot, "the errors as a bar chart (PNG, gnuplot)")->capture_default_str();
-    app.add_option("--atlas", atlas, "lightmap atlas size (square)")->check(CLI::Range(64u, 4096u))->capture_default_str();
-    app.add_option("--rays", rays, "lightmap rays per texel and pass")->check(CLI::Range(1, 1 << 16))->capture_default_str();
+    app.add_option("--atlas", atlas, "lightmap atlas size (square)")
+        ->check(CLI::Range(64u, 4096u))
+        ->capture_default_str();
+    app.add_option("--rays", rays, "lightmap rays per texel and pass")
+        ->check(CLI::Range(1, 1 << 16))
+        ->capture_default_str();
     app.add_option("--reference-rays", reference_rays, "reference paths per pixel")
         ->check(CLI::Range(2, 1 << 16))
         ->capture_default_str();
@@ -187,8 +203,8 @@ int main(int argc, char** argv)
     {
         unsigned w = 0, h = 0;
         char x = 0, rest = 0;
-        if (std::sscanf(size.c_str(), "%u%c%u%c", &w, &x, &h, &rest) != 3 || x != 'x' || w < 16 || h < 16 || w > 4096 ||
-            h > 4096)
+        if (std::sscanf(size.c_str(), "%u%c%u%c", &w, &x, &h, &rest) != 3 || x != 'x' || w < 16 || h < 16 ||
+            w > 4096 || h > 4096)
             throw std::invalid_argument("--size expects WIDTHxHEIGHT (16 to 4096 each), got '" + size + "'");
         fs::create_directories(dir);
         for (const fs::path& p : {fs::path(figure), fs::path(figure).replace_extension().concat("_sky.png"),
@@ -201,9 +217,11 @@ int main(int argc, char** argv)
         const hemi::io::GltfScene level = hemi::samples::make_level(atlas);
         hemi::io::write_gltf(fs::path(dir) / "level.glb", level);
 
-        const hemi::bake::LightmapSurfaces surfaces(level.mesh, level.materials, level.images, level.primitives);
+        const hemi::bake::LightmapSurfaces surfaces(level.mesh, level.materials, level.images,
+                                                    level.primitives);
         hemi::bake::LightmapUvReport report;
-        const hemi::bake::LightmapAtlas lightmap_atlas = hemi::bake::rasterize_lightmap(level.mesh, atlas, atlas, report);
+        const hemi::bake::LightmapAtlas lightmap_atlas =
+            hemi::bake::rasterize_lightmap(level.mesh, atlas, atlas, report);
         if (!report.ok())
             throw std::runtime_error("the level's lightmap UVs: " + report.problems.front());
         hemi::gpu::Device device(hemi::gpu::DeviceDesc{});
@@ -234,8 +252,8 @@ int main(int argc, char** argv)
             bake.bounces = bounces;
             const hemi::bake::LightmapSh sh =
                 hemi::bake::bake_lightmap_sh(level.mesh, lightmap_atlas, lights, bake, &surfaces);
-            std::fprintf(stderr, "  %zu texels, %.1f s (%.1f Mrays/s)\n", lightmap_atlas.texels.size(), sh.trace_seconds,
-                         double(sh.rays) / sh.trace_seconds * 1e-6);
+            std::fprintf(stderr, "  %zu texels, %.1f s (%.1f Mrays/s)\n", lightmap_atlas.texels.size(),
+                         sh.trace_seconds, double(sh.rays) / sh.trace_seconds * 1e-6);
             hemi::io::LightmapAsset asset;
             asset.mesh = level.mesh;
             asset.materials = level.materials;
@@ -257,12 +275,13 @@ int main(int argc, char** argv)
             asset.probes = hemi::bake::probe_grid(level.mesh, glm::uvec3(6, 3, 6));
             hemi::bake::LightmapBakeOptions probe_options = bake;
             probe_options.rays = 2048;
-            hemi::bake::bake_light_probes(asset.probes, level.mesh, lightmap_atlas, sh, lights, probe_options, &surfaces);
+            hemi::bake::bake_light_probes(asset.probes, level.mesh, lightmap_atlas, sh, lights, probe_options,
+                                          &surfaces);
             const std::string stem = std::string("level_") + setup.file;
             hemi::io::write_lightmap_asset(fs::path(dir) / (stem + ".hemi"), asset);
 
-            // The ground truth, from outside the room's south-east corner (the near walls' backs are culled), the
-            // camera `hemi-render --camera` takes as 1.5,-7.5,5,-0.5,0.5,0.6.
+            // The ground truth, from outside the room's south-east corner (the near walls' backs are culled),
+            // the camera `hemi-render --camera` takes as 1.5,-7.5,5,-0.5,0.5,0.6.
             hemi::bake::ReferenceOptions ro;
             ro.auto_camera = false;
             ro.camera.eye = glm::vec3(1.5f, -7.5f, 5.0f);
@@ -272,8 +291,8 @@ int main(int argc, char** argv)
             ro.rays = reference_rays;
             ro.bounces = bounces;
             ro.white = true;
-            std::fprintf(stderr, "%s: tracing the reference (%ux%u, %d paths per pixel) ...\n", setup.name, w, h,
-                         reference_rays);
+            std::fprintf(stderr, "%s: tracing the reference (%ux%u, %d paths per pixel) ...\n", setup.name, w,
+                         h, reference_rays);
             setup.reference = hemi::bake::render_reference(level.mesh, surfaces, lights, ro);
             const hemi::bake::ReferenceImage& reference = setup.reference;
             std::fprintf(stderr, "  %.1f s (%.1f Mrays/s), noise %.4f\n", reference.seconds,
@@ -288,7 +307,8 @@ int main(int argc, char** argv)
             frame.camera = reference.camera;
             frame.white = true;
             std::vector<hemi::io::ImageRgba> tiles = {half(reference.image)},
-                                             errors_row = {half(error_image(reference.image, reference.image, gain))};
+                                             errors_row = {
+                                                 half(error_image(reference.image, reference.image, gain))};
             for (const Column& c : kTechniques)
             {
                 frame.technique = c.technique;
@@ -301,39 +321,46 @@ int main(int argc, char** argv)
             }
             frame.technique = "sh9";
             frame.white = false;
-            // Three dynamic objects, lit by the probes: one in the sun's patch, one in the shade, one by a wall.
-            frame.spheres = {{-1.2f, 0.4f, 0.45f, 0.45f}, {1.2f, 1.4f, 0.6f, 0.6f}, {2.9f, -2.4f, 1.4f, 0.4f}};
+            // Three dynamic objects, lit by the probes: one in the sun's patch, one in the shade, one by a
+            // wall.
+            frame.spheres = {
+                {-1.2f, 0.4f, 0.45f, 0.45f}, {1.2f, 1.4f, 0.6f, 0.6f}, {2.9f, -2.4f, 1.4f, 0.4f}};
             hemi::io::write_png(fs::path(dir) / (stem + "_sh9_colour.png"), view.render(frame),
                                 {exposure, hemi::io::ToneMap::Curve::Clamp});
             if (setup.sun && !ssbump_figure.empty())
             {
-                // Green's room: the same lightmap's rnm colours, drawn with Listing 1 and the normal maps, and
-                // with the reliefs baked into SSBump maps (directional occlusion) in the normal slots.
+                // Green's room: the same lightmap's rnm colours, drawn with Listing 1 and the normal maps,
+                // and with the reliefs baked into SSBump maps (directional occlusion) in the normal slots.
                 hemi::io::LightmapAsset rnm = asset, ssbump = asset;
                 rnm.outputs = {{"rnm", 3, hemi::bake::lightmap_maps("rnm", lightmap_atlas, sh)}};
                 ssbump.outputs = rnm.outputs;
-                const hemi::io::GltfScene ss_level = hemi::samples::make_level(atlas, hemi::samples::LevelMaps::Ssbump);
+                const hemi::io::GltfScene ss_level =
+                    hemi::samples::make_level(atlas, hemi::samples::LevelMaps::Ssbump);
                 ssbump.images = ss_level.images;
                 ssbump.materials = ss_level.materials;
-                hemi::render::LightmapView rnm_view(device, rnm, {"rnm"}, w, h), ss_view(device, ssbump, {"ssbump"}, w, h);
+                hemi::render::LightmapView rnm_view(device, rnm, {"rnm"}, w, h),
+                    ss_view(device, ssbump, {"ssbump"}, w, h);
                 hemi::render::LightmapFrame room;
                 room.camera = frame.camera;
                 room.technique = "rnm";
                 const hemi::io::ImageRgba listing1 = rnm_view.render(room);
                 room.technique = "ssbump";
                 const hemi::io::ImageRgba self_shadowed = ss_view.render(room);
-                hemi::io::write_png(fs::path(dir) / (stem + "_rnm.png"), listing1, {exposure, hemi::io::ToneMap::Curve::Clamp});
+                hemi::io::write_png(fs::path(dir) / (stem + "_rnm.png"), listing1,
+                                    {exposure, hemi::io::ToneMap::Curve::Clamp});
                 hemi::io::write_png(fs::path(dir) / (stem + "_ssbump.png"), self_shadowed,
                                     {exposure, hemi::io::ToneMap::Curve::Clamp});
-                hemi::samples::write_labeled_grid(ssbump_figure, {half(listing1), half(self_shadowed)}, w / 2, h / 2,
-                                                  {"radiosity normal mapping (Listing 1)", "self-shadowed bump maps (SSBump)"},
-                                                  {"the rnm lightmap, sky and sun"}, exposure);
+                hemi::samples::write_labeled_grid(
+                    ssbump_figure, {half(listing1), half(self_shadowed)}, w / 2, h / 2,
+                    {"radiosity normal mapping (Listing 1)", "self-shadowed bump maps (SSBump)"},
+                    {"the rnm lightmap, sky and sun"}, exposure);
             }
             tiles.insert(tiles.end(), errors_row.begin(), errors_row.end());
-            hemi::samples::write_labeled_grid(setup.figure, tiles, w / 2, h / 2, columns,
-                                              {std::string(setup.name) + ": E / pi",
-                                               std::string(setup.name) + ": |error| x " + std::to_string(int(gain))},
-                                              exposure);
+            hemi::samples::write_labeled_grid(
+                setup.figure, tiles, w / 2, h / 2, columns,
+                {std::string(setup.name) + ": E / pi",
+                 std::string(setup.name) + ": |error| x " + std::to_string(int(gain))},
+                exposure);
         }
         write_plot(plot, setups);
 
@@ -352,17 +379,19 @@ int main(int argc, char** argv)
             {
                 char cell[128];
                 const Error& e = setup.errors[i];
-                std::snprintf(cell, sizeof cell, " %.4f | %.4f | %.1f%% |", e.rmse, e.corrected, 100.0 * e.relative);
+                std::snprintf(cell, sizeof cell, " %.4f | %.4f | %.1f%% |", e.rmse, e.corrected,
+                              100.0 * e.relative);
                 md << cell;
             }
             md << "\n";
         }
         char foot[512];
-        std::snprintf(foot, sizeof foot,
-                      "\n%ux%u pixels (%zu compared), reference %d paths per pixel (noise %.4f with the sun, %.4f "
-                      "without), lightmap %ux%u at %d rays per texel, %d bounce(s).\n",
-                      w, h, setups[0].errors[0].pixels, reference_rays, setups[0].reference.noise,
-                      setups[1].reference.noise, atlas, atlas, rays, bounces);
+        std::snprintf(
+            foot, sizeof foot,
+            "\n%ux%u pixels (%zu compared), reference %d paths per pixel (noise %.4f with the sun, %.4f "
+            "without), lightmap %ux%u at %d rays per texel, %d bounce(s).\n",
+            w, h, setups[0].errors[0].pixels, reference_rays, setups[0].reference.noise,
+            setups[1].reference.noise, atlas, atlas, rays, bounces);
         md << foot;
         hemi::io::write_text_atomically(table, md.str());
         std::printf("%s", md.str().c_str());

@@ -35,8 +35,9 @@ struct Column
     const char* label;
 };
 const Column kColumns[] = {
-    {"prt", false, "classic PRT"}, {"gs", false, "SH9 (gold standard)"}, {"sep4", false, "separable"},
-    {"hl2", false, "HL2"},         {"sal4", false, "SAL"},                {"h4", false, "H4"},
+    {"prt", false, "classic PRT"}, {"gs", false, "SH9 (gold standard)"},
+    {"sep4", false, "separable"},  {"hl2", false, "HL2"},
+    {"sal4", false, "SAL"},        {"h4", false, "H4"},
     {"h6", false, "H6"},           {"gs", true, "SH9 + CPCA 1x24"},
 };
 
@@ -57,9 +58,7 @@ Error compare(const hemi::io::ImageRgba& image, const hemi::io::ImageRgba& refer
         {
             const double d = image.pixels[i + c] - reference.pixels[i + c];
             linear += d * d;
-            auto shown = [&](float v) {
-                return hemi::io::srgb_oetf(std::clamp(v * exposure, 0.0f, 1.0f));
-            };
+            auto shown = [&](float v) { return hemi::io::srgb_oetf(std::clamp(v * exposure, 0.0f, 1.0f)); };
             const double s = shown(image.pixels[i + c]) - shown(reference.pixels[i + c]);
             display += s * s;
         }
@@ -81,7 +80,8 @@ int main(int argc, char** argv)
                 kinds_path = "prt_transfer_kinds.png";
     int rays = 256, tile = 180;
     float detail = 1.0f, exposure = 0.6f, rotate = 30.0f;
-    app.add_option("--dir", out_dir, "folder for the models, textures and baked assets")->capture_default_str();
+    app.add_option("--dir", out_dir, "folder for the models, textures and baked assets")
+        ->capture_default_str();
     app.add_option("-o,--output", image_path, "comparison image (PNG)")->capture_default_str();
     app.add_option("--table", table_path, "error table (Markdown)")->capture_default_str();
     app.add_option("--kinds", kinds_path, "transfer-kinds figure (PNG; empty: skip)")->capture_default_str();
@@ -99,7 +99,8 @@ int main(int argc, char** argv)
         const uint32_t t = uint32_t(tile), columns = uint32_t(std::size(kColumns));
         std::vector<hemi::io::ImageRgba> tiles;
         std::ostringstream table;
-        table << "| model | vertices | technique | RMSE (linear) | PSNR (dB, sRGB) |\n| --- | ---: | --- | ---: | ---: |\n";
+        table << "| model | vertices | technique | RMSE (linear) | PSNR (dB, sRGB) |\n| --- | ---: | --- | "
+                 "---: | ---: |\n";
         std::vector<std::string> row_labels, column_labels;
         for (const Column& c : kColumns)
             column_labels.push_back(c.label);
@@ -114,8 +115,8 @@ int main(int argc, char** argv)
             options.cpca_vectors = 24;
             std::fprintf(stderr, "baking %s ...\n", gltf.c_str());
             const hemi::bake::PrtBakeSummary s = hemi::bake::bake_prt_file(gltf, asset_path, options);
-            std::printf("%s: %u vertices, %.2f Mrays/s, bake %.1f s\n", name, s.vertices, s.rays_per_second() * 1e-6,
-                        s.total_seconds);
+            std::printf("%s: %u vertices, %.2f Mrays/s, bake %.1f s\n", name, s.vertices,
+                        s.rays_per_second() * 1e-6, s.total_seconds);
             const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
             row_labels.push_back(std::string(name) + ", " + std::to_string(s.vertices) + " vertices");
             hemi::render::PrtFrame frame;
@@ -151,8 +152,10 @@ int main(int argc, char** argv)
             std::vector<hemi::io::ImageRgba> kinds;
             const uint32_t kt = std::max(t, 320u);
             const std::vector<std::pair<hemi::bake::TransferKind, int>> settings = {
-                {hemi::bake::TransferKind::Unshadowed, 0}, {hemi::bake::TransferKind::Shadowed, 0},
-                {hemi::bake::TransferKind::Interreflected, 1}, {hemi::bake::TransferKind::Interreflected, 2}};
+                {hemi::bake::TransferKind::Unshadowed, 0},
+                {hemi::bake::TransferKind::Shadowed, 0},
+                {hemi::bake::TransferKind::Interreflected, 1},
+                {hemi::bake::TransferKind::Interreflected, 2}};
             for (const auto& [kind, bounces] : settings)
             {
                 hemi::bake::PrtAssetOptions options;
@@ -174,18 +177,20 @@ int main(int argc, char** argv)
                 kinds.push_back(view.render(frame));
             }
             hemi::samples::write_labeled_grid(kinds_path, kinds, kt, kt,
-                               {"unshadowed", "shadowed", "+ 1 bounce", "+ 2 bounces"},
-                               {"lighting only (albedo 1), SH9"}, exposure * 0.7f);
+                                              {"unshadowed", "shadowed", "+ 1 bounce", "+ 2 bounces"},
+                                              {"lighting only (albedo 1), SH9"}, exposure * 0.7f);
             std::printf("wrote %s\n", kinds_path.c_str());
         }
         const std::string text = table.str();
-        hemi::io::write_atomically(table_path, [&](const std::filesystem::path& tmp) {
-            std::ofstream f(tmp);
-            f << text;
-            f.close();
-            if (f.fail())
-                throw hemi::io::FormatError(table_path + ": cannot write");
-        });
+        hemi::io::write_atomically(table_path,
+                                   [&](const std::filesystem::path& tmp)
+                                   {
+                                       std::ofstream f(tmp);
+                                       f << text;
+                                       f.close();
+                                       if (f.fail())
+                                           throw hemi::io::FormatError(table_path + ": cannot write");
+                                   });
         std::printf("%s\ncolumns: ", text.c_str());
         for (const Column& c : kColumns)
             std::printf("%s%s", c.label, &c == &kColumns[columns - 1] ? "\n" : " | ");

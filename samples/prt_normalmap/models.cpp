@@ -85,30 +85,38 @@ io::Mesh make_prt_model(PrtModel model, float detail)
     if (model == PrtModel::Simple)
     {
         const float R = 1.0f, r = 0.45f;
-        return parametric(count(36), count(18), 4.0f, 1.0f, [&](float u, float v) {
-            const float a = 2.0f * float(M_PI) * u, b = 2.0f * float(M_PI) * v;
-            const glm::vec3 n(std::cos(b) * std::cos(a), std::cos(b) * std::sin(a), std::sin(b));
-            return SurfacePoint{glm::vec3(R * std::cos(a), R * std::sin(a), 0.0f) + r * n, n};
-        });
+        return parametric(
+            count(36), count(18), 4.0f, 1.0f,
+            [&](float u, float v)
+            {
+                const float a = 2.0f * float(M_PI) * u, b = 2.0f * float(M_PI) * v;
+                const glm::vec3 n(std::cos(b) * std::cos(a), std::cos(b) * std::sin(a), std::sin(b));
+                return SurfacePoint{glm::vec3(R * std::cos(a), R * std::sin(a), 0.0f) + r * n, n};
+            });
     }
     const float r = 0.28f;
-    return parametric(count(300), count(96), 6.0f, 1.0f, [&](float u, float v) {
-        // Frenet frame of the knot's centre line (periodic: the tube closes without a seam crack).
-        const float e = 1e-3f;
-        const glm::vec3 c = trefoil(u), d1 = (trefoil(u + e) - trefoil(u - e)) / (2.0f * e);
-        const glm::vec3 d2 = (trefoil(u + e) - 2.0f * c + trefoil(u - e)) / (e * e);
-        const glm::vec3 t = glm::normalize(d1);
-        const glm::vec3 nrm = glm::normalize(d2 - glm::dot(d2, t) * t), bin = glm::cross(t, nrm);
-        const float b = 2.0f * float(M_PI) * v;
-        const glm::vec3 n = std::cos(b) * nrm + std::sin(b) * bin;
-        return SurfacePoint{c + r * n, n};
-    });
+    return parametric(count(300), count(96), 6.0f, 1.0f,
+                      [&](float u, float v)
+                      {
+                          // Frenet frame of the knot's centre line (periodic: the tube closes without a seam
+                          // crack).
+                          const float e = 1e-3f;
+                          const glm::vec3 c = trefoil(u), d1 = (trefoil(u + e) - trefoil(u - e)) / (2.0f * e);
+                          const glm::vec3 d2 = (trefoil(u + e) - 2.0f * c + trefoil(u - e)) / (e * e);
+                          const glm::vec3 t = glm::normalize(d1);
+                          const glm::vec3 nrm = glm::normalize(d2 - glm::dot(d2, t) * t),
+                                          bin = glm::cross(t, nrm);
+                          const float b = 2.0f * float(M_PI) * v;
+                          const glm::vec3 n = std::cos(b) * nrm + std::sin(b) * bin;
+                          return SurfacePoint{c + r * n, n};
+                      });
 }
 
 io::ImageRgba8 brick_normal_map(uint32_t width, uint32_t height)
 {
-    return {width, height, bake::normal_map_from_height(brick_heights(width, height, 1.0f, 8.0f, 4.0f), width,
-                                                        height, 3.0f)};
+    return {
+        width, height,
+        bake::normal_map_from_height(brick_heights(width, height, 1.0f, 8.0f, 4.0f), width, height, 3.0f)};
 }
 
 io::ImageRgba8 brick_base_color(uint32_t width, uint32_t height)
@@ -124,14 +132,15 @@ io::ImageRgba8 brick_base_color(uint32_t width, uint32_t height)
         const float shade = 0.85f + 0.3f * float((row * 7 + col * 13) % 5) / 4.0f;
         const glm::vec3 c = glm::mix(mortar, brick * shade, h[i]);
         for (int k = 0; k < 3; ++k)
-            out.pixels[i * 4 + k] = uint8_t(std::lround(255.0f * io::srgb_oetf(std::clamp(c[k], 0.0f, 1.0f))));
+            out.pixels[i * 4 + k] =
+                uint8_t(std::lround(255.0f * io::srgb_oetf(std::clamp(c[k], 0.0f, 1.0f))));
         out.pixels[i * 4 + 3] = 255;
     }
     return out;
 }
 
-std::filesystem::path write_prt_model(const std::filesystem::path& dir, const std::string& name, PrtModel model,
-                                      float detail, bool flat)
+std::filesystem::path write_prt_model(const std::filesystem::path& dir, const std::string& name,
+                                      PrtModel model, float detail, bool flat)
 {
     std::filesystem::create_directories(dir);
     const std::string normal = name + "_normal.png", base = name + "_base_color.png";

@@ -31,7 +31,7 @@ io::ImageRgba8 brick_base_color(uint32_t width, uint32_t height);
 
 // Writes DIR/NAME.gltf (buffers embedded) with DIR/NAME_normal.png and DIR/NAME_base_color.png next to it;
 // returns the .gltf path. `flat` leaves the normal map out (the geometric normals alone).
-std::filesystem::path write_prt_model(const std::filesystem::path& dir, const std::string& name, PrtModel model,
-                                      float detail = 1.0f, bool flat = false);
+std::filesystem::path write_prt_model(const std::filesystem::path& dir, const std::string& name,
+                                      PrtModel model, float detail = 1.0f, bool flat = false);
 
 } // namespace hemi::samples

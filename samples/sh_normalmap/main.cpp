@@ -33,13 +33,14 @@ int main(int argc, char** argv)
     try
     {
         hemi::gpu::DeviceDesc desc;
-        desc.log = [](hemi::gpu::LogLevel level, bool, std::string_view m) {
+        desc.log = [](hemi::gpu::LogLevel level, bool, std::string_view m)
+        {
             if (level >= hemi::gpu::LogLevel::Info)
                 std::fprintf(stderr, "%.*s\n", int(m.size()), m.data());
         };
         hemi::gpu::Device device(desc);
-        auto scene = hemi::samples::make_sh_normalmap_scene(env == "uniform" ? hemi::samples::Environment::Uniform
-                                                                             : hemi::samples::Environment::Sky);
+        auto scene = hemi::samples::make_sh_normalmap_scene(
+            env == "uniform" ? hemi::samples::Environment::Uniform : hemi::samples::Environment::Sky);
         hemi::io::ImageRgba image = hemi::samples::render_sh_normalmap(device, scene, w, h);
         hemi::io::write_png(png, image);
         std::printf("wrote %s (%ux%u)\n", png.c_str(), w, h);

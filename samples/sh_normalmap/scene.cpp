@@ -2,12 +2,12 @@
 
 #include <hemi/bake/normal_map.h>
 #include <hemi/gpu/commands.h>
-#include <hemi/render/view/offscreen.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_instance.h>
-#include <hemi/render/view/prt_view.h>
 #include <hemi/render/scene/gpu_mesh.h>
+#include <hemi/render/view/offscreen.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <algorithm>
 #include <cmath>
@@ -76,7 +76,8 @@ io::ImageRgba render_sh_normalmap(const gpu::Device& device, const ShNormalMapSc
     io::Material material;
     material.base_color_factor = glm::vec4(scene.albedo, 1.0f);
     material.normal.image = 0;
-    material.normal.sampler.mipmaps = false; // bilinear from mip 0 (glTF minFilter LINEAR), as the test's CPU reference
+    material.normal.sampler.mipmaps =
+        false; // bilinear from mip 0 (glTF minFilter LINEAR), as the test's CPU reference
     const io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
     render::TextureSet textures(device, std::span<const io::ImageRgba8>(&normal_map, 1),
                                 std::span<const io::Material>(&material, 1), upload);
@@ -93,18 +94,21 @@ io::ImageRgba render_sh_normalmap(const gpu::Device& device, const ShNormalMapSc
     draw.material = instance.set();
     draw.source = probe.set();
     draw.push.model = glm::mat4(1.0f);
-    gpu::one_shot(device, [&](VkCommandBuffer cmd) {
-        upload.record(cmd);
-        render::FrameData f;
-        f.view_projection = render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(width) / float(height));
-        frame.record_update(cmd, f);
-        probe.record_update(cmd, scene.irradiance);
-        target.begin(cmd, glm::vec4(0.0f));
-        render::bind_material(cmd, draw);
-        mesh.bind(cmd);
-        mesh.draw(cmd, 0, mesh.index_count());
-        target.end(cmd);
-    });
+    gpu::one_shot(device,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      upload.record(cmd);
+                      render::FrameData f;
+                      f.view_projection = render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f,
+                                                                     float(width) / float(height));
+                      frame.record_update(cmd, f);
+                      probe.record_update(cmd, scene.irradiance);
+                      target.begin(cmd, glm::vec4(0.0f));
+                      render::bind_material(cmd, draw);
+                      mesh.bind(cmd);
+                      mesh.draw(cmd, 0, mesh.index_count());
+                      target.end(cmd);
+                  });
     if (aux)
         *aux = target.read_aux();
     return target.read_color();

@@ -36,7 +36,8 @@ ShNormalMapScene make_sh_normalmap_scene(Environment environment);
 
 // Running-bond bricks as a height field (w x h, row-major, top row first): `columns` bricks across, `rows`
 // rows down, bevelled edges, mortar at height 0, brick tops at `amplitude`. Tiles seamlessly.
-std::vector<float> brick_heights(uint32_t w, uint32_t h, float amplitude, float columns = 32.0f, float rows = 16.0f);
+std::vector<float> brick_heights(uint32_t w, uint32_t h, float amplitude, float columns = 32.0f,
+                                 float rows = 16.0f);
 
 // Renders the scene at width x height; returns the linear colour and, if `aux` is given, the auxiliary
 // attachment ((u, v, 0, 1) where the sphere covers the pixel).

@@ -38,7 +38,8 @@ hemi::io::ImageRgba8 panel(uint32_t w, uint32_t h, std::vector<uint8_t> rgba)
 // A floor z = 0 over [-1, 1]^2 (tangent +x, bitangent +y), the relief once across it (TEXCOORD_0),
 // its lightmap (TEXCOORD_1 over the floor) the rnm colours of a dim uniform sky, with the material's normal
 // slot holding `normal_slot` and, when given, an occlusion texture.
-hemi::io::LightmapAsset relief_floor(const hemi::io::ImageRgba8& normal_slot, const hemi::io::ImageRgba8* occlusion)
+hemi::io::LightmapAsset relief_floor(const hemi::io::ImageRgba8& normal_slot,
+                                     const hemi::io::ImageRgba8* occlusion)
 {
     hemi::io::LightmapAsset a;
     hemi::io::Mesh& m = a.mesh;
@@ -69,7 +70,8 @@ hemi::io::LightmapAsset relief_floor(const hemi::io::ImageRgba8& normal_slot, co
     const hemi::bake::LightmapAtlas lightmap = hemi::bake::rasterize_lightmap(m, atlas, atlas, report);
     hemi::bake::LightmapLights sky;
     sky.uniform = glm::vec3(0.12f, 0.14f, 0.18f);
-    const hemi::bake::LightmapSh sh = hemi::bake::bake_lightmap_sh(m, lightmap, sky, hemi::bake::LightmapBakeOptions{});
+    const hemi::bake::LightmapSh sh =
+        hemi::bake::bake_lightmap_sh(m, lightmap, sky, hemi::bake::LightmapBakeOptions{});
     a.width = a.height = atlas;
     a.covered_texels = uint32_t(lightmap.texels.size());
     a.outputs.push_back({"rnm", 3, hemi::bake::lightmap_maps("rnm", lightmap, sh)});
@@ -91,7 +93,8 @@ int main(int argc, char** argv)
     app.add_option("--dir", dir, "folder for the single panels (and the height map, for hemi-bake ssbump)")
         ->capture_default_str();
     app.add_option("-o,--output", figure, "Fig. 2: the maps side by side")->capture_default_str();
-    app.add_option("--fig1", fig1, "Fig. 1: the three modes under a dynamic light (empty: none)")->capture_default_str();
+    app.add_option("--fig1", fig1, "Fig. 1: the three modes under a dynamic light (empty: none)")
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
     try
     {
@@ -130,9 +133,10 @@ int main(int argc, char** argv)
                         fig.pixels[(size_t(y) * fig.width + uint32_t(i) * (p + gap) + x) * 4 + size_t(c)] =
                             panels[i].pixels[(size_t(y) * size + x) * 4 + size_t(c)];
         hemi::io::write_png(figure, fig);
-        std::printf("wrote %s (height, normal map, bump map in the basis, with directional occlusion) and the panels "
-                    "in %s/; %llu rays in %.2f s\n",
-                    figure.c_str(), dir.c_str(), (unsigned long long)shadowed.rays, shadowed.trace_seconds);
+        std::printf(
+            "wrote %s (height, normal map, bump map in the basis, with directional occlusion) and the panels "
+            "in %s/; %llu rays in %.2f s\n",
+            figure.c_str(), dir.c_str(), (unsigned long long)shadowed.rays, shadowed.trace_seconds);
 
         if (!fig1.empty())
         {
@@ -141,12 +145,14 @@ int main(int argc, char** argv)
             for (size_t i = 0; i < shadowed.occlusion.size(); ++i)
             {
                 const glm::vec3& occ = shadowed.occlusion[i];
-                const uint8_t v = uint8_t(std::lround(std::clamp((occ.x + occ.y + occ.z) / 3.0f, 0.0f, 1.0f) * 255.0f));
+                const uint8_t v =
+                    uint8_t(std::lround(std::clamp((occ.x + occ.y + occ.z) / 3.0f, 0.0f, 1.0f) * 255.0f));
                 ao.pixels[i * 4] = ao.pixels[i * 4 + 1] = ao.pixels[i * 4 + 2] = v;
             }
             const hemi::io::ImageRgba8& normal_map = panels[1];
             const hemi::io::ImageRgba8& ssbump_map = panels[3];
-            const hemi::io::LightmapAsset assets[3] = {relief_floor(normal_map, nullptr), relief_floor(normal_map, &ao),
+            const hemi::io::LightmapAsset assets[3] = {relief_floor(normal_map, nullptr),
+                                                       relief_floor(normal_map, &ao),
                                                        relief_floor(ssbump_map, nullptr)};
             const char* techniques[3] = {"rnm", "rnm_ao", "ssbump"};
             const float elevations[3] = {60.0f, 35.0f, 15.0f};
@@ -165,20 +171,24 @@ int main(int argc, char** argv)
                     frame.camera.target = glm::vec3(0.1f, 0.15f, 0.0f);
                     const float e = glm::radians(elevations[row]), azimuth = glm::radians(20.0f);
                     hemi::render::DynamicLight sun;
-                    sun.position = glm::vec3(std::cos(e) * std::cos(azimuth), std::cos(e) * std::sin(azimuth), std::sin(e));
+                    sun.position = glm::vec3(std::cos(e) * std::cos(azimuth), std::cos(e) * std::sin(azimuth),
+                                             std::sin(e));
                     sun.irradiance = glm::vec3(2.6f, 2.45f, 2.2f);
                     frame.lights = {sun};
                     tiles[size_t(row) * 3 + size_t(mode)] = view.render(frame);
                     char name[64];
-                    std::snprintf(name, sizeof name, "fig1_%s_%02d.png", techniques[mode], int(elevations[row]));
-                    hemi::io::write_png(std::filesystem::path(dir) / name, tiles[size_t(row) * 3 + size_t(mode)]);
+                    std::snprintf(name, sizeof name, "fig1_%s_%02d.png", techniques[mode],
+                                  int(elevations[row]));
+                    hemi::io::write_png(std::filesystem::path(dir) / name,
+                                        tiles[size_t(row) * 3 + size_t(mode)]);
                 }
             }
-            hemi::samples::write_labeled_grid(fig1, tiles, t, t,
-                                              {"normal mapped (Listing 1)", "with ambient occlusion",
-                                               "self-shadowed (SSBump)"},
-                                              {"light 60 deg above the horizon", "35 deg", "15 deg"}, 1.0f);
-            std::printf("wrote %s (the three modes under a dynamic light at 60, 35 and 15 degrees)\n", fig1.c_str());
+            hemi::samples::write_labeled_grid(
+                fig1, tiles, t, t,
+                {"normal mapped (Listing 1)", "with ambient occlusion", "self-shadowed (SSBump)"},
+                {"light 60 deg above the horizon", "35 deg", "15 deg"}, 1.0f);
+            std::printf("wrote %s (the three modes under a dynamic light at 60, 35 and 15 degrees)\n",
+                        fig1.c_str());
         }
     }
     catch (const std::exception& e)

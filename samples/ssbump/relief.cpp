@@ -13,7 +13,8 @@ namespace
 // A hash of integer lattice points in [0, 1).
 float hash01(int64_t x, int64_t y, uint32_t salt)
 {
-    uint64_t h = uint64_t(x) * 0x9E3779B97F4A7C15ull ^ (uint64_t(y) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+    uint64_t h =
+        uint64_t(x) * 0x9E3779B97F4A7C15ull ^ (uint64_t(y) + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
     h ^= salt * 0x165667B19E3779F9ull;
     h ^= h >> 31;
     h *= 0xBF58476D1CE4E5B9ull;
@@ -26,7 +27,8 @@ float value_noise(float x, float y, int period, uint32_t salt)
 {
     const int64_t x0 = int64_t(std::floor(x)), y0 = int64_t(std::floor(y));
     const float fx = x - float(x0), fy = y - float(y0);
-    auto v = [&](int64_t i, int64_t j) { return hash01(((i % period) + period) % period, ((j % period) + period) % period, salt); };
+    auto v = [&](int64_t i, int64_t j)
+    { return hash01(((i % period) + period) % period, ((j % period) + period) % period, salt); };
     const float sx = fx * fx * (3.0f - 2.0f * fx), sy = fy * fy * (3.0f - 2.0f * fy);
     const float a = v(x0, y0) + sx * (v(x0 + 1, y0) - v(x0, y0));
     const float b = v(x0, y0 + 1) + sx * (v(x0 + 1, y0 + 1) - v(x0, y0 + 1));

@@ -13,8 +13,8 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -185,13 +185,11 @@ TEST(Checkpoint, IgnoresOtherKeysLayoutsPositionsAndDamagedFiles)
     writer.save({1, 3});
 
     std::vector<uint32_t> state(16, 9u), wide(17, 9u);
-    const auto untouched = [&] {
-        return std::all_of(state.begin(), state.end(), [](uint32_t v) { return v == 9u; });
-    };
-    const auto resume = [&](uint64_t key, uint32_t passes, uint32_t items,
-                            std::vector<CheckpointSection> sections) {
-        return SliceCheckpoint(path, key, passes, items, std::move(sections), 0.0).resume();
-    };
+    const auto untouched = [&]
+    { return std::all_of(state.begin(), state.end(), [](uint32_t v) { return v == 9u; }); };
+    const auto resume =
+        [&](uint64_t key, uint32_t passes, uint32_t items, std::vector<CheckpointSection> sections)
+    { return SliceCheckpoint(path, key, passes, items, std::move(sections), 0.0).resume(); };
     const std::span<std::byte> bytes = std::as_writable_bytes(std::span<uint32_t>(state));
     // The same bake resumes (checked first, so that the refusals below are the checkpoint's doing).
     {
@@ -264,7 +262,8 @@ TEST(Checkpoint, FailedSaveKeepsThePreviousCheckpoint)
         old.checkpoint.save({0, 5});
     }
     Blob next(path, 0x22);
-    const auto child = [&] {
+    const auto child = [&]
+    {
         std::signal(SIGXFSZ, SIG_IGN); // writes past the limit fail with EFBIG instead of killing
         const rlimit limit{kLimit, kLimit};
         setrlimit(RLIMIT_FSIZE, &limit);
@@ -293,7 +292,8 @@ TEST(Checkpoint, CrashBeforeRenameLeavesThePreviousCheckpoint)
     }
     const uintmax_t old_size = fs::file_size(path);
     Blob next(path, 0x22);
-    const auto child = [&] {
+    const auto child = [&]
+    {
         const rlimit no_core{0, 0}, limit{kLimit, kLimit};
         setrlimit(RLIMIT_CORE, &no_core);
         setrlimit(RLIMIT_FSIZE, &limit);
@@ -324,7 +324,8 @@ TEST(Checkpoint, CrashBeforeRenameLeavesThePreviousCheckpoint)
 TEST(Checkpoint, KeyDependsOnTheBytesInOrderAndOnTheVersion)
 {
     const uint32_t a[3] = {1, 2, 3};
-    const auto key = [&](uint64_t version, bool split, bool swapped) {
+    const auto key = [&](uint64_t version, bool split, bool swapped)
+    {
         hemi::bake::CheckpointKey k(version);
         if (swapped)
             k.add_value(a[1]).add_value(a[0]).add_value(a[2]);

@@ -18,7 +18,8 @@ std::vector<float> subspace_data(uint32_t n, uint32_t d, uint32_t clusters, uint
 {
     std::mt19937_64 rng(seed);
     std::normal_distribution<float> g;
-    std::vector<std::vector<float>> means(clusters, std::vector<float>(d)), dirs(clusters * rank, std::vector<float>(d));
+    std::vector<std::vector<float>> means(clusters, std::vector<float>(d)),
+        dirs(clusters * rank, std::vector<float>(d));
     for (auto& m : means)
         for (float& x : m)
             x = 10.0f * g(rng);
@@ -41,8 +42,8 @@ std::vector<float> subspace_data(uint32_t n, uint32_t d, uint32_t clusters, uint
     return out;
 }
 
-// Point i is mean[cluster[i]] + sum_v weights[i][v] * basis[cluster[i]][v] (io::PrtCpca's layout: means C x D,
-// basis C x V x D, weights N x V), multiplied out here in double precision.
+// Point i is mean[cluster[i]] + sum_v weights[i][v] * basis[cluster[i]][v] (io::PrtCpca's layout: means C x
+// D, basis C x V x D, weights N x V), multiplied out here in double precision.
 double reconstruction_rms(const hemi::io::PrtCpca& c, std::span<const float> x, uint32_t n, uint32_t d)
 {
     EXPECT_EQ(c.cluster.size(), n);

@@ -143,7 +143,8 @@ TEST(EmbreeScene, ConcurrentQueriesMatchSerialOnes)
         bool occluded = false;
         bool operator==(const Result&) const = default;
     };
-    const auto trace = [&](uint32_t v, int r) {
+    const auto trace = [&](uint32_t v, int r)
+    {
         const glm::vec3 origin =
             hemi::bake::offset_ray_origin(knot.positions[v], glm::normalize(knot.normals[v]), offset);
         const glm::vec3 d = hemi::bake::sphere_direction(3, v, r, kRays);
@@ -154,10 +155,12 @@ TEST(EmbreeScene, ConcurrentQueriesMatchSerialOnes)
         return out;
     };
     std::vector<Result> parallel(size_t(n) * kRays), serial(parallel.size());
-    tbb::parallel_for(uint32_t(0), n, [&](uint32_t v) {
-        for (int r = 0; r < kRays; ++r)
-            parallel[size_t(v) * kRays + r] = trace(v, r);
-    });
+    tbb::parallel_for(uint32_t(0), n,
+                      [&](uint32_t v)
+                      {
+                          for (int r = 0; r < kRays; ++r)
+                              parallel[size_t(v) * kRays + r] = trace(v, r);
+                      });
     size_t hits = 0;
     for (uint32_t v = 0; v < n; ++v)
         for (int r = 0; r < kRays; ++r)

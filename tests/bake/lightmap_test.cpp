@@ -2,8 +2,8 @@
 // call them: dense sampling of UV triangles, analytic furnace and single-light cases with SH typed here, and
 // a least-squares projection by this file's own quadrature.
 #include "../temp_dir.h"
-#include "quads.h"
 #include "level.h"
+#include "quads.h"
 
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_atlas.h>
@@ -32,12 +32,21 @@ namespace
 // SH9 in hemi's convention, typed from docs/DESIGN.md.
 std::array<double, 9> sh9(const glm::dvec3& d)
 {
-    return {0.282095, -0.488603 * d.y, 0.488603 * d.z, -0.488603 * d.x, 1.092548 * d.x * d.y, -1.092548 * d.y * d.z,
-            0.315392 * (3 * d.z * d.z - 1), -1.092548 * d.x * d.z, 0.546274 * (d.x * d.x - d.y * d.y)};
+    return {0.282095,
+            -0.488603 * d.y,
+            0.488603 * d.z,
+            -0.488603 * d.x,
+            1.092548 * d.x * d.y,
+            -1.092548 * d.y * d.z,
+            0.315392 * (3 * d.z * d.z - 1),
+            -1.092548 * d.x * d.z,
+            0.546274 * (d.x * d.x - d.y * d.y)};
 }
-const double kA[9] = {M_PI, 2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4};
+const double kA[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
+                      M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
 
-double eval_basis(const hemi::math::BasisDesc& b, const std::vector<glm::vec3>& c, int channel, const glm::vec3& n)
+double eval_basis(const hemi::math::BasisDesc& b, const std::vector<glm::vec3>& c, int channel,
+                  const glm::vec3& n)
 {
     float v[16];
     b.eval(n, v);
@@ -95,11 +104,13 @@ TEST(LightmapAtlas, ConservativeCoverageSamplesTheSurfaceInsideEachFootprint)
         for (int j = 0; i + j <= steps; ++j)
         {
             const double b1 = double(i) / steps, b2 = double(j) / steps, b0 = 1 - b1 - b2;
-            const double u = b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x, v = b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y;
+            const double u = b0 * uv[0].x + b1 * uv[1].x + b2 * uv[2].x,
+                         v = b0 * uv[0].y + b1 * uv[1].y + b2 * uv[2].y;
             touched.insert({std::min(size - 1, uint32_t(u * size)), std::min(size - 1, uint32_t(v * size))});
         }
     for (const auto& [x, y] : touched)
-        EXPECT_GE(a.texel_of[y * size + x], 0) << "texel (" << x << ", " << y << ") is touched but not covered";
+        EXPECT_GE(a.texel_of[y * size + x], 0)
+            << "texel (" << x << ", " << y << ") is touched but not covered";
     size_t grazed = 0;
     for (const LightmapTexel& t : a.texels)
     {
@@ -121,7 +132,8 @@ TEST(LightmapAtlas, ReportsOverlapsOutsideUvsDegenerateTrianglesAndDensity)
 {
     Mesh m = plane(1);
     Mesh twice = m;
-    add_quad(twice, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, {0.25f, 0.75f, 0.75f, 0.25f}); // on top of it
+    add_quad(twice, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
+             {0.25f, 0.75f, 0.75f, 0.25f}); // on top of it
     LightmapUvReport report;
     rasterize_lightmap(twice, 16, 16, report);
     ASSERT_EQ(report.problems.size(), 1u);
@@ -220,7 +232,8 @@ TEST(LightmapBake, PlaneUnderOneDirectionalLightMatchesItsProjection)
     const std::array<double, 9> y = sh9(d);
     for (size_t i = 0; i < a.texels.size(); ++i)
         for (int j = 0; j < 9; ++j)
-            ASSERT_NEAR(sh.irradiance[i][size_t(j)].x, kA[j] * y[size_t(j)], 1e-5) << "texel " << i << " coefficient " << j;
+            ASSERT_NEAR(sh.irradiance[i][size_t(j)].x, kA[j] * y[size_t(j)], 1e-5)
+                << "texel " << i << " coefficient " << j;
 
     // The coefficients live in the tangent frame of the normal-map UVs: turn the tangents to +y (so the
     // bitangent is cross(z, y) = -x) and the light's direction becomes (d.y, -d.x, d.z) in that frame.
@@ -308,11 +321,13 @@ TEST(LightmapBake, SealedRoomLitFromOutsideStaysBlack)
     add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.0f, 0.5f, 0.5f, 0.0f});
     const glm::vec3 c[8] = {{-2, -2, -1}, {2, -2, -1}, {2, 2, -1}, {-2, 2, -1},
                             {-2, -2, 3},  {2, -2, 3},  {2, 2, 3},  {-2, 2, 3}};
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
     for (int f = 0; f < 6; ++f)
     {
         const float u0 = 0.55f + 0.07f * float(f);
-        add_quad(m, c[faces[f][0]], c[faces[f][1]], c[faces[f][2]], c[faces[f][3]], {u0, 0.65f, u0 + 0.06f, 0.6f});
+        add_quad(m, c[faces[f][0]], c[faces[f][1]], c[faces[f][2]], c[faces[f][3]],
+                 {u0, 0.65f, u0 + 0.06f, 0.6f});
     }
     LightmapUvReport report;
     const LightmapAtlas a = rasterize_lightmap(m, 32, 32, report);
@@ -361,14 +376,16 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
         tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
         one = bake_lightmap_sh(m, a, lights, o);
     }
-    EXPECT_EQ(0, std::memcmp(all.irradiance.data(), one.irradiance.data(), all.irradiance.size() * sizeof(all.irradiance[0])));
+    EXPECT_EQ(0, std::memcmp(all.irradiance.data(), one.irradiance.data(),
+                             all.irradiance.size() * sizeof(all.irradiance[0])));
     o.checkpoint = hemi::test::temp_dir("lightmap_test") / "resume.partial";
     o.checkpoint_seconds = 0.0;
     o.rays = 8192; // slices of 256 texels
     const LightmapSh first = bake_lightmap_sh(m, a, lights, o);
     const LightmapSh again = bake_lightmap_sh(m, a, lights, o);
     EXPECT_TRUE(again.resumed);
-    EXPECT_EQ(0, std::memcmp(first.irradiance.data(), again.irradiance.data(), first.irradiance.size() * sizeof(first.irradiance[0])));
+    EXPECT_EQ(0, std::memcmp(first.irradiance.data(), again.irradiance.data(),
+                             first.irradiance.size() * sizeof(first.irradiance[0])));
     remove_checkpoint(o.checkpoint);
 
     // A chart in the middle of the atlas: the ring around it takes its neighbours' values.
@@ -418,10 +435,12 @@ TEST(LightmapBake, ClosedRoomFurnaceAddsEachBounce)
         }
         EXPECT_LT(worst, 0.002) << bounces << " bounces";
     }
-    EXPECT_THROW(bake_lightmap_sh(m, a, lights, LightmapBakeOptions{256, 16, 1, 1e-4f, 2}), std::invalid_argument)
+    EXPECT_THROW(bake_lightmap_sh(m, a, lights, LightmapBakeOptions{256, 16, 1, 1e-4f, 2}),
+                 std::invalid_argument)
         << "bounces without surfaces";
 
-    // A save after every pass leaves the state after the second in the file; the second bake redoes the third.
+    // A save after every pass leaves the state after the second in the file; the second bake redoes the
+    // third.
     const LightmapAtlas small = rasterize_lightmap(m, 24, 16, report);
     LightmapBakeOptions o;
     o.rays = 2048; // one slice a pass at this size
@@ -447,7 +466,8 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
     const LightmapAtlas a = rasterize_lightmap(m, 12, 12, report);
     LightmapBakeOptions o;
     o.rays = 4;
-    auto bake_one = [&](const hemi::io::PunctualLight& l) {
+    auto bake_one = [&](const hemi::io::PunctualLight& l)
+    {
         LightmapLights lights;
         lights.uniform = glm::vec3(0.0f);
         lights.punctual = {l};
@@ -492,9 +512,10 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
                 if (l.type == T::Spot)
                 {
                     const double cd = glm::dot(glm::dvec3(l.direction), -d);
-                    const double x = std::clamp((cd - std::cos(double(l.outer_cone))) /
-                                                    (std::cos(double(l.inner_cone)) - std::cos(double(l.outer_cone))),
-                                                0.0, 1.0);
+                    const double x =
+                        std::clamp((cd - std::cos(double(l.outer_cone))) /
+                                       (std::cos(double(l.inner_cone)) - std::cos(double(l.outer_cone))),
+                                   0.0, 1.0);
                     e *= x * x;
                     lit_partly += x > 0.0 && x < 1.0;
                     dark += x == 0.0;
@@ -502,7 +523,8 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
             }
             const std::array<double, 9> y = sh9(d);
             for (int j = 0; j < 9; ++j)
-                ASSERT_NEAR(sh.irradiance[i][size_t(j)].y, 0.5 * e * kA[j] * y[size_t(j)], 2e-5 * std::max(1.0, e))
+                ASSERT_NEAR(sh.irradiance[i][size_t(j)].y, 0.5 * e * kA[j] * y[size_t(j)],
+                            2e-5 * std::max(1.0, e))
                     << "light " << int(l.type) << " texel " << i << " coefficient " << j;
         }
     }
@@ -515,7 +537,8 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
 TEST(LightmapLevel, ChartsArePackedWithoutOverlapAtOneDensity)
 {
     const hemi::io::GltfScene level = hemi::samples::make_level(256);
-    EXPECT_TRUE(hemi::io::surface_problem(level.mesh, level.materials, level.images, level.primitives).empty());
+    EXPECT_TRUE(
+        hemi::io::surface_problem(level.mesh, level.materials, level.images, level.primitives).empty());
     std::vector<TriangleRange> ranges;
     for (uint32_t t = 0; t < level.mesh.indices.size() / 3; t += 2)
         ranges.push_back({t, 2, "quad " + std::to_string(t / 2)});
@@ -540,9 +563,9 @@ TEST(LightmapLevel, ChartsArePackedWithoutOverlapAtOneDensity)
 
 // An HDR environment is importance-sampled by luminance: a small bright patch (0.4% of the sphere, 87% of the
 // light), which 256 uniform hemisphere rays would hit about 4 times, is integrated without bias (the mean of
-// 64 texels within 0.3% of E) and within 1.5% of E in every texel (each SH9 coefficient within 2.5% of E). The reference is
-// the environment's own SH9 over the upper hemisphere, by sub-sampling each of its pixels (the environment is
-// piecewise constant over its pixels).
+// 64 texels within 0.3% of E) and within 1.5% of E in every texel (each SH9 coefficient within 2.5% of E).
+// The reference is the environment's own SH9 over the upper hemisphere, by sub-sampling each of its pixels
+// (the environment is piecewise constant over its pixels).
 TEST(LightmapBake, ImageEnvironmentIsImportanceSampled)
 {
     const uint32_t ew = 64, eh = 32;
@@ -594,9 +617,11 @@ TEST(LightmapBake, ImageEnvironmentIsImportanceSampled)
         const double e = lightmap_coefficients("plain", sh.irradiance[i])[0].x;
         worst = std::max(worst, std::abs(e / e_ref - 1.0));
         for (int j = 0; j < 9; ++j)
-            EXPECT_NEAR(sh.irradiance[i][size_t(j)].x, ref[size_t(j)].x, 0.025 * e_ref) << "texel " << i << " coefficient " << j;
+            EXPECT_NEAR(sh.irradiance[i][size_t(j)].x, ref[size_t(j)].x, 0.025 * e_ref)
+                << "texel " << i << " coefficient " << j;
     }
-    // Unbiased: the mean over the 64 texels is within 0.3% of E; each texel within 1.5% (noise; measured 1.0%).
+    // Unbiased: the mean over the 64 texels is within 0.3% of E; each texel within 1.5% (noise;
+    // measured 1.0%).
     std::array<double, 9> mean{};
     for (size_t i = 0; i < a.texels.size(); ++i)
         for (int j = 0; j < 9; ++j)
@@ -615,13 +640,17 @@ TEST(LightmapBake, ImageEnvironmentIsImportanceSampled)
 TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
 {
     Mesh m;
-    add_quad(m, {-2, -1, 0}, {2, -1, 0}, {2, 1, 0}, {-2, 1, 0}, {0.0f, 1.0f, 1.0f, 0.0f}); // the floor, facing up
+    add_quad(m, {-2, -1, 0}, {2, -1, 0}, {2, 1, 0}, {-2, 1, 0},
+             {0.0f, 1.0f, 1.0f, 0.0f}); // the floor, facing up
     // A closed box with outward faces, each quad in its own small cell of the atlas's unused last rows.
     int cell = 0;
-    auto box = [&](glm::vec3 lo, glm::vec3 hi, bool inward, bool skip_min_x) {
-        const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
-                                {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
-        const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    auto box = [&](glm::vec3 lo, glm::vec3 hi, bool inward, bool skip_min_x)
+    {
+        const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z},
+                                {lo.x, hi.y, lo.z}, {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z},
+                                {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+        const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                 {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
         for (int f = 0; f < 6; ++f)
         {
             if (skip_min_x && f == 5)
@@ -635,7 +664,7 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
         }
     };
     box({-0.1f, -1.2f, -0.3f}, {0.1f, 1.2f, 1.5f}, false, false); // the wall
-    box({0.1f, -1.2f, -0.3f}, {2.2f, 1.2f, 1.5f}, true, true);    // the sealed room, closed by the wall's face
+    box({0.1f, -1.2f, -0.3f}, {2.2f, 1.2f, 1.5f}, true, true); // the sealed room, closed by the wall's face
     // The floor fills the atlas (32 x 16 texels of 0.125); the boxes' quads get zero-height cells on row 0 of
     // UV space, which no texel centre claims: they are geometry only.
     LightmapUvReport report;
@@ -653,7 +682,8 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
         ASSERT_GE(left, 0);
         ASSERT_GE(right, 0);
         const float e_left = lightmap_coefficients("plain", sh.irradiance[size_t(left)])[0].x;
-        EXPECT_GT(e_left, 0.3f * float(M_PI)) << "row " << y << ": the wall's foot on the open side sees the sky";
+        EXPECT_GT(e_left, 0.3f * float(M_PI))
+            << "row " << y << ": the wall's foot on the open side sees the sky";
         for (uint32_t x = 16; x < 32; ++x)
         {
             const size_t i = size_t(a.texel_of[y * 32 + x]);
@@ -699,7 +729,8 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     {
         EXPECT_TRUE(probes.valid[i]);
         const auto& e = probes.irradiance[i];
-        for (const glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(0.6f, -0.8f, 0), glm::vec3(-1, 0, 0)})
+        for (const glm::vec3 n :
+             {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(0.6f, -0.8f, 0), glm::vec3(-1, 0, 0)})
         {
             const std::array<double, 9> y = sh9(n);
             double v = 0.0;
@@ -719,8 +750,9 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     sun.sun = true;
     sun.sun_diameter_degrees = 0.0f;
     sun.sun_irradiance = glm::vec3(3.0f, 2.0f, 1.0f);
-    sun.scene_to_world = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, -1, 0)); // y up -> z up
-    sun.sun_direction = glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)); // world
+    sun.scene_to_world =
+        glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glm::vec3(0, -1, 0)); // y up -> z up
+    sun.sun_direction = glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f));           // world
     const LightmapSh fsh = bake_lightmap_sh(floor, fa, sun, LightmapBakeOptions{}, nullptr);
     hemi::io::LightProbes open;
     open.count = glm::uvec3(1, 1, 2);
@@ -734,8 +766,10 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     for (int j = 0; j < 9; ++j)
     {
         EXPECT_EQ(open.irradiance[0][size_t(j)], glm::vec3(0.0f)) << "under the floor, coefficient " << j;
-        EXPECT_NEAR(open.irradiance[1][size_t(j)].x, 3.0 * kA[j] * ys[size_t(j)], 1e-4) << "coefficient " << j;
-        EXPECT_NEAR(open.irradiance[1][size_t(j)].z, 1.0 * kA[j] * ys[size_t(j)], 1e-4) << "coefficient " << j;
+        EXPECT_NEAR(open.irradiance[1][size_t(j)].x, 3.0 * kA[j] * ys[size_t(j)], 1e-4)
+            << "coefficient " << j;
+        EXPECT_NEAR(open.irradiance[1][size_t(j)].z, 1.0 * kA[j] * ys[size_t(j)], 1e-4)
+            << "coefficient " << j;
     }
     EXPECT_TRUE(open.valid[0] && open.valid[1]);
 
@@ -792,7 +826,8 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
         glm::vec2 lo(INFINITY), hi(-INFINITY);
         for (int e = 0; e < 3; ++e)
         {
-            const glm::vec2 uv = level.mesh.uvs1[level.mesh.indices[size_t(t) * 3 + e]] * glm::vec2(r.width, r.height);
+            const glm::vec2 uv =
+                level.mesh.uvs1[level.mesh.indices[size_t(t) * 3 + e]] * glm::vec2(r.width, r.height);
             lo = glm::min(lo, uv);
             hi = glm::max(hi, uv);
         }
@@ -801,8 +836,8 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
             {
                 ASSERT_TRUE(x >= 0 && y >= 0 && x < int(r.width) && y < int(r.height)) << "triangle " << t;
                 uint32_t& o = owner[size_t(y) * r.width + size_t(x)];
-                ASSERT_TRUE(o == ~0u || o == r.chart_of[t]) << "texel (" << x << ", " << y << ") of charts " << o
-                                                             << " and " << r.chart_of[t];
+                ASSERT_TRUE(o == ~0u || o == r.chart_of[t])
+                    << "texel (" << x << ", " << y << ") of charts " << o << " and " << r.chart_of[t];
                 o = r.chart_of[t];
             }
     }
@@ -839,12 +874,13 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
     const LightmapSh sh = bake_lightmap_sh(box, ba, dark, o, &surfaces);
     for (size_t i = 0; i < ba.texels.size(); ++i)
         ASSERT_NEAR(lightmap_coefficients("plain", sh.irradiance[i])[0].x, 1.5 * M_PI, 0.002 * 1.5 * M_PI)
-            << "texel " << i << " (" << ba.texels[i].x << ", " << ba.texels[i].y << ") at " << ba.texels[i].position.x
-            << "," << ba.texels[i].position.y << "," << ba.texels[i].position.z << " valid " << int(sh.valid[i]) << " of "
-            << br.width << "x" << br.height << " pushed " << sh.pushed;
+            << "texel " << i << " (" << ba.texels[i].x << ", " << ba.texels[i].y << ") at "
+            << ba.texels[i].position.x << "," << ba.texels[i].position.y << "," << ba.texels[i].position.z
+            << " valid " << int(sh.valid[i]) << " of " << br.width << "x" << br.height << " pushed "
+            << sh.pushed;
 
-    // A long wall (10 x 2: its chart far wider than the rest is tall) unwraps at a given texel size, along its
-    // edges (not its diagonal): 100 x 20 texels, plus the border.
+    // A long wall (10 x 2: its chart far wider than the rest is tall) unwraps at a given texel size, along
+    // its edges (not its diagonal): 100 x 20 texels, plus the border.
     Mesh wall;
     add_quad(wall, {0, 0, 0}, {10, 0, 0}, {10, 0, 2}, {0, 0, 2}, {0, 1, 1, 0});
     wall.uvs1.clear();

@@ -16,10 +16,9 @@
 
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <filesystem>
 #include <fstream>
-
+#include <functional>
 
 namespace
 {
@@ -72,8 +71,7 @@ bool cast(const hemi::io::Mesh& m, const glm::dvec3& o, const glm::dvec3& d, Hit
 }
 
 // Calls f(d, solid angle) over a lat-long grid of the whole sphere (exact cell solid angles).
-template <typename F>
-void sphere_integral(int rows, F f)
+template <typename F> void sphere_integral(int rows, F f)
 {
     const int cols = 2 * rows;
     for (int i = 0; i < rows; ++i)
@@ -83,21 +81,23 @@ void sphere_integral(int rows, F f)
         for (int j = 0; j < cols; ++j)
         {
             const double phi = 2.0 * M_PI * (j + 0.5) / cols;
-            f(glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)), omega);
+            f(glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)),
+              omega);
         }
     }
 }
 
 // Integrates f(d) * max(n.d, 0) over the sphere on the same grid.
-template <typename F>
-double cosine_integral(const glm::dvec3& n, int rows, F f)
+template <typename F> double cosine_integral(const glm::dvec3& n, int rows, F f)
 {
     double sum = 0.0;
-    sphere_integral(rows, [&](const glm::dvec3& d, double omega) {
-        const double c = glm::dot(n, d);
-        if (c > 0.0)
-            sum += omega * c * f(d);
-    });
+    sphere_integral(rows,
+                    [&](const glm::dvec3& d, double omega)
+                    {
+                        const double c = glm::dot(n, d);
+                        if (c > 0.0)
+                            sum += omega * c * f(d);
+                    });
     return sum;
 }
 
@@ -109,7 +109,8 @@ glm::dvec3 ray_origin(const hemi::io::Mesh& m, size_t v, float offset)
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }
-    return glm::dvec3(m.positions[v]) + double(offset * glm::length(hi - lo)) * glm::dvec3(glm::normalize(m.normals[v]));
+    return glm::dvec3(m.positions[v]) +
+           double(offset * glm::length(hi - lo)) * glm::dvec3(glm::normalize(m.normals[v]));
 }
 
 // Vertices on the torus's inner equator: they face across the hole at the other side.
@@ -182,15 +183,19 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
     ASSERT_EQ(probes.size(), 3u);
     for (size_t v : probes)
     {
-        const glm::dvec3 n = glm::normalize(glm::dvec3(torus.normals[v])), origin = ray_origin(torus, v, o.ray_offset);
+        const glm::dvec3 n = glm::normalize(glm::dvec3(torus.normals[v])),
+                         origin = ray_origin(torus, v, o.ray_offset);
         Hit hit{};
-        const double e0 = cosine_integral(n, 100, [&](const glm::dvec3& d) { return cast(torus, origin, d, hit) ? 0.0 : 1.0; });
+        const double e0 = cosine_integral(
+            n, 100, [&](const glm::dvec3& d) { return cast(torus, origin, d, hit) ? 0.0 : 1.0; });
         // Radiance bounced toward the vertex from direction d under uniform light: (albedo / pi) times the
         // direct irradiance interpolated where d hits the front of a triangle, from above the horizon.
         // `irradiance(u)` is the irradiance at vertex u that bounces (the direct one for bounce 1; bounce 1's
         // own for bounce 2: each bounce carries only the previous one's light).
-        auto bounce_of = [&](const std::function<double(uint32_t)>& irradiance) {
-            return [&, irradiance](const glm::dvec3& d) {
+        auto bounce_of = [&](const std::function<double(uint32_t)>& irradiance)
+        {
+            return [&, irradiance](const glm::dvec3& d)
+            {
                 if (glm::dot(n, d) <= 0.0 || !cast(torus, origin, d, hit))
                     return 0.0;
                 const uint32_t* tri = &torus.indices[size_t(hit.prim) * 3];
@@ -204,23 +209,27 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
             };
         };
         // Bounce 1's reference shares nothing with the bake: the direct irradiance at each vertex a direction
-        // hits is itself brute force (the caster from that vertex's ray origin, 30 x 60 directions), memoised.
+        // hits is itself brute force (the caster from that vertex's ray origin, 30 x 60 directions),
+        // memoised.
         std::vector<double> direct_bf(torus.vertex_count(), -1.0);
-        auto direct_irradiance = [&](uint32_t u) {
+        auto direct_irradiance = [&](uint32_t u)
+        {
             if (direct_bf[u] < 0.0)
             {
                 const glm::dvec3 nu = glm::normalize(glm::dvec3(torus.normals[u]));
                 const glm::dvec3 ou = ray_origin(torus, u, o.ray_offset);
                 Hit h{};
-                direct_bf[u] = cosine_integral(nu, 30, [&](const glm::dvec3& d) { return cast(torus, ou, d, h) ? 0.0 : 1.0; });
+                direct_bf[u] = cosine_integral(
+                    nu, 30, [&](const glm::dvec3& d) { return cast(torus, ou, d, h) ? 0.0 : 1.0; });
             }
             return direct_bf[u];
         };
         const auto bounced = bounce_of(direct_irradiance);
         const double e1 = cosine_integral(n, 100, bounced);
-        const double e2 = cosine_integral(n, 100, bounce_of([&](uint32_t u) {
-            return double(uniform_irradiance(one, u) - uniform_irradiance(direct, u));
-        }));
+        const double e2 = cosine_integral(
+            n, 100,
+            bounce_of([&](uint32_t u)
+                      { return double(uniform_irradiance(one, u) - uniform_irradiance(direct, u)); }));
         EXPECT_NEAR(uniform_irradiance(two, v) - uniform_irradiance(one, v), e2, 0.05 * e2 + 1e-3) << v;
         EXPECT_LT(e0, 0.8 * M_PI) << "vertex " << v << " should be noticeably shadowed";
         EXPECT_GT(e1, 0.02) << "vertex " << v << " should receive interreflected light";
@@ -232,27 +241,32 @@ TEST(PrtBake, ShadowAndFirstBounceMatchBruteForce)
         // the integral of y_i y_c over the blocked directions; the bounce adds the integral of y_i times the
         // bounced radiance (seen through the uniform lighting's y00 column).
         std::vector<double> blocked(81, 0.0), gathered(9, 0.0);
-        sphere_integral(100, [&](const glm::dvec3& d, double omega) {
-            float y[9];
-            hemi::math::sh_eval(3, glm::vec3(d), y);
-            if (cast(torus, origin, d, hit))
-                for (int i = 0; i < 9; ++i)
-                    for (int c = 0; c < 9; ++c)
-                        blocked[i * 9 + c] += omega * y[i] * y[c];
-            const double b = bounced(d);
-            for (int i = 0; i < 9; ++i)
-                gathered[i] += omega * y[i] * b;
-        });
-        // Tolerances relative to the (0,0) entry, the scale of M (about 0.34 here) and of the bounce's column (about
-        // 0.22): 2% and 3% (measured at most 1.2% and 1.7%).
+        sphere_integral(100,
+                        [&](const glm::dvec3& d, double omega)
+                        {
+                            float y[9];
+                            hemi::math::sh_eval(3, glm::vec3(d), y);
+                            if (cast(torus, origin, d, hit))
+                                for (int i = 0; i < 9; ++i)
+                                    for (int c = 0; c < 9; ++c)
+                                        blocked[i * 9 + c] += omega * y[i] * y[c];
+                            const double b = bounced(d);
+                            for (int i = 0; i < 9; ++i)
+                                gathered[i] += omega * y[i] * b;
+                        });
+        // Tolerances relative to the (0,0) entry, the scale of M (about 0.34 here) and of the bounce's column
+        // (about 0.22): 2% and 3% (measured at most 1.2% and 1.7%).
         const double m00 = 1.0 - blocked[0];
         for (int i = 0; i < 9; ++i)
         {
             for (int c : {0, 2, 5, 8})
-                EXPECT_NEAR(direct.radiance[(v * 9 + i) * 9 + c], (i == c ? 1.0 : 0.0) - blocked[i * 9 + c], 0.02 * m00)
+                EXPECT_NEAR(direct.radiance[(v * 9 + i) * 9 + c], (i == c ? 1.0 : 0.0) - blocked[i * 9 + c],
+                            0.02 * m00)
                     << "vertex " << v << " M(" << i << "," << c << ")";
-            const double bounce_m = (one.radiance[(v * 9 + i) * 9] - direct.radiance[(v * 9 + i) * 9]) * kUniform;
-            EXPECT_NEAR(bounce_m, gathered[i], 0.03 * std::abs(gathered[0])) << "vertex " << v << " row " << i;
+            const double bounce_m =
+                (one.radiance[(v * 9 + i) * 9] - direct.radiance[(v * 9 + i) * 9]) * kUniform;
+            EXPECT_NEAR(bounce_m, gathered[i], 0.03 * std::abs(gathered[0]))
+                << "vertex " << v << " row " << i;
         }
     }
 }
@@ -284,7 +298,8 @@ TEST(PrtBake, ShadowsDarkenBouncesBrightenNeverAboveUnshadowed)
         shadowed += uniform_irradiance(passes[1], v) < 0.9f * unshadowed;
         for (size_t p = 1; p < passes.size(); ++p)
         {
-            ASSERT_LE(uniform_irradiance(passes[p], v), unshadowed * 1.001f) << "pass " << p << " vertex " << v;
+            ASSERT_LE(uniform_irradiance(passes[p], v), unshadowed * 1.001f)
+                << "pass " << p << " vertex " << v;
             if (p > 1)
             {
                 ASSERT_GE(uniform_irradiance(passes[p], v), uniform_irradiance(passes[p - 1], v) - 1e-5f)
@@ -309,7 +324,8 @@ TEST(PrtBake, SameSeedSameBytesWhateverTheThreadCount)
     }
     ASSERT_EQ(parallel.radiance.size(), serial.radiance.size());
     EXPECT_EQ(0, std::memcmp(parallel.radiance.data(), serial.radiance.data(), serial.radiance.size() * 4));
-    EXPECT_EQ(0, std::memcmp(parallel.irradiance.data(), serial.irradiance.data(), serial.irradiance.size() * 4));
+    EXPECT_EQ(
+        0, std::memcmp(parallel.irradiance.data(), serial.irradiance.data(), serial.irradiance.size() * 4));
     o.seed = 2;
     const auto other = hemi::bake::bake_prt_transfer(torus, o);
     EXPECT_NE(0, std::memcmp(parallel.radiance.data(), other.radiance.data(), other.radiance.size() * 4));
@@ -370,7 +386,8 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
         std::filesystem::remove(checkpoint);
         int calls = 0;
         EXPECT_THROW(hemi::bake::bake_prt_transfer(knot, o,
-                                                   [&](const hemi::bake::PrtBakeProgress&) {
+                                                   [&](const hemi::bake::PrtBakeProgress&)
+                                                   {
                                                        if (++calls > stop_after)
                                                            throw Interrupt{};
                                                    }),
@@ -383,12 +400,13 @@ TEST(PrtBake, InterruptedBakeResumesFromItsCheckpointToTheSameBytes)
         EXPECT_EQ(0, std::memcmp(resumed.radiance.data(), whole.radiance.data(), whole.radiance.size() * 4))
             << "stopped after " << stop_after << " progress calls, resumed at pass " << resumed.resumed_pass
             << " vertex " << resumed.resumed_vertex;
-        EXPECT_EQ(0, std::memcmp(resumed.irradiance.data(), whole.irradiance.data(), whole.irradiance.size() * 4));
+        EXPECT_EQ(
+            0, std::memcmp(resumed.irradiance.data(), whole.irradiance.data(), whole.irradiance.size() * 4));
     }
 
     // Another scene with the same options and the same layout (the same vertex and index counts): one vertex
-    // moved by a thousandth. Its checkpoint is not this bake's and is ignored, and the bake gives that scene's
-    // own bytes, not a resumption of the knot's.
+    // moved by a thousandth. Its checkpoint is not this bake's and is ignored, and the bake gives that
+    // scene's own bytes, not a resumption of the knot's.
     {
         hemi::io::Mesh moved = knot;
         moved.positions[5] += glm::vec3(1e-3f, 0.0f, 0.0f);
@@ -437,19 +455,22 @@ TEST(PrtBake, UnwritableCheckpointsAreReportedWhenTheyHappen)
     o.order = 3;
     o.rays = 64;
     o.checkpoint = hemi::test::temp_dir("prt_bake_test") / "no_such_folder" / "x.hemi.partial";
-    o.checkpoint_seconds = 0.0;         // save after every slice
+    o.checkpoint_seconds = 0.0;            // save after every slice
     o.rays_per_slice = uint64_t(256) * 64; // one 256-vertex group a slice: several slices
     size_t calls = 0, first_report = 0;
     uint64_t done_at_report = 0, total = 0;
-    const hemi::bake::PrtTransfer t = hemi::bake::bake_prt_transfer(mesh, o, [&](const hemi::bake::PrtBakeProgress& p) {
-        ++calls;
-        total = p.vertex_count;
-        if (!p.checkpoint_error.empty() && first_report == 0)
-        {
-            first_report = calls;
-            done_at_report = p.vertices_done;
-        }
-    });
+    const hemi::bake::PrtTransfer t =
+        hemi::bake::bake_prt_transfer(mesh, o,
+                                      [&](const hemi::bake::PrtBakeProgress& p)
+                                      {
+                                          ++calls;
+                                          total = p.vertex_count;
+                                          if (!p.checkpoint_error.empty() && first_report == 0)
+                                          {
+                                              first_report = calls;
+                                              done_at_report = p.vertices_done;
+                                          }
+                                      });
     ASSERT_GT(first_report, 0u) << "the failed checkpoint was never reported";
     EXPECT_LT(done_at_report, total) << "reported only once the bake had finished";
     EXPECT_FALSE(t.checkpoint_error.empty());

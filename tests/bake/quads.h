@@ -36,22 +36,24 @@ inline io::Mesh plane(int cells)
     for (int j = 0; j < cells; ++j)
         for (int i = 0; i < cells; ++i)
         {
-            const float u0 = float(i) / cells, u1 = float(i + 1) / cells, v0 = float(j) / cells, v1 = float(j + 1) / cells;
+            const float u0 = float(i) / cells, u1 = float(i + 1) / cells, v0 = float(j) / cells,
+                        v1 = float(j + 1) / cells;
             auto at = [](float u, float v) { return glm::vec3(2.0f * u - 1.0f, 1.0f - 2.0f * v, 0.0f); };
             add_quad(m, at(u0, v1), at(u1, v1), at(u1, v0), at(u0, v0), {u0, v1, u1, v0});
         }
     return m;
 }
 
-// The cube [-1, 1]^3 as six quads, facing into it (`inward`) or out of it, each face's lightmap UVs in its own
-// cell of a 3 x 2 grid over [0, 1]^2 (with a margin), so the atlas has no overlaps.
+// The cube [-1, 1]^3 as six quads, facing into it (`inward`) or out of it, each face's lightmap UVs in its
+// own cell of a 3 x 2 grid over [0, 1]^2 (with a margin), so the atlas has no overlaps.
 inline io::Mesh unit_box(bool inward)
 {
     io::Mesh m;
     const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                             {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
     // Counter-clockwise seen from outside; reversed for the inside.
-    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
     for (int f = 0; f < 6; ++f)
     {
         const float u0 = float(f % 3) / 3.0f + 0.02f, v0 = float(f / 3) / 2.0f + 0.03f;

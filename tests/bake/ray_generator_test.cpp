@@ -27,13 +27,16 @@ constexpr int kRays = 64;
 std::vector<glm::vec3> draw_all(uint64_t seed)
 {
     std::vector<glm::vec3> out(size_t(kItems) * kRays * 2);
-    tbb::parallel_for(uint32_t(0), kItems, [&](uint32_t item) {
-        for (int r = 0; r < kRays; ++r)
-        {
-            out[(size_t(item) * kRays + r) * 2] = sphere_direction(seed, item, r, kRays);
-            out[(size_t(item) * kRays + r) * 2 + 1] = hemisphere_direction(seed, item, r, kRays);
-        }
-    });
+    tbb::parallel_for(uint32_t(0), kItems,
+                      [&](uint32_t item)
+                      {
+                          for (int r = 0; r < kRays; ++r)
+                          {
+                              out[(size_t(item) * kRays + r) * 2] = sphere_direction(seed, item, r, kRays);
+                              out[(size_t(item) * kRays + r) * 2 + 1] =
+                                  hemisphere_direction(seed, item, r, kRays);
+                          }
+                      });
     return out;
 }
 

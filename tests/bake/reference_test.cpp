@@ -1,7 +1,7 @@
-// The reference tracer (hemi-bake reference) against analytic cases: the irradiance of a plane at a normal-map
-// normal under uniform radiance (the visible part of the tilted hemisphere) and under one sun (the cosine,
-// which also pins the tangent frame's handedness), and a closed emissive box whose bounces add a geometric
-// series. Every expected value is computed here from the geometry, not by the tracer's code.
+// The reference tracer (hemi-bake reference) against analytic cases: the irradiance of a plane at a
+// normal-map normal under uniform radiance (the visible part of the tilted hemisphere) and under one sun (the
+// cosine, which also pins the tangent frame's handedness), and a closed emissive box whose bounces add a
+// geometric series. Every expected value is computed here from the geometry, not by the tracer's code.
 #include "quads.h"
 
 #include <hemi/bake/reference.h>
@@ -38,7 +38,8 @@ struct FlatNormalMap
         m.base_color_factor = glm::vec4(albedo, 1.0f);
         m.normal.image = 0;
         materials.push_back(m);
-        tangent_normal = glm::normalize(glm::vec3(2.0f * r / 255.0f - 1.0f, 2.0f * g / 255.0f - 1.0f, 2.0f * b / 255.0f - 1.0f));
+        tangent_normal = glm::normalize(
+            glm::vec3(2.0f * r / 255.0f - 1.0f, 2.0f * g / 255.0f - 1.0f, 2.0f * b / 255.0f - 1.0f));
     }
 };
 
@@ -112,10 +113,10 @@ TEST(Reference, SunLightsTheNormalMapNormalInTheTangentFrame)
         glm::vec3 sun;
     };
     const Case cases[] = {
-        {220, 128, 200, {0.8f, 0.0f, 0.6f}},  // towards the sun along the tangent
-        {36, 128, 200, {0.8f, 0.0f, 0.6f}},   // away from it
-        {128, 220, 200, {0.0f, 0.8f, 0.6f}},  // towards the sun along the bitangent
-        {128, 36, 200, {0.0f, 0.8f, 0.6f}},   // away from it
+        {220, 128, 200, {0.8f, 0.0f, 0.6f}}, // towards the sun along the tangent
+        {36, 128, 200, {0.8f, 0.0f, 0.6f}},  // away from it
+        {128, 220, 200, {0.0f, 0.8f, 0.6f}}, // towards the sun along the bitangent
+        {128, 36, 200, {0.0f, 0.8f, 0.6f}},  // away from it
     };
     for (const Case& k : cases)
     {
@@ -136,7 +137,8 @@ TEST(Reference, SunLightsTheNormalMapNormalInTheTangentFrame)
                 if (r.image.at(x, y)[3] == 1.0f)
                 {
                     ++covered;
-                    ASSERT_NEAR(r.image.at(x, y)[1], expected, 1e-5) << int(k.r) << "," << int(k.g) << " (" << x << ", " << y << ")";
+                    ASSERT_NEAR(r.image.at(x, y)[1], expected, 1e-5)
+                        << int(k.r) << "," << int(k.g) << " (" << x << ", " << y << ")";
                 }
         ASSERT_GT(covered, 200);
     }
@@ -202,13 +204,18 @@ TEST(Reference, SameSeedSameBytesAndBadOptionsAreRefused)
         one = render_reference(m, surfaces, lights, o);
     }
     ASSERT_EQ(all.image.pixels.size(), one.image.pixels.size());
-    EXPECT_EQ(std::memcmp(all.image.pixels.data(), one.image.pixels.data(), all.image.pixels.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(all.image.pixels.data(), one.image.pixels.data(),
+                          all.image.pixels.size() * sizeof(float)),
+              0);
     o.seed = 2;
     const ReferenceImage other = render_reference(m, surfaces, lights, o);
-    EXPECT_NE(std::memcmp(all.image.pixels.data(), other.image.pixels.data(), all.image.pixels.size() * sizeof(float)), 0);
+    EXPECT_NE(std::memcmp(all.image.pixels.data(), other.image.pixels.data(),
+                          all.image.pixels.size() * sizeof(float)),
+              0);
 
     ReferenceOptions bad = above(1);
-    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument) << "one path gives no noise estimate";
+    EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument)
+        << "one path gives no noise estimate";
     bad = above(8);
     bad.bounces = 17;
     EXPECT_THROW(render_reference(m, surfaces, lights, bad), std::invalid_argument);

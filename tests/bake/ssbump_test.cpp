@@ -52,7 +52,8 @@ HeightField rough(uint32_t w, uint32_t h, uint32_t seed)
     HeightField g = f;
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x)
-            g.heights[y * w + x] = 0.5f * f.at(x, y) + 0.25f * f.at((x + 1) % w, y) + 0.25f * f.at(x, (y + 1) % h);
+            g.heights[y * w + x] =
+                0.5f * f.at(x, y) + 0.25f * f.at((x + 1) % w, y) + 0.25f * f.at(x, (y + 1) % h);
     return g;
 }
 
@@ -233,11 +234,13 @@ TEST(Ssbump, VGrooveOcclusionMatchesAnalyticVisibility)
     // The profile along azimuth phi from (x0, floor): p(t) = |x0 + t cos(phi) - 32| periodic, a polyline
     // with kinks where x is a multiple of 32; the horizon slope is the largest (p(t) - p(0) - eps) / t over
     // its kinks and the end t = distance.
-    auto profile = [&](double x) {
+    auto profile = [&](double x)
+    {
         const double m = std::fmod(std::fmod(x, 64.0) + 64.0, 64.0);
         return scale / 32.0 * std::abs(m - 32.0);
     };
-    auto horizon = [&](double x0, double phi) {
+    auto horizon = [&](double x0, double phi)
+    {
         const double c = std::cos(phi);
         double best = -1e300;
         std::vector<double> ts = {distance};
@@ -270,8 +273,9 @@ TEST(Ssbump, VGrooveOcclusionMatchesAnalyticVisibility)
         }
     EXPECT_GT(checked, 15000);
 
-    // Integrated: O_i at the floor (x = 32) from the analytic horizon, by quadrature over phi and over z above
-    // the horizon, against the bake at 300 rays along the whole floor line (16 texels, the same analytic O).
+    // Integrated: O_i at the floor (x = 32) from the analytic horizon, by quadrature over phi and over z
+    // above the horizon, against the bake at 300 rays along the whole floor line (16 texels, the same
+    // analytic O).
     glm::dvec3 analytic(0.0);
     {
         const int nphi = 4096, nz = 2048;
@@ -427,7 +431,8 @@ TEST(Ssbump, DeterministicAcrossThreadsAndResume)
     const SsbumpMap resumed = bake_ssbump(f, o);
     EXPECT_TRUE(resumed.resumed);
     EXPECT_LT(resumed.rays, first.rays);
-    EXPECT_EQ(0, std::memcmp(first.weights.data(), resumed.weights.data(), first.weights.size() * sizeof(glm::vec3)));
+    EXPECT_EQ(0, std::memcmp(first.weights.data(), resumed.weights.data(),
+                             first.weights.size() * sizeof(glm::vec3)));
     // Another scale is another key: the checkpoint is ignored.
     o.scale = 2.0f;
     EXPECT_FALSE(bake_ssbump(f, o).resumed);
@@ -443,7 +448,8 @@ TEST(Ssbump, BilateralFilterSmoothsStairsAndKeepsEdges)
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w; ++x)
         {
-            const double ramp = 0.2 + 0.0011 * x; // a shallow ramp: stairs of one 8-bit step every ~3.6 texels
+            const double ramp =
+                0.2 + 0.0011 * x; // a shallow ramp: stairs of one 8-bit step every ~3.6 texels
             const double v = x >= 24 ? ramp + 0.5 : ramp;
             f.heights[y * w + x] = float(std::round(v * 255.0) / 255.0);
         }
@@ -462,7 +468,8 @@ TEST(Ssbump, BilateralFilterSmoothsStairsAndKeepsEdges)
                 if (sx < 0 || sy < 0 || sx >= int(w) || sy >= int(h))
                     continue;
                 const double v = f.at(uint32_t(sx), uint32_t(sy)), c = f.at(x, y);
-                const double k = std::exp(-(dx * dx + dy * dy) / 2.0) * std::exp(-(v - c) * (v - c) / (2 * 0.02 * 0.02));
+                const double k =
+                    std::exp(-(dx * dx + dy * dy) / 2.0) * std::exp(-(v - c) * (v - c) / (2 * 0.02 * 0.02));
                 sum += k * v;
                 weight += k;
             }
@@ -529,7 +536,8 @@ TEST(Ssbump, ReadsHeightMapsAtFullDepth)
 // Done-when line 5: bad height maps give clear errors naming the file.
 TEST(Ssbump, BadHeightMapsNameTheFileAndTheProblem)
 {
-    auto message = [](const fs::path& p, HeightChannel ch = HeightChannel::Grey) -> std::string {
+    auto message = [](const fs::path& p, HeightChannel ch = HeightChannel::Grey) -> std::string
+    {
         try
         {
             read_height_map(p, ch);
@@ -540,7 +548,8 @@ TEST(Ssbump, BadHeightMapsNameTheFileAndTheProblem)
         }
         return "";
     };
-    auto expect = [&](const fs::path& p, const std::string& problem, HeightChannel ch = HeightChannel::Grey) {
+    auto expect = [&](const fs::path& p, const std::string& problem, HeightChannel ch = HeightChannel::Grey)
+    {
         const std::string m = message(p, ch);
         EXPECT_NE(m.find(p.string()), std::string::npos) << m;
         EXPECT_NE(m.find(problem), std::string::npos) << "expected '" << problem << "' in: " << m;

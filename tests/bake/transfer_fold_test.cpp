@@ -38,7 +38,8 @@ glm::vec3 random_hemisphere(std::mt19937& rng)
 }
 
 // E(n_t) = sum_k c_k b_k(n_t) with c = T l.
-float evaluate(const std::vector<float>& t, const std::vector<float>& l, const math::BasisDesc& b, glm::vec3 n)
+float evaluate(const std::vector<float>& t, const std::vector<float>& l, const math::BasisDesc& b,
+               glm::vec3 n)
 {
     const int L = int(l.size());
     float v[HEMI_BASIS_MAX_SIZE];
@@ -71,7 +72,8 @@ TEST(TransferFold, WhiteFurnaceGivesPiForBasesThatHoldAConstant)
             std::vector<float> t = bake::fold_transfer(rm, 25, b);
             double worst = 0;
             for (int i = 0; i < 200; ++i)
-                worst = std::max(worst, std::abs(double(evaluate(t, l, b, random_hemisphere(rng))) / M_PI - 1.0));
+                worst =
+                    std::max(worst, std::abs(double(evaluate(t, l, b, random_hemisphere(rng))) / M_PI - 1.0));
             if (b.name == "hl2")
             {
                 EXPECT_GT(worst, 0.1) << "HL2 has no constant function; the furnace cannot be exact";

@@ -1,7 +1,7 @@
-// The .hemi container and the assets on it (io::read_prt_asset, io::read_lightmap_asset). The container's XXH64 would turn away
-// almost every mutation before the parsers behind it, so the target re-seals the input: it recomputes the
-// checksum over the mutated bytes, and the section table, the sections' sizes and values, the materials'
-// JSON and the embedded images are what the fuzzer explores.
+// The .hemi container and the assets on it (io::read_prt_asset, io::read_lightmap_asset). The container's
+// XXH64 would turn away almost every mutation before the parsers behind it, so the target re-seals the input:
+// it recomputes the checksum over the mutated bytes, and the section table, the sections' sizes and values,
+// the materials' JSON and the embedded images are what the fuzzer explores.
 #include "fuzz_common.h"
 
 #include <hemi/io/lightmap_asset.h>
@@ -23,11 +23,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
     }
     hemi::fuzz::write_file(file, bytes.data(), bytes.size());
-    hemi::fuzz::expect_clean([&] {
-        const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(file);
-        for (const hemi::io::EncodedImage& image : asset.images)
-            hemi::fuzz::expect_clean([&] { hemi::io::decode_image(image); });
-    });
+    hemi::fuzz::expect_clean(
+        [&]
+        {
+            const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(file);
+            for (const hemi::io::EncodedImage& image : asset.images)
+                hemi::fuzz::expect_clean([&] { hemi::io::decode_image(image); });
+        });
     hemi::fuzz::expect_clean([&] { hemi::io::read_lightmap_asset(file); });
     return 0;
 }

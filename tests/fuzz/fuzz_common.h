@@ -20,8 +20,9 @@ namespace hemi::fuzz
 
 inline std::filesystem::path scratch(const char* extension)
 {
-    const std::filesystem::path dir =
-        std::filesystem::exists("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path();
+    const std::filesystem::path dir = std::filesystem::exists("/dev/shm")
+                                          ? std::filesystem::path("/dev/shm")
+                                          : std::filesystem::temp_directory_path();
     return dir / ("hemi_fuzz_" + std::to_string(getpid()) + extension);
 }
 
@@ -32,8 +33,7 @@ inline void write_file(const std::filesystem::path& p, const uint8_t* data, size
 }
 
 // Runs `read`; returns normally for the documented failures, aborts (a finding) for anything else.
-template <typename F>
-void expect_clean(F&& read)
+template <typename F> void expect_clean(F&& read)
 {
     try
     {

@@ -11,10 +11,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     static const std::filesystem::path glb = hemi::fuzz::scratch(".glb"), gltf = hemi::fuzz::scratch(".gltf");
     const std::filesystem::path& file = data[0] & 1 ? glb : gltf;
     hemi::fuzz::write_file(file, data + 1, size - 1);
-    hemi::fuzz::expect_clean([&] {
-        const hemi::io::GltfScene scene = hemi::io::read_gltf(file);
-        for (const hemi::io::EncodedImage& image : scene.images)
-            hemi::fuzz::expect_clean([&] { hemi::io::decode_image(image); });
-    });
+    hemi::fuzz::expect_clean(
+        [&]
+        {
+            const hemi::io::GltfScene scene = hemi::io::read_gltf(file);
+            for (const hemi::io::EncodedImage& image : scene.images)
+                hemi::fuzz::expect_clean([&] { hemi::io::decode_image(image); });
+        });
     return 0;
 }

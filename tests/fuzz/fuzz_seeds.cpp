@@ -75,10 +75,12 @@ std::vector<uint8_t> png_with_empty_idat(std::vector<uint8_t> png)
 {
     size_t at = 8;
     while (at + 8 <= png.size() && std::memcmp(&png[at + 4], "IDAT", 4) != 0)
-        at += 12 + (size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 | size_t(png[at + 2]) << 8 | png[at + 3]);
+        at +=
+            12 + (size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 | size_t(png[at + 2]) << 8 | png[at + 3]);
     uint8_t chunk[12] = {0, 0, 0, 0, 'I', 'D', 'A', 'T'};
     const uint32_t crc = crc32(chunk + 4, 4);
-    chunk[8] = uint8_t(crc >> 24), chunk[9] = uint8_t(crc >> 16), chunk[10] = uint8_t(crc >> 8), chunk[11] = uint8_t(crc);
+    chunk[8] = uint8_t(crc >> 24), chunk[9] = uint8_t(crc >> 16), chunk[10] = uint8_t(crc >> 8),
+    chunk[11] = uint8_t(crc);
     png.insert(png.begin() + long(at), chunk, chunk + 12);
     return png;
 }
@@ -161,22 +163,26 @@ int main(int argc, char** argv)
         std::string nodes;
         const int n = 24;
         for (int i = 0; i < n; ++i)
-            nodes += std::string(i ? "," : "") + (i + 1 < n ? "{\"children\":[" + std::to_string(i + 1) + "," +
-                                                                 std::to_string(i + 1) + "]}"
-                                                           : "{\"mesh\":0}");
+            nodes += std::string(i ? "," : "") + (i + 1 < n ? "{\"children\":[" + std::to_string(i + 1) +
+                                                                  "," + std::to_string(i + 1) + "]}"
+                                                            : "{\"mesh\":0}");
         const std::string b64 = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"; // 3 vec3 positions
-        put_text(out / "gltf/regressions/node_graph_not_a_tree.gltf",
-                 "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[" + nodes +
-                     "],\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
-                     "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-                     "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
-                     "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64," + b64 + "\"}]}",
-                 0);
+        put_text(
+            out / "gltf/regressions/node_graph_not_a_tree.gltf",
+            "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[" + nodes +
+                "],\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64," +
+                b64 + "\"}]}",
+            0);
         put_text(out / "gltf/regressions/accessor_count_2_62.gltf",
-                 "{\"asset\":{\"version\":\"2.0\"},\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                 "{\"asset\":{\"version\":\"2.0\"},\"meshes\":[{\"primitives\":[{\"attributes\":{"
+                 "\"POSITION\":0}}]}],"
                  "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4611686018427387904,"
                  "\"type\":\"VEC3\"}],\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
-                 "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64," + b64 + "\"}]}",
+                 "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64," +
+                     b64 + "\"}]}",
                  0);
     }
 

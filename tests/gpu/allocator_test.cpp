@@ -59,7 +59,8 @@ TEST_F(Allocator, LargeRequestsGetADedicatedBlockThatIsFreed)
     auto& dev = hemi::test::device();
     const auto before = dev.allocator().stats();
     {
-        hemi::gpu::Buffer big = hemi::gpu::create_buffer(dev, {VkDeviceSize(48) << 20, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+        hemi::gpu::Buffer big =
+            hemi::gpu::create_buffer(dev, {VkDeviceSize(48) << 20, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
         EXPECT_EQ(dev.allocator().stats().blocks, before.blocks + 1);
     }
     EXPECT_EQ(dev.allocator().stats().blocks, before.blocks);

@@ -16,7 +16,8 @@ class DeviceTest : public hemi::test::GpuTest
 {
 };
 
-VKAPI_ATTR VkBool32 VKAPI_CALL host_messenger(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+VKAPI_ATTR VkBool32 VKAPI_CALL host_messenger(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                              VkDebugUtilsMessageTypeFlagsEXT,
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void*)
 {
     hemi::test::validation_log().add(std::string("(host instance) ") + data->pMessage);
@@ -80,7 +81,8 @@ TEST_F(DeviceTest, BuffersRoundTripAndRejectOutOfRangeAccess)
     hemi::gpu::read_buffer(dev, b, out.data(), 256);
     EXPECT_EQ(in, out);
     EXPECT_THROW(hemi::gpu::write_buffer(dev, b, in.data(), 200, 100), std::out_of_range);
-    EXPECT_THROW(hemi::gpu::create_buffer(dev, {0, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT}), std::invalid_argument);
+    EXPECT_THROW(hemi::gpu::create_buffer(dev, {0, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT}),
+                 std::invalid_argument);
 }
 
 // A host engine creates its own instance (with its own validation messenger) and device, hands them to
@@ -93,8 +95,10 @@ TEST_F(DeviceTest, AdoptsAHostEngineDevice)
     const char* layer = "VK_LAYER_KHRONOS_validation";
     const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
     VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+    mi.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    mi.messageType =
+        VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
     mi.pfnUserCallback = host_messenger;
     VkInstanceCreateInfo ii{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
     ii.pNext = &mi;
@@ -184,9 +188,8 @@ TEST(DeviceValidation, LoaderNotesAreNotValidationMessages)
         hemi::gpu::DeviceDesc desc;
         desc.device_selector = "llvmpipe";
         desc.validation = true;
-        desc.log = [&](hemi::gpu::LogLevel, bool validation, std::string_view m) {
-            messages.emplace_back(validation, std::string(m));
-        };
+        desc.log = [&](hemi::gpu::LogLevel, bool validation, std::string_view m)
+        { messages.emplace_back(validation, std::string(m)); };
         hemi::gpu::Device device(desc);
         hemi::gpu::Buffer b = hemi::gpu::create_buffer(device, {256, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
         EXPECT_EQ(device.validation_messages(), 0u);

@@ -1,5 +1,6 @@
 // gpu::UploadBatch::image_levels: every mip level and layer of an image lands where it belongs (the baked
-// solid-angle mipmaps of parabolic maps go through it); read back level by level with the validation layer on.
+// solid-angle mipmaps of parabolic maps go through it); read back level by level with the validation layer
+// on.
 #include "../gpu_fixture.h"
 
 #include <hemi/gpu/commands.h>
@@ -42,26 +43,30 @@ TEST_F(UploadLevels, EveryLevelAndLayerLandsWhereItBelongs)
     size_t total = 0;
     for (const auto& d : data)
         total += d.size();
-    hemi::gpu::Buffer readback = hemi::gpu::create_buffer(dev, {total, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                                                hemi::gpu::MemoryUsage::Readback});
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        hemi::gpu::transition_image(cmd, image, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                                    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-        VkDeviceSize offset = 0;
-        for (uint32_t l = 0; l < levels; ++l)
+    hemi::gpu::Buffer readback = hemi::gpu::create_buffer(
+        dev, {total, VK_BUFFER_USAGE_TRANSFER_DST_BIT, hemi::gpu::MemoryUsage::Readback});
+    hemi::gpu::one_shot(
+        dev,
+        [&](VkCommandBuffer cmd)
         {
-            VkBufferImageCopy region{};
-            region.bufferOffset = offset;
-            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, l, 0, layers};
-            region.imageExtent = {size >> l, size >> l, 1};
-            vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback, 1, &region);
-            offset += data[l].size();
-        }
-        hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                                  VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
-        hemi::gpu::transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    });
+            hemi::gpu::transition_image(cmd, image, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                                        VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+            VkDeviceSize offset = 0;
+            for (uint32_t l = 0; l < levels; ++l)
+            {
+                VkBufferImageCopy region{};
+                region.bufferOffset = offset;
+                region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, l, 0, layers};
+                region.imageExtent = {size >> l, size >> l, 1};
+                vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback, 1,
+                                       &region);
+                offset += data[l].size();
+            }
+            hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                                      VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+            hemi::gpu::transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                                        VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        });
     std::vector<std::byte> back(total);
     hemi::gpu::read_buffer(dev, readback, back.data(), total);
     size_t offset = 0;

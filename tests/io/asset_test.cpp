@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -91,7 +91,8 @@ TEST(Asset, RejectsEveryTruncationAndEveryFlippedByte)
 
 TEST(Asset, ErrorsNameTheFileAndTheProblem)
 {
-    auto expect = [](const fs::path& p, const std::string& part) {
+    auto expect = [](const fs::path& p, const std::string& part)
+    {
         try
         {
             hemi::io::AssetReader r(p);
@@ -203,8 +204,8 @@ TEST(AtomicFile, OutputProblemsAreNamedAndStaleTemporariesRemoved)
 
     const fs::path target = dir() / "stale.hemi";
     // pid 2^22 - 1 is above Linux's default pid_max (2^22) for most systems: no such process.
-    const fs::path dead = target.string() + ".tmp4194303.7", alive = target.string() + ".tmp" +
-                                                                     std::to_string(getpid()) + ".99";
+    const fs::path dead = target.string() + ".tmp4194303.7",
+                   alive = target.string() + ".tmp" + std::to_string(getpid()) + ".99";
     std::ofstream(dead) << "half";
     std::ofstream(alive) << "in progress";
     ASSERT_EQ(hemi::io::stale_temporaries(target), std::vector<fs::path>{dead});

@@ -29,8 +29,7 @@ fs::path dir()
     return hemi::test::temp_dir("gltf_test");
 }
 
-template <typename T>
-void append(std::vector<unsigned char>& buf, const std::vector<T>& v)
+template <typename T> void append(std::vector<unsigned char>& buf, const std::vector<T>& v)
 {
     size_t at = buf.size();
     buf.resize(at + v.size() * sizeof(T));
@@ -79,7 +78,8 @@ tinygltf::Model quad_model(bool with_normal_texture, std::vector<uint16_t> indic
     append(buffer.data, uv);
     append(buffer.data, indices);
     m.buffers.push_back(buffer);
-    auto view = [&](size_t offset, size_t length) {
+    auto view = [&](size_t offset, size_t length)
+    {
         tinygltf::BufferView v;
         v.buffer = 0;
         v.byteOffset = offset;
@@ -87,7 +87,8 @@ tinygltf::Model quad_model(bool with_normal_texture, std::vector<uint16_t> indic
         m.bufferViews.push_back(v);
         return int(m.bufferViews.size() - 1);
     };
-    auto accessor = [&](int v, int component, int type, size_t count) {
+    auto accessor = [&](int v, int component, int type, size_t count)
+    {
         tinygltf::Accessor a;
         a.bufferView = v;
         a.componentType = component;
@@ -100,8 +101,8 @@ tinygltf::Model quad_model(bool with_normal_texture, std::vector<uint16_t> indic
     m.accessors[p].minValues = {0, 0, 0};
     m.accessors[p].maxValues = {1, 1, 0};
     int t = accessor(view(48, 32), TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, 4);
-    int i = accessor(view(80, indices.size() * 2), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR,
-                     indices.size());
+    int i = accessor(view(80, indices.size() * 2), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                     TINYGLTF_TYPE_SCALAR, indices.size());
     tinygltf::Primitive prim;
     prim.attributes["POSITION"] = p;
     prim.attributes["TEXCOORD_0"] = t;
@@ -265,7 +266,8 @@ TEST(GltfReader, ReadsTransformedGeometryAndGeneratesTangentsFromUvs)
         {
             EXPECT_NEAR(glm::length(s.mesh.normals[v] - glm::vec3(0, 0, 1)), 0.0f, 1e-6f) << "normal " << v;
             // u grows along +x, so T = +x; v grows along -y, so the bitangent (toward -v) is +y: w = +1.
-            EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[v]) - glm::vec3(1, 0, 0)), 0.0f, 1e-6f) << "tangent " << v;
+            EXPECT_NEAR(glm::length(glm::vec3(s.mesh.tangents[v]) - glm::vec3(1, 0, 0)), 0.0f, 1e-6f)
+                << "tangent " << v;
             EXPECT_EQ(s.mesh.tangents[v].w, 1.0f);
         }
         EXPECT_TRUE(s.mesh.uvs1.empty());
@@ -304,7 +306,8 @@ TEST(GltfReader, GeneratedTangentsWeightTrianglesByCornerAngle)
     m.normals.assign(5, glm::vec3(0, 0, 1));
     // Triangle A (0, 1, 2): u = x, v = -y. Triangle B (0, 3, 4): u = y, v = x (the same frame turned 90 deg).
     // Vertex 0 has one UV for both; the others belong to one triangle each.
-    m.uvs = {{0, 0}, {1, 0}, {0, -1}, {0, -30}, {-30, -30}}; // B's UVs 3x denser: raw dP/du would weigh it 1/3
+    m.uvs = {
+        {0, 0}, {1, 0}, {0, -1}, {0, -30}, {-30, -30}}; // B's UVs 3x denser: raw dP/du would weigh it 1/3
     m.indices = {0, 1, 2, 0, 3, 4};
     const fs::path p = dir() / "corner.gltf";
     hemi::io::write_gltf(p, m);
@@ -330,7 +333,8 @@ TEST(GltfReader, MirroringNodeKeepsTrianglesFacingOut)
     {
         const glm::vec3 a = s.mesh.positions[s.mesh.indices[t]], b = s.mesh.positions[s.mesh.indices[t + 1]],
                         c = s.mesh.positions[s.mesh.indices[t + 2]];
-        EXPECT_GT(glm::cross(b - a, c - a).z, 0.0f) << "triangle " << t / 3 << " winds clockwise seen from +z";
+        EXPECT_GT(glm::cross(b - a, c - a).z, 0.0f)
+            << "triangle " << t / 3 << " winds clockwise seen from +z";
     }
     for (const glm::vec3& n : s.mesh.normals)
         EXPECT_NEAR(glm::length(n - glm::vec3(0, 0, 1)), 0.0f, 1e-6f);
@@ -833,7 +837,8 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
         {"type": "directional", "intensity": 3}]}})");
     // A point light 2 up, a spot turned +90 degrees about x under a parent moved by (1, 0, 0) (its -Z points
     // along +y), and a directional light with no transform (pointing along -z).
-    h.j["nodes"].push_back({{"translation", {0, 2, 0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    h.j["nodes"].push_back(
+        {{"translation", {0, 2, 0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
     h.j["nodes"].push_back({{"translation", {1, 0, 0}}, {"children", {3}}});
     h.j["nodes"].push_back({{"rotation", {0.7071068, 0, 0, 0.7071068}},
                             {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});

@@ -24,7 +24,8 @@ namespace
 {
 fs::path temp_dir()
 {
-    fs::path d = fs::temp_directory_path() / ("hemi_io_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    fs::path d = fs::temp_directory_path() /
+                 ("hemi_io_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
     fs::create_directories(d);
     return d;
 }
@@ -48,9 +49,9 @@ TEST(ImageWriters, RejectInconsistentImagesNamingTheFile)
 }
 
 // Both writers' files decode to what was given: the PNG, read back by the decoder, holds at every pixel and
-// channel the sRGB encoding of the clamped linear value (the IEC 61966-2-1 curve, typed here) rounded to 8 bits
-// and the clamped alpha; the EXR holds the values themselves (to half precision, whichever type it stores).
-// Every value differs, so a swapped channel or a transposed row is seen as well as a wrong curve.
+// channel the sRGB encoding of the clamped linear value (the IEC 61966-2-1 curve, typed here) rounded to 8
+// bits and the clamped alpha; the EXR holds the values themselves (to half precision, whichever type it
+// stores). Every value differs, so a swapped channel or a transposed row is seen as well as a wrong curve.
 TEST(ImageWriters, WritePngAndExrFiles)
 {
     const uint32_t w = 3, h = 2;
@@ -79,7 +80,8 @@ TEST(ImageWriters, WritePngAndExrFiles)
     for (size_t i = 0; i < img.pixels.size(); ++i)
         EXPECT_NEAR(back.pixels[i], img.pixels[i], 1e-3f * img.pixels[i]) << "EXR value " << i;
     for (const auto& entry : fs::directory_iterator(temp_dir()))
-        EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary left behind: " << entry.path();
+        EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos)
+            << "temporary left behind: " << entry.path();
 }
 
 TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary)
@@ -87,7 +89,8 @@ TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary)
     fs::path p = temp_dir() / "keep.txt";
     hemi::io::write_atomically(p, [](const fs::path& tmp) { std::ofstream(tmp) << "old"; });
     EXPECT_THROW(hemi::io::write_atomically(p,
-                                            [](const fs::path& tmp) {
+                                            [](const fs::path& tmp)
+                                            {
                                                 std::ofstream(tmp) << "half";
                                                 throw std::runtime_error("interrupted");
                                             }),
@@ -202,7 +205,8 @@ TEST(ExrReader, PlacesTheDataWindowInsideTheDisplayWindow)
 // auto-cropped files (a small display window, or one at most 64 times its data) still read.
 TEST(ExrReader, HugeDisplayWindowsAroundTinyDataAreRefusedQuickly)
 {
-    auto write = [](const fs::path& p, int display, int data) {
+    auto write = [](const fs::path& p, int display, int data)
+    {
         Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(display - 1, display - 1)),
                            Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(data - 1, data - 1)));
         header.channels().insert("R", Imf::Channel(Imf::FLOAT));
@@ -490,9 +494,9 @@ TEST(ImageDecode, JpegHuffmanTablesOfMoreThan256CodesAreRefused)
     EXPECT_NO_THROW(hemi::io::decode_image({"fine.jpg", "image/jpeg", jpeg}));
 }
 
-// Found by tests/fuzz/fuzz_image: 760 bytes whose JPEG frame header claims 16392 x 9488 took 13 s and 1.6 GB to
-// decode. A header is refused when its size cannot be coded in the bytes that follow (io/image.cpp says why
-// the bound is below any real file's), before decoding; the same file with its real size decodes.
+// Found by tests/fuzz/fuzz_image: 760 bytes whose JPEG frame header claims 16392 x 9488 took 13 s and 1.6 GB
+// to decode. A header is refused when its size cannot be coded in the bytes that follow (io/image.cpp says
+// why the bound is below any real file's), before decoding; the same file with its real size decodes.
 TEST(ImageDecode, HeadersClaimingMorePixelsThanTheBytesCanCodeAreRefused)
 {
     const std::vector<uint8_t> jpeg = hemi::io::encode_jpeg(smooth(16, 8), 80);
@@ -505,14 +509,20 @@ TEST(ImageDecode, HeadersClaimingMorePixelsThanTheBytesCanCodeAreRefused)
     }
     catch (const hemi::io::FormatError& e)
     {
-        EXPECT_NE(std::string(e.what()).find("16392x9488 pixels cannot be coded"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("16392x9488 pixels cannot be coded"), std::string::npos)
+            << e.what();
     }
-    EXPECT_EQ(hemi::io::decode_image({"same.jpg", "image/jpeg", hemi::test::jpeg_with_frame_size(jpeg, 16, 8)}).width,
-              16u);
+    EXPECT_EQ(
+        hemi::io::decode_image({"same.jpg", "image/jpeg", hemi::test::jpeg_with_frame_size(jpeg, 16, 8)})
+            .width,
+        16u);
     // A real large image is well above the bound: 2048 x 1024 of smooth content.
-    EXPECT_EQ(hemi::io::decode_image({"big.jpg", "image/jpeg", hemi::io::encode_jpeg(smooth(2048, 1024), 50)}).width,
+    EXPECT_EQ(hemi::io::decode_image({"big.jpg", "image/jpeg", hemi::io::encode_jpeg(smooth(2048, 1024), 50)})
+                  .width,
               2048u);
-    EXPECT_EQ(hemi::io::decode_image({"big.png", "image/png", hemi::io::encode_png(smooth(2048, 1024))}).width, 2048u);
+    EXPECT_EQ(
+        hemi::io::decode_image({"big.png", "image/png", hemi::io::encode_png(smooth(2048, 1024))}).width,
+        2048u);
 }
 
 // Found by tests/fuzz/fuzz_image: Huffman code lengths that over-subscribe the code space (no prefix code)
@@ -551,7 +561,8 @@ TEST(ImageDecode, JpegScansWithUndefinedHuffmanTablesAreRefused)
         EXPECT_NE(std::string(e.what()).find("not defined"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("tables.jpg"), std::string::npos) << e.what();
     }
-    // A baseline scan decodes AC coefficients whatever its Se says: an undefined AC table there is refused too.
+    // A baseline scan decodes AC coefficients whatever its Se says: an undefined AC table there is refused
+    // too.
     const std::vector<uint8_t> baseline = hemi::test::jpeg_with_undefined_ac_table_in_a_baseline_scan(good);
     ASSERT_FALSE(baseline.empty());
     EXPECT_THROW(hemi::io::decode_image({"baseline.jpg", "image/jpeg", baseline}), hemi::io::FormatError);

@@ -87,7 +87,8 @@ TEST(LightmapAsset, RoundTripKeepsEveryValueToHalfPrecision)
         const hemi::io::LightmapOutput& r = b.output(o.name);
         ASSERT_EQ(r.maps.size(), o.maps.size());
         for (size_t i = 0; i < o.maps.size(); ++i)
-            EXPECT_NEAR(r.maps[i], o.maps[i], std::abs(o.maps[i]) * 4.9e-4 + 1e-7) << o.name << " " << i; // 2^-11
+            EXPECT_NEAR(r.maps[i], o.maps[i], std::abs(o.maps[i]) * 4.9e-4 + 1e-7)
+                << o.name << " " << i; // 2^-11
     }
     EXPECT_THROW(b.output("sh9"), std::invalid_argument);
     EXPECT_EQ(hemi::io::asset_kind(p), "lightmap");
@@ -115,7 +116,8 @@ TEST(LightmapAsset, BrokenFilesAreRefusedNamingTheFile)
 
 TEST(LightmapAsset, WriterRefusesInconsistentAssets)
 {
-    auto refused = [](hemi::io::LightmapAsset a, const std::string& what) {
+    auto refused = [](hemi::io::LightmapAsset a, const std::string& what)
+    {
         try
         {
             hemi::io::write_lightmap_asset(dir() / "never.hemi", a);
@@ -192,7 +194,8 @@ TEST(LightmapAsset, LightProbesRoundTripAndInterpolate)
     const hemi::io::LightProbes all = probe_grid();
     EXPECT_EQ(all.position(1, 0, 1), glm::vec3(2.0f, 0.0f, 4.0f));
     // Trilinear: the value is linear in (x / 2, y, z / 4) with weights 1, 2, 4.
-    for (const glm::vec3 q : {glm::vec3(0.5f, 0.25f, 1.0f), glm::vec3(1.9f, 0.8f, 0.3f), glm::vec3(1.0f, 0.5f, 2.0f)})
+    for (const glm::vec3 q :
+         {glm::vec3(0.5f, 0.25f, 1.0f), glm::vec3(1.9f, 0.8f, 0.3f), glm::vec3(1.0f, 0.5f, 2.0f)})
     {
         const float expected = q.x / 2.0f + 2.0f * q.y + 4.0f * q.z / 4.0f;
         EXPECT_NEAR(all.at(q)[3].y, expected * 4.0f, 1e-5f) << q.x << "," << q.y << "," << q.z;
@@ -211,7 +214,8 @@ TEST(LightmapAsset, LightProbesRoundTripAndInterpolate)
     lonely.valid[6] = 0;
     EXPECT_EQ(lonely.at(glm::vec3(1.0f))[0].x, 0.0f);
 
-    auto refused = [](hemi::io::LightmapAsset bad, const std::string& what) {
+    auto refused = [](hemi::io::LightmapAsset bad, const std::string& what)
+    {
         try
         {
             hemi::io::write_lightmap_asset(dir() / "never_probes.hemi", bad);

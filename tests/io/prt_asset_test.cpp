@@ -39,8 +39,8 @@ hemi::io::PrtAsset small_asset()
     o.cpca_clusters = 2;
     o.cpca_vectors = 4;
     hemi::bake::PrtBakeSummary summary;
-    hemi::io::PrtAsset a =
-        hemi::bake::make_prt_asset(hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple, 0.5f), o, summary);
+    hemi::io::PrtAsset a = hemi::bake::make_prt_asset(
+        hemi::samples::make_prt_model(hemi::samples::PrtModel::Simple, 0.5f), o, summary);
     // Two materials over two primitives, a PNG and a JPEG, and a second UV set.
     using namespace hemi::io;
     ImageRgba8 small{3, 2, std::vector<uint8_t>(24)};
@@ -240,14 +240,16 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                          }),
                  "TEXCOORD_1");
     expect_error(rewrite(good, "short_t.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "T.gs")
                                  b.resize(b.size() - 4);
                              return true;
                          }),
                  "technique 'gs'");
     expect_error(rewrite(good, "nan.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "T.hl2")
                              {
                                  const float nan = NAN;
@@ -257,7 +259,8 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                          }),
                  "non-finite");
     expect_error(rewrite(good, "index.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "mesh.indices")
                              {
                                  const uint32_t big = 1u << 30;
@@ -267,7 +270,8 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                          }),
                  "out of range");
     expect_error(rewrite(good, "cluster.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "C.prt")
                              {
                                  // Cluster ids follow the 12-byte header, the means and the vectors.
@@ -286,7 +290,8 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
             {"rms", 8}, {"means", header + 4}, {"vectors", header + means + 8}, {"weights", size_t(-4)}};
         for (const auto& [what, offset] : places)
             expect_error(rewrite(good, std::string("cpca_nan_") + what + ".hemi",
-                                 [offset](const std::string& s, std::vector<std::byte>& b) {
+                                 [offset](const std::string& s, std::vector<std::byte>& b)
+                                 {
                                      if (s == "C.prt")
                                      {
                                          // The weights are the section's last N x V floats.
@@ -301,7 +306,8 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
     expect_error(rewrite(good, "unknown.hemi", keep, {{"T.phong", std::vector<std::byte>(16)}}),
                  "unknown technique 'phong'");
     expect_error(rewrite(good, "version.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "prt.info")
                                  b[0] = std::byte{9};
                              return true;
@@ -317,7 +323,8 @@ TEST(PrtAsset, InconsistentContentsAreRefusedWithTheReason)
                  "written by an older hemi (PRT layout 1");
     // An absurd lighting order would make every size computed from it overflow: refused before any is.
     expect_error(rewrite(good, "order.hemi",
-                         [](const std::string& s, std::vector<std::byte>& b) {
+                         [](const std::string& s, std::vector<std::byte>& b)
+                         {
                              if (s == "prt.info")
                              {
                                  const uint32_t order = 1u << 31;

@@ -48,15 +48,16 @@ TEST(Bases, OrthonormalOnTheHemisphere)
         std::vector<double> g = gram_matrix(b);
         for (int i = 0; i < b.size; ++i)
             for (int k = 0; k < b.size; ++k)
-                EXPECT_NEAR(g[i * b.size + k], i == k ? 1.0 : 0.0, 1e-6) << b.name << " <b" << i << ", b" << k << ">";
+                EXPECT_NEAR(g[i * b.size + k], i == k ? 1.0 : 0.0, 1e-6)
+                    << b.name << " <b" << i << ", b" << k << ">";
     }
 }
 
-// Koenderink et al.'s hemispherical Zernike polynomials in their polar closed form, typed here from the disk's
-// definition rather than zernike.cpp's Cartesian one: the direction at (theta, phi) sits at radius
-// rho = sqrt(1 - cos theta) on the unit disk (the equal-area map, d(omega) = 2 rho d(rho) d(phi)), and
-// Z_n^m = N_nm R_n^|m|(rho) cos(m phi) (sin for m < 0) with R_0^0 = 1, R_1^1 = rho, R_2^0 = 2 rho^2 - 1,
-// R_2^2 = rho^2, normalised on the hemisphere by N = sqrt((n + 1) / (2 pi)) for m = 0 and sqrt((n + 1) / pi)
+// Koenderink et al.'s hemispherical Zernike polynomials in their polar closed form, typed here from the
+// disk's definition rather than zernike.cpp's Cartesian one: the direction at (theta, phi) sits at radius rho
+// = sqrt(1 - cos theta) on the unit disk (the equal-area map, d(omega) = 2 rho d(rho) d(phi)), and Z_n^m =
+// N_nm R_n^|m|(rho) cos(m phi) (sin for m < 0) with R_0^0 = 1, R_1^1 = rho, R_2^0 = 2 rho^2 - 1, R_2^2 =
+// rho^2, normalised on the hemisphere by N = sqrt((n + 1) / (2 pi)) for m = 0 and sqrt((n + 1) / pi)
 // otherwise. zernike3 is the first three, zernike6 all six, in the order (0,0), (1,1), (1,-1), (2,0), (2,2),
 // (2,-2).
 TEST(BasisZernike, EqualsThePolarClosedForm)
@@ -74,15 +75,16 @@ TEST(BasisZernike, EqualsThePolarClosedForm)
                                 std::sqrt(3.0 / (2.0 * M_PI)) * (2.0 * rho * rho - 1.0),
                                 std::sqrt(3.0 / M_PI) * rho * rho * std::cos(2.0 * phi),
                                 std::sqrt(3.0 / M_PI) * rho * rho * std::sin(2.0 * phi)};
-        const glm::vec3 n(float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)), float(cos_theta));
+        const glm::vec3 n(float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)),
+                          float(cos_theta));
         for (const char* name : {"zernike3", "zernike6"})
         {
             const BasisDesc& b = basis(name);
             float got[HEMI_BASIS_MAX_SIZE];
             b.eval(n, got);
             for (int k = 0; k < b.size; ++k)
-                EXPECT_NEAR(got[k], want[k], 2e-6) << name << " function " << k << " at theta "
-                                                  << std::acos(cos_theta) << ", phi " << phi;
+                EXPECT_NEAR(got[k], want[k], 2e-6)
+                    << name << " function " << k << " at theta " << std::acos(cos_theta) << ", phi " << phi;
         }
     }
 }
@@ -92,13 +94,33 @@ TEST(BasisZernike, EqualsThePolarClosedForm)
 TEST(BasisHl2, ReproducesSloansMatrix)
 {
     const double s = std::sqrt(M_PI);
-    const std::vector<double> printed = {
-        std::sqrt(3.0) / (4 * s), std::sqrt(6.0) / (4 * s), 1 / (2 * s), std::sqrt(2.0) / (4 * s), 0,
-        3 * std::sqrt(30.0) / (32 * s), std::sqrt(15.0) / (16 * s), 3 * std::sqrt(10.0) / (32 * s), 0,
-        std::sqrt(3.0) / (4 * s), -std::sqrt(6.0) / (4 * s), 1 / (2 * s), std::sqrt(2.0) / (4 * s), 0,
-        -3 * std::sqrt(30.0) / (32 * s), std::sqrt(15.0) / (16 * s), 3 * std::sqrt(10.0) / (32 * s), 0,
-        std::sqrt(3.0) / (4 * s), 0, 1 / (2 * s), -std::sqrt(2.0) / (2 * s), 0, 0, std::sqrt(15.0) / (16 * s),
-        -3 * std::sqrt(10.0) / (16 * s), 0};
+    const std::vector<double> printed = {std::sqrt(3.0) / (4 * s),
+                                         std::sqrt(6.0) / (4 * s),
+                                         1 / (2 * s),
+                                         std::sqrt(2.0) / (4 * s),
+                                         0,
+                                         3 * std::sqrt(30.0) / (32 * s),
+                                         std::sqrt(15.0) / (16 * s),
+                                         3 * std::sqrt(10.0) / (32 * s),
+                                         0,
+                                         std::sqrt(3.0) / (4 * s),
+                                         -std::sqrt(6.0) / (4 * s),
+                                         1 / (2 * s),
+                                         std::sqrt(2.0) / (4 * s),
+                                         0,
+                                         -3 * std::sqrt(30.0) / (32 * s),
+                                         std::sqrt(15.0) / (16 * s),
+                                         3 * std::sqrt(10.0) / (32 * s),
+                                         0,
+                                         std::sqrt(3.0) / (4 * s),
+                                         0,
+                                         1 / (2 * s),
+                                         -std::sqrt(2.0) / (2 * s),
+                                         0,
+                                         0,
+                                         std::sqrt(15.0) / (16 * s),
+                                         -3 * std::sqrt(10.0) / (16 * s),
+                                         0};
     std::vector<double> p = projection_from_sh9(basis("hl2"));
     for (double& v : p)
         v *= std::sqrt(3.0 / (2.0 * M_PI));
@@ -109,12 +131,45 @@ TEST(BasisHl2, ReproducesSloansMatrix)
 TEST(BasisSal4, ReproducesSloansMatrix)
 {
     const double ln = std::log(3 + 2 * std::sqrt(2.0));
-    const double a = (44 - 9 * std::sqrt(2.0) * ln) / 32, b = (39 * std::sqrt(10.0) * ln - 20 * std::sqrt(5.0)) / 256;
+    const double a = (44 - 9 * std::sqrt(2.0) * ln) / 32,
+                 b = (39 * std::sqrt(10.0) * ln - 20 * std::sqrt(5.0)) / 256;
     const double r2 = std::sqrt(2.0);
-    const std::vector<double> printed = {r2 / 2, 0, std::sqrt(6.0) / 4, 0, 0, 0, 0, 0, 0, //
-                                         0, a, 0, 0, 0, b, 0, 0, 0,                        //
-                                         0, 0, r2 / 4, 0, 0, 0, std::sqrt(30.0) / 8, 0, 0, //
-                                         0, 0, 0, a, 0, 0, 0, b, 0};
+    const std::vector<double> printed = {r2 / 2,
+                                         0,
+                                         std::sqrt(6.0) / 4,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0, //
+                                         0,
+                                         a,
+                                         0,
+                                         0,
+                                         0,
+                                         b,
+                                         0,
+                                         0,
+                                         0, //
+                                         0,
+                                         0,
+                                         r2 / 4,
+                                         0,
+                                         0,
+                                         0,
+                                         std::sqrt(30.0) / 8,
+                                         0,
+                                         0, //
+                                         0,
+                                         0,
+                                         0,
+                                         a,
+                                         0,
+                                         0,
+                                         0,
+                                         b,
+                                         0};
     expect_matrix(projection_from_sh9(basis("sal4")), printed, 4, 1e-6, "SAL4");
     EXPECT_NEAR(a, 0.673872, 1e-6);
     EXPECT_NEAR(b, 0.674516, 1e-6);
@@ -124,12 +179,60 @@ TEST(BasisSal4, ReproducesSloansMatrix)
 TEST(BasisH6, ReproducesHabelsTh)
 {
     const double r = 1 / std::sqrt(2.0), q = 3.0 / 8.0 * std::sqrt(2.5);
-    const std::vector<double> printed = {r, 0, 0.5 * std::sqrt(1.5), 0, 0, 0, 0, 0, 0, //
-                                         0, r, 0, 0, 0, q, 0, 0, 0,                    //
-                                         0, 0, 1 / (2 * std::sqrt(2.0)), 0, 0, 0, 0.25 * std::sqrt(7.5), 0, 0,
-                                         0, 0, 0, r, 0, 0, 0, q, 0, //
-                                         0, 0, 0, 0, r, 0, 0, 0, 0, //
-                                         0, 0, 0, 0, 0, 0, 0, 0, r};
+    const std::vector<double> printed = {r,
+                                         0,
+                                         0.5 * std::sqrt(1.5),
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0, //
+                                         0,
+                                         r,
+                                         0,
+                                         0,
+                                         0,
+                                         q,
+                                         0,
+                                         0,
+                                         0, //
+                                         0,
+                                         0,
+                                         1 / (2 * std::sqrt(2.0)),
+                                         0,
+                                         0,
+                                         0,
+                                         0.25 * std::sqrt(7.5),
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         r,
+                                         0,
+                                         0,
+                                         0,
+                                         q,
+                                         0, //
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         r,
+                                         0,
+                                         0,
+                                         0,
+                                         0, //
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         0,
+                                         r};
     expect_matrix(projection_from_sh9(basis("h6")), printed, 6, 1e-6, "T_h");
     // H4 is the first four rows.
     std::vector<double> h4 = projection_from_sh9(basis("h4"));
@@ -146,8 +249,10 @@ TEST(Bases, ReproduceSloanTable2)
         double value;
         int digits;
     };
-    const Entry sal[9] = {{0, 0}, {4.6e-2, 2}, {0, 0}, {4.6e-2, 2}, {5e-1, 1}, {4.5e-2, 2}, {3.1e-2, 2}, {4.5e-2, 2}, {5e-1, 1}};
-    const Entry hl2[9] = {{1.3e-1, 2}, {0, 0}, {0, 0}, {0, 0}, {5e-1, 1}, {1.5e-1, 2}, {3.8e-1, 2}, {1.5e-1, 2}, {5e-1, 1}};
+    const Entry sal[9] = {{0, 0},      {4.6e-2, 2}, {0, 0},      {4.6e-2, 2}, {5e-1, 1},
+                          {4.5e-2, 2}, {3.1e-2, 2}, {4.5e-2, 2}, {5e-1, 1}};
+    const Entry hl2[9] = {{1.3e-1, 2}, {0, 0},      {0, 0},      {0, 0},   {5e-1, 1},
+                          {1.5e-1, 2}, {3.8e-1, 2}, {1.5e-1, 2}, {5e-1, 1}};
     for (int j = 0; j < 9; ++j)
     {
         double e_sal = projection_error_of_sh9_function(basis("sal4"), j);
@@ -155,11 +260,13 @@ TEST(Bases, ReproduceSloanTable2)
         if (sal[j].digits == 0)
             EXPECT_NEAR(e_sal, 0.0, 1e-9) << "SAL y" << j;
         else
-            EXPECT_DOUBLE_EQ(round_significant(e_sal, sal[j].digits), sal[j].value) << "SAL y" << j << ": " << e_sal;
+            EXPECT_DOUBLE_EQ(round_significant(e_sal, sal[j].digits), sal[j].value)
+                << "SAL y" << j << ": " << e_sal;
         if (hl2[j].digits == 0)
             EXPECT_NEAR(e_hl2, 0.0, 1e-9) << "HL2 y" << j;
         else
-            EXPECT_DOUBLE_EQ(round_significant(e_hl2, hl2[j].digits), hl2[j].value) << "HL2 y" << j << ": " << e_hl2;
+            EXPECT_DOUBLE_EQ(round_significant(e_hl2, hl2[j].digits), hl2[j].value)
+                << "HL2 y" << j << ": " << e_hl2;
     }
 }
 
@@ -227,9 +334,10 @@ TEST_F(BasisGlsl, EqualsCppOnTheGpu)
     hemi::gpu::write_buffer(dev, in, normals.data(), count * 16);
     const VkDeviceSize out_bytes = count * HEMI_BASIS_MAX_SIZE * 4;
     hemi::gpu::Buffer out = hemi::gpu::create_buffer(dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
-    std::vector<hemi::gpu::Binding> bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
-                                                {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
-                                                {2, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
+    std::vector<hemi::gpu::Binding> bindings = {
+        {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {2, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
     hemi::gpu::Buffer sep = hemi::gpu::create_buffer(dev, {9 * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     hemi::gpu::write_buffer(dev, sep, sep4_weights().data(), 9 * 16); // 9 rows of 4 floats = std140 vec4[9]
     for (const BasisDesc& b : bases())
@@ -247,12 +355,15 @@ TEST_F(BasisGlsl, EqualsCppOnTheGpu)
         writes[2].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
         writes[2].buffer = {sep, 0, VK_WHOLE_SIZE};
         hemi::gpu::write_descriptors(dev, set, writes);
-        hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
-            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
-            vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, 4, &count);
-            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
-        });
+        hemi::gpu::one_shot(dev,
+                            [&](VkCommandBuffer cmd)
+                            {
+                                vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
+                                vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout,
+                                                        0, 1, &set, 0, nullptr);
+                                vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, 4, &count);
+                                vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+                            });
         std::vector<float> values(count * HEMI_BASIS_MAX_SIZE);
         hemi::gpu::read_buffer(dev, out, values.data(), out_bytes);
         double worst = 0;
@@ -332,7 +443,8 @@ TEST(SeparableBasis, TextureIsIndexedByTheOrthographicProjection)
     {
         float x = (p.col + 0.5f) / size * 2 - 1, y = (p.row + 0.5f) / size * 2 - 1;
         float r2 = x * x + y * y;
-        glm::vec3 n = r2 < 1 ? glm::vec3(x, y, std::sqrt(1 - r2)) : glm::vec3(x / std::sqrt(r2), y / std::sqrt(r2), 0);
+        glm::vec3 n =
+            r2 < 1 ? glm::vec3(x, y, std::sqrt(1 - r2)) : glm::vec3(x / std::sqrt(r2), y / std::sqrt(r2), 0);
         float want[HEMI_BASIS_MAX_SIZE];
         b.eval(n, want);
         for (int m = 0; m < 4; ++m)

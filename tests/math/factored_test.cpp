@@ -1,5 +1,6 @@
-// Heidrich & Seidel 1999 on the CPU: the factored BRDF tables against the models written out in this file (not
-// through hemi's evaluation), and the parabolic maps against the geometry and integrals of §4 computed here.
+// Heidrich & Seidel 1999 on the CPU: the factored BRDF tables against the models written out in this file
+// (not through hemi's evaluation), and the parabolic maps against the geometry and integrals of §4 computed
+// here.
 #include <hemi/math/brdf.h>
 #include <hemi/math/paraboloid.h>
 
@@ -15,7 +16,8 @@ namespace
 {
 constexpr double kPi = 3.14159265358979323846;
 
-// ---- the models, typed from the papers (Cook & Torrance 1982's Fresnel in its s/p form, Beckmann, Smith) ----
+// ---- the models, typed from the papers (Cook & Torrance 1982's Fresnel in its s/p form, Beckmann, Smith)
+// ----
 
 double fresnel_sp(double c, double n)
 {
@@ -49,7 +51,9 @@ double torrance_sparrow_beckmann(const glm::dvec3& l, const glm::dvec3& v, doubl
 double axis_coord(hemi::math::BrdfTable::Axis axis, double c)
 {
     using A = hemi::math::BrdfTable::Axis;
-    return axis == A::Cosine ? c : axis == A::SqrtOneMinus ? std::sqrt(std::max(0.0, 1.0 - c)) : std::acos(c) / kPi;
+    return axis == A::Cosine         ? c
+           : axis == A::SqrtOneMinus ? std::sqrt(std::max(0.0, 1.0 - c))
+                                     : std::acos(c) / kPi;
 }
 double lookup(const hemi::math::BrdfTable& t, uint32_t channel, double a, double b)
 {
@@ -57,8 +61,10 @@ double lookup(const hemi::math::BrdfTable& t, uint32_t channel, double a, double
     const double pv = std::clamp(axis_coord(t.v_axis, b), 0.0, 1.0) * (t.size - 1);
     const uint32_t i = std::min(uint32_t(pu), t.size - 2), j = std::min(uint32_t(pv), t.size - 2);
     const double fu = pu - i, fv = pv - j;
-    auto at = [&](uint32_t x, uint32_t y) { return double(t.values[(size_t(y) * t.size + x) * t.channels + channel]); };
-    return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) + fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
+    auto at = [&](uint32_t x, uint32_t y)
+    { return double(t.values[(size_t(y) * t.size + x) * t.channels + channel]); };
+    return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
+           fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
 }
 
 std::vector<glm::dvec3> hemisphere(int n, uint32_t seed)
@@ -81,7 +87,8 @@ TEST(Brdf, FresnelMatchesTheSPolarisationForm)
         for (int i = 0; i <= 100; ++i)
         {
             const double c = i / 100.0;
-            EXPECT_NEAR(hemi::math::fresnel_dielectric(c, n), fresnel_sp(c, n), 1e-12) << "n " << n << " cos " << c;
+            EXPECT_NEAR(hemi::math::fresnel_dielectric(c, n), fresnel_sp(c, n), 1e-12)
+                << "n " << n << " cos " << c;
         }
     EXPECT_NEAR(hemi::math::fresnel_dielectric(1.0, 1.5), 0.04, 1e-12);
     EXPECT_NEAR(hemi::math::fresnel_dielectric(0.0, 1.5), 1.0, 1e-12);
@@ -101,13 +108,15 @@ TEST(Brdf, DistributionsIntegrateToEq1sNormalisation)
                 const double t = (i + 0.5) * (kPi / 2) / n;
                 sum += model.distribution_term(std::cos(t)) * std::cos(t) * std::sin(t);
             }
-            EXPECT_NEAR(2 * kPi * sum * (kPi / 2) / n, kPi / 4, 1e-6) << hemi::math::facet_distribution_name(dist) << " m " << m;
+            EXPECT_NEAR(2 * kPi * sum * (kPi / 2) / n, kPi / 4, 1e-6)
+                << hemi::math::facet_distribution_name(dist) << " m " << m;
         }
 }
 
-// Done-when 1 (CPU): the product of the two tables equals f_r cos(alpha) evaluated directly over a dense set of
-// directions, to 0.5% of max(value, 1% of the peak) with cos_alpha, cos_beta >= 0.1 and to 2% in the grazing band
-// (README, "Factored BRDFs"). A table sampled linearly in cos_delta (the paper's axis) fails at m = 0.1.
+// Done-when 1 (CPU): the product of the two tables equals f_r cos(alpha) evaluated directly over a dense set
+// of directions, to 0.5% of max(value, 1% of the peak) with cos_alpha, cos_beta >= 0.1 and to 2% in the
+// grazing band (README, "Factored BRDFs"). A table sampled linearly in cos_delta (the paper's axis) fails at
+// m = 0.1.
 TEST(Brdf, TorranceSparrowTablesProductMatchesEq1)
 {
     for (double m : {0.1, 0.3})
@@ -126,7 +135,8 @@ TEST(Brdf, TorranceSparrowTablesProductMatchesEq1)
             {
                 const double direct = torrance_sparrow_beckmann(l, v, m, 1.5);
                 const glm::dvec3 h = glm::normalize(l + v);
-                const double table = lookup(tables[0], 0, glm::dot(l, h), h.z) * lookup(tables[1], 0, l.z, v.z);
+                const double table =
+                    lookup(tables[0], 0, glm::dot(l, h), h.z) * lookup(tables[1], 0, l.z, v.z);
                 const double rel = std::abs(table - direct) / std::max(direct, 0.01 * peak);
                 double& worst = l.z < 0.1 || v.z < 0.1 ? grazing : bulk;
                 worst = std::max(worst, rel);
@@ -159,8 +169,10 @@ TEST(Brdf, SingleTableModelsMatchTheirLobes)
             }
             const double direct = l.z * (std::sqrt(1 - l.x * l.x) + std::pow(std::max(0.0, best), e));
             const double table = l.z * (lookup(banks, 0, l.x, v.x) + lookup(banks, 1, l.x, v.x));
-            EXPECT_NEAR(table, direct, 0.01 * std::max(direct, 0.01)) << "l " << l.x << "," << l.y << "," << l.z;
-            EXPECT_NEAR(hemi::math::banks_eval_cos(n, t, l, v, 1, 1, e), direct, 2e-3 * std::max(direct, 0.01));
+            EXPECT_NEAR(table, direct, 0.01 * std::max(direct, 0.01))
+                << "l " << l.x << "," << l.y << "," << l.z;
+            EXPECT_NEAR(hemi::math::banks_eval_cos(n, t, l, v, 1, 1, e), direct,
+                        2e-3 * std::max(direct, 0.01));
         }
     // Phong (Eq. 8 normalised): ((e + 1) / 2 pi) max(0, r_v.l)^e; Blinn-Phong x ((e + 8) / 8 pi) (n.h)^e.
     const auto phong = hemi::math::lobe_table(hemi::math::LobeModel::Phong, e, 256);
@@ -174,11 +186,13 @@ TEST(Brdf, SingleTableModelsMatchTheirLobes)
             const double p = (e + 1) / (2 * kPi) * std::pow(std::max(0.0, glm::dot(r, l)), e);
             const double hz = glm::normalize(l + v).z;
             const double b = l.z * (e + 8) / (8 * kPi) * std::pow(hz, e);
-            EXPECT_NEAR(lookup(phong, 0, l.z, glm::dot(r, l)), p, 0.005 * std::max(p, (e + 1) / (2 * kPi) * 0.01));
+            EXPECT_NEAR(lookup(phong, 0, l.z, glm::dot(r, l)), p,
+                        0.005 * std::max(p, (e + 1) / (2 * kPi) * 0.01));
             EXPECT_NEAR(lookup(blinn, 0, l.z, hz), b, 0.005 * std::max(b, (e + 8) / (8 * kPi) * 0.01));
             // cosine lobe: x ((e + 2) / 2 pi) max(0, r_v.l)^e
             const double cl = l.z * (e + 2) / (2 * kPi) * std::pow(std::max(0.0, glm::dot(r, l)), e);
-            EXPECT_NEAR(lookup(cosine, 0, l.z, glm::dot(r, l)), cl, 0.005 * std::max(cl, (e + 2) / (2 * kPi) * 0.01));
+            EXPECT_NEAR(lookup(cosine, 0, l.z, glm::dot(r, l)), cl,
+                        0.005 * std::max(cl, (e + 2) / (2 * kPi) * 0.01));
         }
 }
 
@@ -187,10 +201,12 @@ TEST(Brdf, BadParametersAreRefused)
     using hemi::math::FacetDistribution;
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.0, 1.5), std::invalid_argument);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, NAN, 1.5), std::invalid_argument);
-    EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 1e-200, 1.5), std::invalid_argument);
+    EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 1e-200, 1.5),
+                 std::invalid_argument);
     EXPECT_THROW(hemi::math::lobe_table(hemi::math::LobeModel::Phong, 1e40, 16), std::invalid_argument);
     // Far from the peak D underflows to 0, not 0 / 0.
-    EXPECT_EQ(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.01, 1.5).distribution_term(1e-100), 0.0);
+    EXPECT_EQ(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.01, 1.5).distribution_term(1e-100),
+              0.0);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.3, 1.0), std::invalid_argument);
     EXPECT_THROW(hemi::math::TorranceSparrow(FacetDistribution::Beckmann, 0.3, NAN), std::invalid_argument);
     EXPECT_THROW(hemi::math::banks_table(0.0, 16), std::invalid_argument);
@@ -214,8 +230,8 @@ TEST(Paraboloid, ConventionAndRoundTripWithinHalfATexel)
         EXPECT_NEAR(glm::length(parabolic_xy({1, 0, 0}, half) - glm::dvec2(1, 0)), 0.0, 1e-15);
         EXPECT_NEAR(glm::length(parabolic_xy({0, 1, 0}, half) - glm::dvec2(0, 1)), 0.0, 1e-15);
     }
-    // The paraboloid of Eq. 5 reflects d into the viewing direction -z... (front): its normal (x, y, 1) halves d
-    // and +z.
+    // The paraboloid of Eq. 5 reflects d into the viewing direction -z... (front): its normal (x, y, 1)
+    // halves d and +z.
     const glm::dvec3 d = glm::normalize(glm::dvec3(0.3, -0.5, 0.7));
     const glm::dvec2 xy = parabolic_xy(d, 0);
     const glm::dvec3 h = glm::normalize(d + glm::dvec3(0, 0, 1));
@@ -301,7 +317,8 @@ std::vector<float> equirect(uint32_t w, uint32_t h, auto radiance)
         {
             // sh_environment.h's convention: phi = pi - 2 pi u from +x toward +y, theta from +z.
             const double phi = kPi - 2 * kPi * (x + 0.5) / w, theta = kPi * (y + 0.5) / h;
-            const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                               std::cos(theta));
             const glm::dvec3 l = radiance(d);
             float* p = px.data() + (size_t(y) * w + x) * 4;
             p[0] = float(l.x), p[1] = float(l.y), p[2] = float(l.z), p[3] = 1.0f;
@@ -355,15 +372,16 @@ TEST(Paraboloid, WhiteFurnaceAtEveryLevelAndExponent)
 }
 
 // Done-when 2: a single bright texel's prefiltered lobe is the analytic Phong lobe,
-// ((e + 1) / 2 pi) max(0, r.d)^e * L * its solid angle, at every output texel; and the mip chain weights it by
-// its solid angle.
+// ((e + 1) / 2 pi) max(0, r.d)^e * L * its solid angle, at every output texel; and the mip chain weights it
+// by its solid angle.
 TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
 {
     using namespace hemi::math;
     const uint32_t n = 64;
     const double m = parabolic_extent(n);
     // A texel's solid angle by the test's own midpoint rule of Eq. 6, whole or inside the circle.
-    auto omega = [&](uint32_t c, uint32_t r, bool circle) {
+    auto omega = [&](uint32_t c, uint32_t r, bool circle)
+    {
         const double x0 = m * (-1 + 2.0 * c / n), y1 = m * (1 - 2.0 * r / n), step = 2.0 * m / n;
         double s = 0.0;
         const int k = 400;
@@ -412,10 +430,12 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
                 for (uint32_t c = 0; c < n; ++c)
                 {
                     const double cosine = glm::dot(g.direction(half, c, r), d);
-                    const double expect = (e + 1) / (2 * kPi) * std::pow(std::max(0.0, cosine), e) * radiance * w;
+                    const double expect =
+                        (e + 1) / (2 * kPi) * std::pow(std::max(0.0, cosine), e) * radiance * w;
                     if (expect > 1e-3 * peak)
                     {
-                        ASSERT_NEAR(g.at(half, c, r)[0], expect, 1e-3 * expect) << half << " " << c << "," << r;
+                        ASSERT_NEAR(g.at(half, c, r)[0], expect, 1e-3 * expect)
+                            << half << " " << c << "," << r;
                         ++compared;
                     }
                     else
@@ -425,8 +445,8 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
     }
 }
 
-// A lobe far narrower than a texel (a texel against itself, where a float dot product can exceed 1) gives finite
-// values; one beyond 1e6 is refused.
+// A lobe far narrower than a texel (a texel against itself, where a float dot product can exceed 1) gives
+// finite values; one beyond 1e6 is refused.
 TEST(Paraboloid, HugeExponentsStayFinite)
 {
     using namespace hemi::math;
@@ -440,12 +460,14 @@ TEST(Paraboloid, HugeExponentsStayFinite)
 }
 
 // The two halves agree along the seam: a smooth environment sampled just above and just below z = 0 (the
-// lookup a shader makes) jumps by much less than it changes over one texel within a half, in the mirror map and
-// in the diffuse and a glossy map. A back half mirrored in x, or halves that stop at the circle, jump by far more.
+// lookup a shader makes) jumps by much less than it changes over one texel within a half, in the mirror map
+// and in the diffuse and a glossy map. A back half mirrored in x, or halves that stop at the circle, jump by
+// far more.
 TEST(Paraboloid, SeamBetweenTheHalvesIsContinuous)
 {
     using namespace hemi::math;
-    auto l = [](const glm::dvec3& d) { return glm::dvec3(2 + d.x + 0.5 * d.y, 2 + std::sin(3 * d.x) * d.y, 2 + d.z); };
+    auto l = [](const glm::dvec3& d)
+    { return glm::dvec3(2 + d.x + 0.5 * d.y, 2 + std::sin(3 * d.x) * d.y, 2 + d.z); };
     const auto px = equirect(1024, 512, l);
     const auto chain = parabolic_mip_chain(parabolic_from_equirect(128, 1024, 512, px));
     for (double e : {0.0, 1.0, 10.0})
@@ -456,8 +478,10 @@ TEST(Paraboloid, SeamBetweenTheHalvesIsContinuous)
         for (int i = 0; i < 720; ++i)
         {
             const double phi = 2 * kPi * (i + 0.3) / 720;
-            const glm::dvec3 above(std::cos(phi), std::sin(phi), 1e-7), below(std::cos(phi), std::sin(phi), -1e-7);
-            const glm::dvec3 up(std::cos(phi) * std::cos(texel), std::sin(phi) * std::cos(texel), std::sin(texel));
+            const glm::dvec3 above(std::cos(phi), std::sin(phi), 1e-7),
+                below(std::cos(phi), std::sin(phi), -1e-7);
+            const glm::dvec3 up(std::cos(phi) * std::cos(texel), std::sin(phi) * std::cos(texel),
+                                std::sin(texel));
             const glm::dvec3 a = map.sample(above), b = map.sample(below), c = map.sample(up);
             for (int k = 0; k < 3; ++k)
             {

@@ -45,14 +45,18 @@ std::vector<float> cubemap_of(uint32_t n, glm::vec3 (*f)(const glm::vec3&))
         for (uint32_t y = 0; y < n; ++y)
             for (uint32_t x = 0; x < n; ++x)
             {
-                glm::vec3 l = f(cubemap_direction(face, -1.0f + (2.0f * x + 1.0f) / n, -1.0f + (2.0f * y + 1.0f) / n));
+                glm::vec3 l =
+                    f(cubemap_direction(face, -1.0f + (2.0f * x + 1.0f) / n, -1.0f + (2.0f * y + 1.0f) / n));
                 float* p = &px[((size_t(face) * n + y) * n + x) * 4];
                 p[0] = l.x, p[1] = l.y, p[2] = l.z, p[3] = 1.0f;
             }
     return px;
 }
 
-glm::vec3 one(const glm::vec3&) { return glm::vec3(1.0f); }
+glm::vec3 one(const glm::vec3&)
+{
+    return glm::vec3(1.0f);
+}
 } // namespace
 
 TEST(EquirectProjection, ConstantEnvironmentGivesPiIrradiance)
@@ -70,7 +74,8 @@ TEST(CubemapProjection, SolidAnglesCoverTheSphereAndGivePiIrradiance)
     const int n = 16;
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x)
-            total += cubemap_solid_angle(-1 + 2.0 * x / n, -1 + 2.0 * y / n, -1 + 2.0 * (x + 1) / n, -1 + 2.0 * (y + 1) / n);
+            total += cubemap_solid_angle(-1 + 2.0 * x / n, -1 + 2.0 * y / n, -1 + 2.0 * (x + 1) / n,
+                                         -1 + 2.0 * (y + 1) / n);
     EXPECT_NEAR(6 * total, 4 * M_PI, 1e-12);
     std::vector<glm::vec3> c = project_cubemap(3, n, cubemap_of(n, one));
     convolve_cosine(c);
@@ -100,8 +105,9 @@ TEST(EnvironmentProjection, ImagesAgreeWithAnalyticProjection)
 TEST(EquirectProjection, BrightSpotLandsWhereBlenderShowsIt)
 {
     const uint32_t w = 512, h = 256;
-    for (glm::vec3 d : {glm::normalize(glm::vec3(0.3f, 0.8f, 0.4f)), glm::normalize(glm::vec3(-0.7f, -0.2f, -0.3f)),
-                        glm::normalize(glm::vec3(0.9f, -0.4f, 0.1f))})
+    for (glm::vec3 d :
+         {glm::normalize(glm::vec3(0.3f, 0.8f, 0.4f)), glm::normalize(glm::vec3(-0.7f, -0.2f, -0.3f)),
+          glm::normalize(glm::vec3(0.9f, -0.4f, 0.1f))})
     {
         const double u = 0.5 - std::atan2(double(d.y), double(d.x)) / (2 * M_PI);
         const double v = 1.0 - std::acos(double(d.z)) / M_PI;
@@ -113,8 +119,8 @@ TEST(EquirectProjection, BrightSpotLandsWhereBlenderShowsIt)
         const std::vector<glm::vec3> c = project_equirect(2, w, h, px);
         const glm::vec3 dipole = glm::normalize(glm::vec3(-c[3].x, -c[1].x, c[2].x));
         EXPECT_GT(glm::dot(dipole, d), std::cos(glm::radians(1.0f)))
-            << "spot for (" << d.x << ", " << d.y << ", " << d.z << ") came out along (" << dipole.x << ", " << dipole.y
-            << ", " << dipole.z << ")";
+            << "spot for (" << d.x << ", " << d.y << ", " << d.z << ") came out along (" << dipole.x << ", "
+            << dipole.y << ", " << dipole.z << ")";
     }
 }
 

@@ -18,9 +18,15 @@ namespace
 std::array<double, 9> design_table_sh9(glm::dvec3 d)
 {
     const double x = d.x, y = d.y, z = d.z;
-    return {0.282095,           -0.488603 * y,      0.488603 * z,
-            -0.488603 * x,      1.092548 * x * y,   -1.092548 * y * z,
-            0.315392 * (3 * z * z - 1), -1.092548 * x * z, 0.546274 * (x * x - y * y)};
+    return {0.282095,
+            -0.488603 * y,
+            0.488603 * z,
+            -0.488603 * x,
+            1.092548 * x * y,
+            -1.092548 * y * z,
+            0.315392 * (3 * z * z - 1),
+            -1.092548 * x * z,
+            0.546274 * (x * x - y * y)};
 }
 } // namespace
 
@@ -30,7 +36,12 @@ TEST(Sh9, MatchesTheConventionTable)
 {
     std::mt19937 rng(17);
     std::normal_distribution<float> g;
-    std::vector<glm::vec3> dirs = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
+    std::vector<glm::vec3> dirs = {{1, 0, 0},
+                                   {-1, 0, 0},
+                                   {0, 1, 0},
+                                   {0, -1, 0},
+                                   {0, 0, 1},
+                                   {0, 0, -1},
                                    glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f))};
     for (int i = 0; i < 200; ++i)
         dirs.push_back(glm::normalize(glm::vec3(g(rng), g(rng), g(rng))));
@@ -42,8 +53,10 @@ TEST(Sh9, MatchesTheConventionTable)
         const std::array<double, 9> want = design_table_sh9(glm::dvec3(d));
         for (int k = 0; k < 9; ++k)
         {
-            ASSERT_NEAR(y[k], want[k], 1e-6) << "sh9_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
-            ASSERT_NEAR(general[k], want[k], 1e-6) << "sh_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
+            ASSERT_NEAR(y[k], want[k], 1e-6)
+                << "sh9_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
+            ASSERT_NEAR(general[k], want[k], 1e-6)
+                << "sh_eval index " << k << " at " << d.x << "," << d.y << "," << d.z;
         }
     }
 }
@@ -70,17 +83,19 @@ TEST(Sh9, IrradianceOfSmoothSkyMatchesBruteForce)
     AnalyticSky sky;
     sky.sun_color = glm::vec3(0.0f); // keep it smooth: SH9 is a low-pass of the irradiance
     sky.zenith = {0.1f, 0.3f, 1.2f};
-    auto L = [&](const glm::vec3& d) {
-        const float q = 0.5f + 0.2f * d.x - 0.25f * d.y + 0.3f * d.x * d.y - 0.3f * d.y * d.z + 0.25f * d.x * d.z +
-                        0.2f * (d.x * d.x - d.y * d.y);
+    auto L = [&](const glm::vec3& d)
+    {
+        const float q = 0.5f + 0.2f * d.x - 0.25f * d.y + 0.3f * d.x * d.y - 0.3f * d.y * d.z +
+                        0.25f * d.x * d.z + 0.2f * (d.x * d.x - d.y * d.y);
         return sky.radiance(d) + glm::vec3(0.6f * std::max(0.0f, d.x), q, 0.5f * q);
     };
     Sh9Rgb e = convolve_cosine(project_sh9(L, 128));
     const int steps = 256;
-    for (glm::vec3 n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0),
-                        glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)),
-                        glm::normalize(glm::vec3(-0.5f, 0.5f, -0.2f)), glm::normalize(glm::vec3(0.6f, 0.6f, 0.5f)),
-                        glm::normalize(glm::vec3(-0.6f, -0.6f, 0.5f))})
+    for (glm::vec3 n :
+         {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0),
+          glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), glm::normalize(glm::vec3(0.3f, -0.8f, 0.5f)),
+          glm::normalize(glm::vec3(-0.5f, 0.5f, -0.2f)), glm::normalize(glm::vec3(0.6f, 0.6f, 0.5f)),
+          glm::normalize(glm::vec3(-0.6f, -0.6f, 0.5f))})
     {
         glm::dvec3 brute(0.0);
         for (int t = 0; t < steps; ++t)
@@ -215,7 +230,8 @@ TEST(ShEval, ZonalAndSectoralFunctionsMatchClosedFormsUpToBandNine)
         const glm::vec3 d = random_direction(rng);
         float y[100];
         sh_eval(10, d, y);
-        const double z = d.z, st = std::sqrt(double(d.x) * d.x + double(d.y) * d.y), phi = std::atan2(d.y, d.x);
+        const double z = d.z, st = std::sqrt(double(d.x) * d.x + double(d.y) * d.y),
+                     phi = std::atan2(d.y, d.x);
         double p0 = 1.0, p1 = z;
         for (int l = 0; l < 10; ++l)
         {
@@ -228,7 +244,8 @@ TEST(ShEval, ZonalAndSectoralFunctionsMatchClosedFormsUpToBandNine)
                 p1 = p2;
                 legendre = p2;
             }
-            EXPECT_NEAR(y[sh_index(l, 0)], std::sqrt((2 * l + 1) / (4 * M_PI)) * legendre, 2e-6) << "y" << l << ",0";
+            EXPECT_NEAR(y[sh_index(l, 0)], std::sqrt((2 * l + 1) / (4 * M_PI)) * legendre, 2e-6)
+                << "y" << l << ",0";
             if (l == 0)
                 continue;
             double fact2l = 1.0, dfact = 1.0; // (2l)!, (2l-1)!!
@@ -236,8 +253,8 @@ TEST(ShEval, ZonalAndSectoralFunctionsMatchClosedFormsUpToBandNine)
                 fact2l *= i;
             for (int i = 1; i <= 2 * l - 1; i += 2)
                 dfact *= i;
-            const double k = std::sqrt(2.0 * (2 * l + 1) / (4 * M_PI) / fact2l) * (l % 2 ? -1.0 : 1.0) * dfact *
-                             std::pow(st, l);
+            const double k = std::sqrt(2.0 * (2 * l + 1) / (4 * M_PI) / fact2l) * (l % 2 ? -1.0 : 1.0) *
+                             dfact * std::pow(st, l);
             EXPECT_NEAR(y[sh_index(l, l)], k * std::cos(l * phi), 2e-6) << "y" << l << "," << l;
             EXPECT_NEAR(y[sh_index(l, -l)], k * std::sin(l * phi), 2e-6) << "y" << l << "," << -l;
         }
@@ -344,8 +361,8 @@ TEST(ShWindow, WeightsStartAtOneAndDecrease)
 // coefficient of band l by its band's weight.
 TEST(ShWindow, LanczosAndHanningEqualTheirClosedForms)
 {
-    const double lanczos[6] = {1.0, 0.954929658551372, 0.826993343132688, 0.636619772367581, 0.413496671566344,
-                               0.190985931710274};
+    const double lanczos[6] = {
+        1.0, 0.954929658551372, 0.826993343132688, 0.636619772367581, 0.413496671566344, 0.190985931710274};
     const double hanning[6] = {1.0, 0.933012701892219, 0.75, 0.5, 0.25, 0.066987298107781};
     for (int l = 0; l < 6; ++l)
     {
@@ -357,7 +374,10 @@ TEST(ShWindow, LanczosAndHanningEqualTheirClosedForms)
     for (int l = 0; l < 6; ++l)
         for (int m = -l; m <= l; ++m)
             for (int ch = 0; ch < 3; ++ch)
-                EXPECT_NEAR(c[size_t(sh_index(l, m))][ch], float(lanczos[l]) * (ch == 0 ? 1.0f : ch == 1 ? 2.0f : -3.0f),
+                EXPECT_NEAR(c[size_t(sh_index(l, m))][ch],
+                            float(lanczos[l]) * (ch == 0   ? 1.0f
+                                                 : ch == 1 ? 2.0f
+                                                           : -3.0f),
                             1e-6f)
                     << "l " << l << " m " << m;
 }

@@ -1,8 +1,8 @@
 // Heidrich & Seidel's models in the shader (shaders/include/hemi/brdf/factored.glsl): the GLSL evaluated
-// analytically equals hemi's C++ (math/brdf.h), and the product of the tables sampled by the GPU's own bilinear
-// filter (half-float textures) equals the model within the tolerance the README states for the CPU lookups
-// (0.5% of max(value, 1% of the peak) with cos_alpha, cos_beta >= 0.1, 2% in the grazing band), at 200,000
-// random pairs, under the validation layer.
+// analytically equals hemi's C++ (math/brdf.h), and the product of the tables sampled by the GPU's own
+// bilinear filter (half-float textures) equals the model within the tolerance the README states for the CPU
+// lookups (0.5% of max(value, 1% of the peak) with cos_alpha, cos_beta >= 0.1, 2% in the grazing band), at
+// 200,000 random pairs, under the validation layer.
 #include "../gpu_fixture.h"
 
 #include <hemi/gpu/commands.h>
@@ -50,7 +50,8 @@ TEST_F(BrdfGlsl, AnalyticAndTableLookupsMatchTheModels)
 
     hemi::gpu::UploadBatch upload(dev);
     const VkFormat format = VK_FORMAT_R16G16B16A16_SFLOAT;
-    hemi::gpu::Image ts_image = hemi::gpu::create_image(dev, {size, size, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 2, true});
+    hemi::gpu::Image ts_image =
+        hemi::gpu::create_image(dev, {size, size, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 2, true});
     hemi::gpu::Image banks_image = hemi::gpu::create_image(dev, {size, size, format});
     hemi::gpu::Image phong_image = hemi::gpu::create_image(dev, {size, size, format});
     const auto ts_texels = half_texels({&ts[0], &ts[1]});
@@ -66,7 +67,8 @@ TEST_F(BrdfGlsl, AnalyticAndTableLookupsMatchTheModels)
     // Pairs of directions over the hemisphere (n = +z), random.
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(0.0, 1.0);
-    auto direction = [&] {
+    auto direction = [&]
+    {
         const double z = u(rng), phi = 2 * M_PI * u(rng), s = std::sqrt(1 - z * z);
         return glm::dvec3(s * std::cos(phi), s * std::sin(phi), z);
     };
@@ -81,7 +83,8 @@ TEST_F(BrdfGlsl, AnalyticAndTableLookupsMatchTheModels)
         dirs.emplace_back(glm::vec3(l), 0.0f);
         dirs.emplace_back(glm::vec3(v), 0.0f);
     }
-    hemi::gpu::Buffer in = hemi::gpu::create_buffer(dev, {dirs.size() * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    hemi::gpu::Buffer in =
+        hemi::gpu::create_buffer(dev, {dirs.size() * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     hemi::gpu::write_buffer(dev, in, dirs.data(), dirs.size() * 16);
     const VkDeviceSize out_bytes = VkDeviceSize(count) * 6 * 4;
     hemi::gpu::Buffer out = hemi::gpu::create_buffer(dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
@@ -114,12 +117,16 @@ TEST_F(BrdfGlsl, AnalyticAndTableLookupsMatchTheModels)
         writes[2 + k].image = {sampler, images[k]->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
     hemi::gpu::write_descriptors(dev, set, writes);
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
-        vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof(Push), &push);
-        vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
-    });
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
+                            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1,
+                                                    &set, 0, nullptr);
+                            vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof(Push),
+                                               &push);
+                            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+                        });
     std::vector<float> values(size_t(count) * 6);
     hemi::gpu::read_buffer(dev, out, values.data(), out_bytes);
 
@@ -153,7 +160,7 @@ TEST_F(BrdfGlsl, AnalyticAndTableLookupsMatchTheModels)
         EXPECT_LT(worst[k].analytic, 1e-3) << names[k] << ": the GLSL twin";
         EXPECT_LT(worst[k].bulk, 0.005) << names[k] << ": the tables, bulk";
         EXPECT_LT(worst[k].grazing, 0.02) << names[k] << ": the tables, grazing";
-        std::printf("%s: GLSL analytic %.2e, tables bulk %.4f%%, grazing %.4f%%\n", names[k], worst[k].analytic,
-                    100 * worst[k].bulk, 100 * worst[k].grazing);
+        std::printf("%s: GLSL analytic %.2e, tables bulk %.4f%%, grazing %.4f%%\n", names[k],
+                    worst[k].analytic, 100 * worst[k].bulk, 100 * worst[k].grazing);
     }
 }

@@ -36,12 +36,16 @@ struct EnginePass
             colors.push_back(gpu::create_image(device(), {w, h, f, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT}));
             views.push_back(colors.back().view());
             refs.push_back({uint32_t(attachments.size()), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL});
-            attachments.push_back(attachment(f, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_ATTACHMENT_STORE_OP_STORE));
+            attachments.push_back(
+                attachment(f, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_ATTACHMENT_STORE_OP_STORE));
         }
-        depth = gpu::create_image(device(), {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+        depth = gpu::create_image(device(),
+                                  {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
         views.push_back(depth.view());
-        const VkAttachmentReference depth_ref{uint32_t(attachments.size()), VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-        attachments.push_back(attachment(VK_FORMAT_D32_SFLOAT, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        const VkAttachmentReference depth_ref{uint32_t(attachments.size()),
+                                              VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+        attachments.push_back(attachment(VK_FORMAT_D32_SFLOAT,
+                                         VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
                                          VK_ATTACHMENT_STORE_OP_DONT_CARE));
         VkSubpassDescription subpass{};
         subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
@@ -78,7 +82,8 @@ struct EnginePass
         framebuffer = gpu::Framebuffer(d, raw_fb);
     }
 
-    // Begins the pass clearing every colour attachment to `clear` and depth to 1, and sets viewport and scissor.
+    // Begins the pass clearing every colour attachment to `clear` and depth to 1, and sets viewport and
+    // scissor.
     void begin(VkCommandBuffer cmd, const float clear[4]) const
     {
         std::vector<VkClearValue> clears(colors.size() + 1);
@@ -103,8 +108,9 @@ struct EnginePass
         vkCmdSetScissor(cmd, 0, 1, &scissor);
     }
 
-private:
-    static VkAttachmentDescription attachment(VkFormat format, VkImageLayout final_layout, VkAttachmentStoreOp store)
+  private:
+    static VkAttachmentDescription attachment(VkFormat format, VkImageLayout final_layout,
+                                              VkAttachmentStoreOp store)
     {
         VkAttachmentDescription a{};
         a.format = format;

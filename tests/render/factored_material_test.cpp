@@ -1,8 +1,8 @@
-// Heidrich & Seidel's materials (the environment source: factored, banks, env_mirror, env_glossy) drawn through
-// the material system on a normal-mapped sphere, under validation: at sampled pixels the GPU's colour equals a
-// CPU evaluation of the same material at the UV the GPU reports (the analytic sphere frame, a bilinear
-// normal-map lookup, the models of math/brdf.h evaluated directly, the parabolic maps sampled on the CPU); and
-// across the seam between the two parabolic halves the mirror reflection is continuous.
+// Heidrich & Seidel's materials (the environment source: factored, banks, env_mirror, env_glossy) drawn
+// through the material system on a normal-mapped sphere, under validation: at sampled pixels the GPU's colour
+// equals a CPU evaluation of the same material at the UV the GPU reports (the analytic sphere frame, a
+// bilinear normal-map lookup, the models of math/brdf.h evaluated directly, the parabolic maps sampled on the
+// CPU); and across the seam between the two parabolic halves the mirror reflection is continuous.
 #include "../gpu_fixture.h"
 
 #include "factored_scene.h"
@@ -26,11 +26,12 @@ class FactoredMaterial : public hemi::test::GpuTest
 };
 
 // A smooth environment (no edge a tessellated normal could straddle), different in every channel and across
-// the horizon, baked into parabolic maps at 64^2 with glossy maps at exponents 20 and 60 and Fresnel tables at
-// 1.5 and 200.
+// the horizon, baked into parabolic maps at 64^2 with glossy maps at exponents 20 and 60 and Fresnel tables
+// at 1.5 and 200.
 const hemi::io::EnvmapAsset& smooth_environment()
 {
-    static const hemi::io::EnvmapAsset env = [] {
+    static const hemi::io::EnvmapAsset env = []
+    {
         hemi::io::ImageRgba img;
         img.width = 512;
         img.height = 256;
@@ -39,7 +40,8 @@ const hemi::io::EnvmapAsset& smooth_environment()
             for (uint32_t x = 0; x < 512; ++x)
             {
                 const double phi = M_PI - 2 * M_PI * (x + 0.5) / 512, theta = M_PI * (y + 0.5) / 256;
-                const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+                const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                                   std::cos(theta));
                 float* p = img.pixels.data() + (size_t(y) * 512 + x) * 4;
                 p[0] = float(1.0 + 0.6 * d.x);
                 p[1] = float(1.0 + 0.6 * d.y + 0.3 * d.x * d.y);
@@ -61,12 +63,14 @@ struct Pixel
 };
 // The analytic sphere frame at uv (io::make_uv_sphere), the normal map looked up on the CPU, the eye's
 // direction from the sphere point.
-Pixel sphere_pixel(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, bool normal_map, float bitangent_sign = 1.0f)
+Pixel sphere_pixel(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, bool normal_map,
+                   float bitangent_sign = 1.0f)
 {
     const float phi = 2.0f * float(M_PI) * uv.x, theta = float(M_PI) * uv.y;
     const glm::vec3 N(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
     const glm::vec3 T(-std::sin(phi), std::cos(phi), 0.0f);
-    const glm::vec3 B = -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
+    const glm::vec3 B =
+        -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
     glm::vec3 n = N;
     if (normal_map)
     {
@@ -76,10 +80,14 @@ Pixel sphere_pixel(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, bool 
     return {n, T, glm::normalize(s.eye - N)};
 }
 
-glm::vec3 sample(const hemi::math::ParabolicImage& map, const glm::vec3& d) { return glm::vec3(map.sample(glm::dvec3(d))); }
+glm::vec3 sample(const hemi::math::ParabolicImage& map, const glm::vec3& d)
+{
+    return glm::vec3(map.sample(glm::dvec3(d)));
+}
 
 // The sphere of the sh_normalmap scene, seen from its eye, lit by the smooth environment through `technique`.
-hemi::samples::FactoredView sphere_view(const hemi::samples::ShNormalMapScene& scene, hemi::render::Technique technique)
+hemi::samples::FactoredView sphere_view(const hemi::samples::ShNormalMapScene& scene,
+                                        hemi::render::Technique technique)
 {
     hemi::samples::FactoredView view;
     view.mesh = &scene.mesh;
@@ -97,8 +105,8 @@ struct Comparison
 // Every 4th pixel well inside the sphere (not at its silhouette, poles or UV seam): the GPU against `want`,
 // and the same tolerance against `wrong` (a wrong implementation: it must reject many pixels).
 Comparison compare(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& aux,
-                   const std::function<glm::vec3(glm::vec2)>& want, const std::function<glm::vec3(glm::vec2)>& wrong,
-                   float relative, float absolute)
+                   const std::function<glm::vec3(glm::vec2)>& want,
+                   const std::function<glm::vec3(glm::vec2)>& wrong, float relative, float absolute)
 {
     Comparison c;
     for (uint32_t y = 2; y + 2 < color.height; y += 4)
@@ -119,15 +127,16 @@ Comparison compare(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& 
             c.rejected += bad_fails;
             if (fails && c.failures++ < 8)
                 c.first_failures += "\n  pixel " + std::to_string(x) + "," + std::to_string(y) + ": GPU " +
-                                    std::to_string(got[0]) + "," + std::to_string(got[1]) + "," + std::to_string(got[2]) +
-                                    ", CPU " + std::to_string(w.x) + "," + std::to_string(w.y) + "," + std::to_string(w.z);
+                                    std::to_string(got[0]) + "," + std::to_string(got[1]) + "," +
+                                    std::to_string(got[2]) + ", CPU " + std::to_string(w.x) + "," +
+                                    std::to_string(w.y) + "," + std::to_string(w.z);
         }
     return c;
 }
 } // namespace
 
-// Mirror reflection with the Fresnel weight, both blends (F L_m + L_d and the coating's F L_m + (1 - F) L_d), on
-// the sphere without a normal map (the mirror map's mip level then stays near 0, which the CPU samples).
+// Mirror reflection with the Fresnel weight, both blends (F L_m + L_d and the coating's F L_m + (1 - F) L_d),
+// on the sphere without a normal map (the mirror map's mip level then stays near 0, which the CPU samples).
 TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
@@ -140,7 +149,8 @@ TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
         view.material.coating = coating;
         hemi::io::ImageRgba aux;
         const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
-        auto shade = [&](glm::vec2 uv, bool blend) {
+        auto shade = [&](glm::vec2 uv, bool blend)
+        {
             const Pixel p = sphere_pixel(scene, uv, false);
             const float nv = glm::dot(p.n, p.v);
             const glm::vec3 r = 2.0f * nv * p.n - p.v;
@@ -149,13 +159,14 @@ TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
             return f * sample(env.mirror[0], r) + (blend ? 1.0f - f : 1.0f) * ld;
         };
         const Comparison c = compare(
-            color, aux, [&](glm::vec2 uv) { return shade(uv, coating); }, [&](glm::vec2 uv) { return shade(uv, !coating); },
-            0.01f, 0.003f);
+            color, aux, [&](glm::vec2 uv) { return shade(uv, coating); },
+            [&](glm::vec2 uv) { return shade(uv, !coating); }, 0.01f, 0.003f);
         EXPECT_GT(c.compared, 300);
         EXPECT_LE(c.failures, c.compared / 100) << "coating " << coating << c.first_failures;
         EXPECT_GT(c.rejected, c.compared / 10) << "the other blend would pass this comparison";
-        std::printf("mirror, coating %d: %d of %d pixels outside 1%% + 0.003, the other blend rejected at %d\n",
-                    int(coating), c.failures, c.compared, c.rejected);
+        std::printf(
+            "mirror, coating %d: %d of %d pixels outside 1%% + 0.003, the other blend rejected at %d\n",
+            int(coating), c.failures, c.compared, c.rejected);
     }
 }
 
@@ -171,30 +182,33 @@ TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
     view.albedo = glm::vec3(0.6f, 0.6f, 0.5f);
     view.material.kd = 0.5f;
     view.material.ks = 0.7f;
-    // A directional light: Lambert and the frame's Blinn-Phong on top of the environment (the paper's Fig. 10).
+    // A directional light: Lambert and the frame's Blinn-Phong on top of the environment (the paper's Fig.
+    // 10).
     const glm::vec3 light = glm::normalize(glm::vec3(-0.5f, -0.6f, 0.6f)), e(1.5f, 1.4f, 1.2f);
     view.lights = {{false, light, e}};
     view.specular_exponent = 40.0f;
     view.specular_strength = 0.3f;
     hemi::io::ImageRgba aux;
     const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
-    auto shade = [&](glm::vec2 uv, float sign) {
+    auto shade = [&](glm::vec2 uv, float sign)
+    {
         const Pixel p = sphere_pixel(scene, uv, true, sign);
         const glm::vec3 r = 2.0f * glm::dot(p.n, p.v) * p.n - p.v;
         const float nl = std::max(0.0f, glm::dot(p.n, light));
         const float nh = std::max(0.0f, glm::dot(p.n, glm::normalize(light + p.v)));
-        const glm::vec3 specular = e * nl * std::pow(nh, 40.0f) * 0.3f * (40.0f + 8.0f) / (8.0f * float(M_PI));
+        const glm::vec3 specular =
+            e * nl * std::pow(nh, 40.0f) * 0.3f * (40.0f + 8.0f) / (8.0f * float(M_PI));
         return view.material.ks * sample(env.glossy[0], r) +
                view.material.kd * view.albedo * (sample(env.diffuse, p.n) + e * nl / float(M_PI)) + specular;
     };
     const Comparison c = compare(
-        color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); }, [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.01f,
-        0.003f);
+        color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); },
+        [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.01f, 0.003f);
     EXPECT_GT(c.compared, 300);
     EXPECT_LE(c.failures, c.compared / 100) << c.first_failures;
     EXPECT_GT(c.rejected, c.compared / 20) << "a flipped bitangent would pass this comparison";
-    std::printf("glossy + light: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n", c.failures,
-                c.compared, c.rejected);
+    std::printf("glossy + light: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n",
+                c.failures, c.compared, c.rejected);
 }
 
 // Torrance-Sparrow from its factor tables and Banks from its table, for a directional light, with the diffuse
@@ -221,7 +235,8 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
         view.lights = {{false, light, e}};
         hemi::io::ImageRgba aux;
         const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
-        auto shade = [&](glm::vec2 uv, float sign) {
+        auto shade = [&](glm::vec2 uv, float sign)
+        {
             const Pixel p = sphere_pixel(scene, uv, true, sign);
             const glm::dvec3 n(p.n), l(light), v(p.v);
             glm::vec3 out = view.material.kd * view.albedo * sample(env.diffuse, p.n);
@@ -229,8 +244,9 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
             {
                 const glm::dvec3 t = glm::normalize(glm::dvec3(p.t) - n * glm::dot(n, glm::dvec3(p.t)));
                 for (int k = 0; k < 3; ++k)
-                    out[k] += e[k] * float(hemi::math::banks_eval_cos(n, t, l, v, view.material.kd * view.albedo[k],
-                                                                      view.material.ks, 30.0));
+                    out[k] +=
+                        e[k] * float(hemi::math::banks_eval_cos(n, t, l, v, view.material.kd * view.albedo[k],
+                                                                view.material.ks, 30.0));
             }
             else
             {
@@ -241,19 +257,20 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
             return out;
         };
         const Comparison c = compare(
-            color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); }, [&](glm::vec2 uv) { return shade(uv, -1.0f); },
-            0.02f, 0.004f);
+            color, aux, [&](glm::vec2 uv) { return shade(uv, 1.0f); },
+            [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.02f, 0.004f);
         EXPECT_GT(c.compared, 300) << (banks ? "banks" : "factored");
         EXPECT_LE(c.failures, c.compared / 100) << (banks ? "banks" : "factored") << c.first_failures;
         std::printf("%s: %d of %d pixels outside 2%% + 0.004, a flipped bitangent rejected at %d\n",
                     banks ? "banks" : "factored", c.failures, c.compared, c.rejected);
-        EXPECT_GT(c.rejected, c.compared / 20) << (banks ? "banks" : "factored") << ": a flipped bitangent would pass";
+        EXPECT_GT(c.rejected, c.compared / 20)
+            << (banks ? "banks" : "factored") << ": a flipped bitangent would pass";
     }
 }
 
 // Done-when 3: across the seam between the two halves (reflection vectors with z = 0) the rendered mirror
-// reflection of a smooth environment is continuous: neighbouring pixels on both sides of the seam differ no more
-// than neighbouring pixels beside them on one side.
+// reflection of a smooth environment is continuous: neighbouring pixels on both sides of the seam differ no
+// more than neighbouring pixels beside them on one side.
 TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
@@ -263,11 +280,13 @@ TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
     const uint32_t W = 240, H = 200;
     const auto color = hemi::samples::render_factored(hemi::test::device(), view, W, H, &aux);
     // F L_m(r) with F at n.v: divide F out so the comparison sees L_m alone.
-    auto reflection_z = [&](uint32_t x, uint32_t y) {
+    auto reflection_z = [&](uint32_t x, uint32_t y)
+    {
         const Pixel p = sphere_pixel(scene, {aux.at(x, y)[0], aux.at(x, y)[1]}, false);
         return glm::dot(2.0f * glm::dot(p.n, p.v) * p.n - p.v, glm::vec3(0, 0, 1));
     };
-    auto radiance = [&](uint32_t x, uint32_t y) {
+    auto radiance = [&](uint32_t x, uint32_t y)
+    {
         const Pixel p = sphere_pixel(scene, {aux.at(x, y)[0], aux.at(x, y)[1]}, false);
         const float f = float(hemi::math::fresnel_dielectric(glm::dot(p.n, p.v), 1.5));
         return glm::vec3(color.at(x, y)[0], color.at(x, y)[1], color.at(x, y)[2]) / f;
@@ -283,7 +302,8 @@ TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
                            aux.at(x + 1, y + d)[3] == 1.0f;
             if (!interior || (reflection_z(x, y) >= 0.0f) == (reflection_z(x, y + 1) >= 0.0f))
                 continue;
-            // y | y + 1 straddles the seam; (y - 2, y - 1) and (y + 2, y + 3) are neighbours on one side each.
+            // y | y + 1 straddles the seam; (y - 2, y - 1) and (y + 2, y + 3) are neighbours on one side
+            // each.
             ++pairs;
             across += glm::length(radiance(x, y + 1) - radiance(x, y));
             beside += 0.5 * (glm::length(radiance(x, y - 1) - radiance(x, y - 2)) +
@@ -295,14 +315,15 @@ TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
                 beside / pairs);
 }
 
-// The second Fresnel table (n = 200) and the second glossy map (e = 60) of the asset, with the environment turned
-// 90 degrees about z (world_to_env): the GPU equals the CPU evaluation at the turned directions, and rejects the
-// unturned one (so the rotation's packing, the Fresnel row and the glossy index are all held).
+// The second Fresnel table (n = 200) and the second glossy map (e = 60) of the asset, with the environment
+// turned 90 degrees about z (world_to_env): the GPU equals the CPU evaluation at the turned directions, and
+// rejects the unturned one (so the rotation's packing, the Fresnel row and the glossy index are all held).
 TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
 {
     const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
     const hemi::io::EnvmapAsset& env = smooth_environment();
-    const glm::mat3 turn(glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1)); // columns: x -> y, y -> -x
+    const glm::mat3 turn(glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0),
+                         glm::vec3(0, 0, 1)); // columns: x -> y, y -> -x
     for (auto technique : {hemi::render::Technique::EnvMirror, hemi::render::Technique::EnvGlossy})
     {
         const bool mirror = technique == hemi::render::Technique::EnvMirror;
@@ -315,7 +336,8 @@ TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
         view.material.world_to_env = turn;
         hemi::io::ImageRgba aux;
         const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
-        auto shade = [&](glm::vec2 uv, const glm::mat3& m, size_t glossy, double ior) {
+        auto shade = [&](glm::vec2 uv, const glm::mat3& m, size_t glossy, double ior)
+        {
             const Pixel p = sphere_pixel(scene, uv, false);
             const float nv = glm::dot(p.n, p.v);
             const glm::vec3 r = 2.0f * nv * p.n - p.v;
@@ -335,7 +357,8 @@ TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
             color, aux, [&](glm::vec2 uv) { return shade(uv, turn, 1, 200.0); },
             [&](glm::vec2 uv) { return shade(uv, turn, 0, 1.5); }, 0.01f, 0.003f);
         EXPECT_GT(first.rejected, first.compared / 4) << "the first Fresnel table or glossy map would pass";
-        std::printf("%s turned: %d of %d outside 1%% + 0.003; unturned rejected at %d, the first table/map at %d\n",
-                    mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected, first.rejected);
+        std::printf(
+            "%s turned: %d of %d outside 1%% + 0.003; unturned rejected at %d, the first table/map at %d\n",
+            mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected, first.rejected);
     }
 }

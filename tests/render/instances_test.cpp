@@ -18,8 +18,8 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/material/frame_set.h>
-#include <hemi/render/view/prt_view.h>
 #include <hemi/render/scene/prt_model.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -79,9 +79,10 @@ std::vector<glm::vec3> directional_light()
     return l;
 }
 
-// Where the brightest covered pixel of [x0, x1) lands on the UV sphere (object space), turned into world space.
-glm::vec3 peak_normal(const std::vector<float>& color, const std::vector<float>& aux, uint32_t x0, uint32_t x1,
-                      const glm::mat3& rotation)
+// Where the brightest covered pixel of [x0, x1) lands on the UV sphere (object space), turned into world
+// space.
+glm::vec3 peak_normal(const std::vector<float>& color, const std::vector<float>& aux, uint32_t x0,
+                      uint32_t x1, const glm::mat3& rotation)
 {
     float best = -1.0f;
     glm::vec2 uv(0.0f);
@@ -109,9 +110,10 @@ std::vector<float> floats(const std::vector<std::byte>& bytes)
 
 // Records both instances' transfer and frame update, then `draw_pass` records the caller's pass around
 // `draw`; checks both peaks.
-void check_two_instances(hemi::render::MaterialSystem& system, const std::function<void(VkCommandBuffer,
-                                                                                        const std::function<void(VkCommandBuffer)>&)>& pass,
-                         const hemi::gpu::Image& color, const hemi::gpu::Image& aux)
+void check_two_instances(
+    hemi::render::MaterialSystem& system,
+    const std::function<void(VkCommandBuffer, const std::function<void(VkCommandBuffer)>&)>& pass,
+    const hemi::gpu::Image& color, const hemi::gpu::Image& aux)
 {
     auto& dev = hemi::test::device();
     const hemi::io::PrtAsset asset = sphere_asset();
@@ -124,24 +126,30 @@ void check_two_instances(hemi::render::MaterialSystem& system, const std::functi
     for (int i = 0; i < 2; ++i)
         instances[i] = {place[i].model, light, 0.0f};
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -6.5f, 0), glm::vec3(0), 32.0f, float(W) / H);
+    f.view_projection =
+        hemi::render::look_at_projection(glm::vec3(0, -6.5f, 0), glm::vec3(0), 32.0f, float(W) / H);
     f.lighting_only = true;
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        upload.record(cmd);
-        model.record_transfer(cmd, instances);
-        frame.record_update(cmd, f);
-        pass(cmd, [&](VkCommandBuffer c) {
-            for (uint32_t i = 0; i < 2; ++i)
-                model.draw(c, frame.set(), i, place[i].model);
-        });
-    });
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            upload.record(cmd);
+                            model.record_transfer(cmd, instances);
+                            frame.record_update(cmd, f);
+                            pass(cmd,
+                                 [&](VkCommandBuffer c)
+                                 {
+                                     for (uint32_t i = 0; i < 2; ++i)
+                                         model.draw(c, frame.set(), i, place[i].model);
+                                 });
+                        });
     const auto c = floats(hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL));
     const auto a = floats(hemi::gpu::read_image(dev, aux, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL));
     for (int i = 0; i < 2; ++i)
     {
         const glm::vec3 n = peak_normal(c, a, i == 0 ? 0 : W / 2, i == 0 ? W / 2 : W, place[i].rotation);
         const float degrees = glm::degrees(std::acos(std::clamp(glm::dot(n, kLight), -1.0f, 1.0f)));
-        EXPECT_LT(degrees, 6.0f) << "instance " << i << ": the lobe's peak is " << degrees << " degrees from the light";
+        EXPECT_LT(degrees, 6.0f) << "instance " << i << ": the lobe's peak is " << degrees
+                                 << " degrees from the light";
         ::testing::Test::RecordProperty("peak_error_degrees_" + std::to_string(i), std::to_string(degrees));
     }
     EXPECT_EQ(system.type_count(), 1u) << "both instances draw with one material type";
@@ -165,7 +173,8 @@ TEST_F(Instances, TwoInstancesInTheCallersRenderPassAreEachLitInTheirFrame)
     hemi::render::MaterialSystem system(dev, target);
     check_two_instances(
         system,
-        [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw) {
+        [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw)
+        {
             const float clear[4] = {0.0f, 0.0f, 0.0f, 0.0f};
             engine.begin(cmd, clear);
             draw(cmd);
@@ -192,9 +201,12 @@ TEST_F(Instances, TwoInstancesWithDynamicRenderingAndReverseZAreEachLitInTheirFr
     hemi::render::MaterialSystem system(dev, target);
     check_two_instances(
         system,
-        [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw) {
-            hemi::gpu::transition_image(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-            hemi::gpu::transition_image(cmd, aux, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+        [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw)
+        {
+            hemi::gpu::transition_image(cmd, color, VK_IMAGE_LAYOUT_UNDEFINED,
+                                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+            hemi::gpu::transition_image(cmd, aux, VK_IMAGE_LAYOUT_UNDEFINED,
+                                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
             hemi::gpu::transition_image(cmd, depth, VK_IMAGE_LAYOUT_UNDEFINED,
                                         VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
             VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},

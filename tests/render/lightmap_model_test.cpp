@@ -50,15 +50,23 @@ glm::vec3 point_on_floor(const glm::mat4& inverse_view_projection, uint32_t size
 // SH9 in hemi's convention, typed from docs/DESIGN.md.
 std::array<double, 9> sh9(const glm::dvec3& d)
 {
-    return {0.282095, -0.488603 * d.y, 0.488603 * d.z, -0.488603 * d.x, 1.092548 * d.x * d.y, -1.092548 * d.y * d.z,
-            0.315392 * (3 * d.z * d.z - 1), -1.092548 * d.x * d.z, 0.546274 * (d.x * d.x - d.y * d.y)};
+    return {0.282095,
+            -0.488603 * d.y,
+            0.488603 * d.z,
+            -0.488603 * d.x,
+            1.092548 * d.x * d.y,
+            -1.092548 * d.y * d.z,
+            0.315392 * (3 * d.z * d.z - 1),
+            -1.092548 * d.x * d.z,
+            0.546274 * (d.x * d.x - d.y * d.y)};
 }
 
 // A floor z = 0 over [-1, 1]^2 in hemi's world (4 x 4 quads), lightmap UVs over [0, 1]^2 and normal-map UVs
 // twice that (so a shader reading the wrong UV set samples the wrong coefficients); a tilted 1x1 normal map
 // and a coloured base.
-hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm::vec3& albedo, glm::vec3& normal,
-                                    const uint8_t* normal_texel = nullptr, bool furnace = false)
+hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm::vec3& albedo,
+                                    glm::vec3& normal, const uint8_t* normal_texel = nullptr,
+                                    bool furnace = false)
 {
     hemi::io::LightmapAsset a;
     hemi::io::Mesh& m = a.mesh;
@@ -67,8 +75,10 @@ hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm
         for (int i = 0; i < cells; ++i)
         {
             const uint32_t base = uint32_t(m.positions.size());
-            const glm::vec2 c[4] = {{float(i) / cells, float(j + 1) / cells}, {float(i + 1) / cells, float(j + 1) / cells},
-                                    {float(i + 1) / cells, float(j) / cells}, {float(i) / cells, float(j) / cells}};
+            const glm::vec2 c[4] = {{float(i) / cells, float(j + 1) / cells},
+                                    {float(i + 1) / cells, float(j + 1) / cells},
+                                    {float(i + 1) / cells, float(j) / cells},
+                                    {float(i) / cells, float(j) / cells}};
             for (const glm::vec2& uv : c)
             {
                 m.positions.emplace_back(2.0f * uv.x - 1.0f, 1.0f - 2.0f * uv.y, 0.0f);
@@ -83,7 +93,8 @@ hemi::io::LightmapAsset floor_asset(const std::vector<std::string>& outputs, glm
     const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.25f, 0.92f));
     std::vector<uint8_t> texel(4, 255);
     for (int c = 0; c < 3; ++c)
-        texel[size_t(c)] = normal_texel ? normal_texel[c] : uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
+        texel[size_t(c)] =
+            normal_texel ? normal_texel[c] : uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
     normal = glm::normalize(glm::vec3(texel[0], texel[1], texel[2]) / 255.0f * 2.0f - 1.0f);
     a.images.push_back({"normal.png", "image/png", hemi::io::encode_png({1, 1, texel})});
     hemi::io::Material mat;
@@ -151,7 +162,10 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
         o.kind = hemi::bake::TransferKind::Unshadowed;
         o.order = 3;
         sphere.techniques.push_back(
-            {"gs", 9, hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(sphere.mesh, o), sphere.mesh, "gs"), {}});
+            {"gs",
+             9,
+             hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(sphere.mesh, o), sphere.mesh, "gs"),
+             {}});
     }
 
     const hemi::test::EnginePass engine(W, H, {VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
@@ -165,9 +179,10 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
     hemi::render::PrtModel prt(system, sphere, {"gs", false, 1}, upload);
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -2.2f, 2.2f), glm::vec3(0, 0.1f, 0), 50.0f,
-                                                         float(W) / H);
-    const glm::mat4 identity(1.0f), sphere_model = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.4f, 0.3f));
+    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -2.2f, 2.2f), glm::vec3(0, 0.1f, 0),
+                                                         50.0f, float(W) / H);
+    const glm::mat4 identity(1.0f),
+        sphere_model = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.4f, 0.3f));
     std::vector<glm::vec3> uniform(9, glm::vec3(0.0f));
     uniform[0] = glm::vec3(2.0f * std::sqrt(float(M_PI)));
     const hemi::render::PrtInstance instance{sphere_model, uniform, 0.0f};
@@ -175,31 +190,36 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
     for (const std::string& technique : techniques)
     {
         const float clear[4] = {0, 0, 0, 0};
-        hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-            upload.record(cmd);
-            prt.record_transfer(cmd, std::span(&instance, 1));
-            frame.record_update(cmd, f);
-            engine.begin(cmd, clear);
-            floor.draw(cmd, frame.set(), technique, identity);
-            prt.draw(cmd, frame.set(), 0, sphere_model);
-            vkCmdEndRenderPass(cmd);
-        });
+        hemi::gpu::one_shot(dev,
+                            [&](VkCommandBuffer cmd)
+                            {
+                                upload.record(cmd);
+                                prt.record_transfer(cmd, std::span(&instance, 1));
+                                frame.record_update(cmd, f);
+                                engine.begin(cmd, clear);
+                                floor.draw(cmd, frame.set(), technique, identity);
+                                prt.draw(cmd, frame.set(), 0, sphere_model);
+                                vkCmdEndRenderPass(cmd);
+                            });
         const std::vector<float> color = floats_of_half(
             hemi::gpu::read_image(dev, engine.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL));
         std::vector<float> aux(size_t(W) * H * 4);
         {
-            const std::vector<std::byte> b = hemi::gpu::read_image(dev, engine.colors[1], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+            const std::vector<std::byte> b =
+                hemi::gpu::read_image(dev, engine.colors[1], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
             std::memcpy(aux.data(), b.data(), b.size());
         }
         const hemi::io::LightmapOutput& out = asset.output(technique);
         const hemi::math::BasisDesc& basis = hemi::render::lightmap_basis(technique);
         float b[16];
         basis.eval(normal, b);
-        auto coefficient = [&](uint32_t k, int x, int y) {
+        auto coefficient = [&](uint32_t k, int x, int y)
+        {
             x = std::clamp(x, 0, int(kAtlas) - 1);
             y = std::clamp(y, 0, int(kAtlas) - 1);
             const float* t = &out.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
-            return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])), glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
+            return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])),
+                             glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
                              glm::unpackHalf1x16(glm::packHalf1x16(t[2])));
         };
         int compared = 0, failures = 0, sphere_pixels = 0;
@@ -213,7 +233,8 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
                 // Both draws are draw id 1: the sphere's pixels are told apart by where it projects (they are
                 // the PRT material's, compared elsewhere), with a margin.
                 const glm::vec4 centre = f.view_projection * sphere_model * glm::vec4(0, 0, 0, 1);
-                const glm::vec2 sp((centre.x / centre.w * 0.5f + 0.5f) * W, (centre.y / centre.w * 0.5f + 0.5f) * H);
+                const glm::vec2 sp((centre.x / centre.w * 0.5f + 0.5f) * W,
+                                   (centre.y / centre.w * 0.5f + 0.5f) * H);
                 if (glm::length(glm::vec2(px, py) - sp) < 28.0f)
                 {
                     ++sphere_pixels;
@@ -226,8 +247,9 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
                 glm::vec3 e(0.0f);
                 for (uint32_t k = 0; k < out.k; ++k)
                 {
-                    const glm::vec3 c = glm::mix(glm::mix(coefficient(k, x0, y0), coefficient(k, x0 + 1, y0), ax),
-                                                 glm::mix(coefficient(k, x0, y0 + 1), coefficient(k, x0 + 1, y0 + 1), ax), ay);
+                    const glm::vec3 c = glm::mix(
+                        glm::mix(coefficient(k, x0, y0), coefficient(k, x0 + 1, y0), ax),
+                        glm::mix(coefficient(k, x0, y0 + 1), coefficient(k, x0 + 1, y0 + 1), ax), ay);
                     e += c * b[k];
                 }
                 const glm::vec3 want = albedo * e / float(M_PI);
@@ -236,8 +258,8 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
                 {
                     const float got = color[(size_t(py) * W + px) * 4 + size_t(ch)];
                     if (std::abs(got - want[ch]) > 0.005f * std::abs(want[ch]) + 2e-3f && failures++ < 5)
-                        ADD_FAILURE() << technique << " pixel " << px << "," << py << " uv1 " << uv1.x << "," << uv1.y
-                                      << " ch " << ch << ": GPU " << got << ", CPU " << want[ch];
+                        ADD_FAILURE() << technique << " pixel " << px << "," << py << " uv1 " << uv1.x << ","
+                                      << uv1.y << " ch " << ch << ": GPU " << got << ", CPU " << want[ch];
                 }
             }
         EXPECT_GT(compared, 200) << technique;
@@ -253,11 +275,13 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
 TEST_F(LightmapMaterial, ChartSeamShowsNoDiscontinuity)
 {
     auto& dev = hemi::test::device();
-    auto floor = [&](bool split) {
+    auto floor = [&](bool split)
+    {
         hemi::io::LightmapAsset a;
         hemi::io::Mesh& m = a.mesh;
         // Texels 1/12 unit wide in a 32 x 32 atlas: two charts of 12 x 24 texels, or one of 24 x 24.
-        auto quad = [&](float x0, float width, float u0) {
+        auto quad = [&](float x0, float width, float u0)
+        {
             const uint32_t base = uint32_t(m.positions.size());
             const glm::vec2 corners[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
             for (const glm::vec2& c : corners)
@@ -267,7 +291,8 @@ TEST_F(LightmapMaterial, ChartSeamShowsNoDiscontinuity)
                 m.normals.emplace_back(0, 0, 1);
                 m.tangents.emplace_back(1, 0, 0, 1);
                 m.uvs.emplace_back(p.x, -p.y);
-                m.uvs1.emplace_back((u0 + 12.0f * width * c.x) / 32.0f, (4.0f + 24.0f * (1.0f - c.y)) / 32.0f);
+                m.uvs1.emplace_back((u0 + 12.0f * width * c.x) / 32.0f,
+                                    (4.0f + 24.0f * (1.0f - c.y)) / 32.0f);
             }
             m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
         };
@@ -298,7 +323,8 @@ TEST_F(LightmapMaterial, ChartSeamShowsNoDiscontinuity)
         return a;
     };
     const uint32_t size = 144;
-    auto render = [&](const hemi::io::LightmapAsset& a) {
+    auto render = [&](const hemi::io::LightmapAsset& a)
+    {
         hemi::render::LightmapView view(dev, a, {"h4"}, size, size);
         hemi::render::LightmapFrame frame;
         frame.technique = "h4";
@@ -319,15 +345,16 @@ TEST_F(LightmapMaterial, ChartSeamShowsNoDiscontinuity)
             if (a.at(x, y)[3] != 1.0f || b.at(x, y)[3] != 1.0f)
                 continue;
             ++compared;
-            ASSERT_NEAR(a.at(x, y)[0], b.at(x, y)[0], 0.02f * b.at(x, y)[0] + 1e-3f) << "pixel (" << x << ", " << y << ")";
+            ASSERT_NEAR(a.at(x, y)[0], b.at(x, y)[0], 0.02f * b.at(x, y)[0] + 1e-3f)
+                << "pixel (" << x << ", " << y << ")";
         }
     EXPECT_GT(compared, 1000);
 }
 
-// Green 2007's two materials on lightmaps, from the baker's "rnm" output: radiosity normal mapping (Listing 1,
-// the normal-map normal's squared, normalised weights of Valve's directions) and the SSBump material
-// (Listing 2, the weights stored in the normal-map slot) each equal a CPU evaluation at sampled pixels; with no
-// relief (an SSBump texel of 1/3 each) the SSBump material equals Listing 1 with a flat normal map; under
+// Green 2007's two materials on lightmaps, from the baker's "rnm" output: radiosity normal mapping (Listing
+// 1, the normal-map normal's squared, normalised weights of Valve's directions) and the SSBump material
+// (Listing 2, the weights stored in the normal-map slot) each equal a CPU evaluation at sampled pixels; with
+// no relief (an SSBump texel of 1/3 each) the SSBump material equals Listing 1 with a flat normal map; under
 // uniform radiance 1 an open flat floor renders its albedo with either material (issue 11's white furnace:
 // the rnm colours are normalised to pi each over a texel's hemisphere).
 TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
@@ -343,7 +370,8 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
     const hemi::io::LightmapAsset flat_s = floor_asset({"rnm"}, albedo, normal, flat_ssbump);
     const hemi::io::LightmapAsset flat_n = floor_asset({"rnm"}, albedo, normal, flat_normal);
     const uint32_t size = 96;
-    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique, bool white = false) {
+    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique, bool white = false)
+    {
         hemi::render::LightmapView view(dev, a, {technique}, size, size);
         hemi::render::LightmapFrame frame;
         frame.technique = technique;
@@ -359,25 +387,30 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
     const glm::mat4 inv = glm::inverse(vp);
     auto floor_point = [&](uint32_t px, uint32_t py) { return point_on_floor(inv, size, px, py); };
     const hemi::io::LightmapOutput& rnm = tilted.output("rnm");
-    auto lightmap = [&](const glm::vec2& uv1) {
+    auto lightmap = [&](const glm::vec2& uv1)
+    {
         std::array<glm::vec3, 3> c{};
         const float fx = uv1.x * kAtlas - 0.5f, fy = uv1.y * kAtlas - 0.5f;
         const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
         const float ax = fx - float(x0), ay = fy - float(y0);
         for (uint32_t k = 0; k < 3; ++k)
         {
-            auto t = [&](int x, int y) {
+            auto t = [&](int x, int y)
+            {
                 x = std::clamp(x, 0, int(kAtlas) - 1), y = std::clamp(y, 0, int(kAtlas) - 1);
                 const float* v = &rnm.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
-                return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(v[0])), glm::unpackHalf1x16(glm::packHalf1x16(v[1])),
+                return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(v[0])),
+                                 glm::unpackHalf1x16(glm::packHalf1x16(v[1])),
                                  glm::unpackHalf1x16(glm::packHalf1x16(v[2])));
             };
-            c[k] = glm::mix(glm::mix(t(x0, y0), t(x0 + 1, y0), ax), glm::mix(t(x0, y0 + 1), t(x0 + 1, y0 + 1), ax), ay);
+            c[k] = glm::mix(glm::mix(t(x0, y0), t(x0 + 1, y0), ax),
+                            glm::mix(t(x0, y0 + 1), t(x0 + 1, y0 + 1), ax), ay);
         }
         return c;
     };
     // Valve's bumpBasis, typed from Source.
-    const glm::vec3 basis[3] = {{0.81649658f, 0.0f, 0.57735027f}, {-0.40824829f, 0.70710678f, 0.57735027f},
+    const glm::vec3 basis[3] = {{0.81649658f, 0.0f, 0.57735027f},
+                                {-0.40824829f, 0.70710678f, 0.57735027f},
                                 {-0.40824829f, -0.70710678f, 0.57735027f}};
     const hemi::io::ImageRgba listing1 = render(tilted, "rnm"), listing2 = render(bumped, "ssbump");
     int compared = 0;
@@ -395,12 +428,15 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
             for (int i = 0; i < 3; ++i)
                 dp[i] = std::pow(std::clamp(glm::dot(tilted_normal, basis[i]), 0.0f, 1.0f), 2.0f);
             const glm::vec3 e1 = (dp.x * c[0] + dp.y * c[1] + dp.z * c[2]) / (dp.x + dp.y + dp.z);
-            const glm::vec3 e2 = ssbump_texel[0] / 255.0f * c[0] + ssbump_texel[1] / 255.0f * c[1] + ssbump_texel[2] / 255.0f * c[2];
+            const glm::vec3 e2 = ssbump_texel[0] / 255.0f * c[0] + ssbump_texel[1] / 255.0f * c[1] +
+                                 ssbump_texel[2] / 255.0f * c[2];
             for (int ch = 0; ch < 3; ++ch)
             {
                 const float w1 = albedo[ch] * e1[ch] / float(M_PI), w2 = albedo[ch] * e2[ch] / float(M_PI);
-                ASSERT_NEAR(listing1.at(px, py)[ch], w1, 0.01f * w1 + 2e-3f) << "rnm pixel " << px << "," << py;
-                ASSERT_NEAR(listing2.at(px, py)[ch], w2, 0.01f * w2 + 2e-3f) << "ssbump pixel " << px << "," << py;
+                ASSERT_NEAR(listing1.at(px, py)[ch], w1, 0.01f * w1 + 2e-3f)
+                    << "rnm pixel " << px << "," << py;
+                ASSERT_NEAR(listing2.at(px, py)[ch], w2, 0.01f * w2 + 2e-3f)
+                    << "ssbump pixel " << px << "," << py;
             }
             ++compared;
         }
@@ -414,7 +450,8 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
             if (s.at(px, py)[3] != 1.0f)
                 continue;
             for (int ch = 0; ch < 3; ++ch)
-                ASSERT_NEAR(s.at(px, py)[ch], n.at(px, py)[ch], 0.005f * n.at(px, py)[ch] + 1e-4f) << px << "," << py;
+                ASSERT_NEAR(s.at(px, py)[ch], n.at(px, py)[ch], 0.005f * n.at(px, py)[ch] + 1e-4f)
+                    << px << "," << py;
         }
 
     // The furnace of an open flat floor under uniform radiance 1: it renders its albedo with either material.
@@ -430,8 +467,10 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
                 ++covered;
                 for (int ch = 0; ch < 3; ++ch)
                 {
-                    ASSERT_NEAR(f.at(px, py)[ch], albedo[ch], 0.01f * albedo[ch]) << "ssbump " << px << "," << py;
-                    ASSERT_NEAR(fn.at(px, py)[ch], albedo[ch], 0.01f * albedo[ch]) << "rnm " << px << "," << py;
+                    ASSERT_NEAR(f.at(px, py)[ch], albedo[ch], 0.01f * albedo[ch])
+                        << "ssbump " << px << "," << py;
+                    ASSERT_NEAR(fn.at(px, py)[ch], albedo[ch], 0.01f * albedo[ch])
+                        << "rnm " << px << "," << py;
                 }
             }
     EXPECT_GT(covered, 1000);
@@ -451,25 +490,30 @@ TEST(LightmapProbes, ProbeLightingRotatesTheLevelsProbesIntoTheWorld)
     {
         std::array<glm::vec3, 9> e{};
         for (int j = 0; j < 9; ++j)
-            e[size_t(j)] = glm::vec3(std::sin(1.3f * float(j + 1) + float(p)), 0.5f * float(j) - float(p), 1.0f);
+            e[size_t(j)] =
+                glm::vec3(std::sin(1.3f * float(j + 1) + float(p)), 0.5f * float(j) - float(p), 1.0f);
         asset.probes.irradiance.push_back(e);
         asset.probes.valid.push_back(1);
     }
-    const glm::mat4 model = glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, -1.0f, 2.0f)) * hemi::render::gltf_to_world();
+    const glm::mat4 model =
+        glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, -1.0f, 2.0f)) * hemi::render::gltf_to_world();
     const glm::mat3 r(model);
     for (const float x : {0.0f, 1.0f, 4.0f})
     {
         // Scene point (x, 1, 0): world (x + 3, -1 + 0, 2 + 1) under (x, y, z) -> (x, -z, y).
-        const std::vector<glm::vec3> world = hemi::render::probe_lighting(asset, glm::vec3(x + 3.0f, -1.0f, 3.0f), model);
+        const std::vector<glm::vec3> world =
+            hemi::render::probe_lighting(asset, glm::vec3(x + 3.0f, -1.0f, 3.0f), model);
         ASSERT_EQ(world.size(), 9u);
         const float t = x / 4.0f;
-        for (const glm::dvec3 n : {glm::dvec3(0, 0, 1), glm::dvec3(0.6, 0.0, -0.8), glm::dvec3(0.48, -0.6, 0.64)})
+        for (const glm::dvec3 n :
+             {glm::dvec3(0, 0, 1), glm::dvec3(0.6, 0.0, -0.8), glm::dvec3(0.48, -0.6, 0.64)})
         {
             const std::array<double, 9> ys = sh9(n), yw = sh9(glm::dvec3(r * glm::vec3(n)));
             glm::dvec3 scene(0.0), turned(0.0);
             for (int j = 0; j < 9; ++j)
             {
-                const glm::vec3 c = (1.0f - t) * asset.probes.irradiance[0][size_t(j)] + t * asset.probes.irradiance[1][size_t(j)];
+                const glm::vec3 c = (1.0f - t) * asset.probes.irradiance[0][size_t(j)] +
+                                    t * asset.probes.irradiance[1][size_t(j)];
                 scene += glm::dvec3(c) * ys[size_t(j)];
                 turned += glm::dvec3(world[size_t(j)]) * yw[size_t(j)];
             }
@@ -477,7 +521,8 @@ TEST(LightmapProbes, ProbeLightingRotatesTheLevelsProbesIntoTheWorld)
                 EXPECT_NEAR(turned[ch], scene[ch], 1e-5) << "x " << x << " channel " << ch;
         }
     }
-    EXPECT_THROW(hemi::render::probe_lighting(hemi::io::LightmapAsset{}, glm::vec3(0.0f), model), std::invalid_argument);
+    EXPECT_THROW(hemi::render::probe_lighting(hemi::io::LightmapAsset{}, glm::vec3(0.0f), model),
+                 std::invalid_argument);
 }
 
 // A dynamic object beside the lightmapped level: LightmapView draws a sphere lit by the asset's probes in the
@@ -494,10 +539,12 @@ TEST_F(LightmapMaterial, SpheresLitByTheAssetsProbesBesideTheLevel)
     asset.probes.count = glm::uvec3(2, 1, 1);
     asset.probes.lo = glm::vec3(-0.5f, 0.0f, 0.5f);
     asset.probes.hi = glm::vec3(0.5f, 0.0f, 0.5f);
-    // The two probes: the SH9 irradiance of a light from (0.48, -0.6, 0.64) and of one from -x, plus a little sky.
+    // The two probes: the SH9 irradiance of a light from (0.48, -0.6, 0.64) and of one from -x, plus a little
+    // sky.
     for (const glm::dvec3 d : {glm::dvec3(0.48, -0.6, 0.64), glm::dvec3(-1.0, 0.0, 0.0)})
     {
-        const double a[9] = {M_PI, 2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4};
+        const double a[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
+                             M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
         const std::array<double, 9> y = sh9(d);
         std::array<glm::vec3, 9> e{};
         for (int j = 0; j < 9; ++j)
@@ -517,26 +564,31 @@ TEST_F(LightmapMaterial, SpheresLitByTheAssetsProbesBesideTheLevel)
     const glm::vec4 sphere(0.0f, 0.0f, 0.5f, 0.35f); // halfway between the probes
     frame.spheres = {sphere};
     const hemi::io::ImageRgba image = view.render(frame);
-    const glm::mat4 inv = glm::inverse(hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, 1.0f));
+    const glm::mat4 inv =
+        glm::inverse(hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, 1.0f));
     int compared = 0;
     for (uint32_t py = 0; py < size; ++py)
         for (uint32_t px = 0; px < size; ++px)
         {
             const glm::vec2 ndc((px + 0.5f) / size * 2.0f - 1.0f, (py + 0.5f) / size * 2.0f - 1.0f);
             const glm::vec4 a = inv * glm::vec4(ndc, 0.0f, 1.0f), b = inv * glm::vec4(ndc, 1.0f, 1.0f);
-            const glm::dvec3 o = glm::dvec3(glm::vec3(a) / a.w), d = glm::normalize(glm::dvec3(glm::vec3(b) / b.w) - o);
+            const glm::dvec3 o = glm::dvec3(glm::vec3(a) / a.w),
+                             d = glm::normalize(glm::dvec3(glm::vec3(b) / b.w) - o);
             const glm::dvec3 oc = o - glm::dvec3(glm::vec3(sphere));
             const double bq = glm::dot(oc, d), cq = glm::dot(oc, oc) - double(sphere.w) * sphere.w;
             const double disc = bq * bq - cq;
             if (disc < 0.05 * double(sphere.w) * sphere.w) // near the silhouette or off the sphere
                 continue;
-            const glm::dvec3 n = glm::normalize(o + d * (-bq - std::sqrt(disc)) - glm::dvec3(glm::vec3(sphere)));
+            const glm::dvec3 n =
+                glm::normalize(o + d * (-bq - std::sqrt(disc)) - glm::dvec3(glm::vec3(sphere)));
             const std::array<double, 9> y = sh9(n);
             for (int ch = 0; ch < 3; ++ch)
             {
                 double e = 0.0;
                 for (int j = 0; j < 9; ++j)
-                    e += 0.5 * (asset.probes.irradiance[0][size_t(j)][ch] + asset.probes.irradiance[1][size_t(j)][ch]) *
+                    e += 0.5 *
+                         (asset.probes.irradiance[0][size_t(j)][ch] +
+                          asset.probes.irradiance[1][size_t(j)][ch]) *
                          y[size_t(j)];
                 const double expected = e / M_PI;
                 ASSERT_NEAR(image.at(px, py)[ch], expected, 0.01 * std::abs(expected) + 2e-3)
@@ -578,7 +630,8 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
     lights[1].irradiance = glm::vec3(0.3f, 0.35f, 0.4f);
     const float exponent = 24.0f, strength = 0.4f;
     auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique, bool lit, float spec,
-                      std::vector<hemi::render::DynamicLight> with) {
+                      std::vector<hemi::render::DynamicLight> with)
+    {
         hemi::render::LightmapView view(dev, a, {technique}, size, size);
         hemi::render::LightmapFrame frame;
         frame.technique = technique;
@@ -593,10 +646,11 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
         }
         return view.render(frame);
     };
-    const glm::mat4 inv = glm::inverse(hemi::render::camera_matrix({eye, glm::vec3(0.0f), 35.0f}, tilted.mesh,
-                                                                   glm::mat4(1.0f), 1.0f));
+    const glm::mat4 inv = glm::inverse(
+        hemi::render::camera_matrix({eye, glm::vec3(0.0f), 35.0f}, tilted.mesh, glm::mat4(1.0f), 1.0f));
     auto floor_point = [&](uint32_t px, uint32_t py) { return point_on_floor(inv, size, px, py); };
-    const glm::dvec3 basis[3] = {{0.81649658, 0.0, 0.57735027}, {-0.40824829, 0.70710678, 0.57735027},
+    const glm::dvec3 basis[3] = {{0.81649658, 0.0, 0.57735027},
+                                 {-0.40824829, 0.70710678, 0.57735027},
                                  {-0.40824829, -0.70710678, 0.57735027}};
     const glm::dvec3 w(ssbump_texel[0] / 255.0, ssbump_texel[1] / 255.0, ssbump_texel[2] / 255.0);
     const glm::dvec3 reconstructed = glm::normalize(w.x * basis[0] + w.y * basis[1] + w.z * basis[2]);
@@ -631,7 +685,8 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
                             f += std::sqrt(3.0) * w[i] * std::clamp(glm::dot(basis[i], to), 0.0, 1.0);
                     diffuse += e * f;
                     const glm::dvec3 h = glm::normalize(to + v);
-                    specular += e * std::max(0.0, glm::dot(n, to)) * std::pow(std::max(0.0, glm::dot(n, h)), double(exponent));
+                    specular += e * std::max(0.0, glm::dot(n, to)) *
+                                std::pow(std::max(0.0, glm::dot(n, h)), double(exponent));
                 }
                 specular *= strength * (exponent + 8.0) / (8.0 * M_PI);
                 for (int ch = 0; ch < 3; ++ch)
@@ -647,15 +702,18 @@ TEST_F(LightmapMaterial, DynamicLightsOnRadiosityNormalMappingAndSsbump)
     // A flat SSBump texel under one light straight above, no specular: the light's full E times albedo / pi.
     std::vector<hemi::render::DynamicLight> overhead(1);
     overhead[0].irradiance = glm::vec3(2.0f);
-    const hemi::io::ImageRgba a = render(flat, "ssbump", true, 0.0f, overhead), b = render(flat, "ssbump", false, 0.0f, {});
+    const hemi::io::ImageRgba a = render(flat, "ssbump", true, 0.0f, overhead),
+                              b = render(flat, "ssbump", false, 0.0f, {});
     for (uint32_t i = 0; i < size * size; i += 7)
         if (a.pixels[i * 4 + 3] == 1.0f)
         {
-            ASSERT_NEAR(a.pixels[i * 4] - b.pixels[i * 4], albedo.x * 2.0f * (85.0f / 255.0f * 3.0f) / float(M_PI), 2e-3f);
+            ASSERT_NEAR(a.pixels[i * 4] - b.pixels[i * 4],
+                        albedo.x * 2.0f * (85.0f / 255.0f * 3.0f) / float(M_PI), 2e-3f);
         }
     // Too many lights are refused.
-    EXPECT_THROW(render(flat, "ssbump", true, 0.0f, std::vector<hemi::render::DynamicLight>(HEMI_MAX_LIGHTS + 1)),
-                 std::invalid_argument);
+    EXPECT_THROW(
+        render(flat, "ssbump", true, 0.0f, std::vector<hemi::render::DynamicLight>(HEMI_MAX_LIGHTS + 1)),
+        std::invalid_argument);
 }
 
 // Green's second baseline, radiosity normal mapping with a plain ambient-occlusion channel (rnm_ao): the
@@ -673,7 +731,8 @@ TEST_F(LightmapMaterial, AmbientOcclusionBaselineScalesListingOne)
     occluded.materials[0].occlusion_strength = 0.5f;
     const float factor = 1.0f + 0.5f * (102.0f / 255.0f - 1.0f);
     const uint32_t size = 64;
-    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique) {
+    auto render = [&](const hemi::io::LightmapAsset& a, const std::string& technique)
+    {
         hemi::render::LightmapView view(dev, a, {technique}, size, size);
         hemi::render::LightmapFrame frame;
         frame.technique = technique;
@@ -696,7 +755,8 @@ TEST_F(LightmapMaterial, AmbientOcclusionBaselineScalesListingOne)
         ++covered;
         for (int c = 0; c < 3; ++c)
         {
-            ASSERT_NEAR(ao.pixels[i + c], factor * listing1.pixels[i + c], 0.01f * listing1.pixels[i + c] + 1e-4f);
+            ASSERT_NEAR(ao.pixels[i + c], factor * listing1.pixels[i + c],
+                        0.01f * listing1.pixels[i + c] + 1e-4f);
             ASSERT_NEAR(ao_plain.pixels[i + c], listing1_plain.pixels[i + c], 1e-4f);
         }
     }

@@ -18,7 +18,8 @@ inline glm::vec3 sample_bilinear(const hemi::samples::ShNormalMapScene& s, glm::
     float x = uv.x * s.map_width - 0.5f, y = uv.y * s.map_height - 0.5f;
     int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     float fx = x - x0, fy = y - y0;
-    auto texel = [&](int xi, int yi) {
+    auto texel = [&](int xi, int yi)
+    {
         xi = ((xi % int(s.map_width)) + int(s.map_width)) % int(s.map_width);
         yi = ((yi % int(s.map_height)) + int(s.map_height)) % int(s.map_height);
         const uint8_t* p = &s.normal_map[(size_t(yi) * s.map_width + xi) * 4];
@@ -28,9 +29,9 @@ inline glm::vec3 sample_bilinear(const hemi::samples::ShNormalMapScene& s, glm::
            (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
 }
 
-// Whether pixel (x, y) of a render of make_uv_sphere is one the CPU references compare: the mesh covers its 5 x 5
-// neighbourhood (not a silhouette, where frames are interpolated across the edge) and its UV (returned) is away from
-// the poles (degenerate tangents) and the u seam.
+// Whether pixel (x, y) of a render of make_uv_sphere is one the CPU references compare: the mesh covers its 5
+// x 5 neighbourhood (not a silhouette, where frames are interpolated across the edge) and its UV (returned)
+// is away from the poles (degenerate tangents) and the u seam.
 inline bool comparable_sphere_pixel(const hemi::io::ImageRgba& aux, uint32_t x, uint32_t y, glm::vec2& uv)
 {
     for (int dy = -2; dy <= 2; ++dy)

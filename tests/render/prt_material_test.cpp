@@ -12,14 +12,14 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
-#include <hemi/render/view/offscreen.h>
 #include <hemi/render/material/frame_set.h>
-#include <hemi/render/view/prt_view.h>
 #include <hemi/render/transfer.h>
+#include <hemi/render/view/offscreen.h>
+#include <hemi/render/view/prt_view.h>
 
+#include "../temp_dir.h"
 #include "engine_pass.h"
 #include "surface_object.h"
-#include "../temp_dir.h"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/packing.hpp>
@@ -63,20 +63,25 @@ Rendered render(const hemi::samples::ShNormalMapScene& scene, const hemi::math::
     hemi::render::OffscreenTarget target(dev, w, h);
     hemi::render::MaterialSystem system(dev, target.desc());
     const hemi::io::ImageRgba8 normal_map{scene.map_width, scene.map_height, scene.normal_map};
-    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(albedo), basis, &pass);
+    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(albedo), basis,
+                                     &pass);
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        object.upload.record(cmd);
-        pass.record(cmd, lighting);
-        hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                                  VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-        frame.record_update(cmd, f);
-        target.begin(cmd);
-        object.draw(cmd, frame.set());
-        target.end(cmd);
-    });
+    f.view_projection =
+        hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            object.upload.record(cmd);
+                            pass.record(cmd, lighting);
+                            hemi::gpu::memory_barrier(
+                                cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+                            frame.record_update(cmd, f);
+                            target.begin(cmd);
+                            object.draw(cmd, frame.set());
+                            target.end(cmd);
+                        });
     return {target.read_color(), target.read_aux()};
 }
 
@@ -127,10 +132,17 @@ namespace
 glm::dvec3 typed_irradiance(const std::vector<glm::vec3>& lighting, glm::dvec3 d)
 {
     const double x = d.x, y = d.y, z = d.z;
-    const double y9[9] = {0.282095,           -0.488603 * y,      0.488603 * z,
-                          -0.488603 * x,      1.092548 * x * y,   -1.092548 * y * z,
-                          0.315392 * (3 * z * z - 1), -1.092548 * x * z, 0.546274 * (x * x - y * y)};
-    const double a[9] = {M_PI, 2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4};
+    const double y9[9] = {0.282095,
+                          -0.488603 * y,
+                          0.488603 * z,
+                          -0.488603 * x,
+                          1.092548 * x * y,
+                          -1.092548 * y * z,
+                          0.315392 * (3 * z * z - 1),
+                          -1.092548 * x * z,
+                          0.546274 * (x * x - y * y)};
+    const double a[9] = {M_PI,     2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4,
+                         M_PI / 4, M_PI / 4,     M_PI / 4,     M_PI / 4};
     glm::dvec3 e(0.0);
     for (int j = 0; j < 9; ++j)
         e += a[j] * y9[j] * glm::dvec3(lighting[size_t(j)]);
@@ -141,11 +153,11 @@ glm::dvec3 typed_irradiance(const std::vector<glm::vec3>& lighting, glm::dvec3 d
 // force and sharing no code with the bake: at a surface point with frame (T, B, N), the pixel basis holds the
 // hemispherical least-squares fit of g(w) = E(w.x T + w.y B + w.z N), the irradiance as a function of the
 // tangent-space normal; the fit is evaluated at the normal-map normal. The fit solves G c = int_H b g with
-// G = int_H b b^T, both by a midpoint rule in (s, phi) with z = sin^2 s (every basis, the sqrt(z) of the shifted
-// ones included, is smooth in s). Classic PRT is E(N): the normal map plays no part.
+// G = int_H b b^T, both by a midpoint rule in (s, phi) with z = sin^2 s (every basis, the sqrt(z) of the
+// shifted ones included, is smooth in s). Classic PRT is E(N): the normal map plays no part.
 class BruteForceShading
 {
-public:
+  public:
     explicit BruteForceShading(const hemi::math::BasisDesc& b) : basis_(b)
     {
         const int ns = 160, np = 160, k = b.size;
@@ -210,7 +222,7 @@ public:
         return albedo * e / M_PI;
     }
 
-private:
+  private:
     const hemi::math::BasisDesc& basis_;
     std::vector<glm::dvec3> dirs_;
     std::vector<double> weights_, values_, gram_;
@@ -219,8 +231,9 @@ private:
 // Worst relative error |GPU - reference| / |reference| over the sampled interior pixels of `r` (aux = UV and
 // coverage) on the UV sphere; `compared` receives the number of pixels.
 double worst_against_brute_force(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& aux,
-                                 const hemi::samples::ShNormalMapScene& scene, const BruteForceShading& reference,
-                                 const std::vector<glm::vec3>& lighting, int& compared, std::string& where)
+                                 const hemi::samples::ShNormalMapScene& scene,
+                                 const BruteForceShading& reference, const std::vector<glm::vec3>& lighting,
+                                 int& compared, std::string& where)
 {
     double worst = 0.0;
     compared = 0;
@@ -232,10 +245,13 @@ double worst_against_brute_force(const hemi::io::ImageRgba& color, const hemi::i
                 continue;
             // make_uv_sphere: u = phi / 2 pi, v = theta / pi, tangent d/d(phi), bitangent N x T (w = +1).
             const double phi = 2 * M_PI * uv.x, theta = M_PI * uv.y;
-            const glm::dvec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const glm::dvec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                               std::cos(theta));
             const glm::dvec3 t(-std::sin(phi), std::cos(phi), 0.0);
-            const glm::dvec3 nt = glm::normalize(glm::dvec3(hemi::test::sample_bilinear(scene, uv)) * 2.0 - 1.0);
-            const glm::dvec3 want = reference.shade(lighting, t, glm::cross(n, t), n, nt, glm::dvec3(scene.albedo));
+            const glm::dvec3 nt =
+                glm::normalize(glm::dvec3(hemi::test::sample_bilinear(scene, uv)) * 2.0 - 1.0);
+            const glm::dvec3 want =
+                reference.shade(lighting, t, glm::cross(n, t), n, nt, glm::dvec3(scene.albedo));
             ++compared;
             for (int ch = 0; ch < 3; ++ch)
             {
@@ -243,8 +259,9 @@ double worst_against_brute_force(const hemi::io::ImageRgba& color, const hemi::i
                 if (e > worst)
                 {
                     worst = e;
-                    where = "pixel " + std::to_string(x) + "," + std::to_string(y) + " channel " + std::to_string(ch) +
-                            ": GPU " + std::to_string(color.at(x, y)[ch]) + ", reference " + std::to_string(want[ch]);
+                    where = "pixel " + std::to_string(x) + "," + std::to_string(y) + " channel " +
+                            std::to_string(ch) + ": GPU " + std::to_string(color.at(x, y)[ch]) +
+                            ", reference " + std::to_string(want[ch]);
                 }
             }
         }
@@ -266,7 +283,8 @@ TEST_F(PrtMaterial, FrameMatchesBruteForceShadingForEveryTechnique)
 {
     auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Sky);
     hemi::math::AnalyticSky sky;
-    std::vector<glm::vec3> lighting = hemi::math::project_sh(3, [&](const glm::vec3& d) { return sky.radiance(d); }, 64);
+    std::vector<glm::vec3> lighting = hemi::math::project_sh(
+        3, [&](const glm::vec3& d) { return sky.radiance(d); }, 64);
     std::vector<const hemi::math::BasisDesc*> techniques;
     std::vector<std::string> names;
     for (const hemi::math::BasisDesc& b : hemi::math::bases())
@@ -276,7 +294,8 @@ TEST_F(PrtMaterial, FrameMatchesBruteForceShadingForEveryTechnique)
     }
     techniques.push_back(&hemi::math::vertex_irradiance_basis());
     names.push_back("prt");
-    for (const char* required : {"sh9", "sh4ls", "hl2", "sal4", "h4", "h6", "sep4", "zernike3", "zernike6", "prt"})
+    for (const char* required :
+         {"sh9", "sh4ls", "hl2", "sal4", "h4", "h6", "sep4", "zernike3", "zernike6", "prt"})
         EXPECT_NE(std::find(names.begin(), names.end(), required), names.end()) << required;
 
     // The baked asset: the sphere's unshadowed order-3 bake for every technique, with the brick normal map as
@@ -314,8 +333,8 @@ TEST_F(PrtMaterial, FrameMatchesBruteForceShadingForEveryTechnique)
         frame.model = glm::mat4(1.0f); // the sphere as it is: world = object space
         frame.camera = hemi::render::PrtCamera{scene.eye, glm::vec3(0.0f), 40.0f};
         const hemi::io::ImageRgba color = view.render(frame);
-        const double worst_view =
-            worst_against_brute_force(color, view.target().read_aux(), scene, reference, lighting, compared, where);
+        const double worst_view = worst_against_brute_force(color, view.target().read_aux(), scene, reference,
+                                                            lighting, compared, where);
         EXPECT_GT(compared, 60) << names[i];
         EXPECT_LT(worst_view, tolerance) << names[i] << " (PrtView), worst " << where;
         char value[64];
@@ -351,25 +370,31 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
     target.render_pass = engine.render_pass;
     target.color_attachments = 1;
     hemi::render::MaterialSystem system(dev, target);
-    hemi::test::SurfaceObject object(system, scene.mesh, normal_map, hemi::test::normal_mapped(glm::vec3(1.0f)), basis,
-                                     &pass);
+    hemi::test::SurfaceObject object(system, scene.mesh, normal_map,
+                                     hemi::test::normal_mapped(glm::vec3(1.0f)), basis, &pass);
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    f.view_projection =
+        hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
     const float clear[4] = {0.25f, 0.5f, 0.75f, 1.0f};
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        pass.record(cmd, lighting);
-        hemi::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                                  VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-        object.upload.record(cmd);
-        frame.record_update(cmd, f);
-        engine.begin(cmd, clear);
-        object.draw(cmd, frame.set());
-        vkCmdEndRenderPass(cmd);
-    });
-    const std::vector<std::byte> bytes = hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            pass.record(cmd, lighting);
+                            hemi::gpu::memory_barrier(
+                                cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+                            object.upload.record(cmd);
+                            frame.record_update(cmd, f);
+                            engine.begin(cmd, clear);
+                            object.draw(cmd, frame.set());
+                            vkCmdEndRenderPass(cmd);
+                        });
+    const std::vector<std::byte> bytes =
+        hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
     ASSERT_EQ(bytes.size(), size_t(w) * h * 8);
-    auto half = [&](size_t i) {
+    auto half = [&](size_t i)
+    {
         uint16_t bits;
         std::memcpy(&bits, bytes.data() + i * 2, 2);
         return glm::unpackHalf1x16(bits);
@@ -413,16 +438,19 @@ TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
     object.type = &system.type(key);
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
+    f.view_projection =
+        hemi::render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f, float(w) / float(h));
     const std::vector<glm::vec3> probe(9, glm::vec3(100.0f)); // would light the sphere far above the factor
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        object.upload.record(cmd);
-        frame.record_update(cmd, f);
-        object.probe->record_update(cmd, probe);
-        target.begin(cmd);
-        object.draw(cmd, frame.set());
-        target.end(cmd);
-    });
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            object.upload.record(cmd);
+                            frame.record_update(cmd, f);
+                            object.probe->record_update(cmd, probe);
+                            target.begin(cmd);
+                            object.draw(cmd, frame.set());
+                            target.end(cmd);
+                        });
     const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
     size_t covered = 0;
     for (uint32_t y = 0; y < h; ++y)
@@ -461,7 +489,8 @@ TEST_F(PrtMaterial, TexelCoefficientMapsMatchCpuEvaluation)
     const glm::vec3 albedo(0.9f, 0.7f, 0.5f);
     hemi::io::Material material;
     material.base_color_factor = glm::vec4(albedo, 1.0f);
-    hemi::test::SurfaceObject object(system, hemi::test::quad(), flat, material, hemi::math::basis("sh9"), nullptr);
+    hemi::test::SurfaceObject object(system, hemi::test::quad(), flat, material, hemi::math::basis("sh9"),
+                                     nullptr);
     hemi::render::TexelCoefficients coefficients(system, mw, mh, K, maps, object.upload);
     hemi::render::MaterialKey key;
     key.source = hemi::render::CoefficientSourceKind::Texel;
@@ -472,19 +501,23 @@ TEST_F(PrtMaterial, TexelCoefficientMapsMatchCpuEvaluation)
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
     f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
-    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) {
-        object.upload.record(cmd);
-        frame.record_update(cmd, f);
-        target.begin(cmd);
-        object.draw(cmd, frame.set());
-        target.end(cmd);
-    });
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            object.upload.record(cmd);
+                            frame.record_update(cmd, f);
+                            target.begin(cmd);
+                            object.draw(cmd, frame.set());
+                            target.end(cmd);
+                        });
     const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
 
-    auto texel = [&](uint32_t k, int x, int y) {
+    auto texel = [&](uint32_t k, int x, int y)
+    {
         x = std::clamp(x, 0, int(mw) - 1), y = std::clamp(y, 0, int(mh) - 1);
         const float* t = &maps[((size_t(k) * mh + uint32_t(y)) * mw + uint32_t(x)) * 3];
-        return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])), glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
+        return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])),
+                         glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
                          glm::unpackHalf1x16(glm::packHalf1x16(t[2])));
     };
     float y9[9];
@@ -502,16 +535,18 @@ TEST_F(PrtMaterial, TexelCoefficientMapsMatchCpuEvaluation)
             glm::vec3 e(0.0f);
             for (uint32_t k = 0; k < K; ++k)
             {
-                const glm::vec3 c = glm::mix(glm::mix(texel(k, x0, y0), texel(k, x0 + 1, y0), ax),
-                                             glm::mix(texel(k, x0, y0 + 1), texel(k, x0 + 1, y0 + 1), ax), ay);
+                const glm::vec3 c =
+                    glm::mix(glm::mix(texel(k, x0, y0), texel(k, x0 + 1, y0), ax),
+                             glm::mix(texel(k, x0, y0 + 1), texel(k, x0 + 1, y0 + 1), ax), ay);
                 e += c * y9[k];
             }
             const glm::vec3 want = albedo * e / float(M_PI);
             ++compared;
             for (int ch = 0; ch < 3; ++ch)
-                if (std::abs(color.at(px, py)[ch] - want[ch]) > 0.005f * std::abs(want[ch]) + 1e-3f && failures++ < 5)
-                    ADD_FAILURE() << "pixel " << px << "," << py << " uv " << uv.x << "," << uv.y << " ch " << ch
-                                  << ": GPU " << color.at(px, py)[ch] << ", CPU " << want[ch];
+                if (std::abs(color.at(px, py)[ch] - want[ch]) > 0.005f * std::abs(want[ch]) + 1e-3f &&
+                    failures++ < 5)
+                    ADD_FAILURE() << "pixel " << px << "," << py << " uv " << uv.x << "," << uv.y << " ch "
+                                  << ch << ": GPU " << color.at(px, py)[ch] << ", CPU " << want[ch];
         }
     EXPECT_GT(compared, 150);
 }

@@ -12,11 +12,10 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
-#include <hemi/render/view/prt_view.h>
 #include <hemi/render/transfer.h>
+#include <hemi/render/view/prt_view.h>
 
 #include <glm/gtc/matrix_transform.hpp>
-
 
 #include <array>
 #include <cmath>
@@ -109,13 +108,14 @@ TEST_F(PrtView, WhiteFurnaceOnTheSampleModels)
 }
 
 // The sample's concave models (torus, knot; strong brick normal map) under uniform light with albedo < 1,
-// lighting-only view: shadowing never brightens a pixel, each bounce never darkens one, and nothing exceeds the unshadowed render (which is 1) -- up to the
-// ringing of quadratic SH. A pixel with normal-map normal n responds to unit radiance from direction d with
-// K(n, d) = sum_k b_k(n) sum_j (P C)_kj y_j(d): the clamped cosine truncated to bands 0-2 (for SH9,
-// 1/4 + c/2 + (5/32)(3c^2 - 1) at cosine c) and then fitted by the basis. K dips below 0 at directions
-// behind the surface, so light blocked there raises the pixel and light bounced in from there lowers it.
-// The most either can do is (1/pi) max_n integral of max(0, -K(n, d)) over d: 3.1% for SH9. That bound,
-// computed here for each basis, is the tolerance (times the albedo for a bounce).
+// lighting-only view: shadowing never brightens a pixel, each bounce never darkens one, and nothing exceeds
+// the unshadowed render (which is 1) -- up to the ringing of quadratic SH. A pixel with normal-map normal n
+// responds to unit radiance from direction d with K(n, d) = sum_k b_k(n) sum_j (P C)_kj y_j(d): the clamped
+// cosine truncated to bands 0-2 (for SH9, 1/4 + c/2 + (5/32)(3c^2 - 1) at cosine c) and then fitted by the
+// basis. K dips below 0 at directions behind the surface, so light blocked there raises the pixel and light
+// bounced in from there lowers it. The most either can do is (1/pi) max_n integral of max(0, -K(n, d)) over
+// d: 3.1% for SH9. That bound, computed here for each basis, is the tolerance (times the albedo for a
+// bounce).
 namespace
 {
 double ringing_bound(const hemi::math::BasisDesc& basis)
@@ -129,7 +129,8 @@ double ringing_bound(const hemi::math::BasisDesc& basis)
         {
             const double t0 = M_PI * i / rows, t1 = M_PI * (i + 1) / rows, theta = 0.5 * (t0 + t1);
             const double phi = 2.0 * M_PI * (j + 0.5) / cols;
-            const glm::vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const glm::vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                              std::cos(theta));
             hemi::math::sh_eval(3, d, y[size_t(i) * cols + j]);
             omega[size_t(i) * cols + j] = (std::cos(t0) - std::cos(t1)) * 2.0 * M_PI / cols;
         }
@@ -141,7 +142,8 @@ double ringing_bound(const hemi::math::BasisDesc& basis)
         double w[9] = {};
         for (int k = 0; k < basis.size; ++k)
             for (int j = 0; j < 9; ++j)
-                w[j] += b[k] * p[size_t(k) * 9 + j] * hemi::math::clamped_cosine_factor(j == 0 ? 0 : (j < 4 ? 1 : 2));
+                w[j] += b[k] * p[size_t(k) * 9 + j] *
+                        hemi::math::clamped_cosine_factor(j == 0 ? 0 : (j < 4 ? 1 : 2));
         double negative = 0.0;
         for (size_t q = 0; q < y.size(); ++q)
         {
@@ -161,8 +163,9 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
     const float kBounceDarkening = 1e-4f;
     const double min_gain[2] = {0.01, 0.002};
     ASSERT_NEAR(ringing_bound(hemi::math::basis("sh9")), 0.0307, 0.001) << "the closed-form SH9 bound";
-    for (auto [model, name, detail, min_shadowed] : {std::tuple{hemi::samples::PrtModel::Simple, "torus", 1.0f, 0.02},
-                                                     std::tuple{hemi::samples::PrtModel::Complex, "knot", 0.3f, 0.1}})
+    for (auto [model, name, detail, min_shadowed] :
+         {std::tuple{hemi::samples::PrtModel::Simple, "torus", 1.0f, 0.02},
+          std::tuple{hemi::samples::PrtModel::Complex, "knot", 0.3f, 0.1}})
     {
         hemi::bake::PrtAssetOptions o;
         o.bake.rays = 128;
@@ -210,20 +213,24 @@ TEST_F(PrtView, ShadowsAndBouncesOnTheSampleModels)
                         worst_darkening = std::max(worst_darkening, drop);
                         gain[p - 2] += double(-drop);
                         if (drop > kBounceDarkening && failures++ < 5)
-                            ADD_FAILURE() << name << " " << t << " bounce " << p - 1 << " darkened pixel " << i / 4
-                                          << " by " << drop;
+                            ADD_FAILURE() << name << " " << t << " bounce " << p - 1 << " darkened pixel "
+                                          << i / 4 << " by " << drop;
                     }
                 }
             }
-            EXPECT_GT(double(darker), min_shadowed * double(covered)) << name << " " << t << ": should shadow itself";
-            RecordProperty(std::string("worst_above_unshadowed_") + name + "_" + t, std::to_string(worst_above));
-            RecordProperty(std::string("worst_bounce_darkening_") + name + "_" + t, std::to_string(worst_darkening));
+            EXPECT_GT(double(darker), min_shadowed * double(covered))
+                << name << " " << t << ": should shadow itself";
+            RecordProperty(std::string("worst_above_unshadowed_") + name + "_" + t,
+                           std::to_string(worst_above));
+            RecordProperty(std::string("worst_bounce_darkening_") + name + "_" + t,
+                           std::to_string(worst_darkening));
             // Each bounce must add light, or a bake that dropped a bounce would pass: the mean gain over the
             // covered pixels is at least half of what the right bake gives (measured in the comment above).
             for (int bounce = 0; bounce < 2; ++bounce)
             {
                 const double mean_gain = gain[bounce] / double(covered);
-                RecordProperty(std::string("mean_bounce_gain_") + name + "_" + t + "_" + std::to_string(bounce + 1),
+                RecordProperty(std::string("mean_bounce_gain_") + name + "_" + t + "_" +
+                                   std::to_string(bounce + 1),
                                std::to_string(mean_gain));
                 EXPECT_GT(mean_gain, min_gain[bounce]) << name << " " << t << ": bounce " << bounce + 1;
             }
@@ -279,7 +286,8 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
 {
     const RandomCpcaCase t = random_cpca_case(1000, 4, 9, 3);
     const uint32_t d = t.k * t.l;
-    for (auto [clusters, vectors] : {std::pair{1u, 7u}, std::pair{3u, 5u}, std::pair{2u, d}, std::pair{1u, d}})
+    for (auto [clusters, vectors] :
+         {std::pair{1u, 7u}, std::pair{3u, 5u}, std::pair{2u, d}, std::pair{1u, d}})
     {
         const hemi::io::PrtCpca c = hemi::bake::compress_cpca(t.dense, t.n, d, clusters, vectors);
         const std::vector<float> gpu = expect_cpca_pass_matches_host(
@@ -305,7 +313,8 @@ TEST_F(PrtView, CpcaPassMatchesHostAndDense)
         if (vectors == d)
         {
             // With as many vectors as dimensions the compression is exact: the dense pass on the input.
-            hemi::render::TransferPass input(hemi::test::device(), hemi::render::TransferMatrices(t.n, t.k, t.l, t.dense));
+            hemi::render::TransferPass input(hemi::test::device(),
+                                             hemi::render::TransferMatrices(t.n, t.k, t.l, t.dense));
             input.run(t.lighting);
             const std::vector<float> exact = input.read_coefficients();
             for (size_t i = 0; i < gpu.size(); ++i)
@@ -324,8 +333,8 @@ TEST_F(PrtView, CpcaPassAtItsLimitsWithAnEmptyCluster)
     for (uint32_t& id : c.cluster)
         if (id == 1)
             id = 0; // cluster 1 has no vertices now
-    expect_cpca_pass_matches_host({t.n, t.k, t.l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
-                                  t.lighting);
+    expect_cpca_pass_matches_host(
+        {t.n, t.k, t.l, c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights}, t.lighting);
 }
 
 // The environment turns about world z and is seen in object space: a narrow lobe at world direction w, turned
@@ -341,16 +350,16 @@ TEST_F(PrtView, LightingIsTurnedIntoObjectSpace)
     hemi::render::PrtView view(hemi::test::device(), b.asset, "gs", false, 8, 8);
     const glm::vec3 w = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
     hemi::render::PrtFrame frame;
-    frame.world_lighting = hemi::math::project_sh(6, [&](const glm::vec3& d) {
-        return glm::vec3(std::pow(std::max(0.0f, glm::dot(d, w)), 8.0f));
-    });
+    frame.world_lighting = hemi::math::project_sh(
+        6, [&](const glm::vec3& d) { return glm::vec3(std::pow(std::max(0.0f, glm::dot(d, w)), 8.0f)); });
     frame.rotate_degrees = 50.0f;
     const std::vector<glm::vec3> object = view.object_lighting(frame);
     const glm::mat3 m(frame.model);
     const glm::mat3 rz(glm::rotate(glm::mat4(1.0f), glm::radians(50.0f), glm::vec3(0.0f, 0.0f, 1.0f)));
     const float peak = hemi::math::sh_eval_rgb(frame.world_lighting, w).x;
     EXPECT_NEAR(hemi::math::sh_eval_rgb(object, glm::transpose(m) * rz * w).x, peak, 1e-3f * peak);
-    for (const glm::vec3& wrong : {glm::transpose(m) * glm::transpose(rz) * w, m * rz * w, rz * w, glm::transpose(m) * w})
+    for (const glm::vec3& wrong :
+         {glm::transpose(m) * glm::transpose(rz) * w, m * rz * w, rz * w, glm::transpose(m) * w})
         EXPECT_LT(hemi::math::sh_eval_rgb(object, wrong).x, 0.8f * peak);
 }
 
@@ -395,8 +404,8 @@ TEST_F(PrtView, RefusesWhatTheAssetDoesNotHold)
     EXPECT_THROW(render(b, "gs", false, "sky", false), std::invalid_argument);
     EXPECT_THROW(render(b, "hl2", true, "sky", false), std::invalid_argument);
     EXPECT_THROW(render(b, "hl2", false, (dir() / "no_such.exr").string(), false), hemi::io::FormatError);
-    // The asset carries its images: a corrupt one (signature intact, a bit flipped inside; a checksummed .hemi
-    // file never holds one, a PrtAsset made in memory can) is refused naming the image.
+    // The asset carries its images: a corrupt one (signature intact, a bit flipped inside; a checksummed
+    // .hemi file never holds one, a PrtAsset made in memory can) is refused naming the image.
     hemi::io::PrtAsset corrupt_image = b.asset;
     ASSERT_FALSE(corrupt_image.images.empty());
     hemi::io::EncodedImage& image = corrupt_image.images.back();

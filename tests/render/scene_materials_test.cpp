@@ -44,7 +44,8 @@ io::ImageRgba8 blocks(uint32_t w, uint32_t h, uint32_t seed)
         {
             const uint32_t b = (x / 4) * 7 + (y / 4) * 13 + seed * 5;
             uint8_t* p = &img.pixels[(size_t(y) * w + x) * 4];
-            p[0] = uint8_t(60 + (b * 37) % 190), p[1] = uint8_t(60 + (b * 71) % 190), p[2] = uint8_t(60 + (b * 113) % 190);
+            p[0] = uint8_t(60 + (b * 37) % 190), p[1] = uint8_t(60 + (b * 71) % 190),
+            p[2] = uint8_t(60 + (b * 113) % 190);
             p[3] = 255;
         }
     return img;
@@ -58,7 +59,8 @@ io::ImageRgba8 smooth_normals(uint32_t w, uint32_t h)
         for (uint32_t x = 0; x < w; ++x)
         {
             const float u = (x + 0.5f) / w, v = (y + 0.5f) / h;
-            const glm::vec3 n = glm::normalize(glm::vec3(0.6f * std::sin(6.2831853f * u), 0.5f * std::cos(6.2831853f * v), 1.0f));
+            const glm::vec3 n = glm::normalize(
+                glm::vec3(0.6f * std::sin(6.2831853f * u), 0.5f * std::cos(6.2831853f * v), 1.0f));
             uint8_t* p = &img.pixels[(size_t(y) * w + x) * 4];
             for (int c = 0; c < 3; ++c)
                 p[c] = uint8_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
@@ -89,11 +91,13 @@ glm::vec4 bilinear(const io::ImageRgba8& img, glm::vec2 uv)
     const float x = uv.x * img.width - 0.5f, y = uv.y * img.height - 0.5f;
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     const float fx = x - x0, fy = y - y0;
-    auto at = [&](int xi, int yi) {
+    auto at = [&](int xi, int yi)
+    {
         return texel(img, uint32_t((xi % int(img.width) + img.width) % img.width),
                      uint32_t((yi % int(img.height) + img.height) % img.height));
     };
-    return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx), glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
+    return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx),
+                    glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
 }
 
 } // namespace
@@ -128,13 +132,16 @@ TEST_F(SceneMaterials, EachPrimitiveRendersWithItsOwnMaterialFromAMovedAsset)
             scene.mesh.uvs.push_back(uv[k]);
         }
         scene.primitives.push_back({uint32_t(scene.mesh.indices.size()), 6, q});
-        scene.mesh.indices.insert(scene.mesh.indices.end(), {first, first + 1, first + 2, first, first + 2, first + 3});
+        scene.mesh.indices.insert(scene.mesh.indices.end(),
+                                  {first, first + 1, first + 2, first, first + 2, first + 3});
     }
-    const io::ImageRgba8 brick = blocks(32, 32, 1), panel = blocks(16, 16, 2), normals = smooth_normals(64, 64);
+    const io::ImageRgba8 brick = blocks(32, 32, 1), panel = blocks(16, 16, 2),
+                         normals = smooth_normals(64, 64);
     scene.images.push_back({"brick base.png", "image/png", io::encode_png(brick)});
     scene.images.push_back({"brick_normal.jpg", "image/jpeg", io::encode_jpeg(normals, 95)});
     scene.images.push_back({"panel.png", "image/png", io::encode_png(panel)});
-    const io::TextureSampler nearest{io::Filter::Nearest, io::Filter::Nearest, false, io::Wrap::Repeat, io::Wrap::Repeat};
+    const io::TextureSampler nearest{io::Filter::Nearest, io::Filter::Nearest, false, io::Wrap::Repeat,
+                                     io::Wrap::Repeat};
     io::TextureSampler linear;
     linear.mipmaps = false;
     io::Material a;
@@ -154,7 +161,8 @@ TEST_F(SceneMaterials, EachPrimitiveRendersWithItsOwnMaterialFromAMovedAsset)
     c.base_color_factor = {0.2f, 0.4f, 0.6f, 1.0f};
     scene.materials = {a, b, c};
     const fs::path gltf = source / "scene.glb";
-    io::write_gltf(gltf, scene, {io::ImageStorage::External, io::ImageStorage::BufferView, io::ImageStorage::DataUri});
+    io::write_gltf(gltf, scene,
+                   {io::ImageStorage::External, io::ImageStorage::BufferView, io::ImageStorage::DataUri});
     ASSERT_TRUE(fs::exists(source / "brick base.png")) << "the base colour PNG is a file beside the scene";
 
     bake::PrtAssetOptions options;
@@ -181,7 +189,8 @@ TEST_F(SceneMaterials, EachPrimitiveRendersWithItsOwnMaterialFromAMovedAsset)
     std::vector<glm::vec3> irradiance = frame.world_lighting;
     math::convolve_cosine(irradiance);
     const glm::mat3 to_world(render::gltf_to_world());
-    const io::ImageRgba8 normal_map = io::decode_image(asset.images[size_t(a.normal.image)]); // what the GPU samples
+    const io::ImageRgba8 normal_map =
+        io::decode_image(asset.images[size_t(a.normal.image)]); // what the GPU samples
     int compared[3] = {}, failures = 0;
     for (uint32_t y = 2; y + 2 < H; y += 3)
         for (uint32_t x = 2; x + 2 < W; x += 3)
@@ -217,7 +226,8 @@ TEST_F(SceneMaterials, EachPrimitiveRendersWithItsOwnMaterialFromAMovedAsset)
                 nt = glm::normalize(glm::vec3(nt.x * m.normal_scale, nt.y * m.normal_scale, nt.z));
             }
             const Quad& q = quads[p];
-            const glm::vec3 N = glm::normalize(glm::cross(q.u, q.v)), T = glm::normalize(q.u), B = glm::cross(N, T);
+            const glm::vec3 N = glm::normalize(glm::cross(q.u, q.v)), T = glm::normalize(q.u),
+                            B = glm::cross(N, T);
             const glm::vec3 n = glm::normalize(to_world * (T * nt.x + B * nt.y + N * nt.z));
             float ylm[9];
             math::sh_eval(3, n, ylm);
@@ -227,10 +237,12 @@ TEST_F(SceneMaterials, EachPrimitiveRendersWithItsOwnMaterialFromAMovedAsset)
             const glm::vec3 want = albedo * e / float(M_PI) + m.emissive_factor;
             ++compared[p];
             for (int ch = 0; ch < 3; ++ch)
-                if (std::abs(color.at(x, y)[ch] - want[ch]) > 0.01f * std::abs(want[ch]) + 2e-3f && failures++ < 8)
-                    ADD_FAILURE() << m.name << " pixel " << x << "," << y << " uv " << uv.x << "," << uv.y << " ch " << ch
-                                  << ": GPU " << color.at(x, y)[ch] << ", CPU " << want[ch];
+                if (std::abs(color.at(x, y)[ch] - want[ch]) > 0.01f * std::abs(want[ch]) + 2e-3f &&
+                    failures++ < 8)
+                    ADD_FAILURE() << m.name << " pixel " << x << "," << y << " uv " << uv.x << "," << uv.y
+                                  << " ch " << ch << ": GPU " << color.at(x, y)[ch] << ", CPU " << want[ch];
         }
     for (int p = 0; p < 3; ++p)
-        EXPECT_GT(compared[p], 40) << "primitive " << p << " (" << asset.materials[size_t(p)].name << ") barely visible";
+        EXPECT_GT(compared[p], 40) << "primitive " << p << " (" << asset.materials[size_t(p)].name
+                                   << ") barely visible";
 }

@@ -24,7 +24,8 @@ glm::vec3 cpu_shade(const hemi::samples::ShNormalMapScene& s, glm::vec2 uv, floa
     float phi = 2.0f * float(M_PI) * uv.x, theta = float(M_PI) * uv.y;
     glm::vec3 N(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
     glm::vec3 T(-std::sin(phi), std::cos(phi), 0.0f);
-    glm::vec3 B = -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
+    glm::vec3 B =
+        -glm::vec3(std::cos(theta) * std::cos(phi), std::cos(theta) * std::sin(phi), -std::sin(theta));
     glm::vec3 nt = glm::normalize(hemi::test::sample_bilinear(s, uv) * 2.0f - 1.0f);
     glm::vec3 n = glm::normalize(T * nt.x + bitangent_sign * B * nt.y + N * nt.z);
     return s.albedo * hemi::math::sh9_eval_rgb(s.irradiance, n) / float(M_PI);
@@ -76,12 +77,13 @@ TEST_F(ShNormalMapSample, ImageIsNotBlankAndMatchesCpuShading)
             flipped_rejected += flipped_fails;
             for (int c = 0; c < 3; ++c)
                 if (std::abs(got[c] - want[c]) > 0.02f * want[c] + 0.004f && failures++ < 10)
-                    ADD_FAILURE() << "pixel " << x << "," << y << " uv " << uv.x << "," << uv.y << " channel " << c
-                                  << ": GPU " << got[c] << ", CPU " << want[c];
+                    ADD_FAILURE() << "pixel " << x << "," << y << " uv " << uv.x << "," << uv.y << " channel "
+                                  << c << ": GPU " << got[c] << ", CPU " << want[c];
         }
     EXPECT_GT(compared, 300);
     EXPECT_GT(flipped_rejected, compared / 10) << "a flipped bitangent would pass this comparison";
-    RecordProperty("flipped_bitangent_rejected", std::to_string(flipped_rejected) + "/" + std::to_string(compared));
+    RecordProperty("flipped_bitangent_rejected",
+                   std::to_string(flipped_rejected) + "/" + std::to_string(compared));
 }
 
 // Constant environment L = 1: E = pi for every normal, so every covered pixel is exactly the albedo,
@@ -100,7 +102,8 @@ TEST_F(ShNormalMapSample, WhiteFurnaceRendersTheAlbedo)
                 ++covered;
                 for (int c = 0; c < 3; ++c)
                 {
-                    worst = std::max(worst, double(std::abs(color.at(x, y)[c] - scene.albedo[c]) / scene.albedo[c]));
+                    worst = std::max(worst,
+                                     double(std::abs(color.at(x, y)[c] - scene.albedo[c]) / scene.albedo[c]));
                     ASSERT_NEAR(color.at(x, y)[c], scene.albedo[c], 1e-5f * scene.albedo[c]) << x << "," << y;
                 }
             }

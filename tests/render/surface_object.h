@@ -27,10 +27,11 @@ struct SurfaceObject
     const render::MaterialType* type = nullptr;
     VkDescriptorSet source_set = VK_NULL_HANDLE; // overrides the vertex or probe set (e.g. coefficient maps)
 
-    // Per-vertex coefficients from `source` (tangent frame, basis `basis`), or, with source null, an SH9 probe
-    // in world space. `normal_map` is image 0.
+    // Per-vertex coefficients from `source` (tangent frame, basis `basis`), or, with source null, an SH9
+    // probe in world space. `normal_map` is image 0.
     SurfaceObject(render::MaterialSystem& system, const io::Mesh& m, const io::ImageRgba8& normal_map,
-                  const io::Material& mat, const math::BasisDesc& basis, const render::CoefficientSource* source)
+                  const io::Material& mat, const math::BasisDesc& basis,
+                  const render::CoefficientSource* source)
         : upload(system.device()), mesh(system.device(), m, upload), material(mat),
           textures(system.device(), std::span<const io::ImageRgba8>(&normal_map, 1),
                    std::span<const io::Material>(&material, 1), upload),
@@ -41,8 +42,8 @@ struct SurfaceObject
         key.double_sided = material.double_sided;
         if (source)
         {
-            vertex = std::make_unique<render::VertexCoefficients>(system, source->coefficients(),
-                                                                  source->instance_stride() * source->instances());
+            vertex = std::make_unique<render::VertexCoefficients>(
+                system, source->coefficients(), source->instance_stride() * source->instances());
             key.source = render::CoefficientSourceKind::Vertex;
             key.frame = render::ShadingFrame::Tangent;
         }

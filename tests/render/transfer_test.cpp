@@ -44,8 +44,9 @@ std::vector<double> reference(const std::vector<float>& t, const std::vector<glm
 }
 
 // Relative error against the magnitude of the terms (the sum can cancel to ~0).
-void expect_matches(const std::vector<float>& got, const std::vector<double>& ref, const std::vector<float>& t,
-                    const std::vector<glm::vec3>& light, const Case& c, const char* path)
+void expect_matches(const std::vector<float>& got, const std::vector<double>& ref,
+                    const std::vector<float>& t, const std::vector<glm::vec3>& light, const Case& c,
+                    const char* path)
 {
     ASSERT_EQ(got.size(), size_t(c.n) * c.k * 4);
     int failures = 0;
@@ -61,8 +62,9 @@ void expect_matches(const std::vector<float>& got, const std::vector<double>& re
                 if (std::abs(g - r) > 1e-5 * scale)
                 {
                     ADD_FAILURE() << path << " N=" << c.n << " K=" << c.k << " L=" << c.l << " vertex " << v
-                                  << " coefficient " << k << " channel " << ch << ": got " << g << ", expected " << r
-                                  << " (relative error " << std::abs(g - r) / scale << ")";
+                                  << " coefficient " << k << " channel " << ch << ": got " << g
+                                  << ", expected " << r << " (relative error " << std::abs(g - r) / scale
+                                  << ")";
                     ++failures;
                 }
             }
@@ -117,7 +119,8 @@ TEST_F(TransferPassTest, SegmentedSetsEqualReference)
     for (uint32_t j = 0; j < c.l; ++j)
         light[j] = {lv[j * 3], lv[j * 3 + 1], lv[j * 3 + 2]};
     TransferMatrices m(c.n, c.k, c.l, t);
-    // One block is 9*25*8 = 1800 texels; 2 * 1800 = 3600 texels per view -> 2 blocks per segment -> 16 segments.
+    // One block is 9*25*8 = 1800 texels; 2 * 1800 = 3600 texels per view -> 2 blocks per segment -> 16
+    // segments.
     TransferPass pass(hemi::test::device(), m, 3600);
     EXPECT_EQ(pass.segment_count(), 16u);
     pass.run(light);
@@ -184,7 +187,8 @@ TEST(TransferMatricesTest, RejectsBadShapes)
     std::vector<float> t(10 * 9 * 25, 0.0f);
     expect_invalid_argument_naming([&] { TransferMatrices(0, 9, 25, {}); }, "zero vertices");
     expect_invalid_argument_naming(
-        [&] { TransferMatrices(10, 9, 25, std::span<const float>(t).first(t.size() - 1)); }, "expected 2250 floats");
+        [&] { TransferMatrices(10, 9, 25, std::span<const float>(t).first(t.size() - 1)); },
+        "expected 2250 floats");
     expect_invalid_argument_naming([&] { TransferMatrices(10, 10, 25, t); }, "K = 10");
     expect_invalid_argument_naming([&] { TransferMatrices(10, 9, 24, t); }, "L = 24");
     expect_invalid_argument_naming([&] { TransferMatrices(10, 0, 25, t); }, "K = 0");
@@ -213,13 +217,15 @@ TEST_F(TransferPassTest, RejectsMismatchedLightingAndOutput)
     TransferMatrices m(33, 4, 9, t);
     std::vector<glm::vec3> wrong(16, glm::vec3(1.0f)), right(9, glm::vec3(1.0f));
     std::vector<float> out(33 * 4 * 4), short_out(10);
-    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, wrong, out); }, "lighting has 16");
+    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, wrong, out); },
+                                   "lighting has 16");
     expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, right, short_out); },
                                    "output has 10 floats");
     TransferPass pass(hemi::test::device(), m);
     expect_invalid_argument_naming([&] { pass.run(wrong); }, "lighting has 16");
     // NaN lighting, on the host path and on the device path.
     right[3].y = std::nanf("");
-    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, right, out); }, "non-finite");
+    expect_invalid_argument_naming([&] { hemi::render::transfer_multiply_host(m, right, out); },
+                                   "non-finite");
     expect_invalid_argument_naming([&] { pass.run(right); }, "non-finite");
 }

@@ -8,10 +8,23 @@
 layout(constant_id = 0) const int kBasis = 0;
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer Normals { vec4 normals[]; };
-layout(set = 0, binding = 1, std430) writeonly buffer Values { float values[]; };
-layout(set = 0, binding = 2, std140) uniform Separable { vec4 sep4_weights[9]; };
-layout(push_constant) uniform Push { uint count; } pc;
+layout(set = 0, binding = 0, std430) readonly buffer Normals
+{
+    vec4 normals[];
+};
+layout(set = 0, binding = 1, std430) writeonly buffer Values
+{
+    float values[];
+};
+layout(set = 0, binding = 2, std140) uniform Separable
+{
+    vec4 sep4_weights[9];
+};
+layout(push_constant) uniform Push
+{
+    uint count;
+}
+pc;
 
 void main()
 {

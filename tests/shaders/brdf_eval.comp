@@ -1,14 +1,20 @@
 #version 450
 // Heidrich & Seidel's models in GLSL (shaders/include/hemi/brdf/factored.glsl) at a list of (l, v) pairs with
-// n = +z and t = +x: per pair, Torrance-Sparrow evaluated directly and from its two tables, Banks directly and
-// from its table, Phong directly and from its table. A test shader (tests/shaders/).
+// n = +z and t = +x: per pair, Torrance-Sparrow evaluated directly and from its two tables, Banks directly
+// and from its table, Phong directly and from its table. A test shader (tests/shaders/).
 #extension GL_GOOGLE_include_directive : require
 #include "hemi/brdf/factored.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer Pairs { vec4 dirs[]; }; // l, v, l, v, ...
-layout(set = 0, binding = 1, std430) writeonly buffer Values { float values[]; }; // 6 per pair
+layout(set = 0, binding = 0, std430) readonly buffer Pairs
+{
+    vec4 dirs[];
+}; // l, v, l, v, ...
+layout(set = 0, binding = 1, std430) writeonly buffer Values
+{
+    float values[];
+}; // 6 per pair
 layout(set = 0, binding = 2) uniform sampler2DArray ts_tables;
 layout(set = 0, binding = 3) uniform sampler2D banks_table;
 layout(set = 0, binding = 4) uniform sampler2D phong_table;
@@ -19,7 +25,8 @@ layout(push_constant) uniform Push
     float ior;
     float exponent;
     float size;
-} pc;
+}
+pc;
 
 void main()
 {

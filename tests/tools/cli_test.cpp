@@ -7,9 +7,9 @@
 #include "models.h"
 
 #include <hemi/bake/ssbump.h>
+#include <hemi/io/envmap_asset.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
-#include <hemi/io/envmap_asset.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
 
@@ -61,9 +61,15 @@ Result run(const std::string& exe, const std::string& args, const std::string& e
     return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
 }
 
-Result bake(const std::string& args) { return run(HEMI_BAKE_EXE, "prt " + args); }
+Result bake(const std::string& args)
+{
+    return run(HEMI_BAKE_EXE, "prt " + args);
+}
 // Every render runs with the Khronos validation layer: hemi-render exits 2 if it reports anything.
-Result render(const std::string& args) { return run(HEMI_RENDER_EXE, args, "HEMI_VALIDATION=1"); }
+Result render(const std::string& args)
+{
+    return run(HEMI_RENDER_EXE, args, "HEMI_VALIDATION=1");
+}
 
 std::string q(const fs::path& p)
 {
@@ -75,7 +81,8 @@ std::string q(const fs::path& p)
 
 const fs::path& knot()
 {
-    static const fs::path p = hemi::samples::write_prt_model(dir() / "models", "knot", hemi::samples::PrtModel::Complex, 0.2f);
+    static const fs::path p =
+        hemi::samples::write_prt_model(dir() / "models", "knot", hemi::samples::PrtModel::Complex, 0.2f);
     return p;
 }
 
@@ -86,9 +93,11 @@ const fs::path& knot()
 TEST(Cli, BakeThenRenderEndToEnd)
 {
     const fs::path asset = dir() / "knot.hemi", json = dir() / "knot.json";
-    const Result b = bake(q(knot()) + " -o " + q(asset) +
-                          " --bases gs,hl2,sal4,h4,h6,sep4,prt --transfer unshadowed --order 4 --rays 16 --seed 3"
-                          " --cpca 1x8 --json " + q(json));
+    const Result b =
+        bake(q(knot()) + " -o " + q(asset) +
+             " --bases gs,hl2,sal4,h4,h6,sep4,prt --transfer unshadowed --order 4 --rays 16 --seed 3"
+             " --cpca 1x8 --json " +
+             q(json));
     ASSERT_EQ(b.status, 0) << b.err;
     EXPECT_FALSE(fs::exists(asset.string() + ".partial")) << "the checkpoint outlived a finished bake";
     EXPECT_NE(b.out.find("Mrays/s"), std::string::npos) << b.out;
@@ -99,7 +108,8 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_EQ(report["techniques"].size(), 7u);
     // Each technique's reported CPCA error is the RMS difference between the asset's dense matrices and the
     // CPCA data it stores, multiplied out here (means, vectors, weights), and the relative error is that over
-    // the dense matrices' RMS; 1 x 8 vectors hold most of the smooth unshadowed transfer (below 0.5 relative).
+    // the dense matrices' RMS; 1 x 8 vectors hold most of the smooth unshadowed transfer (below 0.5
+    // relative).
     const hemi::io::PrtAsset baked = hemi::io::read_prt_asset(asset);
     for (const nlohmann::json& t : report["techniques"])
     {
@@ -113,14 +123,16 @@ TEST(Cli, BakeThenRenderEndToEnd)
             {
                 double x = c.means[size_t(c.cluster[v]) * d + e];
                 for (uint32_t j = 0; j < c.vectors; ++j)
-                    x += double(c.weights[v * c.vectors + j]) * c.basis[(size_t(c.cluster[v]) * c.vectors + j) * d + e];
+                    x += double(c.weights[v * c.vectors + j]) *
+                         c.basis[(size_t(c.cluster[v]) * c.vectors + j) * d + e];
                 const double dense = tech.matrices[v * d + e];
                 error += (x - dense) * (x - dense);
                 squares += dense * dense;
             }
         const double rms_error = std::sqrt(error / double(n * d)), rms = std::sqrt(squares / double(n * d));
         EXPECT_NEAR(t["cpca_rms_error"].get<double>(), rms_error, 1e-3 * rms_error + 1e-7) << t["name"];
-        EXPECT_NEAR(t["cpca_relative_error"].get<double>(), rms_error / rms, 1e-3 * rms_error / rms + 1e-7) << t["name"];
+        EXPECT_NEAR(t["cpca_relative_error"].get<double>(), rms_error / rms, 1e-3 * rms_error / rms + 1e-7)
+            << t["name"];
         EXPECT_GT(t["cpca_relative_error"].get<double>(), 0.0) << t["name"];
         EXPECT_LT(t["cpca_relative_error"].get<double>(), 0.5) << t["name"];
     }
@@ -160,8 +172,8 @@ TEST(Cli, BakeThenRenderEndToEnd)
     // An EXR environment of radiance 1 everywhere is the uniform environment: the furnace again.
     const fs::path env = dir() / "white_env.exr", exr_env = dir() / "white_from_exr.exr";
     hemi::io::write_exr(env, hemi::io::ImageRgba{64, 32, std::vector<float>(64 * 32 * 4, 1.0f)});
-    const Result e = render(q(asset) + " --technique sal4 --env " + q(env) + " --white --rotate 33 --size 96x64 -o " +
-                            q(exr_env));
+    const Result e = render(q(asset) + " --technique sal4 --env " + q(env) +
+                            " --white --rotate 33 --size 96x64 -o " + q(exr_env));
     ASSERT_EQ(e.status, 0) << e.err;
     const hemi::io::ImageRgba from_exr = hemi::io::read_exr(exr_env);
     size_t covered_exr = 0;
@@ -175,14 +187,18 @@ TEST(Cli, BakeThenRenderEndToEnd)
     EXPECT_GT(covered_exr, 500u);
 
     const fs::path png = dir() / "sky.png";
-    const Result c = render(q(asset) + " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
-                                       "--camera 0,-4,1,0,0,0 -o " + q(png));
+    const Result c = render(q(asset) +
+                            " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
+                            "--camera 0,-4,1,0,0,0 -o " +
+                            q(png));
     ASSERT_EQ(c.status, 0) << c.err;
     // The PNG is the same frame as the EXR of the same command, sRGB-encoded to 8 bits (the curve typed
     // here), the alpha (coverage) kept; and the model covers part of it, lit.
     const fs::path sky_exr = dir() / "sky.exr";
-    const Result c_exr = render(q(asset) + " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
-                                           "--camera 0,-4,1,0,0,0 -o " + q(sky_exr));
+    const Result c_exr = render(q(asset) +
+                                " --technique gs --cpca --env sky --rotate 90 --size 64x48 "
+                                "--camera 0,-4,1,0,0,0 -o " +
+                                q(sky_exr));
     ASSERT_EQ(c_exr.status, 0) << c_exr.err;
     const hemi::io::ImageRgba8 decoded = hemi::io::read_png(png);
     const hemi::io::ImageRgba linear = hemi::io::read_exr(sky_exr);
@@ -208,7 +224,8 @@ TEST(Cli, BakeThenRenderEndToEnd)
 // that can hold a constant: gs, sal4, h4 and h6. Each frame has at least 500 covered and 500 empty pixels.
 TEST(Cli, WhiteFurnaceThroughTheCommandLinesOnBothModels)
 {
-    const fs::path torus = hemi::samples::write_prt_model(dir() / "furnace", "torus", hemi::samples::PrtModel::Simple);
+    const fs::path torus =
+        hemi::samples::write_prt_model(dir() / "furnace", "torus", hemi::samples::PrtModel::Simple);
     for (const auto& [name, model] : {std::pair<std::string, fs::path>{"knot", knot()}, {"torus", torus}})
     {
         const fs::path asset = dir() / (name + "_furnace.hemi");
@@ -270,7 +287,8 @@ TEST(Cli, ValidationMessagesMakeExitStatusTwo)
     EXPECT_TRUE(fs::exists(clean));
 
     const fs::path flagged = dir() / "selftest_flagged.png";
-    const Result bad = run(HEMI_RENDER_EXE, args + q(flagged), "HEMI_VALIDATION=1 HEMI_VALIDATION_SELFTEST=1");
+    const Result bad =
+        run(HEMI_RENDER_EXE, args + q(flagged), "HEMI_VALIDATION=1 HEMI_VALIDATION_SELFTEST=1");
     EXPECT_EQ(bad.status, 2) << bad.err;
     EXPECT_NE(bad.err.find("hemi-render: validation: hemi validation self-test: a synthetic warning"),
               std::string::npos)
@@ -318,7 +336,8 @@ TEST(Cli, SameSeedSameBytes)
 TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
 {
     const fs::path out = dir() / "never.hemi";
-    auto expect_failure = [&](const Result& r, const std::string& part) {
+    auto expect_failure = [&](const Result& r, const std::string& part)
+    {
         EXPECT_EQ(r.status, 1) << r.err;
         EXPECT_NE(r.err.find(part), std::string::npos) << "stderr: " << r.err;
         EXPECT_FALSE(fs::exists(out));
@@ -328,7 +347,8 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
     std::ofstream(garbage) << "{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ { \"primitives\": [ { ";
     expect_failure(bake(q(garbage) + " -o " + q(out)), garbage.string());
     // A normal map the glTF references but that does not exist.
-    fs::path missing = hemi::samples::write_prt_model(dir() / "missing", "m", hemi::samples::PrtModel::Simple, 0.3f);
+    fs::path missing =
+        hemi::samples::write_prt_model(dir() / "missing", "m", hemi::samples::PrtModel::Simple, 0.3f);
     fs::remove(dir() / "missing" / "m_normal.png");
     expect_failure(bake(q(missing) + " -o " + q(out)), "m_normal.png");
     // Bad options.
@@ -346,7 +366,8 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
     f[f.size() / 2] = char(f[f.size() / 2] ^ 0x01);
     std::ofstream(flipped, std::ios::binary) << f;
     const fs::path png = dir() / "never.png";
-    auto expect_render_failure = [&](const Result& r, const std::string& part) {
+    auto expect_render_failure = [&](const Result& r, const std::string& part)
+    {
         EXPECT_EQ(r.status, 1) << r.err;
         EXPECT_NE(r.err.find(part), std::string::npos) << "stderr: " << r.err;
         EXPECT_FALSE(fs::exists(png));
@@ -354,8 +375,8 @@ TEST(Cli, BadInputNamesTheFileAndLeavesNoOutput)
     expect_render_failure(render(q(cut) + " --technique hl2 --env sky -o " + q(png)), cut.string());
     expect_render_failure(render(q(flipped) + " --technique hl2 --env sky -o " + q(png)), "checksum");
     expect_render_failure(render(q(good) + " --technique gs --env sky -o " + q(png)), "no technique 'gs'");
-    expect_render_failure(render(q(good) + " --technique hl2 --env " + q(dir() / "nope.exr") + " -o " + q(png)),
-                          "nope.exr");
+    expect_render_failure(
+        render(q(good) + " --technique hl2 --env " + q(dir() / "nope.exr") + " -o " + q(png)), "nope.exr");
     expect_render_failure(render(q(good) + " --technique hl2 --env sky --size 0x5 -o " + q(png)), "--size");
     // No Vulkan device matching the selector.
     expect_render_failure(run(HEMI_RENDER_EXE, q(good) + " --technique hl2 --env sky -o " + q(png),
@@ -387,16 +408,19 @@ TEST(Cli, BakesFailFastOnUnwritableOutputsAndLeaveNoTemporaries)
     EXPECT_EQ(missing.status, 1) << missing.err;
     EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
     EXPECT_NE(missing.err.find("no_such_folder"), std::string::npos) << missing.err;
-    EXPECT_EQ(missing.err.find("pass 1"), std::string::npos) << "the bake started before the output was checked";
+    EXPECT_EQ(missing.err.find("pass 1"), std::string::npos)
+        << "the bake started before the output was checked";
     const Result json = bake(q(knot()) + " -o " + q(dir() / "json_out.hemi") + " --json " +
                              q(dir() / "no_such_folder" / "report.json"));
     EXPECT_EQ(json.status, 1) << json.err;
     EXPECT_NE(json.err.find("report.json"), std::string::npos) << json.err;
-    EXPECT_EQ(json.err.find("pass 1"), std::string::npos) << "the bake started before its report's folder was checked";
+    EXPECT_EQ(json.err.find("pass 1"), std::string::npos)
+        << "the bake started before its report's folder was checked";
 
     const fs::path blocked = dir() / "blocked.hemi";
     fs::create_directories(blocked.string() + ".partial");
-    const Result folder = bake(q(knot()) + " -o " + q(blocked) + " --bases gs --transfer unshadowed --order 3");
+    const Result folder =
+        bake(q(knot()) + " -o " + q(blocked) + " --bases gs --transfer unshadowed --order 3");
     EXPECT_EQ(folder.status, 1) << folder.err;
     EXPECT_NE(folder.err.find("blocked.hemi.partial"), std::string::npos) << folder.err;
     EXPECT_NE(folder.err.find("folder"), std::string::npos) << folder.err;
@@ -414,7 +438,10 @@ TEST(Cli, BakesFailFastOnUnwritableOutputsAndLeaveNoTemporaries)
 
 namespace
 {
-Result ssbump(const std::string& args) { return run(HEMI_BAKE_EXE, "ssbump " + args); }
+Result ssbump(const std::string& args)
+{
+    return run(HEMI_BAKE_EXE, "ssbump " + args);
+}
 
 void write_file(const fs::path& p, const std::vector<uint8_t>& bytes)
 {
@@ -430,8 +457,10 @@ TEST(BakeCli, SsbumpBakesAndConvertsInTheIssuesForms)
 {
     const fs::path flat = dir() / "flat16.png";
     write_file(flat, hemi::test::encode_png_samples(16, 12, 1, 16, std::vector<uint16_t>(16 * 12, 30000)));
-    const fs::path png = dir() / "flat_ssbump.png", exr = dir() / "flat_ssbump.exr", json = dir() / "flat.json";
-    const Result r = ssbump(q(flat) + " -o " + q(png) + " --exr " + q(exr) + " --json " + q(json) + " --scale 4");
+    const fs::path png = dir() / "flat_ssbump.png", exr = dir() / "flat_ssbump.exr",
+                   json = dir() / "flat.json";
+    const Result r =
+        ssbump(q(flat) + " -o " + q(png) + " --exr " + q(exr) + " --json " + q(json) + " --scale 4");
     ASSERT_EQ(r.status, 0) << r.err;
     const hemi::io::ImageRgba8 out = hemi::io::read_png(png);
     ASSERT_EQ(out.width, 16u);
@@ -480,12 +509,17 @@ TEST(BakeCli, SsbumpBakesAndConvertsInTheIssuesForms)
     std::vector<glm::vec3> truth;
     for (size_t i = 0; i < 256; ++i)
     {
-        const glm::vec3 n = glm::normalize(glm::vec3(0.3f * std::sin(0.37f * float(i)), 0.3f * std::cos(0.23f * float(i)), 1.0f));
+        const glm::vec3 n = glm::normalize(
+            glm::vec3(0.3f * std::sin(0.37f * float(i)), 0.3f * std::cos(0.23f * float(i)), 1.0f));
         for (int c = 0; c < 3; ++c)
             normals[i * 3 + size_t(c)] = uint16_t(std::lround((n[c] * 0.5f + 0.5f) * 255.0f));
-        truth.push_back(glm::vec3(normals[i * 3] / 255.0f, normals[i * 3 + 1] / 255.0f, normals[i * 3 + 2] / 255.0f) * 2.0f - 1.0f);
+        truth.push_back(
+            glm::vec3(normals[i * 3] / 255.0f, normals[i * 3 + 1] / 255.0f, normals[i * 3 + 2] / 255.0f) *
+                2.0f -
+            1.0f);
     }
-    const fs::path normal_png = dir() / "normals.png", converted = dir() / "converted.png", back = dir() / "back.png";
+    const fs::path normal_png = dir() / "normals.png", converted = dir() / "converted.png",
+                   back = dir() / "back.png";
     write_file(normal_png, hemi::test::encode_png_samples(16, 16, 3, 8, normals));
     const Result from = ssbump("--from-normal " + q(normal_png) + " -o " + q(converted));
     ASSERT_EQ(from.status, 0) << from.err;
@@ -499,8 +533,11 @@ TEST(BakeCli, SsbumpBakesAndConvertsInTheIssuesForms)
         // The weights are Eq. (3) of the decoded normal, rounded to 8 bits.
         const glm::vec3 w = hemi::bake::ssbump_weights(n, hemi::bake::SsbumpConvention::Normalized);
         for (int c = 0; c < 3; ++c)
-            ASSERT_NEAR(int(weights.pixels[i * 4 + size_t(c)]), std::lround(w[c] * 255.0f), 1) << "texel " << i;
-        const glm::vec3 m = glm::normalize(glm::vec3(again.pixels[i * 4], again.pixels[i * 4 + 1], again.pixels[i * 4 + 2]) / 255.0f * 2.0f - 1.0f);
+            ASSERT_NEAR(int(weights.pixels[i * 4 + size_t(c)]), std::lround(w[c] * 255.0f), 1)
+                << "texel " << i;
+        const glm::vec3 m = glm::normalize(
+            glm::vec3(again.pixels[i * 4], again.pixels[i * 4 + 1], again.pixels[i * 4 + 2]) / 255.0f * 2.0f -
+            1.0f);
         worst = std::max(worst, std::acos(std::min(1.0, double(glm::dot(m, n)))) * 180.0 / M_PI);
     }
     EXPECT_LT(worst, 3.0) << "degrees";
@@ -535,7 +572,8 @@ TEST(BakeCli, SsbumpRefusesBadInputWithTheFileNamed)
     const Result folder = ssbump(q(flat) + " -o " + q(dir() / "no_such_folder" / "x.png"));
     EXPECT_EQ(folder.status, 1);
     EXPECT_NE(folder.err.find("no_such_folder"), std::string::npos) << folder.err;
-    EXPECT_EQ(folder.err.find("occlusion"), std::string::npos) << "the bake started before the output was checked";
+    EXPECT_EQ(folder.err.find("occlusion"), std::string::npos)
+        << "the bake started before the output was checked";
     const Result two = ssbump(q(flat) + " --from-normal " + q(normal_png) + " -o " + q(out));
     EXPECT_EQ(two.status, 1);
     EXPECT_NE(two.err.find("give one of"), std::string::npos) << two.err;
@@ -557,7 +595,8 @@ fs::path write_floor_gltf(const std::string& name, int cells, bool lightmap_uvs 
         for (int i = 0; i < cells; ++i)
         {
             const uint32_t base = uint32_t(m.positions.size());
-            const float u[2] = {float(i) / cells, float(i + 1) / cells}, v[2] = {float(j) / cells, float(j + 1) / cells};
+            const float u[2] = {float(i) / cells, float(i + 1) / cells},
+                        v[2] = {float(j) / cells, float(j + 1) / cells};
             // (u, v) -> (2u - 1, 0, 2v - 1): +x along u, +z along v, so the normal (counter-clockwise) is +y.
             const glm::vec2 corners[4] = {{u[0], v[0]}, {u[0], v[1]}, {u[1], v[1]}, {u[1], v[0]}};
             for (const glm::vec2& c : corners)
@@ -579,7 +618,10 @@ fs::path write_floor_gltf(const std::string& name, int cells, bool lightmap_uvs 
     return p;
 }
 
-Result lightmap(const std::string& args) { return run(HEMI_BAKE_EXE, "lightmap " + args); }
+Result lightmap(const std::string& args)
+{
+    return run(HEMI_BAKE_EXE, "lightmap " + args);
+}
 } // namespace
 
 // hemi-bake lightmap in the issue's form: a glTF floor under uniform radiance 1 bakes E = pi in the asset and
@@ -588,10 +630,12 @@ Result lightmap(const std::string& args) { return run(HEMI_BAKE_EXE, "lightmap "
 TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
 {
     const fs::path scene = write_floor_gltf("floor.glb", 2);
-    const fs::path asset = dir() / "floor_lightmap.hemi", exrs = dir() / "floor_exr", json = dir() / "floor_lightmap.json";
+    const fs::path asset = dir() / "floor_lightmap.hemi", exrs = dir() / "floor_exr",
+                   json = dir() / "floor_lightmap.json";
     fs::create_directories(exrs);
-    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --env uniform --size 16x16 --rays 256 --exr-dir " +
-                              q(exrs) + " --json " + q(json));
+    const Result r =
+        lightmap(q(scene) + " -o " + q(asset) + " --env uniform --size 16x16 --rays 256 --exr-dir " +
+                 q(exrs) + " --json " + q(json));
     ASSERT_EQ(r.status, 0) << r.err;
     const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
     EXPECT_EQ(a.width, 16u);
@@ -616,7 +660,8 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
         ASSERT_NE(file.header().channels().findChannel("c0.R"), nullptr);
         std::vector<float> values(256);
         Imf::FrameBuffer fb;
-        fb.insert("c0.R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float), 16 * sizeof(float)));
+        fb.insert("c0.R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float),
+                                     16 * sizeof(float)));
         file.setFrameBuffer(fb);
         file.readPixels(0, 15);
         for (float v : values)
@@ -624,9 +669,11 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
     }
     ASSERT_TRUE(fs::exists(exrs / "floor_lightmap.sh9.exr"));
 
-    // The sun straight above in hemi's world: E(+z) = sum_l A_l y_l0(z)^2 = pi/4 + pi/2 * ... (SH9 of max(0, cos)).
+    // The sun straight above in hemi's world: E(+z) = sum_l A_l y_l0(z)^2 = pi/4 + pi/2 * ... (SH9 of max(0,
+    // cos)).
     const fs::path sunny = dir() / "floor_sun.hemi";
-    const Result s = lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun 0,0,1,2,2,2,0 --size 8 --bases plain");
+    const Result s =
+        lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun 0,0,1,2,2,2,0 --size 8 --bases plain");
     ASSERT_EQ(s.status, 0) << s.err;
     const double expected = 2.0 * (M_PI * 0.282095 * 0.282095 + 2 * M_PI / 3 * 0.488603 * 0.488603 +
                                    M_PI / 4 * 4 * 0.315392 * 0.315392 * 1.0);
@@ -667,7 +714,8 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
 {
     const fs::path scene = write_floor_gltf("furnace_floor.glb", 2);
     const fs::path asset = dir() / "furnace_floor.hemi";
-    const Result b = lightmap(q(scene) + " -o " + q(asset) + " --size 16 --rays 512 --bases sh9,hl2,h4,h6,sal4,plain");
+    const Result b =
+        lightmap(q(scene) + " -o " + q(asset) + " --size 16 --rays 512 --bases sh9,hl2,h4,h6,sal4,plain");
     ASSERT_EQ(b.status, 0) << b.err;
     for (const char* technique : {"sh9", "h4", "h6", "sal4", "plain", "gs"})
     {
@@ -691,7 +739,9 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
     }
     // HL2 cannot hold a constant over the hemisphere (Habel & Wimmer): its furnace is off, as for PRT.
     const fs::path hl2 = dir() / "furnace_hl2.exr";
-    ASSERT_EQ(render(q(asset) + " --technique hl2 --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(hl2)).status, 0);
+    ASSERT_EQ(
+        render(q(asset) + " --technique hl2 --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(hl2)).status,
+        0);
     EXPECT_GT(std::abs(hemi::io::read_exr(hl2).at(24, 24)[0] - 1.0f), 0.05f);
     // Options for PRT assets are refused for a lightmap asset, naming it; a technique it lacks is listed.
     const Result env = render(q(asset) + " --env sky -o " + q(dir() / "x.png"));
@@ -704,19 +754,22 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
 }
 
 // hemi-bake lightmap bakes the scene's own KHR_lights_punctual lights: a point light 1 above a glTF floor
-// gives every texel the SH9 of I / d^2 from the light's direction (typed here), and the JSON report counts it.
+// gives every texel the SH9 of I / d^2 from the light's direction (typed here), and the JSON report counts
+// it.
 TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
 {
     const fs::path plain_floor = write_floor_gltf("lit_floor_source.gltf", 2);
     nlohmann::json j = nlohmann::json::parse(slurp(plain_floor));
     j["extensionsUsed"].push_back("KHR_lights_punctual");
     j["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}, {"intensity", 2.0}}};
-    j["nodes"].push_back({{"translation", {0.0, 1.0, 0.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    j["nodes"].push_back(
+        {{"translation", {0.0, 1.0, 0.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
     j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
     const fs::path scene = dir() / "lit_floor.gltf";
     std::ofstream(scene) << j.dump();
     const fs::path asset = dir() / "lit_floor.hemi", json = dir() / "lit_floor.json";
-    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --env-scale 0 --size 16 --bases plain --json " + q(json));
+    const Result r =
+        lightmap(q(scene) + " -o " + q(asset) + " --env-scale 0 --size 16 --bases plain --json " + q(json));
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(nlohmann::json::parse(slurp(json))["punctual_lights"], 1);
     const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
@@ -732,7 +785,8 @@ TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
             const double e = 2.0 / d2 *
                              (M_PI * 0.282095 * 0.282095 + 2.0 * M_PI / 3.0 * 0.488603 * 0.488603 * cz +
                               M_PI / 4.0 * 0.315392 * 0.315392 * (3.0 * cz * cz - 1.0) * 2.0);
-            ASSERT_NEAR(plain[(size_t(y) * 16 + x) * 3], e, 2e-3 * e + 1e-4) << "texel (" << x << ", " << y << ")";
+            ASSERT_NEAR(plain[(size_t(y) * 16 + x) * 3], e, 2e-3 * e + 1e-4)
+                << "texel (" << x << ", " << y << ")";
         }
     // Green 2007's materials through hemi-render, from the rnm colours (validation layer on).
     const fs::path rnm_asset = dir() / "lit_floor_rnm.hemi";
@@ -757,11 +811,14 @@ TEST(BakeCli, ReferenceIsFramedLikeHemiRender)
     ASSERT_EQ(lightmap(q(scene) + " -o " + q(asset) + " --size 16 --rays 512 --bases plain").status, 0);
     for (const std::string camera : {"auto", "0.4,-2.2,1.6,0.1,0.2,0"})
     {
-        const fs::path ref = dir() / "reference.exr", raster = dir() / "raster.exr", json = dir() / "reference.json";
-        const Result r = run(HEMI_BAKE_EXE, "reference " + q(scene) + " --white --size 64x40 --rays 8 --camera " + camera +
-                                                " --json " + q(json) + " -o " + q(ref));
+        const fs::path ref = dir() / "reference.exr", raster = dir() / "raster.exr",
+                       json = dir() / "reference.json";
+        const Result r =
+            run(HEMI_BAKE_EXE, "reference " + q(scene) + " --white --size 64x40 --rays 8 --camera " + camera +
+                                   " --json " + q(json) + " -o " + q(ref));
         ASSERT_EQ(r.status, 0) << r.err;
-        const Result v = render(q(asset) + " --technique plain --white --size 64x40 --camera " + camera + " -o " + q(raster));
+        const Result v = render(q(asset) + " --technique plain --white --size 64x40 --camera " + camera +
+                                " -o " + q(raster));
         ASSERT_EQ(v.status, 0) << v.err;
         const hemi::io::ImageRgba a = hemi::io::read_exr(ref), b = hemi::io::read_exr(raster);
         ASSERT_EQ(a.width, 64u);
@@ -777,8 +834,10 @@ TEST(BakeCli, ReferenceIsFramedLikeHemiRender)
                     ASSERT_EQ(b.at(x, y)[3], 1.0f) << camera << ": pixel (" << x << ", " << y << ")";
                     for (int c = 0; c < 3; ++c)
                     {
-                        ASSERT_NEAR(a.at(x, y)[c], 1.0f, 1e-4f) << camera << ": pixel (" << x << ", " << y << ")";
-                        ASSERT_NEAR(b.at(x, y)[c], a.at(x, y)[c], 0.01f) << camera << ": pixel (" << x << ", " << y << ")";
+                        ASSERT_NEAR(a.at(x, y)[c], 1.0f, 1e-4f)
+                            << camera << ": pixel (" << x << ", " << y << ")";
+                        ASSERT_NEAR(b.at(x, y)[c], a.at(x, y)[c], 0.01f)
+                            << camera << ": pixel (" << x << ", " << y << ")";
                     }
                 }
                 else if (coverage == 0.0f)
@@ -808,7 +867,8 @@ TEST(BakeCli, ReferenceIsFramedLikeHemiRender)
     const Result bad = run(HEMI_BAKE_EXE, "reference " + q(broken) + " --size 8x8 -o " + q(none));
     EXPECT_EQ(bad.status, 1);
     EXPECT_NE(bad.err.find("broken.gltf"), std::string::npos) << bad.err;
-    const Result env = run(HEMI_BAKE_EXE, "reference " + q(scene) + " --env " + q(scene) + " --size 8x8 -o " + q(none));
+    const Result env =
+        run(HEMI_BAKE_EXE, "reference " + q(scene) + " --env " + q(scene) + " --size 8x8 -o " + q(none));
     EXPECT_EQ(env.status, 1);
     EXPECT_NE(env.err.find("reference_floor.glb"), std::string::npos) << env.err;
     EXPECT_FALSE(fs::exists(none));
@@ -822,8 +882,10 @@ TEST(BakeCli, LightmapBakesLightProbesForDynamicObjects)
     const fs::path scene = dir() / "probe_level.glb";
     hemi::io::write_gltf(scene, hemi::samples::make_level(64));
     const fs::path asset = dir() / "probe_level.hemi", json = dir() / "probe_level.json";
-    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --size 64 --rays 16 --bases plain --probes 3,2,3 "
-                              "--probe-rays 256 --sun 0.3,-0.5,0.6,4,4,4 --json " + q(json));
+    const Result r = lightmap(q(scene) + " -o " + q(asset) +
+                              " --size 64 --rays 16 --bases plain --probes 3,2,3 "
+                              "--probe-rays 256 --sun 0.3,-0.5,0.6,4,4,4 --json " +
+                              q(json));
     ASSERT_EQ(r.status, 0) << r.err;
     const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
     ASSERT_EQ(a.probes.count, glm::uvec3(3, 2, 3));
@@ -852,8 +914,11 @@ TEST(BakeCli, RenderDrawsProbeLitSpheresInTheLevel)
     const fs::path scene = dir() / "sphere_level.glb";
     hemi::io::write_gltf(scene, hemi::samples::make_level(64));
     const fs::path asset = dir() / "sphere_level.hemi", bare = dir() / "sphere_level_bare.hemi";
-    ASSERT_EQ(lightmap(q(scene) + " -o " + q(asset) + " --size 64 --rays 16 --bases sh9 --probes 3,2,3 "
-                       "--sun 0.3,-0.5,0.6,4,4,4").status, 0);
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(asset) +
+                       " --size 64 --rays 16 --bases sh9 --probes 3,2,3 "
+                       "--sun 0.3,-0.5,0.6,4,4,4")
+                  .status,
+              0);
     ASSERT_EQ(lightmap(q(scene) + " -o " + q(bare) + " --size 64 --rays 16 --bases sh9").status, 0);
     const fs::path with = dir() / "with_sphere.exr", without = dir() / "without_sphere.exr";
     const std::string view = " --technique sh9 --size 64x48 --camera 1.5,-7.5,5,-0.5,0.5,0.6 -o ";
@@ -887,7 +952,8 @@ TEST(BakeCli, LightmapUnwrapsScenesWithoutLightmapUvs)
     EXPECT_EQ(refused.status, 1);
     EXPECT_NE(refused.err.find("no_uv1_level.glb"), std::string::npos) << refused.err;
     EXPECT_NE(refused.err.find("--unwrap"), std::string::npos) << refused.err;
-    const Result r = lightmap(q(scene) + " -o " + q(asset) + " --unwrap --texel-size 0.1 --rays 16 --bases sh9 --json " + q(json));
+    const Result r = lightmap(q(scene) + " -o " + q(asset) +
+                              " --unwrap --texel-size 0.1 --rays 16 --bases sh9 --json " + q(json));
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json j = nlohmann::json::parse(slurp(json));
     EXPECT_GT(j["unwrap"]["charts"].get<int>(), 20);
@@ -921,9 +987,10 @@ TEST(BakeCli, BasisReportWritesJsonAndPlot)
         int coefficients;
         double mean, rel_rms;
     };
-    const Row table[] = {{"hl2", 3, 15.684, 0.475},    {"zernike3", 3, 3.193, 0.214}, {"sal4", 4, 2.055, 0.172},
-                         {"h4", 4, 1.590, 0.151},      {"sh4ls", 4, 1.590, 0.151},    {"sep4", 4, 1.558, 0.150},
-                         {"zernike6", 6, 0.701, 0.100}, {"h6", 6, 0.531, 0.087},      {"sh9", 9, 0.178, 0.051}};
+    const Row table[] = {
+        {"hl2", 3, 15.684, 0.475},     {"zernike3", 3, 3.193, 0.214}, {"sal4", 4, 2.055, 0.172},
+        {"h4", 4, 1.590, 0.151},       {"sh4ls", 4, 1.590, 0.151},    {"sep4", 4, 1.558, 0.150},
+        {"zernike6", 6, 0.701, 0.100}, {"h6", 6, 0.531, 0.087},       {"sh9", 9, 0.178, 0.051}};
     ASSERT_EQ(j["imse"].size(), std::size(table));
     for (const Row& row : table)
     {
@@ -949,10 +1016,12 @@ TEST(BakeCli, BasisReportWritesJsonAndPlot)
     for (int row = 0; row < 6; ++row)
         for (int col = 0; col < 9; ++col)
         {
-            EXPECT_NEAR(j["projection"]["h6"][row][col].get<double>(), th[row][col], 1e-6) << row << "," << col;
+            EXPECT_NEAR(j["projection"]["h6"][row][col].get<double>(), th[row][col], 1e-6)
+                << row << "," << col;
             if (row < 4)
             {
-                EXPECT_NEAR(j["projection"]["h4"][row][col].get<double>(), th[row][col], 1e-6) << row << "," << col;
+                EXPECT_NEAR(j["projection"]["h4"][row][col].get<double>(), th[row][col], 1e-6)
+                    << row << "," << col;
             }
         }
     EXPECT_FALSE(j["projection"].contains("sh9")) << "SH9's projection is the identity and is not listed";
@@ -1053,8 +1122,8 @@ std::vector<float> exr_channel(const fs::path& path, const std::string& name, in
     h = dw.max.y - dw.min.y + 1;
     std::vector<float> v(size_t(w) * h);
     Imf::FrameBuffer fb;
-    fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(v.data()) - (dw.min.x + dw.min.y * w) * 4, 4,
-                               size_t(w) * 4));
+    fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(v.data()) - (dw.min.x + dw.min.y * w) * 4,
+                               4, size_t(w) * 4));
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     if (attributes)
@@ -1065,14 +1134,17 @@ std::vector<float> exr_channel(const fs::path& path, const std::string& name, in
 }
 } // namespace
 
-// The issue's exact form writes the two Torrance-Sparrow tables with the model in the metadata; the samples at
-// the documented coordinates are F(cos theta) D(cos delta) and G / (pi cos beta) of the closed forms typed here
-// (Beckmann, Smith, Schlick-free exact Fresnel at normal incidence); --8bit reports a larger error than float.
+// The issue's exact form writes the two Torrance-Sparrow tables with the model in the metadata; the samples
+// at the documented coordinates are F(cos theta) D(cos delta) and G / (pi cos beta) of the closed forms typed
+// here (Beckmann, Smith, Schlick-free exact Fresnel at normal incidence); --8bit reports a larger error than
+// float.
 TEST(Cli, BrdfWritesTheFactorTablesWithTheirMetadata)
 {
     const fs::path out = dir() / "ts.exr", json = dir() / "ts.json";
-    const Result r = run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --ior 1.5 --roughness 0.3 --distribution beckmann "
-                                        "--size 64 -o " + q(out) + " --json " + q(json));
+    const Result r =
+        run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --ior 1.5 --roughness 0.3 --distribution beckmann "
+                           "--size 64 -o " +
+                               q(out) + " --json " + q(json));
     ASSERT_EQ(r.status, 0) << r.err;
     int w = 0, h = 0;
     std::map<std::string, std::string> attrs;
@@ -1090,16 +1162,16 @@ TEST(Cli, BrdfWritesTheFactorTablesWithTheirMetadata)
     // FD at cos_theta = 1, row 10: cos_delta = 1 - (10/63)^2.
     const double s = 10.0 / 63, cd = 1 - s * s, t2 = (1 - cd * cd) / (cd * cd);
     EXPECT_NEAR(fd[10 * 64 + 63], 0.04 * std::exp(-t2 / 0.09) / (4 * 0.09 * std::pow(cd, 4)), 1e-6);
-    // G / (pi cos beta) at cos_alpha = cos_beta = 1: 1 / pi; at cos_alpha = 1, cos_beta -> 0: G1 ~ 2 sqrt(pi) c / m,
-    // so 2 sqrt(pi) / (m pi).
+    // G / (pi cos beta) at cos_alpha = cos_beta = 1: 1 / pi; at cos_alpha = 1, cos_beta -> 0: G1 ~ 2 sqrt(pi)
+    // c / m, so 2 sqrt(pi) / (m pi).
     EXPECT_NEAR(g[63 * 64 + 63], 1 / M_PI, 1e-6);
     EXPECT_NEAR(g[0 * 64 + 63], 2 * std::sqrt(M_PI) / (0.3 * M_PI), 1e-5);
     const nlohmann::json j = nlohmann::json::parse(slurp(json));
     EXPECT_LT(j["error"]["bulk_max"].get<double>(), 0.05); // 64^2 here; the README's figures are for 256^2
 
     const fs::path out8 = dir() / "ts8.exr", json8 = dir() / "ts8.json";
-    const Result r8 = run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --roughness 0.3 --8bit -o " + q(out8) +
-                                             " --json " + q(json8));
+    const Result r8 = run(HEMI_BAKE_EXE, "brdf --model torrance-sparrow --roughness 0.3 --8bit -o " +
+                                             q(out8) + " --json " + q(json8));
     ASSERT_EQ(r8.status, 0) << r8.err;
     const nlohmann::json j8 = nlohmann::json::parse(slurp(json8));
     EXPECT_GT(j8["error"]["bulk_rms"].get<double>(), 5 * j8["float_error"]["bulk_rms"].get<double>());
@@ -1110,8 +1182,9 @@ TEST(Cli, BrdfWritesTheFactorTablesWithTheirMetadata)
     EXPECT_GT(std::stod(a8["hemi.FD.scale"]), 0.1);
     for (const char* model : {"banks", "phong", "blinn-phong", "cosine-lobe"})
     {
-        const Result m = run(HEMI_BAKE_EXE, std::string("brdf --model ") + model + " --exponent 20 --size 32 -o " +
-                                                q(dir() / (std::string(model) + ".exr")));
+        const Result m =
+            run(HEMI_BAKE_EXE, std::string("brdf --model ") + model + " --exponent 20 --size 32 -o " +
+                                   q(dir() / (std::string(model) + ".exr")));
         EXPECT_EQ(m.status, 0) << model << ": " << m.err;
     }
 }
@@ -1170,9 +1243,9 @@ TEST(Cli, BrdfAndEnvmapRefuseBadInputNamingTheProblem)
     }
 }
 
-// The issue's exact form: the asset holds every mip level down to 1 x 1, a glossy map per exponent at the size
-// its lobe needs, the diffuse map and the Fresnel table (F(1) = 0.04 at n = 1.5); --exr-dir writes each half of
-// every image; the report compares the sampling with cube maps (the paper's 4 against 3 sqrt(3)).
+// The issue's exact form: the asset holds every mip level down to 1 x 1, a glossy map per exponent at the
+// size its lobe needs, the diffuse map and the Fresnel table (F(1) = 0.04 at n = 1.5); --exr-dir writes each
+// half of every image; the report compares the sampling with cube maps (the paper's 4 against 3 sqrt(3)).
 TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
 {
     hemi::io::ImageRgba env;
@@ -1183,7 +1256,7 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
         for (uint32_t x = 0; x < 256; ++x)
         {
             float* p = env.pixels.data() + (size_t(y) * 256 + x) * 4;
-            p[0] = y < 64 ? 2.0f : 0.5f; // bright sky, dark ground
+            p[0] = y < 64 ? 2.0f : 0.5f;  // bright sky, dark ground
             p[1] = x < 128 ? 1.5f : 0.5f; // two halves of azimuth: a map turned or mirrored about z is caught
             p[2] = 1.0f, p[3] = 1.0f;
         }
@@ -1191,7 +1264,8 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
                    report = dir() / "sky.json";
     hemi::io::write_exr(input, env);
     const Result r = run(HEMI_BAKE_EXE, "envmap " + q(input) + " -o " + q(asset) +
-                                            " --size 64 --exponents 4,100 --exr-dir " + q(exrs) + " --report " + q(report));
+                                            " --size 64 --exponents 4,100 --exr-dir " + q(exrs) +
+                                            " --report " + q(report));
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(hemi::io::asset_kind(asset), "envmap");
     const hemi::io::EnvmapAsset a = hemi::io::read_envmap_asset(asset);
@@ -1208,8 +1282,8 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
     EXPECT_NEAR(a.mirror[0].sample({0, 0, 1})[0], 2.0, 1e-5);
     EXPECT_NEAR(a.mirror[0].sample({0, 0, -1})[0], 0.5, 1e-5);
     EXPECT_NEAR(a.diffuse.sample({0, 0, 1})[2], 1.0, 0.01); // blue is constant: furnace
-    for (const char* name : {"mirror_L0_front.exr", "mirror_L6_back.exr", "glossy_e4_front.exr", "glossy_e100_back.exr",
-                             "diffuse_front.exr", "fresnel.exr"})
+    for (const char* name : {"mirror_L0_front.exr", "mirror_L6_back.exr", "glossy_e4_front.exr",
+                             "glossy_e100_back.exr", "diffuse_front.exr", "fresnel.exr"})
         EXPECT_TRUE(fs::exists(exrs / name)) << name;
     const nlohmann::json j = nlohmann::json::parse(slurp(report));
     EXPECT_NEAR(j["sampling"]["parabolic"]["solid_angle_sum_in_circles"].get<double>(), 4 * M_PI, 1e-4);
@@ -1217,8 +1291,9 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
     EXPECT_LT(j["sampling"]["parabolic"]["largest_over_smallest"].get<double>(), 4.0);
     EXPECT_GT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 4.5);
     EXPECT_LT(j["sampling"]["cube"]["largest_over_smallest"].get<double>(), 3 * std::sqrt(3.0));
-    // The prefiltered maps against Eq. 9 integrated over the equirect's pixels: the diffuse map and both glossy
-    // maps, parabolic and cube, within 3% RMS of the reference (a map in the wrong orientation is ~50% off).
+    // The prefiltered maps against Eq. 9 integrated over the equirect's pixels: the diffuse map and both
+    // glossy maps, parabolic and cube, within 3% RMS of the reference (a map in the wrong orientation is ~50%
+    // off).
     ASSERT_EQ(j["prefiltered"].size(), 3u);
     EXPECT_EQ(j["prefiltered"][0]["exponent"].get<double>(), 1.0);
     EXPECT_EQ(j["prefiltered"][2]["exponent"].get<double>(), 100.0);

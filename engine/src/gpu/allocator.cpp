@@ -74,7 +74,8 @@ MemoryAllocator::~MemoryAllocator()
                                             " buffers or images outlived their device's memory allocator");
 }
 
-MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, VkDeviceSize size, bool dedicated)
+MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, VkDeviceSize size,
+                                                   bool dedicated)
 {
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = size;
@@ -108,14 +109,16 @@ Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsag
     const VkDeviceSize align = std::max<VkDeviceSize>(1, req.alignment);
     // Refuse what the device cannot hold before asking it (a raw VK_ERROR_OUT_OF_DEVICE_MEMORY from deep in
     // a bind names no cause).
-    auto mib = [](VkDeviceSize b) { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20) + " MiB"; };
+    auto mib = [](VkDeviceSize b)
+    { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20) + " MiB"; };
     if (device_->max_allocation_size() && req.size > device_->max_allocation_size())
         throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds device " +
                                     std::string(device_->name()) + "'s maxMemoryAllocationSize (" +
                                     mib(device_->max_allocation_size()) + ")");
     if (req.size > device_->heap_size(type))
         throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds its memory heap (" +
-                                    mib(device_->heap_size(type)) + ") on device " + std::string(device_->name()));
+                                    mib(device_->heap_size(type)) + ") on device " +
+                                    std::string(device_->name()));
     std::lock_guard<std::mutex> lock(mutex_);
     Block* chosen = nullptr;
     VkDeviceSize offset = 0;
@@ -168,7 +171,8 @@ void MemoryAllocator::free(Block* block, VkDeviceSize offset, VkDeviceSize size)
     if (block->dedicated)
     {
         vkFreeMemory(device_->device(), block->memory, nullptr);
-        blocks_.erase(std::find_if(blocks_.begin(), blocks_.end(), [&](const auto& b) { return b.get() == block; }));
+        blocks_.erase(
+            std::find_if(blocks_.begin(), blocks_.end(), [&](const auto& b) { return b.get() == block; }));
         return;
     }
     auto [it, inserted] = block->free.emplace(offset, size);

@@ -89,8 +89,9 @@ std::vector<double> TimestampQueries::read_ns()
     if (!supported())
         throw std::runtime_error("hemi: the device queue does not support timestamps");
     std::vector<uint64_t> ticks(count_);
-    HEMI_VK_CHECK(vkGetQueryPoolResults(device_, pool_, 0, count_, ticks.size() * sizeof(uint64_t), ticks.data(),
-                                        sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    HEMI_VK_CHECK(vkGetQueryPoolResults(device_, pool_, 0, count_, ticks.size() * sizeof(uint64_t),
+                                        ticks.data(), sizeof(uint64_t),
+                                        VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
     std::vector<double> ns(count_);
     for (uint32_t i = 0; i < count_; ++i)
         ns[i] = double(ticks[i]) * period_ns_;

@@ -23,7 +23,8 @@ constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 std::string lower(std::string_view s)
 {
     std::string out(s);
-    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(out.begin(), out.end(), out.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return out;
 }
 
@@ -91,23 +92,25 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
     for (size_t i = 0; i < names.size(); ++i)
         all += (i ? ", " : "") + std::to_string(i) + ": " + names[i];
     if (devices.empty())
-        throw std::runtime_error("hemi: no Vulkan physical device found (install mesa-vulkan-drivers for lavapipe)");
+        throw std::runtime_error(
+            "hemi: no Vulkan physical device found (install mesa-vulkan-drivers for lavapipe)");
 
     uint32_t family;
     if (!selector.empty())
     {
-        bool numeric = selector.size() < 9 &&
-                       std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
+        bool numeric = selector.size() < 9 && std::all_of(selector.begin(), selector.end(),
+                                                          [](unsigned char c) { return std::isdigit(c); });
         for (size_t i = 0; i < devices.size(); ++i)
         {
             VkPhysicalDeviceProperties props;
             vkGetPhysicalDeviceProperties(devices[i], &props);
-            bool match = numeric ? std::stoul(selector) == i : lower(names[i]).find(lower(selector)) != std::string::npos;
+            bool match = numeric ? std::stoul(selector) == i
+                                 : lower(names[i]).find(lower(selector)) != std::string::npos;
             if (match && props.apiVersion >= VK_API_VERSION_1_1 && find_queue_family(devices[i], &family))
                 return devices[i];
         }
-        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue matches '" + selector +
-                                 "' (devices: " + all + ")");
+        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue matches '" +
+                                 selector + "' (devices: " + all + ")");
     }
 
     VkPhysicalDevice best = VK_NULL_HANDLE;
@@ -124,7 +127,8 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
         }
     }
     if (!best)
-        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue (devices: " + all + ")");
+        throw std::runtime_error("hemi: no Vulkan 1.1 device with a graphics+compute queue (devices: " + all +
+                                 ")");
     return best;
 }
 
@@ -132,7 +136,8 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
 
 VKAPI_ATTR VkBool32 VKAPI_CALL Device::debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                       VkDebugUtilsMessageTypeFlagsEXT types,
-                                                      const VkDebugUtilsMessengerCallbackDataEXT* data, void* user)
+                                                      const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                      void* user)
 {
     auto* self = static_cast<Device*>(user);
     // The Vulkan loader reports through the same messenger (e.g. "Layer ... forced enabled due to env var
@@ -140,7 +145,8 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::debug_callback(VkDebugUtilsMessageSeverit
     // pMessageIdName and sends general messages only.
     const bool loader = !(types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT)) &&
-                        data && data->pMessageIdName && std::string_view(data->pMessageIdName) == "Loader Message";
+                        data && data->pMessageIdName &&
+                        std::string_view(data->pMessageIdName) == "Loader Message";
     if (loader)
     {
         if (self->log_)
@@ -170,7 +176,8 @@ namespace
 // stacks, so tests/sanitize/lsan.supp suppresses exactly their allocations and a leak in hemi still fails.
 void pin_vulkan_libraries()
 {
-    static const bool pinned = [] {
+    static const bool pinned = []
+    {
         for (const char* lib : {"libvulkan_lvp.so", "libVkLayer_khronos_validation.so", "libvulkan.so.1"})
             dlopen(lib, RTLD_NOW | RTLD_NODELETE | RTLD_GLOBAL);
         return true;
@@ -194,8 +201,9 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     if (validation)
     {
         if (!has_layer(kValidationLayer))
-            throw std::runtime_error("hemi: validation requested but VK_LAYER_KHRONOS_validation is not installed "
-                                     "(Debian: vulkan-validationlayers)");
+            throw std::runtime_error(
+                "hemi: validation requested but VK_LAYER_KHRONOS_validation is not installed "
+                "(Debian: vulkan-validationlayers)");
         layers.push_back(kValidationLayer);
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     }
@@ -210,9 +218,10 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         enumerate(&loader_version);
     app.apiVersion = loader_version >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_1;
 
-    VkDebugUtilsMessengerCreateInfoEXT messenger_info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    messenger_info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
-                                     VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    VkDebugUtilsMessengerCreateInfoEXT messenger_info{
+        VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messenger_info.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
     messenger_info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
                                  VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                                  VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
@@ -245,9 +254,11 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
             {
                 auto submit = reinterpret_cast<PFN_vkSubmitDebugUtilsMessageEXT>(
                     vkGetInstanceProcAddr(instance_, "vkSubmitDebugUtilsMessageEXT"));
-                VkDebugUtilsMessengerCallbackDataEXT message{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
+                VkDebugUtilsMessengerCallbackDataEXT message{
+                    VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
                 message.pMessageIdName = "hemi-validation-selftest";
-                message.pMessage = "hemi validation self-test: a synthetic warning (HEMI_VALIDATION_SELFTEST=1)";
+                message.pMessage =
+                    "hemi validation self-test: a synthetic warning (HEMI_VALIDATION_SELFTEST=1)";
                 submit(instance_, VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT,
                        VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT, &message);
             }
@@ -347,7 +358,8 @@ Device::~Device()
 
 void Device::init_properties()
 {
-    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceMaintenance3Properties maintenance3{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     subgroup.pNext = &maintenance3;
     VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
@@ -414,7 +426,8 @@ bool Device::memory_is_host_visible(uint32_t memory_type) const
 
 bool Device::memory_is_host_coherent(uint32_t memory_type) const
 {
-    const VkMemoryPropertyFlags need = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    const VkMemoryPropertyFlags need =
+        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
     return (memory_.memoryTypes[memory_type].propertyFlags & need) == need;
 }
 

@@ -123,8 +123,9 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
 {
     const bool dynamic_rendering = desc.render_pass == VK_NULL_HANDLE;
     if (dynamic_rendering && !device.dynamic_rendering())
-        throw std::invalid_argument("hemi: a pipeline without a render pass needs dynamic rendering, which device " +
-                                    std::string(device.name()) + " does not have enabled");
+        throw std::invalid_argument(
+            "hemi: a pipeline without a render pass needs dynamic rendering, which device " +
+            std::string(device.name()) + " does not have enabled");
     if (dynamic_rendering && desc.color_formats.size() != desc.color_attachments)
         throw std::invalid_argument("hemi: dynamic rendering needs one colour format per colour attachment");
     Program p;
@@ -145,13 +146,15 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     for (auto& s : stages)
         s.pSpecializationInfo = desc.specialization.empty() ? nullptr : &spec.info;
 
-    VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineVertexInputStateCreateInfo vertex_input{
+        VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
     vertex_input.vertexBindingDescriptionCount = uint32_t(desc.vertex_bindings.size());
     vertex_input.pVertexBindingDescriptions = desc.vertex_bindings.data();
     vertex_input.vertexAttributeDescriptionCount = uint32_t(desc.vertex_attributes.size());
     vertex_input.pVertexAttributeDescriptions = desc.vertex_attributes.data();
 
-    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly{
+        VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
     assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
 
     VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
@@ -164,7 +167,8 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     raster.frontFace = desc.front_face;
     raster.lineWidth = 1.0f;
 
-    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    VkPipelineMultisampleStateCreateInfo multisample{
+        VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
     multisample.rasterizationSamples = desc.samples;
 
     VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
@@ -214,7 +218,8 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     return p;
 }
 
-DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Binding>& bindings, uint32_t max_sets)
+DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Binding>& bindings,
+                                      uint32_t max_sets)
 {
     std::map<VkDescriptorType, uint32_t> counts;
     for (const Binding& b : bindings)
@@ -231,7 +236,8 @@ DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Bi
     return DescriptorPool(device.device(), pool);
 }
 
-VkDescriptorSet allocate_descriptor_set(const Device& device, VkDescriptorPool pool, VkDescriptorSetLayout layout)
+VkDescriptorSet allocate_descriptor_set(const Device& device, VkDescriptorPool pool,
+                                        VkDescriptorSetLayout layout)
 {
     VkDescriptorSetAllocateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     info.descriptorPool = pool;

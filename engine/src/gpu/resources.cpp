@@ -37,12 +37,14 @@ namespace
 void check_range(const Buffer& buffer, VkDeviceSize size, VkDeviceSize offset, const char* what)
 {
     if (offset > buffer.size() || size > buffer.size() - offset)
-        throw std::out_of_range(std::string("hemi: ") + what + " of " + std::to_string(size) + " bytes at offset " +
-                                std::to_string(offset) + " exceeds a buffer of " + std::to_string(buffer.size()));
+        throw std::out_of_range(std::string("hemi: ") + what + " of " + std::to_string(size) +
+                                " bytes at offset " + std::to_string(offset) + " exceeds a buffer of " +
+                                std::to_string(buffer.size()));
 }
 } // namespace
 
-void write_buffer(const Device& device, const Buffer& buffer, const void* data, VkDeviceSize size, VkDeviceSize offset)
+void write_buffer(const Device& device, const Buffer& buffer, const void* data, VkDeviceSize size,
+                  VkDeviceSize offset)
 {
     check_range(buffer, size, offset, "write_buffer");
     if (size == 0)
@@ -54,13 +56,16 @@ void write_buffer(const Device& device, const Buffer& buffer, const void* data, 
     }
     Buffer staging = create_buffer(device, {size, 0, MemoryUsage::Upload});
     std::memcpy(staging.mapped(), data, size);
-    one_shot(device, [&](VkCommandBuffer cmd) {
-        VkBufferCopy region{0, offset, size};
-        vkCmdCopyBuffer(cmd, staging, buffer, 1, &region);
-    });
+    one_shot(device,
+             [&](VkCommandBuffer cmd)
+             {
+                 VkBufferCopy region{0, offset, size};
+                 vkCmdCopyBuffer(cmd, staging, buffer, 1, &region);
+             });
 }
 
-void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDeviceSize size, VkDeviceSize offset)
+void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDeviceSize size,
+                 VkDeviceSize offset)
 {
     check_range(buffer, size, offset, "read_buffer");
     if (size == 0)
@@ -71,12 +76,14 @@ void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDevice
         return;
     }
     Buffer staging = create_buffer(device, {size, 0, MemoryUsage::Readback});
-    one_shot(device, [&](VkCommandBuffer cmd) {
-        VkBufferCopy region{offset, 0, size};
-        vkCmdCopyBuffer(cmd, buffer, staging, 1, &region);
-        memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
-                       VK_ACCESS_HOST_READ_BIT);
-    });
+    one_shot(device,
+             [&](VkCommandBuffer cmd)
+             {
+                 VkBufferCopy region{offset, 0, size};
+                 vkCmdCopyBuffer(cmd, buffer, staging, 1, &region);
+                 memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+             });
     std::memcpy(out, staging.mapped(), size);
 }
 
@@ -112,12 +119,15 @@ Image create_image(const Device& device, const ImageDesc& desc)
         throw std::invalid_argument("hemi: create_image with a zero size, mip or layer count");
     const VkPhysicalDeviceLimits& limits = device.limits();
     if (desc.width > limits.maxImageDimension2D || desc.height > limits.maxImageDimension2D)
-        throw std::invalid_argument("hemi: a " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
-                                    " image exceeds device " + std::string(device.name()) + "'s maxImageDimension2D (" +
+        throw std::invalid_argument("hemi: a " + std::to_string(desc.width) + "x" +
+                                    std::to_string(desc.height) + " image exceeds device " +
+                                    std::string(device.name()) + "'s maxImageDimension2D (" +
                                     std::to_string(limits.maxImageDimension2D) + ")");
     if (desc.layers > limits.maxImageArrayLayers)
-        throw std::invalid_argument("hemi: " + std::to_string(desc.layers) + " image layers exceed the device's "
-                                    "maxImageArrayLayers (" + std::to_string(limits.maxImageArrayLayers) + ")");
+        throw std::invalid_argument("hemi: " + std::to_string(desc.layers) +
+                                    " image layers exceed the device's "
+                                    "maxImageArrayLayers (" +
+                                    std::to_string(limits.maxImageArrayLayers) + ")");
     VkDevice d = device.device();
     Image img;
     img.aspect_ = is_depth(desc.format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
@@ -168,15 +178,16 @@ void transition_image(VkCommandBuffer cmd, const Image& image, VkImageLayout fro
     barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     barrier.image = image.handle();
     barrier.subresourceRange = {image.aspect(), 0, image.mip_levels(), 0, image.layers()};
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0, nullptr,
-                         0, nullptr, 1, &barrier);
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0,
+                         nullptr, 0, nullptr, 1, &barrier);
 }
 
 void upload_image(const Device& device, const Image& image, const void* texels, size_t bytes,
                   VkImageLayout final_layout)
 {
     if (image.mip_levels() != 1)
-        throw std::invalid_argument("hemi: upload_image fills mip 0 only; create the image with one mip level");
+        throw std::invalid_argument(
+            "hemi: upload_image fills mip 0 only; create the image with one mip level");
     size_t expected = size_t(image.width()) * image.height() * format_size(image.format());
     if (bytes != expected)
         throw std::invalid_argument("hemi: upload_image got " + std::to_string(bytes) + " bytes for a " +
@@ -184,14 +195,18 @@ void upload_image(const Device& device, const Image& image, const void* texels, 
                                     " image that needs " + std::to_string(expected));
     Buffer staging = create_buffer(device, {bytes, 0, MemoryUsage::Upload});
     std::memcpy(staging.mapped(), texels, bytes);
-    one_shot(device, [&](VkCommandBuffer cmd) {
-        transition_image(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-        VkBufferImageCopy region{};
-        region.imageSubresource = {image.aspect(), 0, 0, 1};
-        region.imageExtent = {image.width(), image.height(), 1};
-        vkCmdCopyBufferToImage(cmd, staging, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-        transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, final_layout);
-    });
+    one_shot(device,
+             [&](VkCommandBuffer cmd)
+             {
+                 transition_image(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED,
+                                  VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+                 VkBufferImageCopy region{};
+                 region.imageSubresource = {image.aspect(), 0, 0, 1};
+                 region.imageExtent = {image.width(), image.height(), 1};
+                 vkCmdCopyBufferToImage(cmd, staging, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                                        &region);
+                 transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, final_layout);
+             });
 }
 
 std::vector<std::byte> read_image(const Device& device, const Image& image, VkImageLayout current_layout)
@@ -200,16 +215,19 @@ std::vector<std::byte> read_image(const Device& device, const Image& image, VkIm
         throw std::invalid_argument("hemi: read_image of an image with undefined contents");
     size_t bytes = size_t(image.width()) * image.height() * format_size(image.format());
     Buffer staging = create_buffer(device, {bytes, 0, MemoryUsage::Readback});
-    one_shot(device, [&](VkCommandBuffer cmd) {
-        transition_image(cmd, image, current_layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-        VkBufferImageCopy region{};
-        region.imageSubresource = {image.aspect(), 0, 0, 1};
-        region.imageExtent = {image.width(), image.height(), 1};
-        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1, &region);
-        memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
-                       VK_ACCESS_HOST_READ_BIT);
-        transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, current_layout);
-    });
+    one_shot(device,
+             [&](VkCommandBuffer cmd)
+             {
+                 transition_image(cmd, image, current_layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+                 VkBufferImageCopy region{};
+                 region.imageSubresource = {image.aspect(), 0, 0, 1};
+                 region.imageExtent = {image.width(), image.height(), 1};
+                 vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1,
+                                        &region);
+                 memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+                 transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, current_layout);
+             });
     std::vector<std::byte> out(bytes);
     std::memcpy(out.data(), staging.mapped(), bytes);
     return out;
@@ -228,8 +246,8 @@ Sampler create_sampler(const Device& device, const SamplerDesc& desc)
     return Sampler(device.device(), sampler);
 }
 
-BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format, VkDeviceSize offset,
-                              VkDeviceSize range)
+BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format,
+                              VkDeviceSize offset, VkDeviceSize range)
 {
     VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
     info.buffer = buffer;

@@ -10,8 +10,8 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <vector>
 #include <stdexcept>
+#include <vector>
 
 namespace hemi::io
 {
@@ -32,14 +32,12 @@ void put_bytes(std::vector<std::byte>& out, const void* p, size_t n)
         std::memcpy(out.data() + at, p, n);
 }
 
-template <typename T>
-void put(std::vector<std::byte>& out, T v)
+template <typename T> void put(std::vector<std::byte>& out, T v)
 {
     put_bytes(out, &v, sizeof(T));
 }
 
-template <typename T>
-T get(const std::vector<std::byte>& in, size_t at)
+template <typename T> T get(const std::vector<std::byte>& in, size_t at)
 {
     T v;
     std::memcpy(&v, in.data() + at, sizeof(T));
@@ -76,15 +74,17 @@ void AssetWriter::write(const std::filesystem::path& path) const
     for (const auto& s : sections_)
         put_bytes(out, s.second.data(), s.second.size());
     put<uint64_t>(out, XXH64(out.data(), out.size(), 0));
-    write_atomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream f(tmp, std::ios::binary);
-        errno = 0;
-        f.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
-        f.close();
-        if (f.fail())
-            throw FormatError(path.string() + ": writing the asset failed: " +
-                              (errno ? std::strerror(errno) : "unknown I/O error"));
-    });
+    write_atomically(path,
+                     [&](const std::filesystem::path& tmp)
+                     {
+                         std::ofstream f(tmp, std::ios::binary);
+                         errno = 0;
+                         f.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
+                         f.close();
+                         if (f.fail())
+                             throw FormatError(path.string() + ": writing the asset failed: " +
+                                               (errno ? std::strerror(errno) : "unknown I/O error"));
+                     });
 }
 
 AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string())
@@ -104,21 +104,23 @@ AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string(
         throw FormatError(file_ + ": truncated (" + std::to_string(data_.size()) + " bytes)");
     version_ = get<uint32_t>(data_, 8);
     if (version_ != kAssetVersion)
-        throw FormatError(file_ + ": asset version " + std::to_string(version_) + " is not supported (this hemi reads " +
-                          std::to_string(kAssetVersion) + ")");
+        throw FormatError(file_ + ": asset version " + std::to_string(version_) +
+                          " is not supported (this hemi reads " + std::to_string(kAssetVersion) + ")");
     const uint64_t stored = get<uint64_t>(data_, data_.size() - 8);
     if (XXH64(data_.data(), data_.size() - 8, 0) != stored)
         throw FormatError(file_ + ": checksum mismatch: the file is truncated or corrupted");
     const uint32_t count = get<uint32_t>(data_, 12);
     const uint64_t body_end = data_.size() - 8;
     if (kHeaderBytes + uint64_t(count) * kEntryBytes > body_end)
-        throw FormatError(file_ + ": section table of " + std::to_string(count) + " entries exceeds the file");
+        throw FormatError(file_ + ": section table of " + std::to_string(count) +
+                          " entries exceeds the file");
     for (uint32_t i = 0; i < count; ++i)
     {
         const size_t at = kHeaderBytes + size_t(i) * kEntryBytes;
         char name[kNameBytes + 1] = {};
         std::memcpy(name, data_.data() + at, kNameBytes);
-        const uint64_t offset = get<uint64_t>(data_, at + kNameBytes), size = get<uint64_t>(data_, at + kNameBytes + 8);
+        const uint64_t offset = get<uint64_t>(data_, at + kNameBytes),
+                       size = get<uint64_t>(data_, at + kNameBytes + 8);
         const uint64_t table_end = kHeaderBytes + uint64_t(count) * kEntryBytes;
         if (offset < table_end || offset > body_end || size > body_end - offset)
             throw FormatError(file_ + ": section '" + name + "' lies outside the file's data");

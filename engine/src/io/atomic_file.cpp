@@ -5,10 +5,10 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
-#include <fstream>
-#include <system_error>
 #include <fcntl.h>
+#include <fstream>
 #include <sys/statvfs.h>
+#include <system_error>
 #include <unistd.h>
 
 namespace hemi::io
@@ -29,7 +29,9 @@ std::string output_problem(const std::filesystem::path& path)
         return "the folder " + dir.string() + " is not writable (" + std::strerror(errno) + ")";
     if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0 && errno == EROFS)
         return "the file system is read-only";
-    struct statvfs st{};
+    struct statvfs st
+    {
+    };
     if (::statvfs(dir.c_str(), &st) == 0 && st.f_bavail == 0)
         return "no space left on the device of " + dir.string();
     return {};
@@ -57,7 +59,8 @@ std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path
         const std::string rest = name.substr(prefix.size());
         const size_t dot = rest.find('.');
         if (dot == 0 || dot == std::string::npos || dot + 1 == rest.size() ||
-            rest.find_first_not_of("0123456789.") != std::string::npos || rest.find('.', dot + 1) != std::string::npos)
+            rest.find_first_not_of("0123456789.") != std::string::npos ||
+            rest.find('.', dot + 1) != std::string::npos)
             continue;
         const long pid = std::strtol(rest.substr(0, dot).c_str(), nullptr, 10);
         if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH)
@@ -68,13 +71,16 @@ std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path
 
 void write_text_atomically(const std::filesystem::path& path, std::string_view text)
 {
-    write_atomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream f(tmp, std::ios::binary);
-        f.write(text.data(), std::streamsize(text.size()));
-        f.close();
-        if (f.fail())
-            throw FormatError(path.string() + ": cannot write the file (" + std::strerror(errno) + ")");
-    });
+    write_atomically(path,
+                     [&](const std::filesystem::path& tmp)
+                     {
+                         std::ofstream f(tmp, std::ios::binary);
+                         f.write(text.data(), std::streamsize(text.size()));
+                         f.close();
+                         if (f.fail())
+                             throw FormatError(path.string() + ": cannot write the file (" +
+                                               std::strerror(errno) + ")");
+                     });
 }
 
 void write_atomically(const std::filesystem::path& path,
@@ -117,7 +123,8 @@ void write_atomically(const std::filesystem::path& path,
     {
         std::error_code ignored;
         std::filesystem::remove(tmp, ignored);
-        throw FormatError(path.string() + ": cannot rename the finished temporary file into place: " + ec.message());
+        throw FormatError(path.string() +
+                          ": cannot rename the finished temporary file into place: " + ec.message());
     }
     std::filesystem::path dir = path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
     if (int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY); fd >= 0)

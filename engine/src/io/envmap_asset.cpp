@@ -19,7 +19,10 @@ struct Info
     float extent;
 };
 
-size_t image_floats(uint32_t size) { return size_t(2) * size * size * 3; }
+size_t image_floats(uint32_t size)
+{
+    return size_t(2) * size * size * 3;
+}
 
 } // namespace
 
@@ -28,7 +31,8 @@ std::string envmap_problem(const EnvmapAsset& a)
     if (a.mirror.empty())
         return "no mirror map";
     for (size_t l = 0; l < a.mirror.size(); ++l)
-        if (a.mirror[l].size != (a.mirror[0].size >> l) || a.mirror[l].rgb.size() != image_floats(a.mirror[l].size))
+        if (a.mirror[l].size != (a.mirror[0].size >> l) ||
+            a.mirror[l].rgb.size() != image_floats(a.mirror[l].size))
             return "mirror level " + std::to_string(l) + " has the wrong size";
     if (a.mirror.back().size != 1)
         return "the mirror map's mip chain does not end at 1x1";
@@ -60,13 +64,12 @@ namespace
 // Reads sequentially from a section; every read is checked against its end.
 class Cursor
 {
-public:
+  public:
     Cursor(std::span<const std::byte> bytes, std::string what, const std::string& file)
         : bytes_(bytes), what_(std::move(what)), file_(file)
     {
     }
-    template <typename T>
-    T value()
+    template <typename T> T value()
     {
         T v;
         read(&v, sizeof v);
@@ -86,10 +89,11 @@ public:
     void end() const
     {
         if (at_ != bytes_.size())
-            throw FormatError(file_ + ": " + what_ + " has " + std::to_string(bytes_.size() - at_) + " bytes too many");
+            throw FormatError(file_ + ": " + what_ + " has " + std::to_string(bytes_.size() - at_) +
+                              " bytes too many");
     }
 
-private:
+  private:
     void read(void* out, size_t n)
     {
         if (n > bytes_.size() - at_)
@@ -103,8 +107,7 @@ private:
     const std::string& file_;
 };
 
-template <typename T>
-void append(std::vector<std::byte>& out, const T* data, size_t count)
+template <typename T> void append(std::vector<std::byte>& out, const T* data, size_t count)
 {
     const auto* b = reinterpret_cast<const std::byte*>(data);
     out.insert(out.end(), b, b + count * sizeof(T));
@@ -116,8 +119,14 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
     if (std::string p = envmap_problem(a); !p.empty())
         throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
     AssetWriter w;
-    const Info info{kEnvmapLayoutVersion,     a.mirror[0].size,     uint32_t(a.mirror.size()), uint32_t(a.glossy.size()),
-                    uint32_t(a.iors.size()),  a.fresnel_samples,    a.source_width,            a.source_height,
+    const Info info{kEnvmapLayoutVersion,
+                    a.mirror[0].size,
+                    uint32_t(a.mirror.size()),
+                    uint32_t(a.glossy.size()),
+                    uint32_t(a.iors.size()),
+                    a.fresnel_samples,
+                    a.source_width,
+                    a.source_height,
                     float(a.mirror[0].extent)};
     w.add("envmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
     std::vector<std::byte> mirror;
@@ -161,9 +170,10 @@ EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
     const Info info = ci.value<Info>();
     ci.end();
     if (info.layout != kEnvmapLayoutVersion)
-        throw fail("envmap layout version " + std::to_string(info.layout) + " is not supported (this hemi reads " +
-                   std::to_string(kEnvmapLayoutVersion) + ")");
-    auto check_size = [&](uint32_t size, const std::string& what) {
+        throw fail("envmap layout version " + std::to_string(info.layout) +
+                   " is not supported (this hemi reads " + std::to_string(kEnvmapLayoutVersion) + ")");
+    auto check_size = [&](uint32_t size, const std::string& what)
+    {
         if (size == 0 || size > 8192 || (size & (size - 1)) != 0)
             throw fail(what + ": size " + std::to_string(size) + " is not a power of two in [1, 8192]");
     };
@@ -174,7 +184,8 @@ EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
     if (info.levels != levels)
         throw fail("envmap.info: " + std::to_string(info.levels) + " mirror levels for size " +
                    std::to_string(info.size) + ", expected " + std::to_string(levels));
-    auto check_extent = [&](float extent, const std::string& what) {
+    auto check_extent = [&](float extent, const std::string& what)
+    {
         if (!std::isfinite(extent) || extent < 1.0f || extent > 4.0f)
             throw fail(what + ": extent " + std::to_string(extent) + " is not in [1, 4]");
     };

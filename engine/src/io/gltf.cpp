@@ -148,9 +148,8 @@ const std::set<std::string> kSupportedExtensions = {"KHR_texture_transform", "KH
 bool appearance_only(const std::string& ext)
 {
     static const std::set<std::string> known = {
-        "KHR_texture_basisu",     "EXT_texture_webp",
-        "EXT_texture_avif",    "MSFT_texture_dds",       "KHR_xmp",
-        "KHR_xmp_json_ld",     "EXT_lights_image_based", "KHR_animation_pointer"};
+        "KHR_texture_basisu", "EXT_texture_webp",       "EXT_texture_avif",     "MSFT_texture_dds", "KHR_xmp",
+        "KHR_xmp_json_ld",    "EXT_lights_image_based", "KHR_animation_pointer"};
     return ext.rfind("KHR_materials_", 0) == 0 || known.count(ext) != 0;
 }
 const std::set<std::string> kImageExtensions = {"KHR_texture_basisu", "EXT_texture_webp", "EXT_texture_avif",
@@ -236,7 +235,8 @@ void generate_tangents(Mesh& m)
     // vertex's frame does not depend on how finely its neighbourhood is tessellated).
     const size_t n = m.positions.size();
     std::vector<glm::vec3> t(n, glm::vec3(0.0f)), b(n, glm::vec3(0.0f));
-    auto unit_in_plane = [](const glm::vec3& v, const glm::vec3& normal) {
+    auto unit_in_plane = [](const glm::vec3& v, const glm::vec3& normal)
+    {
         const glm::vec3 p = v - normal * glm::dot(normal, v);
         const float len = glm::length(p);
         return len > 1e-20f ? p / len : glm::vec3(0.0f);
@@ -954,7 +954,8 @@ struct Reader
             fail(where + ": light " + std::to_string(index) + " does not exist (the file has " +
                  std::to_string(model.lights.size()) + ")");
         const tinygltf::Light& l = model.lights[size_t(index)];
-        const std::string what = "light " + std::to_string(index) + (l.name.empty() ? "" : " (" + l.name + ")");
+        const std::string what =
+            "light " + std::to_string(index) + (l.name.empty() ? "" : " (" + l.name + ")");
         PunctualLight out;
         out.name = l.name;
         if (l.type == "directional")
@@ -983,11 +984,13 @@ struct Reader
         if (!std::isfinite(out.range) || out.range < 0.0f)
             fail(what + ": range must be finite and not negative");
         if (out.type == PunctualLight::Type::Spot &&
-            !(out.inner_cone >= 0.0f && out.inner_cone < out.outer_cone && out.outer_cone <= float(M_PI / 2) + 1e-6f))
+            !(out.inner_cone >= 0.0f && out.inner_cone < out.outer_cone &&
+              out.outer_cone <= float(M_PI / 2) + 1e-6f))
             fail(what + ": the spot's cone angles must satisfy 0 <= inner < outer <= pi/2");
         out.position = glm::vec3(world[3]);
         const glm::vec3 forward = -glm::vec3(world[2]);
-        if (!(glm::length(forward) > 0.0f) || !std::isfinite(out.position.x + out.position.y + out.position.z))
+        if (!(glm::length(forward) > 0.0f) ||
+            !std::isfinite(out.position.x + out.position.y + out.position.z))
             fail("node " + std::to_string(node) + " places " + what + " with a degenerate transform");
         out.direction = glm::normalize(forward);
         scene.lights.push_back(out);
@@ -1059,8 +1062,9 @@ struct Reader
                     }
         }
         if (!model.lights.empty() && !lights_placed)
-            warnings.add("KHR_lights_punctual", "KHR_lights_punctual: " + std::to_string(model.lights.size()) +
-                                                    " light(s) that no node places: ignored");
+            warnings.add("KHR_lights_punctual",
+                         "KHR_lights_punctual: " + std::to_string(model.lights.size()) +
+                             " light(s) that no node places: ignored");
         scene.warnings = warnings.lines();
         // What this reader builds must be what every consumer of a scene accepts.
         if (std::string p = surface_problem(scene.mesh, scene.materials, scene.images, scene.primitives);
@@ -1348,7 +1352,8 @@ void write_gltf(const std::filesystem::path& path, const Mesh& mesh, const std::
                    TINYGLTF_TYPE_SCALAR, mesh.indices.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     tinygltf::Material material;
     material.name = "hemi";
-    auto texture = [&](const std::string& uri) {
+    auto texture = [&](const std::string& uri)
+    {
         tinygltf::Image image;
         image.uri = uri;
         b.m.images.push_back(image);

@@ -45,9 +45,9 @@ void check_image(const std::filesystem::path& path, const ImageRgba& image)
     if (image.width == 0 || image.height == 0)
         throw FormatError(path.string() + ": cannot write an empty image");
     if (image.pixels.size() != size_t(image.width) * image.height * 4)
-        throw FormatError(path.string() + ": image has " + std::to_string(image.pixels.size()) +
-                          " floats, expected width*height*4 = " +
-                          std::to_string(size_t(image.width) * image.height * 4));
+        throw FormatError(
+            path.string() + ": image has " + std::to_string(image.pixels.size()) +
+            " floats, expected width*height*4 = " + std::to_string(size_t(image.width) * image.height * 4));
 }
 } // namespace
 
@@ -75,31 +75,34 @@ ImageRgba read_exr(const std::filesystem::path& path)
         const Imath::Box2i dw = file.header().dataWindow();
         const Imath::Box2i disp = file.header().displayWindow();
         const long w = long(disp.max.x) - disp.min.x + 1, h = long(disp.max.y) - disp.min.y + 1;
-        // Caps (io/image.h): the display window at most kMaxExrPixels, and at most kMaxExrPadding times the data
-        // window unless it is small: an auto-cropped file pads with zeros, a hostile one of a few hundred
-        // bytes would otherwise make us zero-fill gigabytes.
+        // Caps (io/image.h): the display window at most kMaxExrPixels, and at most kMaxExrPadding times the
+        // data window unless it is small: an auto-cropped file pads with zeros, a hostile one of a few
+        // hundred bytes would otherwise make us zero-fill gigabytes.
         if (w <= 0 || h <= 0 || w * h > long(kMaxExrPixels))
-            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
-                              " is empty or larger than " + std::to_string(kMaxExrPixels) + " pixels");
+            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" +
+                              std::to_string(h) + " is empty or larger than " +
+                              std::to_string(kMaxExrPixels) + " pixels");
         if (dw.min.x < disp.min.x || dw.min.y < disp.min.y || dw.max.x > disp.max.x || dw.max.y > disp.max.y)
             throw FormatError(path.string() + ": EXR data window extends beyond the display window");
         const long data = (long(dw.max.x) - dw.min.x + 1) * (long(dw.max.y) - dw.min.y + 1);
         if (w * h > long(kMaxExrPaddedPixels) && w * h > data * long(kMaxExrPadding))
-            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
-                              " is more than " + std::to_string(kMaxExrPadding) + " times its data window (" +
-                              std::to_string(data) + " pixels): refused rather than zero-filled");
+            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" +
+                              std::to_string(h) + " is more than " + std::to_string(kMaxExrPadding) +
+                              " times its data window (" + std::to_string(data) +
+                              " pixels): refused rather than zero-filled");
         image.width = uint32_t(w);
         image.height = uint32_t(h);
         image.pixels.assign(size_t(w) * h * 4, 0.0f);
         const Imf::ChannelList& channels = file.header().channels();
         const bool grey = !channels.findChannel("R") && channels.findChannel("Y");
         if (!grey && !channels.findChannel("R") && !channels.findChannel("G") && !channels.findChannel("B"))
-            throw FormatError(path.string() + ": EXR has no R, G, B or Y channel (layered files are not supported)");
+            throw FormatError(path.string() +
+                              ": EXR has no R, G, B or Y channel (layered files are not supported)");
         const size_t xs = 4 * sizeof(float), ys = xs * size_t(w);
         // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys: shift so that the display window's origin
         // is our first pixel.
-        char* base =
-            reinterpret_cast<char*>(image.pixels.data()) - (long(disp.min.x) * long(xs) + long(disp.min.y) * long(ys));
+        char* base = reinterpret_cast<char*>(image.pixels.data()) -
+                     (long(disp.min.x) * long(xs) + long(disp.min.y) * long(ys));
         Imf::FrameBuffer fb;
         const char* names[4] = {"R", "G", "B", "A"};
         for (int c = 0; c < 4; ++c)
@@ -107,7 +110,8 @@ ImageRgba read_exr(const std::filesystem::path& path)
             if (grey && (c == 1 || c == 2))
                 continue;
             const char* name = grey && c == 0 ? "Y" : names[c];
-            fb.insert(name, Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, c == 3 ? 1.0 : 0.0));
+            fb.insert(name,
+                      Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, c == 3 ? 1.0 : 0.0));
         }
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);
@@ -144,48 +148,54 @@ void write_exr_channels(const std::filesystem::path& path, uint32_t width, uint3
         if (c.name.empty() || !c.data || c.stride == 0)
             throw FormatError(path.string() + ": EXR channel '" + c.name + "' has no name or no data");
     }
-    write_atomically(path, [&](const std::filesystem::path& tmp) {
-        try
+    write_atomically(
+        path,
+        [&](const std::filesystem::path& tmp)
         {
-            Imf::Header header(static_cast<int>(width), static_cast<int>(height));
-            for (const ExrChannel& c : channels)
-                header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
-            for (const auto& [key, value] : attributes)
-                header.insert(key, Imf::StringAttribute(value));
-            // OpenEXR converts pixel types when it reads, not when it writes: half channels get half data.
-            std::vector<std::vector<half>> halves;
+            try
             {
-                Imf::OutputFile file(tmp.c_str(), header);
-                Imf::FrameBuffer fb;
+                Imf::Header header(static_cast<int>(width), static_cast<int>(height));
                 for (const ExrChannel& c : channels)
+                    header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
+                for (const auto& [key, value] : attributes)
+                    header.insert(key, Imf::StringAttribute(value));
+                // OpenEXR converts pixel types when it reads, not when it writes: half channels get half
+                // data.
+                std::vector<std::vector<half>> halves;
                 {
-                    if (c.half)
+                    Imf::OutputFile file(tmp.c_str(), header);
+                    Imf::FrameBuffer fb;
+                    for (const ExrChannel& c : channels)
                     {
-                        std::vector<half>& h = halves.emplace_back(size_t(width) * height);
-                        for (size_t i = 0; i < h.size(); ++i)
-                            h[i] = half(c.data[i * c.stride]);
-                        fb.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()), sizeof(half),
-                                                     sizeof(half) * width));
-                        continue;
+                        if (c.half)
+                        {
+                            std::vector<half>& h = halves.emplace_back(size_t(width) * height);
+                            for (size_t i = 0; i < h.size(); ++i)
+                                h[i] = half(c.data[i * c.stride]);
+                            fb.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()),
+                                                         sizeof(half), sizeof(half) * width));
+                            continue;
+                        }
+                        const size_t xs = c.stride * sizeof(float), ys = xs * width;
+                        fb.insert(c.name,
+                                  Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(c.data)),
+                                             xs, ys));
                     }
-                    const size_t xs = c.stride * sizeof(float), ys = xs * width;
-                    fb.insert(c.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(c.data)), xs, ys));
-                }
-                file.setFrameBuffer(fb);
-                file.writePixels(int(height));
-            } // ~OutputFile writes the offset table and swallows its errors: verify by reading back
-            if (!Imf::InputFile(tmp.c_str()).isComplete())
-                throw FormatError(path.string() + ": writing EXR failed (incomplete file)");
-        }
-        catch (const FormatError&)
-        {
-            throw;
-        }
-        catch (const std::exception& e)
-        {
-            throw FormatError(path.string() + ": writing EXR failed: " + e.what());
-        }
-    });
+                    file.setFrameBuffer(fb);
+                    file.writePixels(int(height));
+                } // ~OutputFile writes the offset table and swallows its errors: verify by reading back
+                if (!Imf::InputFile(tmp.c_str()).isComplete())
+                    throw FormatError(path.string() + ": writing EXR failed (incomplete file)");
+            }
+            catch (const FormatError&)
+            {
+                throw;
+            }
+            catch (const std::exception& e)
+            {
+                throw FormatError(path.string() + ": writing EXR failed: " + e.what());
+            }
+        });
 }
 
 void write_exr(const std::filesystem::path& path, const ImageRgba& image)
@@ -221,22 +231,27 @@ void write_png(const std::filesystem::path& path, const ImageRgba& image, const 
 
 void write_png(const std::filesystem::path& path, const ImageRgba8& image)
 {
-    if (image.width == 0 || image.height == 0 || image.pixels.size() != size_t(image.width) * image.height * 4)
+    if (image.width == 0 || image.height == 0 ||
+        image.pixels.size() != size_t(image.width) * image.height * 4)
         throw FormatError(path.string() + ": RGBA8 image of " + std::to_string(image.width) + "x" +
-                          std::to_string(image.height) + " has " + std::to_string(image.pixels.size()) + " bytes");
+                          std::to_string(image.height) + " has " + std::to_string(image.pixels.size()) +
+                          " bytes");
     int length = 0;
     unsigned char* png = stbi_write_png_to_mem(image.pixels.data(), int(image.width * 4), int(image.width),
                                                int(image.height), 4, &length);
     if (!png)
         throw FormatError(path.string() + ": encoding PNG failed (stb_image_write)");
     std::unique_ptr<unsigned char, void (*)(void*)> owner(png, std::free);
-    write_atomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream f(tmp, std::ios::binary);
-        f.write(reinterpret_cast<const char*>(png), length);
-        f.close();
-        if (f.fail())
-            throw FormatError(path.string() + ": writing PNG failed (disk full or not writable?)");
-    });
+    write_atomically(path,
+                     [&](const std::filesystem::path& tmp)
+                     {
+                         std::ofstream f(tmp, std::ios::binary);
+                         f.write(reinterpret_cast<const char*>(png), length);
+                         f.close();
+                         if (f.fail())
+                             throw FormatError(path.string() +
+                                               ": writing PNG failed (disk full or not writable?)");
+                     });
 }
 
 namespace
@@ -412,17 +427,20 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
                 // An over-subscribed table is no prefix code: stb_image 2.27 then indexes its tables with
                 // negative numbers (found by tests/fuzz/fuzz_image).
                 if (code_space > (uint64_t(1) << 16))
-                    throw fail("corrupt JPEG: Huffman table is not a prefix code (its code lengths over-subscribe) at "
-                               "byte " + std::to_string(at));
-                if (symbols > 256)
-                    throw fail("corrupt JPEG: Huffman table of " + std::to_string(symbols) + " codes (at most 256) at byte " +
+                    throw fail("corrupt JPEG: Huffman table is not a prefix code (its code lengths "
+                               "over-subscribe) at "
+                               "byte " +
                                std::to_string(at));
+                if (symbols > 256)
+                    throw fail("corrupt JPEG: Huffman table of " + std::to_string(symbols) +
+                               " codes (at most 256) at byte " + std::to_string(at));
                 if (end - at - 17 < symbols)
-                    throw fail("corrupt JPEG: Huffman table overruns its segment at byte " + std::to_string(at));
+                    throw fail("corrupt JPEG: Huffman table overruns its segment at byte " +
+                               std::to_string(at));
                 const uint8_t table_class = b[at] >> 4, table_id = b[at] & 0x0F;
                 if (table_class > 1 || table_id > 3)
-                    throw fail("corrupt JPEG: Huffman table of class " + std::to_string(table_class) + " and id " +
-                               std::to_string(table_id) + " at byte " + std::to_string(at));
+                    throw fail("corrupt JPEG: Huffman table of class " + std::to_string(table_class) +
+                               " and id " + std::to_string(table_id) + " at byte " + std::to_string(at));
                 defined[table_class][table_id] = true;
                 at += 17 + symbols;
             }
@@ -432,9 +450,9 @@ void check_jpeg(const std::vector<uint8_t>& b, const std::string& name)
             // SOS: every component's tables must be defined before the scan that decodes with them. stb_image
             // decodes with a zeroed table otherwise and indexes its symbols out of bounds (found by
             // tests/fuzz/fuzz_image). A sequential scan decodes every coefficient with both tables, whatever
-            // its Ss and Se say (found by the fuzzer: Se = 0 in a baseline scan); in a progressive frame a first
-            // DC scan (Ss = 0, Ah = 0) uses DC tables, a scan of AC coefficients (Se > 0) AC tables, and a DC
-            // refinement reads plain bits.
+            // its Ss and Se say (found by the fuzzer: Se = 0 in a baseline scan); in a progressive frame a
+            // first DC scan (Ss = 0, Ah = 0) uses DC tables, a scan of AC coefficients (Se > 0) AC tables,
+            // and a DC refinement reads plain bits.
             const size_t components = length >= 3 ? b[pos + 2] : 0;
             if (components == 0 || length != 6 + 2 * components)
                 throw fail("corrupt JPEG: scan header of length " + std::to_string(length) + " at byte " +
@@ -574,8 +592,8 @@ std::vector<uint16_t> decode_rgba16(const CheckedImage& c, const std::string& na
     bits = 8;
     unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
     if (!narrow)
-        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" + stbi_failure_reason() +
-                          ")");
+        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" +
+                          stbi_failure_reason() + ")");
     std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
     for (size_t i = 0; i < out.size(); ++i)
         out[i] = uint16_t(narrow[i] * 257u);
@@ -591,7 +609,8 @@ ImageRgba8 decode_image(const EncodedImage& image)
     const std::vector<uint8_t>& data = c.data();
     const int size = int(data.size());
     int w = 0, h = 0, channels = 0;
-    ImageRgba8 out{uint32_t(c.width), uint32_t(c.height), std::vector<uint8_t>(size_t(c.width) * size_t(c.height) * 4)};
+    ImageRgba8 out{uint32_t(c.width), uint32_t(c.height),
+                   std::vector<uint8_t>(size_t(c.width) * size_t(c.height) * 4)};
     if (c.mime == "image/png" && stbi_is_16_bit_from_memory(data.data(), size))
     {
         // stb reduces 16 to 8 bits by dropping the low byte; round instead (65535 -> 255, 32896 -> 128).
@@ -603,8 +622,8 @@ ImageRgba8 decode_image(const EncodedImage& image)
     }
     unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
     if (!narrow)
-        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" + stbi_failure_reason() +
-                          ")");
+        throw FormatError(name + ": corrupt or unsupported " + c.mime.substr(6) + " (" +
+                          stbi_failure_reason() + ")");
     std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
     std::memcpy(out.pixels.data(), narrow, out.pixels.size());
     return out;
@@ -632,9 +651,10 @@ DataImage read_data_image(const std::filesystem::path& path)
     image.mime_type = sniff_image_mime_type(image.bytes.data(), image.bytes.size());
     if (image.mime_type != "image/png")
         throw FormatError(path.string() + ": " +
-                          (image.mime_type.empty() ? std::string("neither a PNG nor an EXR file")
-                                                   : "a JPEG: data images (height maps) must be PNG or EXR, whose "
-                                                     "values are exact (JPEG's are not)") +
+                          (image.mime_type.empty()
+                               ? std::string("neither a PNG nor an EXR file")
+                               : "a JPEG: data images (height maps) must be PNG or EXR, whose "
+                                 "values are exact (JPEG's are not)") +
                           (image.bytes.empty() ? std::string(" (empty)") : std::string()));
     const CheckedImage c = check_encoded_image(image, image.name);
     DataImage out;

@@ -86,7 +86,8 @@ std::string problem(const LightmapAsset& a)
     if (std::string p = surface_problem(a.mesh, a.materials, a.images, a.primitives); !p.empty())
         return p;
     if (a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384)
-        return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) + " is not in [1, 16384]";
+        return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) +
+               " is not in [1, 16384]";
     if (a.outputs.empty())
         return "no outputs";
     if (std::string p = probes_problem(a.probes); !p.empty())
@@ -97,14 +98,16 @@ std::string problem(const LightmapAsset& a)
         if (k == 0)
             return "unknown output '" + o.name + "'";
         if (o.k != k)
-            return "output '" + o.name + "' has K = " + std::to_string(o.k) + ", it needs " + std::to_string(k);
+            return "output '" + o.name + "' has K = " + std::to_string(o.k) + ", it needs " +
+                   std::to_string(k);
         const size_t expected = size_t(k) * a.width * a.height * 3;
         if (o.maps.size() != expected)
             return "output '" + o.name + "' holds " + std::to_string(o.maps.size()) + " values, expected " +
                    std::to_string(expected);
         for (float v : o.maps)
             if (!std::isfinite(v) || std::abs(v) > 65504.0f)
-                return "output '" + o.name + "' holds a value that is not finite or does not fit a half float";
+                return "output '" + o.name +
+                       "' holds a value that is not finite or does not fit a half float";
     }
     return {};
 }
@@ -139,7 +142,8 @@ std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
     float total = 0.0f;
     for (int corner = 0; corner < 8; ++corner)
     {
-        const uint32_t i = corner & 1 ? i1[0] : i0[0], j = corner & 2 ? i1[1] : i0[1], k = corner & 4 ? i1[2] : i0[2];
+        const uint32_t i = corner & 1 ? i1[0] : i0[0], j = corner & 2 ? i1[1] : i0[1],
+                       k = corner & 4 ? i1[2] : i0[2];
         const size_t at = i + size_t(count.x) * (j + size_t(count.y) * k);
         const float w = (corner & 1 ? t[0] : 1.0f - t[0]) * (corner & 2 ? t[1] : 1.0f - t[1]) *
                         (corner & 4 ? t[2] : 1.0f - t[2]);
@@ -205,11 +209,13 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
     if (!a.probes.empty())
     {
         const LightProbes& p = a.probes;
-        const ProbeHeader header{p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
+        const ProbeHeader header{
+            p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
         std::vector<std::byte> bytes(sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size());
         std::memcpy(bytes.data(), &header, sizeof header);
         std::memcpy(bytes.data() + sizeof header, p.irradiance.data(), p.irradiance.size() * 27 * 4);
-        std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(), p.valid.size());
+        std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(),
+                    p.valid.size());
         w.add("lightmap.probes", bytes);
     }
     w.write(path);
@@ -221,7 +227,8 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
     const std::string file = path.string();
     auto fail = [&](const std::string& what) -> FormatError { return FormatError(file + ": " + what); };
     if (!r.has("lightmap.info"))
-        throw fail(r.has("prt.info") ? "a PRT asset, not a lightmap asset" : "not a lightmap asset (no lightmap.info)");
+        throw fail(r.has("prt.info") ? "a PRT asset, not a lightmap asset"
+                                     : "not a lightmap asset (no lightmap.info)");
     const std::span<const std::byte> info_bytes = r.section("lightmap.info");
     if (info_bytes.size() != sizeof(Info))
         throw fail("lightmap.info has " + std::to_string(info_bytes.size()) + " bytes, expected " +
@@ -229,11 +236,11 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
     Info info;
     std::memcpy(&info, info_bytes.data(), sizeof info);
     if (info.layout != kLightmapLayoutVersion)
-        throw fail("lightmap layout version " + std::to_string(info.layout) + " is not supported (this hemi reads " +
-                   std::to_string(kLightmapLayoutVersion) + ")");
+        throw fail("lightmap layout version " + std::to_string(info.layout) +
+                   " is not supported (this hemi reads " + std::to_string(kLightmapLayoutVersion) + ")");
     if (info.width == 0 || info.height == 0 || info.width > 16384 || info.height > 16384)
-        throw fail("lightmap.info: atlas size " + std::to_string(info.width) + "x" + std::to_string(info.height) +
-                   " is not in [1, 16384]");
+        throw fail("lightmap.info: atlas size " + std::to_string(info.width) + "x" +
+                   std::to_string(info.height) + " is not in [1, 16384]");
     LightmapAsset a;
     a.width = info.width;
     a.height = info.height;
@@ -260,8 +267,8 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
             throw fail(section + ": K = " + std::to_string(o.k) + ", the output needs " + std::to_string(k));
         const uint64_t expected = 4 + uint64_t(k) * texels * 3 * 2;
         if (b.size() != expected)
-            throw fail(section + " has " + std::to_string(b.size()) + " bytes, a " + std::to_string(a.width) + "x" +
-                       std::to_string(a.height) + " atlas of K = " + std::to_string(k) + " needs " +
+            throw fail(section + " has " + std::to_string(b.size()) + " bytes, a " + std::to_string(a.width) +
+                       "x" + std::to_string(a.height) + " atlas of K = " + std::to_string(k) + " needs " +
                        std::to_string(expected));
         o.maps.resize(size_t(k) * texels * 3);
         for (size_t i = 0; i < o.maps.size(); ++i)
@@ -281,8 +288,9 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
         std::memcpy(&header, b.data(), sizeof header);
         const uint64_t n = uint64_t(header.nx) * header.ny * header.nz;
         if (n == 0 || n > (uint64_t(1) << 24) || header.zero != 0)
-            throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" + std::to_string(header.ny) + "x" +
-                       std::to_string(header.nz) + " probes is not supported");
+            throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" +
+                       std::to_string(header.ny) + "x" + std::to_string(header.nz) +
+                       " probes is not supported");
         if (b.size() != sizeof header + n * 27 * 4 + n)
             throw fail("lightmap.probes has " + std::to_string(b.size()) + " bytes, " + std::to_string(n) +
                        " probes need " + std::to_string(sizeof header + n * 27 * 4 + n));

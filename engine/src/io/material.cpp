@@ -85,8 +85,9 @@ std::string surface_problem(const Mesh& mesh, const std::vector<Material>& mater
         if (!finite(m.base_color_factor) || !finite(m.emissive_factor) || !std::isfinite(m.normal_scale) ||
             !std::isfinite(m.occlusion_strength))
             return where + "non-finite factor";
-        for (const auto& [ref, slot] : {std::pair{&m.base_color, "base colour"}, std::pair{&m.normal, "normal"},
-                                        std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
+        for (const auto& [ref, slot] :
+             {std::pair{&m.base_color, "base colour"}, std::pair{&m.normal, "normal"},
+              std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
             if (std::string p = texture_problem(*ref, slot, images.size(), has_uvs1); !p.empty())
                 return where + p;
     }

@@ -8,8 +8,7 @@ namespace hemi::io
 
 namespace
 {
-template <typename T>
-bool all_finite(const std::vector<T>& values)
+template <typename T> bool all_finite(const std::vector<T>& values)
 {
     for (const T& v : values)
         for (int c = 0; c < int(sizeof(T) / sizeof(float)); ++c)
@@ -27,7 +26,8 @@ std::string mesh_problem(const Mesh& m, MeshNeeds needs)
                " indices)";
     for (uint32_t i : m.indices)
         if (i >= n)
-            return "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)";
+            return "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) +
+                   " vertices)";
     if (m.normals.size() != n)
         return "the mesh needs a normal per vertex";
     if (needs == MeshNeeds::Frames && (m.tangents.size() != n || m.uvs.size() != n))

@@ -5,7 +5,6 @@
 
 #include "scene_sections.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -39,8 +38,7 @@ struct Info
 };
 static_assert(sizeof(Info) == 40);
 
-template <typename T>
-bool finite(const std::vector<T>& v)
+template <typename T> bool finite(const std::vector<T>& v)
 {
     for (const T& x : v)
         for (int c = 0; c < int(sizeof(T) / sizeof(float)); ++c)
@@ -86,7 +84,8 @@ std::string problem(const PrtAsset& a)
         if (t.matrices.empty() && !t.cpca)
             return where + "neither matrices nor CPCA data";
         if (!t.matrices.empty() && t.matrices.size() != n * d)
-            return where + std::to_string(t.matrices.size()) + " matrix values, expected " + std::to_string(n * d);
+            return where + std::to_string(t.matrices.size()) + " matrix values, expected " +
+                   std::to_string(n * d);
         if (!finite(t.matrices))
             return where + "non-finite matrix value";
         if (t.cpca)
@@ -108,14 +107,12 @@ std::string problem(const PrtAsset& a)
     return {};
 }
 
-template <typename T>
-void add(AssetWriter& w, const std::string& name, const std::vector<T>& v)
+template <typename T> void add(AssetWriter& w, const std::string& name, const std::vector<T>& v)
 {
     w.add_array(name, std::span<const T>(v));
 }
 
-template <typename T>
-void append(std::vector<std::byte>& out, const T* data, size_t count)
+template <typename T> void append(std::vector<std::byte>& out, const T* data, size_t count)
 {
     const auto* b = reinterpret_cast<const std::byte*>(data);
     out.insert(out.end(), b, b + count * sizeof(T));
@@ -128,8 +125,15 @@ void write_prt_asset(const std::filesystem::path& path, const PrtAsset& a)
     if (std::string p = problem(a); !p.empty())
         throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
     AssetWriter w;
-    Info info{kPrtLayoutVersion, uint32_t(a.mesh.vertex_count()), a.order, a.transfer_kind, a.bounces,
-              a.rays, a.seed, a.albedo, 0};
+    Info info{kPrtLayoutVersion,
+              uint32_t(a.mesh.vertex_count()),
+              a.order,
+              a.transfer_kind,
+              a.bounces,
+              a.rays,
+              a.seed,
+              a.albedo,
+              0};
     w.add("prt.info", std::as_bytes(std::span<const Info>(&info, 1)));
     write_scene_sections(w, a.mesh, a.materials, a.images, a.primitives);
     for (const PrtTechnique& t : a.techniques)
@@ -170,8 +174,8 @@ PrtAsset read_prt_asset(const std::filesystem::path& path)
             "written by an older hemi (PRT layout 1, which referenced its textures by path); re-bake it "
             "with this hemi's hemi-bake prt");
     if (info.layout != kPrtLayoutVersion)
-        throw fail("PRT layout version " + std::to_string(info.layout) + " is not supported (this hemi reads " +
-                   std::to_string(kPrtLayoutVersion) + ")");
+        throw fail("PRT layout version " + std::to_string(info.layout) +
+                   " is not supported (this hemi reads " + std::to_string(kPrtLayoutVersion) + ")");
     // The numbers every size below is computed from, checked before any arithmetic uses them.
     if (info.order < 3 || info.order > 6)
         throw fail("prt.info: lighting order " + std::to_string(info.order) + " is not in [3, 6]");
@@ -224,16 +228,19 @@ PrtAsset read_prt_asset(const std::filesystem::path& path)
             const size_t d = size_t(t.k) * l; // at most 9 x 36
             if (c.clusters == 0 || c.clusters > n || c.vectors == 0 || c.vectors > 1024)
                 throw fail(compressed + ": CPCA shape " + std::to_string(c.clusters) + "x" +
-                           std::to_string(c.vectors) + " is not valid for " + std::to_string(n) + " vertices");
+                           std::to_string(c.vectors) + " is not valid for " + std::to_string(n) +
+                           " vertices");
             // Every factor is bounded now (n < 2^32, C <= n, V <= 1024, d <= 324): no overflow in 64 bits.
-            const uint64_t expected = 12 + 4 * (uint64_t(c.clusters) * d + uint64_t(c.clusters) * c.vectors * d +
-                                                n + n * uint64_t(c.vectors));
+            const uint64_t expected =
+                12 + 4 * (uint64_t(c.clusters) * d + uint64_t(c.clusters) * c.vectors * d + n +
+                          n * uint64_t(c.vectors));
             if (b.size() != expected)
                 throw fail(compressed + " has " + std::to_string(b.size()) + " bytes, its shape " +
                            std::to_string(c.clusters) + "x" + std::to_string(c.vectors) + " needs " +
                            std::to_string(expected));
             const std::byte* p = b.data() + 12;
-            auto take = [&](auto& v, size_t count) {
+            auto take = [&](auto& v, size_t count)
+            {
                 v.resize(count);
                 std::memcpy(v.data(), p, count * 4);
                 p += count * 4;

@@ -57,8 +57,9 @@ std::string scene_json(const std::vector<Material>& materials_in, const std::vec
             {"double_sided", m.double_sided}};
         if (m.occlusion.present())
             j["occlusion_strength"] = m.occlusion_strength;
-        for (const auto& [ref, key] : {std::pair{&m.base_color, "base_color"}, std::pair{&m.normal, "normal"},
-                                       std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
+        for (const auto& [ref, key] :
+             {std::pair{&m.base_color, "base_color"}, std::pair{&m.normal, "normal"},
+              std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
             if (ref->present())
                 j[key] = texture_json(*ref);
         materials.push_back(std::move(j));
@@ -171,7 +172,8 @@ struct SceneJson
     }
 
     // Fills the materials and the images' names and mime types; returns each image's byte count.
-    std::vector<uint64_t> read(std::span<const std::byte> bytes, std::vector<Material>& materials_out, std::vector<EncodedImage>& images_out) const
+    std::vector<uint64_t> read(std::span<const std::byte> bytes, std::vector<Material>& materials_out,
+                               std::vector<EncodedImage>& images_out) const
     {
         json j;
         try
@@ -221,8 +223,7 @@ struct SceneJson
     }
 };
 
-template <typename T>
-void add_array(AssetWriter& w, const std::string& name, const std::vector<T>& v)
+template <typename T> void add_array(AssetWriter& w, const std::string& name, const std::vector<T>& v)
 {
     w.add_array(name, std::span<const T>(v));
 }
@@ -249,8 +250,9 @@ void write_scene_sections(AssetWriter& w, const Mesh& mesh, const std::vector<Ma
         w.add("image." + std::to_string(i), std::as_bytes(std::span<const uint8_t>(images[i].bytes)));
 }
 
-void read_scene_sections(const AssetReader& r, const std::string& file, Mesh& mesh, std::vector<Material>& materials,
-                         std::vector<EncodedImage>& images, std::vector<Primitive>& primitives)
+void read_scene_sections(const AssetReader& r, const std::string& file, Mesh& mesh,
+                         std::vector<Material>& materials, std::vector<EncodedImage>& images,
+                         std::vector<Primitive>& primitives)
 {
     auto fail = [&](const std::string& what) -> FormatError { return FormatError(file + ": " + what); };
     mesh.positions = r.array<glm::vec3>("mesh.positions");
@@ -262,7 +264,8 @@ void read_scene_sections(const AssetReader& r, const std::string& file, Mesh& me
         mesh.uvs1 = r.array<glm::vec2>("mesh.uvs1");
 
     // The surfaces: materials and image metadata, primitives, then each image's bytes.
-    const std::vector<uint64_t> image_sizes = SceneJson{file}.read(r.section("scene.materials"), materials, images);
+    const std::vector<uint64_t> image_sizes =
+        SceneJson{file}.read(r.section("scene.materials"), materials, images);
     const std::vector<uint32_t> ranges = r.array<uint32_t>("scene.primitives");
     if (ranges.size() % 3 != 0)
         throw fail("scene.primitives holds " + std::to_string(ranges.size()) +

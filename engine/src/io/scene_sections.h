@@ -25,7 +25,8 @@ void write_scene_sections(AssetWriter& w, const Mesh& mesh, const std::vector<Ma
                           const std::vector<EncodedImage>& images, const std::vector<Primitive>& primitives);
 // Throws FormatError naming `file` for a missing or malformed section (the checks of what the values mean,
 // mesh_problem and surface_problem, are the caller's).
-void read_scene_sections(const AssetReader& r, const std::string& file, Mesh& mesh, std::vector<Material>& materials,
-                         std::vector<EncodedImage>& images, std::vector<Primitive>& primitives);
+void read_scene_sections(const AssetReader& r, const std::string& file, Mesh& mesh,
+                         std::vector<Material>& materials, std::vector<EncodedImage>& images,
+                         std::vector<Primitive>& primitives);
 
 } // namespace hemi::io

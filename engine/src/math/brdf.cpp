@@ -23,7 +23,10 @@ void check_size(uint32_t size)
     if (size < 2 || size > 8192)
         throw std::invalid_argument("a BRDF table's size must be in [2, 8192], got " + std::to_string(size));
 }
-double clamp01(double c) { return std::clamp(c, 0.0, 1.0); }
+double clamp01(double c)
+{
+    return std::clamp(c, 0.0, 1.0);
+}
 
 BrdfTable make_table(uint32_t size, std::vector<std::string> names, std::string axis_u, std::string axis_v)
 {
@@ -43,9 +46,12 @@ double axis_value(Axis axis, uint32_t i, uint32_t size)
     const double s = double(i) / double(size - 1);
     switch (axis)
     {
-    case Axis::Cosine: return s;
-    case Axis::SqrtOneMinus: return 1.0 - s * s;
-    case Axis::Angle: return std::cos(kPi * s);
+    case Axis::Cosine:
+        return s;
+    case Axis::SqrtOneMinus:
+        return 1.0 - s * s;
+    case Axis::Angle:
+        return std::cos(kPi * s);
     }
     return s;
 }
@@ -53,9 +59,12 @@ double axis_coord(Axis axis, double value)
 {
     switch (axis)
     {
-    case Axis::Cosine: return value;
-    case Axis::SqrtOneMinus: return std::sqrt(std::max(0.0, 1.0 - value));
-    case Axis::Angle: return std::acos(std::clamp(value, -1.0, 1.0)) / kPi;
+    case Axis::Cosine:
+        return value;
+    case Axis::SqrtOneMinus:
+        return std::sqrt(std::max(0.0, 1.0 - value));
+    case Axis::Angle:
+        return std::acos(std::clamp(value, -1.0, 1.0)) / kPi;
     }
     return value;
 }
@@ -87,16 +96,19 @@ TorranceSparrow::TorranceSparrow(FacetDistribution distribution, double roughnes
     : distribution_(distribution), m_(roughness), ior_(ior)
 {
     if (!std::isfinite(roughness) || !(roughness > 0.0))
-        throw std::invalid_argument("the roughness must be a finite number > 0, got " + std::to_string(roughness));
-    if (roughness < 1e-3 || roughness > 10.0)
-        throw std::invalid_argument("the roughness must be in [0.001, 10] (a smoother surface is a mirror), got " +
+        throw std::invalid_argument("the roughness must be a finite number > 0, got " +
                                     std::to_string(roughness));
+    if (roughness < 1e-3 || roughness > 10.0)
+        throw std::invalid_argument(
+            "the roughness must be in [0.001, 10] (a smoother surface is a mirror), got " +
+            std::to_string(roughness));
     if (!std::isfinite(ior) || !(ior > 1.0))
-        throw std::invalid_argument("the index of refraction must be a finite number > 1, got " + std::to_string(ior));
+        throw std::invalid_argument("the index of refraction must be a finite number > 1, got " +
+                                    std::to_string(ior));
     if (distribution_ == FacetDistribution::Gaussian)
     {
-        // c such that 2 pi c * integral_0^{pi/2} exp(-(d/m)^2) cos d sin d dd = pi / 4; the peak is resolved by
-        // a rule of its own over [0, min(pi/2, 8m)].
+        // c such that 2 pi c * integral_0^{pi/2} exp(-(d/m)^2) cos d sin d dd = pi / 4; the peak is resolved
+        // by a rule of its own over [0, min(pi/2, 8m)].
         const double split = std::min(kPi / 2.0, 8.0 * m_);
         double integral = 0.0;
         for (auto [a, b] : {std::pair{0.0, split}, std::pair{split, kPi / 2.0}})
@@ -144,7 +156,10 @@ double TorranceSparrow::smith_g1_over_cos(double c) const
     return 2.0 * sqrt_pi / (m_ * s) / (a * sqrt_pi * (1.0 + std::erf(a)) + std::exp(-a * a));
 }
 
-double TorranceSparrow::smith_g1(double c) const { return clamp01(c) * smith_g1_over_cos(c); }
+double TorranceSparrow::smith_g1(double c) const
+{
+    return clamp01(c) * smith_g1_over_cos(c);
+}
 
 double TorranceSparrow::factor_g(double cos_alpha, double cos_beta) const
 {
@@ -167,7 +182,10 @@ double TorranceSparrow::eval_cos(const glm::dvec3& n, const glm::dvec3& l, const
     return f * g * d / (kPi * ca * cb) * ca;
 }
 
-double banks_diffuse(double a) { return std::sqrt(std::max(0.0, 1.0 - a * a)); }
+double banks_diffuse(double a)
+{
+    return std::sqrt(std::max(0.0, 1.0 - a * a));
+}
 
 double banks_specular(double a, double b, double exponent)
 {
@@ -175,14 +193,14 @@ double banks_specular(double a, double b, double exponent)
     return c > 0.0 ? std::pow(c, exponent) : 0.0;
 }
 
-double banks_eval_cos(const glm::dvec3& n, const glm::dvec3& t, const glm::dvec3& l, const glm::dvec3& v, double kd,
-                      double ks, double exponent)
+double banks_eval_cos(const glm::dvec3& n, const glm::dvec3& t, const glm::dvec3& l, const glm::dvec3& v,
+                      double kd, double ks, double exponent)
 {
     const double ca = glm::dot(n, l);
     if (!(ca > 0.0) || !(glm::dot(n, v) > 0.0))
         return 0.0;
-    // The shading normal n' is l projected into the plane perpendicular to t; the reflected directions of l off
-    // the fibre form a cone about t, and the one nearest v sets the highlight.
+    // The shading normal n' is l projected into the plane perpendicular to t; the reflected directions of l
+    // off the fibre form a cone about t, and the one nearest v sets the highlight.
     const glm::dvec3 l_perp = l - glm::dot(l, t) * t;
     const glm::dvec3 v_perp = v - glm::dot(v, t) * t;
     const double lp = glm::length(l_perp), vp = glm::length(v_perp);
@@ -211,9 +229,12 @@ const char* lobe_model_name(LobeModel m)
 {
     switch (m)
     {
-    case LobeModel::Phong: return "phong";
-    case LobeModel::BlinnPhong: return "blinn-phong";
-    case LobeModel::CosineLobe: return "cosine-lobe";
+    case LobeModel::Phong:
+        return "phong";
+    case LobeModel::BlinnPhong:
+        return "blinn-phong";
+    case LobeModel::CosineLobe:
+        return "cosine-lobe";
     }
     return "?";
 }
@@ -224,14 +245,18 @@ double lobe_table_value(LobeModel model, double exponent, double x, double y)
     const double lobe = y > 0.0 ? std::pow(std::min(y, 1.0), exponent) : 0.0;
     switch (model)
     {
-    case LobeModel::Phong: return (exponent + 1.0) / (2.0 * kPi) * lobe;
-    case LobeModel::BlinnPhong: return x * (exponent + 8.0) / (8.0 * kPi) * lobe;
-    case LobeModel::CosineLobe: return x * (exponent + 2.0) / (2.0 * kPi) * lobe;
+    case LobeModel::Phong:
+        return (exponent + 1.0) / (2.0 * kPi) * lobe;
+    case LobeModel::BlinnPhong:
+        return x * (exponent + 8.0) / (8.0 * kPi) * lobe;
+    case LobeModel::CosineLobe:
+        return x * (exponent + 2.0) / (2.0 * kPi) * lobe;
     }
     return 0.0;
 }
 
-double lobe_eval_cos(LobeModel model, double exponent, const glm::dvec3& n, const glm::dvec3& l, const glm::dvec3& v)
+double lobe_eval_cos(LobeModel model, double exponent, const glm::dvec3& n, const glm::dvec3& l,
+                     const glm::dvec3& v)
 {
     const double x = glm::dot(n, l), nv = glm::dot(n, v);
     if (!(x > 0.0) || !(nv > 0.0))
@@ -247,8 +272,14 @@ double lobe_eval_cos(LobeModel model, double exponent, const glm::dvec3& n, cons
                                      : x * (exponent + 2.0) / (2.0 * kPi) * lobe;
 }
 
-double BrdfTable::coord_u(double value) const { return axis_coord(u_axis, value); }
-double BrdfTable::coord_v(double value) const { return axis_coord(v_axis, value); }
+double BrdfTable::coord_u(double value) const
+{
+    return axis_coord(u_axis, value);
+}
+double BrdfTable::coord_v(double value) const
+{
+    return axis_coord(v_axis, value);
+}
 
 double BrdfTable::lookup(uint32_t channel, double u_value, double v_value) const
 {
@@ -256,7 +287,8 @@ double BrdfTable::lookup(uint32_t channel, double u_value, double v_value) const
     const double pv = std::clamp(coord_v(v_value), 0.0, 1.0) * double(size - 1);
     const uint32_t i0 = std::min(uint32_t(pu), size - 2), j0 = std::min(uint32_t(pv), size - 2);
     const double fu = pu - i0, fv = pv - j0;
-    auto at = [&](uint32_t i, uint32_t j) { return double(values[(size_t(j) * size + i) * channels + channel]); };
+    auto at = [&](uint32_t i, uint32_t j)
+    { return double(values[(size_t(j) * size + i) * channels + channel]); };
     return (1.0 - fv) * ((1.0 - fu) * at(i0, j0) + fu * at(i0 + 1, j0)) +
            fv * ((1.0 - fu) * at(i0, j0 + 1) + fu * at(i0 + 1, j0 + 1));
 }
@@ -271,7 +303,8 @@ std::vector<BrdfTable> torrance_sparrow_tables(const TorranceSparrow& model, uin
         for (uint32_t i = 0; i < size; ++i)
         {
             const size_t k = size_t(j) * size + i;
-            fd.values[k] = float(model.factor_fd(axis_value(fd.u_axis, i, size), axis_value(fd.v_axis, j, size)));
+            fd.values[k] =
+                float(model.factor_fd(axis_value(fd.u_axis, i, size), axis_value(fd.v_axis, j, size)));
             g.values[k] = float(model.factor_g(axis_value(g.u_axis, i, size), axis_value(g.v_axis, j, size)));
         }
     return {std::move(fd), std::move(g)};
@@ -298,12 +331,13 @@ BrdfTable lobe_table(LobeModel model, double exponent, uint32_t size)
 {
     check_exponent(exponent);
     check_size(size);
-    BrdfTable t = make_table(size, {"specular"}, "n.l", model == LobeModel::BlinnPhong ? "sqrt(1-n.h)" : "sqrt(1-r_v.l)");
+    BrdfTable t = make_table(size, {"specular"}, "n.l",
+                             model == LobeModel::BlinnPhong ? "sqrt(1-n.h)" : "sqrt(1-r_v.l)");
     t.v_axis = Axis::SqrtOneMinus;
     for (uint32_t j = 0; j < size; ++j)
         for (uint32_t i = 0; i < size; ++i)
-            t.values[size_t(j) * size + i] =
-                float(lobe_table_value(model, exponent, axis_value(t.u_axis, i, size), axis_value(t.v_axis, j, size)));
+            t.values[size_t(j) * size + i] = float(lobe_table_value(
+                model, exponent, axis_value(t.u_axis, i, size), axis_value(t.v_axis, j, size)));
     return t;
 }
 

@@ -55,7 +55,8 @@ glm::mat4 camera_matrix(const Camera& camera, const io::Mesh& mesh, const glm::m
 
 glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& s, float aspect)
 {
-    const auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    const auto finite = [](const glm::vec3& v)
+    { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
     if (!finite(camera.eye) || !finite(camera.target))
         throw std::invalid_argument("hemi: the camera's eye or target is not finite");
     if (!(camera.fov_y_degrees > 0.0f && camera.fov_y_degrees < 180.0f))

@@ -1,5 +1,5 @@
-#include <hemi/math/paraboloid.h>
 #include <hemi/math/brdf.h>
+#include <hemi/math/paraboloid.h>
 #include <hemi/math/quadrature.h>
 #include <hemi/math/sh_environment.h>
 
@@ -21,7 +21,10 @@ namespace
 {
 constexpr double kPi = 3.14159265358979323846;
 
-bool power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
+bool power_of_two(uint32_t v)
+{
+    return v != 0 && (v & (v - 1)) == 0;
+}
 
 // The integral over y in [y0, y1] of 4 / (a2 + y^2)^2, a2 = 1 + x^2.
 double inner(double a2, double y0, double y1)
@@ -78,8 +81,8 @@ double integrate(double x0, double x1, double y0, double y1, bool circle)
     return total;
 }
 
-void texel_bounds(uint32_t size, double extent, uint32_t col, uint32_t row, double& x0, double& y0, double& x1,
-                  double& y1)
+void texel_bounds(uint32_t size, double extent, uint32_t col, uint32_t row, double& x0, double& y0,
+                  double& x1, double& y1)
 {
     const double step = 2.0 * extent / double(size);
     x0 = -extent + col * step;
@@ -92,20 +95,26 @@ void texel_bounds(uint32_t size, double extent, uint32_t col, uint32_t row, doub
 std::vector<double> solid_angles(uint32_t size, double extent, bool circle)
 {
     std::vector<double> out(size_t(size) * size);
-    tbb::parallel_for(uint32_t(0), size, [&](uint32_t row) {
-        for (uint32_t col = 0; col < size; ++col)
-        {
-            double x0, y0, x1, y1;
-            texel_bounds(size, extent, col, row, x0, y0, x1, y1);
-            out[size_t(row) * size + col] = circle ? parabolic_solid_angle_in_circle(x0, y0, x1, y1)
-                                                   : parabolic_solid_angle(x0, y0, x1, y1);
-        }
-    });
+    tbb::parallel_for(uint32_t(0), size,
+                      [&](uint32_t row)
+                      {
+                          for (uint32_t col = 0; col < size; ++col)
+                          {
+                              double x0, y0, x1, y1;
+                              texel_bounds(size, extent, col, row, x0, y0, x1, y1);
+                              out[size_t(row) * size + col] =
+                                  circle ? parabolic_solid_angle_in_circle(x0, y0, x1, y1)
+                                         : parabolic_solid_angle(x0, y0, x1, y1);
+                          }
+                      });
     return out;
 }
 } // namespace
 
-int parabolic_half(const glm::dvec3& d) { return d.z >= 0.0 ? 0 : 1; }
+int parabolic_half(const glm::dvec3& d)
+{
+    return d.z >= 0.0 ? 0 : 1;
+}
 
 glm::dvec2 parabolic_xy(const glm::dvec3& d, int half)
 {
@@ -120,7 +129,10 @@ glm::dvec3 parabolic_direction(int half, double x, double y)
     return glm::dvec3(2.0 * x / (1.0 + r2), 2.0 * y / (1.0 + r2), half == 0 ? z : -z);
 }
 
-double parabolic_solid_angle(double x0, double y0, double x1, double y1) { return integrate(x0, x1, y0, y1, false); }
+double parabolic_solid_angle(double x0, double y0, double x1, double y1)
+{
+    return integrate(x0, x1, y0, y1, false);
+}
 double parabolic_solid_angle_in_circle(double x0, double y0, double x1, double y1)
 {
     return integrate(x0, x1, y0, y1, true);
@@ -150,7 +162,8 @@ glm::dvec3 ParabolicImage::sample(const glm::dvec3& d) const
     const glm::dvec2 xy = parabolic_xy(d, half);
     const double px = std::clamp((xy.x / extent + 1.0) * 0.5 * size - 0.5, 0.0, double(size - 1));
     const double py = std::clamp((1.0 - xy.y / extent) * 0.5 * size - 0.5, 0.0, double(size - 1));
-    const uint32_t c0 = std::min(uint32_t(px), size > 1 ? size - 2 : 0), r0 = std::min(uint32_t(py), size > 1 ? size - 2 : 0);
+    const uint32_t c0 = std::min(uint32_t(px), size > 1 ? size - 2 : 0),
+                   r0 = std::min(uint32_t(py), size > 1 ? size - 2 : 0);
     const uint32_t c1 = std::min(c0 + 1, size - 1), r1 = std::min(r0 + 1, size - 1);
     const double fx = px - c0, fy = py - r0;
     glm::dvec3 out(0.0);
@@ -161,7 +174,8 @@ glm::dvec3 ParabolicImage::sample(const glm::dvec3& d) const
     return out;
 }
 
-ParabolicImage parabolic_from_equirect(uint32_t size, uint32_t width, uint32_t height, std::span<const float> rgba)
+ParabolicImage parabolic_from_equirect(uint32_t size, uint32_t width, uint32_t height,
+                                       std::span<const float> rgba)
 {
     if (!power_of_two(size) || size < 2 || size > 8192)
         throw std::invalid_argument("a parabolic map's size must be a power of two in [2, 8192], got " +
@@ -179,31 +193,33 @@ ParabolicImage parabolic_from_equirect(uint32_t size, uint32_t width, uint32_t h
     // where texels are largest (4 / size radians).
     const uint32_t n = std::clamp(uint32_t(std::ceil(4.0 * width / (kPi * size))), 2u, 16u);
     const double m = out.extent, step = 2.0 * m / double(size);
-    tbb::parallel_for(uint32_t(0), 2 * size, [&](uint32_t hr) {
-        const int half = int(hr / size);
-        const uint32_t row = hr % size;
-        for (uint32_t col = 0; col < size; ++col)
-        {
-            glm::dvec3 sum(0.0);
-            double weight = 0.0;
-            for (uint32_t j = 0; j < n; ++j)
-                for (uint32_t i = 0; i < n; ++i)
-                {
-                    const double x = -m + (col + (i + 0.5) / n) * step;
-                    const double y = m - (row + (j + 0.5) / n) * step;
-                    const double r2 = 1.0 + x * x + y * y;
-                    const double w = 4.0 / (r2 * r2); // Eq. 6
-                    uint32_t px, py;
-                    equirect_pixel(parabolic_direction(half, x, y), width, height, px, py);
-                    const float* p = rgba.data() + (size_t(py) * width + px) * 4;
-                    sum += w * glm::dvec3(p[0], p[1], p[2]);
-                    weight += w;
-                }
-            float* t = out.at(half, col, row);
-            for (int c = 0; c < 3; ++c)
-                t[c] = float(sum[c] / weight);
-        }
-    });
+    tbb::parallel_for(uint32_t(0), 2 * size,
+                      [&](uint32_t hr)
+                      {
+                          const int half = int(hr / size);
+                          const uint32_t row = hr % size;
+                          for (uint32_t col = 0; col < size; ++col)
+                          {
+                              glm::dvec3 sum(0.0);
+                              double weight = 0.0;
+                              for (uint32_t j = 0; j < n; ++j)
+                                  for (uint32_t i = 0; i < n; ++i)
+                                  {
+                                      const double x = -m + (col + (i + 0.5) / n) * step;
+                                      const double y = m - (row + (j + 0.5) / n) * step;
+                                      const double r2 = 1.0 + x * x + y * y;
+                                      const double w = 4.0 / (r2 * r2); // Eq. 6
+                                      uint32_t px, py;
+                                      equirect_pixel(parabolic_direction(half, x, y), width, height, px, py);
+                                      const float* p = rgba.data() + (size_t(py) * width + px) * 4;
+                                      sum += w * glm::dvec3(p[0], p[1], p[2]);
+                                      weight += w;
+                                  }
+                              float* t = out.at(half, col, row);
+                              for (int c = 0; c < 3; ++c)
+                                  t[c] = float(sum[c] / weight);
+                          }
+                      });
     return out;
 }
 
@@ -244,7 +260,10 @@ std::vector<ParabolicImage> parabolic_mip_chain(ParabolicImage level0)
     return chain;
 }
 
-double parabolic_extent(uint32_t size) { return size > 2 ? double(size) / double(size - 2) : 1.0; }
+double parabolic_extent(uint32_t size)
+{
+    return size > 2 ? double(size) / double(size - 2) : 1.0;
+}
 
 uint32_t glossy_size(double exponent, uint32_t full_size)
 {
@@ -255,11 +274,13 @@ uint32_t glossy_size(double exponent, uint32_t full_size)
     return std::min(s, full_size);
 }
 
-ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent, PrefilterStats* stats)
+ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
+                               PrefilterStats* stats)
 {
     if (!std::isfinite(exponent) || !(exponent > 0.0) || exponent > kMaxPhongExponent)
         throw std::invalid_argument("a glossy map's Phong exponent must be in (0, " +
-                                    std::to_string(int(kMaxPhongExponent)) + "], got " + std::to_string(exponent));
+                                    std::to_string(int(kMaxPhongExponent)) + "], got " +
+                                    std::to_string(exponent));
     if (chain.empty())
         throw std::invalid_argument("prefilter_phong needs a mipmap chain");
     const auto start = std::chrono::steady_clock::now();
@@ -271,7 +292,8 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
     if (!src)
         throw std::invalid_argument("the mipmap chain has no level of size " + std::to_string(size));
 
-    // The source texels as structure of arrays: centre direction, radiance times solid angle inside the circle.
+    // The source texels as structure of arrays: centre direction, radiance times solid angle inside the
+    // circle.
     const std::vector<double> omega = solid_angles(size, src->extent, true);
     const size_t texels = size_t(2) * size * size;
     std::vector<float> dx(texels), dy(texels), dz(texels), wr(texels), wg(texels), wb(texels);
@@ -299,72 +321,81 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
     out.rgb.assign(texels * 3, 0.0f);
     const double m = src->extent;
     std::atomic<uint64_t> pairs{0};
-    tbb::parallel_for(uint32_t(0), 2 * size, [&](uint32_t hr) {
-        const int out_half = int(hr / size);
-        const uint32_t out_row = hr % size;
-        uint64_t local_pairs = 0;
-        for (uint32_t out_col = 0; out_col < size; ++out_col)
+    tbb::parallel_for(
+        uint32_t(0), 2 * size,
+        [&](uint32_t hr)
         {
-            const glm::dvec3 r = out.direction(out_half, out_col, out_row);
-            const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
-            double acc[3] = {0, 0, 0};
-            for (int half = 0; half < 2; ++half)
+            const int out_half = int(hr / size);
+            const uint32_t out_row = hr % size;
+            uint64_t local_pairs = 0;
+            for (uint32_t out_col = 0; out_col < size; ++out_col)
             {
-                const double sigma = half == 0 ? 1.0 : -1.0;
-                uint32_t c0 = 0, c1 = size - 1, r0 = 0, r1 = size - 1;
-                // The cap's image in this half: a disc, unless the cap holds the half's projection pole (0, 0, -sigma).
-                if (-sigma * r.z < cos_cut)
+                const glm::dvec3 r = out.direction(out_half, out_col, out_row);
+                const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
+                double acc[3] = {0, 0, 0};
+                for (int half = 0; half < 2; ++half)
                 {
-                    const double theta = std::atan2(std::sqrt(r.x * r.x + r.y * r.y), r.z);
-                    const double phi = std::atan2(r.y, r.x);
-                    auto rho = [&](double t) { return std::sin(t) / (1.0 + sigma * std::cos(t)); };
-                    // Near the pole test's edge theta +- gamma can round past the pole: keep the whole square.
-                    const bool near_pole = 1.0 + sigma * std::cos(theta - gamma) < 1e-9 ||
-                                           1.0 + sigma * std::cos(theta + gamma) < 1e-9;
-                    if (!near_pole)
+                    const double sigma = half == 0 ? 1.0 : -1.0;
+                    uint32_t c0 = 0, c1 = size - 1, r0 = 0, r1 = size - 1;
+                    // The cap's image in this half: a disc, unless the cap holds the half's projection pole
+                    // (0, 0, -sigma).
+                    if (-sigma * r.z < cos_cut)
                     {
-                        const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
-                        const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
-                        const double cx = centre * std::cos(phi), cy = centre * std::sin(phi);
-                        // Texel centres within [cx - radius, cx + radius] (one texel of margin for rounding).
-                        auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
-                        auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
-                        const double lo_c = std::floor(to_col(cx - radius)) - 1, hi_c = std::ceil(to_col(cx + radius)) + 1;
-                        const double lo_r = std::floor(to_row(cy + radius)) - 1, hi_r = std::ceil(to_row(cy - radius)) + 1;
-                        if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
-                            continue;
-                        c0 = uint32_t(std::max(0.0, lo_c));
-                        c1 = uint32_t(std::min(double(size - 1), hi_c));
-                        r0 = uint32_t(std::max(0.0, lo_r));
-                        r1 = uint32_t(std::min(double(size - 1), hi_r));
-                    }
-                }
-                for (uint32_t row = r0; row <= r1; ++row)
-                {
-                    const size_t base = (size_t(half) * size + row) * size;
-                    float ar = 0, ag = 0, ab = 0;
-                    for (uint32_t col = c0; col <= c1; ++col)
-                    {
-                        const size_t k = base + col;
-                        const float c = dx[k] * rx + dy[k] * ry + dz[k] * rz;
-                        if (c > cut)
+                        const double theta = std::atan2(std::sqrt(r.x * r.x + r.y * r.y), r.z);
+                        const double phi = std::atan2(r.y, r.x);
+                        auto rho = [&](double t) { return std::sin(t) / (1.0 + sigma * std::cos(t)); };
+                        // Near the pole test's edge theta +- gamma can round past the pole: keep the whole
+                        // square.
+                        const bool near_pole = 1.0 + sigma * std::cos(theta - gamma) < 1e-9 ||
+                                               1.0 + sigma * std::cos(theta + gamma) < 1e-9;
+                        if (!near_pole)
                         {
-                            const float w = lobe(c); // c may exceed 1 by a rounding step: the lobe clamps it
-                            ar += w * wr[k];
-                            ag += w * wg[k];
-                            ab += w * wb[k];
+                            const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
+                            const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
+                            const double cx = centre * std::cos(phi), cy = centre * std::sin(phi);
+                            // Texel centres within [cx - radius, cx + radius] (one texel of margin for
+                            // rounding).
+                            auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
+                            auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
+                            const double lo_c = std::floor(to_col(cx - radius)) - 1,
+                                         hi_c = std::ceil(to_col(cx + radius)) + 1;
+                            const double lo_r = std::floor(to_row(cy + radius)) - 1,
+                                         hi_r = std::ceil(to_row(cy - radius)) + 1;
+                            if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
+                                continue;
+                            c0 = uint32_t(std::max(0.0, lo_c));
+                            c1 = uint32_t(std::min(double(size - 1), hi_c));
+                            r0 = uint32_t(std::max(0.0, lo_r));
+                            r1 = uint32_t(std::min(double(size - 1), hi_r));
                         }
                     }
-                    acc[0] += ar, acc[1] += ag, acc[2] += ab;
-                    local_pairs += c1 - c0 + 1;
+                    for (uint32_t row = r0; row <= r1; ++row)
+                    {
+                        const size_t base = (size_t(half) * size + row) * size;
+                        float ar = 0, ag = 0, ab = 0;
+                        for (uint32_t col = c0; col <= c1; ++col)
+                        {
+                            const size_t k = base + col;
+                            const float c = dx[k] * rx + dy[k] * ry + dz[k] * rz;
+                            if (c > cut)
+                            {
+                                const float w =
+                                    lobe(c); // c may exceed 1 by a rounding step: the lobe clamps it
+                                ar += w * wr[k];
+                                ag += w * wg[k];
+                                ab += w * wb[k];
+                            }
+                        }
+                        acc[0] += ar, acc[1] += ag, acc[2] += ab;
+                        local_pairs += c1 - c0 + 1;
+                    }
                 }
+                float* t = out.at(out_half, out_col, out_row);
+                for (int c = 0; c < 3; ++c)
+                    t[c] = float(norm * acc[c]);
             }
-            float* t = out.at(out_half, out_col, out_row);
-            for (int c = 0; c < 3; ++c)
-                t[c] = float(norm * acc[c]);
-        }
-        pairs += local_pairs;
-    });
+            pairs += local_pairs;
+        });
     if (stats)
     {
         stats->texel_pairs = pairs;
@@ -390,7 +421,8 @@ PhongLobe::PhongLobe(double exponent, double cutoff)
 std::vector<float> fresnel_table(double ior, uint32_t size)
 {
     if (!std::isfinite(ior) || !(ior > 1.0))
-        throw std::invalid_argument("the index of refraction must be a finite number > 1, got " + std::to_string(ior));
+        throw std::invalid_argument("the index of refraction must be a finite number > 1, got " +
+                                    std::to_string(ior));
     if (size < 2)
         throw std::invalid_argument("a Fresnel table needs at least 2 samples");
     std::vector<float> out(size);

@@ -50,8 +50,8 @@ void sh_eval(int order, const glm::vec3& d, std::span<float> out)
     const double x = d.x, y = d.y, z = d.z;
     // P~_l^m(z) = P_l^m(z) / sin^m(theta) (Condon-Shortley phase included), and
     // (x + i y)^m = sin^m(theta) (cos m phi + i sin m phi), so y_lm = K P~_l^m * Re/Im (x + iy)^m.
-    double cm = 1.0, sm = 0.0;       // Re, Im of (x + iy)^m
-    double pmm = 1.0;                // P~_m^m = (-1)^m (2m-1)!!
+    double cm = 1.0, sm = 0.0; // Re, Im of (x + iy)^m
+    double pmm = 1.0;          // P~_m^m = (-1)^m (2m-1)!!
     for (int m = 0; m < order; ++m)
     {
         double p_prev = 0.0, p = pmm; // P~_{l-1}^m, P~_l^m starting at l = m
@@ -59,8 +59,9 @@ void sh_eval(int order, const glm::vec3& d, std::span<float> out)
         {
             if (l > m)
             {
-                double next = (l == m + 1) ? z * (2.0 * m + 1.0) * pmm
-                                           : ((2.0 * l - 1.0) * z * p - (l + m - 1.0) * p_prev) / double(l - m);
+                double next = (l == m + 1)
+                                  ? z * (2.0 * m + 1.0) * pmm
+                                  : ((2.0 * l - 1.0) * z * p - (l + m - 1.0) * p_prev) / double(l - m);
                 p_prev = p;
                 p = next;
             }

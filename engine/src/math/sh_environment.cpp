@@ -12,7 +12,8 @@ namespace hemi::math
 {
 namespace
 {
-void accumulate(int order, const glm::vec3& d, double solid_angle, const float* texel, std::vector<glm::dvec3>& acc)
+void accumulate(int order, const glm::vec3& d, double solid_angle, const float* texel,
+                std::vector<glm::dvec3>& acc)
 {
     if (!std::isfinite(texel[0]) || !std::isfinite(texel[1]) || !std::isfinite(texel[2]))
         throw std::invalid_argument("hemi: environment map texel is not finite");
@@ -32,11 +33,13 @@ std::vector<glm::vec3> to_float(const std::vector<glm::dvec3>& acc)
 }
 } // namespace
 
-std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t height, std::span<const float> rgba)
+std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t height,
+                                        std::span<const float> rgba)
 {
     if (width == 0 || height == 0 || rgba.size() != size_t(width) * height * 4)
-        throw std::invalid_argument("hemi: project_equirect: " + std::to_string(rgba.size()) + " floats for a " +
-                                    std::to_string(width) + "x" + std::to_string(height) + " RGBA image");
+        throw std::invalid_argument("hemi: project_equirect: " + std::to_string(rgba.size()) +
+                                    " floats for a " + std::to_string(width) + "x" + std::to_string(height) +
+                                    " RGBA image");
     std::vector<glm::dvec3> acc(size_t(sh_count(order)), glm::dvec3(0.0));
     const double dphi = 2.0 * M_PI / width;
     for (uint32_t y = 0; y < height; ++y)
@@ -69,13 +72,26 @@ glm::vec3 cubemap_direction(int face, float s, float t)
     glm::vec3 d;
     switch (face)
     {
-    case 0: d = {1.0f, -t, -s}; break;
-    case 1: d = {-1.0f, -t, s}; break;
-    case 2: d = {s, 1.0f, t}; break;
-    case 3: d = {s, -1.0f, -t}; break;
-    case 4: d = {s, -t, 1.0f}; break;
-    case 5: d = {-s, -t, -1.0f}; break;
-    default: throw std::invalid_argument("hemi: cube face " + std::to_string(face) + " is not in [0, 5]");
+    case 0:
+        d = {1.0f, -t, -s};
+        break;
+    case 1:
+        d = {-1.0f, -t, s};
+        break;
+    case 2:
+        d = {s, 1.0f, t};
+        break;
+    case 3:
+        d = {s, -1.0f, -t};
+        break;
+    case 4:
+        d = {s, -t, 1.0f};
+        break;
+    case 5:
+        d = {-s, -t, -1.0f};
+        break;
+    default:
+        throw std::invalid_argument("hemi: cube face " + std::to_string(face) + " is not in [0, 5]");
     }
     return glm::normalize(d);
 }

@@ -58,7 +58,8 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
     const float sign[3] = {-1.0f, 1.0f, -1.0f};
     for (int m = -1; m <= 1; ++m)
         for (int n = -1; n <= 1; ++n)
-            blocks_[offsets_[1] + (m + 1) * 3 + (n + 1)] = sign[m + 1] * sign[n + 1] * r[axis[n + 1]][axis[m + 1]];
+            blocks_[offsets_[1] + (m + 1) * 3 + (n + 1)] =
+                sign[m + 1] * sign[n + 1] * r[axis[n + 1]][axis[m + 1]];
 
     Bands b{blocks_, offsets_};
     for (int l = 2; l < order; ++l)
@@ -68,9 +69,11 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
             {
                 const int am = std::abs(m);
                 const double d = (m == 0) ? 1.0 : 0.0;
-                const double denom = (std::abs(n) == l) ? double(2 * l) * (2 * l - 1) : double(l + n) * (l - n);
+                const double denom =
+                    (std::abs(n) == l) ? double(2 * l) * (2 * l - 1) : double(l + n) * (l - n);
                 const double u = std::sqrt(double(l + m) * (l - m) / denom);
-                const double v = 0.5 * std::sqrt((1.0 + d) * (l + am - 1.0) * (l + am) / denom) * (1.0 - 2.0 * d);
+                const double v =
+                    0.5 * std::sqrt((1.0 + d) * (l + am - 1.0) * (l + am) / denom) * (1.0 - 2.0 * d);
                 const double w = -0.5 * std::sqrt(double(l - am - 1) * (l - am) / denom) * (1.0 - d);
                 double value = 0.0;
                 if (u != 0.0)
@@ -83,12 +86,14 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
                     else if (m > 0)
                     {
                         double d1 = (m == 1) ? 1.0 : 0.0;
-                        vv = p_term(b, 1, l, m - 1, n) * std::sqrt(1.0 + d1) - p_term(b, -1, l, -m + 1, n) * (1.0 - d1);
+                        vv = p_term(b, 1, l, m - 1, n) * std::sqrt(1.0 + d1) -
+                             p_term(b, -1, l, -m + 1, n) * (1.0 - d1);
                     }
                     else
                     {
                         double d1 = (m == -1) ? 1.0 : 0.0;
-                        vv = p_term(b, 1, l, m + 1, n) * (1.0 - d1) + p_term(b, -1, l, -m - 1, n) * std::sqrt(1.0 + d1);
+                        vv = p_term(b, 1, l, m + 1, n) * (1.0 - d1) +
+                             p_term(b, -1, l, -m - 1, n) * std::sqrt(1.0 + d1);
                     }
                     value += v * vv;
                 }

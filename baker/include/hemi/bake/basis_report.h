@@ -29,10 +29,10 @@ struct BasisErrorStats
 struct BasisReport
 {
     std::map<std::string, std::vector<std::vector<double>>> projection; // basis -> K rows of 9
-    std::map<std::string, std::vector<double>> sloan_table2;              // "sal4", "hl2" -> 9 values
-    std::map<std::string, BasisErrorStats> imse;                           // every basis incl. "sh9"
-    std::vector<double> svd_singular_values;                               // A
-    std::vector<double> svd_singular_values_convolved;                     // A C
+    std::map<std::string, std::vector<double>> sloan_table2;            // "sal4", "hl2" -> 9 values
+    std::map<std::string, BasisErrorStats> imse;                        // every basis incl. "sh9"
+    std::vector<double> svd_singular_values;                            // A
+    std::vector<double> svd_singular_values_convolved;                  // A C
     int signals = 0;
     uint64_t seed = 0;
 };

@@ -51,33 +51,31 @@ struct CheckpointSection
 // version (bump it when the sections change meaning, so old files are ignored rather than misread).
 class CheckpointKey
 {
-public:
+  public:
     explicit CheckpointKey(uint64_t version);
     ~CheckpointKey();
     CheckpointKey(const CheckpointKey&) = delete;
     CheckpointKey& operator=(const CheckpointKey&) = delete;
 
     CheckpointKey& add(std::span<const std::byte> bytes);
-    template <typename T>
-    CheckpointKey& add_array(std::span<const T> values)
+    template <typename T> CheckpointKey& add_array(std::span<const T> values)
     {
         return add(std::as_bytes(values));
     }
-    template <typename T>
-    CheckpointKey& add_value(const T& value)
+    template <typename T> CheckpointKey& add_value(const T& value)
     {
         return add(std::as_bytes(std::span<const T>(&value, 1)));
     }
     uint64_t digest() const;
 
-private:
+  private:
     struct State;
     std::unique_ptr<State> state_;
 };
 
 class SliceCheckpoint
 {
-public:
+  public:
     // An empty `path` makes a checkpoint that is off: resume() finds nothing and nothing is saved.
     // `interval_seconds` 0 (or less) saves after every slice. Throws std::invalid_argument for passes or
     // items of 0, or a section name that is empty, too long, repeated or "key" or "state".
@@ -105,7 +103,7 @@ public:
     const std::string& error() const { return error_; }
     const std::filesystem::path& path() const { return path_; }
 
-private:
+  private:
     std::optional<SlicePosition> load();
 
     std::filesystem::path path_;

@@ -39,7 +39,7 @@ struct RayHit
 
 class EmbreeScene
 {
-public:
+  public:
     // Copies the mesh's positions and triangles (the mesh may go away afterwards; normals, tangents and UVs
     // are not used). Throws std::invalid_argument for a mesh without vertices or triangles, an index count
     // that is not a multiple of 3, an index out of range or a non-finite position (Embree would silently drop
@@ -79,7 +79,7 @@ public:
     // nearly-equal triangles a ray hits, so bakes put it in their checkpoint keys.
     static int embree_version();
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
     uint32_t triangle_count_ = 0;

@@ -1,8 +1,8 @@
 #pragma once
 // The bake side of Heidrich & Seidel 1999: factored BRDF lookup tables (hemi-bake brdf) and parabolic
-// environment maps with their mipmaps, prefiltered glossy and diffuse maps and Fresnel tables (hemi-bake envmap).
-// The models and maps themselves live in the math layer (math/brdf.h, math/paraboloid.h); this layer chooses
-// parameters, measures errors and writes files.
+// environment maps with their mipmaps, prefiltered glossy and diffuse maps and Fresnel tables (hemi-bake
+// envmap). The models and maps themselves live in the math layer (math/brdf.h, math/paraboloid.h); this layer
+// chooses parameters, measures errors and writes files.
 
 #include <hemi/io/envmap_asset.h>
 #include <hemi/io/image.h>
@@ -28,7 +28,7 @@ struct BrdfBakeOptions
     double ior = 1.5;                       // torrance-sparrow: index of refraction (> 1)
     double exponent = 50.0;                 // banks, phong, blinn-phong, cosine-lobe
     uint32_t size = 256;                    // samples per table axis
-    bool eight_bit = false;                 // store each channel as round(255 v / max) / 255 with max in metadata
+    bool eight_bit = false; // store each channel as round(255 v / max) / 255 with max in metadata
 };
 
 // How far the tables' product (bilinear lookups, as a GPU's sampler makes them) is from the model evaluated
@@ -46,9 +46,10 @@ struct BrdfError
 struct BrdfBake
 {
     std::vector<math::BrdfTable> tables; // as stored (8-bit codes / 255 when eight_bit)
-    std::vector<std::vector<double>> scales; // per table, per channel: stored value x scale = the model's value
-    BrdfError error;                     // of what is stored (with --8bit: of the quantised tables)
-    BrdfError float_error;               // of the float tables (equal to error without --8bit)
+    std::vector<std::vector<double>>
+        scales;            // per table, per channel: stored value x scale = the model's value
+    BrdfError error;       // of what is stored (with --8bit: of the quantised tables)
+    BrdfError float_error; // of the float tables (equal to error without --8bit)
 };
 
 // Validates the options (std::invalid_argument naming the option: an unknown model or distribution, ior <= 1,
@@ -80,40 +81,42 @@ struct EnvmapBakeStats
 io::EnvmapAsset bake_envmap(const io::ImageRgba& equirect, const EnvmapBakeOptions& options,
                             EnvmapBakeStats* stats = nullptr,
                             const std::function<void(const std::string&)>& progress = {});
-// The options' checks alone (what bake_envmap throws for them), for the command line to run before reading the
-// environment.
+// The options' checks alone (what bake_envmap throws for them), for the command line to run before reading
+// the environment.
 void check_envmap_options(const EnvmapBakeOptions& options);
 
-// The comparison report's measurements (hemi-bake envmap --report): for each prefiltered map of the asset (the
-// diffuse map as exponent 1, then each glossy map), its parabolic lookup and a cube-map implementation of the
-// same filter against the reference, at `directions` reflection directions spread evenly over the sphere
-// (a Fibonacci lattice). The reference is Eq. 9 integrated over every pixel of the source equirect where the lobe
-// exceeds 1e-4 of its peak (each pixel at its centre with its exact solid angle): a ray per pixel, what a
-// ray tracer converges to. The cube map has faces of half the parabolic map's size (the same largest texel),
-// resampled from the same equirect and filtered by the same windowed sum (math::PhongLobe) over its own
-// texels, and is looked up bilinearly with seamless filtering across its faces.
+// The comparison report's measurements (hemi-bake envmap --report): for each prefiltered map of the asset
+// (the diffuse map as exponent 1, then each glossy map), its parabolic lookup and a cube-map implementation
+// of the same filter against the reference, at `directions` reflection directions spread evenly over the
+// sphere (a Fibonacci lattice). The reference is Eq. 9 integrated over every pixel of the source equirect
+// where the lobe exceeds 1e-4 of its peak (each pixel at its centre with its exact solid angle): a ray per
+// pixel, what a ray tracer converges to. The cube map has faces of half the parabolic map's size (the same
+// largest texel), resampled from the same equirect and filtered by the same windowed sum (math::PhongLobe)
+// over its own texels, and is looked up bilinearly with seamless filtering across its faces.
 struct PrefilterComparison
 {
     double exponent = 0.0;
-    uint32_t parabolic_size = 0, cube_size = 0;   // per side: each half, each face
+    uint32_t parabolic_size = 0, cube_size = 0; // per side: each half, each face
     uint64_t parabolic_texels = 0, cube_texels = 0;
     double parabolic_rmse = 0.0, cube_rmse = 0.0; // of the luminance-free mean over RGB, in radiance
     double reference_rms = 0.0;                   // RMS of the reference, for relative errors
     double cube_seconds = 0.0;                    // resampling the equirect into the cube and filtering it
 };
-std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& equirect, const io::EnvmapAsset& asset,
+std::vector<PrefilterComparison> compare_prefiltered_maps(const io::ImageRgba& equirect,
+                                                          const io::EnvmapAsset& asset,
                                                           uint32_t directions = 1024);
 // The reference alone: Eq. 9 for Phong exponent e integrated over the equirect's pixels, at each direction.
 std::vector<glm::dvec3> phong_reference(const io::ImageRgba& equirect, double exponent,
                                         std::span<const glm::dvec3> directions);
 
-// One half of a parabolic map as an image: its texels' RGB, alpha 1 inside the circle the half owns (as the paper
-// marks it), 0 outside.
+// One half of a parabolic map as an image: its texels' RGB, alpha 1 inside the circle the half owns (as the
+// paper marks it), 0 outside.
 io::ImageRgba parabolic_half_image(const math::ParabolicImage& map, int half);
 
 // Writes every image of the asset as EXR into `dir` (created): mirror_L<level>_<front|back>.exr,
-// glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior named
-// "ior<value>"). Returns the paths written.
-std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir, const io::EnvmapAsset& asset);
+// glossy_e<exponent>_<front|back>.exr, diffuse_<front|back>.exr and fresnel.exr (one row, a channel per ior
+// named "ior<value>"). Returns the paths written.
+std::vector<std::filesystem::path> write_envmap_exrs(const std::filesystem::path& dir,
+                                                     const io::EnvmapAsset& asset);
 
 } // namespace hemi::bake

@@ -35,14 +35,15 @@ struct LightmapTexel
 {
     uint32_t x = 0, y = 0;
     uint32_t triangle = 0;
-    glm::vec3 barycentric{1.0f, 0.0f, 0.0f}; // of the sample point, weights of the triangle's vertices 0, 1, 2
-    bool centre_inside = false;               // the texel centre lies in the triangle (else: a grazed texel)
-    glm::vec3 position{0.0f};                 // the sample point on the surface (mesh units)
-    glm::vec3 normal{0.0f, 0.0f, 1.0f};       // unit, the frame's z
-    glm::vec3 tangent{1.0f, 0.0f, 0.0f};      // unit, the frame's x
-    glm::vec3 bitangent{0.0f, 1.0f, 0.0f};    // unit, the frame's y
+    glm::vec3 barycentric{1.0f, 0.0f,
+                          0.0f};           // of the sample point, weights of the triangle's vertices 0, 1, 2
+    bool centre_inside = false;            // the texel centre lies in the triangle (else: a grazed texel)
+    glm::vec3 position{0.0f};              // the sample point on the surface (mesh units)
+    glm::vec3 normal{0.0f, 0.0f, 1.0f};    // unit, the frame's z
+    glm::vec3 tangent{1.0f, 0.0f, 0.0f};   // unit, the frame's x
+    glm::vec3 bitangent{0.0f, 1.0f, 0.0f}; // unit, the frame's y
     glm::vec3 geometric_normal{0.0f, 0.0f, 1.0f}; // unit normal of the triangle (counter-clockwise front)
-    float world_size = 0.0f;                  // the texel's footprint on the surface: sqrt(world area / texel area)
+    float world_size = 0.0f; // the texel's footprint on the surface: sqrt(world area / texel area)
 };
 
 struct LightmapAtlas
@@ -56,9 +57,9 @@ struct LightmapAtlas
 struct LightmapUvReport
 {
     size_t triangles = 0;
-    size_t outside = 0;      // triangles with a lightmap UV outside [0, 1]
-    size_t degenerate = 0;   // triangles of zero area in lightmap UV space (no texel can see them)
-    size_t zero_area = 0;    // triangles of zero area in space (ignored)
+    size_t outside = 0;            // triangles with a lightmap UV outside [0, 1]
+    size_t degenerate = 0;         // triangles of zero area in lightmap UV space (no texel can see them)
+    size_t zero_area = 0;          // triangles of zero area in space (ignored)
     size_t overlapping_texels = 0; // texel centres inside two or more triangles
     uint32_t overlap_example[2] = {0, 0}; // two triangles that overlap, when overlapping_texels > 0
     size_t covered_texels = 0;
@@ -83,7 +84,7 @@ struct TriangleRange
 // Validates and rasterises in one pass. The mesh needs positions, normals, tangents and uvs1 (Throws
 // std::invalid_argument naming what is missing, or for a size of 0 or over 16384). `ranges` groups the
 // triangles for the density report (glTF primitives); empty is one group.
-LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
-                                 const std::vector<TriangleRange>& ranges = {});
+LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
+                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {});
 
 } // namespace hemi::bake

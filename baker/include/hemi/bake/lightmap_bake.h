@@ -37,7 +37,7 @@ namespace hemi::bake
 // convention, Cycles' mapping: u = 0.5 - atan2(y, x) / 2 pi, v = acos(z) / pi from the top) and a sun.
 struct LightmapLights
 {
-    glm::vec3 uniform{1.0f};  // when `environment` is empty: radiance from every direction
+    glm::vec3 uniform{1.0f};   // when `environment` is empty: radiance from every direction
     io::ImageRgba environment; // equirect radiance (linear), constant over each pixel; empty: uniform
     float environment_scale = 1.0f;
 
@@ -68,13 +68,14 @@ struct LightmapLights
 // and whether the material is double-sided (a back-face hit of a single-sided one carries no light).
 class LightmapSurfaces
 {
-public:
+  public:
     // Decodes every image once. Throws io::FormatError naming a corrupt image, std::invalid_argument for a
     // primitive out of range or a material index out of range.
     LightmapSurfaces(const io::Mesh& mesh, const std::vector<io::Material>& materials,
-                     const std::vector<io::EncodedImage>& images, const std::vector<io::Primitive>& primitives);
+                     const std::vector<io::EncodedImage>& images,
+                     const std::vector<io::Primitive>& primitives);
 
-    glm::vec3 albedo(uint32_t triangle, float u, float v) const;   // Embree's barycentrics of the hit
+    glm::vec3 albedo(uint32_t triangle, float u, float v) const; // Embree's barycentrics of the hit
     glm::vec3 emission(uint32_t triangle, float u, float v) const;
     // The material's tangent-space normal (glTF's: +y up the image): its normal texture's texel c, bilinear,
     // as (2c - 1) with x and y times the normal scale, normalised, like the material system's shader; +z for
@@ -85,7 +86,7 @@ public:
     const std::vector<io::Material>& materials() const { return materials_; }
     const std::vector<io::ImageRgba8>& images() const { return images_; }
 
-private:
+  private:
     glm::vec4 sample(const io::TextureRef& t, uint32_t triangle, float u, float v, bool srgb) const;
     const io::Mesh* mesh_;
     std::vector<io::Material> materials_;
@@ -96,8 +97,8 @@ private:
 
 struct LightmapBakeOptions
 {
-    int rays = 256;     // hemisphere rays per texel for the environment
-    int sun_rays = 16;  // shadow rays per texel towards the sun's disc
+    int rays = 256;    // hemisphere rays per texel for the environment
+    int sun_rays = 16; // shadow rays per texel towards the sun's disc
     uint64_t seed = 1;
     float ray_offset = 1e-4f; // of the scene's diagonal: how far ray origins leave the surface
     // Passes of indirect light: a ray that hits a surface carries albedo / pi times the irradiance the
@@ -147,7 +148,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 // irradiance. Throws std::invalid_argument listing the known names.
 int lightmap_output_size(std::string_view name);
 // The coefficients of one texel's SH9 irradiance in the output `name`: lightmap_output_size(name) RGB values.
-std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::array<glm::vec3, 9>& irradiance);
+std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
+                                             const std::array<glm::vec3, 9>& irradiance);
 // Every texel's coefficients as K maps for render::TexelCoefficients (map after map, rows from the top, RGB:
 // coefficient k of texel (x, y) at [((k * height + y) * width + x) * 3 + c]). Texels that no triangle covers
 // take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a chart's
@@ -185,7 +187,7 @@ struct LightmapFileOptions
     uint32_t width = 0, height = 0; // the atlas; 0 x 0: from texel_size, else 512 x 512
     float texel_size = 0.0f;        // world units per texel: the atlas size that gives the scene that density
     std::vector<std::string> outputs = {"sh9", "hl2", "h4", "h6", "sal4", "plain", "rnm"};
-    std::filesystem::path exr_dir;  // empty: no EXRs
+    std::filesystem::path exr_dir; // empty: no EXRs
     int dilate = 2;
     // Light probes (bake_light_probes) on a grid of this many probes over the scene's bounding box, each half
     // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.

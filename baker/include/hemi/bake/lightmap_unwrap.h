@@ -3,9 +3,9 @@
 // density. Triangles that share an edge (vertices welded by position, so seams of the other UV sets do not
 // cut charts) join the chart of a seed triangle while their normal stays within `max_chart_angle` of the
 // seed's; each chart is projected onto the seed's plane, turned so that its longest edge runs along u, and
-// the charts' rectangles are packed on a skyline (bottom-left best fit, tallest first) with `padding` texels between them, so
-// that conservative rasterisation never gives two charts one texel. A level of flat walls gets one chart
-// per wall; a curved surface gets bands of at most `max_chart_angle` of curvature.
+// the charts' rectangles are packed on a skyline (bottom-left best fit, tallest first) with `padding` texels
+// between them, so that conservative rasterisation never gives two charts one texel. A level of flat walls
+// gets one chart per wall; a curved surface gets bands of at most `max_chart_angle` of curvature.
 //
 // What this is not: an optimising unwrapper (xatlas, UVAtlas: not packaged in Debian). Curved meshes get
 // many small charts and so many seams; an artist's second UV map (Blender's Lightmap Pack, or a hand-made
@@ -22,11 +22,11 @@ namespace hemi::bake
 
 struct UnwrapOptions
 {
-    float texel_size = 0.0f;          // world units per texel; 0: the largest that fits the atlas below
-    uint32_t width = 0, height = 0;   // the atlas; 0 x 0: from texel_size (about square, no wasted rows);
-                                      // 0 x 0 and texel size 0: 512 x 512
+    float texel_size = 0.0f;        // world units per texel; 0: the largest that fits the atlas below
+    uint32_t width = 0, height = 0; // the atlas; 0 x 0: from texel_size (about square, no wasted rows);
+                                    // 0 x 0 and texel size 0: 512 x 512
     float max_chart_angle_degrees = 10.0f;
-    uint32_t padding = 2;             // texels between charts (and around the atlas's border)
+    uint32_t padding = 2; // texels between charts (and around the atlas's border)
 };
 
 struct UnwrapResult

@@ -23,8 +23,8 @@
 #include <hemi/io/mesh.h>
 #include <hemi/io/prt_asset.h>
 
-#include <filesystem>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <string_view>
@@ -46,11 +46,11 @@ TransferKind parse_transfer_kind(std::string_view name);
 struct PrtBakeOptions
 {
     TransferKind kind = TransferKind::Interreflected;
-    int order = 5;          // lighting SH order n in [3, 6]: L = n^2
-    int rays = 256;         // rays per vertex (>= 1); ignored for unshadowed transfer
-    int bounces = 2;        // interreflection bounces (>= 0); used by TransferKind::Interreflected only
-    float albedo = 0.6f;    // grey diffuse albedo of the model for interreflection, in [0, 1)
-    uint64_t seed = 1;      // random stream of the ray directions
+    int order = 5;       // lighting SH order n in [3, 6]: L = n^2
+    int rays = 256;      // rays per vertex (>= 1); ignored for unshadowed transfer
+    int bounces = 2;     // interreflection bounces (>= 0); used by TransferKind::Interreflected only
+    float albedo = 0.6f; // grey diffuse albedo of the model for interreflection, in [0, 1)
+    uint64_t seed = 1;   // random stream of the ray directions
     // Ray origins move off the surface by this fraction of the bounding-box diagonal (self-intersection).
     float ray_offset = 1e-4f;
     // Checkpoint file (empty: none). The bake saves its finished work there at most every
@@ -86,7 +86,7 @@ struct PrtTransfer
     bool resumed = false;          // true when a checkpoint supplied finished work
     int resumed_pass = 0;          // where it resumed: pass, and first vertex of that pass
     uint32_t resumed_vertex = 0;
-    std::string checkpoint_error;  // why checkpointing stopped (e.g. a full disk); the bake itself went on
+    std::string checkpoint_error; // why checkpointing stopped (e.g. a full disk); the bake itself went on
     int l() const { return order * order; }
 };
 
@@ -106,7 +106,8 @@ uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& options, do
 // tangent frame: a hemispherical basis name of math::bases() ("sh9", "hl2", "h4", "h6", "sal4", "sep4", ...)
 // folds M with the tangent rotation, the cosine convolution and the basis projection; "prt" is t itself
 // (K = 1). The mesh must have tangents. Throws std::invalid_argument for an unknown technique.
-std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& mesh, std::string_view technique);
+std::vector<float> fold_technique(const PrtTransfer& transfer, const io::Mesh& mesh,
+                                  std::string_view technique);
 // K of a technique name (as above); throws std::invalid_argument for an unknown one.
 int technique_size(std::string_view technique);
 

@@ -16,8 +16,8 @@
 //
 // Each pixel averages `rays` paths through points jittered over its square (so the normal map is box-
 // filtered, where the rasteriser filters it with mipmaps). The even and the odd paths are two independent
-// stratified sets, and the noise of the pixel's mean is estimated from the difference of their means. Counter-based random numbers: the same seed gives the same
-// bytes on any thread count.
+// stratified sets, and the noise of the pixel's mean is estimated from the difference of their means.
+// Counter-based random numbers: the same seed gives the same bytes on any thread count.
 
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/io/image.h>
@@ -36,20 +36,20 @@ namespace hemi::bake
 struct ReferenceOptions
 {
     uint32_t width = 800, height = 600;
-    bool auto_camera = true;             // math::auto_camera of the mesh under `model`, as hemi-render
-    math::Camera camera;                 // used when !auto_camera (world space, z up)
+    bool auto_camera = true;                 // math::auto_camera of the mesh under `model`, as hemi-render
+    math::Camera camera;                     // used when !auto_camera (world space, z up)
     glm::mat4 model = math::gltf_to_world(); // the mesh's placement in the world (a rigid transform)
-    int rays = 256;                      // paths per pixel
-    int bounces = 0;                     // surface reflections per path (0: direct light and emission only)
-    bool white = false;                  // E / pi without albedo or emission
+    int rays = 256;                          // paths per pixel
+    int bounces = 0;    // surface reflections per path (0: direct light and emission only)
+    bool white = false; // E / pi without albedo or emission
     uint64_t seed = 1;
-    float ray_offset = 1e-4f;            // of the scene's diagonal, as the lightmap bake's
+    float ray_offset = 1e-4f; // of the scene's diagonal, as the lightmap bake's
 };
 
 struct ReferenceImage
 {
-    io::ImageRgba image; // linear RGB; alpha = coverage (the fraction of the pixel's paths that hit the scene),
-                         // colour not premultiplied (the mean over the paths that hit)
+    io::ImageRgba image; // linear RGB; alpha = coverage (the fraction of the pixel's paths that hit the
+                         // scene), colour not premultiplied (the mean over the paths that hit)
     math::Camera camera; // the camera it was framed with
     double noise = 0.0;  // RMS over fully covered pixels and channels of the estimated standard error of a
                          // pixel's mean (from its even and odd paths)
@@ -59,16 +59,17 @@ struct ReferenceImage
 
 // Throws std::invalid_argument for bad options (sizes, rays, bounces, a camera that is not finite or whose
 // eye is its target) or lights, and for a mesh without normals, tangents and UVs.
-ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& surfaces, const LightmapLights& lights,
-                                const ReferenceOptions& options,
+ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& surfaces,
+                                const LightmapLights& lights, const ReferenceOptions& options,
                                 const std::function<void(uint32_t rows_done, uint32_t rows)>& progress = {});
 
 // hemi-bake reference's job: read the glTF scene (lights in hemi's z-up world, the scene placed there by
 // math::gltf_to_world(), its punctual lights added, as bake_lightmap_file does) and write the image as a
 // linear RGBA EXR (io::write_exr, atomic; checked writable before the render). Throws io::FormatError naming
 // the file and the problem.
-ReferenceImage render_reference_file(const std::filesystem::path& scene, const std::filesystem::path& exr,
-                                     LightmapLights lights, const ReferenceOptions& options,
-                                     const std::function<void(uint32_t rows_done, uint32_t rows)>& progress = {});
+ReferenceImage
+render_reference_file(const std::filesystem::path& scene, const std::filesystem::path& exr,
+                      LightmapLights lights, const ReferenceOptions& options,
+                      const std::function<void(uint32_t rows_done, uint32_t rows)>& progress = {});
 
 } // namespace hemi::bake

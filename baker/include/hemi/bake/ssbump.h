@@ -8,8 +8,8 @@
 // Definitions (docs/ssbump.md has them with figures' worth of words; any other implementation can check
 // hemi's output against them):
 // - The relief is the surface through the texel-centre samples, in units of texel widths: sample (x, y) (x
-//   along a row, y down the rows) stands at height `scale * h(x, y)`. Each quad of four neighbouring samples is
-//   two triangles split along the diagonal from (x, y) to (x + 1, y + 1).
+//   along a row, y down the rows) stands at height `scale * h(x, y)`. Each quad of four neighbouring samples
+//   is two triangles split along the diagonal from (x, y) to (x + 1, y + 1).
 // - Tangent space: +x along a row, +y up the image (towards row 0, glTF's normal-map convention), +z out of
 //   the surface.
 // - The normal N at a texel comes from central differences of the (filtered) heights:
@@ -95,9 +95,9 @@ HeightField bilateral_filter(const HeightField& field, const BilateralFilter& fi
 std::vector<glm::vec3> height_normals(const HeightField& field, float scale, bool wrap);
 
 // The bake's rays of one texel: `rays` directions on the hemisphere z > 0, stratified in A = ssbump_azimuths
-// (rays) azimuths (turned by a random angle per texel) and, within each, uniformly in z (jittered strata). Ray
-// r lies in azimuth r mod A; every ray of an azimuth shares its direction around z, so one horizon search per
-// azimuth answers all of them. weight is the solid angle the ray stands for (the weights sum to 2 pi).
+// (rays) azimuths (turned by a random angle per texel) and, within each, uniformly in z (jittered strata).
+// Ray r lies in azimuth r mod A; every ray of an azimuth shares its direction around z, so one horizon search
+// per azimuth answers all of them. weight is the solid angle the ray stands for (the weights sum to 2 pi).
 // Counter-based (ray_generator.h): a pure function of (seed, texel, ray, rays).
 struct SsbumpRay
 {
@@ -115,14 +115,14 @@ SsbumpRay ssbump_ray(uint64_t seed, uint64_t texel, int ray, int rays);
 // highest point could not.
 class HeightFieldTracer
 {
-public:
+  public:
     // heights are the (filtered) map's; scale in texel widths per height unit; epsilon the raise of a ray's
     // origin; max_distance (texel widths, > 0) how far rays go horizontally. Throws std::invalid_argument for
     // an empty map, a non-finite height or a scale, epsilon or distance out of range.
     HeightFieldTracer(const HeightField& heights, float scale, bool wrap, float epsilon, float max_distance);
 
-    // max(floor_slope, the horizon slope from texel (x, y) towards the tangent-space direction (dx, dy)): a unit
-    // 2D vector, +y up the image.
+    // max(floor_slope, the horizon slope from texel (x, y) towards the tangent-space direction (dx, dy)): a
+    // unit 2D vector, +y up the image.
     double horizon(uint32_t x, uint32_t y, double dx, double dy, double floor_slope) const;
     // Whether the ray from texel (x, y) (raised by epsilon) towards the tangent-space direction (z > 0) meets
     // the relief within max_distance.
@@ -132,14 +132,14 @@ public:
     float epsilon() const { return epsilon_; }
     float max_distance() const { return max_distance_; }
 
-private:
+  private:
     uint32_t width_, height_;
     bool wrap_;
     float epsilon_, max_distance_;
     float z_max_ = 0.0f;
-    std::vector<float> z_;                 // scale * heights
-    uint32_t cells_x_ = 0, cells_y_ = 0;   // quads: width x height wrapped, one fewer each way otherwise
-    std::vector<std::vector<float>> mip_;  // mip_[L]: max height over blocks of 2^L x 2^L cells
+    std::vector<float> z_;                // scale * heights
+    uint32_t cells_x_ = 0, cells_y_ = 0;  // quads: width x height wrapped, one fewer each way otherwise
+    std::vector<std::vector<float>> mip_; // mip_[L]: max height over blocks of 2^L x 2^L cells
     std::vector<uint32_t> mip_width_;
 };
 
@@ -154,7 +154,7 @@ struct SsbumpOptions
     bool occlusion = true;
     bool wrap = true;
     SsbumpConvention convention = SsbumpConvention::Normalized;
-    BilateralFilter filter;    // off unless set (hemi-bake sets default_filter for the input's depth)
+    BilateralFilter filter; // off unless set (hemi-bake sets default_filter for the input's depth)
     uint64_t seed = 1;
     float epsilon = 1e-3f;     // texel widths
     float max_distance = 0.0f; // texel widths; 0: the map's larger side
@@ -212,8 +212,9 @@ HeightChannel parse_height_channel(std::string_view name);
 struct HeightMapFile
 {
     HeightField field;
-    int bits = 0;                // 8 or 16 (PNG), 32 (EXR)
-    std::vector<uint8_t> alpha;  // the file's alpha when it has one and the heights are not in it (kept in the output)
+    int bits = 0; // 8 or 16 (PNG), 32 (EXR)
+    std::vector<uint8_t>
+        alpha; // the file's alpha when it has one and the heights are not in it (kept in the output)
 };
 // Reads a height map: an 8- or 16-bit PNG or an EXR. Throws io::FormatError naming the file when it cannot be
 // read, has a non-finite value, or when the channel does not hold heights: a colour image read as grey, a

@@ -29,14 +29,14 @@ std::vector<float> unshadowed_transfer(const glm::mat3& object_to_tangent, int l
 // P_basis * C for one basis, computed once (the projection is a quadrature) and applied per vertex.
 class TransferFold
 {
-public:
+  public:
     explicit TransferFold(const math::BasisDesc& basis);
     // T = P_basis * C * rm for `rm` = R * M (9 x L row-major, already in the tangent frame). K x L row-major.
     // Throws std::invalid_argument when rm.size() is not 9 * L.
     std::vector<float> apply(std::span<const float> rm, int l) const;
     int k() const { return k_; }
 
-private:
+  private:
     int k_;
     std::vector<double> pc_; // K x 9
 };

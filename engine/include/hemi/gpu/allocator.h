@@ -24,7 +24,7 @@ class MemoryAllocator;
 // A range of a block, freed when destroyed. Move-only.
 class Allocation
 {
-public:
+  public:
     Allocation() = default;
     Allocation(Allocation&& o) noexcept;
     Allocation& operator=(Allocation&& o) noexcept;
@@ -40,7 +40,7 @@ public:
     void* mapped() const;
     explicit operator bool() const { return block_ != nullptr; }
 
-private:
+  private:
     friend class MemoryAllocator;
     void release();
     MemoryAllocator* allocator_ = nullptr;
@@ -50,7 +50,7 @@ private:
 
 class MemoryAllocator
 {
-public:
+  public:
     explicit MemoryAllocator(const Device& device, VkDeviceSize block_size = VkDeviceSize(64) << 20);
     // Frees every block; logs (Device::log, Warning) allocations still alive, which are then dangling.
     ~MemoryAllocator();
@@ -63,14 +63,14 @@ public:
 
     struct Stats
     {
-        size_t blocks = 0;             // VkDeviceMemory objects alive
-        size_t allocations = 0;        // live sub-allocations
-        VkDeviceSize block_bytes = 0;  // bytes of all blocks
-        VkDeviceSize used_bytes = 0;   // bytes of live sub-allocations (after alignment)
+        size_t blocks = 0;            // VkDeviceMemory objects alive
+        size_t allocations = 0;       // live sub-allocations
+        VkDeviceSize block_bytes = 0; // bytes of all blocks
+        VkDeviceSize used_bytes = 0;  // bytes of live sub-allocations (after alignment)
     };
     Stats stats() const;
 
-private:
+  private:
     friend class Allocation;
     struct Block
     {

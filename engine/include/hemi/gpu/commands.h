@@ -15,7 +15,7 @@ namespace hemi::gpu
 // One command pool, one primary command buffer and one fence. Not thread-safe; use one per thread.
 class CommandContext
 {
-public:
+  public:
     explicit CommandContext(const Device& device);
 
     // Resets the command buffer and begins recording (one-time-submit).
@@ -25,7 +25,7 @@ public:
     // begin(); record(cb); submit_and_wait().
     void run(const std::function<void(VkCommandBuffer)>& record);
 
-private:
+  private:
     const Device* device_;
     CommandPool pool_;
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
@@ -38,7 +38,7 @@ void one_shot(const Device& device, const std::function<void(VkCommandBuffer)>& 
 // A pool of `count` timestamp queries. Reset it in the command buffer before writing.
 class TimestampQueries
 {
-public:
+  public:
     TimestampQueries(const Device& device, uint32_t count);
     bool supported() const { return period_ns_ > 0.0; }
     void reset(VkCommandBuffer cmd);
@@ -46,7 +46,7 @@ public:
     // Waits for and returns the tick values of queries [0, count) converted to nanoseconds.
     std::vector<double> read_ns();
 
-private:
+  private:
     VkDevice device_;
     QueryPool pool_;
     uint32_t count_;

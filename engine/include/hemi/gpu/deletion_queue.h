@@ -8,7 +8,8 @@
 //     ...                                               // each frame, after waiting for frame F's fence:
 //     deletions.collect(F);                             // destroys what frames <= F used
 //
-// Not thread-safe (one per render thread); the destructor destroys what is left (the engine waits idle first).
+// Not thread-safe (one per render thread); the destructor destroys what is left (the engine waits idle
+// first).
 
 #include <cstddef>
 #include <cstdint>
@@ -21,15 +22,14 @@ namespace hemi::gpu
 
 class DeletionQueue
 {
-public:
+  public:
     DeletionQueue() = default;
     DeletionQueue(const DeletionQueue&) = delete;
     DeletionQueue& operator=(const DeletionQueue&) = delete;
     ~DeletionQueue() = default;
 
     // Keeps `object` alive until collect(f) with f >= `frame`. Frames are the engine's own counter.
-    template <typename T>
-    void retire(uint64_t frame, T&& object)
+    template <typename T> void retire(uint64_t frame, T&& object)
     {
         using Held = std::decay_t<T>;
         entries_.push_back({frame, std::shared_ptr<void>(new Held(std::forward<T>(object)),
@@ -49,7 +49,7 @@ public:
 
     size_t pending() const { return entries_.size(); }
 
-private:
+  private:
     struct Entry
     {
         uint64_t frame;

@@ -69,7 +69,7 @@ enum class MemoryUsage
 
 class Device
 {
-public:
+  public:
     // Creates an instance and device of its own. Throws VulkanError (e.g. VK_ERROR_INCOMPATIBLE_DRIVER
     // when no Vulkan driver is installed) or std::runtime_error (no device matches the selector).
     explicit Device(const DeviceDesc& desc = {});
@@ -115,7 +115,7 @@ public:
     void log(LogLevel level, std::string_view message) const;
     void wait_idle() const;
 
-private:
+  private:
     void init_properties();
     static VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                          VkDebugUtilsMessageTypeFlagsEXT types,

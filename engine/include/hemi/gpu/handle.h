@@ -8,10 +8,9 @@
 namespace hemi::gpu
 {
 
-template <typename T, auto Destroy>
-class UniqueHandle
+template <typename T, auto Destroy> class UniqueHandle
 {
-public:
+  public:
     UniqueHandle() = default;
     UniqueHandle(VkDevice device, T handle) : device_(device), handle_(handle) {}
     ~UniqueHandle() { reset(); }
@@ -42,7 +41,7 @@ public:
         handle_ = VK_NULL_HANDLE;
     }
 
-private:
+  private:
     VkDevice device_ = VK_NULL_HANDLE;
     T handle_ = VK_NULL_HANDLE;
 };

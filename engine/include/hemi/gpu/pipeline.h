@@ -54,7 +54,7 @@ struct GraphicsProgramDesc
 {
     std::span<const uint32_t> vertex_shader;
     std::span<const uint32_t> fragment_shader;
-    std::vector<Binding> bindings;              // set 0, owned by the program; or:
+    std::vector<Binding> bindings;                  // set 0, owned by the program; or:
     std::vector<VkDescriptorSetLayout> set_layouts; // sets 0.. in order, owned by the caller (bindings empty)
     uint32_t push_constant_size = 0;
     std::vector<uint32_t> specialization; // shared by both stages
@@ -79,8 +79,10 @@ struct GraphicsProgramDesc
 Program create_graphics_program(const Device& device, const GraphicsProgramDesc& desc);
 
 // A descriptor pool sized for `max_sets` sets of the given bindings' types.
-DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Binding>& bindings, uint32_t max_sets);
-VkDescriptorSet allocate_descriptor_set(const Device& device, VkDescriptorPool pool, VkDescriptorSetLayout layout);
+DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Binding>& bindings,
+                                      uint32_t max_sets);
+VkDescriptorSet allocate_descriptor_set(const Device& device, VkDescriptorPool pool,
+                                        VkDescriptorSetLayout layout);
 
 // One descriptor write; fill exactly one of buffer / image / texel_view to match `type`.
 struct DescriptorWrite

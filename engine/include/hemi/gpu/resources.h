@@ -26,7 +26,7 @@ struct BufferDesc
 
 class Buffer
 {
-public:
+  public:
     Buffer() = default;
     Buffer(Buffer&& o) noexcept
         : memory_(std::move(o.memory_)), buffer_(std::move(o.buffer_)), size_(std::exchange(o.size_, 0)),
@@ -51,7 +51,7 @@ public:
     // nullptr (then write_buffer/read_buffer stage through a copy).
     void* mapped() const { return mapped_; }
 
-private:
+  private:
     friend Buffer create_buffer(const Device&, const BufferDesc&);
     Allocation memory_;
     VkBufferHandle buffer_;
@@ -65,7 +65,8 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc);
 void write_buffer(const Device& device, const Buffer& buffer, const void* data, VkDeviceSize size,
                   VkDeviceSize offset = 0);
 // Copies `size` bytes at `offset` out of the buffer (waits for the copy when not mapped).
-void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDeviceSize size, VkDeviceSize offset = 0);
+void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDeviceSize size,
+                 VkDeviceSize offset = 0);
 
 struct ImageDesc
 {
@@ -75,13 +76,13 @@ struct ImageDesc
     // TRANSFER_SRC and TRANSFER_DST are always added (uploads, readback).
     VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT;
     uint32_t mip_levels = 1;
-    uint32_t layers = 1;  // > 1: a 2D array image with a 2D_ARRAY view (coefficient maps, one layer each)
-    bool array = false;   // a 2D_ARRAY view even for one layer (what a sampler2DArray needs)
+    uint32_t layers = 1; // > 1: a 2D array image with a 2D_ARRAY view (coefficient maps, one layer each)
+    bool array = false;  // a 2D_ARRAY view even for one layer (what a sampler2DArray needs)
 };
 
 class Image
 {
-public:
+  public:
     Image() = default;
     VkImage handle() const { return image_; }
     VkImageView view() const { return view_; }
@@ -92,7 +93,7 @@ public:
     uint32_t layers() const { return layers_; }
     VkImageAspectFlags aspect() const { return aspect_; }
 
-private:
+  private:
     friend Image create_image(const Device&, const ImageDesc&);
     Allocation memory_;
     VkImageHandle image_;
@@ -125,7 +126,7 @@ struct SamplerDesc
 Sampler create_sampler(const Device& device, const SamplerDesc& desc = {});
 
 // A typed view of [offset, offset + range) of a buffer, for uniform/storage texel buffers.
-BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format, VkDeviceSize offset,
-                              VkDeviceSize range);
+BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format,
+                              VkDeviceSize offset, VkDeviceSize range);
 
 } // namespace hemi::gpu

@@ -16,7 +16,7 @@ namespace hemi::gpu
 
 class UploadBatch
 {
-public:
+  public:
     explicit UploadBatch(const Device& device) : device_(&device) {}
 
     // `size` bytes into `dst` at `offset`: written directly when the buffer is host-mapped (lavapipe, most
@@ -27,8 +27,8 @@ public:
     // SHADER_READ_ONLY_OPTIMAL.
     void image(const Image& dst, const void* texels, size_t bytes);
     // Every mip level given, not generated (mips a blit cannot make, e.g. solid-angle-weighted ones):
-    // levels[i] holds mip i's tightly packed texels of every layer; dst.mip_levels() levels. Every mip ends in
-    // SHADER_READ_ONLY_OPTIMAL.
+    // levels[i] holds mip i's tightly packed texels of every layer; dst.mip_levels() levels. Every mip ends
+    // in SHADER_READ_ONLY_OPTIMAL.
     void image_levels(const Image& dst, std::span<const std::vector<std::byte>> levels);
 
     // Records every pending copy and blit, with the barriers that make them visible to shader reads
@@ -40,7 +40,7 @@ public:
     void clear();
     bool empty() const { return pending_.empty(); }
 
-private:
+  private:
     const Device* device_;
     std::vector<Buffer> staging_;
     std::vector<std::function<void(VkCommandBuffer)>> pending_;

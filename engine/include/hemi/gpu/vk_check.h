@@ -12,11 +12,11 @@ namespace hemi::gpu
 
 class VulkanError : public std::runtime_error
 {
-public:
+  public:
     VulkanError(const std::string& message, VkResult result) : std::runtime_error(message), result_(result) {}
     VkResult result() const { return result_; }
 
-private:
+  private:
     VkResult result_;
 };
 

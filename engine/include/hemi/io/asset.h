@@ -26,24 +26,23 @@ constexpr uint32_t kAssetVersion = 1;
 
 class AssetWriter
 {
-public:
+  public:
     // Throws std::invalid_argument for an empty or too long (> 31 bytes) name, or a duplicate.
     void add(const std::string& name, std::span<const std::byte> bytes);
-    template <typename T>
-    void add_array(const std::string& name, std::span<const T> values)
+    template <typename T> void add_array(const std::string& name, std::span<const T> values)
     {
         add(name, std::as_bytes(values));
     }
     // Atomic (temporary file + rename). Throws FormatError naming the file on I/O failure.
     void write(const std::filesystem::path& path) const;
 
-private:
+  private:
     std::vector<std::pair<std::string, std::vector<std::byte>>> sections_;
 };
 
 class AssetReader
 {
-public:
+  public:
     // Reads and validates the whole file. Throws FormatError naming the file and the problem: missing file,
     // not a hemi asset (magic), unsupported version, truncated, checksum mismatch (corrupted), or a section
     // table that points outside the file.
@@ -62,8 +61,7 @@ public:
     // Throws FormatError naming the file when the section is missing.
     std::span<const std::byte> section(const std::string& name) const;
     // The section as an array of T; throws FormatError when its size is not a multiple of sizeof(T).
-    template <typename T>
-    std::vector<T> array(const std::string& name) const
+    template <typename T> std::vector<T> array(const std::string& name) const
     {
         std::span<const std::byte> b = section(name);
         check_multiple(name, b.size(), sizeof(T));
@@ -73,7 +71,7 @@ public:
         return out;
     }
 
-private:
+  private:
     void check_multiple(const std::string& name, size_t size, size_t element) const;
 
     std::string file_;

@@ -18,7 +18,8 @@ namespace hemi::io
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& temporary)>& write);
 
-// Writes `text` to `path` atomically (a JSON report, a table). Throws FormatError naming `path` when it cannot.
+// Writes `text` to `path` atomically (a JSON report, a table). Throws FormatError naming `path` when it
+// cannot.
 void write_text_atomically(const std::filesystem::path& path, std::string_view text);
 
 // Why a file cannot be written at `path`, or an empty string: its folder does not exist or is not a folder,

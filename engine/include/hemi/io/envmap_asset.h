@@ -1,14 +1,14 @@
 #pragma once
-// A baked environment asset (Heidrich & Seidel 1999, §4): the parabolic mirror map with its solid-angle mipmaps,
-// the prefiltered glossy maps (one per Phong exponent), the diffuse map and Fresnel tables, in the .hemi
-// container (io/asset.h: versioned, checksummed, written atomically). What hemi-bake envmap writes.
+// A baked environment asset (Heidrich & Seidel 1999, §4): the parabolic mirror map with its solid-angle
+// mipmaps, the prefiltered glossy maps (one per Phong exponent), the diffuse map and Fresnel tables, in the
+// .hemi container (io/asset.h: versioned, checksummed, written atomically). What hemi-bake envmap writes.
 //
 // Every map is a math::ParabolicImage (both halves, math/paraboloid.h's conventions), stored as f32 RGB
 // (environments hold radiances far beyond half float's 65504: a sun).
 // Sections (little-endian):
 //   envmap.info    u32 layout version (1), u32 N (level 0's size), u32 levels, u32 glossy maps,
-//                  u32 Fresnel tables, u32 Fresnel samples, u32 source width, u32 source height, f32 the mirror
-//                  map's extent (math/paraboloid.h: each half covers [-extent, extent]^2)
+//                  u32 Fresnel tables, u32 Fresnel samples, u32 source width, u32 source height, f32 the
+//                  mirror map's extent (math/paraboloid.h: each half covers [-extent, extent]^2)
 //   envmap.mirror  the levels N, N/2, ..., 1 one after another, each 2 x size x size x 3 f32
 //   envmap.glossy  per map: f32 exponent, u32 size, f32 extent, 2 x size x size x 3 f32
 //   envmap.diffuse u32 size, f32 extent, 2 x size x size x 3 f32 (the glossy map of exponent 1: E / pi)
@@ -31,19 +31,20 @@ struct EnvmapAsset
     std::vector<float> exponents;             // one per glossy map
     std::vector<math::ParabolicImage> glossy;
     math::ParabolicImage diffuse;
-    std::vector<float> iors;         // one per Fresnel table
+    std::vector<float> iors; // one per Fresnel table
     uint32_t fresnel_samples = 0;
-    std::vector<float> fresnel;      // iors.size() x fresnel_samples
+    std::vector<float> fresnel; // iors.size() x fresnel_samples
 };
 
-// The first inconsistency of an asset (sizes, counts, exponents, indices of refraction), or an empty string: what
-// the writer refuses and what render::EnvironmentLighting checks.
+// The first inconsistency of an asset (sizes, counts, exponents, indices of refraction), or an empty string:
+// what the writer refuses and what render::EnvironmentLighting checks.
 std::string envmap_problem(const EnvmapAsset& asset);
 
-// Throws std::invalid_argument for an inconsistent asset, FormatError naming the file when it cannot be written.
+// Throws std::invalid_argument for an inconsistent asset, FormatError naming the file when it cannot be
+// written.
 void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& asset);
-// Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset, sizes
-// that disagree, non-finite values).
+// Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset,
+// sizes that disagree, non-finite values).
 EnvmapAsset read_envmap_asset(const std::filesystem::path& path);
 
 } // namespace hemi::io

@@ -52,10 +52,10 @@ struct PunctualLight
     std::string name;
     glm::vec3 color{1.0f};
     float intensity = 1.0f;
-    float range = 0.0f;              // 0: infinite (glTF's "undefined")
-    float inner_cone = 0.0f;         // spot: radians, 0 <= inner < outer <= pi/2
-    float outer_cone = 0.785398163f; // pi/4, glTF's default
-    glm::vec3 position{0.0f};        // point, spot
+    float range = 0.0f;                     // 0: infinite (glTF's "undefined")
+    float inner_cone = 0.0f;                // spot: radians, 0 <= inner < outer <= pi/2
+    float outer_cone = 0.785398163f;        // pi/4, glTF's default
+    glm::vec3 position{0.0f};               // point, spot
     glm::vec3 direction{0.0f, 0.0f, -1.0f}; // unit, where the light points (the node's -Z): directional, spot
 };
 

@@ -7,8 +7,8 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,7 +19,7 @@ namespace hemi::io
 // Thrown by readers and writers; the message names the file and the problem.
 class FormatError : public std::runtime_error
 {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -47,8 +47,9 @@ struct ToneMap
 
 // Reads an OpenEXR file (scanline or tiled, half or float) into linear RGBA over its display window (pixels
 // outside the data window of an auto-cropped file read as 0, alpha 0 there): missing R/G/B read as 0 and a
-// missing A as 1; a single-channel Y image is read as grey. Files with neither R, G, B nor Y are refused. Throws FormatError naming `path` when the file
-// is missing, not EXR, truncated or corrupt, or holds a non-finite pixel (with its position).
+// missing A as 1; a single-channel Y image is read as grey. Files with neither R, G, B nor Y are refused.
+// Throws FormatError naming `path` when the file is missing, not EXR, truncated or corrupt, or holds a
+// non-finite pixel (with its position).
 ImageRgba read_exr(const std::filesystem::path& path);
 // read_exr's caps: the display window holds at most 2^27 pixels (16384 x 8192, 2 GiB of RGBA floats), and
 // one larger than 1024 x 1024 may be at most 64 times its data window (what auto-cropping pads with zeros).
@@ -97,8 +98,8 @@ ImageRgba8 decode_image(const EncodedImage& image);
 // Reads a PNG or JPEG file into its encoded form (mime type from the bytes' signature, not the extension;
 // name = the path). Throws FormatError naming `path` when it is missing or neither format.
 EncodedImage read_encoded_image(const std::filesystem::path& path);
-// An image read as data rather than colour (height maps, masks): a PNG's samples at their full bit depth (8 or
-// 16) scaled to [0, 1] with no sRGB decode, an EXR's values as read_exr gives them. pixels is always RGBA
+// An image read as data rather than colour (height maps, masks): a PNG's samples at their full bit depth (8
+// or 16) scaled to [0, 1] with no sRGB decode, an EXR's values as read_exr gives them. pixels is always RGBA
 // (grey is copied to R, G and B; a missing alpha reads 1).
 struct DataImage
 {

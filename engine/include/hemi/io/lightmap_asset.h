@@ -10,10 +10,11 @@
 //   mesh.*, scene.*, image.<i>: the mesh (mesh.uvs1 required) and the scene's surfaces, exactly as a PRT
 //                  asset stores them (prt_asset.h)
 //   L.<output>     u32 K, then K x H x W x 3 f16 (IEEE binary16): coefficient k of texel (x, y), channel c at
-//                  ((k * H + y) * W + x) * 3 + c, rows from the top (v = 0): render::TexelCoefficients' layout.
-//                  The coefficients are irradiance in each texel's tangent frame (the normal-map UV set's), so
-//                  sum_k c_k b_k(n) at the normal-map normal n is E(n); "plain" is E at the surface normal,
-//                  "rnm" E towards each math::rnm_basis() direction (normalised to pi under uniform radiance).
+//                  ((k * H + y) * W + x) * 3 + c, rows from the top (v = 0): render::TexelCoefficients'
+//                  layout. The coefficients are irradiance in each texel's tangent frame (the normal-map UV
+//                  set's), so sum_k c_k b_k(n) at the normal-map normal n is E(n); "plain" is E at the
+//                  surface normal, "rnm" E towards each math::rnm_basis() direction (normalised to pi under
+//                  uniform radiance).
 //   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
 //                  then NX * NY * NZ u8 valid flags.
@@ -48,13 +49,13 @@ struct LightProbes
     glm::uvec3 count{0};          // probes along x, y and z; all 0 when the asset has none
     glm::vec3 lo{0.0f}, hi{0.0f}; // the grid's corner probes (lo == hi along an axis with one probe)
     std::vector<std::array<glm::vec3, 9>> irradiance; // probe (i, j, k) at i + NX (j + NY k)
-    std::vector<uint8_t> valid;   // 0: inside geometry (most of its rays saw the backs of surfaces)
+    std::vector<uint8_t> valid; // 0: inside geometry (most of its rays saw the backs of surfaces)
 
     bool empty() const { return irradiance.empty(); }
     glm::vec3 position(uint32_t i, uint32_t j, uint32_t k) const;
-    // The irradiance at `p` (scene space): trilinear between the 8 probes of p's cell (p clamped to the grid),
-    // over the valid ones, their weights renormalised; the nearest valid probe when none of the 8 is valid;
-    // zero without a valid probe.
+    // The irradiance at `p` (scene space): trilinear between the 8 probes of p's cell (p clamped to the
+    // grid), over the valid ones, their weights renormalised; the nearest valid probe when none of the 8 is
+    // valid; zero without a valid probe.
     std::array<glm::vec3, 9> at(const glm::vec3& p) const;
 };
 
@@ -81,8 +82,8 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
 // sizes that disagree, non-finite values).
 LightmapAsset read_lightmap_asset(const std::filesystem::path& path);
 
-// What a .hemi file holds, from its sections: "prt", "lightmap" or "envmap". Throws FormatError naming the file when
-// it is not a hemi asset or neither kind.
+// What a .hemi file holds, from its sections: "prt", "lightmap" or "envmap". Throws FormatError naming the
+// file when it is not a hemi asset or neither kind.
 std::string asset_kind(const std::filesystem::path& path);
 
 } // namespace hemi::io

@@ -81,9 +81,9 @@ struct Material
     float normal_scale = 1.0f;         // scales the map's x and y
     glm::vec3 emissive_factor{0.0f};   // linear
     TextureRef emissive;               // sRGB
-    TextureRef occlusion;              // glTF's occlusionTexture: ambient occlusion in the red channel, linear
-    float occlusion_strength = 1.0f;   // occlusion = 1 + strength (texel.r - 1)
-    bool double_sided = false;         // no back-face culling; back faces are lit with the flipped normal
+    TextureRef occlusion;            // glTF's occlusionTexture: ambient occlusion in the red channel, linear
+    float occlusion_strength = 1.0f; // occlusion = 1 + strength (texel.r - 1)
+    bool double_sided = false;       // no back-face culling; back faces are lit with the flipped normal
     bool operator==(const Material&) const = default;
 };
 

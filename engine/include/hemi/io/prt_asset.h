@@ -37,11 +37,11 @@ namespace hemi::io
 struct PrtCpca
 {
     uint32_t clusters = 0, vectors = 0;
-    float rms_error = 0.0f;             // RMS over all matrix elements of (reconstruction - dense)
-    std::vector<float> means;           // C x D
-    std::vector<float> basis;           // C x V x D
-    std::vector<uint32_t> cluster;      // N
-    std::vector<float> weights;         // N x V
+    float rms_error = 0.0f;        // RMS over all matrix elements of (reconstruction - dense)
+    std::vector<float> means;      // C x D
+    std::vector<float> basis;      // C x V x D
+    std::vector<uint32_t> cluster; // N
+    std::vector<float> weights;    // N x V
 };
 
 struct PrtTechnique

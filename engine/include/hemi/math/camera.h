@@ -36,12 +36,13 @@ BoundingSphere bounding_sphere(const io::Mesh& mesh, const glm::mat4& model);
 // A camera that frames the whole model (its bounding sphere under `model`) from the front and slightly above.
 Camera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect);
 // View-projection for `camera` with near and far planes that enclose the model's bounding sphere. Pixel
-// (x, y) of a W x H image (row 0 at the top) has its centre at clip ((x + 0.5) / W * 2 - 1, (y + 0.5) / H * 2 - 1).
-// Throws std::invalid_argument when the eye and the target coincide.
+// (x, y) of a W x H image (row 0 at the top) has its centre at clip ((x + 0.5) / W * 2 - 1, (y + 0.5) / H * 2
+// - 1). Throws std::invalid_argument when the eye and the target coincide.
 glm::mat4 camera_matrix(const Camera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
 glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& bounds, float aspect);
 // A view-projection matrix (Vulkan clip space, near 0.05, far 100) looking from `eye` at `target`, z up.
-glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect);
+glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees,
+                             float aspect);
 
 // The tools' --camera value: "auto" (nullopt: auto_camera) or EYE,TARGET as six comma-separated numbers
 // (world space, z up). Throws std::invalid_argument quoting the text otherwise.

@@ -20,8 +20,14 @@ namespace hemi::math
 {
 
 constexpr int kMaxShOrder = 10; // bands 0..9, 100 coefficients
-constexpr int sh_count(int order) { return order * order; }
-constexpr int sh_index(int l, int m) { return l * (l + 1) + m; }
+constexpr int sh_count(int order)
+{
+    return order * order;
+}
+constexpr int sh_index(int l, int m)
+{
+    return l * (l + 1) + m;
+}
 
 using Sh9 = std::array<float, 9>;
 using Sh9Rgb = std::array<glm::vec3, 9>;
@@ -67,7 +73,7 @@ glm::vec3 sh9_eval_rgb(const Sh9Rgb& coefficients, const glm::vec3& d);
 // evaluating at d equals evaluating the original at R^-1 d.
 class ShRotation
 {
-public:
+  public:
     ShRotation(int order, const glm::mat3& rotation);
     int order() const { return order_; }
     // out = D in; in and out have order^2 entries and may not alias.
@@ -76,7 +82,7 @@ public:
     // Element (m, n) of band l's (2l+1)^2 block, m, n in [-l, l].
     float element(int l, int m, int n) const;
 
-private:
+  private:
     int order_;
     std::vector<float> blocks_; // band l's block at offset sum_{k<l} (2k+1)^2, row-major
     std::vector<int> offsets_;

@@ -23,7 +23,8 @@ namespace hemi::math
 
 // `rgba` holds width*height RGBA floats, row-major from the top row. Throws std::invalid_argument on
 // inconsistent sizes or non-finite texels.
-std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t height, std::span<const float> rgba);
+std::vector<glm::vec3> project_equirect(int order, uint32_t width, uint32_t height,
+                                        std::span<const float> rgba);
 
 // The pixel (x, y) of a width x height equirectangular image that the unit direction d falls in,
 // by the convention above (every direction falls in exactly one pixel).

@@ -20,7 +20,8 @@ namespace basis_detail
 std::span<const BasisDesc> bases()
 {
     // The generated list (cmake/HemiBases.cmake), in id order; each entry's id must be its index.
-    static const std::vector<BasisDesc> table = [] {
+    static const std::vector<BasisDesc> table = []
+    {
         const BasisDesc* entries[] = {
 #include "hemi_bases_table.inc"
         };
@@ -29,8 +30,9 @@ std::span<const BasisDesc> bases()
         for (const BasisDesc* e : entries)
         {
             if (e->id != int(t.size()))
-                throw std::logic_error("hemi: basis '" + std::string(e->name) + "' has id " + std::to_string(e->id) +
-                                       " at position " + std::to_string(t.size()) + " of the table");
+                throw std::logic_error("hemi: basis '" + std::string(e->name) + "' has id " +
+                                       std::to_string(e->id) + " at position " + std::to_string(t.size()) +
+                                       " of the table");
             t.push_back(*e);
         }
         return t;
@@ -157,7 +159,8 @@ double projection_error_of_sh9_function(const BasisDesc& b, int j)
         throw std::invalid_argument("hemi: SH9 index " + std::to_string(j) + " out of range");
     std::vector<double> p = projection_from_sh9(b);
     return integrate_hemisphere(
-        [&](const glm::dvec3& n) {
+        [&](const glm::dvec3& n)
+        {
             float v[HEMI_BASIS_MAX_SIZE];
             b.eval(glm::vec3(n), v);
             double fit = 0.0;

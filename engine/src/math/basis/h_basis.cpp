@@ -19,8 +19,14 @@ static void eval_h(const glm::vec3& n, float* out, int count)
         out[5] = 0.5f * k2 * (n.x * n.x - n.y * n.y);
     }
 }
-static void eval_h4(const glm::vec3& n, float* out) { eval_h(n, out, 4); }
-static void eval_h6(const glm::vec3& n, float* out) { eval_h(n, out, 6); }
+static void eval_h4(const glm::vec3& n, float* out)
+{
+    eval_h(n, out, 4);
+}
+static void eval_h6(const glm::vec3& n, float* out)
+{
+    eval_h(n, out, 6);
+}
 extern const BasisDesc k_h4{HEMI_BASIS_H4, "h4", HEMI_BASIS_SIZE_H4, true, eval_h4};
 extern const BasisDesc k_h6{HEMI_BASIS_H6, "h6", HEMI_BASIS_SIZE_H6, true, eval_h6};
 } // namespace hemi::math::basis_detail

@@ -54,12 +54,14 @@ SeparableSvd separable_svd(bool fold_convolution)
     for (int i = 0; i < kSeparableGrid; ++i)
         for (int k = 0; k < kSeparableGrid; ++k)
         {
-            glm::vec2 sq((k + 0.5f) / kSeparableGrid * 2.0f - 1.0f, (i + 0.5f) / kSeparableGrid * 2.0f - 1.0f);
+            glm::vec2 sq((k + 0.5f) / kSeparableGrid * 2.0f - 1.0f,
+                         (i + 0.5f) / kSeparableGrid * 2.0f - 1.0f);
             Sh9 y = sh9_eval(concentric_hemisphere(sq));
             for (int j = 0; j < 9; ++j)
             {
                 int l = j == 0 ? 0 : (j < 4 ? 1 : 2);
-                a(i * kSeparableGrid + k, j) = double(y[j]) * (fold_convolution ? clamped_cosine_factor(l) : 1.0);
+                a(i * kSeparableGrid + k, j) =
+                    double(y[j]) * (fold_convolution ? clamped_cosine_factor(l) : 1.0);
             }
         }
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
@@ -83,7 +85,8 @@ SeparableSvd separable_svd(bool fold_convolution)
 
 const std::array<float, 36>& sep4_weights()
 {
-    static const std::array<float, 36> weights = [] {
+    static const std::array<float, 36> weights = []
+    {
         std::vector<double> w = separable_svd(true).weights(4);
         std::array<float, 36> f{};
         for (int i = 0; i < 36; ++i)
@@ -102,7 +105,8 @@ std::vector<float> separable_texture(int size)
         {
             glm::vec2 xy((k + 0.5f) / size * 2.0f - 1.0f, (i + 0.5f) / size * 2.0f - 1.0f);
             float r2 = xy.x * xy.x + xy.y * xy.y;
-            glm::vec3 nrm = r2 < 1.0f ? glm::vec3(xy, std::sqrt(1.0f - r2)) : glm::vec3(xy / std::sqrt(r2), 0.0f);
+            glm::vec3 nrm =
+                r2 < 1.0f ? glm::vec3(xy, std::sqrt(1.0f - r2)) : glm::vec3(xy / std::sqrt(r2), 0.0f);
             basis("sep4").eval(nrm, b);
             std::copy(b, b + 4, tex.begin() + (size_t(i) * size + k) * 4);
         }

@@ -13,8 +13,8 @@ namespace hemi::render
 namespace
 {
 // Set 2 of `kind` with its one binding written: every coefficient set is one descriptor in a pool of its own.
-VkDescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind, gpu::DescriptorWrite write,
-                                gpu::DescriptorPool& pool)
+VkDescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind,
+                                gpu::DescriptorWrite write, gpu::DescriptorPool& pool)
 {
     const gpu::Device& device = system.device();
     pool = gpu::create_descriptor_pool(device, MaterialSystem::source_bindings(kind), 1);
@@ -25,16 +25,19 @@ VkDescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceK
 }
 } // namespace
 
-
-VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients, uint64_t texels)
+VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients,
+                                       uint64_t texels)
 {
     const gpu::Device& device = system.device();
     if (texels == 0 || texels * 16 > coefficients.size())
-        throw std::invalid_argument("hemi: " + std::to_string(texels) + " coefficient texels do not fit a buffer of " +
+        throw std::invalid_argument("hemi: " + std::to_string(texels) +
+                                    " coefficient texels do not fit a buffer of " +
                                     std::to_string(coefficients.size()) + " bytes");
     if (texels > device.limits().maxTexelBufferElements)
-        throw std::invalid_argument("hemi: " + std::to_string(texels) + " coefficient texels exceed the device's "
-                                    "maxTexelBufferElements (" + std::to_string(device.limits().maxTexelBufferElements) + ")");
+        throw std::invalid_argument("hemi: " + std::to_string(texels) +
+                                    " coefficient texels exceed the device's "
+                                    "maxTexelBufferElements (" +
+                                    std::to_string(device.limits().maxTexelBufferElements) + ")");
     view_ = gpu::create_buffer_view(device, coefficients, VK_FORMAT_R32G32B32A32_SFLOAT, 0, texels * 16);
     gpu::DescriptorWrite write;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
@@ -68,23 +71,27 @@ void ProbeCoefficients::record_update(VkCommandBuffer cmd, std::span<const glm::
     record_uniform_update(cmd, uniforms_, packed, sizeof packed);
 }
 
-TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
-                                     std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision)
+TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height,
+                                     uint32_t k, std::span<const float> rgb, gpu::UploadBatch& upload,
+                                     bool full_precision)
     : k_(k)
 {
     const gpu::Device& device = system.device();
     if (k == 0 || k > HEMI_BASIS_MAX_SIZE)
-        throw std::invalid_argument("hemi: coefficient maps need 1 to " + std::to_string(HEMI_BASIS_MAX_SIZE) +
-                                    " layers, got " + std::to_string(k));
+        throw std::invalid_argument("hemi: coefficient maps need 1 to " +
+                                    std::to_string(HEMI_BASIS_MAX_SIZE) + " layers, got " +
+                                    std::to_string(k));
     const size_t texels = size_t(width) * height * k;
     if (width == 0 || height == 0 || rgb.size() != texels * 3)
-        throw std::invalid_argument("hemi: coefficient maps of " + std::to_string(width) + "x" + std::to_string(height) +
-                                    "x" + std::to_string(k) + " need " + std::to_string(texels * 3) + " floats, got " +
+        throw std::invalid_argument("hemi: coefficient maps of " + std::to_string(width) + "x" +
+                                    std::to_string(height) + "x" + std::to_string(k) + " need " +
+                                    std::to_string(texels * 3) + " floats, got " +
                                     std::to_string(rgb.size()));
     for (size_t i = 0; i < rgb.size(); ++i)
         if (!std::isfinite(rgb[i]) || (!full_precision && std::abs(rgb[i]) > 65504.0f))
-            throw std::invalid_argument("hemi: coefficient map value " + std::to_string(i) +
-                                        (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
+            throw std::invalid_argument(
+                "hemi: coefficient map value " + std::to_string(i) +
+                (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
     const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
     maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, k, true});
     if (full_precision)

@@ -19,7 +19,8 @@ bool filters_linearly(const gpu::Device& device, VkFormat format)
 {
     VkFormatProperties props{};
     vkGetPhysicalDeviceFormatProperties(device.physical_device(), format, &props);
-    const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+    const VkFormatFeatureFlags need =
+        VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
     return (props.optimalTilingFeatures & need) == need;
 }
 
@@ -33,7 +34,8 @@ std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
         out.resize(texels * 16);
         float* p = reinterpret_cast<float*>(out.data());
         for (size_t i = 0; i < texels; ++i)
-            p[i * 4] = rgb[i * 3], p[i * 4 + 1] = rgb[i * 3 + 1], p[i * 4 + 2] = rgb[i * 3 + 2], p[i * 4 + 3] = 1.0f;
+            p[i * 4] = rgb[i * 3], p[i * 4 + 1] = rgb[i * 3 + 1], p[i * 4 + 2] = rgb[i * 3 + 2],
+                  p[i * 4 + 3] = 1.0f;
     }
     else
     {
@@ -46,11 +48,12 @@ std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
     return out;
 }
 
-gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::ParabolicImage> levels, VkFormat format,
-                           gpu::UploadBatch& upload)
+gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::ParabolicImage> levels,
+                           VkFormat format, gpu::UploadBatch& upload)
 {
-    gpu::Image image = gpu::create_image(
-        device, {levels[0].size, levels[0].size, format, VK_IMAGE_USAGE_SAMPLED_BIT, uint32_t(levels.size()), 2, true});
+    gpu::Image image =
+        gpu::create_image(device, {levels[0].size, levels[0].size, format, VK_IMAGE_USAGE_SAMPLED_BIT,
+                                   uint32_t(levels.size()), 2, true});
     std::vector<std::vector<std::byte>> bytes;
     for (const math::ParabolicImage& level : levels)
         bytes.push_back(pack(level.rgb, format));
@@ -60,23 +63,24 @@ gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::Para
 } // namespace
 
 EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& env,
-                                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
-                                         gpu::UploadBatch& upload)
+                                         std::span<const math::BrdfTable> brdf,
+                                         const EnvironmentMaterial& material, gpu::UploadBatch& upload)
 {
     const gpu::Device& device = system.device();
     if (const std::string problem = io::envmap_problem(env); !problem.empty())
         throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
     if (!env.glossy.empty() && material.glossy >= env.glossy.size())
-        throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) + " of an environment with " +
-                                    std::to_string(env.glossy.size()));
+        throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) +
+                                    " of an environment with " + std::to_string(env.glossy.size()));
     if (!env.iors.empty() && material.fresnel >= env.iors.size())
         throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
                                     " of an environment with " + std::to_string(env.iors.size()));
     for (const math::BrdfTable& t : brdf)
         if (t.size != brdf[0].size || t.size < 2)
-            throw std::invalid_argument("hemi: the BRDF tables of one material must all have one size (>= 2)");
-    // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one two-channel
-    // table (banks).
+            throw std::invalid_argument(
+                "hemi: the BRDF tables of one material must all have one size (>= 2)");
+    // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one
+    // two-channel table (banks).
     const bool torrance_sparrow = brdf.size() == 2 && brdf[0].channels == 1 && brdf[1].channels == 1;
     const bool banks = brdf.size() == 1 && brdf[0].channels == 2;
     if (!brdf.empty() && !torrance_sparrow && !banks)
@@ -122,19 +126,23 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
                     throw std::invalid_argument("hemi: a BRDF table value does not fit a half float");
                 table_rgb[(k * table_size_ * table_size_ + i) * 3 + c] = v;
             }
-    brdf_ = gpu::create_image(device, {table_size_, table_size_, half4, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
+    brdf_ = gpu::create_image(device,
+                              {table_size_, table_size_, half4, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
     const std::vector<std::byte> table_bytes = pack(table_rgb, half4);
     upload.image(brdf_, table_bytes.data(), table_bytes.size());
 
     sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_LINEAR,
                                             VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_LOD_CLAMP_NONE});
-    uniforms_ = gpu::create_buffer(device, {sizeof(shared::EnvironmentUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    uniforms_ =
+        gpu::create_buffer(device, {sizeof(shared::EnvironmentUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const shared::EnvironmentUniforms u = uniforms(material);
     upload.buffer(uniforms_, &u, sizeof u);
 
-    const std::vector<gpu::Binding> bindings = MaterialSystem::source_bindings(CoefficientSourceKind::Environment);
+    const std::vector<gpu::Binding> bindings =
+        MaterialSystem::source_bindings(CoefficientSourceKind::Environment);
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Environment));
+    set_ =
+        gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Environment));
     gpu::DescriptorWrite writes[6];
     writes[0].binding = HEMI_ENV_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
@@ -158,11 +166,14 @@ shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMater
     const glm::mat3 identity = glm::transpose(m.world_to_env) * m.world_to_env;
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
-            if (!std::isfinite(m.world_to_env[i][j]) || std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
-                throw std::invalid_argument("hemi: an environment's world_to_env must be a rotation (orthonormal)");
+            if (!std::isfinite(m.world_to_env[i][j]) ||
+                std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
+                throw std::invalid_argument(
+                    "hemi: an environment's world_to_env must be a rotation (orthonormal)");
     shared::EnvironmentUniforms u{};
     u.extents = glm::vec4(extents_[0], extents_[1], extents_[2], 0.0f);
-    u.material = glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(fresnel_rows_), m.coating ? 1.0f : 0.0f);
+    u.material =
+        glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(fresnel_rows_), m.coating ? 1.0f : 0.0f);
     u.tables = glm::vec4(float(table_size_), float(fresnel_samples_), 0.0f, 0.0f);
     for (int r = 0; r < 3; ++r) // rows of world_to_env (glm is column-major: element [column][row])
         u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r], 0.0f);

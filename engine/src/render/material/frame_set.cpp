@@ -13,7 +13,8 @@ namespace hemi::render
 
 void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, const void* data, size_t size)
 {
-    const VkPipelineStageFlags shaders = VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT;
+    const VkPipelineStageFlags shaders =
+        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT;
     gpu::memory_barrier(cmd, shaders, VK_ACCESS_UNIFORM_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT);
     vkCmdUpdateBuffer(cmd, uniforms, 0, size, data);
@@ -24,7 +25,8 @@ void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, con
 FrameSet::FrameSet(const MaterialSystem& system)
 {
     const gpu::Device& device = system.device();
-    uniforms_ = gpu::create_buffer(device, {sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    uniforms_ =
+        gpu::create_buffer(device, {sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const auto bindings = MaterialSystem::frame_bindings();
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, system.frame_layout());
@@ -40,13 +42,14 @@ void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame) const
     shared::FrameUniforms u{};
     u.view_projection = frame.view_projection;
     if (frame.lights.size() > HEMI_MAX_LIGHTS)
-        throw std::invalid_argument("hemi: at most " + std::to_string(HEMI_MAX_LIGHTS) + " dynamic lights, got " +
-                                    std::to_string(frame.lights.size()));
+        throw std::invalid_argument("hemi: at most " + std::to_string(HEMI_MAX_LIGHTS) +
+                                    " dynamic lights, got " + std::to_string(frame.lights.size()));
     if (!(frame.specular_exponent > 0.0f) || !std::isfinite(frame.specular_exponent) ||
         !std::isfinite(frame.specular_strength))
-        throw std::invalid_argument("hemi: the specular exponent and strength must be finite, the exponent > 0");
-    u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()), frame.specular_exponent,
-                          frame.specular_strength);
+        throw std::invalid_argument(
+            "hemi: the specular exponent and strength must be finite, the exponent > 0");
+    u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()),
+                          frame.specular_exponent, frame.specular_strength);
     u.eye = glm::vec4(frame.eye, 1.0f);
     for (size_t i = 0; i < frame.lights.size(); ++i)
     {
@@ -56,7 +59,8 @@ void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame) const
         if (!finite || (!l.point && !(glm::length(l.position) > 0.0f)))
             throw std::invalid_argument("hemi: dynamic light " + std::to_string(i) +
                                         " is not finite or has no direction");
-        u.light_position[i] = glm::vec4(l.point ? l.position : glm::normalize(l.position), l.point ? 1.0f : 0.0f);
+        u.light_position[i] =
+            glm::vec4(l.point ? l.position : glm::normalize(l.position), l.point ? 1.0f : 0.0f);
         u.light_irradiance[i] = glm::vec4(l.irradiance, 0.0f);
     }
     const auto& w = math::sep4_weights();

@@ -13,13 +13,19 @@ VkSamplerAddressMode address(io::Wrap w)
 {
     switch (w)
     {
-    case io::Wrap::ClampToEdge: return VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    case io::Wrap::MirroredRepeat: return VK_SAMPLER_ADDRESS_MODE_MIRRORED_REPEAT;
-    case io::Wrap::Repeat: break;
+    case io::Wrap::ClampToEdge:
+        return VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    case io::Wrap::MirroredRepeat:
+        return VK_SAMPLER_ADDRESS_MODE_MIRRORED_REPEAT;
+    case io::Wrap::Repeat:
+        break;
     }
     return VK_SAMPLER_ADDRESS_MODE_REPEAT;
 }
-VkFilter filter(io::Filter f) { return f == io::Filter::Nearest ? VK_FILTER_NEAREST : VK_FILTER_LINEAR; }
+VkFilter filter(io::Filter f)
+{
+    return f == io::Filter::Nearest ? VK_FILTER_NEAREST : VK_FILTER_LINEAR;
+}
 } // namespace
 
 TextureSet::TextureSet(const gpu::Device& device, std::span<const io::EncodedImage> images,
@@ -32,8 +38,9 @@ TextureSet::TextureSet(const gpu::Device& device, std::span<const io::EncodedIma
         for (const io::TextureRef* r : {&m.base_color, &m.normal, &m.emissive, &m.occlusion})
         {
             if (r->image >= 0 && size_t(r->image) >= images.size())
-                throw std::invalid_argument("hemi: material '" + m.name + "' uses image " + std::to_string(r->image) +
-                                            " of " + std::to_string(images.size()));
+                throw std::invalid_argument("hemi: material '" + m.name + "' uses image " +
+                                            std::to_string(r->image) + " of " +
+                                            std::to_string(images.size()));
             if (r->image >= 0 && decoded[size_t(r->image)].pixels.empty())
                 decoded[size_t(r->image)] = io::decode_image(images[size_t(r->image)]);
         }
@@ -51,7 +58,8 @@ void TextureSet::create(std::span<const io::ImageRgba8> images, std::span<const 
                         gpu::UploadBatch& upload)
 {
     const gpu::Device& device = *device_;
-    auto need = [&](int index, bool srgb) {
+    auto need = [&](int index, bool srgb)
+    {
         if (index < 0)
             return;
         if (size_t(index) >= images.size())
@@ -60,8 +68,10 @@ void TextureSet::create(std::span<const io::ImageRgba8> images, std::span<const 
         if (images_.count({index, srgb}))
             return;
         const io::ImageRgba8& texels = images[size_t(index)];
-        if (texels.width == 0 || texels.height == 0 || texels.pixels.size() != size_t(texels.width) * texels.height * 4)
-            throw std::invalid_argument("hemi: image " + std::to_string(index) + " is empty or not RGBA8 of its size");
+        if (texels.width == 0 || texels.height == 0 ||
+            texels.pixels.size() != size_t(texels.width) * texels.height * 4)
+            throw std::invalid_argument("hemi: image " + std::to_string(index) +
+                                        " is empty or not RGBA8 of its size");
         gpu::Image image = gpu::create_image(
             device, {texels.width, texels.height, srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM,
                      VK_IMAGE_USAGE_SAMPLED_BIT, gpu::full_mip_count(texels.width, texels.height)});
@@ -118,7 +128,8 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
     u.base_color_factor = m.base_color_factor;
     // glTF: emissive = factor * texture; without a texture the factor alone (the default image is white).
     // Without a normal texture the default texel (128, 128, 255) decodes to a normal tilted by 0.32 degrees
-    // (8 bits have no 0.5): a normal scale of 0 makes it the surface normal exactly (mirror reflections show it).
+    // (8 bits have no 0.5): a normal scale of 0 makes it the surface normal exactly (mirror reflections show
+    // it).
     u.emissive_factor = glm::vec4(m.emissive_factor, m.normal.present() ? m.normal_scale : 0.0f);
     const io::TextureRef* refs[4] = {&m.base_color, &m.normal, &m.emissive, &m.occlusion};
     for (int t = 0; t < 4; ++t)
@@ -128,20 +139,23 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
         u.uv_transform[t * 2] = glm::vec4(x[0][0], x[1][0], x[2][0], 0.0f);
         u.uv_transform[t * 2 + 1] = glm::vec4(x[0][1], x[1][1], x[2][1], 0.0f);
     }
-    u.texcoord = glm::uvec4(m.base_color.texcoord, m.normal.texcoord, m.emissive.texcoord, m.occlusion.texcoord);
+    u.texcoord =
+        glm::uvec4(m.base_color.texcoord, m.normal.texcoord, m.emissive.texcoord, m.occlusion.texcoord);
     u.occlusion = glm::vec4(m.occlusion_strength, 0.0f, 0.0f, 0.0f);
     return u;
 }
 
-MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& textures, const io::Material& material,
-                                   gpu::UploadBatch& upload)
+MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& textures,
+                                   const io::Material& material, gpu::UploadBatch& upload)
     : double_sided_(material.double_sided)
 {
     const gpu::Device& device = system.device();
-    for (const io::TextureRef* r : {&material.base_color, &material.normal, &material.emissive, &material.occlusion})
+    for (const io::TextureRef* r :
+         {&material.base_color, &material.normal, &material.emissive, &material.occlusion})
         if (r->texcoord > 1)
             throw std::invalid_argument("hemi: material '" + material.name + "' uses TEXCOORD_" +
-                                        std::to_string(r->texcoord) + "; hemi reads TEXCOORD_0 and TEXCOORD_1");
+                                        std::to_string(r->texcoord) +
+                                        "; hemi reads TEXCOORD_0 and TEXCOORD_1");
     const shared::MaterialUniforms u = material_uniforms(material);
     uniforms_ = gpu::create_buffer(device, {sizeof u, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     upload.buffer(uniforms_, &u, sizeof u);
@@ -152,7 +166,8 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
     writes[0].binding = HEMI_MATERIAL_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[0].buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    // Without an occlusion texture the default is the white sRGB texel (1: no occlusion), not the flat normal.
+    // Without an occlusion texture the default is the white sRGB texel (1: no occlusion), not the flat
+    // normal.
     const bool occlusion_srgb = !material.occlusion.present();
     const std::pair<uint32_t, std::pair<const io::TextureRef*, bool>> maps[4] = {
         {HEMI_MATERIAL_BINDING_BASE_COLOR, {&material.base_color, true}},
@@ -165,7 +180,8 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
         const auto& [binding, use] = maps[i];
         writes[i + 1].binding = binding;
         writes[i + 1].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        writes[i + 1].image = {textures.sampler(use.first->sampler), textures.image(use.first->image, use.second).view(),
+        writes[i + 1].image = {textures.sampler(use.first->sampler),
+                               textures.image(use.first->image, use.second).view(),
                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
     gpu::write_descriptors(device, set_, writes);

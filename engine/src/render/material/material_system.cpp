@@ -16,17 +16,22 @@ const math::BasisDesc& basis_of(int id)
     for (const math::BasisDesc& b : math::bases())
         if (b.id == id)
             return b;
-    throw std::invalid_argument("hemi: material key names basis id " + std::to_string(id) + ", which hemi does not know");
+    throw std::invalid_argument("hemi: material key names basis id " + std::to_string(id) +
+                                ", which hemi does not know");
 }
 
 const char* source_name(CoefficientSourceKind kind)
 {
     switch (kind)
     {
-    case CoefficientSourceKind::Vertex: return "vertex";
-    case CoefficientSourceKind::Texel: return "texel";
-    case CoefficientSourceKind::Uniform: return "uniform";
-    case CoefficientSourceKind::Environment: return "environment";
+    case CoefficientSourceKind::Vertex:
+        return "vertex";
+    case CoefficientSourceKind::Texel:
+        return "texel";
+    case CoefficientSourceKind::Uniform:
+        return "uniform";
+    case CoefficientSourceKind::Environment:
+        return "environment";
     }
     throw std::invalid_argument("hemi: unknown coefficient source kind");
 }
@@ -55,12 +60,14 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
     switch (kind)
     {
     case CoefficientSourceKind::Vertex:
-        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_VERTEX_BIT}};
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                 VK_SHADER_STAGE_VERTEX_BIT}};
     case CoefficientSourceKind::Texel:
         return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                  VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Uniform:
-        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_FRAGMENT_BIT}};
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+                 VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Environment:
     {
         const VkShaderStageFlags fs = VK_SHADER_STAGE_FRAGMENT_BIT;
@@ -76,7 +83,8 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
     throw std::invalid_argument("hemi: unknown coefficient source kind");
 }
 
-MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target, VkPipelineCache cache)
+MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
+                               VkPipelineCache cache)
     : device_(&device), target_(target), cache_(cache)
 {
     const bool dynamic = target.render_pass == VK_NULL_HANDLE;
@@ -86,8 +94,10 @@ MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc
     if (target.aux_output && colors < 2)
         throw std::invalid_argument("hemi: a material target with aux output needs two colour attachments");
     if (dynamic && !device.dynamic_rendering())
-        throw std::invalid_argument("hemi: a material target without a render pass needs dynamic rendering, which "
-                                    "device " + std::string(device.name()) + " does not have enabled");
+        throw std::invalid_argument(
+            "hemi: a material target without a render pass needs dynamic rendering, which "
+            "device " +
+            std::string(device.name()) + " does not have enabled");
     frame_layout_ = gpu::create_set_layout(device, frame_bindings());
     material_layout_ = gpu::create_set_layout(device, material_bindings());
     for (CoefficientSourceKind kind : {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel,
@@ -111,12 +121,15 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     const math::BasisDesc& basis = basis_of(key.basis);
     if (key.frame == ShadingFrame::World && key.basis != HEMI_BASIS_SH9)
         throw std::invalid_argument("hemi: world-frame materials evaluate SH9 (the sphere), not basis '" +
-                                    std::string(basis.name) + "', a hemispherical basis of the tangent frame");
-    const bool environment_technique = key.technique == Technique::Factored || key.technique == Technique::Banks ||
-                                       key.technique == Technique::EnvMirror || key.technique == Technique::EnvGlossy;
+                                    std::string(basis.name) +
+                                    "', a hemispherical basis of the tangent frame");
+    const bool environment_technique =
+        key.technique == Technique::Factored || key.technique == Technique::Banks ||
+        key.technique == Technique::EnvMirror || key.technique == Technique::EnvGlossy;
     if (environment_technique != (key.source == CoefficientSourceKind::Environment))
-        throw std::invalid_argument("hemi: the factored, banks, env_mirror and env_glossy techniques, and only they, "
-                                    "take the environment source");
+        throw std::invalid_argument(
+            "hemi: the factored, banks, env_mirror and env_glossy techniques, and only they, "
+            "take the environment source");
     if (environment_technique && key.frame != ShadingFrame::World)
         throw std::invalid_argument("hemi: environment materials shade in the world frame");
     auto type = std::make_unique<MaterialType>();
@@ -124,7 +137,8 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     type->k = uint32_t(basis.size);
 
     const std::string source = source_name(key.source);
-    const std::string vs = key.source == CoefficientSourceKind::Vertex ? "surface_vertex.vert" : "surface_other.vert";
+    const std::string vs =
+        key.source == CoefficientSourceKind::Vertex ? "surface_vertex.vert" : "surface_other.vert";
     const std::string fs = "surface_" + source + (target_.aux_output ? "_aux" : "") + ".frag";
     gpu::GraphicsProgramDesc desc;
     desc.vertex_shader = gpu::embedded_spirv(vs);
@@ -132,8 +146,8 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     desc.set_layouts = {frame_layout_, material_layout_, source_layout(key.source)};
     desc.push_constant_size = sizeof(shared::DrawPush);
     // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_DOUBLE_SIDED, in order.
-    desc.specialization = {uint32_t(key.basis), uint32_t(basis.size), uint32_t(key.frame), uint32_t(key.technique),
-                           key.double_sided ? 1u : 0u};
+    desc.specialization = {uint32_t(key.basis), uint32_t(basis.size), uint32_t(key.frame),
+                           uint32_t(key.technique), key.double_sided ? 1u : 0u};
     desc.vertex_bindings = GpuMesh::vertex_bindings();
     desc.vertex_attributes = GpuMesh::vertex_attributes();
     desc.render_pass = target_.render_pass;

@@ -40,9 +40,8 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
                                    gpu::UploadBatch* upload)
     : impl_(std::make_unique<Impl>())
 {
-    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size) {
-        upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size);
-    };
+    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size)
+    { upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size); };
     validate_cpca(c);
     Impl& s = *impl_;
     s.device = &device;
@@ -54,15 +53,17 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     s.rows = c.clusters * (c.vectors + 1) * c.k;
     s.per_cluster = (c.vectors + 1) * c.k;
     const VkPhysicalDeviceLimits& limits = device.limits();
-    auto storage = [&](VkDeviceSize bytes, const char* what) {
+    auto storage = [&](VkDeviceSize bytes, const char* what)
+    {
         if (bytes > limits.maxStorageBufferRange)
             throw std::runtime_error("hemi: CPCA " + std::string(what) + " (" + std::to_string(bytes) +
                                      " bytes) exceed the device's maxStorageBufferRange");
         return gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     };
     if (c.vectors > HEMI_CPCA_MAX_VECTORS)
-        throw std::invalid_argument("hemi: the CPCA pass supports up to " + std::to_string(HEMI_CPCA_MAX_VECTORS) +
-                                    " vectors per cluster, got " + std::to_string(c.vectors));
+        throw std::invalid_argument("hemi: the CPCA pass supports up to " +
+                                    std::to_string(HEMI_CPCA_MAX_VECTORS) + " vectors per cluster, got " +
+                                    std::to_string(c.vectors));
     // Rows: per cluster, the mean then the V vectors, each K x L.
     std::vector<float> rows(size_t(s.rows) * c.l);
     for (uint32_t cl = 0; cl < c.clusters; ++cl)
@@ -93,7 +94,8 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     const VkDeviceSize align = std::max<VkDeviceSize>(1, limits.minUniformBufferOffsetAlignment);
     s.projected_stride = (VkDeviceSize(c.vectors + 1) * c.k * 16 + align - 1) / align * align;
     if (HEMI_CPCA_PROJECTED_BYTES > limits.maxUniformBufferRange)
-        throw std::runtime_error("hemi: the device's maxUniformBufferRange is below the CPCA pass's uniform block");
+        throw std::runtime_error(
+            "hemi: the device's maxUniformBufferRange is below the CPCA pass's uniform block");
     const uint32_t V = c.vectors, per_block = HEMI_TRANSFER_INVOCATIONS_PER_BLOCK;
     std::vector<float> interleaved(slot_vertex.size() * V, 0.0f);
     for (size_t slot = 0; slot < slot_vertex.size(); ++slot)
@@ -117,10 +119,11 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
                                  " vertices exceed the device's maxTexelBufferElements");
     s.rows_buffer = storage(rows.size() * 4, "cluster matrices");
     put(s.rows_buffer, rows.data(), rows.size() * 4);
-    s.weights = gpu::create_buffer(device, {interleaved.size() * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.weights =
+        gpu::create_buffer(device, {interleaved.size() * 4, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
     put(s.weights, interleaved.data(), interleaved.size() * 4);
-    s.weight_view = gpu::create_buffer_view(device, s.weights, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
-                                            interleaved.size() * 4);
+    s.weight_view =
+        gpu::create_buffer_view(device, s.weights, VK_FORMAT_R32G32B32A32_SFLOAT, 0, interleaved.size() * 4);
     s.slots = storage(slot_vertex.size() * 4, "vertex slots");
     put(s.slots, slot_vertex.data(), slot_vertex.size() * 4);
     // Written by step 1 as a storage buffer, read by step 2 as a uniform block at a dynamic offset: cluster
@@ -129,14 +132,17 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
         throw std::runtime_error("hemi: CPCA projections of " + std::to_string(c.clusters) +
                                  " clusters exceed the device's maxStorageBufferRange");
     const VkDeviceSize projected_bytes = s.projected_stride * (c.clusters - 1) + HEMI_CPCA_PROJECTED_BYTES;
-    s.projected_instance_bytes =
-        align_up(projected_bytes, std::max(limits.minUniformBufferOffsetAlignment, limits.minStorageBufferOffsetAlignment));
-    s.projected = gpu::create_buffer(device, {s.projected_instance_bytes * instances,
-                                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    s.lighting = gpu::create_buffer(device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    s.projected_instance_bytes = align_up(projected_bytes, std::max(limits.minUniformBufferOffsetAlignment,
+                                                                    limits.minStorageBufferOffsetAlignment));
+    s.projected =
+        gpu::create_buffer(device, {s.projected_instance_bytes * instances,
+                                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    s.lighting = gpu::create_buffer(
+        device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
-    s.coefficients = gpu::create_buffer(
-        device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.coefficients =
+        gpu::create_buffer(device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                                                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
 
     const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
     const std::vector<gpu::Binding> project_bindings = {
@@ -152,14 +158,16 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     };
     s.project = gpu::create_compute_program(
         device, {gpu::embedded_spirv("cpca_project.comp"), project_bindings, sizeof(CpcaPush), {s.l}});
-    s.reconstruct = gpu::create_compute_program(
-        device, {gpu::embedded_spirv("cpca_reconstruct.comp"), reconstruct_bindings, sizeof(CpcaPush),
-                 {s.k, c.vectors}});
+    s.reconstruct = gpu::create_compute_program(device, {gpu::embedded_spirv("cpca_reconstruct.comp"),
+                                                         reconstruct_bindings,
+                                                         sizeof(CpcaPush),
+                                                         {s.k, c.vectors}});
     std::vector<gpu::Binding> all = project_bindings;
     all.insert(all.end(), reconstruct_bindings.begin(), reconstruct_bindings.end());
     s.pool = gpu::create_descriptor_pool(device, all, 2 * instances);
-    auto buffer_write = [](uint32_t binding, VkDescriptorType type, VkBuffer buffer, VkDeviceSize offset,
-                           VkDeviceSize range) {
+    auto buffer_write =
+        [](uint32_t binding, VkDescriptorType type, VkBuffer buffer, VkDeviceSize offset, VkDeviceSize range)
+    {
         gpu::DescriptorWrite w;
         w.binding = binding;
         w.type = type;
@@ -170,23 +178,28 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     {
         const VkDeviceSize projected_base = i * s.projected_instance_bytes;
         const VkDeviceSize coefficient_base = i * s.instances.coefficient_stride * 16;
-        s.instance_views.push_back(gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                           coefficient_base, VkDeviceSize(s.n) * s.k * 16));
-        const VkDescriptorSet project_set = gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
-        const VkDescriptorSet reconstruct_set = gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
+        s.instance_views.push_back(gpu::create_buffer_view(device, s.coefficients,
+                                                           VK_FORMAT_R32G32B32A32_SFLOAT, coefficient_base,
+                                                           VkDeviceSize(s.n) * s.k * 16));
+        const VkDescriptorSet project_set =
+            gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
+        const VkDescriptorSet reconstruct_set =
+            gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
         gpu::DescriptorWrite project_writes[3] = {
-            buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer, 0, VK_WHOLE_SIZE),
+            buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer, 0,
+                         VK_WHOLE_SIZE),
             buffer_write(HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.lighting, 0,
                          HEMI_TRANSFER_MAX_L * 16),
-            buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected, projected_base,
-                         projected_bytes),
+            buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.projected,
+                         projected_base, projected_bytes),
         };
         gpu::write_descriptors(device, project_set, project_writes);
         gpu::DescriptorWrite reconstruct_writes[4] = {
             buffer_write(HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, s.projected,
                          projected_base, HEMI_CPCA_PROJECTED_BYTES),
             {},
-            buffer_write(HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.slots, 0, VK_WHOLE_SIZE),
+            buffer_write(HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.slots, 0,
+                         VK_WHOLE_SIZE),
             {},
         };
         reconstruct_writes[1].binding = HEMI_CPCA_BINDING_WEIGHTS;
@@ -214,31 +227,54 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
     for (uint32_t i = 0; i < instances; ++i)
     {
         const uint32_t lighting_offset = uint32_t(i * s.instances.lighting_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &s.project_sets[i], 1,
-                                &lighting_offset);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1,
+                                &s.project_sets[i], 1, &lighting_offset);
         vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
     }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.pipeline);
     for (uint32_t i = 0; i < instances; ++i)
-    for (const Impl::Run& run : s.runs)
-    {
-        const uint32_t offset = uint32_t(run.cluster * s.projected_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &s.reconstruct_sets[i], 1,
-                                &offset);
-        const CpcaPush run_push{run.invocations, run.first_invocation, 0, 0};
-        vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof run_push, &run_push);
-        vkCmdDispatch(cmd, (run.invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
-    }
+        for (const Impl::Run& run : s.runs)
+        {
+            const uint32_t offset = uint32_t(run.cluster * s.projected_stride);
+            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1,
+                                    &s.reconstruct_sets[i], 1, &offset);
+            const CpcaPush run_push{run.invocations, run.first_invocation, 0, 0};
+            vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof run_push, &run_push);
+            vkCmdDispatch(cmd,
+                          (run.invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE,
+                          1, 1);
+        }
 }
 
-const gpu::Buffer& CpcaTransferPass::coefficients() const { return impl_->coefficients; }
-uint32_t CpcaTransferPass::instances() const { return impl_->instances.count; }
-uint64_t CpcaTransferPass::instance_stride() const { return impl_->instances.coefficient_stride; }
-uint32_t CpcaTransferPass::vertex_count() const { return impl_->n; }
-uint32_t CpcaTransferPass::k() const { return impl_->k; }
-uint32_t CpcaTransferPass::l() const { return impl_->l; }
-const gpu::Device& CpcaTransferPass::device() const { return *impl_->device; }
+const gpu::Buffer& CpcaTransferPass::coefficients() const
+{
+    return impl_->coefficients;
+}
+uint32_t CpcaTransferPass::instances() const
+{
+    return impl_->instances.count;
+}
+uint64_t CpcaTransferPass::instance_stride() const
+{
+    return impl_->instances.coefficient_stride;
+}
+uint32_t CpcaTransferPass::vertex_count() const
+{
+    return impl_->n;
+}
+uint32_t CpcaTransferPass::k() const
+{
+    return impl_->k;
+}
+uint32_t CpcaTransferPass::l() const
+{
+    return impl_->l;
+}
+const gpu::Device& CpcaTransferPass::device() const
+{
+    return *impl_->device;
+}
 
 } // namespace hemi::render

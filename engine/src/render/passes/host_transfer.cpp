@@ -31,8 +31,10 @@ constexpr uint32_t kB = TransferMatrices::kBlockVertices;
 // load time, see multiply_block) each matrix element costs 3 FMAs per 8 vertices.
 typedef float v8f __attribute__((vector_size(32)));
 
-__attribute__((always_inline)) inline void multiply_block_body(const float* __restrict m, const float* __restrict light /* L x 3 */, uint32_t K, uint32_t L,
-                    float* __restrict acc /* K x 3 x 32 */)
+__attribute__((always_inline)) inline void multiply_block_body(const float* __restrict m,
+                                                               const float* __restrict light /* L x 3 */,
+                                                               uint32_t K, uint32_t L,
+                                                               float* __restrict acc /* K x 3 x 32 */)
 {
     for (uint32_t k = 0; k < K; ++k)
     {
@@ -73,7 +75,7 @@ void multiply_block_default(const float* m, const float* light, uint32_t K, uint
 // target_clones("arch=haswell") would dispatch on the CPU *model*, not its features, so AMD CPUs with
 // AVX2 would get the SSE2 clone: dispatch on the features ourselves.
 __attribute__((target("avx2,fma"))) void multiply_block_avx2(const float* m, const float* light, uint32_t K,
-                                                              uint32_t L, float* acc)
+                                                             uint32_t L, float* acc)
 {
     multiply_block_body(m, light, K, L, acc);
 }
@@ -92,7 +94,6 @@ MultiplyBlockFn select_multiply_block()
 }
 #endif
 
-
 } // namespace
 
 void transfer_multiply_host(const TransferMatrices& matrices, std::span<const glm::vec3> lighting,
@@ -101,8 +102,8 @@ void transfer_multiply_host(const TransferMatrices& matrices, std::span<const gl
     const uint32_t N = matrices.vertex_count(), K = matrices.k(), L = matrices.l();
     check_lighting(lighting, L);
     if (out.size() != size_t(N) * K * 4)
-        throw std::invalid_argument("hemi: transfer output has " + std::to_string(out.size()) + " floats, expected " +
-                                    std::to_string(size_t(N) * K * 4) + " (N*K*4)");
+        throw std::invalid_argument("hemi: transfer output has " + std::to_string(out.size()) +
+                                    " floats, expected " + std::to_string(size_t(N) * K * 4) + " (N*K*4)");
     float light[HEMI_TRANSFER_MAX_L * 3];
     for (uint32_t j = 0; j < L; ++j)
     {
@@ -114,7 +115,8 @@ void transfer_multiply_host(const TransferMatrices& matrices, std::span<const gl
     const float* data = matrices.data().data();
     const size_t block_floats = matrices.block_floats();
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, matrices.block_count(), 64),
-                      [&](const tbb::blocked_range<uint32_t>& range) {
+                      [&](const tbb::blocked_range<uint32_t>& range)
+                      {
                           float acc[HEMI_TRANSFER_MAX_K * 3 * kB];
                           for (uint32_t blk = range.begin(); blk != range.end(); ++blk)
                           {
@@ -141,8 +143,8 @@ void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighti
     validate_cpca(c, false);
     check_lighting(lighting, c.l);
     if (out.size() != size_t(c.vertex_count) * c.k * 4)
-        throw std::invalid_argument("hemi: CPCA output has " + std::to_string(out.size()) + " floats, expected " +
-                                    std::to_string(size_t(c.vertex_count) * c.k * 4));
+        throw std::invalid_argument("hemi: CPCA output has " + std::to_string(out.size()) +
+                                    " floats, expected " + std::to_string(size_t(c.vertex_count) * c.k * 4));
     const size_t d = size_t(c.k) * c.l;
     const Eigen::Index rows = Eigen::Index(c.k) * 4, V = c.vectors;
     // Step 1: per cluster, a (4K) x (V + 1) matrix: column j is row j (the mean, then the V vectors) times
@@ -166,23 +168,25 @@ void cpca_multiply_host(const CpcaMatrices& c, std::span<const glm::vec3> lighti
     // matrix-vector product per vertex.
     using ConstMap = Eigen::Map<const Eigen::MatrixXf>;
     using Map = Eigen::Map<Eigen::MatrixXf>;
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, c.vertex_count, 2048), [&](const tbb::blocked_range<uint32_t>& r) {
-        const Eigen::Index count = Eigen::Index(r.end() - r.begin());
-        Map o(out.data() + size_t(r.begin()) * rows, rows, count);
-        ConstMap w(c.weights.data() + size_t(r.begin()) * V, V, count);
-        if (c.clusters == 1)
-        {
-            o = projected[0].col(0).replicate(1, count);
-            o.noalias() += projected[0].rightCols(V) * w;
-        }
-        else
-            for (Eigen::Index i = 0; i < count; ++i)
-            {
-                const Eigen::MatrixXf& p = projected[c.cluster[r.begin() + uint32_t(i)]];
-                o.col(i) = p.col(0);
-                o.col(i).noalias() += p.rightCols(V) * w.col(i);
-            }
-    });
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, c.vertex_count, 2048),
+                      [&](const tbb::blocked_range<uint32_t>& r)
+                      {
+                          const Eigen::Index count = Eigen::Index(r.end() - r.begin());
+                          Map o(out.data() + size_t(r.begin()) * rows, rows, count);
+                          ConstMap w(c.weights.data() + size_t(r.begin()) * V, V, count);
+                          if (c.clusters == 1)
+                          {
+                              o = projected[0].col(0).replicate(1, count);
+                              o.noalias() += projected[0].rightCols(V) * w;
+                          }
+                          else
+                              for (Eigen::Index i = 0; i < count; ++i)
+                              {
+                                  const Eigen::MatrixXf& p = projected[c.cluster[r.begin() + uint32_t(i)]];
+                                  o.col(i) = p.col(0);
+                                  o.col(i).noalias() += p.rightCols(V) * w.col(i);
+                              }
+                      });
 }
 
 } // namespace hemi::render

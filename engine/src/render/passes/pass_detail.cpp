@@ -30,8 +30,8 @@ void validate_cpca(const CpcaMatrices& c, bool values)
         throw std::invalid_argument("hemi: CPCA needs at least one cluster and one vector");
     if (c.means.size() != c.clusters * d || c.basis.size() != size_t(c.clusters) * c.vectors * d ||
         c.cluster.size() != c.vertex_count || c.weights.size() != size_t(c.vertex_count) * c.vectors)
-        throw std::invalid_argument("hemi: CPCA array sizes do not match " + std::to_string(c.clusters) + "x" +
-                                    std::to_string(c.vectors) + " clusters x vectors over " +
+        throw std::invalid_argument("hemi: CPCA array sizes do not match " + std::to_string(c.clusters) +
+                                    "x" + std::to_string(c.vectors) + " clusters x vectors over " +
                                     std::to_string(c.vertex_count) + " vertices");
     for (uint32_t id : c.cluster)
         if (id >= c.clusters)
@@ -49,7 +49,6 @@ uint64_t align_up(uint64_t value, uint64_t alignment)
     return (value + alignment - 1) / alignment * alignment;
 }
 
-
 InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, uint32_t n, uint32_t k)
 {
     if (instances == 0)
@@ -58,9 +57,13 @@ InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, ui
     InstanceLayout layout;
     layout.count = instances;
     layout.lighting_stride = align_up(HEMI_TRANSFER_MAX_L * 16, limits.minUniformBufferOffsetAlignment);
-    layout.coefficient_stride = align_up(uint64_t(n) * k * 16, std::lcm<uint64_t>(16, std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment))) / 16;
+    layout.coefficient_stride =
+        align_up(uint64_t(n) * k * 16,
+                 std::lcm<uint64_t>(16, std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment))) /
+        16;
     if (layout.coefficient_stride * instances > limits.maxTexelBufferElements)
-        throw std::invalid_argument("hemi: " + std::to_string(instances) + " instances of " + std::to_string(n) +
+        throw std::invalid_argument("hemi: " + std::to_string(instances) + " instances of " +
+                                    std::to_string(n) +
                                     " vertices' coefficients exceed the device's maxTexelBufferElements");
     return layout;
 }
@@ -71,16 +74,16 @@ uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uin
 {
     if (lighting.empty() || lighting.size() % l != 0 || lighting.size() / l > capacity)
         throw std::invalid_argument("hemi: lighting has " + std::to_string(lighting.size()) +
-                                    " SH coefficients: expected L = " + std::to_string(l) + " per instance for 1 to " +
-                                    std::to_string(capacity) + " instances");
+                                    " SH coefficients: expected L = " + std::to_string(l) +
+                                    " per instance for 1 to " + std::to_string(capacity) + " instances");
     for (size_t i = 0; i < lighting.size(); i += l)
         check_lighting(lighting.subspan(i, l), l);
     return uint32_t(lighting.size() / l);
 }
 
 // The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
-void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std::span<const glm::vec3> lighting,
-                            uint32_t l, VkDeviceSize stride)
+void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
+                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride)
 {
     const size_t instances = lighting.size() / l;
     std::vector<float> packed(instances * stride / 4, 0.0f);
@@ -96,7 +99,8 @@ void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std:
     // finishes before this frame's dispatch reads it. Earlier reads of the coefficients (vertex shaders)
     // finish before this dispatch overwrites them.
     // ALL_COMMANDS as the source: valid on compute-only queues, and covers readers in any shader stage.
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                        VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
                         VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     // vkCmdUpdateBuffer takes at most 65,536 bytes per call.

@@ -37,7 +37,7 @@ InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, ui
 // within the capacity, or a value is not finite.
 uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity);
 // The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
-void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, std::span<const glm::vec3> lighting,
-                            uint32_t l, VkDeviceSize stride);
+void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
+                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride);
 
 } // namespace hemi::render::detail

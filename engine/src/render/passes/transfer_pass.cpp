@@ -42,9 +42,12 @@ struct TransferPass::Impl
 static std::vector<gpu::Binding> transfer_bindings()
 {
     return {
-        {HEMI_TRANSFER_BINDING_MATRICES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
-        {HEMI_TRANSFER_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, VK_SHADER_STAGE_COMPUTE_BIT},
-        {HEMI_TRANSFER_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_MATRICES, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+         VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC,
+         VK_SHADER_STAGE_COMPUTE_BIT},
+        {HEMI_TRANSFER_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER,
+         VK_SHADER_STAGE_COMPUTE_BIT},
     };
 }
 
@@ -52,9 +55,8 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
                            uint32_t instances, gpu::UploadBatch* upload)
     : impl_(std::make_unique<Impl>())
 {
-    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size) {
-        upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size);
-    };
+    auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size)
+    { upload ? upload->buffer(b, data, size) : gpu::write_buffer(device, b, data, size); };
     Impl& s = *impl_;
     s.device = &device;
     s.n = m.vertex_count();
@@ -65,10 +67,12 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     const VkDeviceSize matrix_bytes = m.data().size_bytes();
     s.matrices = gpu::create_buffer(device, {matrix_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
     put(s.matrices, m.data().data(), matrix_bytes);
-    s.lighting = gpu::create_buffer(device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    s.lighting = gpu::create_buffer(
+        device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
-    s.coefficients = gpu::create_buffer(
-        device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.coefficients =
+        gpu::create_buffer(device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                                                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
 
     std::vector<gpu::Binding> bindings = transfer_bindings();
     s.program = gpu::create_compute_program(
@@ -84,14 +88,16 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     if (max_view_texels != 0)
         max_texels = std::min<uint64_t>(max_texels, max_view_texels);
     uint64_t blocks_per_segment = max_texels / block_texels;
-    blocks_per_segment = std::min<uint64_t>(blocks_per_segment, max_texels / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
+    blocks_per_segment =
+        std::min<uint64_t>(blocks_per_segment, max_texels / (HEMI_TRANSFER_BLOCK_VERTICES * s.k));
     // One dispatch per segment: its workgroup count must stay within maxComputeWorkGroupCount[0] (65,535 on
     // many drivers, reached by K = 3, L = 9 sets of ~17M vertices before the texel limit is).
     blocks_per_segment = std::min<uint64_t>(blocks_per_segment, uint64_t(limits.maxComputeWorkGroupCount[0]) *
                                                                     HEMI_TRANSFER_WORKGROUP_SIZE /
                                                                     HEMI_TRANSFER_INVOCATIONS_PER_BLOCK);
     const uint64_t align = std::max<uint64_t>(1, limits.minTexelBufferOffsetAlignment);
-    const uint64_t step = std::lcm(align / std::gcd(align, block_bytes), align / std::gcd(align, out_block_bytes));
+    const uint64_t step =
+        std::lcm(align / std::gcd(align, block_bytes), align / std::gcd(align, out_block_bytes));
     blocks_per_segment -= blocks_per_segment % step;
     if (blocks_per_segment == 0)
         throw std::runtime_error("hemi: device " + std::string(device.name()) +
@@ -102,33 +108,34 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     s.segment_count = segment_count;
     s.pool = gpu::create_descriptor_pool(device, bindings, segment_count * instances);
     for (uint32_t instance = 0; instance < instances; ++instance)
-    for (uint32_t i = 0; i < segment_count; ++i)
-    {
-        const VkDeviceSize instance_base = instance * s.instances.coefficient_stride * 16;
-        uint64_t first_block = i * blocks_per_segment;
-        uint64_t blocks = std::min<uint64_t>(blocks_per_segment, total_blocks - first_block);
-        uint64_t first_vertex = first_block * HEMI_TRANSFER_BLOCK_VERTICES;
-        Impl::Segment seg;
-        seg.vertex_count = uint32_t(std::min<uint64_t>(blocks * HEMI_TRANSFER_BLOCK_VERTICES, s.n - first_vertex));
-        seg.matrix_view = gpu::create_buffer_view(device, s.matrices, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                  first_block * block_bytes, blocks * block_bytes);
-        seg.coefficient_view = gpu::create_buffer_view(device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                       instance_base + first_vertex * s.k * 16,
-                                                       uint64_t(seg.vertex_count) * s.k * 16);
-        seg.set = gpu::allocate_descriptor_set(device, s.pool, s.program.set_layout);
-        gpu::DescriptorWrite writes[3];
-        writes[0].binding = HEMI_TRANSFER_BINDING_MATRICES;
-        writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-        writes[0].texel_view = seg.matrix_view;
-        writes[1].binding = HEMI_TRANSFER_BINDING_LIGHTING;
-        writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
-        writes[1].buffer = {s.lighting, 0, HEMI_TRANSFER_MAX_L * 16};
-        writes[2].binding = HEMI_TRANSFER_BINDING_COEFFICIENTS;
-        writes[2].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
-        writes[2].texel_view = seg.coefficient_view;
-        gpu::write_descriptors(device, seg.set, writes);
-        s.segments.push_back(std::move(seg));
-    }
+        for (uint32_t i = 0; i < segment_count; ++i)
+        {
+            const VkDeviceSize instance_base = instance * s.instances.coefficient_stride * 16;
+            uint64_t first_block = i * blocks_per_segment;
+            uint64_t blocks = std::min<uint64_t>(blocks_per_segment, total_blocks - first_block);
+            uint64_t first_vertex = first_block * HEMI_TRANSFER_BLOCK_VERTICES;
+            Impl::Segment seg;
+            seg.vertex_count =
+                uint32_t(std::min<uint64_t>(blocks * HEMI_TRANSFER_BLOCK_VERTICES, s.n - first_vertex));
+            seg.matrix_view = gpu::create_buffer_view(device, s.matrices, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                      first_block * block_bytes, blocks * block_bytes);
+            seg.coefficient_view = gpu::create_buffer_view(
+                device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
+                instance_base + first_vertex * s.k * 16, uint64_t(seg.vertex_count) * s.k * 16);
+            seg.set = gpu::allocate_descriptor_set(device, s.pool, s.program.set_layout);
+            gpu::DescriptorWrite writes[3];
+            writes[0].binding = HEMI_TRANSFER_BINDING_MATRICES;
+            writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+            writes[0].texel_view = seg.matrix_view;
+            writes[1].binding = HEMI_TRANSFER_BINDING_LIGHTING;
+            writes[1].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+            writes[1].buffer = {s.lighting, 0, HEMI_TRANSFER_MAX_L * 16};
+            writes[2].binding = HEMI_TRANSFER_BINDING_COEFFICIENTS;
+            writes[2].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+            writes[2].texel_view = seg.coefficient_view;
+            gpu::write_descriptors(device, seg.set, writes);
+            s.segments.push_back(std::move(seg));
+        }
 }
 
 TransferPass::~TransferPass() = default;
@@ -143,12 +150,14 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
     {
         const Impl::Segment& seg = s.segments[i];
         const uint32_t offset = uint32_t((i / s.segment_count) * s.instances.lighting_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 1, &offset);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 1,
+                                &offset);
         TransferPush push{seg.vertex_count};
         vkCmdPushConstants(cmd, s.program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
         uint32_t invocations = (seg.vertex_count + HEMI_TRANSFER_VERTICES_PER_INVOCATION - 1) /
                                HEMI_TRANSFER_VERTICES_PER_INVOCATION;
-        vkCmdDispatch(cmd, (invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
+        vkCmdDispatch(cmd, (invocations + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1,
+                      1);
     }
 }
 
@@ -157,12 +166,33 @@ const gpu::Buffer& TransferPass::coefficients() const
     return impl_->coefficients;
 }
 
-uint32_t TransferPass::vertex_count() const { return impl_->n; }
-uint32_t TransferPass::k() const { return impl_->k; }
-uint32_t TransferPass::l() const { return impl_->l; }
-uint32_t TransferPass::segment_count() const { return impl_->segment_count; }
-uint32_t TransferPass::instances() const { return impl_->instances.count; }
-uint64_t TransferPass::instance_stride() const { return impl_->instances.coefficient_stride; }
-const gpu::Device& TransferPass::device() const { return *impl_->device; }
+uint32_t TransferPass::vertex_count() const
+{
+    return impl_->n;
+}
+uint32_t TransferPass::k() const
+{
+    return impl_->k;
+}
+uint32_t TransferPass::l() const
+{
+    return impl_->l;
+}
+uint32_t TransferPass::segment_count() const
+{
+    return impl_->segment_count;
+}
+uint32_t TransferPass::instances() const
+{
+    return impl_->instances.count;
+}
+uint64_t TransferPass::instance_stride() const
+{
+    return impl_->instances.coefficient_stride;
+}
+const gpu::Device& TransferPass::device() const
+{
+    return *impl_->device;
+}
 
 } // namespace hemi::render

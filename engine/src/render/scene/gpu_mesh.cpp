@@ -23,8 +23,8 @@ GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBat
     if (std::string problem = io::mesh_problem(mesh, io::MeshNeeds::Frames); !problem.empty())
         throw std::invalid_argument("hemi: " + problem);
     if (!mesh.uvs1.empty() && mesh.uvs1.size() != n)
-        throw std::invalid_argument("hemi: the mesh has " + std::to_string(mesh.uvs1.size()) + " TEXCOORD_1 values for " +
-                                    std::to_string(n) + " vertices");
+        throw std::invalid_argument("hemi: the mesh has " + std::to_string(mesh.uvs1.size()) +
+                                    " TEXCOORD_1 values for " + std::to_string(n) + " vertices");
     std::vector<Vertex> vertices(n);
     for (size_t i = 0; i < n; ++i)
     {
@@ -35,7 +35,8 @@ GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBat
                        {mesh.uvs[i].x, mesh.uvs[i].y},
                        {uv1.x, uv1.y}};
     }
-    vertices_ = gpu::create_buffer(device, {vertices.size() * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    vertices_ =
+        gpu::create_buffer(device, {vertices.size() * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
     upload.buffer(vertices_, vertices.data(), vertices.size() * sizeof(Vertex));
     indices_ = gpu::create_buffer(device, {mesh.indices.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
     upload.buffer(indices_, mesh.indices.data(), mesh.indices.size() * 4);
@@ -71,7 +72,8 @@ void GpuMesh::draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_cou
 {
     if (uint64_t(first_index) + index_count > index_count_)
         throw std::invalid_argument("hemi: draw of indices [" + std::to_string(first_index) + ", +" +
-                                    std::to_string(index_count) + ") past the mesh's " + std::to_string(index_count_));
+                                    std::to_string(index_count) + ") past the mesh's " +
+                                    std::to_string(index_count_));
     vkCmdDrawIndexed(cmd, index_count, 1, first_index, 0, 0);
 }
 

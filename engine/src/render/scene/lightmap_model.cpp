@@ -14,8 +14,9 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
     if (output == "plain")
         return math::vertex_irradiance_basis();
     if (output == "rnm" || output == "ssbump" || output == "rnm_ao")
-        throw std::invalid_argument("hemi: the 'rnm' lightmap colours are drawn by the rnm and ssbump techniques "
-                                    "(radiosity normal mapping), not by a basis");
+        throw std::invalid_argument(
+            "hemi: the 'rnm' lightmap colours are drawn by the rnm and ssbump techniques "
+            "(radiosity normal mapping), not by a basis");
     return math::basis(output);
 }
 
@@ -58,7 +59,9 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         const std::string source = rnm ? "rnm" : name == "constant" ? asset.outputs.front().name : name;
         const io::LightmapOutput& output = asset.output(source); // lists what the asset has
         if (rnm)
-            variants.push_back({name == "rnm" ? Technique::Rnm : name == "rnm_ao" ? Technique::RnmAo : Technique::Ssbump,
+            variants.push_back({name == "rnm"      ? Technique::Rnm
+                                : name == "rnm_ao" ? Technique::RnmAo
+                                                   : Technique::Ssbump,
                                 HEMI_BASIS_HL2});
         else if (source == "rnm")
             variants.push_back({Technique::Constant, HEMI_BASIS_HL2});
@@ -66,11 +69,12 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
             variants.push_back({name == "constant" ? Technique::Constant : Technique::Irradiance,
                                 lightmap_basis(source).id});
         names_.push_back(name);
-        coefficients_.push_back(
-            std::make_unique<TexelCoefficients>(system, asset.width, asset.height, output.k, output.maps, upload));
+        coefficients_.push_back(std::make_unique<TexelCoefficients>(system, asset.width, asset.height,
+                                                                    output.k, output.maps, upload));
     }
-    surfaces_ = std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
-                                                CoefficientSourceKind::Texel, variants, upload);
+    surfaces_ =
+        std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
+                                        CoefficientSourceKind::Texel, variants, upload);
 }
 
 LightmapModel::~LightmapModel() = default;

@@ -7,9 +7,11 @@
 namespace hemi::render
 {
 
-ProbeObject::ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
-                         const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
-                         uint32_t instances, gpu::UploadBatch& upload)
+ProbeObject::ProbeObject(MaterialSystem& system, const io::Mesh& mesh,
+                         const std::vector<io::EncodedImage>& images,
+                         const std::vector<io::Material>& materials,
+                         const std::vector<io::Primitive>& primitives, uint32_t instances,
+                         gpu::UploadBatch& upload)
     : surfaces_(system, mesh, images, materials, primitives, CoefficientSourceKind::Uniform,
                 {SurfaceVariant{Technique::Irradiance, HEMI_BASIS_SH9, ShadingFrame::World}}, upload)
 {
@@ -21,17 +23,20 @@ ProbeObject::ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std
 
 ProbeObject::~ProbeObject() = default;
 
-void ProbeObject::record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9) const
+void ProbeObject::record_lighting(VkCommandBuffer cmd, uint32_t instance,
+                                  std::span<const glm::vec3> sh9) const
 {
     if (instance >= probes_.size())
         throw std::invalid_argument("hemi: probe-lit instance " + std::to_string(instance) + " of " +
                                     std::to_string(probes_.size()));
     if (sh9.size() != 9)
-        throw std::invalid_argument("hemi: a probe-lit object takes 9 SH9 coefficients, got " + std::to_string(sh9.size()));
+        throw std::invalid_argument("hemi: a probe-lit object takes 9 SH9 coefficients, got " +
+                                    std::to_string(sh9.size()));
     probes_[instance]->record_update(cmd, sh9);
 }
 
-void ProbeObject::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const
+void ProbeObject::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance,
+                       const glm::mat4& model) const
 {
     if (instance >= probes_.size())
         throw std::invalid_argument("hemi: probe-lit instance " + std::to_string(instance) + " of " +

@@ -10,8 +10,8 @@
 namespace hemi::render
 {
 
-std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order, const glm::mat4& model,
-                                       float rotate_degrees)
+std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order,
+                                       const glm::mat4& model, float rotate_degrees)
 {
     const size_t l = size_t(order) * order;
     if (order < 1 || order > math::kMaxShOrder)
@@ -50,29 +50,32 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
                                         "' (bake it with --cpca)");
         const io::PrtCpca& c = *t.cpca;
         return std::make_unique<CpcaTransferPass>(
-            device, CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
+            device,
+            CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
             desc.instances, &upload);
     }
     if (t.matrices.empty())
-        throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique + "' (use --cpca)");
-    return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0, desc.instances,
-                                          &upload);
+        throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique +
+                                    "' (use --cpca)");
+    return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0,
+                                          desc.instances, &upload);
 }
 } // namespace
 
 PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
                    gpu::UploadBatch& upload)
     : system_(&system), asset_(&asset), basis_(&math::technique(desc.technique)),
-      surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives, CoefficientSourceKind::Vertex,
-                {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
+      surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives,
+                CoefficientSourceKind::Vertex, {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
 {
     const gpu::Device& device = system.device();
     source_ = make_source(device, asset, desc, upload);
     if (int(source_->k()) != basis_->size)
-        throw std::invalid_argument("hemi: technique '" + desc.technique + "' has K = " + std::to_string(source_->k()) +
+        throw std::invalid_argument("hemi: technique '" + desc.technique +
+                                    "' has K = " + std::to_string(source_->k()) +
                                     " in the asset, its basis needs " + std::to_string(basis_->size));
-    coefficient_set_ = std::make_unique<VertexCoefficients>(system, source_->coefficients(),
-                                                            source_->instance_stride() * source_->instances());
+    coefficient_set_ = std::make_unique<VertexCoefficients>(
+        system, source_->coefficients(), source_->instance_stride() * source_->instances());
 }
 
 PrtModel::~PrtModel() = default;
@@ -83,7 +86,8 @@ void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance>
     lighting.reserve(instances.size() * asset_->l());
     for (const PrtInstance& i : instances)
     {
-        const std::vector<glm::vec3> o = object_lighting(i.world_lighting, int(asset_->order), i.model, i.rotate_degrees);
+        const std::vector<glm::vec3> o =
+            object_lighting(i.world_lighting, int(asset_->order), i.model, i.rotate_degrees);
         lighting.insert(lighting.end(), o.begin(), o.end());
     }
     record_transfer_object_space(cmd, lighting);
@@ -96,7 +100,8 @@ void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const
                         VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
 }
 
-void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const
+void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance,
+                    const glm::mat4& model) const
 {
     if (instance >= source_->instances())
         throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +

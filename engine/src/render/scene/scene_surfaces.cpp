@@ -6,7 +6,8 @@
 namespace hemi::render
 {
 
-SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
+SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
+                             const std::vector<io::EncodedImage>& images,
                              const std::vector<io::Material>& asset_materials,
                              const std::vector<io::Primitive>& asset_primitives, CoefficientSourceKind source,
                              const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload)
@@ -25,8 +26,8 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const
     for (const io::Primitive& p : primitives)
     {
         if (p.material >= materials_.size())
-            throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) + " of " +
-                                        std::to_string(materials_.size()));
+            throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) +
+                                        " of " + std::to_string(materials_.size()));
         Draw d{p.first_index, p.index_count, p.material, {}};
         for (const SurfaceVariant& v : variants)
         {

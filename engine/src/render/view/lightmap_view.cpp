@@ -43,28 +43,32 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
         grey.base_color_factor = glm::vec4(0.8f, 0.8f, 0.8f, 1.0f);
         sphere_material_ = {grey};
         gpu::UploadBatch upload(view_.device());
-        spheres_ = std::make_unique<ProbeObject>(view_.system(), sphere_mesh_, std::vector<io::EncodedImage>{},
-                                                 sphere_material_, std::vector<io::Primitive>{}, kMaxSpheres, upload);
+        spheres_ = std::make_unique<ProbeObject>(view_.system(), sphere_mesh_,
+                                                 std::vector<io::EncodedImage>{}, sphere_material_,
+                                                 std::vector<io::Primitive>{}, kMaxSpheres, upload);
         upload.submit_and_wait();
     }
-    gpu::one_shot(view_.device(), [&](VkCommandBuffer cmd) {
-        FrameData dynamic;
-        dynamic.lights = frame.lights;
-        dynamic.specular_exponent = frame.specular_exponent;
-        dynamic.specular_strength = frame.specular_strength;
-        view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
-        for (size_t i = 0; i < lighting.size(); ++i)
-            spheres_->record_lighting(cmd, uint32_t(i), lighting[i]);
-        view_.target().begin(cmd);
-        model_->draw(cmd, view_.frame(), frame.technique, frame.model);
-        for (size_t i = 0; i < frame.spheres.size(); ++i)
-        {
-            const glm::vec4& s = frame.spheres[i];
-            const glm::mat4 m = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(s)), glm::vec3(s.w));
-            spheres_->draw(cmd, view_.frame(), uint32_t(i), m);
-        }
-        view_.target().end(cmd);
-    });
+    gpu::one_shot(view_.device(),
+                  [&](VkCommandBuffer cmd)
+                  {
+                      FrameData dynamic;
+                      dynamic.lights = frame.lights;
+                      dynamic.specular_exponent = frame.specular_exponent;
+                      dynamic.specular_strength = frame.specular_strength;
+                      view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
+                      for (size_t i = 0; i < lighting.size(); ++i)
+                          spheres_->record_lighting(cmd, uint32_t(i), lighting[i]);
+                      view_.target().begin(cmd);
+                      model_->draw(cmd, view_.frame(), frame.technique, frame.model);
+                      for (size_t i = 0; i < frame.spheres.size(); ++i)
+                      {
+                          const glm::vec4& s = frame.spheres[i];
+                          const glm::mat4 m =
+                              glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(s)), glm::vec3(s.w));
+                          spheres_->draw(cmd, view_.frame(), uint32_t(i), m);
+                      }
+                      view_.target().end(cmd);
+                  });
     return view_.read();
 }
 

@@ -15,21 +15,24 @@ OffscreenTarget::OffscreenTarget(const gpu::Device& device, uint32_t width, uint
     const VkPhysicalDeviceLimits& limits = device.limits();
     const std::string size = std::to_string(width) + "x" + std::to_string(height);
     if (width > limits.maxFramebufferWidth || height > limits.maxFramebufferHeight)
-        throw std::invalid_argument("hemi: a " + size + " render target exceeds device " + std::string(device.name()) +
-                                    "'s maxFramebufferWidth/Height (" + std::to_string(limits.maxFramebufferWidth) +
-                                    "x" + std::to_string(limits.maxFramebufferHeight) + ")");
+        throw std::invalid_argument("hemi: a " + size + " render target exceeds device " +
+                                    std::string(device.name()) + "'s maxFramebufferWidth/Height (" +
+                                    std::to_string(limits.maxFramebufferWidth) + "x" +
+                                    std::to_string(limits.maxFramebufferHeight) + ")");
     try
     {
         color_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
         aux_ = gpu::create_image(device, {width, height, VK_FORMAT_R32G32B32A32_SFLOAT, color_usage});
-        depth_ = gpu::create_image(device, {width, height, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+        depth_ = gpu::create_image(
+            device, {width, height, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
     }
     catch (const std::invalid_argument& e)
     {
         std::string why = e.what();
         if (why.rfind("hemi: ", 0) == 0)
             why = why.substr(6);
-        throw std::invalid_argument("hemi: a " + size + " render target (two RGBA32F attachments and D32): " + why);
+        throw std::invalid_argument("hemi: a " + size +
+                                    " render target (two RGBA32F attachments and D32): " + why);
     }
 
     VkAttachmentDescription attachments[3] = {};
@@ -132,8 +135,14 @@ io::ImageRgba OffscreenTarget::read(const gpu::Image& image) const
     return out;
 }
 
-io::ImageRgba OffscreenTarget::read_color() const { return read(color_); }
-io::ImageRgba OffscreenTarget::read_aux() const { return read(aux_); }
+io::ImageRgba OffscreenTarget::read_color() const
+{
+    return read(color_);
+}
+io::ImageRgba OffscreenTarget::read_aux() const
+{
+    return read(aux_);
+}
 
 RenderTargetDesc OffscreenTarget::desc() const
 {

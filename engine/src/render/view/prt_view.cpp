@@ -28,7 +28,8 @@ std::vector<glm::vec3> environment_lighting(const std::string& environment, int 
     if (environment == "sky")
     {
         const math::AnalyticSky sky;
-        return math::project_sh(order, [&](const glm::vec3& d) { return sky.radiance(d); }, 256);
+        return math::project_sh(
+            order, [&](const glm::vec3& d) { return sky.radiance(d); }, 256);
     }
     const io::ImageRgba image = io::read_exr(environment);
     return math::project_equirect(order, image.width, image.height, image.pixels);
@@ -68,8 +69,8 @@ io::ImageRgba ViewTarget::read() const
     return color;
 }
 
-PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::string& technique, bool cpca,
-                 uint32_t width, uint32_t height)
+PrtView::PrtView(const gpu::Device& device, const io::PrtAsset& asset, const std::string& technique,
+                 bool cpca, uint32_t width, uint32_t height)
     : asset_(&asset), view_(device, width, height)
 {
     gpu::UploadBatch upload(device);
@@ -81,7 +82,8 @@ PrtView::~PrtView() = default;
 
 std::vector<glm::vec3> PrtView::object_lighting(const PrtFrame& frame) const
 {
-    return render::object_lighting(frame.world_lighting, int(asset_->order), frame.model, frame.rotate_degrees);
+    return render::object_lighting(frame.world_lighting, int(asset_->order), frame.model,
+                                   frame.rotate_degrees);
 }
 
 void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
@@ -105,10 +107,12 @@ void PrtView::record_raster(VkCommandBuffer cmd) const
 
 io::ImageRgba PrtView::render(const PrtFrame& frame)
 {
-    gpu::one_shot(view_.device(), [&](VkCommandBuffer cmd) {
-        record_transfer(cmd, frame);
-        record_raster(cmd);
-    });
+    gpu::one_shot(view_.device(),
+                  [&](VkCommandBuffer cmd)
+                  {
+                      record_transfer(cmd, frame);
+                      record_raster(cmd);
+                  });
     return view_.read();
 }
 

@@ -1,7 +1,7 @@
 // Heidrich & Seidel 1999's reflection models in GLSL: the GLSL twins of hemi/math/brdf.h (same conventions,
 // same normalisation: every model is f_r cos(alpha), directions point away from the surface), evaluated
-// analytically, and the lookups of their factored tables as hemi-bake brdf writes them (one table per layer of
-// a sampler2DArray or a sampler2D; sample i of an axis at coordinate i / (size - 1)).
+// analytically, and the lookups of their factored tables as hemi-bake brdf writes them (one table per layer
+// of a sampler2DArray or a sampler2D; sample i of an axis at coordinate i / (size - 1)).
 #ifndef HEMI_BRDF_FACTORED_GLSL
 #define HEMI_BRDF_FACTORED_GLSL
 
@@ -11,7 +11,8 @@ const float kHemiBrdfPi = 3.14159265358979;
 float hemi_erf(float x)
 {
     const float t = 1.0 / (1.0 + 0.3275911 * abs(x));
-    const float p = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    const float p =
+        t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
     return sign(x) * (1.0 - p * exp(-x * x));
 }
 
@@ -83,9 +84,18 @@ float hemi_phong_cos(vec3 n, vec3 l, vec3 v, float e)
 }
 
 // Table coordinates: an axis value s in [0, 1] of a table of `size` samples, and the axis mappings.
-float hemi_table_coord(float s, float size) { return (clamp(s, 0.0, 1.0) * (size - 1.0) + 0.5) / size; }
-float hemi_axis_sqrt(float c) { return sqrt(max(0.0, 1.0 - c)); }
-float hemi_axis_angle(float c) { return acos(clamp(c, -1.0, 1.0)) / kHemiBrdfPi; }
+float hemi_table_coord(float s, float size)
+{
+    return (clamp(s, 0.0, 1.0) * (size - 1.0) + 0.5) / size;
+}
+float hemi_axis_sqrt(float c)
+{
+    return sqrt(max(0.0, 1.0 - c));
+}
+float hemi_axis_angle(float c)
+{
+    return acos(clamp(c, -1.0, 1.0)) / kHemiBrdfPi;
+}
 
 // Torrance-Sparrow from its two tables: layer 0 = FD (cos_theta, sqrt(1 - cos_delta)), layer 1 = G
 // (cos_alpha, cos_beta), channel r; f_r cos(alpha) = FD * G.
@@ -96,9 +106,13 @@ float hemi_torrance_sparrow_table(sampler2DArray tables, float size, vec3 n, vec
         return 0.0;
     const vec3 h = normalize(l + v);
     // textureLod: tables have one level, and these lookups sit in non-uniform control flow.
-    const float fd = textureLod(tables, vec3(hemi_table_coord(dot(l, h), size),
-                                             hemi_table_coord(hemi_axis_sqrt(dot(n, h)), size), 0.0), 0.0).r;
-    const float g = textureLod(tables, vec3(hemi_table_coord(ca, size), hemi_table_coord(cb, size), 1.0), 0.0).r;
+    const float fd = textureLod(tables,
+                                vec3(hemi_table_coord(dot(l, h), size),
+                                     hemi_table_coord(hemi_axis_sqrt(dot(n, h)), size), 0.0),
+                                0.0)
+                         .r;
+    const float g =
+        textureLod(tables, vec3(hemi_table_coord(ca, size), hemi_table_coord(cb, size), 1.0), 0.0).r;
     return fd * g;
 }
 
@@ -108,8 +122,11 @@ float hemi_banks_table(sampler2D table, float size, vec3 n, vec3 t, vec3 l, vec3
     const float ca = dot(n, l);
     if (ca <= 0.0 || dot(n, v) <= 0.0)
         return 0.0;
-    const vec2 ds = textureLod(table, vec2(hemi_table_coord(hemi_axis_angle(dot(t, l)), size),
-                                           hemi_table_coord(hemi_axis_angle(dot(t, v)), size)), 0.0).rg;
+    const vec2 ds = textureLod(table,
+                               vec2(hemi_table_coord(hemi_axis_angle(dot(t, l)), size),
+                                    hemi_table_coord(hemi_axis_angle(dot(t, v)), size)),
+                               0.0)
+                        .rg;
     return ca * (kd * ds.x + ks * ds.y);
 }
 
@@ -122,7 +139,9 @@ float hemi_phong_table(sampler2D table, float size, vec3 n, vec3 l, vec3 v)
     const float y = dot(2.0 * nv * n - v, l);
     if (y <= 0.0)
         return 0.0;
-    return textureLod(table, vec2(hemi_table_coord(dot(n, l), size), hemi_table_coord(hemi_axis_sqrt(y), size)), 0.0).r;
+    return textureLod(table,
+                      vec2(hemi_table_coord(dot(n, l), size), hemi_table_coord(hemi_axis_sqrt(y), size)), 0.0)
+        .r;
 }
 
 #endif

@@ -36,11 +36,13 @@ using uint = uint32_t;
 #define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)
 #define HEMI_SOURCE_TEXEL 1   // 2D array texture, layer k, sampled at TEXCOORD_1 (lightmaps)
 #define HEMI_SOURCE_UNIFORM 2 // uniform block of K vec4 (an SH probe, an environment)
-#define HEMI_SOURCE_ENVIRONMENT 3 // parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
+#define HEMI_SOURCE_ENVIRONMENT                                                                              \
+    3 // parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
 
 // Set 2 of the environment source (render::EnvironmentLighting).
 #define HEMI_ENV_BINDING_UNIFORMS 0
-#define HEMI_ENV_BINDING_MIRROR 1  // sampler2DArray: the mirror map, layer 0 front (z >= 0), 1 back, its mip chain
+#define HEMI_ENV_BINDING_MIRROR                                                                              \
+    1 // sampler2DArray: the mirror map, layer 0 front (z >= 0), 1 back, its mip chain
 #define HEMI_ENV_BINDING_GLOSSY 2  // sampler2DArray: the material's prefiltered glossy map
 #define HEMI_ENV_BINDING_DIFFUSE 3 // sampler2DArray: the diffuse map (E / pi)
 #define HEMI_ENV_BINDING_FRESNEL 4 // sampler2D: the Fresnel table, a row per index of refraction
@@ -71,26 +73,28 @@ struct FrameUniforms
                           // exponent, w = specular strength of the dynamic lights
     vec4 sep4_weights[9]; // math::sep4_weights() rows, read only by the separable basis
     vec4 eye;             // xyz: the camera's position (world)
-    vec4 light_position[HEMI_MAX_LIGHTS]; // w = 0: xyz towards a directional light; w = 1: a point light at xyz
-    vec4 light_irradiance[HEMI_MAX_LIGHTS]; // rgb: on a surface facing it (a point light: at distance 1, / d^2)
+    vec4 light_position[HEMI_MAX_LIGHTS];   // w = 0: xyz towards a directional light; w = 1: a point light at
+                                            // xyz
+    vec4 light_irradiance[HEMI_MAX_LIGHTS]; // rgb: on a surface facing it (a point light: at distance 1, /
+                                            // d^2)
 };
 
 struct MaterialUniforms
 {
     vec4 base_color_factor; // linear rgba
     vec4 emissive_factor;   // rgb linear; a = normal scale
-    vec4 uv_transform[8];   // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive, occlusion
-    uvec4 texcoord;         // UV set (0 or 1) of base colour, normal, emissive, occlusion
-    vec4 occlusion;         // x = glTF's occlusion strength; yzw unused
+    vec4 uv_transform[8]; // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive, occlusion
+    uvec4 texcoord;       // UV set (0 or 1) of base colour, normal, emissive, occlusion
+    vec4 occlusion;       // x = glTF's occlusion strength; yzw unused
 };
 
 // The environment source's uniforms (set 2, binding HEMI_ENV_BINDING_UNIFORMS).
 struct EnvironmentUniforms
 {
-    vec4 extents;         // x, y, z: the mirror, glossy and diffuse maps' extents (math/paraboloid.h); w: unused
-    vec4 material;        // x = kd (diffuse weight), y = ks (specular weight), z = the Fresnel row's v coordinate,
-                          // w = blend: 0 = F L_m + L_d, 1 = F L_m + (1 - F) L_d (a coating, section 4.4)
-    vec4 tables;          // x = the BRDF tables' size, y = the Fresnel table's samples, zw unused
+    vec4 extents;  // x, y, z: the mirror, glossy and diffuse maps' extents (math/paraboloid.h); w: unused
+    vec4 material; // x = kd (diffuse weight), y = ks (specular weight), z = the Fresnel row's v coordinate,
+                   // w = blend: 0 = F L_m + L_d, 1 = F L_m + (1 - F) L_d (a coating, section 4.4)
+    vec4 tables;   // x = the BRDF tables' size, y = the Fresnel table's samples, zw unused
     vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z: w unused)
 };
 

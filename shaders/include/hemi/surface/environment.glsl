@@ -1,8 +1,9 @@
-// The environment source of the material system (HEMI_SOURCE_ENVIRONMENT, set 2; render::EnvironmentLighting):
-// Heidrich & Seidel's parabolic maps (math/paraboloid.h's conventions: layer 0 holds z >= 0, a direction d at
-// (x, y) = d.xy / (1 + |d.z|), texture coordinate ((x / m + 1) / 2, (1 - y / m) / 2) for the map's extent m),
-// the Fresnel table and the factored BRDF's tables. In the other variants these functions return 0, so that
-// every technique compiles everywhere (the specialization constant drops what a pipeline does not use).
+// The environment source of the material system (HEMI_SOURCE_ENVIRONMENT, set 2;
+// render::EnvironmentLighting): Heidrich & Seidel's parabolic maps (math/paraboloid.h's conventions: layer 0
+// holds z >= 0, a direction d at (x, y) = d.xy / (1 + |d.z|), texture coordinate ((x / m + 1) / 2, (1 - y /
+// m) / 2) for the map's extent m), the Fresnel table and the factored BRDF's tables. In the other variants
+// these functions return 0, so that every technique compiles everywhere (the specialization constant drops
+// what a pipeline does not use).
 #ifndef HEMI_SURFACE_ENVIRONMENT_GLSL
 #define HEMI_SURFACE_ENVIRONMENT_GLSL
 #include "hemi/shared/surface.h"
@@ -62,20 +63,56 @@ float hemi_env_fresnel(float c)
     const float n = environment.tables.y;
     return texture(env_fresnel, vec2((clamp(c, 0.0, 1.0) * (n - 1.0) + 0.5) / n, environment.material.z)).r;
 }
-float hemi_env_kd() { return environment.material.x; }
-float hemi_env_ks() { return environment.material.y; }
-bool hemi_env_coating() { return environment.material.w != 0.0; }
-float hemi_env_table_size() { return environment.tables.x; }
+float hemi_env_kd()
+{
+    return environment.material.x;
+}
+float hemi_env_ks()
+{
+    return environment.material.y;
+}
+bool hemi_env_coating()
+{
+    return environment.material.w != 0.0;
+}
+float hemi_env_table_size()
+{
+    return environment.tables.x;
+}
 #define HEMI_ENV_BRDF_TABLES env_brdf
 #else
-vec3 hemi_env_mirror(vec3 d) { return vec3(0.0); }
-vec3 hemi_env_glossy(vec3 d) { return vec3(0.0); }
-vec3 hemi_env_diffuse(vec3 n) { return vec3(0.0); }
-float hemi_env_fresnel(float c) { return 0.0; }
-float hemi_env_kd() { return 0.0; }
-float hemi_env_ks() { return 0.0; }
-bool hemi_env_coating() { return false; }
-float hemi_env_table_size() { return 2.0; }
+vec3 hemi_env_mirror(vec3 d)
+{
+    return vec3(0.0);
+}
+vec3 hemi_env_glossy(vec3 d)
+{
+    return vec3(0.0);
+}
+vec3 hemi_env_diffuse(vec3 n)
+{
+    return vec3(0.0);
+}
+float hemi_env_fresnel(float c)
+{
+    return 0.0;
+}
+float hemi_env_kd()
+{
+    return 0.0;
+}
+float hemi_env_ks()
+{
+    return 0.0;
+}
+bool hemi_env_coating()
+{
+    return false;
+}
+float hemi_env_table_size()
+{
+    return 2.0;
+}
 #endif
 
 #endif

@@ -19,7 +19,7 @@ struct HemiSurface
     int basis;              // HEMI_BASIS_* of the coefficients
     int k;                  // how many coefficients
     vec3 c[HEMI_BASIS_MAX_SIZE];
-    vec4 sep4_weights[9];   // the separable basis's weights (math::sep4_weights())
+    vec4 sep4_weights[9]; // the separable basis's weights (math::sep4_weights())
     // Dynamic lights in the coefficients' frame (tangent or world), at this pixel.
     int lights;
     vec3 l[HEMI_MAX_LIGHTS]; // unit, towards the light

@@ -1,7 +1,8 @@
 // Heidrich & Seidel 1999, section 3.2: Banks' anisotropic model (Eq. 4, in Stalling's form) from its table
-// (hemi-bake brdf --model banks: layer 0, r = diffuse, g = specular against acos(t.l) / pi, acos(t.v) / pi), per
-// pixel with the tangent t made perpendicular to the normal-map normal, for the dynamic lights; plus the
-// environment's diffuse map: colour = sum_i E_i (n.l_i) (kd albedo diffuse + ks specular) + kd albedo D(n) + emissive.
+// (hemi-bake brdf --model banks: layer 0, r = diffuse, g = specular against acos(t.l) / pi, acos(t.v) / pi),
+// per pixel with the tangent t made perpendicular to the normal-map normal, for the dynamic lights; plus the
+// environment's diffuse map: colour = sum_i E_i (n.l_i) (kd albedo diffuse + ks specular) + kd albedo D(n) +
+// emissive.
 #ifndef HEMI_TECHNIQUE_BANKS_GLSL
 #define HEMI_TECHNIQUE_BANKS_GLSL
 #include "hemi/brdf/factored.glsl"
@@ -14,7 +15,9 @@ vec3 hemi_technique_banks(HemiSurface s)
     vec3 sum = hemi_env_kd() * s.albedo * hemi_env_diffuse(s.n);
 #if HEMI_SOURCE == HEMI_SOURCE_ENVIRONMENT
     vec3 t = s.t - s.n * dot(s.n, s.t);
-    t = dot(t, t) > 1e-12 ? normalize(t) : (abs(s.n.x) < 0.9 ? normalize(cross(s.n, vec3(1, 0, 0))) : normalize(cross(s.n, vec3(0, 1, 0))));
+    t = dot(t, t) > 1e-12 ? normalize(t)
+                          : (abs(s.n.x) < 0.9 ? normalize(cross(s.n, vec3(1, 0, 0)))
+                                              : normalize(cross(s.n, vec3(0, 1, 0))));
     const float size = hemi_env_table_size();
     for (int i = 0; i < s.lights; ++i)
     {
@@ -23,7 +26,9 @@ vec3 hemi_technique_banks(HemiSurface s)
             continue;
         const vec2 ds = textureLod(HEMI_ENV_BRDF_TABLES,
                                    vec3(hemi_table_coord(hemi_axis_angle(dot(t, s.l[i])), size),
-                                        hemi_table_coord(hemi_axis_angle(dot(t, s.v)), size), 0.0), 0.0).rg;
+                                        hemi_table_coord(hemi_axis_angle(dot(t, s.v)), size), 0.0),
+                                   0.0)
+                            .rg;
         sum += s.e[i] * nl * (hemi_env_kd() * s.albedo * ds.x + hemi_env_ks() * ds.y);
     }
 #endif

@@ -18,11 +18,13 @@ vec3 hemi_technique_ssbump(HemiSurface s)
     vec3 e = s.bump.x * s.c[0] + s.bump.y * s.c[1] + s.bump.z * s.c[2];
     for (int i = 0; i < s.lights; ++i)
     {
-        const vec3 projected = clamp(vec3(dot(kHemiRnmBasis[0], s.l[i]), dot(kHemiRnmBasis[1], s.l[i]),
-                                          dot(kHemiRnmBasis[2], s.l[i])), 0.0, 1.0);
+        const vec3 projected = clamp(
+            vec3(dot(kHemiRnmBasis[0], s.l[i]), dot(kHemiRnmBasis[1], s.l[i]), dot(kHemiRnmBasis[2], s.l[i])),
+            0.0, 1.0);
         e += s.e[i] * (HEMI_RNM_SQRT_3 * dot(s.bump, projected));
     }
-    const vec3 reconstructed = s.bump.x * kHemiRnmBasis[0] + s.bump.y * kHemiRnmBasis[1] + s.bump.z * kHemiRnmBasis[2];
+    const vec3 reconstructed =
+        s.bump.x * kHemiRnmBasis[0] + s.bump.y * kHemiRnmBasis[1] + s.bump.z * kHemiRnmBasis[2];
     const vec3 n = dot(reconstructed, reconstructed) > 0.0 ? normalize(reconstructed) : vec3(0.0, 0.0, 1.0);
     return s.albedo * e / kHemiPi + hemi_dynamic_specular(s, n) + s.emissive;
 }

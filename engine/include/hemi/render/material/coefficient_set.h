@@ -20,13 +20,13 @@ namespace hemi::render
 
 class VertexCoefficients
 {
-public:
+  public:
     // Views `texels` RGBA32F texels of `coefficients` from its start (every instance of a multi-instance
     // source; draws pick theirs by shared::DrawPush::coefficient_offset). The buffer must outlive this.
     VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients, uint64_t texels);
     VkDescriptorSet set() const { return set_; }
 
-private:
+  private:
     gpu::BufferView view_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
@@ -34,13 +34,13 @@ private:
 
 class ProbeCoefficients
 {
-public:
+  public:
     explicit ProbeCoefficients(const MaterialSystem& system);
     // Outside a render pass: up to HEMI_BASIS_MAX_SIZE RGB coefficients (finite; std::invalid_argument else).
     void record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const;
     VkDescriptorSet set() const { return set_; }
 
-private:
+  private:
     gpu::Buffer uniforms_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
@@ -48,7 +48,7 @@ private:
 
 class TexelCoefficients
 {
-public:
+  public:
     // `rgb` holds K maps of width x height RGB texels, map after map, rows from the top (v = 0), 3 floats a
     // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored as RGBA16F
     // (half floats, as lightmaps usually are; `full_precision` stores RGBA32F), uploaded through `upload`.
@@ -59,7 +59,7 @@ public:
     VkDescriptorSet set() const { return set_; }
     uint32_t k() const { return k_; }
 
-private:
+  private:
     gpu::Image maps_;
     gpu::Sampler sampler_;
     gpu::DescriptorPool pool_;

@@ -17,16 +17,18 @@ namespace hemi::render
 // and ssbump: Green 2007 projects them onto Valve's three directions). World space, z up.
 struct DynamicLight
 {
-    bool point = false;          // false: directional
-    glm::vec3 position{0.0f, 0.0f, 1.0f}; // a point light's position, or the direction towards a directional one
-    glm::vec3 irradiance{1.0f};  // on a surface facing it (a point light's at distance 1, falling off as 1 / d^2)
+    bool point = false; // false: directional
+    glm::vec3 position{0.0f, 0.0f,
+                       1.0f}; // a point light's position, or the direction towards a directional one
+    glm::vec3 irradiance{
+        1.0f}; // on a surface facing it (a point light's at distance 1, falling off as 1 / d^2)
 };
 
 struct FrameData
 {
-    glm::mat4 view_projection{1.0f}; // Vulkan clip space (material_system.h)
-    bool lighting_only = false;      // albedo 1 and no emissive: the "white" view of the lighting alone
-    glm::vec3 eye{0.0f};             // the camera's position (world): the view direction of specular terms
+    glm::mat4 view_projection{1.0f};  // Vulkan clip space (material_system.h)
+    bool lighting_only = false;       // albedo 1 and no emissive: the "white" view of the lighting alone
+    glm::vec3 eye{0.0f};              // the camera's position (world): the view direction of specular terms
     std::vector<DynamicLight> lights; // at most HEMI_MAX_LIGHTS (std::invalid_argument else)
     // The dynamic lights' specular term (normalised Blinn-Phong, (m + 8) / (8 pi) (n.h)^m (n.l) E, at the
     // technique's normal): exponent m and strength (0: none). A stand-in for per-material gloss.
@@ -36,14 +38,14 @@ struct FrameData
 
 class FrameSet
 {
-public:
+  public:
     explicit FrameSet(const MaterialSystem& system);
     // Outside a render pass, once per frame: the previous frame's reads finish before the update, which
     // finishes before this frame's draws read it.
     void record_update(VkCommandBuffer cmd, const FrameData& frame) const;
     VkDescriptorSet set() const { return set_; }
 
-private:
+  private:
     gpu::Buffer uniforms_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;

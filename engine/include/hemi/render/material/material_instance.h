@@ -20,7 +20,7 @@ namespace hemi::render
 
 class TextureSet
 {
-public:
+  public:
     // Decodes every image (io::decode_image: FormatError naming the image when it is corrupt) and creates
     // it with a full mip chain, filled through `upload`. `materials` say how each image is used: base colour
     // and emissive maps are sRGB, normal maps linear (an image used both ways is created twice).
@@ -35,7 +35,7 @@ public:
     // A sampler for glTF's sampler state (cached: one per distinct state).
     VkSampler sampler(const io::TextureSampler& state);
 
-private:
+  private:
     void create(std::span<const io::ImageRgba8> images, std::span<const io::Material> materials,
                 gpu::UploadBatch& upload);
     const gpu::Device* device_;
@@ -45,14 +45,14 @@ private:
 
 class MaterialInstance
 {
-public:
+  public:
     // Throws std::invalid_argument when the material refers to an image the set does not have.
     MaterialInstance(const MaterialSystem& system, TextureSet& textures, const io::Material& material,
                      gpu::UploadBatch& upload);
     VkDescriptorSet set() const { return set_; }
     bool double_sided() const { return double_sided_; }
 
-private:
+  private:
     gpu::Buffer uniforms_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;

@@ -38,21 +38,22 @@ enum class Technique : uint32_t
 {
     Irradiance = HEMI_TECHNIQUE_IRRADIANCE, // basis at the normal: PRT, classic PRT, lightmaps, SH probes
     Constant = HEMI_TECHNIQUE_CONSTANT,     // the base colour factor alone (a baseline, a debug view)
-    Rnm = HEMI_TECHNIQUE_RNM,               // radiosity normal mapping, Green 2007 Listing 1 (K = 3: rnm colours)
-    Ssbump = HEMI_TECHNIQUE_SSBUMP,         // self-shadowed bump map in the normal slot, Listing 2 (K = 3)
-    RnmAo = HEMI_TECHNIQUE_RNM_AO,          // Listing 1 times the material's occlusion texture (Green's baseline)
+    Rnm = HEMI_TECHNIQUE_RNM,       // radiosity normal mapping, Green 2007 Listing 1 (K = 3: rnm colours)
+    Ssbump = HEMI_TECHNIQUE_SSBUMP, // self-shadowed bump map in the normal slot, Listing 2 (K = 3)
+    RnmAo = HEMI_TECHNIQUE_RNM_AO,  // Listing 1 times the material's occlusion texture (Green's baseline)
     // Heidrich & Seidel 1999, with the environment source (render::EnvironmentLighting), world frame:
-    Factored = HEMI_TECHNIQUE_FACTORED,     // Torrance-Sparrow from its factor tables for the dynamic lights
-    Banks = HEMI_TECHNIQUE_BANKS,           // Banks' anisotropic model from its table for the dynamic lights
-    EnvMirror = HEMI_TECHNIQUE_ENV_MIRROR,  // Fresnel-weighted mirror reflection of the parabolic map + diffuse
-    EnvGlossy = HEMI_TECHNIQUE_ENV_GLOSSY,  // the prefiltered glossy map at the reflection vector + diffuse
+    Factored = HEMI_TECHNIQUE_FACTORED, // Torrance-Sparrow from its factor tables for the dynamic lights
+    Banks = HEMI_TECHNIQUE_BANKS,       // Banks' anisotropic model from its table for the dynamic lights
+    EnvMirror =
+        HEMI_TECHNIQUE_ENV_MIRROR, // Fresnel-weighted mirror reflection of the parabolic map + diffuse
+    EnvGlossy = HEMI_TECHNIQUE_ENV_GLOSSY, // the prefiltered glossy map at the reflection vector + diffuse
 };
 
 enum class CoefficientSourceKind : uint32_t
 {
-    Vertex = HEMI_SOURCE_VERTEX,   // transfer or CPCA pass output, interpolated across triangles
-    Texel = HEMI_SOURCE_TEXEL,     // coefficient textures sampled at TEXCOORD_1
-    Uniform = HEMI_SOURCE_UNIFORM, // one set of coefficients for the whole object (an SH probe)
+    Vertex = HEMI_SOURCE_VERTEX,           // transfer or CPCA pass output, interpolated across triangles
+    Texel = HEMI_SOURCE_TEXEL,             // coefficient textures sampled at TEXCOORD_1
+    Uniform = HEMI_SOURCE_UNIFORM,         // one set of coefficients for the whole object (an SH probe)
     Environment = HEMI_SOURCE_ENVIRONMENT, // parabolic environment maps and BRDF tables (EnvironmentLighting)
 };
 
@@ -81,12 +82,12 @@ struct RenderTargetDesc
 {
     VkRenderPass render_pass = VK_NULL_HANDLE;
     uint32_t subpass = 0;
-    uint32_t color_attachments = 1;      // render pass: colour attachments of the subpass
-    std::vector<VkFormat> color_formats; // dynamic rendering: one per colour attachment
+    uint32_t color_attachments = 1;              // render pass: colour attachments of the subpass
+    std::vector<VkFormat> color_formats;         // dynamic rendering: one per colour attachment
     VkFormat depth_format = VK_FORMAT_UNDEFINED; // dynamic rendering: UNDEFINED = no depth attachment
-    // Colour attachment 1 receives (u, v, draw id, 1) where the mesh covers the pixel (hemi's OffscreenTarget;
-    // shared::DrawPush::draw_id, e.g. PrtModel's primitive index + 1);
-    // otherwise only attachment 0 is written (further attachments are left undefined where drawn).
+    // Colour attachment 1 receives (u, v, draw id, 1) where the mesh covers the pixel (hemi's
+    // OffscreenTarget; shared::DrawPush::draw_id, e.g. PrtModel's primitive index + 1); otherwise only
+    // attachment 0 is written (further attachments are left undefined where drawn).
     bool aux_output = false;
     VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
     bool depth_test = true;
@@ -98,15 +99,16 @@ struct RenderTargetDesc
 struct MaterialType
 {
     MaterialKey key;
-    uint32_t k = 0;      // coefficients the basis takes
+    uint32_t k = 0;       // coefficients the basis takes
     gpu::Program program; // pipeline + layout (sets 0-2 of the system's shared layouts, shared::DrawPush)
 };
 
 class MaterialSystem
 {
-public:
+  public:
     // `cache` is the host's VkPipelineCache (or null); it must outlive the system.
-    MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target, VkPipelineCache cache = VK_NULL_HANDLE);
+    MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
+                   VkPipelineCache cache = VK_NULL_HANDLE);
     ~MaterialSystem();
     MaterialSystem(const MaterialSystem&) = delete;
     MaterialSystem& operator=(const MaterialSystem&) = delete;
@@ -121,7 +123,8 @@ public:
     VkDescriptorSetLayout material_layout() const { return material_layout_; }
     VkDescriptorSetLayout source_layout(CoefficientSourceKind kind) const;
 
-    // The bindings of each set, for descriptor pools (frame_set.h, material_instance.h, coefficient_source.h).
+    // The bindings of each set, for descriptor pools (frame_set.h, material_instance.h,
+    // coefficient_source.h).
     static std::vector<gpu::Binding> frame_bindings();
     static std::vector<gpu::Binding> material_bindings();
     static std::vector<gpu::Binding> source_bindings(CoefficientSourceKind kind);
@@ -129,7 +132,7 @@ public:
     const gpu::Device& device() const { return *device_; }
     const RenderTargetDesc& target() const { return target_; }
 
-private:
+  private:
     const gpu::Device* device_;
     RenderTargetDesc target_;
     VkPipelineCache cache_;

@@ -18,7 +18,7 @@ namespace hemi::render
 // are the two sources; the materials take either.
 class CoefficientSource
 {
-public:
+  public:
     virtual ~CoefficientSource() = default;
     // Records the lighting update and the compute work. The caller orders later reads of coefficients()
     // with a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.

@@ -19,7 +19,7 @@ namespace hemi::render
 // projections. The per-frame memory traffic per vertex is V weights instead of K * L matrix elements.
 class CpcaTransferPass : public CoefficientSource
 {
-public:
+  public:
     // Throws std::invalid_argument on inconsistent sizes, a cluster out of range or a non-finite value, and
     // std::runtime_error when the data exceed the device's storage-buffer range or texel-buffer size.
     // `instances` and `upload` as for TransferPass.
@@ -38,7 +38,7 @@ public:
     uint32_t instances() const override;
     uint64_t instance_stride() const override;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -1,5 +1,6 @@
 #pragma once
-// Transfer matrices as the per-frame passes read them: dense, in hemi's block layout, or compressed with CPCA.
+// Transfer matrices as the per-frame passes read them: dense, in hemi's block layout, or compressed with
+// CPCA.
 //
 // The per-frame PRT transfer multiply, c_v = T_v * l (Sloan 2006, Sec. 2): on the Vulkan device
 // (TransferPass) and on the host (transfer_multiply_host), over one shared data layout.
@@ -22,7 +23,7 @@ namespace hemi::render
 // The last block is padded with zero matrices.
 class TransferMatrices
 {
-public:
+  public:
     // `row_major` holds N matrices one after another, each K x L row-major (element (k, j) at k*L + j).
     // Throws std::invalid_argument when N is 0, K is not in [1, 9], L is not a square in [1, 36], the
     // span's size is not N*K*L, or a value is not finite.
@@ -42,7 +43,7 @@ public:
 
     static constexpr uint32_t kBlockVertices = 32;
 
-private:
+  private:
     uint32_t n_, k_, l_, blocks_;
     std::vector<float> data_;
 };

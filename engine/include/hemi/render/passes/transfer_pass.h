@@ -18,7 +18,7 @@ namespace hemi::render
 // the compute pipeline; one dispatch per segment of at most maxTexelBufferElements texels.
 class TransferPass : public CoefficientSource
 {
-public:
+  public:
     // `max_view_texels` bounds the texels of one texel-buffer view (and so one dispatch's segment);
     // 0 means the device's maxTexelBufferElements. Smaller values exist to exercise segmenting in tests.
     // `instances` objects can be relit per frame from the one copy of the matrices. With `upload`, the
@@ -47,7 +47,7 @@ public:
     uint32_t instances() const override;
     uint64_t instance_stride() const override;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -15,7 +15,7 @@ namespace hemi::render
 
 class GpuMesh
 {
-public:
+  public:
     // The mesh needs a normal, tangent and UV per vertex and a non-empty triangle list with indices in
     // range (TEXCOORD_1 is optional: zeros when absent); throws std::invalid_argument naming the problem.
     // The vertex and index data are written now or staged in `upload` (record it before the first draw).
@@ -31,7 +31,7 @@ public:
     uint32_t vertex_count() const { return vertex_count_; }
     uint32_t index_count() const { return index_count_; }
 
-private:
+  private:
     gpu::Buffer vertices_, indices_;
     uint32_t vertex_count_ = 0, index_count_ = 0;
 };

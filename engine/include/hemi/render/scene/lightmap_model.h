@@ -44,20 +44,21 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
 
 class LightmapModel
 {
-public:
+  public:
     // `asset` must outlive the model. Loads each of `techniques` (outputs of the asset). Uploads go into
     // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
-    LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
-                  gpu::UploadBatch& upload);
+    LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
+                  const std::vector<std::string>& techniques, gpu::UploadBatch& upload);
     ~LightmapModel();
 
     // Inside the caller's render pass: every primitive with its material, lit by `technique` (one of those
     // loaded), under `model`.
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique, const glm::mat4& model) const;
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
+              const glm::mat4& model) const;
 
     const io::LightmapAsset& asset() const { return *asset_; }
 
-private:
+  private:
     const io::LightmapAsset* asset_;
     std::vector<std::string> names_;
     std::unique_ptr<SceneSurfaces> surfaces_; // variant i draws technique names_[i]

@@ -25,7 +25,7 @@ namespace hemi::render
 
 class ProbeObject
 {
-public:
+  public:
     // The mesh, images and materials must outlive the object. Throws std::invalid_argument for no instances.
     ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                 const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
@@ -40,7 +40,7 @@ public:
 
     uint32_t instances() const { return uint32_t(probes_.size()); }
 
-private:
+  private:
     SceneSurfaces surfaces_;
     std::vector<std::unique_ptr<ProbeCoefficients>> probes_;
 };

@@ -6,7 +6,8 @@
 // from the one copy of the matrices.
 //
 // Conventions: hemi's world is z up; baked assets are in glTF's y-up scene space and are usually placed in
-// the world by gltf_to_world() (glTF +y becomes world +z). Lighting is world-space SH (math/sh_environment.h).
+// the world by gltf_to_world() (glTF +y becomes world +z). Lighting is world-space SH
+// (math/sh_environment.h).
 
 #include <hemi/gpu/upload.h>
 #include <hemi/io/prt_asset.h>
@@ -21,8 +22,8 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
-#include <memory>
 #include <hemi/math/camera.h>
+#include <memory>
 
 #include <span>
 #include <string>
@@ -37,8 +38,8 @@ using math::gltf_to_world;
 // `world_lighting` (SH of order >= `order`, truncated) turned by `rotate_degrees` about world z, then seen
 // in the object frame of `model` (a rotation, uniform scale and translation): what that object's transfer
 // matrices multiply.
-std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order, const glm::mat4& model,
-                                       float rotate_degrees = 0.0f);
+std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting, int order,
+                                       const glm::mat4& model, float rotate_degrees = 0.0f);
 
 struct PrtModelDesc
 {
@@ -57,12 +58,13 @@ struct PrtInstance
 
 class PrtModel
 {
-public:
+  public:
     // `asset` must outlive the model. Compiles (or finds in `system`) the material type of every primitive.
     // Uploads go into `upload` (record it, or submit_and_wait(), before the first frame). Throws
     // std::invalid_argument when the asset lacks the technique (or its CPCA data), io::FormatError when one
     // of its images is corrupt.
-    PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc, gpu::UploadBatch& upload);
+    PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
+             gpu::UploadBatch& upload);
     ~PrtModel();
 
     // Outside a render pass: the lighting of instances.size() <= desc.instances objects rotated into their
@@ -81,7 +83,7 @@ public:
     const GpuMesh& mesh() const { return surfaces_.mesh(); }
     size_t material_count() const { return surfaces_.material_count(); }
 
-private:
+  private:
     MaterialSystem* system_;
     const io::PrtAsset* asset_;
     const math::BasisDesc* basis_;

@@ -23,10 +23,10 @@ namespace hemi::render
 
 struct LightmapFrame
 {
-    std::string technique;         // one of the view's techniques
+    std::string technique; // one of the view's techniques
     PrtCamera camera;
     glm::mat4 model = gltf_to_world();
-    bool white = false;            // albedo 1: the lighting-only view (E / pi)
+    bool white = false; // albedo 1: the lighting-only view (E / pi)
     // Dynamic objects: grey spheres (albedo 0.8), centre xyz and radius w in world space, each lit by the
     // asset's light probes at its centre (render::probe_lighting) in the same render pass as the level. At
     // most LightmapView::kMaxSpheres; the asset must have probes. The view's depth range is the level's
@@ -39,11 +39,11 @@ struct LightmapFrame
 
 class LightmapView
 {
-public:
-    // `asset` must outlive the view. Loads `techniques` (outputs of the asset; std::invalid_argument names one
-    // it lacks).
-    LightmapView(const gpu::Device& device, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
-                 uint32_t width, uint32_t height);
+  public:
+    // `asset` must outlive the view. Loads `techniques` (outputs of the asset; std::invalid_argument names
+    // one it lacks).
+    LightmapView(const gpu::Device& device, const io::LightmapAsset& asset,
+                 const std::vector<std::string>& techniques, uint32_t width, uint32_t height);
     ~LightmapView();
 
     static constexpr uint32_t kMaxSpheres = 16;
@@ -55,7 +55,7 @@ public:
     MaterialSystem& materials() { return view_.system(); }
     LightmapModel& model() { return *model_; }
 
-private:
+  private:
     const io::LightmapAsset* asset_;
     ViewTarget view_;
     std::unique_ptr<LightmapModel> model_;

@@ -16,7 +16,7 @@ namespace hemi::render
 
 class OffscreenTarget
 {
-public:
+  public:
     OffscreenTarget(const gpu::Device& device, uint32_t width, uint32_t height);
 
     // Begins the render pass (clearing colour to `clear`, aux to 0, depth to 1) and sets viewport/scissor.
@@ -34,7 +34,7 @@ public:
     io::ImageRgba read_color() const;
     io::ImageRgba read_aux() const;
 
-private:
+  private:
     io::ImageRgba read(const gpu::Image& image) const;
 
     const gpu::Device* device_;

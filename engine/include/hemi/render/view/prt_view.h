@@ -13,10 +13,10 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
-#include <hemi/render/view/offscreen.h>
-#include <hemi/render/view/view_target.h>
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/transfer.h>
+#include <hemi/render/view/offscreen.h>
+#include <hemi/render/view/view_target.h>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -45,13 +45,13 @@ struct PrtFrame
     std::vector<glm::vec3> world_lighting; // SH of the asset's order (or higher: truncated)
     float rotate_degrees = 0.0f;           // the environment turns about world z
     PrtCamera camera;
-    glm::mat4 model = gltf_to_world();     // a rotation; the lighting is rotated by its inverse
-    bool white = false;                    // albedo 1: the lighting-only view
+    glm::mat4 model = gltf_to_world(); // a rotation; the lighting is rotated by its inverse
+    bool white = false;                // albedo 1: the lighting-only view
 };
 
 class PrtView
 {
-public:
+  public:
     // `asset` must outlive the view; it is self-contained (its images travel inside it: a corrupt one is an
     // io::FormatError naming it). `cpca` selects the CPCA data of the technique (std::invalid_argument when
     // the asset has none).
@@ -78,7 +78,7 @@ public:
     MaterialSystem& materials() { return view_.system(); }
     PrtModel& model() { return *model_; }
 
-private:
+  private:
     const io::PrtAsset* asset_;
     ViewTarget view_;
     std::unique_ptr<PrtModel> model_;

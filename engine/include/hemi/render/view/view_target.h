@@ -21,15 +21,15 @@ using PrtCamera = math::Camera; // math/camera.h
 
 class ViewTarget
 {
-public:
+  public:
     ViewTarget(const gpu::Device& device, uint32_t width, uint32_t height);
 
     // Outside a render pass: the frame set for `camera` looking at `mesh` under `model` (near and far planes
     // around its bounds, which are recomputed only when `model` changes), albedo 1 when `white`.
     // `lighting` carries the dynamic lights and their specular term (its view_projection, eye and
     // lighting_only are set here).
-    void record_frame(VkCommandBuffer cmd, const PrtCamera& camera, const io::Mesh& mesh, const glm::mat4& model,
-                      bool white, const FrameData& lighting = {});
+    void record_frame(VkCommandBuffer cmd, const PrtCamera& camera, const io::Mesh& mesh,
+                      const glm::mat4& model, bool white, const FrameData& lighting = {});
     // The target's colour with alpha = coverage (1 where the asset is), after a submitted frame.
     io::ImageRgba read() const;
 
@@ -38,7 +38,7 @@ public:
     VkDescriptorSet frame() const { return frame_set_.set(); }
     const gpu::Device& device() const { return *device_; }
 
-private:
+  private:
     const gpu::Device* device_;
     OffscreenTarget target_;
     MaterialSystem system_;
