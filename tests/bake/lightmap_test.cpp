@@ -15,9 +15,12 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <glm/common.hpp>
+#include <glm/exponential.hpp>
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <set>
 
@@ -126,6 +129,73 @@ TEST(LightmapAtlas, ConservativeCoverageSamplesTheSurfaceInsideEachFootprint)
     }
     EXPECT_GT(grazed, 10u) << "the edges' texels are covered conservatively";
     EXPECT_LE(a.texels.size(), touched.size() + 8) << "only texels the triangle touches";
+}
+
+// A texel the triangle only grazes (its centre outside the triangle) samples the centroid of the triangle's
+// part inside its square (docs/lightmaps.md): against this test's own centroid of that part, the mean of a
+// 256 x 256 grid of points of the square that lie in the triangle (within 0.01 texel; parts too small for
+// the grid to measure, under 1% of the square, are left out). The vertices' mean of the clipped polygon, the
+// point nearest the centre or the triangle's own centroid miss.
+TEST(LightmapAtlas, GrazedTexelsSampleTheCentroidOfTheirPart)
+{
+    Mesh m;
+    const glm::dvec2 uv[3] = {{0.1, 0.1}, {0.93, 0.17}, {0.31, 0.86}};
+    for (int k = 0; k < 3; ++k)
+    {
+        m.positions.emplace_back(float(uv[k].x) * 3.0f, float(uv[k].y) * 3.0f, 0.5f);
+        m.normals.emplace_back(0, 0, 1);
+        m.tangents.emplace_back(1, 0, 0, 1);
+        m.uvs.emplace_back(uv[k]);
+        m.uvs1.emplace_back(uv[k]);
+    }
+    m.indices = {0, 1, 2};
+    const uint32_t size = 16;
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, size, size, report);
+    auto inside = [&](const glm::dvec2& p)
+    {
+        double sign = 0.0;
+        for (int e = 0; e < 3; ++e)
+        {
+            const glm::dvec2 d = uv[(e + 1) % 3] - uv[e], q = p - uv[e];
+            const double c = d.x * q.y - d.y * q.x;
+            if (c * sign < 0.0)
+                return false;
+            sign = c != 0.0 ? c : sign;
+        }
+        return true;
+    };
+    int checked = 0;
+    double worst = 0.0;
+    for (const LightmapTexel& t : a.texels)
+    {
+        if (t.centre_inside)
+            continue;
+        const int n = 256;
+        glm::dvec2 sum(0.0);
+        int count = 0;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j)
+            {
+                const glm::dvec2 p((t.x + (i + 0.5) / n) / size, (t.y + (j + 0.5) / n) / size);
+                if (inside(p))
+                {
+                    sum += p;
+                    ++count;
+                }
+            }
+        if (count < n * n / 100)
+            continue;
+        const glm::dvec2 centroid = sum / double(count) * double(size);
+        const glm::dvec3 b(t.barycentric);
+        const glm::dvec2 sample = (b.x * uv[0] + b.y * uv[1] + b.z * uv[2]) * double(size);
+        worst = std::max(worst, glm::length(sample - centroid));
+        EXPECT_NEAR(sample.x, centroid.x, 0.01) << "texel (" << t.x << ", " << t.y << ")";
+        EXPECT_NEAR(sample.y, centroid.y, 0.01) << "texel (" << t.x << ", " << t.y << ")";
+        ++checked;
+    }
+    EXPECT_GT(checked, 20);
+    std::printf("grazed texels: %d checked, worst distance from the centroid %.4f texel\n", checked, worst);
 }
 
 TEST(LightmapAtlas, ReportsOverlapsOutsideUvsDegenerateTrianglesAndDensity)
@@ -312,6 +382,58 @@ TEST(LightmapBake, PlaneUnderOneDirectionalLightMatchesItsProjection)
     EXPECT_NEAR(lightmap_coefficients("plain", sh.irradiance[0])[0].x, plain, 1e-5);
 }
 
+// The rnm output's three colours under one point sun (uniform light makes them equal by symmetry): colour i
+// is the SH9 irradiance towards B_i times 2 / (1 + B_i.z), B_i.z = 1 / sqrt 3 (lightmap_bake.h). The
+// directions are typed here in Valve's order (Source's bumpBasis): B_0 = (sqrt(2/3), 0, 1/sqrt 3), B_1 =
+// (-1/sqrt 6, 1/sqrt 2, 1/sqrt 3), B_2 = (-1/sqrt 6, -1/sqrt 2, 1/sqrt 3). The sun at l projects to E A_l
+// y_lm(l), so colour i is exactly E sum_lm A_l y_lm(l) y_lm(B_i) times the factor (1e-5), and within the SH9
+// truncation (0.06 E here) of the clamped cosine E max(0, B_i.l) times the factor. The sun's three B_i.l
+// differ (0.86, 0.48, -0.16) and so do its channels, so swapped or mirrored directions, a missing factor or a
+// channel mix-up fail.
+TEST(LightmapBake, RnmColoursFollowTheSunPerDirection)
+{
+    const Mesh m = plane(2);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 8, 8, report);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.5f, 0.4f, 0.6f));
+    lights.sun_irradiance = glm::vec3(2.0f, 1.0f, 0.5f);
+    lights.sun_diameter_degrees = 0.0f;
+    LightmapBakeOptions o;
+    o.rays = 8;
+    o.sun_rays = 4;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    const double s3 = 1.0 / std::sqrt(3.0), factor = 2.0 / (1.0 + s3);
+    const glm::dvec3 b[3] = {{std::sqrt(2.0 / 3.0), 0.0, s3},
+                             {-1.0 / std::sqrt(6.0), 1.0 / std::sqrt(2.0), s3},
+                             {-1.0 / std::sqrt(6.0), -1.0 / std::sqrt(2.0), s3}};
+    const glm::dvec3 l(lights.sun_direction); // the plane's tangent frame is the world's
+    const std::array<double, 9> yl = sh9(l);
+    for (size_t t = 0; t < a.texels.size(); ++t)
+    {
+        const std::vector<glm::vec3> rnm = lightmap_coefficients("rnm", sh.irradiance[t]);
+        ASSERT_EQ(rnm.size(), 3u);
+        for (int i = 0; i < 3; ++i)
+        {
+            const std::array<double, 9> yb = sh9(b[i]);
+            double sh_route = 0.0;
+            for (int j = 0; j < 9; ++j)
+                sh_route += kA[j] * yl[size_t(j)] * yb[size_t(j)];
+            const double cosine = std::max(0.0, glm::dot(b[i], l));
+            for (int c = 0; c < 3; ++c)
+            {
+                const double e = lights.sun_irradiance[c];
+                ASSERT_NEAR(rnm[size_t(i)][c], e * factor * sh_route, 1e-5 * e)
+                    << "texel " << t << " direction " << i << " channel " << c;
+                ASSERT_NEAR(rnm[size_t(i)][c], e * factor * cosine, 0.06 * e)
+                    << "texel " << t << " direction " << i << " channel " << c;
+            }
+        }
+    }
+}
+
 // Done-when line 3: a sealed room lit only from outside stays black inside.
 TEST(LightmapBake, SealedRoomLitFromOutsideStaysBlack)
 {
@@ -382,10 +504,21 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
     o.checkpoint_seconds = 0.0;
     o.rays = 8192; // slices of 256 texels
     const LightmapSh first = bake_lightmap_sh(m, a, lights, o);
-    const LightmapSh again = bake_lightmap_sh(m, a, lights, o);
+    // The last save is after the second slice (512 of 576 texels; none after the last): the resumed bake
+    // traces only the last 64 texels and never reports fewer than 512 done.
+    std::vector<uint64_t> done;
+    const LightmapSh again = bake_lightmap_sh(
+        m, a, lights, o, nullptr, [&](const LightmapProgress& p) { done.push_back(p.texels_done); });
     EXPECT_TRUE(again.resumed);
     EXPECT_EQ(0, std::memcmp(first.irradiance.data(), again.irradiance.data(),
                              first.irradiance.size() * sizeof(first.irradiance[0])));
+    ASSERT_EQ(a.texels.size(), 576u);
+    EXPECT_EQ(again.rays, first.rays / 9) << "the finished 512 texels are not traced again";
+    ASSERT_FALSE(done.empty());
+    EXPECT_EQ(done.front(), 512u);
+    for (uint64_t d : done)
+        EXPECT_GE(d, 512u);
+    EXPECT_EQ(done.back(), 576u);
     remove_checkpoint(o.checkpoint);
 
     // A chart in the middle of the atlas: the ring around it takes its neighbours' values.
@@ -400,6 +533,73 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
     EXPECT_LT(s.texel_of[2 * 16 + 2], 0);
     EXPECT_GT(maps[(2 * 16 + 2) * 3], 0.5f) << "two texels out from the chart";
     EXPECT_EQ(maps[(0 * 16 + 0) * 3], 0.0f) << "beyond the dilation";
+}
+
+// The sun's disc: a roof z = 1 over x < 0 hides a sun straight above from the floor's left half. A sun of
+// diameter D lights a texel at x a fraction of the open floor's irradiance that is the part of its disc on
+// the open side of the roof's edge, seen at the angle a = atan(x / 1) from the disc's centre: for a disc of
+// angular radius R = D / 2, 1 - s(a / R) with s(t) = (acos t - t sqrt(1 - t^2)) / pi the segment beyond a
+// chord at t (and s(-t) = 1 - s(t)). The texels next to the edge (x = +-0.0625: a = 3.6 deg) get 0.91 and
+// 0.09 of it at D = 10 deg, within 0.04 (1024 rays; measured below), where a point sun (D = 0) gives 1 and 0
+// and a disc taken as 10 deg in radius 0.72 and 0.28; texels farther than R from the edge get all or nothing.
+TEST(LightmapBake, SunDiameterSetsThePenumbra)
+{
+    Mesh m = plane(4);
+    add_quad(m, {-3, -3, 1}, {-3, 3, 1}, {0, 3, 1}, {0, -3, 1}, {0.0f, 0.0f, 0.1f, 0.0f}); // facing down
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 16, 16, report);
+    ASSERT_EQ(a.texels.size(), 256u);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::vec3(0.0f, 0.0f, 1.0f);
+    lights.sun_irradiance = glm::vec3(1.0f, 2.0f, 3.0f);
+    LightmapBakeOptions o;
+    o.rays = 4;
+    o.sun_rays = 1024;
+    auto segment = [](double t)
+    {
+        t = std::clamp(t, -1.0, 1.0);
+        return (std::acos(t) - t * std::sqrt(1.0 - t * t)) / M_PI;
+    };
+    for (const float diameter : {0.0f, 10.0f})
+    {
+        lights.sun_diameter_degrees = diameter;
+        const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+        const double r = 0.5 * double(diameter) * M_PI / 180.0;
+        // The open floor's irradiance: the mean over the texels at x > 0.5 (all of the disc in view).
+        glm::dvec3 open(0.0);
+        int n_open = 0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            if (a.texels[i].position.x > 0.5f)
+            {
+                open += glm::dvec3(lightmap_coefficients("plain", sh.irradiance[i])[0]);
+                ++n_open;
+            }
+        open /= double(n_open);
+        double worst = 0.0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+        {
+            const double x = a.texels[i].position.x, angle = std::atan(x);
+            const double expected = diameter == 0.0f ? (x > 0 ? 1.0 : 0.0) : 1.0 - segment(angle / r);
+            const glm::dvec3 e(lightmap_coefficients("plain", sh.irradiance[i])[0]);
+            for (int c = 0; c < 3; ++c)
+            {
+                const double share = e[c] / open[c];
+                worst = std::max(worst, std::abs(share - expected));
+                EXPECT_NEAR(share, expected, 0.04)
+                    << "diameter " << diameter << " texel at x = " << x << " channel " << c;
+            }
+        }
+        std::printf("sun of %.0f deg: worst share off the disc's by %.4f\n", double(diameter), worst);
+        // The penumbra is really there at 10 degrees: the two columns beside the edge are partly lit.
+        if (diameter > 0.0f)
+        {
+            const size_t left = size_t(a.texel_of[5 * 16 + 7]), right = size_t(a.texel_of[5 * 16 + 8]);
+            EXPECT_GT(lightmap_coefficients("plain", sh.irradiance[left])[0].x, 0.05 * open.x);
+            EXPECT_LT(lightmap_coefficients("plain", sh.irradiance[right])[0].x, 0.95 * open.x);
+        }
+    }
 }
 
 // Done-when line 2: inside a closed box whose every surface emits radiance 1 with albedo 0.5, B bounces give
@@ -454,6 +654,48 @@ TEST(LightmapBake, ClosedRoomFurnaceAddsEachBounce)
     EXPECT_EQ(0, std::memcmp(first.irradiance.data(), again.irradiance.data(),
                              first.irradiance.size() * sizeof(first.irradiance[0])));
     remove_checkpoint(o.checkpoint);
+}
+
+// The closed-box furnace per channel, with colour and textures: inside a closed box whose walls emit em and
+// reflect albedo a, B bounces give E = pi em sum_{k=0..B} a^k in each channel, in every texel (0.2%, as
+// ClosedRoomFurnaceAddsEachBounce). First a coloured albedo factor (0.8, 0.5, 0.2) under a coloured emissive
+// factor; then a base colour texture of sRGB (128, 200, 32) under the factor (0.9, 0.8, 1) and an emissive
+// texture of sRGB (255, 128, 64) under the factor (0.5, 1, 2). The sRGB codes are decoded here (128 is
+// 0.2158; read as linear it would be 0.502), so a bake that skips the decoding, ignores a texture or a
+// factor, or mixes up channels misses.
+TEST(LightmapBake, ColouredAndTexturedClosedBoxBouncesPerChannel)
+{
+    const Mesh m = hemi::test::unit_box(true);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
+    ASSERT_TRUE(report.ok()) << report.problems[0];
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    const uint8_t base[3] = {128, 200, 32}, emissive[3] = {255, 128, 64};
+    const hemi::test::ColouredMaterial coloured({0.8f, 0.5f, 0.2f}, {1.0f, 2.0f, 0.5f});
+    const hemi::test::ColouredMaterial textured({0.9f, 0.8f, 1.0f}, {0.5f, 1.0f, 2.0f}, base, emissive);
+    EXPECT_NEAR(textured.albedo.x, 0.9 * 0.2158605, 1e-6) << "the test's own sRGB decoding";
+    for (const hemi::test::ColouredMaterial* mat : {&coloured, &textured})
+    {
+        const LightmapSurfaces surfaces(m, mat->materials, mat->images, primitives);
+        LightmapBakeOptions o;
+        o.rays = 256;
+        o.bounces = 2;
+        const LightmapSh sh = bake_lightmap_sh(m, a, lights, o, &surfaces);
+        glm::dvec3 expected(0.0);
+        for (int k = 0; k <= o.bounces; ++k)
+            expected += M_PI * mat->emission * glm::pow(mat->albedo, glm::dvec3(k));
+        glm::dvec3 worst(0.0);
+        for (size_t i = 0; i < a.texels.size(); ++i)
+        {
+            const glm::dvec3 e(lightmap_coefficients("plain", sh.irradiance[i])[0]);
+            worst = glm::max(worst, glm::abs(e / expected - 1.0));
+        }
+        for (int c = 0; c < 3; ++c)
+            EXPECT_LT(worst[c], 0.002) << (mat == &textured ? "textured" : "coloured") << " channel " << c
+                                       << " expected " << expected[c];
+    }
 }
 
 // glTF punctual lights: a point light's SH9 is its I / d^2 E y(d) from each texel's sample point (inverse
@@ -530,6 +772,86 @@ TEST(LightmapBake, PunctualLightsFollowGltfsFalloffs)
     }
     EXPECT_GT(lit_partly, 10) << "the spot's edge crosses the floor";
     EXPECT_GT(dark, 10) << "part of the floor is outside the spot's cone";
+}
+
+// Shadow rays of point and spot lights: a roof z = 1 over x < 0.2 (a point light) or x > 0 (a spot light)
+// hides the light from part of the floor. Texels whose line to the light meets the roof get exactly nothing;
+// the others get the open floor's I / d^2 E y(d) (spot: times glTF's cone factor), typed here as in
+// PunctualLightsFollowGltfsFalloffs, all three channels. Texels whose line passes within 0.02 of the roof's
+// edge are left out (the edge's rounding).
+TEST(LightmapBake, PointAndSpotLightsCastShadows)
+{
+    using T = hemi::io::PunctualLight::Type;
+    hemi::io::PunctualLight point;
+    point.type = T::Point;
+    point.color = glm::vec3(1.0f, 0.5f, 0.25f);
+    point.intensity = 10.0f;
+    point.position = glm::vec3(0.3f, -0.2f, 1.5f);
+    hemi::io::PunctualLight spot = point;
+    spot.type = T::Spot;
+    spot.color = glm::vec3(0.25f, 1.0f, 0.5f);
+    spot.position = glm::vec3(0.1f, 0.0f, 2.0f);
+    spot.direction = glm::vec3(0.0f, 0.0f, -1.0f);
+    spot.inner_cone = 0.3f;
+    spot.outer_cone = 0.6f;
+    for (const hemi::io::PunctualLight& l : {point, spot})
+    {
+        // The roof, facing down (single-sided: a shadow ray meets its front), in a zero-height cell of the
+        // atlas (geometry only).
+        const float x0 = l.type == T::Point ? -2.0f : 0.0f, x1 = l.type == T::Point ? 0.2f : 2.0f;
+        const float roof_z = 1.0f;
+        Mesh m = plane(2);
+        add_quad(m, {x0, -2, roof_z}, {x0, 2, roof_z}, {x1, 2, roof_z}, {x1, -2, roof_z},
+                 {0.0f, 0.0f, 0.1f, 0.0f});
+        LightmapUvReport report;
+        const LightmapAtlas a = rasterize_lightmap(m, 16, 16, report);
+        LightmapLights lights;
+        lights.uniform = glm::vec3(0.0f);
+        lights.punctual = {l};
+        LightmapBakeOptions o;
+        o.rays = 4;
+        const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+        int shadowed = 0, lit = 0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+        {
+            ASSERT_LT(a.texels[i].triangle, 8u) << "only the floor has texels";
+            const glm::dvec3 p(a.texels[i].position);
+            const glm::dvec3 to = glm::dvec3(l.position) - p;
+            // Where the line to the light crosses the roof's plane, and how far inside the roof that is.
+            const glm::dvec3 q = p + to * ((roof_z - p.z) / to.z);
+            const double inside = std::min({q.x - x0, x1 - q.x, q.y + 2.0, 2.0 - q.y});
+            if (std::abs(inside) < 0.02)
+                continue;
+            const double dist = glm::length(to);
+            const glm::dvec3 d = to / dist;
+            double e = l.intensity / (dist * dist);
+            if (l.type == T::Spot)
+            {
+                const double cd = glm::dot(glm::dvec3(l.direction), -d);
+                const double x =
+                    std::clamp((cd - std::cos(double(l.outer_cone))) /
+                                   (std::cos(double(l.inner_cone)) - std::cos(double(l.outer_cone))),
+                               0.0, 1.0);
+                e *= x * x;
+                if (x == 0.0)
+                    continue; // outside the cone: dark either way
+            }
+            const std::array<double, 9> y = sh9(d);
+            const bool blocked = inside > 0.0;
+            shadowed += blocked;
+            lit += !blocked;
+            for (int j = 0; j < 9; ++j)
+                for (int c = 0; c < 3; ++c)
+                {
+                    const double expected = blocked ? 0.0 : l.color[c] * e * kA[j] * y[size_t(j)];
+                    ASSERT_NEAR(sh.irradiance[i][size_t(j)][c], expected, 2e-5 * std::max(1.0, e))
+                        << "light " << int(l.type) << " texel " << i << " at " << p.x << "," << p.y
+                        << (blocked ? " (shadowed)" : " (lit)") << " coefficient " << j << " channel " << c;
+                }
+        }
+        EXPECT_GT(shadowed, 40) << "light " << int(l.type);
+        EXPECT_GT(lit, 40) << "light " << int(l.type);
+    }
 }
 
 // The sample's level (samples/irradiance_normalmap/level.h, also hemi-bench's): its lightmap charts do not
@@ -694,6 +1016,64 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
     }
 }
 
+// A texel still inside geometry after the push takes its valid neighbours' values. A closed box of outward
+// (single-sided) faces stands on the floor around the centres of 3 x 4 of its texels (x in [0.01, 0.365], y
+// in [0.01, 0.49], texels of 0.125; its walls off the texel edges, so that no push ray meets a corner exactly
+// at its reach): the ring of ten texels within reach of a wall is pushed out through it; the two in the
+// middle, (9, 5) and (9, 6), 1.4 texels from every wall, see only the box's inside (back faces) and are
+// invalid. In the output each takes the mean of its seven valid neighbours (the other invalid one does not
+// count), which is lit, where its own value is black.
+TEST(LightmapBake, TexelsLeftInsideGeometryTakeTheirValidNeighboursValues)
+{
+    Mesh m = plane(4);
+    int cell = 0;
+    const glm::vec3 lo(0.01f, 0.01f, -0.3f), hi(0.365f, 0.49f, 0.5f);
+    const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                            {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const auto& q : faces) // zero-height cells on row 0 of UV space: geometry only
+    {
+        const float u0 = 0.01f + 0.08f * float(cell++);
+        add_quad(m, c[q[0]], c[q[1]], c[q[2]], c[q[3]], {u0, 0.0f, u0 + 0.06f, 0.0f});
+    }
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 16, 16, report);
+    ASSERT_EQ(a.texels.size(), 256u);
+    LightmapLights lights; // uniform radiance 1
+    LightmapBakeOptions o;
+    o.rays = 64;
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
+    EXPECT_EQ(sh.pushed, 10u);
+    EXPECT_EQ(sh.invalid, 2u);
+    auto index = [&](uint32_t x, uint32_t y) { return size_t(a.texel_of[y * 16 + x]); };
+    auto plain = [&](uint32_t x, uint32_t y)
+    { return double(lightmap_coefficients("plain", sh.irradiance[index(x, y)])[0].x); };
+    const std::vector<float> maps = lightmap_maps("plain", a, sh);
+    for (uint32_t y : {5u, 6u})
+    {
+        EXPECT_EQ(sh.valid[index(9, y)], 0) << "row " << y;
+        EXPECT_EQ(plain(9, y), 0.0) << "row " << y << ": it sees only the box's inside";
+        double sum = 0.0;
+        int count = 0;
+        for (uint32_t ny = y - 1; ny <= y + 1; ++ny)
+            for (uint32_t nx = 8; nx <= 10; ++nx)
+                if ((nx != 9 || ny != y) && !(nx == 9 && (ny == 5 || ny == 6)))
+                {
+                    EXPECT_EQ(sh.valid[index(nx, ny)], 1) << nx << ", " << ny;
+                    sum += plain(nx, ny);
+                    ++count;
+                }
+        ASSERT_EQ(count, 7);
+        EXPECT_GT(sum / count, 0.2 * M_PI) << "the neighbours, pushed out of the box, see the sky";
+        EXPECT_NEAR(maps[(y * 16 + 9) * 3], sum / count, 1e-5) << "row " << y;
+    }
+    size_t valid = 0;
+    for (uint8_t v : sh.valid)
+        valid += v;
+    EXPECT_EQ(valid, 254u);
+}
+
 // Light probes: inside a closed box whose walls emit 1 with albedo 0.5, a lightmap of one bounce leaves the
 // walls' radiance at 1 + 0.5 (1 + 0.5) = 1.75, so every probe sees that from every direction: E(n) = 1.75 pi
 // for every n and no directional coefficients (0.5%: the lightmap's noise). A sun with no sky gives a probe
@@ -783,6 +1163,75 @@ TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
     EXPECT_FALSE(inside.valid[0]);
     hemi::io::LightProbes none;
     EXPECT_THROW(bake_light_probes(none, solid, sa, ssh, dark, po, nullptr), std::invalid_argument);
+}
+
+// --unwrap's chart rule and offset (docs/lightmaps.md): triangles join a chart while their normal stays
+// within 10 degrees of the chart's largest triangle's, so a floor with a second quad folded up by 9 degrees
+// along their shared edge is one chart and by 11 degrees two, and a chain of three quads folded by 6 degrees
+// each (the last 12 degrees from the first, the largest) is two; a chart starts a quarter texel into its
+// rectangle, so its smallest u and v lie a quarter texel past a texel edge (in texels), not on a texel edge
+// or centre.
+TEST(LightmapUnwrap, ChartsJoinWithinTenDegreesAndStartAQuarterTexelIn)
+{
+    // Quads along x, 1 wide in y; quad k + 1 turned up about the shared edge by fold(k) more than quad k.
+    auto folded = [](const std::vector<double>& folds, const std::vector<float>& lengths)
+    {
+        Mesh m;
+        glm::dvec3 p(0.0), dir(1, 0, 0);
+        for (size_t k = 0; k < lengths.size(); ++k)
+        {
+            if (k > 0)
+            {
+                const double a = folds[k - 1] * M_PI / 180.0;
+                dir = glm::dvec3(dir.x * std::cos(a) - dir.z * std::sin(a), 0.0,
+                                 dir.x * std::sin(a) + dir.z * std::cos(a));
+            }
+            const glm::dvec3 q = p + dir * double(lengths[k]);
+            add_quad(m, glm::vec3(p), glm::vec3(q), glm::vec3(q + glm::dvec3(0, 1, 0)),
+                     glm::vec3(p + glm::dvec3(0, 1, 0)), {0, 1, 1, 0});
+            p = q;
+        }
+        m.uvs1.clear();
+        return m;
+    };
+    hemi::bake::UnwrapOptions u;
+    u.texel_size = 0.1f;
+    struct Case
+    {
+        std::vector<double> folds;
+        std::vector<float> lengths;
+        size_t charts;
+    };
+    const Case cases[] = {{{9.0}, {2.0f, 1.0f}, 1},
+                          {{11.0}, {2.0f, 1.0f}, 2},
+                          {{6.0, 6.0}, {2.0f, 1.0f, 1.0f}, 2},
+                          {{-9.0}, {2.0f, 1.0f}, 1},
+                          {{-11.0}, {2.0f, 1.0f}, 2}};
+    for (const auto& [folds, lengths, charts] : cases)
+    {
+        Mesh m = folded(folds, lengths);
+        const hemi::bake::UnwrapResult r = hemi::bake::unwrap_lightmap(m, u);
+        EXPECT_EQ(r.charts, charts) << "folds " << folds[0] << " x " << folds.size();
+        if (folds.size() == 2 && r.chart_of.size() == 6)
+        {
+            EXPECT_EQ(r.chart_of[0], r.chart_of[2]) << "6 degrees from the largest quad: its chart";
+            EXPECT_NE(r.chart_of[0], r.chart_of[4]) << "12 degrees from it: a chart of its own";
+        }
+        // Every chart's corners at a quarter texel past a texel edge: the chart's smallest u and v, in
+        // texels.
+        ASSERT_EQ(m.uvs1.size(), m.positions.size());
+        for (size_t c = 0; c < r.charts; ++c)
+        {
+            glm::dvec2 lo(INFINITY);
+            for (size_t t = 0; t < r.chart_of.size(); ++t)
+                if (r.chart_of[t] == c)
+                    for (int e = 0; e < 3; ++e)
+                        lo = glm::min(lo, glm::dvec2(m.uvs1[m.indices[t * 3 + size_t(e)]]) *
+                                              glm::dvec2(r.width, r.height));
+            EXPECT_NEAR(lo.x - std::floor(lo.x), 0.25, 1e-3) << "chart " << c << " u " << lo.x;
+            EXPECT_NEAR(lo.y - std::floor(lo.y), 0.25, 1e-3) << "chart " << c << " v " << lo.y;
+        }
+    }
 }
 
 // --unwrap: planar charts at one texel density. The sample's level with its lightmap UVs removed unwraps

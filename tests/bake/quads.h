@@ -1,9 +1,17 @@
 #pragma once
 // Quads and planes for the lightmap and reference tests, with normal-map and lightmap UVs.
+#include <hemi/io/image.h>
+#include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
 #include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 namespace hemi::test
 {
@@ -66,5 +74,48 @@ inline io::Mesh unit_box(bool inward)
     }
     return m;
 }
+
+// An 8-bit sRGB code as linear, typed from the sRGB standard (IEC 61966-2-1): 128 is 0.2158 (not 0.502).
+inline double srgb_decode(int code)
+{
+    const double v = code / 255.0;
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+// One material for a whole closed box: a base colour factor times a base colour texture and an emissive
+// factor times an emissive texture, each texture (when given) one sRGB colour over 2 x 2 texels, and the
+// linear albedo and emission that gives, decoded here. Every channel differs.
+struct ColouredMaterial
+{
+    std::vector<io::Material> materials;
+    std::vector<io::EncodedImage> images;
+    glm::dvec3 albedo{0.0}, emission{0.0};
+
+    ColouredMaterial(glm::vec3 base_factor, glm::vec3 emissive_factor, const uint8_t* base_srgb = nullptr,
+                     const uint8_t* emissive_srgb = nullptr)
+    {
+        io::Material m;
+        m.base_color_factor = glm::vec4(base_factor, 1.0f);
+        m.emissive_factor = emissive_factor;
+        albedo = glm::dvec3(base_factor);
+        emission = glm::dvec3(emissive_factor);
+        auto texture = [&](const uint8_t* srgb, io::TextureRef& ref, glm::dvec3& value)
+        {
+            if (!srgb)
+                return;
+            io::ImageRgba8 image{2, 2, std::vector<uint8_t>(16, 255)};
+            for (size_t i = 0; i < 16; ++i)
+                if (i % 4 != 3)
+                    image.pixels[i] = srgb[i % 4];
+            ref.image = int(images.size());
+            images.push_back(
+                {"texture " + std::to_string(images.size()), "image/png", io::encode_png(image)});
+            value *= glm::dvec3(srgb_decode(srgb[0]), srgb_decode(srgb[1]), srgb_decode(srgb[2]));
+        };
+        texture(base_srgb, m.base_color, albedo);
+        texture(emissive_srgb, m.emissive, emission);
+        materials.push_back(m);
+    }
+};
 
 } // namespace hemi::test

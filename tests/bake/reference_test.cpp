@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <glm/exponential.hpp>
 #include <glm/geometric.hpp>
 
 #include <cmath>
@@ -182,6 +183,53 @@ TEST(Reference, ClosedBoxFurnaceAddsEachBounce)
             EXPECT_GT(covered, 100) << "the box fills the auto camera's view";
             EXPECT_LT(r.noise, 1e-4);
         }
+}
+
+// The closed box per channel, with colour and textures: walls that emit em and reflect albedo a give, along a
+// path of B bounces, E / pi = em sum_{k=0..B} a^k (the white view) and em + a E / pi (the colour view), in
+// each channel. A coloured albedo factor (0.8, 0.5, 0.2) under a coloured emissive factor; then a base colour
+// texture of sRGB (128, 200, 32) under the factor (0.9, 0.8, 1) and an emissive texture of sRGB
+// (255, 128, 64) under the factor (0.5, 1, 2), decoded here (128 is 0.2158; read as linear, 0.502).
+TEST(Reference, ColouredAndTexturedClosedBoxPerChannel)
+{
+    const Mesh m = hemi::test::unit_box(true);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    const uint8_t base[3] = {128, 200, 32}, emissive[3] = {255, 128, 64};
+    const hemi::test::ColouredMaterial coloured({0.8f, 0.5f, 0.2f}, {1.0f, 2.0f, 0.5f});
+    const hemi::test::ColouredMaterial textured({0.9f, 0.8f, 1.0f}, {0.5f, 1.0f, 2.0f}, base, emissive);
+    for (const hemi::test::ColouredMaterial* mat : {&coloured, &textured})
+    {
+        const LightmapSurfaces surfaces(m, mat->materials, mat->images, primitives);
+        for (int bounces : {0, 2})
+            for (bool white : {true, false})
+            {
+                ReferenceOptions o;
+                o.width = o.height = 12;
+                o.model = glm::mat4(1.0f);
+                o.rays = 8;
+                o.bounces = bounces;
+                o.white = white;
+                const ReferenceImage r = render_reference(m, surfaces, lights, o);
+                glm::dvec3 e(0.0);
+                for (int k = 0; k <= bounces; ++k)
+                    e += mat->emission * glm::pow(mat->albedo, glm::dvec3(k));
+                const glm::dvec3 expected = white ? e : mat->emission + mat->albedo * e;
+                int covered = 0;
+                for (uint32_t y = 0; y < 12; ++y)
+                    for (uint32_t x = 0; x < 12; ++x)
+                        if (r.image.at(x, y)[3] == 1.0f)
+                        {
+                            ++covered;
+                            for (int c = 0; c < 3; ++c)
+                                ASSERT_NEAR(r.image.at(x, y)[c], expected[c], 1e-4 * expected[c])
+                                    << (mat == &textured ? "textured" : "coloured") << " " << bounces
+                                    << " bounces, white " << white << ", channel " << c;
+                        }
+                EXPECT_GT(covered, 50);
+            }
+    }
 }
 
 // The same seed gives the same bytes on one thread and on all of them; bad options are refused.

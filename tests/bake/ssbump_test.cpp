@@ -325,8 +325,10 @@ TEST(Ssbump, VGrooveOcclusionMatchesAnalyticVisibility)
 }
 
 // Done-when line 2: the bake's occlusion equals a brute-force ray cast against the height-field triangles at
-// sampled texels (the borders among them), tiling and not, with the bake's own rays: ray for ray, so the
-// only differences are rays that graze an edge within rounding.
+// sampled texels (the borders among them), tiling and not, with the bake's own rays: ray for ray, every texel
+// within 1e-5 (the README's figure). Measured: every texel of this map in all four configurations (not only
+// the sampled ones) within 5e-8, the float rounding of the stored occlusion; no ray differs. One ray of 300
+// differing would move a texel by about 0.003.
 TEST(Ssbump, OcclusionEqualsBruteForceRayCast)
 {
     const HeightField f = rough(24, 20, 3);
@@ -340,7 +342,7 @@ TEST(Ssbump, OcclusionEqualsBruteForceRayCast)
             o.rays = 300;
             const SsbumpMap m = bake_ssbump(f, o);
             const BruteForce brute{f, o.scale, o.epsilon, distance > 0.0f ? distance : 24.0, wrap};
-            int texels = 0, off = 0;
+            int texels = 0;
             double occluded = 0.0;
             for (uint32_t y : {0u, 1u, 7u, 19u})
                 for (uint32_t x : {0u, 5u, 12u, 23u})
@@ -348,12 +350,11 @@ TEST(Ssbump, OcclusionEqualsBruteForceRayCast)
                     const glm::dvec3 ref = brute.occlusion(x, y, o.seed, o.rays);
                     const glm::dvec3 got(m.occlusion[y * f.width + x]);
                     const double diff = glm::length(ref - got);
-                    EXPECT_LT(diff, 0.01) << "texel (" << x << ", " << y << ") wrap " << wrap;
-                    off += diff > 1e-5;
+                    EXPECT_LT(diff, 1e-5)
+                        << "texel (" << x << ", " << y << ") wrap " << wrap << " distance " << distance;
                     ++texels;
                     occluded += 3.0 - (ref.x + ref.y + ref.z);
                 }
-            EXPECT_LE(off, 1) << "wrap " << wrap << " distance " << distance;
             EXPECT_GT(occluded / texels, 0.3) << "the relief must occlude something to test";
         }
 }

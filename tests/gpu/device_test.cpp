@@ -16,10 +16,14 @@ class DeviceTest : public hemi::test::GpuTest
 {
 };
 
+// The host instance's messenger: the layer's messages fail the test, the loader's notes about the setup (e.g.
+// that VK_LOADER_LAYERS_ENABLE forced the layer on) do not, by the same test hemi's own messenger uses.
 VKAPI_ATTR VkBool32 VKAPI_CALL host_messenger(VkDebugUtilsMessageSeverityFlagBitsEXT,
-                                              VkDebugUtilsMessageTypeFlagsEXT,
+                                              VkDebugUtilsMessageTypeFlagsEXT types,
                                               const VkDebugUtilsMessengerCallbackDataEXT* data, void*)
 {
+    if (hemi::gpu::is_loader_message(types, data))
+        return VK_FALSE;
     hemi::test::validation_log().add(std::string("(host instance) ") + data->pMessage);
     return VK_FALSE;
 }
@@ -154,6 +158,38 @@ TEST_F(DeviceTest, AdoptsAHostEngineDevice)
     EXPECT_EQ(vkDeviceWaitIdle(vk_device), VK_SUCCESS);
     vkDestroyDevice(vk_device, nullptr);
     vkDestroyInstance(instance, nullptr);
+}
+
+// The host instance's messenger above drops the loader's notes and keeps the layer's findings: what
+// AdoptsAHostEngineDevice needs to pass with VK_LOADER_LAYERS_ENABLE=*validation* set and still fail on a
+// validation message. Messages made up here, shaped as the loader and the layer send them.
+TEST(DeviceValidation, HostMessengerDropsLoaderNotesOnly)
+{
+    hemi::test::validation_log().take();
+    VkDebugUtilsMessengerCallbackDataEXT loader{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
+    loader.pMessageIdName = "Loader Message";
+    loader.pMessage =
+        "Layer VK_LAYER_KHRONOS_validation forced enabled due to env var 'VK_LOADER_LAYERS_ENABLE'";
+    VkDebugUtilsMessengerCallbackDataEXT layer{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
+    layer.pMessageIdName = "VUID-VkBufferCreateInfo-usage-requiredbitmask";
+    layer.pMessage = "usage must not be 0";
+    const auto general = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT;
+    const auto validation = VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+    const auto warning = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT;
+    EXPECT_TRUE(hemi::gpu::is_loader_message(general, &loader));
+    EXPECT_FALSE(hemi::gpu::is_loader_message(validation, &loader))
+        << "the loader sends general messages only";
+    EXPECT_FALSE(hemi::gpu::is_loader_message(general, &layer));
+    EXPECT_FALSE(hemi::gpu::is_loader_message(validation, &layer));
+    EXPECT_FALSE(hemi::gpu::is_loader_message(general, nullptr));
+
+    host_messenger(warning, general, &loader, nullptr);
+    EXPECT_TRUE(hemi::test::validation_log().take().empty()) << "a loader note failed the host's test";
+    host_messenger(warning, validation, &layer, nullptr);
+    host_messenger(warning, general, &layer, nullptr);
+    const std::vector<std::string> kept = hemi::test::validation_log().take();
+    ASSERT_EQ(kept.size(), 2u) << "the layer's messages must still fail the host's test";
+    EXPECT_NE(kept[0].find("usage must not be 0"), std::string::npos) << kept[0];
 }
 
 TEST(DeviceAdoption, RejectsIncompleteHandles)

@@ -13,7 +13,6 @@
 
 #include <glm/geometric.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -916,8 +915,8 @@ TEST(GltfReader, UnreadableFeaturesAreErrorsNamingThem)
 }
 
 // The node hierarchy must be a forest. A graph in which each node lists the next one twice would be walked
-// 2^N times by a naive traversal; it is refused at once, as are cycles and shared children. A deep chain (far
-// deeper than any recursion limit) is read.
+// 2^N times by a naive traversal; it is refused at its first repeated node, as are cycles and shared
+// children. A deep chain (far deeper than any recursion limit) is read.
 TEST(GltfReader, NodeGraphsThatAreNotForestsAreRefusedQuickly)
 {
     auto chain = [](size_t n, bool twice)
@@ -935,9 +934,12 @@ TEST(GltfReader, NodeGraphsThatAreNotForestsAreRefusedQuickly)
         }
         return h;
     };
-    const auto t0 = std::chrono::steady_clock::now();
-    expect_error_naming(chain(64, true).save("doubled"), "is reached twice");
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
+    // No clock: the bound on the work is in the refusal. The walk is depth-first in file order, so it refuses
+    // at the first repeat, node 63 again from node 62, after 64 visits. A walk that visits every path (2^63
+    // of them here) before or instead of refusing never gets to an answer; one that flattens the graph into
+    // instances first gives no refusal (the small graph), or never finishes (the large one).
+    expect_error_naming(chain(64, true).save("doubled"), "node 63 is reached twice (again from node 62)");
+    expect_error_naming(chain(12, true).save("doubled12"), "node 11 is reached twice (again from node 10)");
     {
         Handmade h = handmade_quad();
         h.j["nodes"] = json::parse(R"([{"children": [1]}, {"children": [0], "mesh": 0}])");
@@ -963,11 +965,11 @@ TEST(GltfReader, HugeAccessorsReadPastTheirBufferNotIntoAnOverflow)
     auto expect =
         [&](const std::function<void(Handmade&)>& edit, const std::string& name, const std::string& part)
     {
+        // The refusal's own message is the check: reading or allocating first would end in a crash, a
+        // std::length_error or std::bad_alloc (2^62 elements), not in "reads past its buffer".
         Handmade h = handmade_quad();
         edit(h);
-        const auto t0 = std::chrono::steady_clock::now();
         expect_error_naming(h.save(name), part);
-        EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0) << name;
     };
     expect([&](Handmade& h) { h.j["accessors"][0]["count"] = huge; }, "count62", "reads past its buffer");
     expect([&](Handmade& h) { h.j["accessors"][2]["count"] = huge; }, "indices62", "reads past its buffer");

@@ -446,16 +446,29 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
 }
 
 // A lobe far narrower than a texel (a texel against itself, where a float dot product can exceed 1) gives
-// finite values; one beyond 1e6 is refused.
+// finite values, up to the largest exponent allowed (1e6); one beyond 1e6 is refused. Under a constant
+// environment of 1 no texel can exceed the lobe's normalisation times the whole sphere, (e + 1) / (2 pi) * 4
+// pi, and none is negative.
 TEST(Paraboloid, HugeExponentsStayFinite)
 {
     using namespace hemi::math;
     const std::vector<float> px(64 * 32 * 4, 1.0f);
     const auto chain = parabolic_mip_chain(parabolic_from_equirect(32, 64, 32, px));
-    const ParabolicImage g = prefilter_phong(chain, 3e4);
-    ASSERT_EQ(g.size, 32u);
-    for (float v : g.rgb)
-        ASSERT_TRUE(std::isfinite(v));
+    for (const double e : {3e4, kMaxPhongExponent})
+    {
+        const ParabolicImage g = prefilter_phong(chain, e);
+        ASSERT_EQ(g.size, 32u);
+        const double bound = (e + 1) / (2 * kPi) * 4 * kPi;
+        double sum = 0.0;
+        for (float v : g.rgb)
+        {
+            ASSERT_TRUE(std::isfinite(v)) << "exponent " << e;
+            ASSERT_GE(v, 0.0f) << "exponent " << e;
+            ASSERT_LE(v, bound) << "exponent " << e;
+            sum += v;
+        }
+        EXPECT_GT(sum, 0.0) << "exponent " << e;
+    }
     EXPECT_THROW(prefilter_phong(chain, 2e6), std::invalid_argument);
 }
 

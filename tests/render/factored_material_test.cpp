@@ -163,7 +163,8 @@ TEST_F(FactoredMaterial, MirrorWithFresnelMatchesCpu)
             [&](glm::vec2 uv) { return shade(uv, !coating); }, 0.01f, 0.003f);
         EXPECT_GT(c.compared, 300);
         EXPECT_LE(c.failures, c.compared / 100) << "coating " << coating << c.first_failures;
-        EXPECT_GT(c.rejected, c.compared / 10) << "the other blend would pass this comparison";
+        // The docs' "rejected at every pixel" (measured 834 of 834 in both blends).
+        EXPECT_EQ(c.rejected, c.compared) << "the other blend would pass some of this comparison";
         std::printf(
             "mirror, coating %d: %d of %d pixels outside 1%% + 0.003, the other blend rejected at %d\n",
             int(coating), c.failures, c.compared, c.rejected);
@@ -206,7 +207,8 @@ TEST_F(FactoredMaterial, GlossyWithNormalMapMatchesCpu)
         [&](glm::vec2 uv) { return shade(uv, -1.0f); }, 0.01f, 0.003f);
     EXPECT_GT(c.compared, 300);
     EXPECT_LE(c.failures, c.compared / 100) << c.first_failures;
-    EXPECT_GT(c.rejected, c.compared / 20) << "a flipped bitangent would pass this comparison";
+    // At least a fifth (measured 241 of 834).
+    EXPECT_GE(5 * c.rejected, c.compared) << "a flipped bitangent would pass this comparison";
     std::printf("glossy + light: %d of %d pixels outside 1%% + 0.003, a flipped bitangent rejected at %d\n",
                 c.failures, c.compared, c.rejected);
 }
@@ -263,7 +265,8 @@ TEST_F(FactoredMaterial, FactoredModelsMatchCpu)
         EXPECT_LE(c.failures, c.compared / 100) << (banks ? "banks" : "factored") << c.first_failures;
         std::printf("%s: %d of %d pixels outside 2%% + 0.004, a flipped bitangent rejected at %d\n",
                     banks ? "banks" : "factored", c.failures, c.compared, c.rejected);
-        EXPECT_GT(c.rejected, c.compared / 20)
+        // At least a fifth (measured 185 of 834 for factored, 192 for banks).
+        EXPECT_GE(5 * c.rejected, c.compared)
             << (banks ? "banks" : "factored") << ": a flipped bitangent would pass";
     }
 }
@@ -310,7 +313,8 @@ TEST_F(FactoredMaterial, MirrorIsContinuousAcrossTheSeam)
                              glm::length(radiance(x, y + 3) - radiance(x, y + 2)));
         }
     ASSERT_GT(pairs, 40);
-    EXPECT_LT(across, 1.5 * beside + 0.002 * pairs) << pairs << " pairs";
+    // The docs' 1.5x (measured 0.0152 across against 0.0149 beside).
+    EXPECT_LT(across, 1.5 * beside) << pairs << " pairs";
     std::printf("seam: %d pixel pairs across it, mean step %.4f across, %.4f beside\n", pairs, across / pairs,
                 beside / pairs);
 }
@@ -351,12 +355,14 @@ TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
             [&](glm::vec2 uv) { return shade(uv, glm::mat3(1.0f), 1, 200.0); }, 0.01f, 0.003f);
         EXPECT_GT(c.compared, 300);
         EXPECT_LE(c.failures, c.compared / 100) << (mirror ? "mirror" : "glossy") << c.first_failures;
-        EXPECT_GT(c.rejected, c.compared / 4) << "the unturned environment would pass this comparison";
+        // At least half (measured 834 of 834, mirror and glossy).
+        EXPECT_GE(2 * c.rejected, c.compared) << "the unturned environment would pass this comparison";
         // The first table or map instead of the second: rejected too.
         const Comparison first = compare(
             color, aux, [&](glm::vec2 uv) { return shade(uv, turn, 1, 200.0); },
             [&](glm::vec2 uv) { return shade(uv, turn, 0, 1.5); }, 0.01f, 0.003f);
-        EXPECT_GT(first.rejected, first.compared / 4) << "the first Fresnel table or glossy map would pass";
+        // At least half (measured 834 of 834 for the first Fresnel table, 418 for the first glossy map).
+        EXPECT_GE(2 * first.rejected, first.compared) << "the first Fresnel table or glossy map would pass";
         std::printf(
             "%s turned: %d of %d outside 1%% + 0.003; unturned rejected at %d, the first table/map at %d\n",
             mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected, first.rejected);

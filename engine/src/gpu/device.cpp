@@ -134,20 +134,22 @@ VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& 
 
 } // namespace
 
+bool is_loader_message(VkDebugUtilsMessageTypeFlagsEXT types,
+                       const VkDebugUtilsMessengerCallbackDataEXT* data)
+{
+    return !(types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT)) &&
+           data && data->pMessageIdName && std::string_view(data->pMessageIdName) == "Loader Message";
+}
+
 VKAPI_ATTR VkBool32 VKAPI_CALL Device::debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                       VkDebugUtilsMessageTypeFlagsEXT types,
                                                       const VkDebugUtilsMessengerCallbackDataEXT* data,
                                                       void* user)
 {
     auto* self = static_cast<Device*>(user);
-    // The Vulkan loader reports through the same messenger (e.g. "Layer ... forced enabled due to env var
-    // 'VK_LOADER_LAYERS_ENABLE'"): notes about the setup, not validation findings. It names itself in
-    // pMessageIdName and sends general messages only.
-    const bool loader = !(types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                                   VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT)) &&
-                        data && data->pMessageIdName &&
-                        std::string_view(data->pMessageIdName) == "Loader Message";
-    if (loader)
+    // The Vulkan loader reports through the same messenger: notes about the setup, not validation findings.
+    if (is_loader_message(types, data))
     {
         if (self->log_)
             self->log_(LogLevel::Info, false, data->pMessage ? data->pMessage : "(no message)");

@@ -60,6 +60,13 @@ struct ExternalDevice
     bool dynamic_rendering = false;
 };
 
+// Whether a debug-utils message comes from the Vulkan loader (e.g. "Layer ... forced enabled due to env var
+// 'VK_LOADER_LAYERS_ENABLE'"), a note about the setup rather than a validation finding: the loader names
+// itself in pMessageIdName ("Loader Message") and sends general messages only. hemi's own messenger logs
+// these as Info and does not count them; a host engine's messenger can use the same test.
+bool is_loader_message(VkDebugUtilsMessageTypeFlagsEXT types,
+                       const VkDebugUtilsMessengerCallbackDataEXT* data);
+
 enum class MemoryUsage
 {
     GpuOnly,  // device-local; uploads go through a staging copy unless the memory is also host-visible
