@@ -6,6 +6,11 @@
 #include <hemi/gpu/allocator.h>
 #include <hemi/gpu/deletion_queue.h>
 #include <hemi/gpu/resources.h>
+#include <hemi/render/view/offscreen.h>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
 
 #include <vector>
 
@@ -91,4 +96,60 @@ TEST(DeletionQueue, KeepsObjectsAliveUntilTheirFrameIsCollected)
     EXPECT_EQ(q.pending(), 1u);
     q.collect(100);
     EXPECT_EQ(alive, 0);
+}
+
+// Every device limit a request can exceed is refused before Vulkan is asked, naming the limit and the device
+// (a raw VK_ERROR_* from deep in a create or a bind names no cause): an image wider than
+// maxImageDimension2D, a render target taller than maxFramebufferHeight, a resource larger than its memory
+// heap (and than maxMemoryAllocationSize: every limit exceeded is named). The limits are the device's own,
+// read here; nothing is created.
+TEST_F(Allocator, RequestsBeyondTheDevicesLimitsAreRefusedNamingTheLimit)
+{
+    auto& dev = hemi::test::device();
+    const VkPhysicalDeviceLimits& limits = dev.limits();
+    auto refused = [](const std::function<void()>& f) -> std::string
+    {
+        try
+        {
+            f();
+        }
+        catch (const std::invalid_argument& e)
+        {
+            return e.what();
+        }
+        return "(accepted)";
+    };
+    std::string why = refused(
+        [&] {
+            hemi::gpu::create_image(dev, {limits.maxImageDimension2D + 1, 1, VK_FORMAT_R8G8B8A8_UNORM});
+        });
+    EXPECT_NE(why.find("maxImageDimension2D (" + std::to_string(limits.maxImageDimension2D) + ")"),
+              std::string::npos)
+        << why;
+    why = refused([&] { hemi::render::OffscreenTarget(dev, 1, limits.maxFramebufferHeight + 1); });
+    EXPECT_NE(why.find("maxFramebufferWidth/Height"), std::string::npos) << why;
+    EXPECT_NE(why.find(std::to_string(limits.maxFramebufferHeight)), std::string::npos) << why;
+
+    const uint32_t type = dev.memory_type(~0u, hemi::gpu::MemoryUsage::GpuOnly);
+    const VkDeviceSize heap = dev.heap_size(type);
+    why = refused(
+        [&] {
+            dev.allocator().allocate({heap + 1, 256, ~0u}, hemi::gpu::MemoryUsage::GpuOnly, false);
+        });
+    EXPECT_NE(why.find("exceeds its memory heap"), std::string::npos) << why;
+    // Every limit exceeded is named: lavapipe's heap and maxMemoryAllocationSize are both 2 GiB.
+    if (dev.max_allocation_size() && dev.max_allocation_size() < heap + 1)
+        EXPECT_NE(why.find("maxMemoryAllocationSize"), std::string::npos) << why;
+    // Within the heap but beyond one allocation's limit, where the device has such a gap.
+    if (dev.max_allocation_size() && dev.max_allocation_size() < heap)
+    {
+        why = refused(
+            [&]
+            {
+                dev.allocator().allocate({dev.max_allocation_size() + 1, 256, ~0u},
+                                         hemi::gpu::MemoryUsage::GpuOnly, false);
+            });
+        EXPECT_NE(why.find("maxMemoryAllocationSize"), std::string::npos) << why;
+        EXPECT_EQ(why.find("heap"), std::string::npos) << why;
+    }
 }

@@ -111,14 +111,17 @@ Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsag
     // a bind names no cause).
     auto mib = [](VkDeviceSize b)
     { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20) + " MiB"; };
-    if (device_->max_allocation_size() && req.size > device_->max_allocation_size())
-        throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds device " +
-                                    std::string(device_->name()) + "'s maxMemoryAllocationSize (" +
-                                    mib(device_->max_allocation_size()) + ")");
+    // Every limit the request exceeds is named: its memory heap, maxMemoryAllocationSize (on lavapipe both
+    // are the same 2 GiB).
+    std::string exceeded;
     if (req.size > device_->heap_size(type))
-        throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds its memory heap (" +
-                                    mib(device_->heap_size(type)) + ") on device " +
-                                    std::string(device_->name()));
+        exceeded = "its memory heap (" + mib(device_->heap_size(type)) + ")";
+    if (device_->max_allocation_size() && req.size > device_->max_allocation_size())
+        exceeded += (exceeded.empty() ? "" : " and ") + std::string("maxMemoryAllocationSize (") +
+                    mib(device_->max_allocation_size()) + ")";
+    if (!exceeded.empty())
+        throw std::invalid_argument("hemi: a resource of " + mib(req.size) + " exceeds " + exceeded +
+                                    " on device " + std::string(device_->name()));
     std::lock_guard<std::mutex> lock(mutex_);
     Block* chosen = nullptr;
     VkDeviceSize offset = 0;
