@@ -1,23 +1,25 @@
-// hemi-bake: the offline side of hemi as a command line. Subcommands:
+// hemi-bake: the offline side of hemi as a command line. Subcommands (hemi-bake SUBCOMMAND --help for
+// every option):
 //   basis-report [--json FILE] [--plot FILE.png] [--signals N] [--seed S]
-//   prt SCENE.gltf|.glb -o ASSET.hemi [--bases ...] [--transfer ...] [--bounces B] [--order N] [--rays R]
-//       [--seed S] [--albedo A] [--cpca CxV] [--json REPORT.json]
-//   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R] [--filter RADIUS,SIGMA]
-//       [--no-occlusion] [--no-wrap] [--convention normalized|valve] [--exr OUT.exr] [--json REPORT.json]
+//   prt SCENE.gltf|.glb -o ASSET.hemi [--bases ...] [--transfer ...] [--bounces B] [--order N]
+//       [--rays R] [--seed S] [--albedo A] [--cpca CxV] [--json REPORT.json]
+//   ssbump HEIGHT.png|.exr -o OUT.png [--scale S] [--channel r|g|b|a|grey] [--rays R]
+//       [--filter RADIUS,SIGMA] [--no-occlusion] [--no-wrap] [--convention normalized|valve]
+//       [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
-//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X] [--sun
-//   X,Y,Z,R,G,B[,DIAMETER]]
-//       [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm] [--size WxH | --texel-size S] [--rays R] [--seed
-//       S]
-//       [--probes NX,NY,NZ] [--probe-rays R] [--exr-dir DIR] [--json REPORT.json]
-//   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R] [--exponent
-//   E]
-//       [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr [--json REPORT.json]
+//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X]
+//       [--sun X,Y,Z,R,G,B[,DIAMETER]] [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm]
+//       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ] [--probe-rays R]
+//       [--exr-dir DIR] [--json REPORT.json]
+//   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R]
+//       [--exponent E] [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr
+//       [--json REPORT.json]
 //   envmap ENV.exr -o ENVMAP.hemi [--size N] [--exponents E1,E2,...] [--ior N1,...] [--exr-dir DIR]
 //       [--report REPORT.json]
-//   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B] [--camera
-//   auto|EYE,TARGET]
-//       [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
+//   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B]
+//       [--camera auto|EYE,TARGET] [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
+// Every error names the file or option it is about and exits 1 (usage errors too); outputs are checked
+// (writable, regular files, none of them an input) before any work starts (tool_options.h).
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/factored.h>
@@ -27,11 +29,14 @@
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+#include <hemi/io/memory.h>
 #include <hemi/math/camera.h>
 #include <hemi/math/paraboloid.h>
 #include <hemi/math/sh_environment.h>
 
 #include <nlohmann/json.hpp>
+
+#include "tool_options.h"
 
 #include <CLI/CLI.hpp>
 
@@ -43,6 +48,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <unistd.h>
 #include <vector>
 
@@ -146,16 +152,6 @@ struct PrtProgressLine
     }
 };
 
-std::vector<std::string> split(const std::string& list)
-{
-    std::vector<std::string> out;
-    std::stringstream in(list);
-    for (std::string item; std::getline(in, item, ',');)
-        if (!item.empty())
-            out.push_back(item);
-    return out;
-}
-
 void print_prt_summary(const hemi::bake::PrtBakeSummary& s, const hemi::bake::PrtAssetOptions& o,
                        const std::string& scene, const std::string& asset)
 {
@@ -218,11 +214,16 @@ int run_ssbump(SsbumpCli& c)
         throw std::invalid_argument("give one of HEIGHT (a height map to bake), --from-normal NORMAL.png or "
                                     "--to-normal SSBUMP.png");
     const bake::SsbumpConvention convention = bake::parse_ssbump_convention(c.convention);
-    hemi::io::check_writable(c.output);
-    if (!c.exr.empty())
-        hemi::io::check_writable(c.exr);
-    if (!c.json.empty())
-        hemi::io::check_writable(c.json);
+    hemi::tool::Files files;
+    files.input("HEIGHT", c.input);
+    files.input("--from-normal", c.from_normal);
+    files.input("--to-normal", c.to_normal);
+    files.output("-o", c.output);
+    files.output("--exr", c.exr);
+    files.output("--json", c.json);
+    if (!c.input.empty())
+        files.output("its checkpoint", bake::checkpoint_path(c.output));
+    files.check();
     if (!c.to_normal.empty())
     {
         // The way back: a tangent-space ("bent") normal from each texel's weights.
@@ -276,18 +277,19 @@ int run_ssbump(SsbumpCli& c)
     const bool filter_given = !c.filter.empty();
     if (filter_given)
     {
-        int radius = 0;
-        float sigma = 0.0f;
-        char comma = 0, rest = 0;
-        const int got = std::sscanf(c.filter.c_str(), "%d%c%f%c", &radius, &comma, &sigma, &rest);
-        if (!((got == 1 && radius == 0) || (got == 3 && comma == ',')))
+        const std::vector<double> v = hemi::tool::parse_numbers(
+            c.filter, "--filter", "RADIUS,SIGMA (e.g. 2,0.02) or 0 for none", {1, 2});
+        if ((v.size() == 1 && v[0] != 0.0) || v[0] != std::floor(v[0]) || std::abs(v[0]) > 1e6)
             throw std::invalid_argument("--filter expects RADIUS,SIGMA (e.g. 2,0.02) or 0 for none, got '" +
-                                        c.filter + "'");
-        o.filter = {radius, sigma};
+                                        c.filter + "' (the radius is a whole number of texels)");
+        o.filter = {int(v[0]), v.size() == 2 ? float(v[1]) : 0.0f};
     }
     bake::check_ssbump_options(o); // before the map is read: a bad option fails at once
     o.checkpoint = bake::checkpoint_path(c.output);
-    hemi::io::check_writable(o.checkpoint);
+    // The map's size from its header, so that one the machine cannot hold is refused before it is read.
+    if (const uint64_t texels = hemi::io::image_pixels(c.input))
+        hemi::io::check_memory(bake::ssbump_memory(texels, o),
+                               c.input + ": an SSBump bake of its " + std::to_string(texels) + " texels");
     const bake::HeightMapFile file = bake::read_height_map(c.input, bake::parse_height_channel(c.channel));
     if (!filter_given)
         o.filter = bake::default_filter(file.bits);
@@ -299,15 +301,20 @@ int run_ssbump(SsbumpCli& c)
                 o.wrap ? "tiling" : "not tiling", std::string(to_string(o.convention)).c_str(), filter_text,
                 filter_given ? "" : " (default)");
     ProgressLine line("hemi-bake ssbump");
-    const bake::SsbumpMap m =
-        bake::bake_ssbump(file.field, o,
-                          [&](const bake::SsbumpProgress& p)
-                          {
-                              line.checkpoint_error(p.checkpoint_error);
-                              if (o.occlusion)
-                                  line.update(p.texels ? double(p.texels_done) / double(p.texels) : 1.0,
-                                              "occlusion", p.texels_done == p.texels);
-                          });
+    const bake::SsbumpMap m = hemi::tool::naming_input(
+        c.input, files,
+        [&]
+        {
+            return bake::bake_ssbump(file.field, o,
+                                     [&](const bake::SsbumpProgress& p)
+                                     {
+                                         line.checkpoint_error(p.checkpoint_error);
+                                         if (o.occlusion)
+                                             line.update(p.texels ? double(p.texels_done) / double(p.texels)
+                                                                  : 1.0,
+                                                         "occlusion", p.texels_done == p.texels);
+                                     });
+        });
     write_ssbump_png(c.output, m, file.alpha, false);
     std::printf("wrote %s\n", c.output.c_str());
     if (!c.exr.empty())
@@ -377,7 +384,8 @@ struct LightCli
                         "environment: uniform (radiance 1 from every direction) or an equirect EXR "
                         "(z up, hemi-render's convention)")
             ->capture_default_str();
-        app->add_option("--env-scale", env_scale, "multiplies the environment's radiance")
+        app->add_option("--env-scale", env_scale, "multiplies the environment's radiance (>= 0)")
+            ->check(hemi::tool::finite(0.0, 1e20))
             ->capture_default_str();
         app->add_option("--sun", sun,
                         "a sun: X,Y,Z (towards it, world z up),R,G,B (irradiance on a surface "
@@ -389,43 +397,27 @@ struct LightCli
         hemi::bake::LightmapLights l;
         if (!sun.empty())
         {
-            float v[7] = {0, 0, 0, 0, 0, 0, 0.53f};
-            char rest = 0;
-            const int got = std::sscanf(sun.c_str(), "%f,%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3],
-                                        &v[4], &v[5], &v[6], &rest);
-            if (got != 6 && got != 7)
-                throw std::invalid_argument(
-                    "--sun expects X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z "
-                    "up; R,G,B the irradiance on a surface facing it), got '" +
-                    sun + "'");
+            const char* form = "X,Y,Z,R,G,B[,DIAMETER_DEGREES] (towards the sun, world z up; R,G,B the "
+                               "irradiance on a surface facing it, >= 0; the diameter in [0, 90))";
+            const std::vector<double> v = hemi::tool::parse_numbers(sun, "--sun", form, {6, 7});
+            if (v[3] < 0.0 || v[4] < 0.0 || v[5] < 0.0 || (v.size() == 7 && !(v[6] >= 0.0 && v[6] < 90.0)) ||
+                v[0] * v[0] + v[1] * v[1] + v[2] * v[2] == 0.0)
+                throw std::invalid_argument("--sun expects " + std::string(form) + ", got '" + sun + "'");
             l.sun = true;
-            l.sun_direction = glm::vec3(v[0], v[1], v[2]);
-            l.sun_irradiance = glm::vec3(v[3], v[4], v[5]);
-            l.sun_diameter_degrees = v[6];
+            l.sun_direction = glm::vec3(float(v[0]), float(v[1]), float(v[2]));
+            l.sun_irradiance = glm::vec3(float(v[3]), float(v[4]), float(v[5]));
+            l.sun_diameter_degrees = v.size() == 7 ? float(v[6]) : 0.53f;
         }
         if (env != "uniform")
+        {
             l.environment = hemi::io::read_exr(env); // names the file when it is missing or not an EXR
+            l.environment_name = env;
+        }
         l.environment_scale = env_scale;
         l.uniform = glm::vec3(env_scale);
         return l;
     }
 };
-
-// W or WxH, each side in [1, 16384].
-void parse_size(const std::string& text, uint32_t& width, uint32_t& height)
-{
-    unsigned w = 0, h = 0;
-    char x = 0, rest = 0;
-    const int got = std::sscanf(text.c_str(), "%u%c%u%c", &w, &x, &h, &rest);
-    if (got == 1)
-        h = w;
-    else if (got != 3 || x != 'x')
-        throw std::invalid_argument("--size expects W or WxH (e.g. 1024x512), got '" + text + "'");
-    if (w == 0 || h == 0 || w > 16384 || h > 16384)
-        throw std::invalid_argument("--size " + text + ": each side must be in [1, 16384]");
-    width = w;
-    height = h;
-}
 
 struct LightmapCli
 {
@@ -438,35 +430,51 @@ int run_lightmap(LightmapCli& c)
 {
     namespace bake = hemi::bake;
     bake::LightmapFileOptions& o = c.options;
-    o.outputs = split(c.bases);
+    o.outputs = hemi::tool::parse_names(c.bases, "--bases");
     if (!c.size.empty())
-        parse_size(c.size, o.width, o.height);
-    o.lights = c.light.lights();
+        std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size");
     if (!c.probes.empty())
     {
-        unsigned n[3] = {0, 0, 0};
-        char rest = 0;
-        if (std::sscanf(c.probes.c_str(), "%u,%u,%u%c", &n[0], &n[1], &n[2], &rest) != 3 || !n[0] || !n[1] ||
-            !n[2] || uint64_t(n[0]) * n[1] * n[2] > (uint64_t(1) << 24))
-            throw std::invalid_argument("--probes expects NX,NY,NZ (at least 1 each, 2^24 in all), got '" +
-                                        c.probes + "'");
-        o.probes = glm::uvec3(n[0], n[1], n[2]);
+        const std::vector<uint64_t> n = hemi::tool::parse_counts(
+            c.probes, "--probes", "NX,NY,NZ (at least 1 each, 2^24 in all)", ',', {3}, 1, 1u << 24);
+        if (n[0] * n[1] * n[2] > (uint64_t(1) << 24))
+            throw std::invalid_argument("--probes " + c.probes + ": more than 2^24 probes in all");
+        o.probes = glm::uvec3(uint32_t(n[0]), uint32_t(n[1]), uint32_t(n[2]));
     }
     o.exr_dir = c.exr_dir;
-    if (!c.json.empty())
-        hemi::io::check_writable(c.json); // before the bake, like the asset and its checkpoint
+    // Every file before any work: the outputs writable, none of them an input.
+    hemi::tool::Files files;
+    files.scene("SCENE", c.scene);
+    if (c.light.env != "uniform")
+        files.input("--env", c.light.env);
+    files.output("-o", c.asset);
+    files.output("its checkpoint", bake::checkpoint_path(c.asset));
+    files.output("--json", c.json);
+    if (!c.exr_dir.empty())
+    {
+        hemi::tool::make_folder(c.exr_dir, "--exr-dir");
+        for (const std::string& name : o.outputs)
+            files.output("--exr-dir", bake::lightmap_exr_path(c.exr_dir, c.asset, name));
+    }
+    files.check();
+    o.lights = hemi::tool::naming_input(c.light.env, files, [&] { return c.light.lights(); });
     ProgressLine line("hemi-bake lightmap");
-    const bake::LightmapBakeSummary s = bake::bake_lightmap_file(
-        c.scene, c.asset, o,
-        [&](const bake::LightmapProgress& p)
+    const bake::LightmapBakeSummary s = hemi::tool::naming_input(
+        c.scene, files,
+        [&]
         {
-            line.checkpoint_error(p.checkpoint_error);
-            const double fraction =
-                (p.pass + (p.texels ? double(p.texels_done) / double(p.texels) : 1.0)) / p.passes;
-            const std::string what =
-                "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
-                (p.pass == 0 ? std::string("direct") : "bounce " + std::to_string(p.pass)) + ")";
-            line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
+            return bake::bake_lightmap_file(
+                c.scene, c.asset, o,
+                [&](const bake::LightmapProgress& p)
+                {
+                    line.checkpoint_error(p.checkpoint_error);
+                    const double fraction =
+                        (p.pass + (p.texels ? double(p.texels_done) / double(p.texels) : 1.0)) / p.passes;
+                    const std::string what =
+                        "pass " + std::to_string(p.pass + 1) + "/" + std::to_string(p.passes) + " (" +
+                        (p.pass == 0 ? std::string("direct") : "bounce " + std::to_string(p.pass)) + ")";
+                    line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
+                });
         });
     for (const std::string& w : s.warnings)
         std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
@@ -512,7 +520,7 @@ int run_reference(ReferenceCli& c)
 {
     namespace bake = hemi::bake;
     bake::ReferenceOptions& o = c.options;
-    parse_size(c.size, o.width, o.height);
+    std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size", 16384, false);
     const std::optional<hemi::math::Camera> camera = hemi::math::parse_camera(c.camera);
     o.auto_camera = !camera;
     if (camera)
@@ -520,16 +528,31 @@ int run_reference(ReferenceCli& c)
     if (std::filesystem::path(c.output).extension() != ".exr")
         throw std::invalid_argument("-o must end in .exr (linear RGBA, alpha = coverage), got '" + c.output +
                                     "'");
-    if (!c.json.empty())
-        hemi::io::check_writable(c.json);
-    const bake::LightmapLights lights = c.light.lights();
+    hemi::tool::Files files;
+    files.scene("SCENE", c.scene);
+    if (c.light.env != "uniform")
+        files.input("--env", c.light.env);
+    files.output("-o", c.output);
+    files.output("--json", c.json);
+    files.check();
+    // The image (RGBA floats), its per-pixel noise (a double) and the EXR's copy: refused before the scene is
+    // read if they cannot fit.
+    hemi::io::check_memory(uint64_t(o.width) * o.height * 48,
+                           "--size " + c.size + ": a " + c.size + " reference image");
+    const bake::LightmapLights lights =
+        hemi::tool::naming_input(c.light.env, files, [&] { return c.light.lights(); });
     ProgressLine line("hemi-bake reference");
-    const bake::ReferenceImage r = bake::render_reference_file(
-        c.scene, c.output, lights, o,
-        [&](uint32_t done, uint32_t rows)
+    const bake::ReferenceImage r = hemi::tool::naming_input(
+        c.scene, files,
+        [&]
         {
-            line.update(double(done) / double(rows),
-                        "rows " + std::to_string(done) + "/" + std::to_string(rows), done == rows);
+            return bake::render_reference_file(
+                c.scene, c.output, lights, o,
+                [&](uint32_t done, uint32_t rows)
+                {
+                    line.update(double(done) / double(rows),
+                                "rows " + std::to_string(done) + "/" + std::to_string(rows), done == rows);
+                });
         });
     std::printf(
         "wrote %s: %ux%u, %d paths per pixel, %d bounce(s)%s; camera %.3g,%.3g,%.3g -> %.3g,%.3g,%.3g\n",
@@ -585,9 +608,10 @@ nlohmann::json brdf_error_json(const hemi::bake::BrdfError& e)
 
 int run_brdf(BrdfCli& c)
 {
-    hemi::io::check_writable(c.output);
-    if (!c.json.empty())
-        hemi::io::check_writable(c.json);
+    hemi::tool::Files files;
+    files.output("-o", c.output);
+    files.output("--json", c.json);
+    files.check();
     const hemi::bake::BrdfBake b = hemi::bake::bake_brdf(c.options);
     hemi::bake::write_brdf_exr(c.output, c.options, b);
     std::printf("wrote %s: %s, %u x %u, %s\n", c.output.c_str(), c.options.model.c_str(), c.options.size,
@@ -629,17 +653,12 @@ struct EnvmapCli
 std::vector<double> parse_numbers(const std::string& list, const char* option)
 {
     std::vector<double> out;
-    for (const std::string& item : split(list))
-    {
-        char* end = nullptr;
-        const double v = std::strtod(item.c_str(), &end);
-        if (item.empty() || end != item.c_str() + item.size())
-            throw std::invalid_argument(std::string(option) + " expects comma-separated numbers, got '" +
-                                        list + "'");
-        out.push_back(v);
-    }
-    if (out.empty())
-        throw std::invalid_argument(std::string(option) + " needs at least one number");
+    out = hemi::tool::parse_numbers(list, option, "comma-separated numbers");
+    for (size_t i = 0; i < out.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (out[i] == out[j])
+                throw std::invalid_argument(std::string(option) + " names " + std::to_string(out[i]) +
+                                            " twice");
     return out;
 }
 
@@ -683,16 +702,29 @@ int run_envmap(EnvmapCli& c)
     c.options.exponents = parse_numbers(c.exponents, "--exponents");
     c.options.iors = parse_numbers(c.iors, "--ior");
     hemi::bake::check_envmap_options(c.options);
-    hemi::io::check_writable(c.output);
-    if (!c.report.empty())
-        hemi::io::check_writable(c.report);
+    hemi::tool::Files files;
+    files.input("ENV", c.input);
+    files.output("-o", c.output);
+    files.output("--report", c.report);
+    files.check();
+    if (!c.exr_dir.empty())
+    {
+        hemi::tool::make_folder(c.exr_dir, "--exr-dir");
+        hemi::io::check_writable(std::filesystem::path(c.exr_dir) / "mirror_0_front.exr");
+    }
     const hemi::io::ImageRgba env = hemi::io::read_exr(c.input);
     hemi::bake::EnvmapBakeStats stats;
     ProgressLine line("hemi-bake envmap");
     const auto t0 = std::chrono::steady_clock::now();
-    const hemi::io::EnvmapAsset a = hemi::bake::bake_envmap(
-        env, c.options, &stats,
-        [&](const std::string& stage) { std::fprintf(stderr, "hemi-bake envmap: %s\n", stage.c_str()); });
+    const hemi::io::EnvmapAsset a = hemi::tool::naming_input(
+        c.input, files,
+        [&]
+        {
+            return hemi::bake::bake_envmap(env, c.options, &stats,
+                                           [&](const std::string& stage) {
+                                               std::fprintf(stderr, "hemi-bake envmap: %s\n", stage.c_str());
+                                           });
+        });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     hemi::io::write_envmap_asset(c.output, a);
     std::printf(
@@ -705,8 +737,8 @@ int run_envmap(EnvmapCli& c)
                     a.glossy[i].size, stats.glossy_seconds[i], double(stats.glossy_pairs[i]));
     if (!c.exr_dir.empty())
     {
-        const auto files = hemi::bake::write_envmap_exrs(c.exr_dir, a);
-        std::printf("wrote %zu EXR files into %s\n", files.size(), c.exr_dir.c_str());
+        const auto written = hemi::bake::write_envmap_exrs(c.exr_dir, a);
+        std::printf("wrote %zu EXR files into %s\n", written.size(), c.exr_dir.c_str());
     }
     if (!c.report.empty())
     {
@@ -766,6 +798,66 @@ int run_envmap(EnvmapCli& c)
     return 0;
 }
 
+struct PrtCli
+{
+    std::string scene, asset, bases, transfer = "interreflected", cpca, json;
+    hemi::bake::PrtAssetOptions options;
+};
+
+int run_prt(PrtCli& c)
+{
+    hemi::bake::PrtAssetOptions& o = c.options;
+    o.bake.kind = hemi::bake::parse_transfer_kind(c.transfer);
+    o.techniques = hemi::tool::parse_names(c.bases, "--bases");
+    if (!c.cpca.empty())
+    {
+        const std::vector<uint64_t> v =
+            hemi::tool::parse_counts(c.cpca, "--cpca", "CLUSTERSxVECTORS (e.g. 1x24)", 'x', {2}, 1, 1u << 20);
+        o.cpca_clusters = uint32_t(v[0]);
+        o.cpca_vectors = uint32_t(v[1]);
+    }
+    hemi::tool::Files files;
+    files.scene("SCENE", c.scene);
+    files.output("-o", c.asset);
+    files.output("its checkpoint", hemi::bake::checkpoint_path(c.asset));
+    files.output("--json", c.json);
+    files.check();
+    PrtProgressLine line;
+    const hemi::bake::PrtBakeSummary s = hemi::tool::naming_input(
+        c.scene, files, [&] { return hemi::bake::bake_prt_file(c.scene, c.asset, o, std::ref(line)); });
+    print_prt_summary(s, o, c.scene, c.asset);
+    if (!c.json.empty())
+    {
+        hemi::bake::write_prt_bake_json(c.json, s, o);
+        std::printf("wrote %s\n", c.json.c_str());
+    }
+    return 0;
+}
+
+int run_basis_report(const std::string& json, const std::string& plot, int signals, uint64_t seed)
+{
+    hemi::tool::Files files;
+    files.output("--json", json);
+    files.output("--plot", plot);
+    files.check();
+    auto t0 = std::chrono::steady_clock::now();
+    hemi::bake::BasisReport r = hemi::bake::make_basis_report(signals, seed);
+    print_report(r);
+    if (!json.empty())
+    {
+        hemi::bake::write_basis_report_json(json, r);
+        std::printf("\nwrote %s\n", json.c_str());
+    }
+    if (!plot.empty())
+    {
+        hemi::bake::plot_basis_report(plot, r);
+        std::printf("wrote %s\n", plot.c_str());
+    }
+    std::fprintf(stderr, "basis-report: %.1f s\n",
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -786,43 +878,43 @@ int main(int argc, char** argv)
         ->capture_default_str();
     report->add_option("--seed", seed, "seed of the random signals")->capture_default_str();
 
-    std::string scene, asset, bases, transfer = "interreflected", cpca, prt_json;
-    hemi::bake::PrtAssetOptions prt_options;
-    {
-        std::string all;
-        for (const auto& t : hemi::bake::default_techniques())
-            all += (all.empty() ? "" : ",") + t;
-        bases = all;
-    }
+    PrtCli pc;
+    for (const auto& t : hemi::bake::default_techniques())
+        pc.bases += (pc.bases.empty() ? "" : ",") + t;
     CLI::App* prt =
         app.add_subcommand("prt", "bake per-vertex PRT transfer matrices (Sloan 2006) from a glTF scene");
-    prt->add_option("scene", scene, "glTF 2.0 scene (.gltf or .glb)")->required()->check(CLI::ExistingFile);
-    prt->add_option("-o,--output", asset, "baked asset to write (.hemi)")->required();
-    prt->add_option("--bases", bases,
+    prt->add_option("scene", pc.scene, "glTF 2.0 scene (.gltf or .glb)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    prt->add_option("-o,--output", pc.asset, "baked asset to write (.hemi)")->required();
+    prt->add_option("--bases", pc.bases,
                     "comma-separated techniques: gs (SH9, the gold standard), hl2, sal4, h4, h6, "
                     "sep4, prt (classic PRT, no normal map); also sh4ls, zernike3, zernike6")
         ->capture_default_str();
-    prt->add_option("--transfer", transfer, "unshadowed | shadowed | interreflected")->capture_default_str();
-    prt->add_option("--bounces", prt_options.bake.bounces, "interreflection bounces")
+    prt->add_option("--transfer", pc.transfer, "unshadowed | shadowed | interreflected")
+        ->capture_default_str();
+    prt->add_option("--bounces", pc.options.bake.bounces, "interreflection bounces")
         ->check(CLI::Range(0, 16))
         ->capture_default_str();
-    prt->add_option("--order", prt_options.bake.order, "lighting SH order n (L = n^2)")
+    prt->add_option("--order", pc.options.bake.order, "lighting SH order n (L = n^2)")
         ->check(CLI::Range(3, 6))
         ->capture_default_str();
-    prt->add_option("--rays", prt_options.bake.rays, "rays per vertex")
+    prt->add_option("--rays", pc.options.bake.rays, "rays per vertex")
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
-    prt->add_option("--seed", prt_options.bake.seed, "seed of the ray directions (same seed, same bytes)")
+    prt->add_option("--seed", pc.options.bake.seed, "seed of the ray directions (same seed, same bytes)")
         ->capture_default_str();
-    prt->add_option("--albedo", prt_options.bake.albedo, "grey albedo for interreflection, in [0, 1)")
-        ->capture_default_str();
-    prt->add_option("--cpca", cpca,
+    prt->add_option("--albedo", pc.options.bake.albedo, "grey albedo for interreflection, in [0, 1)")
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 0.999999));
+    prt->add_option("--cpca", pc.cpca,
                     "compress with CPCA: CLUSTERSxVECTORS, e.g. 1x24 (dense matrices are kept)");
-    prt->add_option("--json", prt_json, "write the bake summary as JSON to FILE");
-    prt->add_option("--checkpoint-interval", prt_options.bake.checkpoint_seconds,
+    prt->add_option("--json", pc.json, "write the bake summary as JSON to FILE");
+    prt->add_option("--checkpoint-interval", pc.options.bake.checkpoint_seconds,
                     "seconds between checkpoints to ASSET.partial (an interrupted bake resumes from it)")
-        ->check(CLI::Range(0.0, 1e9))
-        ->capture_default_str();
+
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e9));
 
     SsbumpCli sb;
     CLI::App* ssbump = app.add_subcommand(
@@ -835,7 +927,8 @@ int main(int argc, char** argv)
                      "SSBump map (8-bit PNG) to write; a normal map with --to-normal")
         ->required();
     ssbump->add_option("--scale", sb.options.scale, "height of white above black, in texel widths")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e6));
     ssbump->add_option("--channel", sb.channel, "channel that holds the heights: grey, r, g, b or a")
         ->capture_default_str();
     ssbump->add_option("--rays", sb.options.rays, "rays per texel for the directional occlusion")
@@ -861,11 +954,13 @@ int main(int argc, char** argv)
     ssbump
         ->add_option("--max-distance", sb.options.max_distance,
                      "how far rays go, in texel widths (0: the map's larger side)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e9));
     ssbump
         ->add_option("--checkpoint-interval", sb.options.checkpoint_seconds,
                      "seconds between checkpoints to OUT.png.partial (an interrupted bake resumes from it)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e9));
     LightmapCli lm;
     CLI::App* lightmap = app.add_subcommand(
         "lightmap", "bake directional lightmaps (Habel & Wimmer 2010) of a glTF scene's TEXCOORD_1 atlas");
@@ -881,8 +976,10 @@ int main(int argc, char** argv)
                      "each radiosity-normal-mapping direction)")
         ->capture_default_str();
     lightmap->add_option("--size", lm.size, "atlas size W or WxH [default: from --texel-size, else 512]");
-    lightmap->add_option("--texel-size", lm.options.texel_size,
-                         "world units per texel: the atlas size that gives the scene that texel density");
+    lightmap
+        ->add_option("--texel-size", lm.options.texel_size,
+                     "world units per texel: the atlas size that gives the scene that texel density")
+        ->check(hemi::tool::finite(0.0, 1e30));
     lightmap->add_option("--rays", lm.options.bake.rays, "hemisphere rays per texel")->capture_default_str();
     lightmap
         ->add_option("--sun-rays", lm.options.bake.sun_rays, "shadow rays per texel towards the sun's disc")
@@ -909,7 +1006,8 @@ int main(int argc, char** argv)
         ->add_option(
             "--checkpoint-interval", lm.options.bake.checkpoint_seconds,
             "seconds between checkpoints to LEVEL.hemi.partial (an interrupted bake resumes from it)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e9));
     ReferenceCli rf;
     CLI::App* reference = app.add_subcommand(
         "reference",
@@ -944,14 +1042,17 @@ int main(int argc, char** argv)
         ->capture_default_str();
     brdf->add_option("--ior", br.options.ior,
                      "torrance-sparrow: index of refraction of the Fresnel term (> 1)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e6));
     brdf->add_option(
             "--roughness", br.options.roughness,
             "torrance-sparrow: m, the facets' RMS slope (beckmann) or angle spread in radians (gaussian)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e6));
     brdf->add_option("--exponent", br.options.exponent,
                      "banks, phong, blinn-phong, cosine-lobe: the lobe's exponent")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e6));
     brdf->add_option("--distribution", br.options.distribution, "torrance-sparrow: beckmann | gaussian")
         ->capture_default_str();
     brdf->add_option("--size", br.options.size, "samples per table axis")->capture_default_str();
@@ -983,119 +1084,21 @@ int main(int argc, char** argv)
                        "also write every image (each half, mip level, exponent) as EXR into DIR");
     envmap->add_option("--report", em.report,
                        "write the sampling comparison with cube maps and the timings as JSON");
-    CLI11_PARSE(app, argc, argv);
-
-    if (brdf->parsed() || envmap->parsed())
-    {
-        const char* name = brdf->parsed() ? "brdf" : "envmap";
-        try
-        {
-            return brdf->parsed() ? run_brdf(br) : run_envmap(em);
-        }
-        catch (const std::exception& e)
-        {
-            std::fprintf(stderr, "hemi-bake %s: %s\n", name, e.what());
-            return 1;
-        }
-    }
-
-    if (reference->parsed())
-    {
-        try
-        {
-            return run_reference(rf);
-        }
-        catch (const std::exception& e)
-        {
-            std::fprintf(stderr, "\nhemi-bake reference: %s\n", e.what());
-            return 1;
-        }
-    }
-
-    if (lightmap->parsed())
-    {
-        try
-        {
-            return run_lightmap(lm);
-        }
-        catch (const std::exception& e)
-        {
-            std::fprintf(stderr, "\nhemi-bake lightmap: %s\n", e.what());
-            return 1;
-        }
-    }
-    if (ssbump->parsed())
-    {
-        try
-        {
-            return run_ssbump(sb);
-        }
-        catch (const std::exception& e)
-        {
-            std::fprintf(stderr, "\nhemi-bake ssbump: %s\n", e.what());
-            return 1;
-        }
-    }
-
-    if (prt->parsed())
-    {
-        try
-        {
-            prt_options.bake.kind = hemi::bake::parse_transfer_kind(transfer);
-            prt_options.techniques = split(bases);
-            if (!cpca.empty())
-            {
-                unsigned c = 0, v = 0;
-                char x = 0, rest = 0;
-                if (std::sscanf(cpca.c_str(), "%u%c%u%c", &c, &x, &v, &rest) != 3 || x != 'x' || c == 0 ||
-                    v == 0)
-                    throw std::invalid_argument("--cpca expects CLUSTERSxVECTORS (e.g. 1x24), got '" + cpca +
-                                                "'");
-                prt_options.cpca_clusters = c;
-                prt_options.cpca_vectors = v;
-            }
-            if (!prt_json.empty())
-                hemi::io::check_writable(prt_json); // before the bake, like the asset and its checkpoint
-            PrtProgressLine line;
-            hemi::bake::PrtBakeSummary s =
-                hemi::bake::bake_prt_file(scene, asset, prt_options, std::ref(line));
-            print_prt_summary(s, prt_options, scene, asset);
-            if (!prt_json.empty())
-            {
-                hemi::bake::write_prt_bake_json(prt_json, s, prt_options);
-                std::printf("wrote %s\n", prt_json.c_str());
-            }
-        }
-        catch (const std::exception& e)
-        {
-            std::fprintf(stderr, "\nhemi-bake prt: %s\n", e.what());
-            return 1;
-        }
-        return 0;
-    }
-
-    try
-    {
-        auto t0 = std::chrono::steady_clock::now();
-        hemi::bake::BasisReport r = hemi::bake::make_basis_report(signals, seed);
-        print_report(r);
-        if (!json.empty())
-        {
-            hemi::bake::write_basis_report_json(json, r);
-            std::printf("\nwrote %s\n", json.c_str());
-        }
-        if (!plot.empty())
-        {
-            hemi::bake::plot_basis_report(plot, r);
-            std::printf("wrote %s\n", plot.c_str());
-        }
-        std::fprintf(stderr, "basis-report: %.1f s\n",
-                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    }
-    catch (const std::exception& e)
-    {
-        std::fprintf(stderr, "hemi-bake: %s\n", e.what());
-        return 1;
-    }
-    return 0;
+    return hemi::tool::run(app, argc, argv, "hemi-bake",
+                           [&]() -> int
+                           {
+                               if (brdf->parsed())
+                                   return run_brdf(br);
+                               if (envmap->parsed())
+                                   return run_envmap(em);
+                               if (reference->parsed())
+                                   return run_reference(rf);
+                               if (lightmap->parsed())
+                                   return run_lightmap(lm);
+                               if (ssbump->parsed())
+                                   return run_ssbump(sb);
+                               if (prt->parsed())
+                                   return run_prt(pc);
+                               return run_basis_report(json, plot, signals, seed);
+                           });
 }

@@ -1,6 +1,7 @@
 #include <hemi/bake/checkpoint.h>
 
 #include <hemi/io/asset.h>
+#include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
 
 #define XXH_INLINE_ALL
@@ -156,6 +157,17 @@ void remove_checkpoint(const std::filesystem::path& path) noexcept
 {
     std::error_code ignored;
     std::filesystem::remove(path, ignored);
+    // And what a checkpoint write killed before its rename left beside it (io::write_atomically's
+    // temporaries): a finished bake leaves no trace of its checkpoints.
+    try
+    {
+        for (const std::filesystem::path& stale : io::stale_temporaries(path))
+            std::filesystem::remove(stale, ignored);
+    }
+    catch (...)
+    {
+        // best effort, like the checkpoint itself
+    }
 }
 
 } // namespace hemi::bake

@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -53,8 +54,16 @@ void check_mesh(const io::Mesh& mesh)
             throw std::invalid_argument("hemi: EmbreeScene: mesh index " + std::to_string(i) +
                                         " is out of range (" + std::to_string(n) + " vertices)");
     for (const glm::vec3& p : mesh.positions)
+    {
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
             throw std::invalid_argument("hemi: EmbreeScene: the mesh has a non-finite position");
+        // Embree's rays are valid within +-1.8e18, and float positions that far out are kilometres apart;
+        // a level in metres (or centimetres) is far inside +-1e9.
+        if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > 1e9f)
+            throw std::invalid_argument("hemi: the mesh has a position beyond +-1e9 units of the origin (" +
+                                        std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
+                                        std::to_string(p.z) + "): too far out for ray tracing in floats");
+    }
 }
 
 void init_ray(RTCRay& ray, const glm::vec3& origin, const glm::vec3& direction, float t_near, float t_far)

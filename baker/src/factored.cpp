@@ -236,6 +236,11 @@ void check_envmap_options(const EnvmapBakeOptions& o)
     for (double e : o.exponents)
     {
         check_finite_positive(e, "every --exponents value");
+        // The asset stores exponents as floats: one too small for a float would become 0 there, after the
+        // work. Below 1e-6 a lobe is uniform to within float precision anyway.
+        if (e < 1e-6)
+            throw std::invalid_argument("every --exponents value must be at least 1e-6, got " +
+                                        std::to_string(e));
         if (e > math::kMaxPhongExponent)
             throw std::invalid_argument("every --exponents value must be at most 1e6 (a mirror), got " +
                                         std::to_string(e));

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -64,33 +65,75 @@ bool finite3(const glm::vec3& v)
 {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
+
+bool non_negative3(const glm::vec3& v)
+{
+    return v.x >= 0.0f && v.y >= 0.0f && v.z >= 0.0f;
+}
 } // namespace
 
 void check_lights(const LightmapLights& l)
 {
     if (!finite3(l.uniform) || !std::isfinite(l.environment_scale))
         throw std::invalid_argument("the environment's radiance must be finite");
+    if (!non_negative3(l.uniform) || !(l.environment_scale >= 0.0f))
+        throw std::invalid_argument("the environment's radiance must not be negative (--env-scale " +
+                                    std::to_string(l.environment_scale) + ")");
+    float env_max = std::max({l.uniform.x, l.uniform.y, l.uniform.z});
     if (!l.environment.pixels.empty())
     {
         if (l.environment.width == 0 || l.environment.height == 0 ||
             l.environment.pixels.size() != size_t(l.environment.width) * l.environment.height * 4)
             throw std::invalid_argument("the environment image's pixels do not match its size");
-        for (float v : l.environment.pixels)
+        env_max = 0.0f;
+        for (size_t i = 0; i < l.environment.pixels.size(); ++i)
+        {
+            const float v = l.environment.pixels[i];
             if (!std::isfinite(v))
                 throw std::invalid_argument("the environment image holds a value that is not finite");
+            if (i % 4 != 3 && v < 0.0f)
+                throw std::invalid_argument("the environment image holds a negative radiance (pixel " +
+                                            std::to_string(i / 4 % l.environment.width) + ", " +
+                                            std::to_string(i / 4 / l.environment.width) + ")");
+            if (i % 4 != 3)
+                env_max = std::max(env_max, v);
+        }
+        env_max *= l.environment_scale;
+    }
+    // Sums of many samples of such radiance must stay finite in float: far beyond any physical light.
+    if (!(double(env_max) <= kMaxLightValue))
+    {
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      "'s radiance reaches %.4g (times --env-scale): above %.4g, beyond what a bake can sum "
+                      "in floats",
+                      double(env_max), kMaxLightValue);
+        throw std::invalid_argument(
+            (l.environment_name.empty() ? std::string("the environment") : l.environment_name) + text);
     }
     for (const io::PunctualLight& p : l.punctual)
+    {
         if (!finite3(p.color) || !std::isfinite(p.intensity) || !finite3(p.position) ||
             !finite3(p.direction) || glm::length(p.direction) < 1e-6f || !std::isfinite(p.range) ||
             !std::isfinite(p.inner_cone) || !std::isfinite(p.outer_cone))
             throw std::invalid_argument("punctual light '" + p.name +
                                         "' has a value that is not finite or a direction of zero length");
+        if (!non_negative3(p.color) || p.intensity < 0.0f)
+            throw std::invalid_argument("punctual light '" + p.name + "' has a negative colour or intensity");
+        if (double(p.intensity) * std::max({p.color.x, p.color.y, p.color.z}) > kMaxLightValue)
+            throw std::invalid_argument("punctual light '" + p.name + "' has an intensity above " +
+                                        std::to_string(kMaxLightValue));
+    }
     if (l.sun)
     {
         if (!finite3(l.sun_direction) || glm::length(l.sun_direction) < 1e-6f)
             throw std::invalid_argument("the sun's direction must be a finite vector of non-zero length");
         if (!finite3(l.sun_irradiance))
             throw std::invalid_argument("the sun's irradiance must be finite");
+        if (!non_negative3(l.sun_irradiance))
+            throw std::invalid_argument("the sun's irradiance must not be negative");
+        if (double(std::max({l.sun_irradiance.x, l.sun_irradiance.y, l.sun_irradiance.z})) > kMaxLightValue)
+            throw std::invalid_argument("the sun's irradiance is above " + std::to_string(kMaxLightValue));
         if (!(l.sun_diameter_degrees >= 0.0f) || !(l.sun_diameter_degrees < 90.0f))
             throw std::invalid_argument("the sun's diameter must be in [0, 90) degrees");
     }

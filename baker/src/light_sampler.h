@@ -31,8 +31,12 @@ class EnvironmentSampler
     double total_ = 0.0;
 };
 
-// Throws std::invalid_argument for lights with a value that is not finite, a sun direction of zero length or
-// a sun diameter outside [0, 90) degrees.
+// The largest radiance, irradiance or intensity a light may have: far beyond any physical light (the sun's
+// disc is ~1.6e9 cd/m^2), and small enough that sums of millions of samples of it stay finite in float.
+constexpr double kMaxLightValue = 1e20;
+
+// Throws std::invalid_argument for lights with a value that is not finite, negative or above
+// kMaxLightValue, a sun direction of zero length or a sun diameter outside [0, 90) degrees.
 void check_lights(const LightmapLights& lights);
 
 class LightSampler

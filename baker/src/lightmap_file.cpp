@@ -6,6 +6,7 @@
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
+#include <hemi/io/memory.h>
 #include <hemi/math/camera.h>
 
 #include <nlohmann/json.hpp>
@@ -16,17 +17,86 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
 namespace hemi::bake
 {
+std::filesystem::path lightmap_exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,
+                                        const std::string& output)
+{
+    return dir / (asset.stem().string() + "." + output + ".exr");
+}
+
 namespace
 {
 
-std::filesystem::path exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,
-                               const std::string& output)
+// The lightmap's outputs are half floats (at most 65504). A basis coefficient reaches about the irradiance
+// itself (SH9's largest, for a single direction, is 1.02 E) and bounces add to it (a closed room of albedo
+// 0.75 sums to 4 E), so the lights' irradiance on a surface must stay within 65504 / 4. What can be known
+// before the bake is checked here, each light on its own and the lights together: a directional light's
+// irradiance, the environment's (pi times its largest radiance, a bound) and an emissive surface's
+// (pi times its radiance, the most a surface facing it can receive). Point and spot lights depend on their
+// distance to the surfaces; the asset's writer refuses what they make out of range.
+constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
+
+// Peak memory of a bake, an upper estimate: per atlas texel, its tables and per output coefficient (a float
+// map, its half copy in the asset and the asset's bytes), and per covered texel (the irradiance of every
+// pass, the sample, the texel's record). Measured on a fully covered floor with the default outputs (90
+// coefficients): 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against the 1,188 estimated here.
+constexpr uint64_t kLightmapBytesPerAtlasTexel = 32;
+constexpr uint64_t kLightmapBytesPerCoefficient = 10;
+constexpr uint64_t kLightmapBytesPerCoveredTexel = 256;
+
+void check_lightmap_range(const LightmapLights& l, const std::vector<io::Material>& materials,
+                          const std::filesystem::path& scene)
 {
-    return dir / (asset.stem().string() + "." + output + ".exr");
+    struct Source
+    {
+        std::string name;
+        double irradiance;
+    };
+    std::vector<Source> sources;
+    auto max3 = [](const glm::vec3& v) { return double(std::max({v.x, v.y, v.z})); };
+    if (l.sun)
+        sources.push_back({"the sun (--sun)", max3(l.sun_irradiance)});
+    if (l.environment.pixels.empty())
+        sources.push_back({"the environment (--env uniform, --env-scale)", M_PI * max3(l.uniform)});
+    else
+    {
+        double most = 0.0;
+        for (size_t i = 0; i < l.environment.pixels.size(); ++i)
+            if (i % 4 != 3)
+                most = std::max(most, double(l.environment.pixels[i]));
+        sources.push_back({"the environment image " + l.environment_name + " (--env, --env-scale)",
+                           M_PI * most * l.environment_scale});
+    }
+    for (const io::PunctualLight& p : l.punctual)
+        if (p.type == io::PunctualLight::Type::Directional)
+            sources.push_back(
+                {"the glTF directional light '" + p.name + "' (lux)", double(p.intensity) * max3(p.color)});
+    for (const io::Material& m : materials)
+        if (max3(m.emissive_factor) > 0.0)
+            sources.push_back({"the emissive material '" + m.name + "'", M_PI * max3(m.emissive_factor)});
+    double total = 0.0;
+    const Source* largest = nullptr;
+    for (const Source& s : sources)
+    {
+        total += s.irradiance;
+        if (!largest || s.irradiance > largest->irradiance)
+            largest = &s;
+    }
+    if (largest && total > kMaxLightmapIrradiance)
+    {
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      ": the lights give an irradiance of up to %.4g (%s: %.4g), above the %.4g that the "
+                      "lightmap's half floats hold with room for the bases and bounces; scale every light "
+                      "by one factor (e.g. 1e-3 or 1e-4 for daylight in lux) and undo it with the renderer's "
+                      "exposure",
+                      total, largest->name.c_str(), largest->irradiance, kMaxLightmapIrradiance);
+        throw io::FormatError(scene.string() + text);
+    }
 }
 
 } // namespace
@@ -56,7 +126,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     io::check_writable(o.bake.checkpoint);
     if (!o.exr_dir.empty())
         for (const std::string& name : o.outputs)
-            io::check_writable(exr_path(o.exr_dir, asset_path, name));
+            io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
 
     io::GltfScene scene = io::read_gltf(scene_path);
     LightmapBakeSummary summary;
@@ -86,6 +156,16 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             ": has no lightmap UVs (TEXCOORD_1): give every mesh a second UV set laid out for the "
             "lightmap (Blender: a second UV map, e.g. from Lightmap Pack), or let hemi make "
             "planar charts with --unwrap");
+    // Every texture is decoded once, now: a corrupt one stops the bake before it starts.
+    std::optional<LightmapSurfaces> surfaces;
+    try
+    {
+        surfaces.emplace(scene.mesh, scene.materials, scene.images, scene.primitives);
+    }
+    catch (const std::exception& e)
+    {
+        throw io::FormatError(scene_path.string() + ": " + e.what());
+    }
     summary.triangles = scene.mesh.indices.size() / 3;
     summary.materials = scene.materials.size();
     summary.primitives = scene.primitives.size();
@@ -129,19 +209,48 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     summary.width = w;
     summary.height = h;
+    // Memory before the atlas is made: what every atlas texel costs (the outputs' float maps and their half
+    // copies in the asset, the atlas's own tables), then, once the covered texels are known, theirs too.
+    uint64_t coefficients = 0;
+    for (const std::string& name : o.outputs)
+        coefficients += uint64_t(lightmap_output_size(name)) * 3;
+    const uint64_t per_atlas_texel =
+        kLightmapBytesPerAtlasTexel + coefficients * kLightmapBytesPerCoefficient;
+    const std::string atlas_text = std::to_string(w) + "x" + std::to_string(h) + " lightmap";
+    io::check_memory(uint64_t(w) * h * per_atlas_texel,
+                     scene_path.string() + ": a " + atlas_text + " with " + std::to_string(coefficients) +
+                         " coefficients per texel (--size, --texel-size, --bases)");
     LightmapUvReport report;
     const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
     summary.uv_report = report;
     if (!report.ok())
         throw io::FormatError(scene_path.string() + ": " + report.problems.front());
+    if (atlas.texels.empty())
+        throw io::FormatError(
+            scene_path.string() + ": no texel of the " + std::to_string(w) + "x" + std::to_string(h) +
+            " lightmap is covered by a triangle (" + std::to_string(report.triangles) +
+            " triangle(s): " + std::to_string(report.outside) + " with lightmap UVs outside [0, 1], " +
+            std::to_string(report.degenerate) + " of zero area in UV space, " +
+            std::to_string(report.zero_area) +
+            " of zero area in space); the lightmap would be empty: lay out TEXCOORD_1 inside [0, 1] "
+            "or bake with --unwrap");
+    io::check_memory(uint64_t(w) * h * per_atlas_texel + atlas.texels.size() * kLightmapBytesPerCoveredTexel,
+                     scene_path.string() + ": a " + atlas_text + " with " +
+                         std::to_string(atlas.texels.size()) + " covered texels");
     for (const std::string& warning : report.warnings)
         summary.warnings.push_back(warning);
+    // An atlas mostly empty costs its whole size in memory and in the asset: say so.
+    if (uint64_t(atlas.texels.size()) * 20 < uint64_t(w) * h && uint64_t(w) * h > (uint64_t(1) << 20))
+        summary.warnings.push_back(std::to_string(atlas.texels.size()) + " of the " + atlas_text + "'s " +
+                                   std::to_string(uint64_t(w) * h) +
+                                   " texels are covered (under 5%): the asset stores every texel; a smaller "
+                                   "--size or a larger --texel-size gives the same density for less");
 
     o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
-    const LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
-    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &surfaces, progress);
+    check_lightmap_range(o.lights, scene.materials, scene_path);
+    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &*surfaces, progress);
     summary.rays = sh.rays;
     summary.pushed = sh.pushed;
     summary.invalid = sh.invalid;
@@ -170,7 +279,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         asset.probes = probe_grid(scene.mesh, o.probes);
         LightmapBakeOptions probe_options = o.bake;
         probe_options.rays = o.probe_rays;
-        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &surfaces);
+        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
         summary.probes = asset.probes.irradiance.size();
         for (uint8_t v : asset.probes.valid)
             summary.invalid_probes += !v;
@@ -198,7 +307,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 {"hemi.frame",
                  "irradiance in each texel's tangent frame of the normal-map UV set (TEXCOORD_0): "
                  "E(n) = sum_k c_k b_k(n), n the tangent-space normal-map normal"}};
-            const std::filesystem::path file = exr_path(o.exr_dir, asset_path, out.name);
+            const std::filesystem::path file = lightmap_exr_path(o.exr_dir, asset_path, out.name);
             io::write_exr_channels(file, w, h, channels, attributes);
             summary.exr_files.push_back(file);
         }

@@ -414,6 +414,9 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     io::check_writable(asset_path);
     io::check_writable(o.bake.checkpoint);
     const io::GltfScene scene = io::read_gltf(scene_path);
+    // The asset carries the scene's images: each is decoded once now, so a corrupt one stops the bake
+    // before it starts rather than the renderer after it.
+    io::check_images(scene.images, scene_path.string());
     PrtBakeSummary summary;
     io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress); // scene.mesh: uvs1 included
     summary.tangents_generated = scene.tangents_generated;

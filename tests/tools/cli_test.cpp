@@ -21,13 +21,17 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 
 namespace fs = std::filesystem;
@@ -1304,5 +1308,580 @@ TEST(Cli, EnvmapWritesTheAssetTheExrsAndTheReport)
         EXPECT_LT(p["parabolic"]["rmse"].get<double>(), 0.03 * rms) << p.dump();
         EXPECT_LT(p["cube"]["rmse"].get<double>(), 0.03 * rms) << p.dump();
         EXPECT_EQ(p["cube"]["face_size"].get<uint32_t>() * 2, p["parabolic"]["size"].get<uint32_t>());
+    }
+}
+
+// ---- Hostile command lines, each defect fixed as a class: every subcommand, every option of its kind ----
+
+namespace
+{
+// A small glTF floor, baked once into a lightmap asset for hemi-render's checks.
+const fs::path& floor_scene()
+{
+    static const fs::path p = write_floor_gltf("hostile_floor.gltf", 2);
+    return p;
+}
+const fs::path& floor_asset()
+{
+    static const fs::path p = []
+    {
+        const fs::path a = dir() / "hostile_floor.hemi";
+        const Result r = lightmap(q(floor_scene()) + " -o " + q(a) + " --size 16 --rays 16 --bases plain");
+        EXPECT_EQ(r.status, 0) << r.err;
+        return a;
+    }();
+    return p;
+}
+const fs::path& height_png()
+{
+    static const fs::path p = []
+    {
+        const fs::path h = dir() / "hostile_height.png";
+        write_file(h, hemi::test::encode_png_samples(8, 8, 1, 8, std::vector<uint16_t>(64, 100)));
+        return h;
+    }();
+    return p;
+}
+const fs::path& env_exr(const std::string& name = "hostile_env.exr", uint32_t w = 16, uint32_t h = 8,
+                        float radiance = 1.0f)
+{
+    static std::map<std::string, fs::path> made;
+    auto it = made.find(name);
+    if (it == made.end())
+    {
+        const fs::path p = dir() / name;
+        hemi::io::ImageRgba img{w, h, std::vector<float>(size_t(w) * h * 4, radiance)};
+        hemi::io::write_exr(p, img);
+        it = made.emplace(name, p).first;
+    }
+    return it->second;
+}
+// Every subcommand once, with its inputs and the output `out` (and, where it has one, `--json` `json`): the
+// same cases run for every kind of bad output.
+std::vector<std::pair<std::string, std::string>> every_command(const fs::path& out_stem)
+{
+    const std::string o = out_stem.string();
+    return {
+        {HEMI_BAKE_EXE,
+         "prt " + q(floor_scene()) + " --bases gs --transfer unshadowed --order 3 -o " + q(o + ".hemi")},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + " --rays 8 -o " + q(o + ".png")},
+        {HEMI_BAKE_EXE,
+         "lightmap " + q(floor_scene()) + " --size 8 --rays 4 --bases plain -o " + q(o + ".hemi")},
+        {HEMI_BAKE_EXE, "reference " + q(floor_scene()) + " --size 8x8 --rays 2 -o " + q(o + ".exr")},
+        {HEMI_BAKE_EXE, "brdf --model phong --exponent 10 --size 16 -o " + q(o + ".exr")},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + " --size 8 --exponents 2 -o " + q(o + ".hemi")},
+        {HEMI_BAKE_EXE, "basis-report --signals 10 --json " + q(o + ".json")},
+        {HEMI_RENDER_EXE, q(floor_asset()) + " --technique plain --size 8x8 -o " + q(o + ".png")},
+    };
+}
+std::string name_of(const std::pair<std::string, std::string>& c)
+{
+    return fs::path(c.first).filename().string() + " " + c.second.substr(0, c.second.find(' '));
+}
+} // namespace
+
+// Usage errors exit 1 like every other error, for each subcommand (CLI11's own codes were 104-114): an
+// unknown option, a malformed value, a missing required option, a missing input; --help exits 0.
+TEST(HostileCli, UsageErrorsExitOneAndHelpExitsZero)
+{
+    for (const char* sub : {"prt", "ssbump", "lightmap", "reference", "brdf", "envmap", "basis-report"})
+    {
+        const Result unknown = run(HEMI_BAKE_EXE, std::string(sub) + " --no-such-option 1");
+        EXPECT_EQ(unknown.status, 1) << sub << ": " << unknown.err;
+        EXPECT_EQ(run(HEMI_BAKE_EXE, std::string(sub) + " --help").status, 0) << sub;
+    }
+    EXPECT_EQ(run(HEMI_BAKE_EXE, "").status, 1);
+    EXPECT_EQ(run(HEMI_BAKE_EXE, "no-such-subcommand").status, 1);
+    EXPECT_EQ(lightmap(q(dir() / "no_such_scene.gltf") + " -o " + q(dir() / "u.hemi")).status, 1);
+    EXPECT_EQ(lightmap(q(floor_scene())).status, 1) << "no -o";
+    EXPECT_EQ(lightmap(q(floor_scene()) + " -o " + q(dir() / "u.hemi") + " --bounces 17").status, 1);
+    EXPECT_EQ(ssbump(q(height_png()) + " -o " + q(dir() / "u.png") + " --scale abc").status, 1);
+    EXPECT_EQ(run(HEMI_RENDER_EXE, q(floor_asset()) + " --no-such-option -o x.png").status, 1);
+    EXPECT_EQ(run(HEMI_RENDER_EXE, "--help").status, 0);
+    EXPECT_FALSE(fs::exists(dir() / "u.hemi"));
+}
+
+// Numbers are the whole option text, finite and in range, in every option that takes them: each case exits 1
+// naming its option, before any work and with no output.
+TEST(HostileCli, NumbersAreWholeFiniteAndInRangeInEveryOption)
+{
+    const fs::path out = dir() / "numbers_out";
+    const std::string floor = q(floor_scene()), hemi_out = " -o " + q(out.string() + ".hemi"),
+                      exr_out = " -o " + q(out.string() + ".exr"),
+                      png_out = " -o " + q(out.string() + ".png");
+    struct Case
+    {
+        std::string exe, args, option;
+    };
+    const std::vector<Case> cases = {
+        {HEMI_BAKE_EXE, "prt " + floor + hemi_out + " --checkpoint-interval -1", "--checkpoint-interval"},
+        {HEMI_BAKE_EXE, "prt " + floor + hemi_out + " --checkpoint-interval nan", "--checkpoint-interval"},
+        {HEMI_BAKE_EXE, "prt " + floor + hemi_out + " --albedo nan", "--albedo"},
+        {HEMI_BAKE_EXE, "prt " + floor + hemi_out + " --cpca 1x8x", "--cpca"},
+        {HEMI_BAKE_EXE, "prt " + floor + hemi_out + " --cpca 4294967297x8", "--cpca"},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + png_out + " --checkpoint-interval nan",
+         "--checkpoint-interval"},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + png_out + " --scale inf", "--scale"},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + png_out + " --max-distance nan", "--max-distance"},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + png_out + " --filter 2,0.02x", "--filter"},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + png_out + " --filter 2.5,0.02", "--filter"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --checkpoint-interval -1",
+         "--checkpoint-interval"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --size 4294967297", "--size"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --size 16x4294967312", "--size"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --size 16x", "--size"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --texel-size nan", "--texel-size"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,1,1,1,1abc", "--sun"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,1,1,1,1,0.5,9", "--sun"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,1,-1,1,1", "--sun"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,0,1,1,1", "--sun"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,1,1,1,1,95", "--sun"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --env-scale -1", "--env-scale"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --env-scale nan", "--env-scale"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --probes 1,1,1x", "--probes"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --probes 1,-1,1", "--probes"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --camera 0,0,1e8,0,0,0", "--camera"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --camera 0,0,1,0,0,1e30", "--camera"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --camera 1,2,3,1,2,3", "--camera"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --camera 1,2,3,1,2,nan", "--camera"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --size 4294967297x2", "--size"},
+        {HEMI_BAKE_EXE, "reference " + floor + exr_out + " --env-scale -1", "--env-scale"},
+        {HEMI_BAKE_EXE, "brdf --model torrance-sparrow --roughness nan" + exr_out, "--roughness"},
+        {HEMI_BAKE_EXE, "brdf --model phong --exponent inf" + exr_out, "--exponent"},
+        {HEMI_BAKE_EXE, "brdf --model torrance-sparrow --ior nan" + exr_out, "--ior"},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + hemi_out + " --size 8 --exponents 1e-300", "--exponents"},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + hemi_out + " --size 8 --exponents 10,10", "--exponents"},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + hemi_out + " --size 8 --ior 1.5x", "--ior"},
+        {HEMI_RENDER_EXE, q(floor_asset()) + png_out + " --technique plain --exposure nan", "--exposure"},
+        {HEMI_RENDER_EXE, q(floor_asset()) + png_out + " --technique plain --exposure 0", "--exposure"},
+        {HEMI_RENDER_EXE, q(floor_asset()) + png_out + " --technique plain --rotate inf", "--rotate"},
+        {HEMI_RENDER_EXE, q(floor_asset()) + png_out + " --technique plain --size 1e3x10", "--size"},
+        {HEMI_RENDER_EXE, q(floor_asset()) + png_out + " --technique plain --camera 0,0,1e8,0,0,0",
+         "--camera"},
+    };
+    for (const Case& c : cases)
+    {
+        const Result r = run(c.exe, c.args);
+        EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+        EXPECT_NE(r.err.find(c.option), std::string::npos) << c.args << "\n" << r.err;
+        EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << c.args << ": the work started";
+        for (const char* ext : {".hemi", ".exr", ".png"})
+            EXPECT_FALSE(fs::exists(out.string() + ext)) << c.args;
+    }
+}
+
+namespace
+{
+// A glTF scene as two files (the JSON and its .bin buffer), as Blender's "glTF Separate" exports it.
+fs::path write_separate_floor(const std::string& stem)
+{
+    const fs::path embedded = write_floor_gltf(stem + "_embedded.gltf", 2);
+    nlohmann::json j = nlohmann::json::parse(slurp(embedded));
+    const std::string uri = j["buffers"][0]["uri"].get<std::string>();
+    const std::string b64 = uri.substr(uri.find(',') + 1);
+    std::vector<uint8_t> bytes;
+    uint32_t acc = 0;
+    int bits = 0;
+    for (char ch : b64)
+    {
+        const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        const char* at = std::strchr(table, ch);
+        if (ch == '=' || !at)
+            break;
+        acc = acc << 6 | uint32_t(at - table);
+        bits += 6;
+        if (bits >= 8)
+        {
+            bits -= 8;
+            bytes.push_back(uint8_t(acc >> bits));
+        }
+    }
+    write_file(dir() / (stem + ".bin"), bytes);
+    j["buffers"][0]["uri"] = stem + ".bin";
+    const fs::path p = dir() / (stem + ".gltf");
+    std::ofstream(p) << j.dump();
+    return p;
+}
+} // namespace
+
+// An output that is one of the command's inputs (named, or a file the glTF refers to) or another of its
+// outputs is refused before any work, and the input is left as it was.
+TEST(HostileCli, OutputsAreNeitherInputsNorEachOther)
+{
+    const fs::path scene = write_separate_floor("separate_floor");
+    const fs::path bin = dir() / "separate_floor.bin";
+    ASSERT_EQ(lightmap(q(scene) + " -o " + q(dir() / "separate_ok.hemi") + " --size 8 --rays 4 --bases plain")
+                  .status,
+              0)
+        << "the two-file scene must bake";
+    const std::string bin_bytes = slurp(bin), height_bytes = slurp(height_png());
+    const fs::path a = dir() / "same_a.hemi", s = dir() / "same_s.png";
+    struct Case
+    {
+        std::string exe, args;
+    };
+    const std::vector<Case> cases = {
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + " -o " + q(height_png())},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + " -o " + q(s) + " --exr " + q(s)},
+        {HEMI_BAKE_EXE, "ssbump " + q(height_png()) + " -o " + q(s) + " --json " + q(s)},
+        {HEMI_BAKE_EXE, "lightmap " + q(scene) + " -o " + q(bin) + " --size 8"},
+        {HEMI_BAKE_EXE, "lightmap " + q(scene) + " -o " + q(a) + " --json " + q(a) + " --size 8"},
+        {HEMI_BAKE_EXE, "lightmap " + q(scene) + " -o " + q(a) + " --json " + q(a.string() + ".partial")},
+        {HEMI_BAKE_EXE, "prt " + q(scene) + " -o " + q(bin)},
+        {HEMI_BAKE_EXE, "prt " + q(scene) + " -o " + q(a) + " --json " + q(dir() / "." / "same_a.hemi")},
+        {HEMI_BAKE_EXE, "reference " + q(scene) + " --env " + q(env_exr()) + " -o " + q(env_exr())},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + " -o " + q(env_exr())},
+        {HEMI_BAKE_EXE,
+         "brdf --model phong -o " + q(dir() / "same_b.exr") + " --json " + q(dir() / "same_b.exr")},
+    };
+    for (const Case& c : cases)
+    {
+        const Result r = run(c.exe, c.args);
+        EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+        EXPECT_TRUE(r.err.find("overwrite") != std::string::npos ||
+                    r.err.find("same file") != std::string::npos)
+            << c.args << "\n"
+            << r.err;
+    }
+    EXPECT_EQ(slurp(bin), bin_bytes) << "the scene's buffer was overwritten";
+    EXPECT_EQ(slurp(height_png()), height_bytes) << "the height map was overwritten";
+    EXPECT_FALSE(fs::exists(a));
+    EXPECT_FALSE(fs::exists(s));
+}
+
+// Outputs are regular files: a FIFO (or a device) named as any output of any command is refused before the
+// work, and stays what it was.
+TEST(HostileCli, OutputsThatAreNotRegularFilesAreRefused)
+{
+    for (const auto& c : every_command(dir() / "fifo_out"))
+    {
+        const std::string ext =
+            c.second.substr(c.second.rfind('.'), c.second.size() - c.second.rfind('.') - 1);
+        const fs::path fifo = dir() / ("fifo_out" + ext);
+        fs::remove(fifo);
+        ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+        const Result r = run(c.first, c.second);
+        EXPECT_EQ(r.status, 1) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find("not a regular file"), std::string::npos) << name_of(c) << "\n" << r.err;
+        EXPECT_TRUE(fs::is_fifo(fifo)) << name_of(c) << ": the FIFO was replaced";
+        fs::remove(fifo);
+    }
+}
+
+// Every command's outputs are checked before its work: a missing folder and a folder it may not write (a
+// read-only one: the command runs as an unprivileged user, since root writes anywhere) fail at once naming
+// the folder; a full disk (an RLIMIT_FSIZE child: writes past 16 blocks fail with EFBIG) fails naming the
+// file, with nothing half-written left behind (a checkpoint may stay: it is the finished work).
+TEST(HostileCli, EveryCommandChecksItsOutputs)
+{
+    const fs::path missing = dir() / "no_such_folder_at_all";
+    for (const auto& c : every_command(missing / "x"))
+    {
+        const Result r = run(c.first, c.second);
+        EXPECT_EQ(r.status, 1) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find("no_such_folder_at_all"), std::string::npos) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find("does not exist"), std::string::npos) << name_of(c) << "\n" << r.err;
+    }
+    EXPECT_FALSE(fs::exists(missing));
+
+    // Read-only: the folder is root's, mode 555, and the command runs as nobody.
+    const fs::path locked = dir() / "read_only_folder";
+    fs::create_directories(locked);
+    fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+    fs::permissions(dir(), fs::perms::all); // the inputs beside it are readable by nobody
+    for (const fs::path& input : {floor_scene(), floor_asset(), height_png(), env_exr()})
+        fs::permissions(input, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read,
+                        fs::perm_options::add);
+    const bool root = ::geteuid() == 0;
+    for (const auto& c : every_command(locked / "x"))
+    {
+        const Result r =
+            run(c.first, c.second, root ? "setpriv --reuid=65534 --regid=65534 --clear-groups" : "");
+        EXPECT_EQ(r.status, 1) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find("read_only_folder"), std::string::npos) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find("not writable"), std::string::npos) << name_of(c) << "\n" << r.err;
+        EXPECT_TRUE(fs::is_empty(locked)) << name_of(c);
+    }
+
+    // Full: each command's output grows past the limit (the large sizes here) and the write fails.
+    const fs::path full = dir() / "full_disk";
+    fs::create_directories(full);
+    const std::string o = (full / "x").string();
+    const fs::path noisy = dir() / "noisy_height.png";
+    std::vector<uint16_t> heights(256 * 256);
+    for (size_t i = 0; i < heights.size(); ++i)
+        heights[i] = uint16_t((i * 2654435761u >> 13) & 255); // incompressible enough
+    write_file(noisy, hemi::test::encode_png_samples(256, 256, 1, 8, heights));
+    fs::permissions(noisy, fs::perms::others_read, fs::perm_options::add);
+    const std::vector<std::pair<std::string, std::string>> big = {
+        {HEMI_BAKE_EXE,
+         "prt " + q(knot()) + " --bases gs --transfer unshadowed --order 3 -o " + q(o + ".hemi")},
+        {HEMI_BAKE_EXE,
+         "ssbump " + q(noisy) + " --no-occlusion -o " + q(o + ".png") + " --exr " + q(o + ".exr")},
+        {HEMI_BAKE_EXE,
+         "lightmap " + q(floor_scene()) + " --size 128 --rays 1 --bases sh9 -o " + q(o + ".hemi")},
+        {HEMI_BAKE_EXE, "reference " + q(floor_scene()) + " --size 1024x1024 --rays 2 -o " + q(o + ".exr")},
+        {HEMI_BAKE_EXE, "brdf --model torrance-sparrow --size 512 -o " + q(o + ".exr")},
+        {HEMI_BAKE_EXE, "envmap " + q(env_exr()) + " --size 64 --exponents 2 -o " + q(o + ".hemi")},
+        {HEMI_RENDER_EXE, q(floor_asset()) + " --technique plain --size 1024x1024 -o " + q(o + ".exr")},
+    };
+    for (const auto& c : big)
+    {
+        const Result r =
+            run("sh", "-c \"trap '' XFSZ; ulimit -f 16; exec '" + c.first + "' " + c.second + "\"");
+        EXPECT_EQ(r.status, 1) << name_of(c) << "\n" << r.err;
+        EXPECT_NE(r.err.find(full.string()), std::string::npos) << name_of(c) << "\n" << r.err;
+        for (const fs::directory_entry& e : fs::directory_iterator(full))
+            if (e.path().extension() != ".partial") // a checkpoint keeps the finished work, by design
+                ADD_FAILURE() << name_of(c) << " left " << e.path();
+        fs::remove_all(full);
+        fs::create_directories(full);
+    }
+}
+
+namespace
+{
+// The floor with its glTF JSON changed by `edit` (positions, lightmap UVs, lights, images).
+fs::path edited_floor(const std::string& name, const std::function<void(hemi::io::GltfScene&)>& edit)
+{
+    hemi::io::GltfScene s = hemi::io::read_gltf(floor_scene());
+    edit(s);
+    const fs::path p = dir() / name;
+    hemi::io::write_gltf(p, s);
+    return p;
+}
+} // namespace
+
+// Errors name the file they are about, whatever stage finds them (the bake's own checks included), and the
+// checks that can be made before the work are made before it.
+TEST(HostileCli, ErrorsNameTheFileAndComeBeforeTheWork)
+{
+    const fs::path out = dir() / "named_out";
+    // Not 2:1: found by the bake, named by the command.
+    const fs::path square = env_exr("square_env.exr", 8, 8);
+    Result r = run(HEMI_BAKE_EXE, "envmap " + q(square) + " --size 8 -o " + q(out.string() + ".hemi"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("square_env.exr"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("2:1"), std::string::npos) << r.err;
+    // Heights whose scaled slopes overflow.
+    const fs::path huge = dir() / "huge_heights.exr";
+    {
+        hemi::io::ImageRgba img{8, 8, std::vector<float>(8 * 8 * 4, 1.0f)};
+        for (size_t i = 0; i < 64; ++i)
+            img.pixels[i * 4] = img.pixels[i * 4 + 1] = img.pixels[i * 4 + 2] = (i % 2) ? 3e38f : 0.0f;
+        hemi::io::write_exr(huge, img);
+    }
+    r = ssbump(q(huge) + " --channel r -o " + q(out.string() + ".png"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("huge_heights.exr"), std::string::npos) << r.err;
+    // --unwrap of positions too large to chart.
+    const fs::path far = edited_floor("far_floor.gltf",
+                                      [](hemi::io::GltfScene& s)
+                                      {
+                                          for (glm::vec3& p : s.mesh.positions)
+                                              p *= 1e30f;
+                                      });
+    r = lightmap(q(far) + " --unwrap -o " + q(out.string() + ".hemi"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("far_floor.gltf"), std::string::npos) << r.err;
+    // ... and too far out to trace, for every bake that traces it.
+    for (const std::string& sub : {std::string("prt"), std::string("lightmap"), std::string("reference")})
+    {
+        r = run(HEMI_BAKE_EXE,
+                sub + " " + q(far) + " -o " + q(out.string() + (sub == "reference" ? ".exr" : ".hemi")));
+        EXPECT_EQ(r.status, 1) << sub << ": " << r.err;
+        EXPECT_NE(r.err.find("far_floor.gltf"), std::string::npos) << sub << ": " << r.err;
+    }
+    // An environment asset given to hemi-render: it says which kinds it draws.
+    const fs::path env_asset = dir() / "an_envmap.hemi";
+    ASSERT_EQ(
+        run(HEMI_BAKE_EXE, "envmap " + q(env_exr()) + " --size 8 --exponents 2 -o " + q(env_asset)).status,
+        0);
+    r = render(q(env_asset) + " --size 8x8 -o " + q(out.string() + ".png"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("an_envmap.hemi"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("envmap"), std::string::npos) << r.err;
+    // A corrupt embedded PNG: refused before the bake starts (no pass), naming the scene and the image, by
+    // every command that reads the scene's textures.
+    const fs::path corrupt = edited_floor("corrupt_texture.gltf",
+                                          [](hemi::io::GltfScene& s)
+                                          {
+                                              std::vector<uint8_t> png = hemi::test::encode_png_samples(
+                                                  4, 4, 3, 8, std::vector<uint16_t>(48, 200));
+                                              png[20] ^= 0x40; // inside IHDR: its CRC no longer matches
+                                              s.images.push_back({"CesiumLogoFlat.png", "image/png", png});
+                                              s.materials[0].base_color.image = 0;
+                                          });
+    for (const std::string& sub : {std::string("prt"), std::string("lightmap"), std::string("reference")})
+    {
+        r = run(HEMI_BAKE_EXE,
+                sub + " " + q(corrupt) + " -o " + q(out.string() + (sub == "reference" ? ".exr" : ".hemi")));
+        EXPECT_EQ(r.status, 1) << sub << ": " << r.err;
+        EXPECT_NE(r.err.find("corrupt_texture.gltf"), std::string::npos) << sub << ": " << r.err;
+        EXPECT_NE(r.err.find("image 0"), std::string::npos) << sub << ": " << r.err;
+        EXPECT_NE(r.err.find("corrupt PNG"), std::string::npos) << sub << ": " << r.err;
+        EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << sub << ": the bake started first";
+        EXPECT_FALSE(fs::exists(out.string() + ".hemi.partial")) << sub;
+    }
+    // A name given twice, and an --exr-dir that cannot be a folder: before the work.
+    r = lightmap(q(floor_scene()) + " --bases sh9,plain,sh9 -o " + q(out.string() + ".hemi"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("'sh9' twice"), std::string::npos) << r.err;
+    r = run(HEMI_BAKE_EXE, "prt " + q(floor_scene()) + " --bases gs,hl2,gs -o " + q(out.string() + ".hemi"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("'gs' twice"), std::string::npos) << r.err;
+    const fs::path a_file = dir() / "a_plain_file";
+    std::ofstream(a_file) << "x";
+    for (const std::string& cmd :
+         {"envmap " + q(env_exr()) + " --size 8 --exponents 2 -o " + q(out.string() + ".hemi"),
+          "lightmap " + q(floor_scene()) + " --size 8 --bases plain -o " + q(out.string() + ".hemi")})
+    {
+        r = run(HEMI_BAKE_EXE, cmd + " --exr-dir " + q(a_file / "sub"));
+        EXPECT_EQ(r.status, 1) << cmd << "\n" << r.err;
+        EXPECT_NE(r.err.find("--exr-dir"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out.string() + ".hemi")) << cmd << ": the asset was written first";
+    }
+}
+
+// A lightmap that would be empty, and light the lightmap cannot store, are refused before the bake, naming
+// the scene and the light; so is light too strong to sum in floats, for the reference too.
+TEST(HostileCli, LightmapsRefuseEmptyAtlasesAndLightTheyCannotHold)
+{
+    const fs::path out = dir() / "refused.hemi";
+    const std::vector<std::pair<std::string, std::function<void(hemi::io::GltfScene&)>>> empty = {
+        {"zero_uvs.gltf",
+         [](hemi::io::GltfScene& s) { std::fill(s.mesh.uvs1.begin(), s.mesh.uvs1.end(), glm::vec2(0.0f)); }},
+        {"one_uv.gltf",
+         [](hemi::io::GltfScene& s) { std::fill(s.mesh.uvs1.begin(), s.mesh.uvs1.end(), glm::vec2(0.3f)); }},
+        {"outside_uvs.gltf",
+         [](hemi::io::GltfScene& s)
+         {
+             for (glm::vec2& uv : s.mesh.uvs1)
+                 uv += glm::vec2(5.0f);
+         }},
+        {"one_point.gltf", [](hemi::io::GltfScene& s)
+         { std::fill(s.mesh.positions.begin(), s.mesh.positions.end(), glm::vec3(1.0f)); }},
+    };
+    for (const auto& [name, edit] : empty)
+    {
+        const Result r = lightmap(q(edited_floor(name, edit)) + " --size 16 -o " + q(out));
+        EXPECT_EQ(r.status, 1) << name << ": " << r.err;
+        EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+        // (All-zero TEXCOORD_1 is what glTF writers emit for "none": refused as a scene without lightmap
+        // UVs.)
+        EXPECT_TRUE(r.err.find("no texel") != std::string::npos ||
+                    r.err.find("TEXCOORD_1") != std::string::npos)
+            << r.err;
+        EXPECT_FALSE(fs::exists(out)) << name;
+    }
+    // Daylight in lux: 100,000 is beyond the half floats, named, before any pass; a rerun says the same.
+    for (int attempt = 0; attempt < 2; ++attempt)
+    {
+        const Result r = lightmap(q(floor_scene()) + " --size 16 --sun 0,0,1,1e5,1e5,1e5 -o " + q(out));
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find("the sun (--sun)"), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out.string() + ".partial"));
+    }
+    nlohmann::json j = nlohmann::json::parse(slurp(floor_scene()));
+    j["extensionsUsed"].push_back("KHR_lights_punctual");
+    j["extensions"]["KHR_lights_punctual"]["lights"] = {
+        {{"type", "directional"}, {"intensity", 100000.0}, {"name", "Daylight"}}};
+    j["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+    const fs::path daylight_scene = dir() / "daylight.gltf";
+    std::ofstream(daylight_scene) << j.dump();
+    Result r = lightmap(q(daylight_scene) + " --size 16 -o " + q(out));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("'Daylight'"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("daylight.gltf"), std::string::npos) << r.err;
+    // The same light scaled by 1e-3, as the message says, bakes.
+    r = lightmap(q(floor_scene()) + " --size 16 --rays 8 --bases plain --sun 0,0,1,100,100,100 -o " + q(out));
+    EXPECT_EQ(r.status, 0) << r.err;
+    // A sky of 3e38: no bake can sum it in floats.
+    const fs::path blinding = env_exr("blinding_sky.exr", 16, 8, 3e38f);
+    for (const std::string& sub : {std::string("lightmap"), std::string("reference")})
+    {
+        r = run(HEMI_BAKE_EXE, sub + " " + q(floor_scene()) + " --env " + q(blinding) + " -o " +
+                                   q(dir() / (sub == "reference" ? "blinding.exr" : "blinding.hemi")));
+        EXPECT_EQ(r.status, 1) << sub << ": " << r.err;
+        EXPECT_NE(r.err.find("blinding_sky.exr"), std::string::npos) << sub << ": " << r.err;
+        EXPECT_FALSE(fs::exists(dir() / "blinding.exr"));
+    }
+}
+
+namespace
+{
+// A PNG that declares width x height in its IHDR (CRC fixed) but holds 1x1 data: what a job must size from
+// the header before it decodes anything.
+std::vector<uint8_t> png_declaring(uint32_t width, uint32_t height)
+{
+    std::vector<uint8_t> png = hemi::test::encode_png_samples(1, 1, 1, 8, {0});
+    for (int i = 0; i < 4; ++i)
+    {
+        png[16 + i] = uint8_t(width >> (24 - 8 * i));
+        png[20 + i] = uint8_t(height >> (24 - 8 * i));
+    }
+    const uint32_t crc = uint32_t(::crc32(0, png.data() + 12, 17));
+    for (int i = 0; i < 4; ++i)
+        png[29 + i] = uint8_t(crc >> (24 - 8 * i));
+    return png;
+}
+} // namespace
+
+// What the machine cannot hold is refused before it is allocated, naming the input, the size and the
+// estimate (HEMI_MEMORY_BUDGET stands for a small machine): a 16384^2 height map, a 16384^2 lightmap of one
+// texel's worth of floor, a 16384^2 reference image.
+TEST(HostileCli, WhatCannotFitIsRefusedWithTheEstimate)
+{
+    const std::string budget = "HEMI_MEMORY_BUDGET=256M";
+    const fs::path big = dir() / "declared_16384.png";
+    write_file(big, png_declaring(16384, 16384));
+    Result r = run(HEMI_BAKE_EXE, "ssbump " + q(big) + " -o " + q(dir() / "big_out.png"), budget);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("declared_16384.png"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("268435456 texels"), std::string::npos) << r.err;
+    for (const char* size : {"4096", "16384"})
+    {
+        r = run(HEMI_BAKE_EXE,
+                "lightmap " + q(floor_scene()) + " --size " + size + " -o " + q(dir() / "big.hemi"), budget);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find(std::string(size) + "x" + size + " lightmap"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << r.err;
+    }
+    r = run(HEMI_BAKE_EXE, "reference " + q(floor_scene()) + " --size 16384x16384 -o " + q(dir() / "big.exr"),
+            budget);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
+    // The same small bakes fit the same budget.
+    EXPECT_EQ(run(HEMI_BAKE_EXE,
+                  "lightmap " + q(floor_scene()) + " --size 64 --rays 4 -o " + q(dir() / "fits.hemi"), budget)
+                  .status,
+              0);
+}
+
+// A checkpoint write killed before its rename leaves "<out>.partial.tmp<pid>.<n>"; a later bake that finishes
+// removes it with the checkpoint, for every bake that checkpoints.
+TEST(HostileCli, FinishedBakesLeaveNoCheckpointTemporaries)
+{
+    const std::vector<std::pair<std::string, fs::path>> bakes = {
+        {"ssbump " + q(height_png()) + " --rays 8 -o ", dir() / "tmp_ssbump.png"},
+        {"lightmap " + q(floor_scene()) + " --size 8 --rays 4 --bases plain -o ",
+         dir() / "tmp_lightmap.hemi"},
+        {"prt " + q(floor_scene()) + " --bases gs --order 3 --rays 8 -o ", dir() / "tmp_prt.hemi"},
+    };
+    for (const auto& [args, output] : bakes)
+    {
+        const fs::path left = output.string() + ".partial.tmp4194303.7"; // a pid no process has
+        std::ofstream(left) << "half a checkpoint";
+        const Result r = run(HEMI_BAKE_EXE, args + q(output));
+        ASSERT_EQ(r.status, 0) << args << r.err;
+        EXPECT_TRUE(fs::exists(output));
+        EXPECT_FALSE(fs::exists(left))
+            << args << ": the killed checkpoint write's temporary outlived the bake";
+        EXPECT_FALSE(fs::exists(output.string() + ".partial"));
     }
 }

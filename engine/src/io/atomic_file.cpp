@@ -25,6 +25,10 @@ std::string output_problem(const std::filesystem::path& path)
         return dir.string() + " is not a folder";
     if (fs::is_directory(path, ec))
         return "it is a folder";
+    // A device, FIFO or socket would be replaced by a regular file (the rename), or written with a partial
+    // result: outputs are regular files only.
+    if (fs::exists(path, ec) && !fs::is_regular_file(path, ec))
+        return "it exists and is not a regular file (a device, FIFO or socket)";
     if (::access(dir.c_str(), W_OK | X_OK) != 0)
         return "the folder " + dir.string() + " is not writable (" + std::strerror(errno) + ")";
     if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0 && errno == EROFS)

@@ -1,3 +1,4 @@
+#include <hemi/io/image.h>
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
@@ -6,6 +7,23 @@
 
 namespace hemi::io
 {
+
+void check_images(const std::vector<EncodedImage>& images, const std::string& container)
+{
+    for (size_t i = 0; i < images.size(); ++i)
+    {
+        try
+        {
+            decode_image(images[i]);
+        }
+        catch (const std::exception& e)
+        {
+            // decode_image names the image: an embedded one as "<container> image <i>", one by URI by it.
+            const std::string message = e.what();
+            throw FormatError(message.rfind(container, 0) == 0 ? message : container + ": " + message);
+        }
+    }
+}
 
 glm::mat3 TextureRef::uv_transform() const
 {

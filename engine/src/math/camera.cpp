@@ -5,8 +5,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -90,11 +92,31 @@ std::optional<Camera> parse_camera(std::string_view text)
     if (text == "auto")
         return std::nullopt;
     const std::string s(text);
+    const std::string form = "--camera expects auto or EYE,TARGET (6 comma-separated numbers, each within "
+                             "+-1e6 world units, the eye apart from the target), got '" +
+                             s + "'";
+    float v[6] = {};
+    size_t start = 0;
+    for (int i = 0; i < 6; ++i)
+    {
+        const size_t comma = s.find(',', start);
+        if ((i < 5) != (comma != std::string::npos))
+            throw std::invalid_argument(form);
+        const std::string item =
+            s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        char* end = nullptr;
+        const double d =
+            item.empty() || std::isspace((unsigned char)item[0]) ? NAN : std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d) || std::abs(d) > 1e6)
+            throw std::invalid_argument(form);
+        v[i] = float(d);
+        start = comma + 1;
+    }
     Camera c;
-    char rest = 0;
-    if (std::sscanf(s.c_str(), "%f,%f,%f,%f,%f,%f%c", &c.eye.x, &c.eye.y, &c.eye.z, &c.target.x, &c.target.y,
-                    &c.target.z, &rest) != 6)
-        throw std::invalid_argument("--camera expects auto or EYE,TARGET (6 numbers), got '" + s + "'");
+    c.eye = glm::vec3(v[0], v[1], v[2]);
+    c.target = glm::vec3(v[3], v[4], v[5]);
+    if (!(glm::length(c.target - c.eye) > 1e-6f))
+        throw std::invalid_argument(form);
     return c;
 }
 

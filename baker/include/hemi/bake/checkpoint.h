@@ -119,7 +119,8 @@ class SliceCheckpoint
 // ASSET.partial: where the bake of `asset` checkpoints unless told otherwise.
 std::filesystem::path checkpoint_path(const std::filesystem::path& asset);
 
-// Removes a checkpoint once the result it was insurance for is written; no file is fine, and a failure is
+// Removes a checkpoint once the result it was insurance for is written, with the temporaries of checkpoint
+// writes that were killed before their rename; no file is fine, and a failure is
 // ignored (a stale checkpoint is harmless: its key no longer matches anything, or it resumes to the same
 // bytes).
 void remove_checkpoint(const std::filesystem::path& path) noexcept;

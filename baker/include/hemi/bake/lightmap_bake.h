@@ -40,6 +40,7 @@ struct LightmapLights
     glm::vec3 uniform{1.0f};   // when `environment` is empty: radiance from every direction
     io::ImageRgba environment; // equirect radiance (linear), constant over each pixel; empty: uniform
     float environment_scale = 1.0f;
+    std::string environment_name; // for messages: the file `environment` came from
 
     bool sun = false;
     glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun (world)
@@ -214,6 +215,10 @@ struct LightmapBakeSummary
     std::string checkpoint_error;
     std::vector<std::filesystem::path> exr_files;
 };
+
+// Where --exr-dir DIR puts an output of the asset ASSET: DIR/<ASSET's stem>.<output>.exr.
+std::filesystem::path lightmap_exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,
+                                        const std::string& output);
 
 // Checks that every output can be written before reading the scene; checkpoints to ASSET.partial unless
 // options.bake.checkpoint says otherwise. Throws io::FormatError naming the file and the problem, or

@@ -165,6 +165,11 @@ struct SsbumpOptions
 // Throws std::invalid_argument naming the option that is out of range.
 void check_ssbump_options(const SsbumpOptions& options);
 
+// Bytes a bake of a height map of `texels` texels takes at its peak (the decoded image, the heights and their
+// filtered copy, normals, occlusion and weights, the horizon tracer, the 8-bit output), for refusing a map
+// the machine cannot hold before it is read (io::check_memory).
+uint64_t ssbump_memory(uint64_t texels, const SsbumpOptions& options);
+
 struct SsbumpProgress
 {
     uint64_t texels_done = 0;

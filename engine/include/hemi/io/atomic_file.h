@@ -23,7 +23,8 @@ void write_atomically(const std::filesystem::path& path,
 void write_text_atomically(const std::filesystem::path& path, std::string_view text);
 
 // Why a file cannot be written at `path`, or an empty string: its folder does not exist or is not a folder,
-// `path` is a folder, the folder is not writable, or its file system has no space left. Long jobs call this
+// `path` is a folder or another file that is not a regular one (a device, a FIFO), the folder is not
+// writable, or its file system has no space left. Long jobs call this
 // before they start (io::check_writable), so that they fail in a second, not after the work.
 std::string output_problem(const std::filesystem::path& path);
 // Throws FormatError("<path>: <output_problem>") when there is a problem.

@@ -48,6 +48,10 @@ struct EncodedImage
     bool operator==(const EncodedImage&) const = default;
 };
 
+// Decodes every image once (decode_image), so that a job that will carry or read them finds a corrupt one
+// before it starts; the texels are dropped. Throws FormatError naming `container`, the image and the problem.
+void check_images(const std::vector<EncodedImage>& images, const std::string& container);
+
 // A material's use of an image.
 struct TextureRef
 {

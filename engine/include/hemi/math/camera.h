@@ -45,7 +45,8 @@ glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, floa
                              float aspect);
 
 // The tools' --camera value: "auto" (nullopt: auto_camera) or EYE,TARGET as six comma-separated numbers
-// (world space, z up). Throws std::invalid_argument quoting the text otherwise.
+// (world space, z up), each finite and within +-1e6, the eye apart from the target. Throws
+// std::invalid_argument quoting the text otherwise.
 std::optional<Camera> parse_camera(std::string_view text);
 
 } // namespace hemi::math

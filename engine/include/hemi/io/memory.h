@@ -1,0 +1,30 @@
+#pragma once
+// Memory a long job can count on, so that it refuses an input it cannot hold before it starts (naming the
+// input and the estimate) instead of failing with std::bad_alloc, or being killed, after hours.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace hemi::io
+{
+
+// Bytes this process can still allocate: the kernel's MemAvailable (/proc/meminfo), lowered by the room
+// left under RLIMIT_AS or RLIMIT_DATA when one is set, and by the environment variable HEMI_MEMORY_BUDGET
+// when it is set (bytes, or a number with K, M, G or T: "8G"; a share of a machine that runs other jobs).
+// 0 when none of them can be read.
+uint64_t available_memory();
+
+// "1.50 GiB", "12.0 MiB", "512 B".
+std::string format_bytes(uint64_t bytes);
+
+// Throws FormatError("<what>: needs about <bytes> of memory, but only <available> is available") when an
+// estimate exceeds available_memory() (nothing is refused when that is unknown).
+void check_memory(uint64_t bytes, const std::string& what);
+
+// The pixel count a PNG or EXR file declares in its header (PNG's IHDR, EXR's data window), read without
+// decoding, so that a job can estimate its memory before it reads the image; 0 when the file is neither
+// or its header cannot be read (the reader then says why).
+uint64_t image_pixels(const std::filesystem::path& path);
+
+} // namespace hemi::io
