@@ -52,8 +52,8 @@ inline double parse_number(std::string_view text, std::string_view option, doubl
 
 // Comma-separated numbers, each as parse_number; their count must be one of `counts` (empty: any count
 // from 1). `form` shows the expected form in the error, e.g. "X,Y,Z,R,G,B[,DIAMETER]".
-inline std::vector<double> parse_numbers(std::string_view text, std::string_view option, std::string_view form,
-                                         std::vector<size_t> counts = {})
+inline std::vector<double> parse_numbers(std::string_view text, std::string_view option,
+                                         std::string_view form, std::vector<size_t> counts = {})
 {
     std::vector<double> out;
     const std::string s(text);
@@ -61,15 +61,16 @@ inline std::vector<double> parse_numbers(std::string_view text, std::string_view
     while (true)
     {
         const size_t comma = s.find(',', start);
-        const std::string item = s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        const std::string item =
+            s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
         try
         {
             out.push_back(parse_number(item, option));
         }
         catch (const std::invalid_argument&)
         {
-            throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" + s +
-                                        "' ('" + item + "' is not a finite number)");
+            throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" +
+                                        s + "' ('" + item + "' is not a finite number)");
         }
         if (comma == std::string::npos)
             break;
@@ -99,8 +100,9 @@ inline uint64_t parse_count(std::string_view text, std::string_view option, uint
 
 // Whole numbers separated by `separator` ('x' for sizes and CPCA's CLUSTERSxVECTORS, ',' for grids); their
 // count must be one of `counts`; each in [lo, hi].
-inline std::vector<uint64_t> parse_counts(std::string_view text, std::string_view option, std::string_view form,
-                                          char separator, std::vector<size_t> counts, uint64_t lo, uint64_t hi)
+inline std::vector<uint64_t> parse_counts(std::string_view text, std::string_view option,
+                                          std::string_view form, char separator, std::vector<size_t> counts,
+                                          uint64_t lo, uint64_t hi)
 {
     std::vector<uint64_t> out;
     const std::string s(text);
@@ -115,8 +117,8 @@ inline std::vector<uint64_t> parse_counts(std::string_view text, std::string_vie
         }
         catch (const std::invalid_argument& e)
         {
-            throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" + s +
-                                        "': " + e.what());
+            throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" +
+                                        s + "': " + e.what());
         }
         if (sep == std::string::npos)
             break;
@@ -126,7 +128,8 @@ inline std::vector<uint64_t> parse_counts(std::string_view text, std::string_vie
     for (size_t c : counts)
         count_ok = count_ok || out.size() == c;
     if (!count_ok)
-        throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" + s + "'");
+        throw std::invalid_argument(std::string(option) + " expects " + std::string(form) + ", got '" + s +
+                                    "'");
     return out;
 }
 
@@ -156,8 +159,9 @@ inline CLI::Validator finite(double lo = -HUGE_VAL, double hi = HUGE_VAL)
             }
             return {};
         },
-        lo == -HUGE_VAL && hi == HUGE_VAL ? "FINITE" : "FINITE in [" + CLI::detail::to_string(lo) + ", " +
-                                                           CLI::detail::to_string(hi) + "]");
+        lo == -HUGE_VAL && hi == HUGE_VAL
+            ? "FINITE"
+            : "FINITE in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]");
 }
 
 // Comma-separated names, none twice and none empty.
@@ -269,14 +273,14 @@ inline void make_folder(const std::filesystem::path& dir, std::string_view optio
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec || !std::filesystem::is_directory(dir))
-        throw std::invalid_argument(std::string(option) + " " + dir.string() + ": cannot make the folder" +
-                                    (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
+        throw std::invalid_argument(
+            std::string(option) + " " + dir.string() + ": cannot make the folder" +
+            (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
 }
 
 // Runs `work` on the data of `input`; an error whose message names none of the command's files is
 // re-thrown as "<input>: <message>", so that every error says which file it is about.
-template <class F>
-auto naming_input(const std::filesystem::path& input, const Files& files, F&& work)
+template <class F> auto naming_input(const std::filesystem::path& input, const Files& files, F&& work)
 {
     try
     {
@@ -300,7 +304,8 @@ auto naming_input(const std::filesystem::path& input, const Files& files, F&& wo
 // Parses the command line and runs `body`: usage errors print CLI11's message and exit 1 (--help exits 0);
 // an exception from `body` prints "<tool> <subcommand>: <message>" and exits 1; running out of memory says
 // so.
-inline int run(CLI::App& app, int argc, char** argv, const std::string& tool, const std::function<int()>& body)
+inline int run(CLI::App& app, int argc, char** argv, const std::string& tool,
+               const std::function<int()>& body)
 {
     try
     {

@@ -2,25 +2,33 @@
 //   <out>/<target>/corpus/       small valid inputs of each reader
 //   <out>/<target>/regressions/  the hostile inputs that once got through (each must stay a clean refusal)
 // Usage: fuzz_seeds OUT_DIR
+#include <hemi/io/asset.h>
+#include <hemi/io/envmap_asset.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
 
 #include "../hostile_inputs.h"
+#include "../io/raw_exr.h"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
+#include <ImfTiledOutputFile.h>
 
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -102,21 +110,121 @@ io::GltfScene tiny_scene()
     return s;
 }
 
-void exr(const fs::path& p, int display, int data)
+void exr(const fs::path& p, int display, int data_w, int data_h = -1)
 {
+    data_h = data_h < 0 ? data_w : data_h;
     fs::create_directories(p.parent_path());
     Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(display - 1, display - 1)),
-                       Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(data - 1, data - 1)));
+                       Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(data_w - 1, data_h - 1)));
     header.channels().insert("R", Imf::Channel(Imf::HALF));
     header.channels().insert("G", Imf::Channel(Imf::FLOAT));
-    std::vector<uint16_t> r(size_t(data) * data, 0x3c00); // half 1.0
-    std::vector<float> g(size_t(data) * data, 0.5f);
+    std::vector<uint16_t> r(size_t(data_w) * data_h, 0x3c00); // half 1.0
+    std::vector<float> g(size_t(data_w) * data_h, 0.5f);
     Imf::OutputFile file(p.c_str(), header);
     Imf::FrameBuffer fb;
-    fb.insert("R", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(r.data()), 2, 2 * size_t(data)));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(g.data()), 4, 4 * size_t(data)));
+    fb.insert("R", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(r.data()), 2, 2 * size_t(data_w)));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(g.data()), 4, 4 * size_t(data_w)));
     file.setFrameBuffer(fb);
-    file.writePixels(data);
+    file.writePixels(data_h);
+}
+
+// A 12 x 10 tiled EXR (4 x 4 tiles, mipmapped, PIZ) of a gradient in R, G, B.
+void tiled_exr(const fs::path& p)
+{
+    fs::create_directories(p.parent_path());
+    Imf::Header header(12, 10);
+    header.compression() = Imf::PIZ_COMPRESSION;
+    for (const char* c : {"R", "G", "B"})
+        header.channels().insert(c, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(4, 4, Imf::MIPMAP_LEVELS));
+    std::vector<uint16_t> v(12 * 10 * 3);
+    for (size_t i = 0; i < v.size(); ++i)
+        v[i] = uint16_t(0x3000 + i * 7); // half values between 0.125 and 1
+    Imf::TiledOutputFile file(p.c_str(), header);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+        fb.insert(c == 0   ? "R"
+                  : c == 1 ? "G"
+                           : "B",
+                  Imf::Slice(Imf::HALF, reinterpret_cast<char*>(v.data() + c), 6, 6 * 12));
+    file.setFrameBuffer(fb);
+    for (int level = 0; level < file.numLevels(); ++level)
+        file.writeTiles(0, file.numXTiles(level) - 1, 0, file.numYTiles(level) - 1, level);
+}
+
+// The hand-made EXR (tests/io/raw_exr.h) with `extra` attributes after the image's, on `rows` scanlines of
+// `width` pixels of data (whatever the attributes claim), with the version field `version`.
+std::vector<uint8_t> raw_exr(const std::function<void(test::RawExr&)>& extra, int width = 4, int rows = 3,
+                             uint32_t version = 2)
+{
+    test::RawExr e(version);
+    e.image_attributes(4, 3);
+    extra(e);
+    e.end_header().half_scanlines(width, rows);
+    return e.bytes;
+}
+
+math::ParabolicImage parabolic(uint32_t size, float value)
+{
+    math::ParabolicImage m;
+    m.size = size;
+    m.extent = size > 2 ? double(size) / double(size - 2) : 1.0;
+    m.rgb.assign(size_t(2) * size * size * 3, value);
+    for (size_t i = 0; i < m.rgb.size(); ++i)
+        m.rgb[i] += 0.01f * float(i % 17);
+    return m;
+}
+
+// A small environment asset: a mirror chain from `size`, `glossy` glossy maps, `tables` Fresnel tables of 5
+// samples.
+io::EnvmapAsset envmap(uint32_t size, int glossy, int tables)
+{
+    io::EnvmapAsset a;
+    a.source_width = 16;
+    a.source_height = 8;
+    for (uint32_t s = size; s >= 1; s /= 2)
+        a.mirror.push_back(parabolic(s, 1.0f / float(s)));
+    for (int i = 0; i < glossy; ++i)
+    {
+        a.exponents.push_back(float(10 * (i + 1)));
+        a.glossy.push_back(parabolic(size, 0.5f));
+    }
+    a.diffuse = parabolic(2, 0.25f);
+    a.fresnel_samples = 5;
+    for (int i = 0; i < tables; ++i)
+    {
+        a.iors.push_back(1.5f + float(i));
+        for (int k = 0; k < 5; ++k)
+            a.fresnel.push_back(1.0f - 0.2f * float(k));
+    }
+    return a;
+}
+
+// The sections of the asset at `valid`, changed by `change`, in a new container (checksum sealed).
+std::vector<uint8_t>
+changed_asset(const fs::path& valid, const fs::path& scratch,
+              const std::function<void(std::map<std::string, std::vector<std::byte>>&)>& change)
+{
+    std::map<std::string, std::vector<std::byte>> sections;
+    {
+        const io::AssetReader r(valid);
+        for (const std::string& name : r.names())
+        {
+            const std::span<const std::byte> b = r.section(name);
+            sections[name].assign(b.begin(), b.end());
+        }
+    }
+    change(sections);
+    io::AssetWriter w;
+    for (const auto& [name, bytes] : sections)
+        w.add(name, bytes);
+    w.write(scratch);
+    return slurp(scratch);
+}
+
+template <typename T> void set(std::vector<std::byte>& section, size_t at, T v)
+{
+    std::memcpy(section.data() + at, &v, sizeof v);
 }
 
 } // namespace
@@ -152,6 +260,50 @@ int main(int argc, char** argv)
     exr(out / "exr/corpus/small.exr", 4, 4);
     exr(out / "exr/corpus/cropped.exr", 16, 2);
     exr(out / "exr/regressions/huge_display_window.exr", 16384, 1);
+    put(out / "exr/corpus/hand_made.exr", test::RawExr::standard(5, 3).bytes);
+    tiled_exr(out / "exr/corpus/tiled.exr");
+    // Each refused by one rule of read_exr alone (tests/io/image_test.cpp, ExrReader): a display window 64.2
+    // times its data window under the 2^27-pixel cap; header claims the file cannot hold (OpenEXR 3.1 would
+    // allocate them: a 1 GiB string attribute, a preview of a million pixels, an 8 MiB offset table, the
+    // buffers of a 2^20-pixel row or of a 4096 x 4096 tile around one pixel).
+    exr(out / "exr/regressions/display_window_64.2_times_data.exr", 2048, 255, 256);
+    put(out / "exr/regressions/string_attribute_of_1_gib.exr",
+        raw_exr([](test::RawExr& e)
+                { e.attribute("comment", "string", test::RawExr::text("hi"), 1 << 30); }));
+    put(out / "exr/regressions/preview_of_a_million_pixels_in_8_bytes.exr",
+        raw_exr(
+            [](test::RawExr& e) {
+                e.attribute("preview", "preview", test::RawExr::ints({1000, 1000}));
+            }));
+    put(out / "exr/regressions/offset_table_of_8_mib.exr",
+        raw_exr(
+            [](test::RawExr& e)
+            {
+                e.attribute("dataWindow", "box2i", test::RawExr::box(0, 0, 0, (1 << 20) - 1));
+                e.attribute("displayWindow", "box2i", test::RawExr::box(0, 0, 0, (1 << 20) - 1));
+            },
+            1, 1));
+    put(out / "exr/regressions/row_of_2_20_pixels_in_2_kib.exr",
+        raw_exr(
+            [](test::RawExr& e)
+            {
+                e.attribute("dataWindow", "box2i", test::RawExr::box(0, 0, (1 << 20) - 1, 0));
+                e.attribute("displayWindow", "box2i", test::RawExr::box(0, 0, (1 << 20) - 1, 0));
+            },
+            1000, 1));
+    {
+        std::vector<uint8_t> tiles = test::RawExr::ints({4096, 4096});
+        tiles.push_back(0);
+        put(out / "exr/regressions/tile_of_16_megapixels_around_one_pixel.exr",
+            raw_exr(
+                [&](test::RawExr& e)
+                {
+                    e.attribute("dataWindow", "box2i", test::RawExr::box(0, 0, 0, 0));
+                    e.attribute("displayWindow", "box2i", test::RawExr::box(0, 0, 0, 0));
+                    e.attribute("tiles", "tiledesc", tiles);
+                },
+                1, 1, 2 | 0x200));
+    }
 
     // gltf: the first byte picks .glb (1) or .gltf (0).
     io::write_gltf(scratch / "tiny.glb", tiny_scene(), io::ImageStorage::BufferView);
@@ -225,6 +377,48 @@ int main(int argc, char** argv)
         io::write_lightmap_asset(scratch / "tiny_lightmap.hemi", l);
         put(out / "asset/corpus/tiny_lightmap.hemi", slurp(scratch / "tiny_lightmap.hemi"));
     }
+    {
+        // envmap: two small environment assets; hostile ones each refused by one check of the reader.
+        io::write_envmap_asset(scratch / "envmap4.hemi", envmap(4, 2, 2));
+        const std::vector<uint8_t> envmap4 = slurp(scratch / "envmap4.hemi");
+        put(out / "envmap/corpus/envmap4.hemi", envmap4);
+        put(out / "asset/corpus/envmap4.hemi", envmap4);
+        io::write_envmap_asset(scratch / "envmap2.hemi", envmap(2, 0, 0));
+        put(out / "envmap/corpus/envmap2_plain.hemi", slurp(scratch / "envmap2.hemi"));
+        const fs::path valid = scratch / "envmap4.hemi", changed = scratch / "changed.hemi";
+        using Sections = std::map<std::string, std::vector<std::byte>>;
+        // A mirror map of 8192^2 (1.6 GB of floats) claimed, 4^2 there.
+        put(out / "envmap/regressions/mirror_8192_claimed.hemi",
+            changed_asset(valid, changed,
+                          [](Sections& s)
+                          {
+                              set(s["envmap.info"], 4, uint32_t(8192));
+                              set(s["envmap.info"], 8, uint32_t(14));
+                          }));
+        // 64 glossy maps of 8192^2 claimed in a section of two 4^2 maps.
+        put(out / "envmap/regressions/glossy_8192_claimed.hemi",
+            changed_asset(valid, changed,
+                          [](Sections& s)
+                          {
+                              set(s["envmap.info"], 12, uint32_t(64));
+                              set(s["envmap.glossy"], 4, uint32_t(8192));
+                          }));
+        put(out / "envmap/regressions/fresnel_65536_samples_claimed.hemi",
+            changed_asset(valid, changed, [](Sections& s) { set(s["envmap.info"], 20, uint32_t(65536)); }));
+        put(out / "envmap/regressions/nan_in_the_diffuse_map.hemi",
+            changed_asset(valid, changed, [](Sections& s) { set(s["envmap.diffuse"], 12, NAN); }));
+        put(out / "envmap/regressions/index_of_refraction_1.hemi",
+            changed_asset(valid, changed, [](Sections& s) { set(s["envmap.fresnel"], 0, 1.0f); }));
+        put(out / "envmap/regressions/a_prt_asset.hemi", asset);
+    }
+
+    // data_image: PNG and EXR files, as height and normal maps are read.
+    put(out / "data_image/corpus/png", png);
+    put(out / "data_image/corpus/exr", slurp(out / "exr/corpus/small.exr"));
+    put(out / "data_image/corpus/tiled_exr", slurp(out / "exr/corpus/tiled.exr"));
+    put(out / "data_image/regressions/jpeg", io::encode_jpeg(pattern(16, 8), 80));
+    put(out / "data_image/regressions/exr_string_attribute_of_1_gib",
+        slurp(out / "exr/regressions/string_attribute_of_1_gib.exr"));
     fs::remove_all(scratch);
     std::printf("fuzz_seeds: wrote %s\n", out.string().c_str());
     return 0;

@@ -3,6 +3,7 @@
 #include <hemi/io/image.h>
 
 #include "../hostile_inputs.h"
+#include "raw_exr.h"
 
 #include <gtest/gtest.h>
 
@@ -10,12 +11,15 @@
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfTiledOutputFile.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <tuple>
 
 namespace fs = std::filesystem;
@@ -237,6 +241,395 @@ TEST(ExrReader, HugeDisplayWindowsAroundTinyDataAreRefusedQuickly)
     const fs::path padded = temp_dir() / "padded_2k.exr";
     write(padded, 2048, 256); // 64 times its data window: read
     EXPECT_EQ(hemi::io::read_exr(padded).width, 2048u);
+}
+
+// The 64x padding rule on its own: display windows under the 2^27-pixel cap but over 1024 x 1024, around data
+// windows that are a little (2048^2 around 255 x 256: 64.2 times) or much (1100^2 around 8 x 8) smaller.
+// Both files are otherwise sound (with the rule removed they read), so only the rule refuses them; the
+// message names the file and the two windows.
+TEST(ExrReader, DisplayWindowsOverSixtyFourTimesTheirDataAreRefused)
+{
+    auto write = [](const fs::path& p, int display, int data_w, int data_h)
+    {
+        Imf::Header header(Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(display - 1, display - 1)),
+                           Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(data_w - 1, data_h - 1)));
+        header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+        std::vector<float> r(size_t(data_w) * data_h, 1.0f);
+        Imf::OutputFile file(p.c_str(), header);
+        Imf::FrameBuffer fb;
+        fb.insert("R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(r.data()), 4, 4 * size_t(data_w)));
+        file.setFrameBuffer(fb);
+        file.writePixels(data_h);
+    };
+    const struct
+    {
+        int display, data_w, data_h;
+        const char* what;
+    } cases[] = {{2048, 255, 256, "is more than 64 times its data window (65280 pixels)"},
+                 {1100, 8, 8, "is more than 64 times its data window (64 pixels)"}};
+    for (const auto& c : cases)
+    {
+        const fs::path p = temp_dir() / ("padded_" + std::to_string(c.display) + ".exr");
+        write(p, c.display, c.data_w, c.data_h);
+        ASSERT_LT(uint64_t(c.display) * uint64_t(c.display), hemi::io::kMaxExrPixels);
+        expect_format_error_naming(p, "EXR display window of " + std::to_string(c.display) + "x" +
+                                          std::to_string(c.display) + " " + c.what);
+    }
+}
+
+namespace
+{
+using hemi::test::RawExr;
+
+std::string exr_error(const std::vector<uint8_t>& bytes, const fs::path& p)
+{
+    {
+        std::ofstream f(p, std::ios::binary | std::ios::trunc);
+        f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    }
+    try
+    {
+        hemi::io::read_exr(p);
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        return e.what();
+    }
+    return "(read)";
+}
+} // namespace
+
+// The hand-made file the next tests change one thing of reads as it should (so each refusal below is the
+// change's doing).
+TEST(ExrReader, HandMadeFileReads)
+{
+    const fs::path p = temp_dir() / "hand_made.exr";
+    const std::vector<uint8_t> bytes = RawExr::standard(4, 3).bytes;
+    ASSERT_EQ(exr_error(bytes, p), "(read)");
+    const hemi::io::ImageRgba img = hemi::io::read_exr(p);
+    ASSERT_EQ(img.width, 4u);
+    ASSERT_EQ(img.height, 3u);
+    for (uint32_t y = 0; y < 3; ++y)
+        for (uint32_t x = 0; x < 4; ++x)
+        {
+            EXPECT_EQ(img.at(x, y)[0], 1.0f);
+            EXPECT_EQ(img.at(x, y)[1], 0.0f);
+            EXPECT_EQ(img.at(x, y)[3], 1.0f);
+        }
+}
+
+// read_exr walks the headers before OpenEXR does and refuses, naming the file, what OpenEXR would allocate
+// for (or misread) without the file holding it: every refusal of that walk, each made by one change to the
+// hand-made file. A reader that left these to OpenEXR would allocate what the header claims (an attribute of
+// 1 GiB, an offset table of 8 MiB, ...) and fail later with another message.
+TEST(ExrReader, HeadersClaimingWhatTheFileCannotHoldAreRefused)
+{
+    const std::vector<uint8_t> standard = RawExr::standard().bytes;
+    auto with =
+        [](const std::function<void(RawExr&)>& header, int32_t w = 4, int32_t h = 3, uint32_t version = 2)
+    {
+        RawExr e(version);
+        header(e);
+        e.end_header().half_scanlines(w, h);
+        return e.bytes;
+    };
+    auto standard_plus = [&](const std::function<void(RawExr&)>& extra)
+    {
+        return with(
+            [&](RawExr& e)
+            {
+                e.image_attributes(4, 3);
+                extra(e);
+            });
+    };
+    const struct
+    {
+        const char* name;
+        std::vector<uint8_t> bytes;
+        std::string what;
+    } cases[] = {
+        {"magic", std::vector<uint8_t>{0x76, 0x2f, 0x31, 0x02, 2, 0, 0, 0}, "no EXR magic number"},
+        {"version", with([](RawExr& e) { e.image_attributes(4, 3); }, 4, 3, 3), "version field 3"},
+        {"flags", with([](RawExr& e) { e.image_attributes(4, 3); }, 4, 3, 2 | 0x2000), "version field 8194"},
+        {"attribute_1gib",
+         standard_plus([](RawExr& e) { e.attribute("comment", "string", RawExr::text("hi"), 1 << 30); }),
+         "header attribute 'comment' (string) claims 1073741824 bytes, the file has"},
+        {"attribute_negative", standard_plus([](RawExr& e) { e.attribute("comment", "string", {}, -5); }),
+         "header attribute 'comment' (string) claims -5 bytes"},
+        {"box_of_20_bytes",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("dataWindow", "box2i", RawExr::ints({0, 0, 3, 2, 0}));
+             }),
+         "header attribute 'dataWindow' (box2i) has 20 bytes, not 16"},
+        {"predefined_of_another_type",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("dataWindow", "v2i", RawExr::ints({0, 0}));
+             }),
+         "header attribute 'dataWindow' (v2i) was declared of type 'box2i'"},
+        {"custom_of_two_types",
+         standard_plus(
+             [](RawExr& e)
+             {
+                 e.attribute("owner", "string", RawExr::text("me"));
+                 e.attribute("owner", "int", RawExr::ints({1}));
+             }),
+         "header attribute 'owner' (int) was declared of type 'string'"},
+        {"chlist_longer_than_its_channels",
+         with(
+             [](RawExr& e)
+             {
+                 std::vector<uint8_t> channels = RawExr::chlist({{"R"}});
+                 channels.push_back(7);
+                 e.attribute("channels", "chlist", channels);
+                 e.attribute("dataWindow", "box2i", RawExr::box(0, 0, 3, 2));
+                 e.attribute("displayWindow", "box2i", RawExr::box(0, 0, 3, 2));
+                 e.attribute("compression", "compression", {0});
+             }),
+         "header attribute 'channels' (chlist) has 20 bytes, but its channels take 19"},
+        {"preview_of_a_million_pixels_in_8_bytes",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("preview", "preview", RawExr::ints({1000, 1000}));
+             }),
+         "header attribute 'preview' (preview) of 8 bytes does not hold its preview image"},
+        {"floatvector",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("weights", "floatvector", {0, 0, 0, 0, 0, 0});
+             }),
+         "of 6 bytes is no whole number of floats"},
+        {"idmanifest",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("ids", "idmanifest", {0, 0});
+             }),
+         "header attribute 'ids' (idmanifest) of 2 bytes is truncated"},
+        {"long_name",
+         standard_plus([](RawExr& e) { e.attribute(std::string(256, 'n'), "int", RawExr::ints({1})); }),
+         "an attribute name of more than 255 bytes"},
+        {"truncated_header", std::vector<uint8_t>(standard.begin(), standard.begin() + 60),
+         "truncated header"},
+        {"deep",
+         with(
+             [](RawExr& e)
+             {
+                 e.image_attributes(4, 3);
+                 e.attribute("type", "string", RawExr::text("deepscanline"));
+             },
+             4, 3, 2 | 0x800),
+         "deep data or an unknown kind of part (type 'deepscanline')"},
+        {"inverted_data_window",
+         standard_plus([](RawExr& e) { e.attribute("dataWindow", "box2i", RawExr::box(3, 0, 0, 2)); }),
+         "invalid data window (3, 0) - (0, 2)"},
+        {"unknown_compression",
+         standard_plus([](RawExr& e) { e.attribute("compression", "compression", {10}); }),
+         "unknown compression method 10"},
+        {"tiled_without_tiles", with([](RawExr& e) { e.image_attributes(4, 3); }, 4, 3, 2 | 0x200),
+         "a tiled image without a valid tile description"},
+        {"pixel_type_7",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("channels", "chlist", RawExr::chlist({{"R", 7}}));
+             }),
+         "channel 'R' has pixel type 7"},
+        {"subsampled_R",
+         standard_plus(
+             [](RawExr& e) {
+                 e.attribute("channels", "chlist", RawExr::chlist({{"R", 1, 2, 1}}));
+             }),
+         "EXR channel 'R' is subsampled (2x1)"},
+        {"no_colour",
+         standard_plus([](RawExr& e) { e.attribute("channels", "chlist", RawExr::chlist({{"Z"}})); }),
+         "EXR has no R, G, B or Y channel"},
+        // 2^20 rows of one pixel, no compression: 2^20 chunks, an 8 MiB offset table in a file of 200 bytes.
+        {"offset_table_of_8_mib", with([](RawExr& e) { e.image_attributes(1, 1 << 20); }, 1, 1),
+         "EXR offset tables of 1048576 chunks (8388608 bytes) do not fit in the file's"},
+        // One row of 2^20 pixels, no compression: 2 MiB of samples in a file of 2 KiB.
+        {"wide_row", with([](RawExr& e) { e.image_attributes(1 << 20, 1); }, 1000, 1),
+         "EXR data window of 1048576x1 pixels (2097152 bytes) cannot be coded in"},
+        // One pixel in a tile of 4096 x 4096: OpenEXR would allocate the whole tile (and read_exr's row of
+        // tiles 256 MiB) for two bytes of data.
+        {"tile_of_16_megapixels",
+         with(
+             [](RawExr& e)
+             {
+                 e.image_attributes(1, 1);
+                 std::vector<uint8_t> tiles = RawExr::ints({4096, 4096});
+                 tiles.push_back(0);
+                 e.attribute("tiles", "tiledesc", tiles);
+             },
+             1, 1, 2 | 0x200),
+         "EXR chunks of 4096x4096 pixels cannot be coded in"},
+    };
+    for (const auto& c : cases)
+    {
+        const fs::path p = temp_dir() / (std::string("hostile_") + c.name + ".exr");
+        const std::string e = exr_error(c.bytes, p);
+        EXPECT_NE(e.find(p.string()), std::string::npos) << c.name << ": " << e;
+        EXPECT_NE(e.find(c.what), std::string::npos) << c.name << ": " << e;
+    }
+}
+
+// Multi-part files: part 0 is what read_exr reads; the offset tables of every part must fit, and a part of a
+// type OpenEXR does not know needs its chunk count.
+TEST(ExrReader, MultiPartOffsetTablesMustFit)
+{
+    auto part = [](RawExr& e, const char* name, const char* type, int32_t height)
+    {
+        e.image_attributes(4, height);
+        e.attribute("name", "string", RawExr::text(name));
+        e.attribute("type", "string", RawExr::text(type));
+        e.attribute("chunkCount", "int", RawExr::ints({height}));
+        e.end_header();
+    };
+    RawExr unknown(2 | 0x1000);
+    part(unknown, "a", "scanlineimage", 3);
+    unknown.image_attributes(4, 3).attribute("name", "string", RawExr::text("b"));
+    unknown.attribute("type", "string", RawExr::text("mystery")).end_header().end_header();
+    unknown.bytes.resize(unknown.bytes.size() + 200);
+    const fs::path p1 = temp_dir() / "multipart_unknown.exr";
+    std::string e = exr_error(unknown.bytes, p1);
+    EXPECT_NE(e.find("part 1 of type 'mystery' has no chunk count"), std::string::npos) << e;
+    EXPECT_NE(e.find(p1.string()), std::string::npos) << e;
+    // The second part claims 2^20 scanlines (no compression): its table alone would be 8 MiB.
+    RawExr tall(2 | 0x1000);
+    part(tall, "a", "scanlineimage", 3);
+    part(tall, "b", "scanlineimage", 1 << 20);
+    tall.end_header();
+    tall.bytes.resize(tall.bytes.size() + 200);
+    const fs::path p2 = temp_dir() / "multipart_tall.exr";
+    e = exr_error(tall.bytes, p2);
+    EXPECT_NE(e.find("EXR offset tables of 1048579 chunks"), std::string::npos) << e;
+    EXPECT_NE(e.find(p2.string()), std::string::npos) << e;
+}
+
+// What the bound on the data a file can code must never refuse: the most compressible image there is (one
+// value everywhere) written by OpenEXR with each of its compression methods, with a lossy (R), an RLE-coded
+// (A) and a float channel (G, which PXR24 stores in 24 bits), reads back. Prints each file's expansion (its
+// pixels' bytes per stored byte) for the bounds of image.cpp.
+TEST(ExrReader, HighlyCompressedFilesOfEveryMethodRead)
+{
+    const int w = 2048, h = 256;
+    std::vector<uint16_t> half_value(size_t(w) * h, 0x3800); // 0.5
+    std::vector<uint16_t> half_one(size_t(w) * h, 0x3c00);
+    std::vector<float> float_value(size_t(w) * h, 0.25f);
+    for (int c = 0; c < int(Imf::NUM_COMPRESSION_METHODS); ++c)
+    {
+        const fs::path p = temp_dir() / ("constant_" + std::to_string(c) + ".exr");
+        {
+            Imf::Header header(w, h);
+            header.compression() = Imf::Compression(c);
+            header.channels().insert("R", Imf::Channel(Imf::HALF));
+            header.channels().insert("A", Imf::Channel(Imf::HALF));
+            header.channels().insert("G", Imf::Channel(Imf::FLOAT));
+            Imf::OutputFile file(p.c_str(), header);
+            Imf::FrameBuffer fb;
+            fb.insert("R",
+                      Imf::Slice(Imf::HALF, reinterpret_cast<char*>(half_value.data()), 2, 2 * size_t(w)));
+            fb.insert("A", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(half_one.data()), 2, 2 * size_t(w)));
+            fb.insert("G",
+                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(float_value.data()), 4, 4 * size_t(w)));
+            file.setFrameBuffer(fb);
+            file.writePixels(h);
+        }
+        const uint64_t bytes = fs::file_size(p);
+        std::printf("compression %d: %d x %d pixels of 8 bytes in %llu bytes, expansion %.0f\n", c, w, h,
+                    (unsigned long long)bytes, double(w) * h * 8 / double(bytes));
+        try
+        {
+            const hemi::io::ImageRgba img = hemi::io::read_exr(p);
+            ASSERT_EQ(img.width, uint32_t(w));
+            EXPECT_NEAR(img.at(100, 200)[0], 0.5f, 0.01f) << "compression " << c;
+            EXPECT_NEAR(img.at(100, 200)[1], 0.25f, 0.01f) << "compression " << c;
+            EXPECT_EQ(img.at(w - 1, h - 1)[3], 1.0f) << "compression " << c;
+        }
+        catch (const hemi::io::FormatError& e)
+        {
+            ADD_FAILURE() << "compression " << c << ": " << e.what();
+        }
+    }
+}
+
+// read_exr reads the data window in bands that start at one chunk and grow: every pixel lands where it
+// belongs, with the padding of an auto-cropped display window around it, for scanline files of 1 and 16 lines
+// a chunk and a tiled file (8 x 8 tiles, mipmapped), and for a grey (Y) file. Every value differs (so a band
+// at the wrong row, a shifted pad or a transposition is seen).
+TEST(ExrReader, BandsPutEveryPixelInPlace)
+{
+    const int dx0 = 13, dy0 = 5, dw = 60,
+              dh = 70; // data window (13, 5) - (72, 74) in display (0, 0) - (99, 79)
+    auto value = [](int x, int y, int c) { return float(x * 1000 + y * 4 + c) * 0.001f; };
+    std::vector<float> rgba(size_t(dw) * dh * 4);
+    for (int y = 0; y < dh; ++y)
+        for (int x = 0; x < dw; ++x)
+            for (int c = 0; c < 4; ++c)
+                rgba[(size_t(y) * dw + x) * 4 + c] = value(x + dx0, y + dy0, c);
+    const Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(99, 79));
+    const Imath::Box2i data(Imath::V2i(dx0, dy0), Imath::V2i(dx0 + dw - 1, dy0 + dh - 1));
+    char* base = reinterpret_cast<char*>(rgba.data()) - (size_t(dx0) * 16 + size_t(dy0) * 16 * dw);
+    auto frame_buffer = [&](bool grey)
+    {
+        Imf::FrameBuffer fb;
+        const char* names[4] = {"R", "G", "B", "A"};
+        for (int c = 0; c < (grey ? 1 : 4); ++c)
+            fb.insert(grey ? "Y" : names[c], Imf::Slice(Imf::FLOAT, base + 4 * c, 16, 16 * size_t(dw)));
+        return fb;
+    };
+    auto check = [&](const fs::path& p, bool grey)
+    {
+        const hemi::io::ImageRgba img = hemi::io::read_exr(p);
+        ASSERT_EQ(img.width, 100u);
+        ASSERT_EQ(img.height, 80u);
+        int wrong = 0;
+        for (int y = 0; y < 80; ++y)
+            for (int x = 0; x < 100; ++x)
+                for (int c = 0; c < 4; ++c)
+                {
+                    const bool inside = x >= dx0 && x < dx0 + dw && y >= dy0 && y < dy0 + dh;
+                    const float want = !inside ? 0.0f
+                                       : grey  ? (c == 3 ? 1.0f : value(x, y, 0))
+                                               : value(x, y, c);
+                    wrong += img.at(uint32_t(x), uint32_t(y))[c] != want;
+                }
+        EXPECT_EQ(wrong, 0) << p;
+    };
+    for (Imf::Compression compression : {Imf::NO_COMPRESSION, Imf::ZIP_COMPRESSION})
+    {
+        const fs::path p = temp_dir() / ("bands_" + std::to_string(int(compression)) + ".exr");
+        Imf::Header header(display, data);
+        header.compression() = compression;
+        for (const char* n : {"R", "G", "B", "A"})
+            header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+        {
+            Imf::OutputFile file(p.c_str(), header);
+            file.setFrameBuffer(frame_buffer(false));
+            file.writePixels(dh);
+        }
+        check(p, false);
+    }
+    {
+        const fs::path p = temp_dir() / "bands_tiled.exr";
+        Imf::Header header(display, data);
+        for (const char* n : {"R", "G", "B", "A"})
+            header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+        header.setTileDescription(Imf::TileDescription(8, 8, Imf::MIPMAP_LEVELS));
+        Imf::TiledOutputFile file(p.c_str(), header);
+        file.setFrameBuffer(frame_buffer(false));
+        for (int level = 0; level < file.numLevels(); ++level)
+            file.writeTiles(0, file.numXTiles(level) - 1, 0, file.numYTiles(level) - 1, level);
+    }
+    check(temp_dir() / "bands_tiled.exr", false);
+    {
+        const fs::path p = temp_dir() / "bands_grey.exr";
+        Imf::Header header(display, data);
+        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+        Imf::OutputFile file(p.c_str(), header);
+        file.setFrameBuffer(frame_buffer(true));
+        file.writePixels(dh);
+    }
+    check(temp_dir() / "bands_grey.exr", true);
 }
 
 // ---- 8-bit textures: PNG and JPEG decoding (the images glTF scenes and assets carry) ----

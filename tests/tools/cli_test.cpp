@@ -1843,6 +1843,14 @@ TEST(HostileCli, WhatCannotFitIsRefusedWithTheEstimate)
     EXPECT_NE(r.err.find("declared_16384.png"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("268435456 texels"), std::string::npos) << r.err;
+    // An EXR's size from its data window (read from the header's bytes, before OpenEXR allocates).
+    const fs::path exr = dir() / "heights_1024.exr";
+    hemi::io::write_exr(exr, {1024, 1024, std::vector<float>(size_t(1024) * 1024 * 4, 0.5f)});
+    r = run(HEMI_BAKE_EXE, "ssbump " + q(exr) + " --channel r -o " + q(dir() / "big_out.png"),
+            "HEMI_MEMORY_BUDGET=32M");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("1048576 texels"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
     for (const char* size : {"4096", "16384"})
     {
         r = run(HEMI_BAKE_EXE,

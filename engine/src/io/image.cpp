@@ -30,9 +30,11 @@
 #include <array>
 #include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -62,62 +64,569 @@ float srgb_eotf(float c)
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
+namespace
+{
+// ---- read_exr: a look at the file before OpenEXR's ----
+// OpenEXR 3.1 allocates what a header claims before it reads what the claim is about: every attribute's value
+// at its declared size (a string is zero-filled to it), the chunk offset table, one chunk's line or tile
+// buffers and its compressor's; and read_exr's own image follows the header's windows. A few hundred hostile
+// bytes could so make it allocate and fault gigabytes (tests/fuzz/fuzz_exr ran at 4 executions a second under
+// AddressSanitizer, nearly all of it faulting in the pages of attribute values a header claimed). So the
+// headers are walked here first, as OpenEXR will read them, and a file is refused unless what they claim can
+// be there: every attribute's value and the offset tables lie in the file, and the data window's pixels (and
+// any one chunk) can be coded in the file's bytes at the compression's largest expansion. The pixels are
+// then read in bands that grow with what has decoded, never with what the header says.
+
+// Per compression (Imf::Compression 0-9): the scanlines in a chunk, twice the largest expansion the method
+// can achieve (decoded bytes per stored byte), and a name. NONE stores the bytes as they are; RLE codes at
+// most 128 equal bytes in 2; deflate (ZIPS, ZIP) at most 1032:1, PXR24 deflates 24 of a float's 32 bits
+// (1376:1); PIZ's Huffman coder spends at least 10 bits on a run of 256 16-bit values (410:1); B44A stores a
+// flat 4x4 block of halves in 3 bytes (10.7:1); DWAA/DWAB deflate the RLE (64:1) of some channels (66048:1).
+constexpr int kExrCompressions = 10;
+constexpr uint64_t kExrChunkLines[kExrCompressions] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+constexpr uint64_t kExrExpansion[kExrCompressions] = {1, 128, 2064, 2064, 820, 2752, 22, 22, 132096, 132096};
+const char* const kExrCompressionNames[kExrCompressions] = {"no compression", "RLE", "ZIPS", "ZIP",  "PIZ",
+                                                            "PXR24",          "B44", "B44A", "DWAA", "DWAB"};
+// A chunk's buffers (OpenEXR's, for a chunk of every channel; read_exr's, of RGBA floats) may overhang the
+// data window (a tile larger than the image, a block of scanlines taller than it) by this much.
+constexpr uint64_t kExrChunkOverhangBytes = uint64_t(64) << 20;
+
+uint64_t mul_sat(uint64_t a, uint64_t b)
+{
+    return a != 0 && b > UINT64_MAX / a ? UINT64_MAX : a * b;
+}
+
+uint64_t add_sat(uint64_t a, uint64_t b)
+{
+    return b > UINT64_MAX - a ? UINT64_MAX : a + b;
+}
+
+struct ExrBox
+{
+    int64_t x0 = 0, y0 = 0, x1 = 63, y1 = 63; // OpenEXR's default windows, for a header without them
+    int64_t width() const { return x1 - x0 + 1; }
+    int64_t height() const { return y1 - y0 + 1; }
+    bool operator==(const ExrBox&) const = default;
+};
+
+struct ExrChannelInfo
+{
+    std::string name;
+    int32_t type = 0;
+    int32_t x_sampling = 1, y_sampling = 1;
+};
+
+struct ExrPart
+{
+    std::map<std::string, std::string> types; // attribute name -> type name, as OpenEXR's Header holds them
+    ExrBox data, display;
+    int compression = 3; // OpenEXR's default: ZIP
+    std::vector<ExrChannelInfo> channels;
+    bool has_tiles = false;
+    uint64_t tile_width = 0, tile_height = 0;
+    int level_mode = 0, rounding = 0;
+    std::string type;
+    bool has_type = false;
+    int64_t chunk_count = -1;
+};
+
+struct ExrLayout
+{
+    bool multipart = false, tiled = false, non_image = false;
+    std::vector<ExrPart> parts;
+    uint64_t header_end = 0, file_size = 0;
+};
+
+// Walks an EXR's headers exactly as OpenEXR 3.1's Header::readFrom consumes them, refusing what OpenEXR would
+// allocate for without the file holding it. Reads nothing but the headers, and allocates only what they hold.
+class ExrHeaderScan
+{
+  public:
+    ExrHeaderScan(const std::filesystem::path& path, const std::string& file)
+        : file_(file), in_(path, std::ios::binary)
+    {
+        std::error_code ec;
+        size_ = std::filesystem::file_size(path, ec);
+        if (ec || !in_)
+            throw FormatError(file_ + ": no such file or not readable");
+    }
+
+    ExrLayout scan()
+    {
+        ExrLayout layout;
+        layout.file_size = size_;
+        const uint32_t magic = u32();
+        if (magic != 20000630u)
+            fail("no EXR magic number");
+        const uint32_t version = u32();
+        if ((version & 0xFF) != 2 || (version & ~uint32_t(0x1EFF)) != 0)
+            fail("EXR version field " + std::to_string(version) + " is not one OpenEXR 2 reads");
+        layout.tiled = version & 0x200;
+        layout.non_image = version & 0x800;
+        layout.multipart = version & 0x1000;
+        if (!layout.multipart)
+            layout.parts.push_back(header());
+        else
+            while (peek() != 0)
+                layout.parts.push_back(header());
+        if (layout.multipart)
+            u8(); // the empty header that ends the list
+        if (layout.parts.empty())
+            fail("a multi-part file of no parts");
+        layout.header_end = at_;
+        return layout;
+    }
+
+  private:
+    [[noreturn]] void fail(const std::string& what) const
+    {
+        throw FormatError(file_ + ": not a readable EXR file: " + what);
+    }
+    uint64_t left() const { return size_ - at_; }
+    void read(void* out, uint64_t n, const char* what)
+    {
+        if (n > left())
+            fail(std::string("truncated header (") + what + " at byte " + std::to_string(at_) + ")");
+        in_.read(static_cast<char*>(out), std::streamsize(n));
+        if (!in_)
+            fail("read error in the header");
+        at_ += n;
+    }
+    void skip(uint64_t n)
+    {
+        in_.seekg(std::streamoff(n), std::ios::cur);
+        at_ += n;
+    }
+    uint8_t peek()
+    {
+        uint8_t b = 0;
+        read(&b, 1, "the next header");
+        in_.seekg(-1, std::ios::cur);
+        --at_;
+        return b;
+    }
+    uint8_t u8()
+    {
+        uint8_t b = 0;
+        read(&b, 1, "a byte");
+        return b;
+    }
+    uint32_t u32()
+    {
+        uint8_t b[4];
+        read(b, 4, "an integer");
+        return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+    }
+    int32_t i32() { return int32_t(u32()); }
+    // A NUL-terminated name of at most 255 bytes (OpenEXR's Name).
+    std::string name(const char* what)
+    {
+        std::string s;
+        for (char c = char(u8()); c != 0; c = char(u8()))
+        {
+            if (s.size() == 255)
+                fail(std::string(what) + " of more than 255 bytes");
+            s.push_back(c);
+        }
+        return s;
+    }
+    ExrBox box()
+    {
+        ExrBox b;
+        b.x0 = i32(), b.y0 = i32(), b.x1 = i32(), b.y1 = i32();
+        return b;
+    }
+
+    ExrPart header()
+    {
+        // The attributes a default-constructed Imf::Header has: a file's attribute of one of these names must
+        // have its type.
+        ExrPart part;
+        part.types = {{"displayWindow", "box2i"},     {"dataWindow", "box2i"},
+                      {"pixelAspectRatio", "float"},  {"screenWindowCenter", "v2f"},
+                      {"screenWindowWidth", "float"}, {"lineOrder", "lineOrder"},
+                      {"compression", "compression"}, {"channels", "chlist"}};
+        // OpenEXR 3.1's attribute types that read a fixed number of bytes, whatever the size field says.
+        static const std::map<std::string, uint64_t> fixed = {{"box2i", 16},
+                                                              {"box2f", 16},
+                                                              {"chromaticities", 32},
+                                                              {"compression", 1},
+                                                              {"deepImageState", 1},
+                                                              {"double", 8},
+                                                              {"envmap", 1},
+                                                              {"float", 4},
+                                                              {"int", 4},
+                                                              {"keycode", 28},
+                                                              {"lineOrder", 1},
+                                                              {"m33d", 72},
+                                                              {"m33f", 36},
+                                                              {"m44d", 128},
+                                                              {"m44f", 64},
+                                                              {"rational", 8},
+                                                              {"tiledesc", 9},
+                                                              {"timecode", 8},
+                                                              {"v2d", 16},
+                                                              {"v2f", 8},
+                                                              {"v2i", 8},
+                                                              {"v3d", 24},
+                                                              {"v3f", 12},
+                                                              {"v3i", 12}};
+        while (true)
+        {
+            const std::string attribute = name("an attribute name");
+            if (attribute.empty())
+                return part;
+            const std::string type = name("an attribute type name");
+            const int32_t size = i32();
+            const std::string what = "header attribute '" + attribute + "' (" + type + ")";
+            if (size < 0 || uint64_t(size) > left())
+                fail(what + " claims " + std::to_string(size) + " bytes, the file has " +
+                     std::to_string(left()) + " after it: truncated, or a hostile header");
+            if (const auto [it, added] = part.types.emplace(attribute, type); !added && it->second != type)
+                fail(what + " was declared of type '" + it->second + "'");
+            const uint64_t start = at_;
+            if (const auto f = fixed.find(type); f != fixed.end() && uint64_t(size) != f->second)
+                fail(what + " has " + std::to_string(size) + " bytes, not " + std::to_string(f->second));
+            if (type == "chlist")
+            {
+                std::vector<ExrChannelInfo> channels;
+                while (true)
+                {
+                    const std::string channel = name("a channel name");
+                    if (channel.empty())
+                        break;
+                    ExrChannelInfo c;
+                    c.name = channel;
+                    c.type = i32();
+                    skip_checked(4);
+                    c.x_sampling = i32();
+                    c.y_sampling = i32();
+                    channels.push_back(c);
+                    if (at_ - start > uint64_t(size))
+                        break;
+                }
+                if (at_ - start != uint64_t(size))
+                    fail(what + " has " + std::to_string(size) + " bytes, but its channels take " +
+                         std::to_string(at_ - start));
+                if (attribute == "channels")
+                    part.channels = std::move(channels);
+                continue;
+            }
+            if (type == "preview")
+            {
+                // OpenEXR allocates width x height pixels before it reads them.
+                const int64_t w = size >= 8 ? i32() : -1, h = size >= 8 ? i32() : -1;
+                if (w < 0 || h < 0 || uint64_t(w) * uint64_t(h) * 4 + 8 != uint64_t(size))
+                    fail(what + " of " + std::to_string(size) + " bytes does not hold its preview image");
+                skip(uint64_t(size) - 8);
+                continue;
+            }
+            if (type == "floatvector" && size % 4 != 0)
+                fail(what + " of " + std::to_string(size) + " bytes is no whole number of floats");
+            if (type == "idmanifest")
+            {
+                // OpenEXR 3.1.5 reads an 8-byte size and then size - 4 bytes.
+                if (size < 4 || uint64_t(size) + 4 > left())
+                    fail(what + " of " + std::to_string(size) + " bytes is truncated");
+                skip(uint64_t(size) + 4);
+                continue;
+            }
+            if (attribute == "dataWindow")
+                part.data = box();
+            else if (attribute == "displayWindow")
+                part.display = box();
+            else if (attribute == "compression")
+                part.compression = u8();
+            else if (attribute == "tiles" && type == "tiledesc")
+            {
+                part.has_tiles = true;
+                part.tile_width = u32();
+                part.tile_height = u32();
+                const uint8_t mode = u8();
+                part.level_mode = mode & 0x0F;
+                part.rounding = mode >> 4;
+            }
+            else if (attribute == "type" && type == "string")
+            {
+                part.type.resize(size_t(size));
+                read(part.type.data(), uint64_t(size), "the type attribute");
+                part.has_type = true;
+            }
+            else if (attribute == "chunkCount" && type == "int")
+                part.chunk_count = i32();
+            else
+                skip(uint64_t(size));
+            if (at_ - start != uint64_t(size))
+                skip(uint64_t(size) - (at_ - start));
+        }
+    }
+    void skip_checked(uint64_t n)
+    {
+        if (n > left())
+            fail("truncated header (a channel at byte " + std::to_string(at_) + ")");
+        skip(n);
+    }
+
+    const std::string& file_;
+    std::ifstream in_;
+    uint64_t size_ = 0, at_ = 0;
+};
+
+// OpenEXR's level count along an axis of `size` pixels: log2 rounded down (rounding 0) or up, plus one.
+uint64_t exr_levels(uint64_t size, int rounding)
+{
+    uint64_t floor_log = 0;
+    while (floor_log < 63 && (uint64_t(2) << floor_log) <= size)
+        ++floor_log;
+    const bool exact = (uint64_t(1) << floor_log) == size;
+    return (rounding == 1 && !exact ? floor_log + 1 : floor_log) + 1;
+}
+
+uint64_t exr_level_tiles(uint64_t size, uint64_t level, int rounding, uint64_t tile)
+{
+    uint64_t s = level < 64 ? size >> level : 0;
+    if (rounding == 1 && level < 64 && (s << level) < size)
+        ++s;
+    s = std::max<uint64_t>(s, 1);
+    return (s + tile - 1) / tile;
+}
+
+// The number of chunks (entries in the offset table) of a flat or deep part, as OpenEXR counts them.
+uint64_t exr_chunks(const ExrPart& part, bool tiled, const std::string& file)
+{
+    auto fail = [&](const std::string& what)
+    { return FormatError(file + ": not a readable EXR file: " + what); };
+    if (part.data.x0 > part.data.x1 || part.data.y0 > part.data.y1)
+        throw fail("invalid data window (" + std::to_string(part.data.x0) + ", " +
+                   std::to_string(part.data.y0) + ") - (" + std::to_string(part.data.x1) + ", " +
+                   std::to_string(part.data.y1) + ")");
+    if (part.compression >= kExrCompressions)
+        throw fail("unknown compression method " + std::to_string(part.compression));
+    const uint64_t w = uint64_t(part.data.width()), h = uint64_t(part.data.height());
+    if (!tiled)
+        return (h + kExrChunkLines[part.compression] - 1) / kExrChunkLines[part.compression];
+    if (!part.has_tiles || part.tile_width == 0 || part.tile_height == 0 || part.tile_width > INT_MAX ||
+        part.tile_height > INT_MAX || part.level_mode > 2 || part.rounding > 1)
+        throw fail("a tiled image without a valid tile description");
+    const uint64_t tw = part.tile_width, th = part.tile_height;
+    if (part.level_mode == 0)
+        return mul_sat((w + tw - 1) / tw, (h + th - 1) / th);
+    if (part.level_mode == 1)
+    {
+        uint64_t n = 0;
+        for (uint64_t l = 0, levels = exr_levels(std::max(w, h), part.rounding); l < levels; ++l)
+            n = add_sat(n, mul_sat(exr_level_tiles(w, l, part.rounding, tw),
+                                   exr_level_tiles(h, l, part.rounding, th)));
+        return n;
+    }
+    uint64_t nx = 0, ny = 0;
+    for (uint64_t l = 0, levels = exr_levels(w, part.rounding); l < levels; ++l)
+        nx = add_sat(nx, exr_level_tiles(w, l, part.rounding, tw));
+    for (uint64_t l = 0, levels = exr_levels(h, part.rounding); l < levels; ++l)
+        ny = add_sat(ny, exr_level_tiles(h, l, part.rounding, th));
+    return mul_sat(nx, ny);
+}
+
+struct ExrPlan
+{
+    bool grey = false;
+    bool tiled = false;
+    uint64_t chunk_rows = 1; // scanlines of a chunk, or a tile's height
+};
+
+// read_exr's refusals of a header, before OpenEXR reads it (io/image.h's caps, and what the file can hold).
+ExrPlan check_exr_layout(const ExrLayout& layout, const std::string& file)
+{
+    auto fail = [&](const std::string& what) { return FormatError(file + ": " + what); };
+    const ExrPart& part = layout.parts[0];
+    ExrPlan plan;
+    plan.tiled = layout.multipart ? part.type == "tiledimage" : layout.tiled;
+    const bool flat =
+        layout.multipart ? (part.type == "scanlineimage" || part.type == "tiledimage") : !layout.non_image;
+    if (!flat)
+        throw fail("EXR holds deep data or an unknown kind of part (type '" + part.type +
+                   "'): only flat scanline and tiled images are read");
+    exr_chunks(part, plan.tiled, file); // a valid data window, compression and tile description
+    // The display window: at most kMaxExrPixels, holding the data window, at most kMaxExrPadding times it
+    // unless small (an auto-cropped file pads with zeros; a hostile one of a few hundred bytes would
+    // otherwise make us zero-fill gigabytes).
+    const ExrBox& dw = part.data;
+    const ExrBox& disp = part.display;
+    const int64_t w = disp.width(), h = disp.height();
+    if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > kMaxExrPixels)
+        throw fail("EXR display window of " + std::to_string(w) + "x" + std::to_string(h) +
+                   " is empty or larger than " + std::to_string(kMaxExrPixels) + " pixels");
+    if (dw.x0 < disp.x0 || dw.y0 < disp.y0 || dw.x1 > disp.x1 || dw.y1 > disp.y1)
+        throw fail("EXR data window extends beyond the display window");
+    const uint64_t data = uint64_t(dw.width()) * uint64_t(dw.height());
+    if (uint64_t(w) * uint64_t(h) > kMaxExrPaddedPixels && uint64_t(w) * uint64_t(h) > data * kMaxExrPadding)
+        throw fail("EXR display window of " + std::to_string(w) + "x" + std::to_string(h) + " is more than " +
+                   std::to_string(kMaxExrPadding) + " times its data window (" + std::to_string(data) +
+                   " pixels): refused rather than zero-filled");
+    bool r = false, g = false, b = false, y = false;
+    double bytes_per_pixel = 0.0;
+    for (const ExrChannelInfo& c : part.channels)
+    {
+        if (c.type < 0 || c.type > 2 || c.x_sampling < 1 || c.y_sampling < 1)
+            throw fail("not a readable EXR file: channel '" + c.name + "' has pixel type " +
+                       std::to_string(c.type) + " and sampling " + std::to_string(c.x_sampling) + "x" +
+                       std::to_string(c.y_sampling));
+        const bool read = c.name == "R" || c.name == "G" || c.name == "B" || c.name == "A" || c.name == "Y";
+        if (read && (c.x_sampling != 1 || c.y_sampling != 1))
+            throw fail("EXR channel '" + c.name + "' is subsampled (" + std::to_string(c.x_sampling) + "x" +
+                       std::to_string(c.y_sampling) + "): not supported");
+        r |= c.name == "R", g |= c.name == "G", b |= c.name == "B", y |= c.name == "Y";
+        bytes_per_pixel += double(c.type == 1 ? 2 : 4) / (double(c.x_sampling) * double(c.y_sampling));
+    }
+    plan.grey = !r && y;
+    if (!plan.grey && !r && !g && !b)
+        throw fail("EXR has no R, G, B or Y channel (layered files are not supported)");
+    // The chunk offset tables of every part come after the headers.
+    uint64_t chunks = 0;
+    for (size_t i = 0; i < layout.parts.size(); ++i)
+    {
+        const ExrPart& p = layout.parts[i];
+        static const char* const known[] = {"scanlineimage", "tiledimage", "deepscanline", "deeptile"};
+        const bool supported =
+            !p.has_type || std::find(std::begin(known), std::end(known), p.type) != std::end(known);
+        uint64_t n = 0;
+        if (!supported && layout.multipart)
+        {
+            if (p.chunk_count < 0)
+                throw fail("not a readable EXR file: part " + std::to_string(i) + " of type '" + p.type +
+                           "' has no chunk count");
+            n = uint64_t(p.chunk_count);
+        }
+        else
+            n = exr_chunks(
+                p, layout.multipart ? (p.type == "tiledimage" || p.type == "deeptile") : layout.tiled, file);
+        chunks = add_sat(chunks, n);
+    }
+    // What the file must hold: the offset tables, and the data window's pixels coded at no more than the
+    // compression's expansion (so OpenEXR's tables and buffers, and ours, are bounded by the file's size).
+    const uint64_t after_headers = layout.file_size - layout.header_end;
+    if (mul_sat(chunks, 8) > after_headers)
+        throw fail("EXR offset tables of " + std::to_string(chunks) + " chunks (" +
+                   std::to_string(mul_sat(chunks, 8)) + " bytes) do not fit in the file's " +
+                   std::to_string(after_headers) + " bytes after its header: truncated, or a hostile header");
+    const double expansion = double(kExrExpansion[part.compression]);
+    const double capacity = expansion * double(layout.file_size);
+    const double coded = double(data) * bytes_per_pixel;
+    const std::string method = kExrCompressionNames[part.compression];
+    if (coded > capacity)
+        throw fail("EXR data window of " + std::to_string(dw.width()) + "x" + std::to_string(dw.height()) +
+                   " pixels (" + std::to_string(uint64_t(coded)) + " bytes) cannot be coded in " +
+                   std::to_string(layout.file_size) + " bytes with " + method +
+                   ": a corrupt or hostile header");
+    // One chunk's buffers: OpenEXR's line or tile buffer (every channel), InputFile's row of tiles and our
+    // band (RGBA floats) span the chunk's full size even where it overhangs the data window.
+    plan.chunk_rows = plan.tiled ? part.tile_height : kExrChunkLines[part.compression];
+    const uint64_t chunk_width =
+        plan.tiled ? std::max<uint64_t>(uint64_t(dw.width()), part.tile_width) : uint64_t(dw.width());
+    const double chunk_pixels = double(chunk_width) * double(plan.chunk_rows);
+    if (chunk_pixels * std::max(bytes_per_pixel, 16.0) > double(kExrChunkOverhangBytes) &&
+        chunk_pixels * bytes_per_pixel > capacity)
+        throw fail("EXR chunks of " + std::to_string(chunk_width) + "x" + std::to_string(plan.chunk_rows) +
+                   " pixels cannot be coded in " + std::to_string(layout.file_size) + " bytes with " +
+                   method + ", and overhang the data window of " + std::to_string(dw.width()) + "x" +
+                   std::to_string(dw.height()) + ": a corrupt or hostile header");
+    return plan;
+}
+
+// Rows of a band read_exr decodes at once, once the first chunks have decoded: about 16 MiB of RGBA floats.
+constexpr uint64_t kExrBandBytes = uint64_t(16) << 20;
+
+} // namespace
+
 ImageRgba read_exr(const std::filesystem::path& path)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
         throw FormatError(path.string() + ": no such file");
+    const std::string file = path.string();
+    const ExrLayout layout = ExrHeaderScan(path, file).scan();
+    const ExrPlan plan = check_exr_layout(layout, file);
+    const ExrPart& part = layout.parts[0];
     ImageRgba image;
     try
     {
-        Imf::InputFile file(path.c_str());
-        // The image is the display window; pixels outside the data window (auto-cropped files) read as 0.
-        const Imath::Box2i dw = file.header().dataWindow();
-        const Imath::Box2i disp = file.header().displayWindow();
-        const long w = long(disp.max.x) - disp.min.x + 1, h = long(disp.max.y) - disp.min.y + 1;
-        // Caps (io/image.h): the display window at most kMaxExrPixels, and at most kMaxExrPadding times the
-        // data window unless it is small: an auto-cropped file pads with zeros, a hostile one of a few
-        // hundred bytes would otherwise make us zero-fill gigabytes.
-        if (w <= 0 || h <= 0 || w * h > long(kMaxExrPixels))
-            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" +
-                              std::to_string(h) + " is empty or larger than " +
-                              std::to_string(kMaxExrPixels) + " pixels");
-        if (dw.min.x < disp.min.x || dw.min.y < disp.min.y || dw.max.x > disp.max.x || dw.max.y > disp.max.y)
-            throw FormatError(path.string() + ": EXR data window extends beyond the display window");
-        const long data = (long(dw.max.x) - dw.min.x + 1) * (long(dw.max.y) - dw.min.y + 1);
-        if (w * h > long(kMaxExrPaddedPixels) && w * h > data * long(kMaxExrPadding))
-            throw FormatError(path.string() + ": EXR display window of " + std::to_string(w) + "x" +
-                              std::to_string(h) + " is more than " + std::to_string(kMaxExrPadding) +
-                              " times its data window (" + std::to_string(data) +
-                              " pixels): refused rather than zero-filled");
+        Imf::InputFile in(path.c_str());
+        const Imath::Box2i dw = in.header().dataWindow();
+        const Imath::Box2i disp = in.header().displayWindow();
+        // What OpenEXR read is what was checked (else the file changed, or the walk is out of step with it).
+        if (ExrBox{dw.min.x, dw.min.y, dw.max.x, dw.max.y} != part.data ||
+            ExrBox{disp.min.x, disp.min.y, disp.max.x, disp.max.y} != part.display ||
+            int(in.header().compression()) != part.compression ||
+            (plan.tiled &&
+             (!in.header().hasTileDescription() || in.header().tileDescription().ySize != part.tile_height)))
+            throw FormatError(file +
+                              ": not a readable EXR file: its header reads differently on a second look");
+        // The data window, in bands of whole chunks that start at one chunk and grow to kExrBandBytes: memory
+        // follows what decodes. OpenEXR addresses pixel (x, y) at base + x * xs + y * ys; the base of a band
+        // starting at row y0 is its first pixel shifted back by (min.x, y0) (computed as an integer: it may
+        // lie outside any object).
+        const uint64_t width = uint64_t(part.data.width());
+        const size_t xs = 4 * sizeof(float), ys = xs * width;
+        std::vector<std::vector<float>> bands;
+        uint64_t rows = std::min<uint64_t>(plan.chunk_rows, uint64_t(part.data.height()));
+        for (int64_t y0 = dw.min.y; y0 <= dw.max.y;)
+        {
+            const uint64_t n = std::min<uint64_t>(rows, uint64_t(int64_t(dw.max.y) - y0 + 1));
+            std::vector<float>& band = bands.emplace_back(size_t(width * n * 4), 0.0f);
+            char* base = reinterpret_cast<char*>(reinterpret_cast<uintptr_t>(band.data()) -
+                                                 (uintptr_t(int64_t(dw.min.x)) * xs + uintptr_t(y0) * ys));
+            Imf::FrameBuffer fb;
+            const char* names[4] = {"R", "G", "B", "A"};
+            for (int c = 0; c < 4; ++c)
+            {
+                if (plan.grey && (c == 1 || c == 2))
+                    continue;
+                const char* name = plan.grey && c == 0 ? "Y" : names[c];
+                fb.insert(name,
+                          Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, c == 3 ? 1.0 : 0.0));
+            }
+            in.setFrameBuffer(fb);
+            in.readPixels(int(y0), int(y0 + int64_t(n) - 1));
+            for (size_t i = 0; i < band.size(); i += 4)
+            {
+                if (plan.grey) // a FrameBuffer holds one slice per name: copy Y into G and B
+                    band[i + 1] = band[i + 2] = band[i];
+                for (size_t c = 0; c < 4; ++c)
+                    if (!std::isfinite(band[i + c]))
+                    {
+                        const uint64_t p = i / 4;
+                        throw FormatError(
+                            file + ": pixel (" + std::to_string(dw.min.x + int64_t(p % width) - disp.min.x) +
+                            ", " + std::to_string(y0 + int64_t(p / width) - disp.min.y) + ") is not finite");
+                    }
+            }
+            y0 += int64_t(n);
+            if (rows * width * xs < kExrBandBytes)
+                rows *= 2;
+        }
+        // The display window: the bands where the data window lies, zeros (alpha 0 too) around it. The bands
+        // are freed as they are copied.
+        const uint64_t w = uint64_t(part.display.width()), h = uint64_t(part.display.height());
         image.width = uint32_t(w);
         image.height = uint32_t(h);
-        image.pixels.assign(size_t(w) * h * 4, 0.0f);
-        const Imf::ChannelList& channels = file.header().channels();
-        const bool grey = !channels.findChannel("R") && channels.findChannel("Y");
-        if (!grey && !channels.findChannel("R") && !channels.findChannel("G") && !channels.findChannel("B"))
-            throw FormatError(path.string() +
-                              ": EXR has no R, G, B or Y channel (layered files are not supported)");
-        const size_t xs = 4 * sizeof(float), ys = xs * size_t(w);
-        // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys: shift so that the display window's origin
-        // is our first pixel.
-        char* base = reinterpret_cast<char*>(image.pixels.data()) -
-                     (long(disp.min.x) * long(xs) + long(disp.min.y) * long(ys));
-        Imf::FrameBuffer fb;
-        const char* names[4] = {"R", "G", "B", "A"};
-        for (int c = 0; c < 4; ++c)
+        image.pixels.reserve(size_t(w * h * 4));
+        const size_t left = size_t(dw.min.x - disp.min.x) * 4, right = size_t(disp.max.x - dw.max.x) * 4;
+        image.pixels.insert(image.pixels.end(), size_t(dw.min.y - disp.min.y) * w * 4, 0.0f);
+        for (std::vector<float>& band : bands)
         {
-            if (grey && (c == 1 || c == 2))
-                continue;
-            const char* name = grey && c == 0 ? "Y" : names[c];
-            fb.insert(name,
-                      Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, c == 3 ? 1.0 : 0.0));
+            if (left == 0 && right == 0)
+                image.pixels.insert(image.pixels.end(), band.begin(), band.end());
+            else
+                for (size_t at = 0; at < band.size(); at += width * 4)
+                {
+                    image.pixels.insert(image.pixels.end(), left, 0.0f);
+                    image.pixels.insert(image.pixels.end(), band.begin() + long(at),
+                                        band.begin() + long(at + width * 4));
+                    image.pixels.insert(image.pixels.end(), right, 0.0f);
+                }
+            std::vector<float>().swap(band);
         }
-        file.setFrameBuffer(fb);
-        file.readPixels(dw.min.y, dw.max.y);
-        if (grey) // a FrameBuffer holds one slice per name: copy Y into G and B
-            for (size_t i = 0; i < image.pixels.size(); i += 4)
-                image.pixels[i + 1] = image.pixels[i + 2] = image.pixels[i];
+        image.pixels.insert(image.pixels.end(), size_t(disp.max.y - dw.max.y) * w * 4, 0.0f);
     }
     catch (const FormatError&)
     {
@@ -125,15 +634,8 @@ ImageRgba read_exr(const std::filesystem::path& path)
     }
     catch (const std::exception& e)
     {
-        throw FormatError(path.string() + ": not a readable EXR file: " + e.what());
+        throw FormatError(file + ": not a readable EXR file: " + e.what());
     }
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        if (!std::isfinite(image.pixels[i]))
-        {
-            size_t p = i / 4;
-            throw FormatError(path.string() + ": pixel (" + std::to_string(p % image.width) + ", " +
-                              std::to_string(p / image.width) + ") is not finite");
-        }
     return image;
 }
 

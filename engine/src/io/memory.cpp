@@ -8,9 +8,6 @@
 #include <sstream>
 #include <sys/resource.h>
 
-#include <ImfHeader.h>
-#include <ImfInputFile.h>
-
 namespace hemi::io
 {
 namespace
@@ -41,11 +38,28 @@ uint64_t budget_from_environment()
     double scale = 1.0;
     switch (*end)
     {
-    case 'K': case 'k': scale = 1024.0; ++end; break;
-    case 'M': case 'm': scale = 1024.0 * 1024.0; ++end; break;
-    case 'G': case 'g': scale = 1024.0 * 1024.0 * 1024.0; ++end; break;
-    case 'T': case 't': scale = 1024.0 * 1024.0 * 1024.0 * 1024.0; ++end; break;
-    default: break;
+    case 'K':
+    case 'k':
+        scale = 1024.0;
+        ++end;
+        break;
+    case 'M':
+    case 'm':
+        scale = 1024.0 * 1024.0;
+        ++end;
+        break;
+    case 'G':
+    case 'g':
+        scale = 1024.0 * 1024.0 * 1024.0;
+        ++end;
+        break;
+    case 'T':
+    case 't':
+        scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+        ++end;
+        break;
+    default:
+        break;
     }
     if (*end == 'i' || *end == 'B')
         ++end;
@@ -109,22 +123,56 @@ uint64_t image_pixels(const std::filesystem::path& path)
     if (std::equal(png, png + 8, head) && std::equal(head + 12, head + 16, "IHDR"))
     {
         auto be32 = [&](int at)
-        { return uint64_t(head[at]) << 24 | uint64_t(head[at + 1]) << 16 | uint64_t(head[at + 2]) << 8 | head[at + 3]; };
+        {
+            return uint64_t(head[at]) << 24 | uint64_t(head[at + 1]) << 16 | uint64_t(head[at + 2]) << 8 |
+                   head[at + 3];
+        };
         return be32(16) * be32(20);
     }
     if (head[0] == 0x76 && head[1] == 0x2f && head[2] == 0x31 && head[3] == 0x01)
     {
-        try
+        // The first part's header, read as bytes: attributes "name\0type\0<int32 size><value>" until an
+        // empty name; the data window is a box2i (four int32). Nothing is allocated from a declared size
+        // (read_exr checks the rest of the file before OpenEXR sees it).
+        in.clear();
+        in.seekg(8);
+        auto read_name = [&](std::string& out)
         {
-            const Imf::InputFile file(path.c_str());
-            const Imath::Box2i w = file.header().dataWindow();
-            if (w.max.x < w.min.x || w.max.y < w.min.y)
+            out.clear();
+            for (char c; in.get(c);)
+            {
+                if (c == '\0')
+                    return true;
+                if (out.size() >= 255)
+                    return false;
+                out.push_back(c);
+            }
+            return false;
+        };
+        std::string name, type;
+        for (int attributes = 0; attributes < 4096 && read_name(name) && !name.empty(); ++attributes)
+        {
+            unsigned char size_bytes[4];
+            if (!read_name(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4))
                 return 0;
-            return (uint64_t(int64_t(w.max.x) - w.min.x) + 1) * (uint64_t(int64_t(w.max.y) - w.min.y) + 1);
-        }
-        catch (...)
-        {
-            return 0; // the reader says what is wrong
+            const uint32_t size = uint32_t(size_bytes[0]) | uint32_t(size_bytes[1]) << 8 |
+                                  uint32_t(size_bytes[2]) << 16 | uint32_t(size_bytes[3]) << 24;
+            if (name == "dataWindow" && type == "box2i" && size == 16)
+            {
+                unsigned char box[16];
+                if (!in.read(reinterpret_cast<char*>(box), 16))
+                    return 0;
+                auto i32 = [&](int at)
+                {
+                    return int32_t(uint32_t(box[at]) | uint32_t(box[at + 1]) << 8 |
+                                   uint32_t(box[at + 2]) << 16 | uint32_t(box[at + 3]) << 24);
+                };
+                const int64_t w = int64_t(i32(8)) - i32(0) + 1, h = int64_t(i32(12)) - i32(4) + 1;
+                return w > 0 && h > 0 ? uint64_t(w) * uint64_t(h) : 0;
+            }
+            in.seekg(std::streamoff(size), std::ios::cur);
+            if (!in)
+                return 0;
         }
     }
     return 0;

@@ -48,8 +48,16 @@ struct ToneMap
 // Reads an OpenEXR file (scanline or tiled, half or float) into linear RGBA over its display window (pixels
 // outside the data window of an auto-cropped file read as 0, alpha 0 there): missing R/G/B read as 0 and a
 // missing A as 1; a single-channel Y image is read as grey. Files with neither R, G, B nor Y are refused.
-// Throws FormatError naming `path` when the file is missing, not EXR, truncated or corrupt, or holds a
-// non-finite pixel (with its position).
+// Multi-part files are read from their first part, which must be a flat scanline or tiled image (deep data is
+// refused). Throws FormatError naming `path` when the file is missing, not EXR, truncated or corrupt, or
+// holds a non-finite pixel (with its position).
+//
+// Memory follows the file, not its header: the headers are walked before OpenEXR reads them, and a file is
+// refused unless every attribute's value and the chunk offset tables lie in it and its data window's pixels
+// (and any one chunk: a block of scanlines, a tile) can be coded in its bytes at the compression's largest
+// expansion (none 1:1, RLE 64:1, ZIP 1032:1, PIZ 410:1, PXR24 1376:1, B44 11:1, DWA 66048:1, each with a
+// margin of 2); a chunk may overhang the data window by at most 64 MiB of buffers beyond that. The pixels are
+// then read in bands that grow with what has decoded.
 ImageRgba read_exr(const std::filesystem::path& path);
 // read_exr's caps: the display window holds at most 2^27 pixels (16384 x 8192, 2 GiB of RGBA floats), and
 // one larger than 1024 x 1024 may be at most 64 times its data window (what auto-cropping pads with zeros).

@@ -76,9 +76,15 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
         throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
                                     " of an environment with " + std::to_string(env.iors.size()));
     for (const math::BrdfTable& t : brdf)
+    {
         if (t.size != brdf[0].size || t.size < 2)
             throw std::invalid_argument(
                 "hemi: the BRDF tables of one material must all have one size (>= 2)");
+        if (t.channels == 0 || t.values.size() != size_t(t.size) * t.size * t.channels)
+            throw std::invalid_argument("hemi: a BRDF table of " + std::to_string(t.size) + "^2 x " +
+                                        std::to_string(t.channels) + " channels holds " +
+                                        std::to_string(t.values.size()) + " values");
+    }
     // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one
     // two-channel table (banks).
     const bool torrance_sparrow = brdf.size() == 2 && brdf[0].channels == 1 && brdf[1].channels == 1;
