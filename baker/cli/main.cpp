@@ -437,7 +437,7 @@ int run_lightmap(LightmapCli& c)
     {
         const std::vector<uint64_t> n = hemi::tool::parse_counts(
             c.probes, "--probes", "NX,NY,NZ (at least 1 each, 2^24 in all)", ',', {3}, 1, 1u << 24);
-        if (n[0] * n[1] * n[2] > (uint64_t(1) << 24))
+        if (hemi::io::probe_grid_count(n[0], n[1], n[2]) == 0)
             throw std::invalid_argument("--probes " + c.probes + ": more than 2^24 probes in all");
         o.probes = glm::uvec3(uint32_t(n[0]), uint32_t(n[1]), uint32_t(n[2]));
     }
@@ -457,7 +457,7 @@ int run_lightmap(LightmapCli& c)
             files.output("--exr-dir", bake::lightmap_exr_path(c.exr_dir, c.asset, name));
     }
     files.check();
-    o.lights = hemi::tool::naming_input(c.light.env, files, [&] { return c.light.lights(); });
+    o.lights = c.light.lights(); // read_exr names the environment's file; check_lights names it too
     ProgressLine line("hemi-bake lightmap");
     const bake::LightmapBakeSummary s = hemi::tool::naming_input(
         c.scene, files,
@@ -520,7 +520,7 @@ int run_reference(ReferenceCli& c)
 {
     namespace bake = hemi::bake;
     bake::ReferenceOptions& o = c.options;
-    std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size", 16384, false);
+    std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size");
     const std::optional<hemi::math::Camera> camera = hemi::math::parse_camera(c.camera);
     o.auto_camera = !camera;
     if (camera)
@@ -539,8 +539,7 @@ int run_reference(ReferenceCli& c)
     // read if they cannot fit.
     hemi::io::check_memory(uint64_t(o.width) * o.height * 48,
                            "--size " + c.size + ": a " + c.size + " reference image");
-    const bake::LightmapLights lights =
-        hemi::tool::naming_input(c.light.env, files, [&] { return c.light.lights(); });
+    const bake::LightmapLights lights = c.light.lights();
     ProgressLine line("hemi-bake reference");
     const bake::ReferenceImage r = hemi::tool::naming_input(
         c.scene, files,

@@ -542,8 +542,8 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                        const LightmapSurfaces* surfaces)
 {
     check(lights, o);
-    const uint64_t n = uint64_t(probes.count.x) * probes.count.y * probes.count.z;
-    if (n == 0 || n > (uint64_t(1) << 24))
+    const uint64_t n = io::probe_grid_count(probes.count.x, probes.count.y, probes.count.z);
+    if (n == 0)
         throw std::invalid_argument("a probe grid needs 1 to 2^24 probes");
     if (!(probes.lo.x <= probes.hi.x && probes.lo.y <= probes.hi.y && probes.lo.z <= probes.hi.z) ||
         !std::isfinite(probes.lo.x + probes.lo.y + probes.lo.z + probes.hi.x + probes.hi.y + probes.hi.z))

@@ -34,9 +34,9 @@ namespace
 // The lightmap's outputs are half floats (at most 65504). A basis coefficient reaches about the irradiance
 // itself (SH9's largest, for a single direction, is 1.02 E) and bounces add to it (a closed room of albedo
 // 0.75 sums to 4 E), so the lights' irradiance on a surface must stay within 65504 / 4. What can be known
-// before the bake is checked here, each light on its own and the lights together: a directional light's
-// irradiance, the environment's (pi times its largest radiance, a bound) and an emissive surface's
-// (pi times its radiance, the most a surface facing it can receive). Point and spot lights depend on their
+// before the bake is checked here: the directional lights' irradiance, summed, plus pi times the largest
+// radiance of the environment and the emissive surfaces (which share one hemisphere, so that is the most
+// they can give a point together). Point and spot lights depend on their
 // distance to the surfaces; the asset's writer refuses what they make out of range.
 constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 
@@ -56,35 +56,47 @@ void check_lightmap_range(const LightmapLights& l, const std::vector<io::Materia
         std::string name;
         double irradiance;
     };
-    std::vector<Source> sources;
+    // Delta lights (the sun, directional lights) add up; the environment and emissive surfaces share one
+    // hemisphere, so together they give a point at most pi times the largest radiance among them.
+    std::vector<Source> delta, area;
     auto max3 = [](const glm::vec3& v) { return double(std::max({v.x, v.y, v.z})); };
     if (l.sun)
-        sources.push_back({"the sun (--sun)", max3(l.sun_irradiance)});
+        delta.push_back({"the sun (--sun)", max3(l.sun_irradiance)});
+    for (const io::PunctualLight& p : l.punctual)
+        if (p.type == io::PunctualLight::Type::Directional)
+            delta.push_back(
+                {"the glTF directional light '" + p.name + "' (lux)", double(p.intensity) * max3(p.color)});
     if (l.environment.pixels.empty())
-        sources.push_back({"the environment (--env uniform, --env-scale)", M_PI * max3(l.uniform)});
+        area.push_back({"the environment (--env uniform, --env-scale)", M_PI * max3(l.uniform)});
     else
     {
         double most = 0.0;
         for (size_t i = 0; i < l.environment.pixels.size(); ++i)
             if (i % 4 != 3)
                 most = std::max(most, double(l.environment.pixels[i]));
-        sources.push_back({"the environment image " + l.environment_name + " (--env, --env-scale)",
-                           M_PI * most * l.environment_scale});
+        area.push_back({"the environment image " + l.environment_name + " (--env, --env-scale)",
+                        M_PI * most * l.environment_scale});
     }
-    for (const io::PunctualLight& p : l.punctual)
-        if (p.type == io::PunctualLight::Type::Directional)
-            sources.push_back(
-                {"the glTF directional light '" + p.name + "' (lux)", double(p.intensity) * max3(p.color)});
     for (const io::Material& m : materials)
         if (max3(m.emissive_factor) > 0.0)
-            sources.push_back({"the emissive material '" + m.name + "'", M_PI * max3(m.emissive_factor)});
+            area.push_back({"the emissive material '" + m.name + "'", M_PI * max3(m.emissive_factor)});
     double total = 0.0;
     const Source* largest = nullptr;
-    for (const Source& s : sources)
+    for (const Source& s : delta)
     {
         total += s.irradiance;
         if (!largest || s.irradiance > largest->irradiance)
             largest = &s;
+    }
+    const Source* brightest_area = nullptr;
+    for (const Source& s : area)
+        if (!brightest_area || s.irradiance > brightest_area->irradiance)
+            brightest_area = &s;
+    if (brightest_area)
+    {
+        total += brightest_area->irradiance;
+        if (!largest || brightest_area->irradiance > largest->irradiance)
+            largest = brightest_area;
     }
     if (largest && total > kMaxLightmapIrradiance)
     {
@@ -161,6 +173,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     try
     {
         surfaces.emplace(scene.mesh, scene.materials, scene.images, scene.primitives);
+    }
+    catch (const std::bad_alloc&)
+    {
+        throw;
     }
     catch (const std::exception& e)
     {

@@ -259,10 +259,16 @@ class Files
     };
     static bool same_file(const std::filesystem::path& a, const std::filesystem::path& b)
     {
-        std::error_code ec;
-        if (std::filesystem::exists(a, ec) && std::filesystem::exists(b, ec))
-            return std::filesystem::equivalent(a, b, ec);
-        return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+        std::error_code ea, eb;
+        if (std::filesystem::exists(a, ea) && std::filesystem::exists(b, eb))
+            return std::filesystem::equivalent(a, b, ea) && !ea;
+        // Not both there yet: compare the absolute, normalised paths (weakly_canonical keeps a path
+        // relative when none of it exists). A path that cannot be resolved is left to check_writable.
+        const std::filesystem::path x =
+            std::filesystem::weakly_canonical(std::filesystem::absolute(a, ea), ea);
+        const std::filesystem::path y =
+            std::filesystem::weakly_canonical(std::filesystem::absolute(b, eb), eb);
+        return !ea && !eb && x == y;
     }
     std::vector<Named> inputs_, outputs_;
 };
@@ -295,7 +301,7 @@ template <class F> auto naming_input(const std::filesystem::path& input, const F
         const std::string message = e.what();
         for (const std::filesystem::path& p : files.all())
             if (message.find(p.string()) != std::string::npos ||
-                message.find(p.filename().string()) != std::string::npos)
+                (!p.filename().empty() && message.find(p.filename().string()) != std::string::npos))
                 throw;
         throw std::runtime_error(input.string() + ": " + message);
     }

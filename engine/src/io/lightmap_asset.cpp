@@ -61,8 +61,8 @@ std::string probes_problem(const LightProbes& p)
 {
     if (p.count == glm::uvec3(0) && p.irradiance.empty() && p.valid.empty())
         return {};
-    const uint64_t n = uint64_t(p.count.x) * p.count.y * p.count.z;
-    if (n == 0 || n > (uint64_t(1) << 24))
+    const uint64_t n = probe_grid_count(p.count.x, p.count.y, p.count.z);
+    if (n == 0)
         return "probe grid " + std::to_string(p.count.x) + "x" + std::to_string(p.count.y) + "x" +
                std::to_string(p.count.z) + " is empty or larger than 2^24 probes";
     if (p.irradiance.size() != n || p.valid.size() != n)
@@ -286,8 +286,8 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
         if (b.size() < sizeof header)
             throw fail("lightmap.probes is too short");
         std::memcpy(&header, b.data(), sizeof header);
-        const uint64_t n = uint64_t(header.nx) * header.ny * header.nz;
-        if (n == 0 || n > (uint64_t(1) << 24) || header.zero != 0)
+        const uint64_t n = probe_grid_count(header.nx, header.ny, header.nz);
+        if (n == 0 || header.zero != 0)
             throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" +
                        std::to_string(header.ny) + "x" + std::to_string(header.nz) +
                        " probes is not supported");

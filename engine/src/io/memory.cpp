@@ -150,6 +150,7 @@ uint64_t image_pixels(const std::filesystem::path& path)
             return false;
         };
         std::string name, type;
+        uint64_t data = 0, display = 0; // the last of each, as OpenEXR keeps the last
         for (int attributes = 0; attributes < 4096 && read_name(name) && !name.empty(); ++attributes)
         {
             unsigned char size_bytes[4];
@@ -157,7 +158,7 @@ uint64_t image_pixels(const std::filesystem::path& path)
                 return 0;
             const uint32_t size = uint32_t(size_bytes[0]) | uint32_t(size_bytes[1]) << 8 |
                                   uint32_t(size_bytes[2]) << 16 | uint32_t(size_bytes[3]) << 24;
-            if (name == "dataWindow" && type == "box2i" && size == 16)
+            if ((name == "dataWindow" || name == "displayWindow") && type == "box2i" && size == 16)
             {
                 unsigned char box[16];
                 if (!in.read(reinterpret_cast<char*>(box), 16))
@@ -168,12 +169,15 @@ uint64_t image_pixels(const std::filesystem::path& path)
                                    uint32_t(box[at + 2]) << 16 | uint32_t(box[at + 3]) << 24);
                 };
                 const int64_t w = int64_t(i32(8)) - i32(0) + 1, h = int64_t(i32(12)) - i32(4) + 1;
-                return w > 0 && h > 0 ? uint64_t(w) * uint64_t(h) : 0;
+                (name == "dataWindow" ? data : display) = w > 0 && h > 0 ? uint64_t(w) * uint64_t(h) : 0;
+                continue;
             }
             in.seekg(std::streamoff(size), std::ios::cur);
             if (!in)
                 return 0;
         }
+        // read_exr returns the display window (the data placed inside it): the larger is what it holds.
+        return std::max(data, display);
     }
     return 0;
 }

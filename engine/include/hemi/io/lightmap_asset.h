@@ -59,6 +59,16 @@ struct LightProbes
     std::array<glm::vec3, 9> at(const glm::vec3& p) const;
 };
 
+// The probes of an NX x NY x NZ grid, or 0 when the grid is empty or holds more than 2^24 (the product is
+// taken so that it cannot wrap: three counts of up to 2^32 each).
+inline uint64_t probe_grid_count(uint64_t nx, uint64_t ny, uint64_t nz)
+{
+    constexpr uint64_t limit = uint64_t(1) << 24;
+    if (nx == 0 || ny == 0 || nz == 0 || nx > limit || ny > limit || nx * ny > limit || nx * ny * nz > limit)
+        return 0;
+    return nx * ny * nz;
+}
+
 struct LightmapAsset
 {
     Mesh mesh; // with uvs1
