@@ -308,8 +308,18 @@ class ExrHeaderScan
                 if (at_ - start != uint64_t(size))
                     fail(what + " has " + std::to_string(size) + " bytes, but its channels take " +
                          std::to_string(at_ - start));
+                // OpenEXR merges a repeated channel list into the one it has (a name already there is
+                // replaced): so does the scan, so that what it bounds is what OpenEXR will allocate for.
                 if (attribute == "channels")
-                    part.channels = std::move(channels);
+                    for (ExrChannelInfo& c : channels)
+                    {
+                        auto same = std::find_if(part.channels.begin(), part.channels.end(),
+                                                 [&](const ExrChannelInfo& e) { return e.name == c.name; });
+                        if (same != part.channels.end())
+                            *same = std::move(c);
+                        else
+                            part.channels.push_back(std::move(c));
+                    }
                 continue;
             }
             if (type == "preview")
