@@ -5,22 +5,13 @@
 
 #include <hemi/io/envmap_asset.h>
 
-#define XXH_INLINE_ALL
-#include <xxhash.h>
-
 #include <cstring>
 #include <vector>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     static const std::filesystem::path file = hemi::fuzz::scratch(".hemi");
-    std::vector<uint8_t> bytes(data, data + size);
-    if (bytes.size() >= 24)
-    {
-        const uint64_t sum = XXH64(bytes.data(), bytes.size() - 8, 0);
-        std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
-    }
-    hemi::fuzz::write_file(file, bytes.data(), bytes.size());
+    hemi::fuzz::write_resealed(file, data, size);
     hemi::fuzz::expect_clean(
         [&]
         {
