@@ -30,15 +30,15 @@ glm::dvec3 barycentric(const dvec2& p, const dvec2& a, const dvec2& b, const dve
     return {1.0 - w1 - w2, w1, w2};
 }
 
-// Whether triangle (a, b, c) and the square [x0, x0 + 1] x [y0, y0 + 1] overlap (separating axes: the two
-// coordinate axes and the three edge normals).
-bool overlaps_square(const dvec2 t[3], double x0, double y0)
+// Whether triangle (a, b, c) and the square [x0, x0 + size] x [y0, y0 + size] overlap (separating axes: the
+// two coordinate axes and the three edge normals).
+bool overlaps_square(const dvec2 t[3], double x0, double y0, double size = 1.0)
 {
     const double lo_x = std::min({t[0].x, t[1].x, t[2].x}), hi_x = std::max({t[0].x, t[1].x, t[2].x});
     const double lo_y = std::min({t[0].y, t[1].y, t[2].y}), hi_y = std::max({t[0].y, t[1].y, t[2].y});
-    if (hi_x < x0 || lo_x > x0 + 1 || hi_y < y0 || lo_y > y0 + 1)
+    if (hi_x < x0 || lo_x > x0 + size || hi_y < y0 || lo_y > y0 + size)
         return false;
-    const dvec2 corners[4] = {{x0, y0}, {x0 + 1, y0}, {x0, y0 + 1}, {x0 + 1, y0 + 1}};
+    const dvec2 corners[4] = {{x0, y0}, {x0 + size, y0}, {x0, y0 + size}, {x0 + size, y0 + size}};
     for (int e = 0; e < 3; ++e)
     {
         const dvec2 a = t[e], b = t[(e + 1) % 3], other = t[(e + 2) % 3];
@@ -126,10 +126,8 @@ std::string uv_text(const glm::vec2& uv)
     return buf;
 }
 
-} // namespace
-
-LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
-                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges)
+// The mesh rasterize_lightmap needs (throws std::invalid_argument naming what is wrong).
+void check_mesh(const io::Mesh& mesh, uint32_t width, uint32_t height)
 {
     if (width == 0 || height == 0 || width > 16384 || height > 16384)
         throw std::invalid_argument("lightmap size " + std::to_string(width) + "x" + std::to_string(height) +
@@ -152,11 +150,74 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
             !std::isfinite(mesh.positions[i].z))
             throw std::invalid_argument("vertex " + std::to_string(i) +
                                         " has a non-finite position or lightmap UV");
+}
 
+// Triangle t's lightmap UVs in texels and twice its signed area there; false for a triangle no texel holds
+// (zero area in space or in UV space).
+bool triangle_uvs(const io::Mesh& mesh, size_t t, uint32_t width, uint32_t height, dvec2 uv[3], double& area2)
+{
+    const uint32_t* idx = &mesh.indices[t * 3];
+    const glm::dvec3 p0(mesh.positions[idx[0]]), p1(mesh.positions[idx[1]]), p2(mesh.positions[idx[2]]);
+    for (int k = 0; k < 3; ++k)
+        uv[k] = dvec2(double(mesh.uvs1[idx[k]].x) * width, double(mesh.uvs1[idx[k]].y) * height);
+    area2 = cross2(uv[1] - uv[0], uv[2] - uv[0]);
+    return glm::length(glm::cross(p1 - p0, p2 - p0)) > 0.0 && std::abs(area2) >= 1e-12;
+}
+
+// The texels [x_begin, x_end] x [y_begin, y_end] of the atlas that a triangle's UV bounding box touches;
+// false when none.
+bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x_begin, int64_t& x_end,
+                  int64_t& y_begin, int64_t& y_end)
+{
+    const double lo_x = std::min({uv[0].x, uv[1].x, uv[2].x}), hi_x = std::max({uv[0].x, uv[1].x, uv[2].x});
+    const double lo_y = std::min({uv[0].y, uv[1].y, uv[2].y}), hi_y = std::max({uv[0].y, uv[1].y, uv[2].y});
+    x_begin = std::max<int64_t>(0, int64_t(std::floor(lo_x)));
+    x_end = std::min<int64_t>(int64_t(width) - 1, int64_t(std::floor(hi_x)));
+    y_begin = std::max<int64_t>(0, int64_t(std::floor(lo_y)));
+    y_end = std::min<int64_t>(int64_t(height) - 1, int64_t(std::floor(hi_y)));
+    return x_begin <= x_end && y_begin <= y_end;
+}
+
+} // namespace
+
+io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t height)
+{
+    check_mesh(mesh, width, height);
+    constexpr uint32_t B = io::BlockGrid::kSize;
+    const uint32_t bx = (width + B - 1) / B, by = (height + B - 1) / B;
+    std::vector<uint8_t> touched(size_t(bx) * by, 0);
+    for (size_t t = 0; t < mesh.indices.size() / 3; ++t)
+    {
+        dvec2 uv[3];
+        double area2;
+        int64_t x0, x1, y0, y1;
+        if (!triangle_uvs(mesh, t, width, height, uv, area2) ||
+            !texel_bounds(uv, width, height, x0, x1, y0, y1))
+            continue;
+        // A block touched by the triangle contains every texel it touches; the block's square is widened by a
+        // hair so that rounding cannot drop a block whose texel the exact test keeps.
+        for (int64_t j = y0 / B; j <= y1 / B; ++j)
+            for (int64_t i = x0 / B; i <= x1 / B; ++i)
+                if (!touched[size_t(j) * bx + size_t(i)] &&
+                    overlaps_square(uv, double(i * B) - 1e-6, double(j * B) - 1e-6, B + 2e-6))
+                    touched[size_t(j) * bx + size_t(i)] = 1;
+    }
+    std::vector<uint32_t> blocks;
+    for (size_t b = 0; b < touched.size(); ++b)
+        if (touched[b])
+            blocks.push_back(uint32_t(b));
+    return io::BlockGrid(width, height, std::move(blocks));
+}
+
+LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
+                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges)
+{
+    io::BlockGrid grid = lightmap_blocks(mesh, width, height); // checks the mesh
     report = {};
     const size_t triangles = mesh.indices.size() / 3;
     report.triangles = triangles;
-    const size_t texels = size_t(width) * height;
+    // Per texel of the touched blocks (slots), not per texel of the atlas.
+    const size_t texels = grid.slots();
     std::vector<int32_t> best(texels, -1);
     std::vector<double> best_distance(texels, std::numeric_limits<double>::infinity());
     std::vector<glm::dvec3> best_bary(texels);
@@ -198,20 +259,18 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 example_degenerate = t;
             continue;
         }
-        const double lo_x = std::min({uv[0].x, uv[1].x, uv[2].x}),
-                     hi_x = std::max({uv[0].x, uv[1].x, uv[2].x});
-        const double lo_y = std::min({uv[0].y, uv[1].y, uv[2].y}),
-                     hi_y = std::max({uv[0].y, uv[1].y, uv[2].y});
-        const int64_t x_begin = std::max<int64_t>(0, int64_t(std::floor(lo_x))),
-                      x_end = std::min<int64_t>(width - 1, int64_t(std::floor(hi_x)));
-        const int64_t y_begin = std::max<int64_t>(0, int64_t(std::floor(lo_y))),
-                      y_end = std::min<int64_t>(height - 1, int64_t(std::floor(hi_y)));
+        int64_t x_begin, x_end, y_begin, y_end;
+        if (!texel_bounds(uv, width, height, x_begin, x_end, y_begin, y_end))
+            continue;
         for (int64_t y = y_begin; y <= y_end; ++y)
             for (int64_t x = x_begin; x <= x_end; ++x)
             {
                 if (!overlaps_square(uv, double(x), double(y)))
                     continue;
-                const size_t texel = size_t(y) * width + size_t(x);
+                const int64_t slot = grid.slot(x, y);
+                if (slot < 0)
+                    continue; // cannot happen: lightmap_blocks keeps every block a triangle touches
+                const size_t texel = size_t(slot);
                 const dvec2 centre(double(x) + 0.5, double(y) + 0.5);
                 glm::dvec3 b = barycentric(centre, uv[0], uv[1], uv[2], area2);
                 double distance = 0.0;
@@ -253,17 +312,36 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     LightmapAtlas atlas;
     atlas.width = width;
     atlas.height = height;
-    atlas.texel_of.assign(texels, -1);
-    for (size_t texel = 0; texel < texels; ++texel)
+    atlas.slot_texel.assign(texels, -1);
+    // Covered texels in row-major order of the atlas: block row by block row, then texel row by texel row
+    // across the row's kept blocks.
+    std::vector<size_t> order;
     {
-        if (best[texel] < 0)
-            continue;
+        const std::vector<uint32_t>& blocks = grid.blocks();
+        const uint32_t bx = grid.blocks_x();
+        for (size_t first = 0; first < blocks.size();)
+        {
+            const uint32_t row = blocks[first] / bx;
+            size_t last = first;
+            while (last < blocks.size() && blocks[last] / bx == row)
+                ++last;
+            for (uint32_t ly = 0; ly < io::BlockGrid::kSize; ++ly)
+                for (size_t b = first; b < last; ++b)
+                    for (uint32_t lx = 0; lx < io::BlockGrid::kSize; ++lx)
+                        if (best[b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx] >= 0)
+                            order.push_back(b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx);
+            first = last;
+        }
+    }
+    for (const size_t texel : order)
+    {
         const size_t t = size_t(best[texel]);
         const uint32_t* idx = &mesh.indices[t * 3];
         const glm::dvec3 b = best_bary[texel];
         LightmapTexel out;
-        out.x = uint32_t(texel % width);
-        out.y = uint32_t(texel / width);
+        const glm::uvec2 xy = grid.texel(texel);
+        out.x = xy.x;
+        out.y = xy.y;
         out.triangle = uint32_t(t);
         out.barycentric = glm::vec3(b);
         out.centre_inside = best_distance[texel] == 0.0;
@@ -290,10 +368,11 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         out.tangent = glm::vec3(tan);
         out.bitangent = glm::vec3(glm::cross(nrm, tan) * w);
         out.world_size = float(std::sqrt(world_area[t] / uv_area[t]));
-        atlas.texel_of[texel] = int32_t(atlas.texels.size());
+        atlas.slot_texel[texel] = int32_t(atlas.texels.size());
         atlas.texels.push_back(out);
     }
     report.covered_texels = atlas.texels.size();
+    atlas.grid = std::move(grid);
 
     // Texel density per range.
     std::vector<TriangleRange> groups = ranges;

@@ -205,61 +205,91 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
 
 namespace
 {
-// Per texel values spread to the whole atlas: covered texels hold theirs, empty ones within `dilate` texels
-// of a chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel.
-std::vector<glm::vec3> dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k,
-                               int dilate, std::span<const uint8_t> valid = {})
+// Per texel values spread over the atlas: covered texels hold theirs, empty ones within `dilate` texels of a
+// chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel. Only the
+// blocks that hold a covered texel or one within `dilate` texels of one are stored, so the maps' memory
+// follows the covered texels.
+io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
+                      std::span<const uint8_t> valid = {})
 {
-    const uint32_t w = atlas.width, h = atlas.height;
-    const size_t plane = size_t(w) * h;
-    std::vector<glm::vec3> maps(size_t(k) * plane, glm::vec3(0.0f)); // map after map
-    std::vector<uint8_t> filled(plane, 0);
+    dilate = std::max(dilate, 0);
+    const int64_t w = atlas.width, h = atlas.height, B = io::BlockGrid::kSize;
+    const int64_t bx = (w + B - 1) / B, by = (h + B - 1) / B;
+    std::vector<uint8_t> keep(size_t(bx * by), 0);
+    for (const LightmapTexel& t : atlas.texels)
+        for (int64_t j = std::max<int64_t>(0, int64_t(t.y) - dilate) / B;
+             j <= std::min<int64_t>(h - 1, int64_t(t.y) + dilate) / B; ++j)
+            for (int64_t i = std::max<int64_t>(0, int64_t(t.x) - dilate) / B;
+                 i <= std::min<int64_t>(w - 1, int64_t(t.x) + dilate) / B; ++i)
+                keep[size_t(j * bx + i)] = 1;
+    std::vector<uint32_t> blocks;
+    for (size_t i = 0; i < keep.size(); ++i)
+        if (keep[i])
+            blocks.push_back(uint32_t(i));
+    io::BlockMaps maps(io::BlockGrid(atlas.width, atlas.height, std::move(blocks)), uint32_t(k));
+    const io::BlockGrid& grid = maps.grid;
+    auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
+    std::vector<uint8_t> filled(grid.slots(), 0);
     for (size_t i = 0; i < atlas.texels.size(); ++i)
     {
         if (!valid.empty() && !valid[i])
             continue; // inside geometry: filled from its valid neighbours like an empty texel
-        const size_t at = size_t(atlas.texels[i].y) * w + atlas.texels[i].x;
-        filled[at] = 1;
+        const size_t slot = size_t(grid.slot(atlas.texels[i].x, atlas.texels[i].y));
+        filled[slot] = 1;
         for (int j = 0; j < k; ++j)
-            maps[size_t(j) * plane + at] = values[i * size_t(k) + size_t(j)];
+        {
+            const glm::vec3& v = values[i * size_t(k) + size_t(j)];
+            float* out = at(j, slot);
+            out[0] = v.x;
+            out[1] = v.y;
+            out[2] = v.z;
+        }
     }
+    std::vector<glm::dvec3> sum(static_cast<size_t>(k));
     for (int pass = 0; pass < dilate; ++pass)
     {
         std::vector<uint8_t> next = filled;
-        for (uint32_t y = 0; y < h; ++y)
-            for (uint32_t x = 0; x < w; ++x)
-            {
-                const size_t at = size_t(y) * w + x;
-                if (filled[at])
-                    continue;
-                int count = 0;
-                std::vector<glm::dvec3> sum(size_t(k), glm::dvec3(0.0));
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx)
+        for (size_t slot = 0; slot < grid.slots(); ++slot)
+        {
+            if (filled[slot])
+                continue;
+            const glm::uvec2 xy = grid.texel(slot);
+            if (xy.x >= atlas.width || xy.y >= atlas.height)
+                continue; // past the atlas in a block of its last column or row
+            int count = 0;
+            std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                {
+                    const int64_t from = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
+                    if (from < 0 || !filled[size_t(from)])
+                        continue;
+                    ++count;
+                    for (int j = 0; j < k; ++j)
                     {
-                        const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
-                        if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h))
-                            continue;
-                        const size_t from = size_t(sy) * w + size_t(sx);
-                        if (!filled[from])
-                            continue;
-                        ++count;
-                        for (int j = 0; j < k; ++j)
-                            sum[size_t(j)] += glm::dvec3(maps[size_t(j) * plane + from]);
+                        const float* v = at(j, size_t(from));
+                        sum[size_t(j)] += glm::dvec3(v[0], v[1], v[2]);
                     }
-                if (!count)
-                    continue;
-                for (int j = 0; j < k; ++j)
-                    maps[size_t(j) * plane + at] = glm::vec3(sum[size_t(j)] / double(count));
-                next[at] = 1;
+                }
+            if (!count)
+                continue;
+            for (int j = 0; j < k; ++j)
+            {
+                const glm::vec3 v(sum[size_t(j)] / double(count));
+                float* out = at(j, slot);
+                out[0] = v.x;
+                out[1] = v.y;
+                out[2] = v.z;
             }
+            next[slot] = 1;
+        }
         filled.swap(next);
     }
     return maps;
 }
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
 // (Embree's barycentrics): what a ray that lands there picks up.
-glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const std::vector<glm::vec3>& map,
+glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const io::BlockMaps& map,
                        uint32_t triangle, float bu, float bv)
 {
     const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
@@ -273,7 +303,7 @@ glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const s
     {
         x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
         y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
-        return map[size_t(y) * atlas.width + size_t(x)];
+        return map.at(0, x, y);
     };
     const int64_t ix = int64_t(x0), iy = int64_t(y0);
     return (at(ix, iy) * (1.0f - tx) + at(ix + 1, iy) * tx) * (1.0f - ty) +
@@ -313,7 +343,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
     out.valid.assign(n, 1);
     std::vector<uint8_t> pushed(n, 0);
-    std::vector<glm::vec3> previous_map; // `previous` over the whole atlas, dilated, for bilinear lookups
+    io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     auto lookup_previous = [&](uint32_t triangle, float bu, float bv)
     { return atlas_lookup(mesh, atlas, previous_map, triangle, bu, bv); };
 
@@ -558,7 +588,7 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     std::vector<glm::vec3> irradiance(atlas.texels.size());
     for (size_t i = 0; i < atlas.texels.size(); ++i)
         irradiance[i] = math::sh9_eval_rgb(sh.irradiance[i], glm::vec3(0.0f, 0.0f, 1.0f));
-    const std::vector<glm::vec3> map = dilated(atlas, irradiance, 1, 2, sh.valid);
+    const io::BlockMaps map = dilated(atlas, irradiance, 1, 2, sh.valid);
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
@@ -715,20 +745,15 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
     return out;
 }
 
-std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
-                                 int dilate)
+io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
+                            int dilate)
 {
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel
     std::vector<glm::vec3> values(atlas.texels.size() * size_t(k));
     for (size_t i = 0; i < atlas.texels.size(); ++i)
         apply(m, sh.irradiance[i], &values[i * size_t(k)]);
-    const std::vector<glm::vec3> maps = dilated(atlas, values, k, dilate, sh.valid);
-    std::vector<float> out(maps.size() * 3);
-    for (size_t i = 0; i < maps.size(); ++i)
-        for (int c = 0; c < 3; ++c)
-            out[i * 3 + size_t(c)] = maps[i][c];
-    return out;
+    return dilated(atlas, values, k, dilate, sh.valid);
 }
 
 } // namespace hemi::bake

@@ -40,13 +40,33 @@ namespace
 // distance to the surfaces; the asset's writer refuses what they make out of range.
 constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 
-// Peak memory of a bake, an upper estimate: per atlas texel, its tables and per output coefficient (a float
-// map, its half copy in the asset and the asset's bytes), and per covered texel (the irradiance of every
-// pass, the sample, the texel's record). Measured on a fully covered floor with the default outputs (90
-// coefficients): 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against the 1,188 estimated here.
-constexpr uint64_t kLightmapBytesPerAtlasTexel = 32;
+// Peak memory of a bake, an upper estimate. The bake keeps only the 8 x 8 blocks of the atlas that triangles
+// touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
+// slot of the outputs' blocks (the touched ones and their dilation) and per output coefficient, a float map,
+// its half copy and the asset's bytes; per covered texel (at most one per slot), the irradiance of every
+// pass, the sample and the texel's record. Measured on a fully covered floor with the default outputs (90
+// coefficients): 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against the 1,240 estimated here. With
+// --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
+// atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
+constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerCoefficient = 10;
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 256;
+constexpr uint64_t kExrBytesPerCoefficient = 6;
+
+// The blocks around the touched ones that dilating the outputs by `dilate` texels may fill too.
+uint64_t dilated_slots(const io::BlockGrid& grid, int dilate)
+{
+    const int64_t ring = (std::max(dilate, 0) + int64_t(io::BlockGrid::kSize) - 1) / io::BlockGrid::kSize;
+    const int64_t bx = grid.blocks_x(), by = grid.blocks_y();
+    std::vector<uint8_t> keep(size_t(bx * by), 0);
+    for (uint32_t b : grid.blocks())
+        for (int64_t j = std::max<int64_t>(0, b / bx - ring); j <= std::min<int64_t>(by - 1, b / bx + ring);
+             ++j)
+            for (int64_t i = std::max<int64_t>(0, b % bx - ring);
+                 i <= std::min<int64_t>(bx - 1, b % bx + ring); ++i)
+                keep[size_t(j * bx + i)] = 1;
+    return uint64_t(std::count(keep.begin(), keep.end(), uint8_t(1))) * io::BlockGrid::kTexels;
+}
 
 void check_lightmap_range(const LightmapLights& l, const std::vector<io::Material>& materials,
                           const std::filesystem::path& scene)
@@ -225,17 +245,36 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     summary.width = w;
     summary.height = h;
-    // Memory before the atlas is made: what every atlas texel costs (the outputs' float maps and their half
-    // copies in the asset, the atlas's own tables), then, once the covered texels are known, theirs too.
-    uint64_t coefficients = 0;
+    // Memory before the atlas is made, from the blocks the triangles touch (io::BlockGrid): the bake and
+    // the asset store those, so a small scene in a large atlas costs what its texels cost.
+    uint64_t coefficients = 0, largest_output = 0;
     for (const std::string& name : o.outputs)
+    {
         coefficients += uint64_t(lightmap_output_size(name)) * 3;
-    const uint64_t per_atlas_texel =
-        kLightmapBytesPerAtlasTexel + coefficients * kLightmapBytesPerCoefficient;
+        largest_output = std::max<uint64_t>(largest_output, uint64_t(lightmap_output_size(name)) * 3);
+    }
     const std::string atlas_text = std::to_string(w) + "x" + std::to_string(h) + " lightmap";
-    io::check_memory(uint64_t(w) * h * per_atlas_texel,
-                     scene_path.string() + ": a " + atlas_text + " with " + std::to_string(coefficients) +
-                         " coefficients per texel (--size, --texel-size, --bases)");
+    const uint64_t exr_bytes =
+        o.exr_dir.empty() ? 0 : uint64_t(w) * h * largest_output * kExrBytesPerCoefficient;
+    uint64_t slots = 0, output_slots = 0;
+    try
+    {
+        const io::BlockGrid touched = lightmap_blocks(scene.mesh, w, h);
+        slots = touched.slots();
+        output_slots = dilated_slots(touched, o.dilate);
+    }
+    catch (const std::invalid_argument& e)
+    {
+        throw io::FormatError(scene_path.string() + ": " + e.what());
+    }
+    const uint64_t block_bytes =
+        slots * kLightmapBytesPerSlot + output_slots * coefficients * kLightmapBytesPerCoefficient;
+    io::check_memory(block_bytes + slots * kLightmapBytesPerCoveredTexel + exr_bytes,
+                     scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
+                         std::to_string(slots / io::BlockGrid::kTexels) + " blocks of 8x8 texels, with " +
+                         std::to_string(coefficients) +
+                         " coefficients per texel (--size, --texel-size, --bases" +
+                         (exr_bytes ? ", --exr-dir" : "") + ")");
     LightmapUvReport report;
     const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
     summary.uv_report = report;
@@ -250,17 +289,21 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             std::to_string(report.zero_area) +
             " of zero area in space); the lightmap would be empty: lay out TEXCOORD_1 inside [0, 1] "
             "or bake with --unwrap");
-    io::check_memory(uint64_t(w) * h * per_atlas_texel + atlas.texels.size() * kLightmapBytesPerCoveredTexel,
+    io::check_memory(block_bytes + atlas.texels.size() * kLightmapBytesPerCoveredTexel + exr_bytes,
                      scene_path.string() + ": a " + atlas_text + " with " +
                          std::to_string(atlas.texels.size()) + " covered texels");
     for (const std::string& warning : report.warnings)
         summary.warnings.push_back(warning);
-    // An atlas mostly empty costs its whole size in memory and in the asset: say so.
+    // The bake and the asset follow the covered texels; a renderer's coefficient images still cover the
+    // whole atlas: say so when most of it is empty.
     if (uint64_t(atlas.texels.size()) * 20 < uint64_t(w) * h && uint64_t(w) * h > (uint64_t(1) << 20))
-        summary.warnings.push_back(std::to_string(atlas.texels.size()) + " of the " + atlas_text + "'s " +
-                                   std::to_string(uint64_t(w) * h) +
-                                   " texels are covered (under 5%): the asset stores every texel; a smaller "
-                                   "--size or a larger --texel-size gives the same density for less");
+        summary.warnings.push_back(
+            std::to_string(atlas.texels.size()) + " of the " + atlas_text + "'s " +
+            std::to_string(uint64_t(w) * h) +
+            " texels are covered (under 5%): the bake and the asset store only the "
+            "8x8 blocks that hold texels, but a renderer's coefficient images cover "
+            "the whole atlas; a smaller --size or a larger --texel-size gives the same "
+            "density for less");
 
     o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
@@ -288,6 +331,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     for (const std::string& name : o.outputs)
         asset.outputs.push_back(
             {name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
+    summary.blocks = asset.outputs.front().maps.grid.blocks().size();
     if (o.probes != glm::uvec3(0))
     {
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
@@ -304,6 +348,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (!o.exr_dir.empty())
         for (const io::LightmapOutput& out : asset.outputs)
         {
+            // An EXR is a dense image: one output at a time is expanded to the whole atlas.
+            const std::vector<float> dense = out.maps.dense();
             std::vector<io::ExrChannel> channels;
             const size_t plane = size_t(w) * h * 3;
             for (uint32_t k = 0; k < out.k; ++k)
@@ -312,7 +358,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                     char name[32];
                     std::snprintf(name, sizeof name, "c%u.%s", k, c);
                     const size_t channel = size_t(c[0] == 'R' ? 0 : c[0] == 'G' ? 1 : 2);
-                    channels.push_back({name, out.maps.data() + k * plane + channel, 3, true});
+                    channels.push_back({name, dense.data() + k * plane + channel, 3, true});
                 }
             const std::vector<std::pair<std::string, std::string>> attributes = {
                 {"hemi.output", out.name},
@@ -339,6 +385,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["width"] = s.width;
     j["height"] = s.height;
     j["covered_texels"] = s.uv_report.covered_texels;
+    j["stored_blocks"] = s.blocks; // 8x8 blocks of the atlas the asset stores per output
+    j["peak_memory_bytes"] = io::peak_memory();
     j["triangles"] = s.triangles;
     j["materials"] = s.materials;
     j["primitives"] = s.primitives;

@@ -112,8 +112,7 @@ TEST(LightmapAtlas, ConservativeCoverageSamplesTheSurfaceInsideEachFootprint)
             touched.insert({std::min(size - 1, uint32_t(u * size)), std::min(size - 1, uint32_t(v * size))});
         }
     for (const auto& [x, y] : touched)
-        EXPECT_GE(a.texel_of[y * size + x], 0)
-            << "texel (" << x << ", " << y << ") is touched but not covered";
+        EXPECT_GE(a.texel_of(x, y), 0) << "texel (" << x << ", " << y << ") is touched but not covered";
     size_t grazed = 0;
     for (const LightmapTexel& t : a.texels)
     {
@@ -477,7 +476,7 @@ TEST(LightmapBake, SealedRoomLitFromOutsideStaysBlack)
     open.indices.erase(open.indices.begin() + 3 * 4, open.indices.begin() + 3 * 6); // the roof: face 1
     const LightmapAtlas b = rasterize_lightmap(open, 32, 32, report);
     const LightmapSh lit = bake_lightmap_sh(open, b, lights, o);
-    EXPECT_GT(lightmap_coefficients("plain", lit.irradiance[b.texel_of[8 * 32 + 8]])[0].x, 10.0f);
+    EXPECT_GT(lightmap_coefficients("plain", lit.irradiance[b.texel_of(8, 8)])[0].x, 10.0f);
 }
 
 // The same bytes on one thread and on all, and after resuming; dilation fills the ring around a chart.
@@ -529,8 +528,8 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
     o.checkpoint.clear();
     o.rays = 64;
     const LightmapSh ssh = bake_lightmap_sh(small, s, lights, o);
-    const std::vector<float> maps = lightmap_maps("plain", s, ssh, 2);
-    EXPECT_LT(s.texel_of[2 * 16 + 2], 0);
+    const std::vector<float> maps = lightmap_maps("plain", s, ssh, 2).dense();
+    EXPECT_LT(s.texel_of(2, 2), 0);
     EXPECT_GT(maps[(2 * 16 + 2) * 3], 0.5f) << "two texels out from the chart";
     EXPECT_EQ(maps[(0 * 16 + 0) * 3], 0.0f) << "beyond the dilation";
 }
@@ -595,7 +594,7 @@ TEST(LightmapBake, SunDiameterSetsThePenumbra)
         // The penumbra is really there at 10 degrees: the two columns beside the edge are partly lit.
         if (diameter > 0.0f)
         {
-            const size_t left = size_t(a.texel_of[5 * 16 + 7]), right = size_t(a.texel_of[5 * 16 + 8]);
+            const size_t left = size_t(a.texel_of(7, 5)), right = size_t(a.texel_of(8, 5));
             EXPECT_GT(lightmap_coefficients("plain", sh.irradiance[left])[0].x, 0.05 * open.x);
             EXPECT_LT(lightmap_coefficients("plain", sh.irradiance[right])[0].x, 0.95 * open.x);
         }
@@ -997,10 +996,10 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
     const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
     EXPECT_EQ(sh.pushed, 32u) << "two columns of 16 texels inside the wall";
     EXPECT_EQ(sh.invalid, 0u);
-    const std::vector<float> plain = lightmap_maps("plain", a, sh);
+    const std::vector<float> plain = lightmap_maps("plain", a, sh).dense();
     for (uint32_t y = 0; y < 16; ++y)
     {
-        const int32_t left = a.texel_of[y * 32 + 15], right = a.texel_of[y * 32 + 16];
+        const int32_t left = a.texel_of(15, y), right = a.texel_of(16, y);
         ASSERT_GE(left, 0);
         ASSERT_GE(right, 0);
         const float e_left = lightmap_coefficients("plain", sh.irradiance[size_t(left)])[0].x;
@@ -1008,7 +1007,7 @@ TEST(LightmapBake, TexelsInsideAWallAreMovedToTheSideTheyBelongTo)
             << "row " << y << ": the wall's foot on the open side sees the sky";
         for (uint32_t x = 16; x < 32; ++x)
         {
-            const size_t i = size_t(a.texel_of[y * 32 + x]);
+            const size_t i = size_t(a.texel_of(x, y));
             for (const glm::vec3& c : sh.irradiance[i])
                 ASSERT_EQ(c, glm::vec3(0.0f)) << "texel (" << x << ", " << y << ") of the sealed room";
             ASSERT_EQ(plain[(size_t(y) * 32 + x) * 3], 0.0f) << "output texel (" << x << ", " << y << ")";
@@ -1046,10 +1045,10 @@ TEST(LightmapBake, TexelsLeftInsideGeometryTakeTheirValidNeighboursValues)
     const LightmapSh sh = bake_lightmap_sh(m, a, lights, o);
     EXPECT_EQ(sh.pushed, 10u);
     EXPECT_EQ(sh.invalid, 2u);
-    auto index = [&](uint32_t x, uint32_t y) { return size_t(a.texel_of[y * 16 + x]); };
+    auto index = [&](uint32_t x, uint32_t y) { return size_t(a.texel_of(x, y)); };
     auto plain = [&](uint32_t x, uint32_t y)
     { return double(lightmap_coefficients("plain", sh.irradiance[index(x, y)])[0].x); };
-    const std::vector<float> maps = lightmap_maps("plain", a, sh);
+    const std::vector<float> maps = lightmap_maps("plain", a, sh).dense();
     for (uint32_t y : {5u, 6u})
     {
         EXPECT_EQ(sh.valid[index(9, y)], 0) << "row " << y;
@@ -1353,4 +1352,169 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
         EXPECT_NE(std::string(e.what()).find("64 x 64"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("0.01"), std::string::npos) << e.what();
     }
+}
+
+// ---- Storage that follows the covered texels (io/block_maps.h) ----
+
+namespace
+{
+// Made-up SH9 irradiance for every texel of an atlas (a different value per texel and coefficient), with
+// the texels at `invalid` marked inside geometry.
+LightmapSh made_up_sh(const LightmapAtlas& a, const std::set<std::pair<uint32_t, uint32_t>>& invalid)
+{
+    LightmapSh sh;
+    sh.width = a.width;
+    sh.height = a.height;
+    sh.irradiance.resize(a.texels.size());
+    sh.valid.assign(a.texels.size(), 1);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+    {
+        for (size_t j = 0; j < 9; ++j)
+            sh.irradiance[i][j] = glm::vec3(std::sin(0.37 * double(i) + double(j)),
+                                            0.5 + 0.01 * double(i % 97), -0.25 * double(j));
+        sh.valid[i] = invalid.count({a.texels[i].x, a.texels[i].y}) ? 0 : 1;
+    }
+    return sh;
+}
+
+// The dilation the outputs document, over the whole dense atlas (what lightmap_maps computed before it kept
+// blocks): covered valid texels hold their coefficients; each pass, an empty texel with filled 8-neighbours
+// takes their mean (in double, neighbours in row order); the rest stay 0.
+std::vector<float> dense_dilation(const LightmapAtlas& a, const LightmapSh& sh, const std::string& name,
+                                  int k, int dilate)
+{
+    const size_t w = a.width, h = a.height, plane_size = w * h;
+    std::vector<glm::vec3> maps(size_t(k) * plane_size, glm::vec3(0.0f));
+    std::vector<uint8_t> filled(plane_size, 0);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+        if (sh.valid[i])
+        {
+            const size_t at = a.texels[i].y * w + a.texels[i].x;
+            filled[at] = 1;
+            const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
+            for (int j = 0; j < k; ++j)
+                maps[size_t(j) * plane_size + at] = c[size_t(j)];
+        }
+    for (int pass = 0; pass < dilate; ++pass)
+    {
+        std::vector<uint8_t> next = filled;
+        for (size_t y = 0; y < h; ++y)
+            for (size_t x = 0; x < w; ++x)
+            {
+                if (filled[y * w + x])
+                    continue;
+                int count = 0;
+                std::vector<glm::dvec3> sum(size_t(k), glm::dvec3(0.0));
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx)
+                    {
+                        const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
+                        if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h) ||
+                            !filled[size_t(sy) * w + size_t(sx)])
+                            continue;
+                        ++count;
+                        for (int j = 0; j < k; ++j)
+                            sum[size_t(j)] +=
+                                glm::dvec3(maps[size_t(j) * plane_size + size_t(sy) * w + size_t(sx)]);
+                    }
+                if (!count)
+                    continue;
+                for (int j = 0; j < k; ++j)
+                    maps[size_t(j) * plane_size + y * w + x] = glm::vec3(sum[size_t(j)] / double(count));
+                next[y * w + x] = 1;
+            }
+        filled.swap(next);
+    }
+    std::vector<float> out(maps.size() * 3);
+    for (size_t i = 0; i < maps.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            out[i * 3 + size_t(c)] = maps[i][c];
+    return out;
+}
+} // namespace
+
+// Three charts of a 64 x 45 atlas: one across a block border, one in the atlas's last (partial) block row
+// and column, one small in the middle. The covered texels are exactly those whose square overlaps a chart's
+// rectangle with area (worked out here from the rectangles), and the atlas keeps exactly the 8x8 blocks that
+// hold them. Fails for a rasteriser that drops the texels of partial blocks or of a block a triangle only
+// grazes, or that keeps the blocks of the bounding box.
+TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
+{
+    const uint32_t w = 64, h = 45;
+    const glm::vec4 rects[] = {
+        {5.3f, 6.2f, 12.6f, 10.7f}, {58.2f, 41.4f, 63.5f, 44.6f}, {30.1f, 20.1f, 31.4f, 21.2f}};
+    Mesh m;
+    for (const glm::vec4& r : rects)
+        add_quad(m, {r.x, r.y, 0.0f}, {r.z, r.y, 0.0f}, {r.z, r.w, 0.0f}, {r.x, r.w, 0.0f},
+                 {r.x / w, r.y / h, r.z / w, r.w / h});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, w, h, report);
+    ASSERT_TRUE(report.ok());
+    std::set<std::pair<uint32_t, uint32_t>> expected;
+    std::set<uint32_t> blocks;
+    for (const glm::vec4& r : rects)
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+                if (float(x) < r.z && float(x + 1) > r.x && float(y) < r.w && float(y + 1) > r.y)
+                {
+                    expected.insert({x, y});
+                    blocks.insert(y / 8 * 8 + x / 8);
+                }
+    std::set<std::pair<uint32_t, uint32_t>> covered;
+    for (const LightmapTexel& t : a.texels)
+        covered.insert({t.x, t.y});
+    EXPECT_EQ(covered, expected);
+    EXPECT_EQ(a.grid.blocks(), std::vector<uint32_t>(blocks.begin(), blocks.end()));
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+        {
+            const int32_t i = a.texel_of(x, y);
+            ASSERT_EQ(i >= 0, expected.count({x, y}) == 1) << x << ", " << y;
+            if (i >= 0)
+                EXPECT_TRUE(a.texels[size_t(i)].x == x && a.texels[size_t(i)].y == y);
+        }
+    // Row-major order of (y, x), as the bake's seeds and checkpoints expect.
+    for (size_t i = 1; i < a.texels.size(); ++i)
+        EXPECT_LT(std::pair(a.texels[i - 1].y, a.texels[i - 1].x), std::pair(a.texels[i].y, a.texels[i].x));
+
+    // A sliver along the diagonal of a 64 x 64 atlas touches the blocks along it, not its bounding box's 64.
+    Mesh sliver;
+    for (const glm::vec3& p :
+         {glm::vec3(0.5f, 60.5f, 0.0f), glm::vec3(60.5f, 0.5f, 0.0f), glm::vec3(61.0f, 1.5f, 0.0f)})
+    {
+        sliver.positions.push_back(p);
+        sliver.normals.emplace_back(0.0f, 0.0f, 1.0f);
+        sliver.tangents.emplace_back(1.0f, 0.0f, 0.0f, 1.0f);
+        sliver.uvs.emplace_back(p.x / 64.0f, p.y / 64.0f);
+        sliver.uvs1.emplace_back(p.x / 64.0f, p.y / 64.0f);
+    }
+    sliver.indices = {0, 2, 1};
+    const hemi::io::BlockGrid g = lightmap_blocks(sliver, 64, 64);
+    EXPECT_GE(g.blocks().size(), 8u);
+    EXPECT_LE(g.blocks().size(), 24u);
+}
+
+// The outputs over the kept blocks equal the dense dilation of the same coefficients, value for value, for
+// the default 2 rings and for 11 (which reaches two blocks away): a texel that dilation fills is never in a
+// block that was not kept. Fails when the dilation blocks miss a ring, or when a texel inside geometry is
+// taken as filled.
+TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
+{
+    const uint32_t w = 64, h = 45;
+    const glm::vec4 rects[] = {
+        {5.3f, 6.2f, 12.6f, 10.7f}, {58.2f, 41.4f, 63.5f, 44.6f}, {30.1f, 20.1f, 31.4f, 21.2f}};
+    Mesh m;
+    for (const glm::vec4& r : rects)
+        add_quad(m, {r.x, r.y, 0.0f}, {r.z, r.y, 0.0f}, {r.z, r.w, 0.0f}, {r.x, r.w, 0.0f},
+                 {r.x / w, r.y / h, r.z / w, r.w / h});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, w, h, report);
+    const LightmapSh sh = made_up_sh(a, {{8, 8}, {30, 20}});
+    for (const auto& [name, k] : {std::pair{std::string("plain"), 1}, std::pair{std::string("h4"), 4}})
+        for (int dilate : {2, 11})
+        {
+            const hemi::io::BlockMaps maps = lightmap_maps(name, a, sh, dilate);
+            EXPECT_EQ(maps.dense(), dense_dilation(a, sh, name, k, dilate)) << name << ", dilate " << dilate;
+            EXPECT_LT(maps.grid.blocks().size(), size_t(8 * 6)) << "not every block of the atlas";
+        }
 }

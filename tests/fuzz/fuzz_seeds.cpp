@@ -364,16 +364,22 @@ int main(int argc, char** argv)
         put(out / "asset/regressions/duplicate_section.hemi", dup);
     }
     {
-        // A lightmap asset of the same scene: a 2 x 2 atlas, one output of each kind's size.
+        // A lightmap asset of the same scene: a 20 x 12 atlas (6 blocks of 8 x 8, partial ones included), one
+        // output of each kind's size: `plain` in two of the blocks, `h4` in all of them.
         io::LightmapAsset l;
         l.mesh = s.mesh;
         l.mesh.uvs1 = l.mesh.uvs;
         l.materials = s.materials;
         l.images = s.images;
         l.primitives = s.primitives;
-        l.width = l.height = 2;
-        l.outputs.push_back({"plain", 1, std::vector<float>(2 * 2 * 3, 0.5f)});
-        l.outputs.push_back({"h4", 4, std::vector<float>(4 * 2 * 2 * 3, 0.25f)});
+        l.width = 20;
+        l.height = 12;
+        std::vector<float> plain(20 * 12 * 3, 0.0f);
+        plain[(1 * 20 + 2) * 3] = 0.5f;
+        plain[(10 * 20 + 17) * 3 + 1] = 0.25f;
+        l.outputs.push_back({"plain", 1, io::BlockMaps::from_dense(20, 12, 1, plain)});
+        l.outputs.push_back(
+            {"h4", 4, io::BlockMaps::from_dense(20, 12, 4, std::vector<float>(4 * 20 * 12 * 3, 0.25f))});
         io::write_lightmap_asset(scratch / "tiny_lightmap.hemi", l);
         put(out / "asset/corpus/tiny_lightmap.hemi", slurp(scratch / "tiny_lightmap.hemi"));
     }

@@ -1,15 +1,25 @@
 // The lightmap asset (io/lightmap_asset.h): every value round-trips (coefficients through half floats, so to
-// half precision); truncated, corrupted, inconsistent and other kinds of files are refused naming the file.
+// half precision); truncated, corrupted, inconsistent and other kinds of files are refused naming the file;
+// the coefficient maps are stored as the 8x8 blocks that hold texels (io/block_maps.h), in the layout the
+// header documents, and the dense layout 1 is still read.
 #include "../temp_dir.h"
 
+#include <hemi/io/asset.h>
+#include <hemi/io/block_maps.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <set>
+#include <tuple>
 
 namespace fs = std::filesystem;
 
@@ -45,10 +55,10 @@ hemi::io::LightmapAsset small_asset()
     a.covered_texels = 15;
     for (const auto& [name, k] : {std::pair{"plain", 1u}, std::pair{"h4", 4u}, std::pair{"rnm", 3u}})
     {
-        hemi::io::LightmapOutput o{name, k, std::vector<float>(size_t(k) * 15 * 3)};
-        for (size_t i = 0; i < o.maps.size(); ++i)
-            o.maps[i] = float(std::sin(double(i) * 0.7)) * 3.0f;
-        a.outputs.push_back(std::move(o));
+        std::vector<float> dense(size_t(k) * 15 * 3);
+        for (size_t i = 0; i < dense.size(); ++i)
+            dense[i] = float(std::sin(double(i) * 0.7)) * 3.0f;
+        a.outputs.push_back({name, k, hemi::io::BlockMaps::from_dense(5, 3, k, dense)});
     }
     return a;
 }
@@ -85,9 +95,10 @@ TEST(LightmapAsset, RoundTripKeepsEveryValueToHalfPrecision)
     for (const hemi::io::LightmapOutput& o : a.outputs)
     {
         const hemi::io::LightmapOutput& r = b.output(o.name);
-        ASSERT_EQ(r.maps.size(), o.maps.size());
-        for (size_t i = 0; i < o.maps.size(); ++i)
-            EXPECT_NEAR(r.maps[i], o.maps[i], std::abs(o.maps[i]) * 4.9e-4 + 1e-7)
+        const std::vector<float> written = o.maps.dense(), read = r.maps.dense();
+        ASSERT_EQ(read.size(), written.size());
+        for (size_t i = 0; i < written.size(); ++i)
+            EXPECT_NEAR(read[i], written[i], std::abs(written[i]) * 4.9e-4 + 1e-7)
                 << o.name << " " << i; // 2^-11
     }
     EXPECT_THROW(b.output("sh9"), std::invalid_argument);
@@ -130,13 +141,13 @@ TEST(LightmapAsset, WriterRefusesInconsistentAssets)
         EXPECT_FALSE(fs::exists(dir() / "never.hemi"));
     };
     hemi::io::LightmapAsset a = small_asset();
-    a.outputs[1].maps.pop_back();
-    refused(a, "values, expected");
+    a.outputs[1].maps.values.pop_back();
+    refused(a, "values, its blocks need");
     a = small_asset();
-    a.outputs[0].maps[3] = NAN;
+    a.outputs[0].maps.values[3] = NAN;
     refused(a, "half float");
     a = small_asset();
-    a.outputs[0].maps[3] = 1e6f;
+    a.outputs[0].maps.values[3] = 1e6f;
     refused(a, "half float");
     a = small_asset();
     a.outputs[0].name = "h7";
@@ -235,4 +246,206 @@ TEST(LightmapAsset, LightProbesRoundTripAndInterpolate)
     bad = a;
     bad.probes.lo.x = 5.0f;
     refused(bad, "corners");
+}
+
+// ---- Block-sparse maps (io/block_maps.h) and the asset's block layout ----
+
+// A 21 x 13 atlas (its last block column and row reach past it) with values at a few texels: exactly the
+// blocks that hold one are kept, every texel reads back, and the dense array comes back unchanged. The
+// expected blocks are worked out here from the texels, 3 blocks a row. Fails for a block index taken as
+// bx * blocks_y + by, for partial blocks dropped, or for a slot that mixes up x and y.
+TEST(BlockMaps, KeepExactlyTheBlocksThatHoldAValueAndReadBackEveryTexel)
+{
+    const uint32_t w = 21, h = 13, k = 2;
+    std::vector<float> dense(size_t(k) * w * h * 3, 0.0f);
+    const struct
+    {
+        uint32_t map, x, y, c;
+        float v;
+    } values[] = {{0, 0, 0, 0, 1.5f},
+                  {0, 9, 2, 1, -2.0f},
+                  {1, 20, 12, 2, 3.25f},
+                  {1, 17, 3, 0, 0.5f},
+                  {0, 17, 4, 2, 7.0f}};
+    std::set<uint32_t> expected;
+    for (const auto& t : values)
+    {
+        dense[((size_t(t.map) * h + t.y) * w + t.x) * 3 + t.c] = t.v;
+        expected.insert(t.y / 8 * 3 + t.x / 8);
+    }
+    const hemi::io::BlockMaps m = hemi::io::BlockMaps::from_dense(w, h, k, dense);
+    EXPECT_EQ(m.grid.blocks(), std::vector<uint32_t>(expected.begin(), expected.end()));
+    EXPECT_EQ(m.values.size(), expected.size() * k * 64 * 3);
+    for (uint32_t map = 0; map < k; ++map)
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+            {
+                const glm::vec3 v = m.at(map, x, y);
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(v[c], dense[((size_t(map) * h + y) * w + x) * 3 + size_t(c)])
+                        << map << " " << x << " " << y;
+            }
+    EXPECT_EQ(m.dense(), dense);
+    EXPECT_EQ(m.at(0, -1, 0), glm::vec3(0.0f));
+    EXPECT_EQ(m.at(1, 21, 12), glm::vec3(0.0f)); // past the atlas, inside a kept block
+    for (size_t s = 0; s < m.grid.slots(); ++s)
+    {
+        const glm::uvec2 t = m.grid.texel(s);
+        if (t.x < w && t.y < h)
+            EXPECT_EQ(m.grid.slot(t.x, t.y), int64_t(s));
+    }
+    EXPECT_THROW(hemi::io::BlockGrid(w, h, {4, 2}), std::invalid_argument); // out of order
+    EXPECT_THROW(hemi::io::BlockGrid(w, h, {1, 1}), std::invalid_argument); // twice
+    EXPECT_THROW(hemi::io::BlockGrid(w, h, {0, 6}), std::invalid_argument); // 6 blocks in the grid
+    EXPECT_THROW(hemi::io::BlockGrid(0, h, {}), std::invalid_argument);     // no texels
+    EXPECT_THROW(hemi::io::BlockMaps::from_dense(w, h, 3, dense), std::invalid_argument); // wrong K
+}
+
+namespace
+{
+// A 4096 x 4096 atlas whose only texel (1234, 2345) holds `plain`: one 8x8 block, made without the dense
+// atlas (which would be 200 MB of floats).
+hemi::io::LightmapAsset one_texel_asset(const glm::vec3& plain)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    a.width = a.height = 4096;
+    a.covered_texels = 1;
+    a.outputs.clear();
+    const uint32_t block = 2345 / 8 * 512 + 1234 / 8;
+    hemi::io::BlockMaps m(hemi::io::BlockGrid(4096, 4096, {block}), 1);
+    const size_t at = m.index(0, size_t(m.grid.slot(1234, 2345)));
+    m.values[at] = plain.x;
+    m.values[at + 1] = plain.y;
+    m.values[at + 2] = plain.z;
+    a.outputs.push_back({"plain", 1, std::move(m)});
+    return a;
+}
+} // namespace
+
+// A 4096^2 lightmap with one covered texel is a few kilobytes (the dense layout stored 100 MB), and its
+// section holds what lightmap_asset.h documents, parsed here from the bytes: K, N, the block indices, then
+// the halves, coefficient k of local texel (x, y) of block b at ((b * K + k) * 64 + y * 8 + x) * 3 + c.
+TEST(LightmapAsset, StoresOnlyTheBlocksThatHoldTexelsInTheDocumentedLayout)
+{
+    const fs::path p = dir() / "one_texel.hemi";
+    hemi::io::write_lightmap_asset(p, one_texel_asset({1.0f, 2.5f, -0.75f}));
+    EXPECT_LT(fs::file_size(p), 16384u);
+    const hemi::io::AssetReader r(p);
+    const std::span<const std::byte> b = r.section("L.plain");
+    ASSERT_EQ(b.size(), 4u + 4u + 4u + 64u * 3u * 2u);
+    uint32_t head[3];
+    std::memcpy(head, b.data(), 12);
+    EXPECT_EQ(head[0], 1u);                                  // K
+    EXPECT_EQ(head[1], 1u);                                  // N
+    EXPECT_EQ(head[2], uint32_t(2345 / 8 * 512 + 1234 / 8)); // by * ceil(W / 8) + bx
+    const size_t local = size_t(2345 % 8) * 8 + 1234 % 8;
+    for (size_t i = 0; i < 64 * 3; ++i)
+    {
+        uint16_t half;
+        std::memcpy(&half, b.data() + 12 + 2 * i, 2);
+        const float expected = i / 3 == local ? std::array<float, 3>{1.0f, 2.5f, -0.75f}[i % 3] : 0.0f;
+        EXPECT_EQ(glm::unpackHalf1x16(half), expected) << i;
+    }
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(p);
+    const hemi::io::BlockMaps& m = a.output("plain").maps;
+    EXPECT_EQ(m.at(0, 1234, 2345), glm::vec3(1.0f, 2.5f, -0.75f));
+    EXPECT_EQ(m.at(0, 1235, 2345), glm::vec3(0.0f));
+    EXPECT_EQ(m.at(0, 0, 0), glm::vec3(0.0f));
+    EXPECT_EQ(m.grid.blocks().size(), 1u);
+}
+
+namespace
+{
+// `good` with its lightmap.info and L.<output> sections replaced (the rest copied).
+fs::path rewritten(const fs::path& good, const std::string& name,
+                   const std::function<void(const std::string&, std::vector<std::byte>&)>& edit)
+{
+    const hemi::io::AssetReader r(good);
+    hemi::io::AssetWriter w;
+    for (const std::string& section : r.names())
+    {
+        const std::span<const std::byte> b = r.section(section);
+        std::vector<std::byte> bytes(b.begin(), b.end());
+        edit(section, bytes);
+        w.add(section, bytes);
+    }
+    const fs::path p = dir() / name;
+    w.write(p);
+    return p;
+}
+} // namespace
+
+// An asset of layout 1 (the dense K x H x W x 3 halves hemi wrote before the blocks) still reads, to the same
+// values; made here from a layout-2 asset by rewriting its sections as layout 1 documented them.
+TEST(LightmapAsset, ReadsTheDenseLayoutOne)
+{
+    const hemi::io::LightmapAsset a = small_asset();
+    const fs::path good = dir() / "layout2.hemi";
+    hemi::io::write_lightmap_asset(good, a);
+    const fs::path old = rewritten(good, "layout1.hemi",
+                                   [&](const std::string& section, std::vector<std::byte>& bytes)
+                                   {
+                                       if (section == "lightmap.info")
+                                       {
+                                           const uint32_t one = 1;
+                                           std::memcpy(bytes.data(), &one, 4);
+                                       }
+                                       if (section.rfind("L.", 0) != 0)
+                                           return;
+                                       const hemi::io::LightmapOutput& o = a.output(section.substr(2));
+                                       const std::vector<float> dense = o.maps.dense();
+                                       bytes.resize(4 + dense.size() * 2);
+                                       std::memcpy(bytes.data(), &o.k, 4);
+                                       for (size_t i = 0; i < dense.size(); ++i)
+                                       {
+                                           const uint16_t h = uint16_t(glm::packHalf1x16(dense[i]));
+                                           std::memcpy(bytes.data() + 4 + 2 * i, &h, 2);
+                                       }
+                                   });
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(old);
+    ASSERT_EQ(b.outputs.size(), a.outputs.size());
+    for (const hemi::io::LightmapOutput& o : a.outputs)
+    {
+        const std::vector<float> written = o.maps.dense(), read = b.output(o.name).maps.dense();
+        ASSERT_EQ(read.size(), written.size());
+        for (size_t i = 0; i < written.size(); ++i)
+            EXPECT_EQ(read[i], glm::unpackHalf1x16(glm::packHalf1x16(written[i]))) << o.name << " " << i;
+    }
+}
+
+// Block lists that are not strictly ascending, or name blocks past the grid, or disagree with the section's
+// size, are refused naming the file and the section.
+TEST(LightmapAsset, RefusesBadBlockLists)
+{
+    const fs::path good = dir() / "blocks.hemi";
+    hemi::io::write_lightmap_asset(good, small_asset()); // 5 x 3: one block, index 0
+    auto with_blocks = [&](const std::string& name, std::vector<uint32_t> blocks)
+    {
+        return rewritten(good, name,
+                         [&](const std::string& section, std::vector<std::byte>& bytes)
+                         {
+                             const uint32_t width = 17; // 3 blocks, so that block 0 stays valid
+                             if (section == "lightmap.info")
+                                 std::memcpy(bytes.data() + 4, &width, 4);
+                             if (section != "L.plain")
+                                 return;
+                             const uint32_t n = uint32_t(blocks.size());
+                             std::vector<std::byte> out(8 + n * 4 + size_t(n) * 64 * 3 * 2);
+                             std::memcpy(out.data(), bytes.data(), 4); // K = 1
+                             std::memcpy(out.data() + 4, &n, 4);
+                             std::memcpy(out.data() + 8, blocks.data(), n * 4);
+                             bytes = out;
+                         });
+    };
+    for (const auto& [name, blocks, what] :
+         {std::tuple{"twice.hemi", std::vector<uint32_t>{0, 0}, "ascending"},
+          std::tuple{"past.hemi", std::vector<uint32_t>{3}, "out of the 3-block grid"},
+          std::tuple{"many.hemi", std::vector<uint32_t>{0, 1, 2, 3}, "atlas has 3"}})
+    {
+        const fs::path p = with_blocks(name, blocks);
+        const std::string e = error_of(p);
+        EXPECT_NE(e.find(p.string()), std::string::npos) << e;
+        EXPECT_NE(e.find("L.plain"), std::string::npos) << e;
+        EXPECT_NE(e.find(what), std::string::npos) << e;
+    }
 }

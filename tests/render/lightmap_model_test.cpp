@@ -217,7 +217,7 @@ TEST_F(LightmapMaterial, EveryBasisMatchesCpuEvaluationBesideAPrtObjectInTheCall
         {
             x = std::clamp(x, 0, int(kAtlas) - 1);
             y = std::clamp(y, 0, int(kAtlas) - 1);
-            const float* t = &out.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
+            const glm::vec3 t = out.maps.at(k, x, y);
             return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(t[0])),
                              glm::unpackHalf1x16(glm::packHalf1x16(t[1])),
                              glm::unpackHalf1x16(glm::packHalf1x16(t[2])));
@@ -398,7 +398,7 @@ TEST_F(LightmapMaterial, RadiosityNormalMappingAndSsbumpMatchTheirListings)
             auto t = [&](int x, int y)
             {
                 x = std::clamp(x, 0, int(kAtlas) - 1), y = std::clamp(y, 0, int(kAtlas) - 1);
-                const float* v = &rnm.maps[((size_t(k) * kAtlas + uint32_t(y)) * kAtlas + uint32_t(x)) * 3];
+                const glm::vec3 v = rnm.maps.at(uint32_t(k), x, y);
                 return glm::vec3(glm::unpackHalf1x16(glm::packHalf1x16(v[0])),
                                  glm::unpackHalf1x16(glm::packHalf1x16(v[1])),
                                  glm::unpackHalf1x16(glm::packHalf1x16(v[2])));

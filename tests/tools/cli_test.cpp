@@ -647,7 +647,7 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
     EXPECT_EQ(hemi::io::asset_kind(asset), "lightmap");
     const hemi::io::LightmapOutput& plain = a.output("plain");
     for (size_t i = 0; i < 256; ++i)
-        ASSERT_NEAR(plain.maps[i * 3], M_PI, 0.01 * M_PI) << "texel " << i;
+        ASSERT_NEAR(plain.maps.at(0, int64_t(i % 16), int64_t(i / 16)).x, M_PI, 0.01 * M_PI) << "texel " << i;
     EXPECT_EQ(a.output("h6").k, 6u);
     EXPECT_FALSE(fs::exists(asset.string() + ".partial"));
     const nlohmann::json j = nlohmann::json::parse(slurp(json));
@@ -682,7 +682,7 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
     const double expected = 2.0 * (M_PI * 0.282095 * 0.282095 + 2 * M_PI / 3 * 0.488603 * 0.488603 +
                                    M_PI / 4 * 4 * 0.315392 * 0.315392 * 1.0);
     const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(sunny);
-    EXPECT_NEAR(b.output("plain").maps[0], expected, 1e-3);
+    EXPECT_NEAR(b.output("plain").maps.at(0, 0, 0).x, expected, 1e-3);
 }
 
 // Bad scenes for hemi-bake lightmap: exit status 1 and a message naming the file and the problem.
@@ -777,7 +777,7 @@ TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(nlohmann::json::parse(slurp(json))["punctual_lights"], 1);
     const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
-    const std::vector<float>& plain = a.output("plain").maps;
+    const std::vector<float> plain = a.output("plain").maps.dense();
     for (uint32_t y = 0; y < 16; ++y)
         for (uint32_t x = 0; x < 16; ++x)
         {
@@ -1887,8 +1887,8 @@ std::vector<uint8_t> png_declaring(uint32_t width, uint32_t height)
 } // namespace
 
 // What the machine cannot hold is refused before it is allocated, naming the input, the size and the
-// estimate (HEMI_MEMORY_BUDGET stands for a small machine): a 16384^2 height map, a 16384^2 lightmap of one
-// texel's worth of floor, a 16384^2 reference image.
+// estimate (HEMI_MEMORY_BUDGET stands for a small machine): a 16384^2 height map, 4096^2 and 16384^2
+// lightmaps that the floor covers whole, a 16384^2 reference image.
 TEST(HostileCli, WhatCannotFitIsRefusedWithTheEstimate)
 {
     const std::string budget = "HEMI_MEMORY_BUDGET=256M";
@@ -1925,6 +1925,49 @@ TEST(HostileCli, WhatCannotFitIsRefusedWithTheEstimate)
                   "lightmap " + q(floor_scene()) + " --size 64 --rays 4 -o " + q(dir() / "fits.hemi"), budget)
                   .status,
               0);
+}
+
+// A lightmap bake's memory and its asset follow the texels the scene covers, not the atlas: the floor laid
+// out in a square of one texel of a 4096^2 atlas (4 texels of a 16384^2 one) bakes under a 256 MiB budget,
+// with a peak (the process's own high-water mark, in its JSON) under it and an asset of a few kilobytes
+// (the dense layout took 12 GB and wrote 3 GB); the texel holds the open floor's pi, and every other texel
+// is 0 beyond the dilation.
+TEST(HostileCli, LightmapMemoryAndAssetFollowTheCoveredTexels)
+{
+    const fs::path scene = edited_floor("one_texel_floor.gltf",
+                                        [](hemi::io::GltfScene& s)
+                                        {
+                                            for (glm::vec2& uv : s.mesh.uvs1)
+                                                uv = glm::vec2(0.25f) + uv / 4096.0f;
+                                        });
+    for (const uint32_t size : {4096u, 16384u})
+    {
+        const fs::path asset = dir() / ("one_texel_" + std::to_string(size) + ".hemi");
+        const fs::path json = dir() / ("one_texel_" + std::to_string(size) + ".json");
+        const Result r = run(HEMI_BAKE_EXE,
+                             "lightmap " + q(scene) + " --size " + std::to_string(size) +
+                                 " --rays 64 --json " + q(json) + " -o " + q(asset),
+                             "HEMI_MEMORY_BUDGET=256M");
+        ASSERT_EQ(r.status, 0) << r.err;
+        const nlohmann::json j = nlohmann::json::parse(slurp(json));
+        const uint32_t texels = size / 4096; // along a side
+        EXPECT_EQ(j["covered_texels"], texels * texels);
+        EXPECT_LE(j["stored_blocks"].get<uint64_t>(), 4u);
+        EXPECT_GT(j["peak_memory_bytes"].get<uint64_t>(), 0u);
+        EXPECT_LT(j["peak_memory_bytes"].get<uint64_t>(), uint64_t(256) << 20);
+        EXPECT_LT(fs::file_size(asset), uint64_t(1) << 20);
+        const std::string warnings = j["warnings"].dump();
+        EXPECT_NE(warnings.find("store only the 8x8 blocks"), std::string::npos) << warnings;
+        const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+        const hemi::io::BlockMaps& plain = a.output("plain").maps;
+        const uint32_t at = size / 4;
+        for (uint32_t y = at; y < at + texels; ++y)
+            for (uint32_t x = at; x < at + texels; ++x)
+                EXPECT_NEAR(plain.at(0, x, y).x, M_PI, 0.02 * M_PI) << x << ", " << y;
+        EXPECT_EQ(plain.at(0, at + texels + 2, at), glm::vec3(0.0f));
+        EXPECT_EQ(plain.at(0, 0, 0), glm::vec3(0.0f));
+        EXPECT_EQ(plain.at(0, size - 1, size - 1), glm::vec3(0.0f));
+    }
 }
 
 // A checkpoint write killed before its rename leaves "<out>.partial.tmp<pid>.<n>"; a later bake that finishes

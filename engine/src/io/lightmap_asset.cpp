@@ -19,7 +19,9 @@ namespace hemi::io
 namespace
 {
 
-constexpr uint32_t kLightmapLayoutVersion = 1;
+// Layout 2 stores each output's kept 8 x 8 blocks (io/block_maps.h); layout 1 (read, not written) stored
+// the dense atlas.
+constexpr uint32_t kLightmapLayoutVersion = 2;
 
 struct Info
 {
@@ -100,11 +102,16 @@ std::string problem(const LightmapAsset& a)
         if (o.k != k)
             return "output '" + o.name + "' has K = " + std::to_string(o.k) + ", it needs " +
                    std::to_string(k);
-        const size_t expected = size_t(k) * a.width * a.height * 3;
-        if (o.maps.size() != expected)
-            return "output '" + o.name + "' holds " + std::to_string(o.maps.size()) + " values, expected " +
-                   std::to_string(expected);
-        for (float v : o.maps)
+        if (o.maps.k != k || o.maps.width() != a.width || o.maps.height() != a.height)
+            return "output '" + o.name + "' holds " + std::to_string(o.maps.k) + " maps of " +
+                   std::to_string(o.maps.width()) + "x" + std::to_string(o.maps.height()) + ", expected " +
+                   std::to_string(k) + " of the atlas's " + std::to_string(a.width) + "x" +
+                   std::to_string(a.height);
+        const size_t expected = o.maps.grid.slots() * k * 3;
+        if (o.maps.values.size() != expected)
+            return "output '" + o.name + "' holds " + std::to_string(o.maps.values.size()) +
+                   " values, its blocks need " + std::to_string(expected);
+        for (float v : o.maps.values)
             if (!std::isfinite(v) || std::abs(v) > 65504.0f)
                 return "output '" + o.name +
                        "' holds a value that is not finite or does not fit a half float";
@@ -200,10 +207,15 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
     write_scene_sections(w, a.mesh, a.materials, a.images, a.primitives);
     for (const LightmapOutput& o : a.outputs)
     {
-        std::vector<uint16_t> halves(o.maps.size() + 2);
-        std::memcpy(halves.data(), &o.k, 4);
-        for (size_t i = 0; i < o.maps.size(); ++i)
-            halves[i + 2] = glm::packHalf1x16(o.maps[i]);
+        // u32 K, u32 N, N u32 block indices, then the values as half floats.
+        const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
+        std::vector<uint16_t> halves(4 + blocks.size() * 2 + o.maps.values.size());
+        const uint32_t head[2] = {o.k, uint32_t(blocks.size())};
+        std::memcpy(halves.data(), head, 8);
+        std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
+        uint16_t* out = halves.data() + 4 + blocks.size() * 2;
+        for (size_t i = 0; i < o.maps.values.size(); ++i)
+            out[i] = glm::packHalf1x16(o.maps.values[i]);
         w.add("L." + o.name, std::as_bytes(std::span<const uint16_t>(halves)));
     }
     if (!a.probes.empty())
@@ -235,9 +247,10 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
                    std::to_string(sizeof(Info)));
     Info info;
     std::memcpy(&info, info_bytes.data(), sizeof info);
-    if (info.layout != kLightmapLayoutVersion)
+    if (info.layout != kLightmapLayoutVersion && info.layout != 1)
         throw fail("lightmap layout version " + std::to_string(info.layout) +
-                   " is not supported (this hemi reads " + std::to_string(kLightmapLayoutVersion) + ")");
+                   " is not supported (this hemi reads 1 and " + std::to_string(kLightmapLayoutVersion) +
+                   ")");
     if (info.width == 0 || info.height == 0 || info.width > 16384 || info.height > 16384)
         throw fail("lightmap.info: atlas size " + std::to_string(info.width) + "x" +
                    std::to_string(info.height) + " is not in [1, 16384]");
@@ -265,17 +278,54 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
             throw fail("unknown output '" + o.name + "'");
         if (o.k != k)
             throw fail(section + ": K = " + std::to_string(o.k) + ", the output needs " + std::to_string(k));
-        const uint64_t expected = 4 + uint64_t(k) * texels * 3 * 2;
-        if (b.size() != expected)
-            throw fail(section + " has " + std::to_string(b.size()) + " bytes, a " + std::to_string(a.width) +
-                       "x" + std::to_string(a.height) + " atlas of K = " + std::to_string(k) + " needs " +
-                       std::to_string(expected));
-        o.maps.resize(size_t(k) * texels * 3);
-        for (size_t i = 0; i < o.maps.size(); ++i)
+        auto half = [&](size_t offset)
         {
             uint16_t h;
-            std::memcpy(&h, b.data() + 4 + 2 * i, 2);
-            o.maps[i] = glm::unpackHalf1x16(h);
+            std::memcpy(&h, b.data() + offset, 2);
+            return glm::unpackHalf1x16(h);
+        };
+        if (info.layout == 1)
+        {
+            // The dense atlas: K x H x W x 3 halves after K.
+            const uint64_t expected = 4 + uint64_t(k) * texels * 3 * 2;
+            if (b.size() != expected)
+                throw fail(section + " has " + std::to_string(b.size()) + " bytes, a " +
+                           std::to_string(a.width) + "x" + std::to_string(a.height) +
+                           " atlas of K = " + std::to_string(k) + " needs " + std::to_string(expected));
+            std::vector<float> dense(size_t(k) * texels * 3);
+            for (size_t i = 0; i < dense.size(); ++i)
+                dense[i] = half(4 + 2 * i);
+            o.maps = BlockMaps::from_dense(a.width, a.height, k, dense);
+        }
+        else
+        {
+            // K, N, N block indices, N x K x 64 x 3 halves.
+            if (b.size() < 8)
+                throw fail(section + " is too short");
+            uint32_t n = 0;
+            std::memcpy(&n, b.data() + 4, 4);
+            const uint64_t grid = uint64_t((a.width + 7) / 8) * ((a.height + 7) / 8);
+            const uint64_t expected = 8 + uint64_t(n) * 4 + uint64_t(n) * k * BlockGrid::kTexels * 3 * 2;
+            if (n > grid)
+                throw fail(section + " lists " + std::to_string(n) + " blocks, but a " +
+                           std::to_string(a.width) + "x" + std::to_string(a.height) + " atlas has " +
+                           std::to_string(grid));
+            if (b.size() != expected)
+                throw fail(section + " has " + std::to_string(b.size()) + " bytes, " + std::to_string(n) +
+                           " blocks of K = " + std::to_string(k) + " need " + std::to_string(expected));
+            std::vector<uint32_t> blocks(n);
+            std::memcpy(blocks.data(), b.data() + 8, size_t(n) * 4);
+            try
+            {
+                o.maps = BlockMaps(BlockGrid(a.width, a.height, std::move(blocks)), k);
+            }
+            catch (const std::invalid_argument& e)
+            {
+                throw fail(section + ": " + e.what());
+            }
+            const size_t base = 8 + size_t(n) * 4;
+            for (size_t i = 0; i < o.maps.values.size(); ++i)
+                o.maps.values[i] = half(base + 2 * i);
         }
         a.outputs.push_back(std::move(o));
     }

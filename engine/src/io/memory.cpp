@@ -90,6 +90,14 @@ uint64_t available_memory()
     return available;
 }
 
+uint64_t peak_memory()
+{
+    if (const uint64_t hwm = proc_field("/proc/self/status", "VmHWM"))
+        return hwm;
+    rusage usage{};
+    return getrusage(RUSAGE_SELF, &usage) == 0 ? uint64_t(usage.ru_maxrss) * 1024 : 0;
+}
+
 std::string format_bytes(uint64_t bytes)
 {
     char text[32];

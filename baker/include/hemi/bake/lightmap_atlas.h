@@ -20,6 +20,7 @@
 // cross(N, T) * tangent.w, as glTF defines it. Lightmap coefficients live in that frame, so that the runtime
 // evaluates them at the normal-map normal with no further transform.
 
+#include <hemi/io/block_maps.h>
 #include <hemi/io/mesh.h>
 
 #include <glm/vec3.hpp>
@@ -46,12 +47,26 @@ struct LightmapTexel
     float world_size = 0.0f; // the texel's footprint on the surface: sqrt(world area / texel area)
 };
 
+// The covered texels and where they are. Its memory follows the covered texels: only the 8 x 8 blocks of the
+// atlas that some triangle touches are kept (io::BlockGrid).
 struct LightmapAtlas
 {
     uint32_t width = 0, height = 0;
-    std::vector<int32_t> texel_of;     // width * height: index into texels, or -1 for an empty texel
+    io::BlockGrid grid;                // the blocks that triangles touch
+    std::vector<int32_t> slot_texel;   // per slot of grid: index into texels, or -1
     std::vector<LightmapTexel> texels; // covered texels, in row-major order of (y, x)
+
+    // Index into texels of texel (x, y), or -1 for an empty texel (or one outside the atlas).
+    int32_t texel_of(int64_t x, int64_t y) const
+    {
+        const int64_t s = grid.slot(x, y);
+        return s < 0 ? -1 : slot_texel[size_t(s)];
+    }
 };
+
+// The blocks of a width x height atlas that the mesh's lightmap UVs touch (what rasterize_lightmap keeps),
+// to know a bake's memory before it is spent. The mesh is checked as rasterize_lightmap checks it.
+io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t height);
 
 // What is wrong or notable in a mesh's lightmap UVs.
 struct LightmapUvReport

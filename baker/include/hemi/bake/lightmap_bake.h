@@ -151,12 +151,12 @@ int lightmap_output_size(std::string_view name);
 // The coefficients of one texel's SH9 irradiance in the output `name`: lightmap_output_size(name) RGB values.
 std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
                                              const std::array<glm::vec3, 9>& irradiance);
-// Every texel's coefficients as K maps for render::TexelCoefficients (map after map, rows from the top, RGB:
-// coefficient k of texel (x, y) at [((k * height + y) * width + x) * 3 + c]). Texels that no triangle covers
-// take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a chart's
-// border does not pull in black), else 0.
-std::vector<float> lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
-                                 int dilate = 2);
+// Every texel's coefficients as K maps (io::BlockMaps: only the blocks of the atlas that hold covered texels
+// or their dilation; BlockMaps::dense() gives render::TexelCoefficients' layout). Texels that no triangle
+// covers take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a
+// chart's border does not pull in black), else 0.
+io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
+                            int dilate = 2);
 
 // An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
 // hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
@@ -208,6 +208,7 @@ struct LightmapBakeSummary
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     size_t probes = 0, invalid_probes = 0;
+    size_t blocks = 0;           // 8x8 blocks of the atlas stored per output (covered texels and dilation)
     size_t unwrapped_charts = 0; // with unwrap
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;

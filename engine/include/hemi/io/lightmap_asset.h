@@ -5,20 +5,24 @@
 // like a PRT asset.
 //
 // Sections (all little-endian; W x H atlas, K = the output's size):
-//   lightmap.info  u32 layout version (1), u32 W, u32 H, u32 rays per texel, u64 seed, u32 bounces,
+//   lightmap.info  u32 layout version (2), u32 W, u32 H, u32 rays per texel, u64 seed, u32 bounces,
 //                  u32 covered texels
 //   mesh.*, scene.*, image.<i>: the mesh (mesh.uvs1 required) and the scene's surfaces, exactly as a PRT
 //                  asset stores them (prt_asset.h)
-//   L.<output>     u32 K, then K x H x W x 3 f16 (IEEE binary16): coefficient k of texel (x, y), channel c at
-//                  ((k * H + y) * W + x) * 3 + c, rows from the top (v = 0): render::TexelCoefficients'
-//                  layout. The coefficients are irradiance in each texel's tangent frame (the normal-map UV
-//                  set's), so sum_k c_k b_k(n) at the normal-map normal n is E(n); "plain" is E at the
-//                  surface normal, "rnm" E towards each math::rnm_basis() direction (normalised to pi under
-//                  uniform radiance).
+//   L.<output>     u32 K, u32 N, N u32 block indices (strictly ascending), then N x K x 64 x 3 f16 (IEEE
+//                  binary16): the 8 x 8 blocks of the atlas that hold a texel (io/block_maps.h: block
+//                  by * ceil(W / 8) + bx; in a block, coefficient after coefficient, each 8 rows of 8 RGB
+//                  texels, rows from the top, v = 0); texels of the blocks not stored are 0. So the asset's
+//                  size follows the texels the scene covers (and their dilation), not the atlas. Layout 1
+//                  (still read) stored K x H x W x 3 f16 for the whole atlas. The coefficients are irradiance
+//                  in each texel's tangent frame (the normal-map UV set's), so sum_k c_k b_k(n) at the
+//                  normal-map normal n is E(n); "plain" is E at the surface normal, "rnm" E towards each
+//                  math::rnm_basis() direction (normalised to pi under uniform radiance).
 //   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
 //                  then NX * NY * NZ u8 valid flags.
 
+#include <hemi/io/block_maps.h>
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
@@ -38,7 +42,7 @@ struct LightmapOutput
 {
     std::string name; // "sh9", "hl2", "h4", "h6", "sal4", ... , "plain", "rnm"
     uint32_t k = 0;
-    std::vector<float> maps; // K x H x W x 3, as in L.<output> (stored as half floats)
+    BlockMaps maps; // K maps of the W x H atlas, the blocks that hold texels (stored as half floats)
 };
 
 // Light probes for dynamic objects (hemi-bake lightmap --probes): the SH9 irradiance (hemi's SH order and

@@ -15,6 +15,9 @@ namespace hemi::io
 // 0 when none of them can be read.
 uint64_t available_memory();
 
+// The most resident memory this process has held so far (getrusage's ru_maxrss), in bytes; 0 when unknown.
+uint64_t peak_memory();
+
 // "1.50 GiB", "12.0 MiB", "512 B".
 std::string format_bytes(uint64_t bytes);
 

@@ -70,7 +70,7 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
                                 lightmap_basis(source).id});
         names_.push_back(name);
         coefficients_.push_back(std::make_unique<TexelCoefficients>(system, asset.width, asset.height,
-                                                                    output.k, output.maps, upload));
+                                                                    output.k, output.maps.dense(), upload));
     }
     surfaces_ =
         std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,

@@ -1,0 +1,103 @@
+#pragma once
+// Per-texel data over a W x H atlas, stored only where there is some: the atlas is cut into 8 x 8 blocks and
+// only the blocks that hold a texel are kept. A lightmap bake and its asset use it, so that their memory and
+// size follow the texels a scene covers, not the atlas it is laid out in (a one-texel chart in a 4096^2 atlas
+// costs a few blocks, not 16 M texels).
+//
+// Block b of the grid covers texels [bx * 8, bx * 8 + 8) x [by * 8, by * 8 + 8), b = by * blocks_x + bx; the
+// blocks of the last column and row may reach past the atlas (their outside texels exist and stay unused).
+// A kept block's slot is its rank among the kept blocks, and a texel's slot is block slot * 64 + (y % 8) * 8
+// + x % 8: row-major inside the block, blocks in ascending order.
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace hemi::io
+{
+
+class BlockGrid
+{
+  public:
+    static constexpr uint32_t kSize = 8;    // texels along a block's side
+    static constexpr uint32_t kTexels = 64; // texels of a block
+
+    BlockGrid() = default;
+    // `blocks`: the kept blocks' indices, strictly ascending. Throws std::invalid_argument for a side of 0 or
+    // over 2^20, or for blocks out of the grid or out of order.
+    BlockGrid(uint32_t width, uint32_t height, std::vector<uint32_t> blocks);
+
+    uint32_t width() const { return width_; }
+    uint32_t height() const { return height_; }
+    uint32_t blocks_x() const { return (width_ + kSize - 1) / kSize; }
+    uint32_t blocks_y() const { return (height_ + kSize - 1) / kSize; }
+    const std::vector<uint32_t>& blocks() const { return blocks_; }
+    size_t slots() const { return blocks_.size() * kTexels; } // texels of the kept blocks
+    bool empty() const { return blocks_.empty(); }
+
+    // The slot of texel (x, y), or -1 when the texel is outside the atlas or its block is not kept: a binary
+    // search among the kept blocks of the texel's block row.
+    int64_t slot(int64_t x, int64_t y) const
+    {
+        if (x < 0 || y < 0 || x >= int64_t(width_) || y >= int64_t(height_))
+            return -1;
+        const uint32_t row = uint32_t(y / kSize), block = row * blocks_x() + uint32_t(x / kSize);
+        const auto first = blocks_.begin() + row_begin_[row], last = blocks_.begin() + row_begin_[row + 1];
+        const auto it = std::lower_bound(first, last, block);
+        if (it == last || *it != block)
+            return -1;
+        return int64_t(it - blocks_.begin()) * kTexels + (y % kSize) * kSize + x % kSize;
+    }
+    // The texel of a slot (it may lie past the atlas in a block of the last column or row).
+    glm::uvec2 texel(size_t slot) const
+    {
+        const uint32_t b = blocks_[slot / kTexels], local = uint32_t(slot % kTexels);
+        return {(b % blocks_x()) * kSize + local % kSize, (b / blocks_x()) * kSize + local / kSize};
+    }
+
+  private:
+    uint32_t width_ = 0, height_ = 0;
+    std::vector<uint32_t> blocks_;
+    std::vector<uint32_t> row_begin_; // per block row, and one past the last: its first kept block's slot
+};
+
+// K RGB maps over a BlockGrid: coefficient k of the texel at slot s, channel c, at
+// ((s / 64 * K + k) * 64 + s % 64) * 3 + c (block after block; in a block, map after map). Texels of blocks
+// that are not kept read as 0.
+struct BlockMaps
+{
+    BlockGrid grid;
+    uint32_t k = 0;
+    std::vector<float> values;
+
+    BlockMaps() = default;
+    BlockMaps(BlockGrid grid, uint32_t k); // every value 0
+
+    // The blocks of a dense K x H x W x 3 array (map after map, rows from the top) that hold a value other
+    // than 0. Throws std::invalid_argument when the array's size is not K * W * H * 3.
+    static BlockMaps from_dense(uint32_t width, uint32_t height, uint32_t k, std::span<const float> dense);
+    // The dense K x H x W x 3 array (what a GPU image of the whole atlas holds).
+    std::vector<float> dense() const;
+
+    uint32_t width() const { return grid.width(); }
+    uint32_t height() const { return grid.height(); }
+    size_t index(uint32_t map, size_t slot) const
+    {
+        return ((slot / BlockGrid::kTexels * k + map) * BlockGrid::kTexels + slot % BlockGrid::kTexels) * 3;
+    }
+    // Coefficient `map` of texel (x, y); 0 where no block is kept (and outside the atlas).
+    glm::vec3 at(uint32_t map, int64_t x, int64_t y) const
+    {
+        const int64_t s = grid.slot(x, y);
+        if (s < 0)
+            return glm::vec3(0.0f);
+        const float* v = &values[index(map, size_t(s))];
+        return {v[0], v[1], v[2]};
+    }
+};
+
+} // namespace hemi::io
