@@ -22,12 +22,21 @@
 //                                     values, so the assets hold unshadowed transfer (the 1M model's CPCA
 //                                     data are random, with the real shapes: CPCA of 1M x 225 values is a
 //                                     bake-time job).
+//   material/overhead/complex/...     the PRT material against the constant one, same mesh, same run.
 //   bake/complex                      the PRT bake's first (visibility) pass on the complex model, 64 rays
-//   per
-//                                     vertex: rays_per_s, and embree_ratio = Embree's own rays/s tracing the
-//                                     same rays with nothing else (bake::trace_bake_rays) / the bake's.
+//                                     per vertex: rays_per_s, and embree_ratio = Embree's own rays/s tracing
+//                                     the same rays with nothing else (bake::trace_bake_rays) / the bake's.
+//   ssbump/...                        the SSBump bake (1024^2, 300 rays) and its tracer against Embree.
+//   lightmap/material/level/WxH/TECH  the lightmap material against the constant one on the sample's level,
+//                                     baked and read back as hemi-bake lightmap and hemi-render do.
+//   lightmap/bake/level/...           the lightmap bake of the sample's level (1280^2, 2 bounces).
 //
-// Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device.
+// Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device. A benchmark that throws is
+// reported as an error (the others still run) and makes the exit status 1.
+//
+// --smoke (or HEMI_BENCH_SMOKE=1): every benchmark once (one iteration) at its smallest size, on a device
+// with the Khronos validation layer on; any exception or validation message makes the exit status 1. CI
+// runs it so that a benchmark that no longer runs fails; its times mean nothing.
 
 #include "level.h"
 #include "models.h"
@@ -43,6 +52,8 @@
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/upload.h>
+#include <hemi/io/gltf.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/io/mesh.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/material/coefficient_set.h>
@@ -58,20 +69,129 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace
 {
 
 double g_triad_gbps = 0.0; // measured by stream/triad, which runs first
+
+struct TransferCase
+{
+    uint32_t n, k, l;
+};
+
+// A row of Table 1: the model, its tessellation and whether its CPCA data are random (with the real shapes:
+// CPCA of 1M x 225 values is a bake-time job).
+struct Table1Row
+{
+    std::string label;
+    hemi::samples::PrtModel model = hemi::samples::PrtModel::Simple;
+    float detail = 1.0f;
+    bool random_cpca = false;
+};
+
+// What a run measures: the full sizes, or with --smoke the smallest of every benchmark.
+struct Sizes
+{
+    bool smoke = false;
+    size_t triad_floats = size_t(64) << 20; // 64 Mi floats = 256 MiB per array
+    std::vector<TransferCase> transfer = {{31726, 9, 25}, {1000000, 9, 25}};
+    std::vector<Table1Row> table1 = {{"simple", hemi::samples::PrtModel::Simple, 1.0f, false},
+                                     {"complex", hemi::samples::PrtModel::Complex, 1.0f, false},
+                                     {"1M", hemi::samples::PrtModel::Complex, 5.89f, true}};
+    // The model of material/overhead and of the PRT bake.
+    Table1Row overhead = {"complex", hemi::samples::PrtModel::Complex, 1.0f, false};
+    uint32_t relief = 1024;        // the SSBump benchmarks' height field, relief x relief
+    uint32_t lightmap_atlas = 512; // the level that lightmap/material draws
+    uint32_t bake_atlas = 1280;    // the level that lightmap/bake bakes
+};
+
+Sizes smoke_sizes()
+{
+    Sizes s;
+    s.smoke = true;
+    s.triad_floats = size_t(1) << 20;
+    s.transfer = {{1024, 9, 25}};
+    // The 1M row's own path (random CPCA data) on the simple model: "simple:random".
+    s.table1 = {{"simple", hemi::samples::PrtModel::Simple, 1.0f, false},
+                {"simple:random", hemi::samples::PrtModel::Simple, 1.0f, true}};
+    s.overhead = s.table1[0];
+    s.relief = 64;
+    s.lightmap_atlas = 64; // make_level's smallest
+    s.bake_atlas = 64;
+    return s;
+}
+
+Sizes g_sizes;
+
+// The lightmap outputs that lightmap/material draws (and its asset holds).
+const char* const kLightmapTechniques[] = {"sh9", "h6", "h4", "hl2", "plain", "rnm"};
+
+std::atomic<int> g_failures{0};
+std::atomic<uint64_t> g_validation_messages{0};
+
+// Registers fn(state, args...) as `name`. An exception ends that benchmark with an error (the others still
+// run) and makes the exit status 1. In a smoke run every benchmark runs one iteration; a full run's own
+// MinTime and Iterations are set with full_min_time and full_iterations.
+template <class F, class... Args>
+benchmark::internal::Benchmark* add(const std::string& name, F fn, Args... args)
+{
+    benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(
+        name.c_str(),
+        [=](benchmark::State& state)
+        {
+            std::string error;
+            try
+            {
+                fn(state, args...);
+            }
+            catch (const std::exception& e)
+            {
+                error = e.what();
+            }
+            catch (...)
+            {
+                error = "an exception that is not a std::exception";
+            }
+            if (!error.empty())
+            {
+                ++g_failures;
+                std::fprintf(stderr, "%s threw: %s\n", name.c_str(), error.c_str());
+                state.SkipWithError(error.c_str());
+            }
+        });
+    if (g_sizes.smoke)
+        b->Iterations(1);
+    return b;
+}
+
+void full_min_time(benchmark::internal::Benchmark* b, double seconds)
+{
+    if (!g_sizes.smoke)
+        b->MinTime(seconds);
+}
+
+void full_iterations(benchmark::internal::Benchmark* b, int64_t n)
+{
+    if (!g_sizes.smoke)
+        b->Iterations(n);
+}
 
 struct Rng
 {
@@ -98,7 +218,7 @@ std::vector<float> random_floats(size_t n, uint64_t seed)
 
 void stream_triad(benchmark::State& state)
 {
-    const size_t n = size_t(64) << 20; // 64 Mi floats = 256 MiB per array
+    const size_t n = g_sizes.triad_floats;
     std::vector<float> a(n), b(n, 1.0f), c(n, 2.0f);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
                       [&](const tbb::blocked_range<size_t>& r)
@@ -130,7 +250,7 @@ void stream_triad(benchmark::State& state)
 // Derived after the run (the rate counter needs the loop's time): we time the triad once more here.
 double measure_triad_gbps()
 {
-    const size_t n = size_t(64) << 20;
+    const size_t n = g_sizes.triad_floats;
     std::vector<float> a(n, 0.0f), b(n, 1.0f), c(n, 2.0f);
     double best = 1e30;
     for (int rep = 0; rep < 5; ++rep)
@@ -156,16 +276,28 @@ void set_bandwidth_counters(benchmark::State& state, size_t bytes, double second
     state.counters["triad_GBps"] = g_triad_gbps;
 }
 
-struct TransferCase
-{
-    uint32_t n, k, l;
-};
+std::unique_ptr<hemi::gpu::Device> g_device; // destroyed before main returns, so that its leaks count
 
+// The Vulkan device, made at first use; with the validation layer in a smoke run (HEMI_VALIDATION overrides
+// that). Validation warnings and errors are printed and counted.
 hemi::gpu::Device& bench_device()
 {
-    static std::unique_ptr<hemi::gpu::Device> device =
-        std::make_unique<hemi::gpu::Device>(hemi::gpu::DeviceDesc{});
-    return *device;
+    if (!g_device)
+    {
+        hemi::gpu::DeviceDesc desc;
+        desc.validation = g_sizes.smoke;
+        desc.log = [](hemi::gpu::LogLevel level, bool validation, std::string_view message)
+        {
+            if (level < hemi::gpu::LogLevel::Warning)
+                return;
+            if (validation)
+                ++g_validation_messages;
+            std::fprintf(stderr, "%s%.*s\n", validation ? "validation: " : "", int(message.size()),
+                         message.data());
+        };
+        g_device = std::make_unique<hemi::gpu::Device>(desc);
+    }
+    return *g_device;
 }
 
 void transfer_cpu(benchmark::State& state, TransferCase c)
@@ -249,27 +381,26 @@ struct Table1Model
     hemi::bake::PrtTransfer transfer; // unshadowed, order 5
 };
 
-const Table1Model& table1_model(const std::string& name)
+const Table1Model& table1_model(const Table1Row& row)
 {
     static std::map<std::string, std::unique_ptr<Table1Model>> cache;
-    auto& slot = cache[name];
+    auto& slot = cache[row.label];
     if (!slot)
     {
         cache.clear(); // one model in memory at a time (the 1M one is large)
         auto m = std::make_unique<Table1Model>();
-        const float detail = name == "simple" ? 1.0f : name == "complex" ? 1.0f : 5.89f;
-        m->mesh = hemi::samples::make_prt_model(
-            name == "simple" ? hemi::samples::PrtModel::Simple : hemi::samples::PrtModel::Complex, detail);
+        m->mesh = hemi::samples::make_prt_model(row.model, row.detail);
         hemi::bake::PrtBakeOptions o;
         o.kind = hemi::bake::TransferKind::Unshadowed;
         m->transfer = hemi::bake::bake_prt_transfer(m->mesh, o);
-        cache[name] = std::move(m);
-        return *cache[name];
+        cache[row.label] = std::move(m);
+        return *cache[row.label];
     }
     return *slot;
 }
 
-hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& technique, bool cpca)
+hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& technique, bool cpca,
+                                bool random_cpca)
 {
     hemi::io::PrtAsset a;
     a.mesh = model.mesh;
@@ -293,7 +424,7 @@ hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& tec
     const uint32_t n = uint32_t(model.mesh.vertex_count()), d = t.k * a.l();
     if (!cpca)
         t.matrices = hemi::bake::fold_technique(model.transfer, model.mesh, technique);
-    else if (n < 100000)
+    else if (!random_cpca)
         t.cpca = hemi::bake::compress_cpca(hemi::bake::fold_technique(model.transfer, model.mesh, technique),
                                            n, d, 1, 24);
     else
@@ -311,11 +442,11 @@ hemi::io::PrtAsset table1_asset(const Table1Model& model, const std::string& tec
     return a;
 }
 
-void table1(benchmark::State& state, std::string model_name, std::string technique, bool cpca, bool cpu_path)
+void table1(benchmark::State& state, Table1Row row, std::string technique, bool cpca, bool cpu_path)
 {
     hemi::gpu::Device& device = bench_device();
-    const Table1Model& model = table1_model(model_name);
-    const hemi::io::PrtAsset asset = table1_asset(model, technique, cpca);
+    const Table1Model& model = table1_model(row);
+    const hemi::io::PrtAsset asset = table1_asset(model, technique, cpca, row.random_cpca);
     const uint32_t w = 640, h = 480;
     hemi::render::PrtView view(device, asset, technique, cpca, w, h);
     hemi::render::PrtFrame frame;
@@ -428,8 +559,8 @@ std::pair<double, double> time_two_passes(benchmark::State& state, hemi::gpu::De
 void material_overhead(benchmark::State& state, std::string technique)
 {
     hemi::gpu::Device& device = bench_device();
-    const Table1Model& model = table1_model("complex");
-    const hemi::io::PrtAsset asset = table1_asset(model, technique, false);
+    const Table1Model& model = table1_model(g_sizes.overhead);
+    const hemi::io::PrtAsset asset = table1_asset(model, technique, false, false);
     const uint32_t w = 640, h = 480;
     hemi::render::PrtView view(device, asset, technique, false, w, h);
     hemi::render::PrtFrame frame;
@@ -485,9 +616,10 @@ void material_overhead(benchmark::State& state, std::string technique)
     state.counters["overhead_ratio"] = prt / trivial;
 }
 
-void bake_complex(benchmark::State& state)
+void prt_bake(benchmark::State& state)
 {
-    const hemi::io::Mesh mesh = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex);
+    const hemi::io::Mesh mesh =
+        hemi::samples::make_prt_model(g_sizes.overhead.model, g_sizes.overhead.detail);
     hemi::bake::PrtBakeOptions o;
     o.kind = hemi::bake::TransferKind::Shadowed;
     o.rays = 64;
@@ -510,7 +642,7 @@ void bake_complex(benchmark::State& state)
 // sample's deep relief (bricks, rivets, craters; scale 24 texels), tiling.
 void ssbump_bake(benchmark::State& state, bool wrap)
 {
-    const hemi::bake::HeightField field = hemi::samples::make_relief(1024);
+    const hemi::bake::HeightField field = hemi::samples::make_relief(g_sizes.relief);
     hemi::bake::SsbumpOptions o;
     o.scale = 24.0f;
     o.rays = 300;
@@ -531,8 +663,8 @@ void ssbump_bake(benchmark::State& state, bool wrap)
 // rays of an azimuth with one search. Also counts how often the two disagree (grazing ties only).
 void ssbump_tracers(benchmark::State& state)
 {
-    const hemi::bake::HeightField field = hemi::samples::make_relief(1024);
-    const float scale = 24.0f, epsilon = 1e-3f, distance = 1024.0f;
+    const hemi::bake::HeightField field = hemi::samples::make_relief(g_sizes.relief);
+    const float scale = 24.0f, epsilon = 1e-3f, distance = float(g_sizes.relief);
     const int rays = 300;
     const hemi::bake::HeightFieldTracer tracer(field, scale, false, epsilon, distance);
     const hemi::bake::EmbreeScene embree(hemi::bake::height_field_mesh(field, scale));
@@ -634,9 +766,10 @@ double peak_rss_mib()
 // first 2^16 texels (rtcOccluded1 only, the same directions and origins), and the ratio.
 void lightmap_level(benchmark::State& state)
 {
-    const hemi::io::GltfScene scene = hemi::samples::make_level(1280);
+    const uint32_t size = g_sizes.bake_atlas;
+    const hemi::io::GltfScene scene = hemi::samples::make_level(size);
     hemi::bake::LightmapUvReport report;
-    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, 1280, 1280, report);
+    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
     const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
     hemi::bake::LightmapLights lights;
     lights.sun = true;
@@ -690,34 +823,44 @@ void lightmap_level(benchmark::State& state)
     state.counters["blocked_fraction"] = double(blocked) / (double(n) * o.rays);
 }
 
+// The sample's level as hemi-bake lightmap makes it and hemi-render reads it: written as a .glb with its
+// textures, baked by bake::bake_lightmap_file (hemi-bake lightmap's whole job: 8 rays a texel, a sun, every
+// output lightmap/material draws) and read back by io::read_lightmap_asset, so that the asset holds what a
+// real one does (images, materials, primitives) whatever the format comes to hold. In a temporary folder,
+// removed afterwards.
+hemi::io::LightmapAsset level_lightmap_asset(uint32_t atlas)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("hemi-bench-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    struct Remove
+    {
+        fs::path dir;
+        ~Remove()
+        {
+            std::error_code ignored;
+            fs::remove_all(dir, ignored);
+        }
+    } remove{dir};
+    hemi::io::write_gltf(dir / "level.glb", hemi::samples::make_level(atlas));
+    hemi::bake::LightmapFileOptions o;
+    o.width = o.height = atlas;
+    o.bake.rays = 8;
+    o.lights.sun = true;
+    o.lights.sun_direction = glm::normalize(glm::vec3(0.4f, -0.35f, 1.0f)); // hemi's z-up world
+    o.lights.sun_irradiance = glm::vec3(6.0f);
+    o.outputs.assign(std::begin(kLightmapTechniques), std::end(kLightmapTechniques));
+    hemi::bake::bake_lightmap_file(dir / "level.glb", dir / "level.hemi", o);
+    return hemi::io::read_lightmap_asset(dir / "level.hemi");
+}
+
 // Issue 12's frame-time goal: the lightmap material against the trivial one (Technique::Constant) on the
 // sample's level at 640 x 480, seen from inside the room, in the same run: GPU time of one raster pass each,
 // from timestamps (the bake of the small atlas it draws is set-up, not measured).
 void lightmap_material(benchmark::State& state, std::string technique)
 {
     hemi::gpu::Device& device = bench_device();
-    static const hemi::io::LightmapAsset asset = []
-    {
-        const hemi::io::GltfScene scene = hemi::samples::make_level(512);
-        hemi::bake::LightmapUvReport report;
-        const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, 512, 512, report);
-        hemi::bake::LightmapLights lights;
-        lights.sun = true;
-        lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f));
-        lights.sun_irradiance = glm::vec3(6.0f);
-        hemi::bake::LightmapBakeOptions o;
-        o.rays = 8;
-        const hemi::bake::LightmapSh sh = hemi::bake::bake_lightmap_sh(scene.mesh, atlas, lights, o);
-        hemi::io::LightmapAsset a;
-        a.mesh = scene.mesh;
-        a.materials = scene.materials;
-        a.primitives = scene.primitives;
-        a.width = a.height = 512;
-        for (const char* name : {"sh9", "h4", "h6", "hl2", "plain", "rnm"})
-            a.outputs.push_back({name, uint32_t(hemi::bake::lightmap_output_size(name)),
-                                 hemi::bake::lightmap_maps(name, atlas, sh)});
-        return a;
-    }();
+    static const hemi::io::LightmapAsset asset = level_lightmap_asset(g_sizes.lightmap_atlas);
     const uint32_t w = 640, h = 480;
     hemi::render::OffscreenTarget target(device, w, h);
     hemi::render::MaterialSystem system(device, target.desc());
@@ -756,74 +899,96 @@ void lightmap_material(benchmark::State& state, std::string technique)
 
 int main(int argc, char** argv)
 {
+    // --smoke (or HEMI_BENCH_SMOKE=1, not 0): every benchmark once at its smallest size, validation on.
+    bool smoke = false;
+    if (const char* env = std::getenv("HEMI_BENCH_SMOKE"))
+        smoke = *env != '\0' && std::strcmp(env, "0") != 0;
+    int kept = 1;
+    for (int i = 1; i < argc; ++i)
+        if (std::strcmp(argv[i], "--smoke") == 0)
+            smoke = true;
+        else
+            argv[kept++] = argv[i];
+    argc = kept;
+    argv[argc] = nullptr;
+    if (smoke)
+        g_sizes = smoke_sizes();
     benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+        return 1;
     g_triad_gbps = measure_triad_gbps();
     std::printf("memory bandwidth (STREAM triad, best of 5): %.1f GB/s\n", g_triad_gbps);
-    benchmark::RegisterBenchmark("stream/triad", stream_triad)->Unit(benchmark::kMillisecond)->UseRealTime();
+    if (smoke)
+        std::printf("smoke run: every benchmark once at its smallest size, validation on; the times mean "
+                    "nothing\n");
+    add("stream/triad", stream_triad)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-    const TransferCase cases[] = {{31726, 9, 25}, {1000000, 9, 25}};
-    for (const TransferCase& c : cases)
+    for (const TransferCase& c : g_sizes.transfer)
     {
         std::string suffix =
             "/N:" + std::to_string(c.n) + "/K:" + std::to_string(c.k) + "/L:" + std::to_string(c.l);
-        benchmark::RegisterBenchmark(("transfer/gpu" + suffix).c_str(), transfer_gpu, c)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-        benchmark::RegisterBenchmark(("transfer/cpu" + suffix).c_str(), transfer_cpu, c)
-            ->Unit(benchmark::kMillisecond)
-            ->UseRealTime();
+        add("transfer/gpu" + suffix, transfer_gpu, c)->Unit(benchmark::kMillisecond)->UseManualTime();
+        add("transfer/cpu" + suffix, transfer_cpu, c)->Unit(benchmark::kMillisecond)->UseRealTime();
     }
-    benchmark::RegisterBenchmark("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)
-        ->Unit(benchmark::kMicrosecond);
+    add("sh/rotate/order:6/rgb", sh_rotate_order6_rgb)->Unit(benchmark::kMicrosecond);
 
-    for (const char* model : {"simple", "complex", "1M"})
+    for (const Table1Row& row : g_sizes.table1)
         for (const char* tech : {"gs", "sep4", "sal4", "hl2", "h4", "h6", "gs+cpca", "sep4+cpca"})
             for (bool cpu_path : {false, true})
             {
-                const std::string name =
-                    std::string("table1/") + model + "/" + tech + (cpu_path ? "/cpu" : "");
                 std::string t = tech;
                 const bool cpca = t.size() > 5 && t.substr(t.size() - 5) == "+cpca";
                 if (cpca)
                     t = t.substr(0, t.size() - 5);
-                benchmark::RegisterBenchmark(name.c_str(), table1, std::string(model), t, cpca, cpu_path)
-                    ->Unit(benchmark::kMillisecond)
-                    ->UseManualTime()
-                    ->MinTime(0.2);
+                if (g_sizes.smoke && row.random_cpca && !cpca)
+                    continue; // the same path as the row before
+                const std::string name = "table1/" + row.label + "/" + tech + (cpu_path ? "/cpu" : "");
+                full_min_time(
+                    add(name, table1, row, t, cpca, cpu_path)->Unit(benchmark::kMillisecond)->UseManualTime(),
+                    0.2);
             }
     for (const char* technique : {"gs", "h4", "hl2"})
-        benchmark::RegisterBenchmark((std::string("material/overhead/complex/640x480/") + technique).c_str(),
-                                     material_overhead, std::string(technique))
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime()
-            ->MinTime(0.5);
-    benchmark::RegisterBenchmark("bake/complex", bake_complex)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(2);
-    benchmark::RegisterBenchmark("ssbump/bake/1024x1024/rays:300", ssbump_bake, true)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(1);
-    benchmark::RegisterBenchmark("ssbump/bake/1024x1024/rays:300/no-wrap", ssbump_bake, false)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(1);
-    benchmark::RegisterBenchmark("ssbump/tracers/1024x1024", ssbump_tracers)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(1);
-    for (const char* technique : {"sh9", "h6", "h4", "hl2", "plain", "rnm"})
-        benchmark::RegisterBenchmark((std::string("lightmap/material/level/640x480/") + technique).c_str(),
-                                     lightmap_material, std::string(technique))
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime()
-            ->MinTime(0.5);
-    benchmark::RegisterBenchmark("lightmap/bake/level/1280x1280/bounces:2/rays:64", lightmap_level)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(1);
-    benchmark::RunSpecifiedBenchmarks();
+        full_min_time(add("material/overhead/" + g_sizes.overhead.label + "/640x480/" + technique,
+                          material_overhead, std::string(technique))
+                          ->Unit(benchmark::kMillisecond)
+                          ->UseManualTime(),
+                      0.5);
+    full_iterations(
+        add("bake/" + g_sizes.overhead.label, prt_bake)->Unit(benchmark::kMillisecond)->UseManualTime(), 2);
+    const std::string relief = std::to_string(g_sizes.relief) + "x" + std::to_string(g_sizes.relief);
+    full_iterations(add("ssbump/bake/" + relief + "/rays:300", ssbump_bake, true)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    full_iterations(add("ssbump/bake/" + relief + "/rays:300/no-wrap", ssbump_bake, false)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    full_iterations(
+        add("ssbump/tracers/" + relief, ssbump_tracers)->Unit(benchmark::kMillisecond)->UseManualTime(), 1);
+    for (const char* technique : kLightmapTechniques)
+        full_min_time(add(std::string("lightmap/material/level/640x480/") + technique, lightmap_material,
+                          std::string(technique))
+                          ->Unit(benchmark::kMillisecond)
+                          ->UseManualTime(),
+                      0.5);
+    const std::string atlas = std::to_string(g_sizes.bake_atlas) + "x" + std::to_string(g_sizes.bake_atlas);
+    full_iterations(add("lightmap/bake/level/" + atlas + "/bounces:2/rays:64", lightmap_level)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    const size_t run = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
+    g_device.reset(); // its messages at destruction (leaks) count too
+    const int failures = g_failures.load();
+    const uint64_t messages = g_validation_messages.load();
+    if (failures > 0 || messages > 0)
+    {
+        std::fprintf(stderr, "hemi-bench: %d of %zu benchmark(s) threw, %llu validation message(s)\n",
+                     failures, run, (unsigned long long)messages);
+        return 1;
+    }
+    if (smoke)
+        std::printf("smoke run: %zu benchmarks ran to the end\n", run);
     return 0;
 }
