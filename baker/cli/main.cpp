@@ -7,7 +7,8 @@
 //       [--filter RADIUS,SIGMA] [--no-occlusion] [--no-wrap] [--convention normalized|valve]
 //       [--exr OUT.exr] [--json REPORT.json]
 //   ssbump --from-normal NORMAL.png -o OUT.png;  ssbump --to-normal SSBUMP.png -o NORMAL.png
-//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--env uniform|FILE.exr] [--env-scale X]
+//   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--strict-uv] [--uv-report FILE.png] [--env
+//   uniform|FILE.exr] [--env-scale X]
 //       [--sun X,Y,Z,R,G,B[,DIAMETER]] [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm]
 //       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ] [--probe-rays R]
 //       [--exr-dir DIR] [--json REPORT.json]
@@ -421,7 +422,7 @@ struct LightCli
 
 struct LightmapCli
 {
-    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes;
+    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes, uv_report;
     LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
@@ -450,6 +451,8 @@ int run_lightmap(LightmapCli& c)
     files.output("-o", c.asset);
     files.output("its checkpoint", bake::checkpoint_path(c.asset));
     files.output("--json", c.json);
+    files.output("--uv-report", c.uv_report);
+    o.uv_report = c.uv_report;
     if (!c.exr_dir.empty())
     {
         hemi::tool::make_folder(c.exr_dir, "--exr-dir");
@@ -499,6 +502,11 @@ int run_lightmap(LightmapCli& c)
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
             "their neighbours)\n",
             s.pushed, s.invalid);
+    if (s.uv_report.overlapping_texels)
+        std::printf("%zu texel(s) of overlapping lightmap UVs, each given to one triangle%s\n",
+                    s.uv_report.overlapping_texels, c.uv_report.empty() ? " (--uv-report shows where)" : "");
+    if (!c.uv_report.empty())
+        std::printf("wrote %s\n", c.uv_report.c_str());
     for (const std::filesystem::path& p : s.exr_files)
         std::printf("wrote %s\n", p.string().c_str());
     if (!c.json.empty())
@@ -993,6 +1001,12 @@ int main(int argc, char** argv)
     lightmap->add_flag("--unwrap", lm.options.unwrap,
                        "make the lightmap UVs (planar charts at one texel density, "
                        "from --texel-size or to fill --size) instead of reading TEXCOORD_1");
+    lightmap->add_flag("--strict-uv", lm.options.strict_uv,
+                       "refuse overlapping lightmap UVs instead of giving each contested texel to one "
+                       "triangle (with a warning)");
+    lightmap->add_option("--uv-report", lm.uv_report,
+                         "write a PNG of the atlas before the bake: covered texels grey, texels two or more "
+                         "triangles overlap red (at most 2048 pixels a side, each the worst of its texels)");
     lightmap->add_option("--probes", lm.probes,
                          "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
                          "grid over the scene's bounding box, at the centres of its cells");

@@ -178,6 +178,93 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
     return x_begin <= x_end && y_begin <= y_end;
 }
 
+// Overlapping lightmap UVs, as shipped levels have them (a face modelled twice back to back on one UV
+// rectangle, decals on walls), resolved deterministically: each texel centre that several triangles claim
+// goes to one of them, chosen by, in order,
+//   1. the plane its chart continues in: the most of the texel's 8 neighbours whose centre only one triangle
+//      claims and whose triangle lies in the candidate's plane, facing its way;
+//   2. the side that faces into the scene: the largest cosine between the candidate's normal and the
+//      direction from its centroid to the centre of the scene's bounding box (of a back-to-back pair, the
+//      face towards the level's inside, which is the one a player sees);
+//   3. the lower triangle index.
+// The chosen triangle samples the texel's centre.
+void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
+                      std::vector<std::pair<size_t, uint32_t>>& contested,
+                      const std::vector<uint8_t>& inside_count, std::vector<int32_t>& best,
+                      std::vector<double>& best_distance, std::vector<glm::dvec3>& best_bary,
+                      LightmapUvReport& report)
+{
+    if (contested.empty())
+        return;
+    std::sort(contested.begin(), contested.end());
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, glm::dvec3(p));
+        hi = glm::max(hi, glm::dvec3(p));
+    }
+    const glm::dvec3 scene_centre = 0.5 * (lo + hi);
+    const double tolerance = 1e-4 * glm::length(hi - lo);
+    auto corner = [&](uint32_t t, int k)
+    { return glm::dvec3(mesh.positions[mesh.indices[size_t(t) * 3 + k]]); };
+    auto normal = [&](uint32_t t)
+    { return glm::normalize(glm::cross(corner(t, 1) - corner(t, 0), corner(t, 2) - corner(t, 0))); };
+    auto same_plane = [&](uint32_t a, uint32_t b)
+    {
+        if (a == b)
+            return true;
+        const glm::dvec3 na = normal(a);
+        return glm::dot(na, normal(b)) > 0.999 &&
+               std::abs(glm::dot(na, corner(b, 0) - corner(a, 0))) <= tolerance;
+    };
+    const uint32_t width = grid.width(), height = grid.height();
+    for (size_t first = 0; first < contested.size();)
+    {
+        const size_t slot = contested[first].first;
+        size_t last = first;
+        while (last < contested.size() && contested[last].first == slot)
+            ++last;
+        const glm::uvec2 xy = grid.texel(slot);
+        uint32_t winner = contested[first].second;
+        int winner_support = -1;
+        double winner_facing = -2.0;
+        for (size_t c = first; c < last; ++c)
+        {
+            const uint32_t t = contested[c].second;
+            if (c > first && t == contested[c - 1].second)
+                continue;
+            int support = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                {
+                    const int64_t n = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
+                    if ((dx || dy) && n >= 0 && inside_count[size_t(n)] == 1 && best[size_t(n)] >= 0 &&
+                        same_plane(t, uint32_t(best[size_t(n)])))
+                        ++support;
+                }
+            const glm::dvec3 centroid = (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0;
+            const glm::dvec3 to_centre = scene_centre - centroid;
+            const double facing =
+                glm::length(to_centre) > tolerance ? glm::dot(normal(t), glm::normalize(to_centre)) : 0.0;
+            // Candidates come in ascending triangle order, so a tie keeps the lower index.
+            if (support > winner_support || (support == winner_support && facing > winner_facing + 1e-9))
+            {
+                winner = t;
+                winner_support = support;
+                winner_facing = facing;
+            }
+        }
+        dvec2 uv[3];
+        double area2;
+        triangle_uvs(mesh, winner, width, height, uv, area2);
+        best[slot] = int32_t(winner);
+        best_distance[slot] = 0.0;
+        best_bary[slot] = barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2);
+        report.overlaps.push_back(xy);
+        first = last;
+    }
+}
+
 } // namespace
 
 io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t height)
@@ -223,6 +310,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     std::vector<glm::dvec3> best_bary(texels);
     std::vector<uint8_t> inside_count(texels, 0);
     std::vector<int32_t> first_inside(texels, -1);
+    std::vector<std::pair<size_t, uint32_t>> contested; // (slot, triangle) for centres two triangles claim
     size_t example_outside = SIZE_MAX, example_degenerate = SIZE_MAX;
     std::vector<double> world_area(triangles, 0.0), uv_area(triangles, 0.0);
 
@@ -286,7 +374,11 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                             report.overlap_example[1] = uint32_t(t);
                         }
                         ++report.overlapping_texels;
+                        contested.emplace_back(texel, uint32_t(first_inside[texel]));
+                        contested.emplace_back(texel, uint32_t(t));
                     }
+                    else
+                        contested.emplace_back(texel, uint32_t(t));
                     inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
                 }
                 if (!(b.x >= 0 && b.y >= 0 && b.z >= 0))
@@ -308,6 +400,8 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 }
             }
     }
+
+    resolve_overlaps(mesh, grid, contested, inside_count, best, best_distance, best_bary, report);
 
     LightmapAtlas atlas;
     atlas.width = width;
@@ -407,12 +501,14 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         report.min_texel_size = 0.0f;
 
     if (report.overlapping_texels)
-        report.problems.push_back(
+        report.warnings.push_back(
             std::to_string(report.overlapping_texels) +
             " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
             std::to_string(report.overlap_example[0]) + " and " + std::to_string(report.overlap_example[1]) +
-            "): lightmap UVs (TEXCOORD_1) must not overlap; re-unwrap the scene or bake "
-            "with --unwrap");
+            "): overlapping lightmap UVs (TEXCOORD_1); each such texel takes the light of one of them (the "
+            "one "
+            "its chart continues in, else the one facing into the scene), the others get none of their own; "
+            "--uv-report shows where, --strict-uv refuses, and re-unwrapping (or --unwrap) fixes it");
     if (report.outside)
         report.warnings.push_back(
             std::to_string(report.outside) + " triangle(s) have lightmap UVs outside [0, 1] (e.g. triangle " +

@@ -68,6 +68,33 @@ uint64_t dilated_slots(const io::BlockGrid& grid, int dilate)
     return uint64_t(std::count(keep.begin(), keep.end(), uint8_t(1))) * io::BlockGrid::kTexels;
 }
 
+// The atlas as a picture (LightmapFileOptions::uv_report).
+void write_uv_report(const std::filesystem::path& path, const LightmapAtlas& atlas,
+                     const LightmapUvReport& report)
+{
+    const uint32_t scale = std::max<uint32_t>(1, (std::max(atlas.width, atlas.height) + 2047) / 2048);
+    io::ImageRgba8 image;
+    image.width = (atlas.width + scale - 1) / scale;
+    image.height = (atlas.height + scale - 1) / scale;
+    image.pixels.assign(size_t(image.width) * image.height * 4, 0);
+    for (size_t i = 3; i < image.pixels.size(); i += 4)
+        image.pixels[i] = 255;
+    auto paint = [&](uint32_t x, uint32_t y, uint8_t r, uint8_t g, uint8_t b)
+    {
+        uint8_t* p = &image.pixels[(size_t(y / scale) * image.width + x / scale) * 4];
+        if (p[0] == 255 && p[1] == 40)
+            return; // an overlap stays red
+        p[0] = r;
+        p[1] = g;
+        p[2] = b;
+    };
+    for (const LightmapTexel& t : atlas.texels)
+        paint(t.x, t.y, 110, 110, 110);
+    for (const glm::uvec2& t : report.overlaps)
+        paint(t.x, t.y, 255, 40, 40);
+    io::write_png(path, image);
+}
+
 void check_lightmap_range(const LightmapLights& l, const std::vector<io::Material>& materials,
                           const std::filesystem::path& scene)
 {
@@ -156,6 +183,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // Fail fast: every output's folder before the scene is even read.
     io::check_writable(asset_path);
     io::check_writable(o.bake.checkpoint);
+    if (!o.uv_report.empty())
+        io::check_writable(o.uv_report);
     if (!o.exr_dir.empty())
         for (const std::string& name : o.outputs)
             io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
@@ -278,8 +307,17 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     LightmapUvReport report;
     const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
     summary.uv_report = report;
+    if (!o.uv_report.empty())
+        write_uv_report(o.uv_report, atlas, report);
     if (!report.ok())
         throw io::FormatError(scene_path.string() + ": " + report.problems.front());
+    if (o.strict_uv && report.overlapping_texels)
+        throw io::FormatError(
+            scene_path.string() + ": " + std::to_string(report.overlapping_texels) +
+            " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
+            std::to_string(report.overlap_example[0]) + " and " + std::to_string(report.overlap_example[1]) +
+            "), refused (--strict-uv): lightmap UVs (TEXCOORD_1) must not overlap; re-unwrap "
+            "the scene or bake with --unwrap");
     if (atlas.texels.empty())
         throw io::FormatError(
             scene_path.string() + ": no texel of the " + std::to_string(w) + "x" + std::to_string(h) +
@@ -385,6 +423,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["width"] = s.width;
     j["height"] = s.height;
     j["covered_texels"] = s.uv_report.covered_texels;
+    j["overlapping_texels"] = s.uv_report.overlapping_texels;
     j["stored_blocks"] = s.blocks; // 8x8 blocks of the atlas the asset stores per output
     j["peak_memory_bytes"] = io::peak_memory();
     j["triangles"] = s.triangles;

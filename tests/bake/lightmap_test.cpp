@@ -204,10 +204,17 @@ TEST(LightmapAtlas, ReportsOverlapsOutsideUvsDegenerateTrianglesAndDensity)
     add_quad(twice, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
              {0.25f, 0.75f, 0.75f, 0.25f}); // on top of it
     LightmapUvReport report;
-    rasterize_lightmap(twice, 16, 16, report);
-    ASSERT_EQ(report.problems.size(), 1u);
-    EXPECT_NE(report.problems[0].find("overlap"), std::string::npos) << report.problems[0];
+    const LightmapAtlas overlapped = rasterize_lightmap(twice, 16, 16, report);
+    EXPECT_TRUE(report.ok()) << "overlaps are resolved, with a warning";
+    ASSERT_EQ(report.warnings.size(), 1u);
+    EXPECT_NE(report.warnings[0].find("lie inside two or more triangles (e.g. triangles 0 and 2)"),
+              std::string::npos)
+        << report.warnings[0];
     EXPECT_EQ(report.overlapping_texels, 64u);
+    EXPECT_EQ(report.overlaps.size(), 64u);
+    for (const glm::uvec2& t : report.overlaps)
+        EXPECT_LT(overlapped.texels[size_t(overlapped.texel_of(t.x, t.y))].triangle, 2u)
+            << "the floor, whose plane the uncontested rim continues and which faces the scene's centre";
 
     Mesh outside = m;
     for (glm::vec2& uv : outside.uvs1)
@@ -1517,4 +1524,68 @@ TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
             EXPECT_EQ(maps.dense(), dense_dilation(a, sh, name, k, dilate)) << name << ", dilate " << dilate;
             EXPECT_LT(maps.grid.blocks().size(), size_t(8 * 6)) << "not every block of the atlas";
         }
+}
+
+// Overlapping lightmap UVs are resolved, each contested texel to one triangle (lightmap_atlas.h):
+// - a face modelled twice back to back on one UV rectangle (the down-facing copy first in the file, so the
+//   lower index alone would pick it) gives every texel to the face towards the scene's inside (here the
+//   up-facing one: a marker above the floor puts the bounding box's centre over it), and the bake gives
+//   each texel that face's light: a sun straight above, nothing else, E = E_sun in every texel (the
+//   down-facing face would get 0);
+// - a small wall piece whose UVs land inside a floor's chart, listed first and facing the scene's centre
+//   better than the floor, loses the texels whose uncontested neighbours continue the floor's plane.
+TEST(LightmapAtlas, OverlapsGoToTheChartTheyContinueElseTheFaceTowardsTheScene)
+{
+    auto at = [](float u, float v) { return glm::vec3(2.0f * u - 1.0f, 1.0f - 2.0f * v, 0.0f); };
+    Mesh pair;
+    add_quad(pair, at(0, 0), at(1, 0), at(1, 1), at(0, 1), {0.0f, 0.0f, 1.0f, 1.0f}); // facing down
+    add_quad(pair, at(0, 1), at(1, 1), at(1, 0), at(0, 0), {0.0f, 1.0f, 1.0f, 0.0f}); // facing up
+    add_quad(pair, {3.0f, 0.0f, 2.0f}, {3.1f, 0.0f, 2.0f}, {3.1f, 0.1f, 2.0f}, {3.0f, 0.1f, 2.0f},
+             {0.99f, 0.99f, 0.99f, 0.99f}); // a marker off the floor, no UV area
+    ASSERT_LT(pair.normals[0].z, 0.0f);
+    ASSERT_GT(pair.normals[4].z, 0.0f);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(pair, 8, 8, report);
+    EXPECT_EQ(report.overlapping_texels, 64u);
+    ASSERT_EQ(a.texels.size(), 64u);
+    for (const LightmapTexel& t : a.texels)
+    {
+        EXPECT_TRUE(t.triangle == 2 || t.triangle == 3) << t.x << ", " << t.y << ": " << t.triangle;
+        EXPECT_GT(t.normal.z, 0.99f);
+    }
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::vec3(0.0f, 0.0f, 1.0f);
+    lights.sun_irradiance = glm::vec3(2.0f);
+    lights.sun_diameter_degrees = 0.0f;
+    LightmapBakeOptions o;
+    o.rays = 16;
+    const LightmapSh sh = bake_lightmap_sh(pair, a, lights, o);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+    {
+        // The plain output is SH9's irradiance at the normal: for a delta light along the normal, the
+        // clamped cosine's first three bands, 2 (pi Y00^2 + 2 pi / 3 Y10^2 + pi / 4 Y20^2), as in the
+        // sun test of BakeCli.
+        const double expected = 2.0 * (M_PI * 0.282095 * 0.282095 + 2 * M_PI / 3 * 0.488603 * 0.488603 +
+                                       M_PI / 4 * 4 * 0.315392 * 0.315392);
+        EXPECT_NEAR(lightmap_coefficients("plain", sh.irradiance[i])[0].x, expected, 1e-3 * expected)
+            << "texel " << a.texels[i].x << ", " << a.texels[i].y;
+    }
+
+    // A wall piece (facing +x, towards the centre) listed before a floor, its UVs on 4 texels inside the
+    // floor's 16 x 16 chart.
+    Mesh decal;
+    add_quad(decal, {-1.0f, -0.1f, 0.0f}, {-1.0f, 0.1f, 0.0f}, {-1.0f, 0.1f, 0.2f}, {-1.0f, -0.1f, 0.2f},
+             {7.2f / 16, 7.2f / 16, 8.8f / 16, 8.8f / 16});
+    add_quad(decal, at(0, 1), at(1, 1), at(1, 0), at(0, 0), {0.0f, 1.0f, 1.0f, 0.0f});
+    ASSERT_GT(decal.normals[0].x, 0.99f);
+    const LightmapAtlas b = rasterize_lightmap(decal, 16, 16, report);
+    EXPECT_EQ(report.overlapping_texels, 4u);
+    for (const glm::uvec2& t : report.overlaps)
+    {
+        EXPECT_TRUE(t.x == 7 || t.x == 8) << t.x;
+        EXPECT_TRUE(t.y == 7 || t.y == 8) << t.y;
+        EXPECT_GE(b.texels[size_t(b.texel_of(t.x, t.y))].triangle, 2u) << "the floor's triangles";
+    }
 }

@@ -694,11 +694,36 @@ TEST(BakeCli, LightmapRefusesScenesWithoutUsableLightmapUvs)
     EXPECT_EQ(a.status, 1);
     EXPECT_NE(a.err.find("no_uv1.glb"), std::string::npos) << a.err;
     EXPECT_NE(a.err.find("TEXCOORD_1"), std::string::npos) << a.err;
+    // Overlapping lightmap UVs (the floor's four quads on one UV square) bake with a warning naming them;
+    // --strict-uv refuses them; --uv-report draws them: red where they overlap, grey where covered.
     const fs::path overlap = write_floor_gltf("overlap.glb", 2, true, true);
-    const Result b = lightmap(q(overlap) + " -o " + q(out) + " --size 32");
-    EXPECT_EQ(b.status, 1);
+    const fs::path uv_png = dir() / "overlap_uvs.png", uv_json = dir() / "overlap.json";
+    const fs::path overlap_out = dir() / "overlap.hemi";
+    const Result b =
+        lightmap(q(overlap) + " -o " + q(overlap_out) + " --size 32 --rays 4 --bases plain --uv-report " +
+                 q(uv_png) + " --json " + q(uv_json));
+    EXPECT_EQ(b.status, 0) << b.err;
     EXPECT_NE(b.err.find("overlap.glb"), std::string::npos) << b.err;
-    EXPECT_NE(b.err.find("overlap"), std::string::npos) << b.err;
+    EXPECT_NE(b.err.find("lie inside two or more triangles"), std::string::npos) << b.err;
+    const nlohmann::json uv = nlohmann::json::parse(slurp(uv_json));
+    const hemi::io::ImageRgba8 drawn = hemi::io::read_png(uv_png);
+    ASSERT_EQ(drawn.width, 32u);
+    size_t red = 0, grey = 0;
+    for (size_t i = 0; i < drawn.pixels.size(); i += 4)
+    {
+        red += drawn.pixels[i] == 255 && drawn.pixels[i + 1] == 40;
+        grey += drawn.pixels[i] == 110 && drawn.pixels[i + 1] == 110;
+    }
+    EXPECT_GT(uv["overlapping_texels"].get<size_t>(), 200u); // 16 x 16 centres, each in four quads
+    EXPECT_EQ(red, uv["overlapping_texels"].get<size_t>());
+    EXPECT_EQ(red + grey, uv["covered_texels"].get<size_t>());
+    fs::remove(overlap_out);
+    const Result strict = lightmap(q(overlap) + " -o " + q(overlap_out) + " --size 32 --strict-uv");
+    EXPECT_EQ(strict.status, 1);
+    EXPECT_NE(strict.err.find("overlap.glb"), std::string::npos) << strict.err;
+    EXPECT_NE(strict.err.find("--strict-uv"), std::string::npos) << strict.err;
+    EXPECT_NE(strict.err.find("lie inside two or more triangles"), std::string::npos) << strict.err;
+    EXPECT_FALSE(fs::exists(overlap_out));
     const fs::path floor = write_floor_gltf("floor_for_env.glb", 1);
     const fs::path png = dir() / "sky.png";
     hemi::io::write_png(png, hemi::io::ImageRgba8{2, 2, std::vector<uint8_t>(16, 200)});

@@ -13,7 +13,11 @@
 // centre (ties: the lower triangle index), so the result does not depend on the order of the work.
 //
 // Overlaps are texel centres that two triangles claim under a fill rule that gives a point on a shared edge
-// (or vertex) to exactly one of the triangles meeting there: a chart's own triangles never overlap.
+// (or vertex) to exactly one of the triangles meeting there: a chart's own triangles never overlap. Shipped
+// levels have them (a face modelled twice back to back on one UV rectangle; decals), so they are reported
+// as a warning and resolved deterministically: each contested texel goes to the triangle whose plane its
+// uncontested neighbours share, else the one facing into the scene (towards the centre of its bounding box:
+// of a back-to-back pair, the face on the level's inside), else the lower index; it samples the centre.
 //
 // The frame of a texel is the tangent frame of the normal-map UV set (Habel & Wimmer 2010, Sec. 4.3): the
 // interpolated vertex normal, the interpolated tangent made orthogonal to it, and the bitangent
@@ -23,6 +27,7 @@
 #include <hemi/io/block_maps.h>
 #include <hemi/io/mesh.h>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -77,13 +82,14 @@ struct LightmapUvReport
     size_t zero_area = 0;          // triangles of zero area in space (ignored)
     size_t overlapping_texels = 0; // texel centres inside two or more triangles
     uint32_t overlap_example[2] = {0, 0}; // two triangles that overlap, when overlapping_texels > 0
+    std::vector<glm::uvec2> overlaps;     // those texels, in row-major order of blocks
     size_t covered_texels = 0;
     // Texel density: the world size of a texel, per primitive range of triangles (all triangles when the
     // caller passes none), min and max over those with UV area.
     float min_texel_size = 0.0f, max_texel_size = 0.0f;
-    // One line each, with counts and an example. Problems make the lightmap wrong (overlapping UVs: two
-    // surfaces would share texels); warnings lose or waste texels (UVs outside [0, 1], triangles of no UV
-    // area, texel density varying more than 4x between primitives).
+    // One line each, with counts and an example. Problems make the lightmap impossible (none at present);
+    // warnings lose or waste texels (overlapping UVs, resolved as above; UVs outside [0, 1], triangles of no
+    // UV area, texel density varying more than 4x between primitives).
     std::vector<std::string> problems;
     std::vector<std::string> warnings;
 

@@ -177,10 +177,10 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                        const LightmapSurfaces* surfaces = nullptr);
 
 // The whole job hemi-bake lightmap runs: read the glTF scene, rasterise its TEXCOORD_1 atlas (refused when
-// the scene has none or its UVs overlap), bake, and write the lightmap asset (io/lightmap_asset.h) and,
-// with exr_dir, one EXR per output with named channels ("c<k>.R", ".G", ".B", half) and the layout in its
-// header (hemi.output, hemi.k, hemi.layout, hemi.frame). Lights are in hemi's z-up world (the scene is placed
-// there by render::gltf_to_world(), as hemi-render places it).
+// the scene has none, or its UVs overlap and strict_uv is set), bake, and write the lightmap asset
+// (io/lightmap_asset.h) and, with exr_dir, one EXR per output with named channels ("c<k>.R", ".G", ".B",
+// half) and the layout in its header (hemi.output, hemi.k, hemi.layout, hemi.frame). Lights are in hemi's
+// z-up world (the scene is placed there by render::gltf_to_world(), as hemi-render places it).
 struct LightmapFileOptions
 {
     LightmapBakeOptions bake;
@@ -194,6 +194,11 @@ struct LightmapFileOptions
     // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.
     glm::uvec3 probes{0};
     int probe_rays = 1024;
+    // Overlapping lightmap UVs: resolved with a warning (lightmap_atlas.h), or refused with strict_uv.
+    bool strict_uv = false;
+    // A PNG of the atlas, written after rasterising and before the bake: covered texels grey, overlapping
+    // ones red, empty black; at most 2048 pixels a side (a pixel shows the worst of its texels). Empty: none.
+    std::filesystem::path uv_report;
     // Make the lightmap UVs (unwrap_lightmap: planar charts at one texel density) instead of reading
     // TEXCOORD_1, with texel_size and width x height as its options; the asset keeps the unwrapped mesh.
     bool unwrap = false;
