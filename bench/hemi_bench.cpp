@@ -38,6 +38,7 @@
 // with the Khronos validation layer on; any exception or validation message makes the exit status 1. CI
 // runs it so that a benchmark that no longer runs fails; its times mean nothing.
 
+#include "factored_scene.h"
 #include "level.h"
 #include "models.h"
 #include "relief.h"
@@ -55,6 +56,7 @@
 #include <hemi/io/gltf.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/mesh.h>
+#include <hemi/math/paraboloid.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
@@ -120,6 +122,7 @@ struct Sizes
     uint32_t relief = 1024;        // the SSBump benchmarks' height field, relief x relief
     uint32_t lightmap_atlas = 512; // the level that lightmap/material draws
     uint32_t bake_atlas = 1280;    // the level that lightmap/bake bakes
+    uint32_t prefilter = 512;      // the parabolic maps' level 0 that prefilter/ filters (hemi-bake envmap's)
 };
 
 Sizes smoke_sizes()
@@ -135,6 +138,7 @@ Sizes smoke_sizes()
     s.relief = 64;
     s.lightmap_atlas = 64; // make_level's smallest
     s.bake_atlas = 64;
+    s.prefilter = 64;
     return s;
 }
 
@@ -897,6 +901,39 @@ void lightmap_material(benchmark::State& state, std::string technique)
 
 } // namespace
 
+// Heidrich & Seidel's prefiltering (math::prefilter_phong, what hemi-bake envmap runs): the factored sample's
+// studio environment (2048 x 1024, a small sun of radiance 2000) resampled into 2 x size^2 parabolic maps,
+// then the diffuse map (e = 1) and the glossy maps for e = 10, 100 and 1000, each at glossy_size(e): the
+// seconds of each and in all, and the lobe evaluations. The resampling and mipmaps are not timed.
+void prefilter(benchmark::State& state)
+{
+    const hemi::io::ImageRgba env = hemi::samples::studio_environment(2048, 1024);
+    const std::vector<hemi::math::ParabolicImage> chain = hemi::math::parabolic_mip_chain(
+        hemi::math::parabolic_from_equirect(g_sizes.prefilter, env.width, env.height, env.pixels));
+    const double exponents[] = {1.0, 10.0, 100.0, 1000.0};
+    double seconds[4] = {0, 0, 0, 0};
+    uint64_t pairs = 0;
+    for (auto _ : state)
+    {
+        double total = 0.0;
+        for (int i = 0; i < 4; ++i)
+        {
+            hemi::math::PrefilterStats stats;
+            benchmark::DoNotOptimize(hemi::math::prefilter_phong(chain, exponents[i], &stats));
+            seconds[i] = stats.seconds;
+            pairs = i == 0 ? stats.texel_pairs : pairs + stats.texel_pairs;
+            total += stats.seconds;
+        }
+        state.SetIterationTime(total);
+    }
+    state.counters["diffuse_s"] = seconds[0];
+    state.counters["e10_s"] = seconds[1];
+    state.counters["e100_s"] = seconds[2];
+    state.counters["e1000_s"] = seconds[3];
+    state.counters["glossy_s"] = seconds[1] + seconds[2] + seconds[3]; // the goal: <= 1 s
+    state.counters["lobe_evaluations"] = double(pairs);
+}
+
 int main(int argc, char** argv)
 {
     // --smoke (or HEMI_BENCH_SMOKE=1, not 0): every benchmark once at its smallest size, validation on.
@@ -974,6 +1011,11 @@ int main(int argc, char** argv)
                       0.5);
     const std::string atlas = std::to_string(g_sizes.bake_atlas) + "x" + std::to_string(g_sizes.bake_atlas);
     full_iterations(add("lightmap/bake/level/" + atlas + "/bounces:2/rays:64", lightmap_level)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    const std::string parabolic = std::to_string(g_sizes.prefilter);
+    full_iterations(add("prefilter/parabolic/2x" + parabolic + "^2/studio/e:1,10,100,1000", prefilter)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);
