@@ -184,8 +184,8 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
 //   1. the plane its chart continues in: the most of the texel's 8 neighbours whose centre only one triangle
 //      claims and whose triangle lies in the candidate's plane, facing its way;
 //   2. the side that faces into the scene: the largest cosine between the candidate's normal and the
-//      direction from its centroid to the centre of the scene's bounding box (of a back-to-back pair, the
-//      face towards the level's inside, which is the one a player sees);
+//      direction from its centroid to the scene's centre (the area-weighted centroid of its surfaces; of a
+//      back-to-back pair, the face towards the level's inside, which is the one a player sees);
 //   3. the lower triangle index.
 // The chosen triangle samples the texel's centre.
 void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
@@ -197,16 +197,24 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
     if (contested.empty())
         return;
     std::sort(contested.begin(), contested.end());
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, glm::dvec3(p));
-        hi = glm::max(hi, glm::dvec3(p));
-    }
-    const glm::dvec3 scene_centre = 0.5 * (lo + hi);
-    const double tolerance = 1e-4 * glm::length(hi - lo);
     auto corner = [&](uint32_t t, int k)
     { return glm::dvec3(mesh.positions[mesh.indices[size_t(t) * 3 + k]]); };
+    // The scene's centre: the area-weighted centroid of its surfaces (a few faces far out, as levels have
+    // them, move it little; they would move the bounding box's centre out of the playable space).
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    glm::dvec3 weighted(0.0);
+    double area = 0.0;
+    for (uint32_t t = 0; t < mesh.indices.size() / 3; ++t)
+    {
+        const glm::dvec3 a = corner(t, 0), b = corner(t, 1), c = corner(t, 2);
+        const double w = 0.5 * glm::length(glm::cross(b - a, c - a));
+        weighted += w * (a + b + c) / 3.0;
+        area += w;
+        lo = glm::min(lo, glm::min(a, glm::min(b, c)));
+        hi = glm::max(hi, glm::max(a, glm::max(b, c)));
+    }
+    const glm::dvec3 scene_centre = area > 0.0 ? weighted / area : 0.5 * (lo + hi);
+    const double tolerance = 1e-4 * glm::length(hi - lo);
     auto normal = [&](uint32_t t)
     { return glm::normalize(glm::cross(corner(t, 1) - corner(t, 0), corner(t, 2) - corner(t, 0))); };
     auto same_plane = [&](uint32_t a, uint32_t b)

@@ -1529,7 +1529,7 @@ TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
 // Overlapping lightmap UVs are resolved, each contested texel to one triangle (lightmap_atlas.h):
 // - a face modelled twice back to back on one UV rectangle (the down-facing copy first in the file, so the
 //   lower index alone would pick it) gives every texel to the face towards the scene's inside (here the
-//   up-facing one: a marker above the floor puts the bounding box's centre over it), and the bake gives
+//   up-facing one: a marker above the floor puts the scene's centre over it), and the bake gives
 //   each texel that face's light: a sun straight above, nothing else, E = E_sun in every texel (the
 //   down-facing face would get 0);
 // - a small wall piece whose UVs land inside a floor's chart, listed first and facing the scene's centre
@@ -1540,8 +1540,8 @@ TEST(LightmapAtlas, OverlapsGoToTheChartTheyContinueElseTheFaceTowardsTheScene)
     Mesh pair;
     add_quad(pair, at(0, 0), at(1, 0), at(1, 1), at(0, 1), {0.0f, 0.0f, 1.0f, 1.0f}); // facing down
     add_quad(pair, at(0, 1), at(1, 1), at(1, 0), at(0, 0), {0.0f, 1.0f, 1.0f, 0.0f}); // facing up
-    add_quad(pair, {3.0f, 0.0f, 2.0f}, {3.1f, 0.0f, 2.0f}, {3.1f, 0.1f, 2.0f}, {3.0f, 0.1f, 2.0f},
-             {0.99f, 0.99f, 0.99f, 0.99f}); // a marker off the floor, no UV area
+    add_quad(pair, {3.0f, 0.0f, 2.0f}, {4.0f, 0.0f, 2.0f}, {4.0f, 1.0f, 2.0f}, {3.0f, 1.0f, 2.0f},
+             {0.99f, 0.99f, 0.99f, 0.99f}); // a marker above the floor's plane, beside it, no UV area
     ASSERT_LT(pair.normals[0].z, 0.0f);
     ASSERT_GT(pair.normals[4].z, 0.0f);
     LightmapUvReport report;

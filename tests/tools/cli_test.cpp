@@ -5,6 +5,7 @@
 #include "../temp_dir.h"
 #include "level.h"
 #include "models.h"
+#include "run_tool.h"
 
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/envmap_asset.h>
@@ -44,25 +45,13 @@ fs::path dir()
     return hemi::test::temp_dir("cli_test");
 }
 
-struct Result
-{
-    int status;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p)
-{
-    std::ifstream f(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
+using hemi::test::q;
+using hemi::test::Result;
+using hemi::test::slurp;
 
 Result run(const std::string& exe, const std::string& args, const std::string& environment = "")
 {
-    const fs::path out = dir() / "stdout.txt", err = dir() / "stderr.txt";
-    const std::string command =
-        environment + " '" + exe + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int raw = std::system(command.c_str());
-    return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+    return hemi::test::run(dir(), exe, args, environment);
 }
 
 Result bake(const std::string& args)
@@ -73,14 +62,6 @@ Result bake(const std::string& args)
 Result render(const std::string& args)
 {
     return run(HEMI_RENDER_EXE, args, "HEMI_VALIDATION=1");
-}
-
-std::string q(const fs::path& p)
-{
-    std::string quoted(1, '\'');
-    quoted.append(p.string());
-    quoted.push_back('\'');
-    return quoted;
 }
 
 const fs::path& knot()

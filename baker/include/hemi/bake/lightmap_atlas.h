@@ -14,10 +14,13 @@
 //
 // Overlaps are texel centres that two triangles claim under a fill rule that gives a point on a shared edge
 // (or vertex) to exactly one of the triangles meeting there: a chart's own triangles never overlap. Shipped
-// levels have them (a face modelled twice back to back on one UV rectangle; decals), so they are reported
-// as a warning and resolved deterministically: each contested texel goes to the triangle whose plane its
-// uncontested neighbours share, else the one facing into the scene (towards the centre of its bounding box:
-// of a back-to-back pair, the face on the level's inside), else the lower index; it samples the centre.
+// levels have them: Quake III's q3map2 stores one lightmap rectangle for surfaces that came out lit the same
+// (copies of a wall, mirrored corridors) and lays decals over walls on the same texels; a face modelled
+// twice back to back on one rectangle does it too. So they are reported as a warning and resolved
+// deterministically: each contested texel goes to the triangle whose plane its uncontested neighbours share,
+// else the one facing into the scene (towards the area-weighted centroid of its surfaces: of a back-to-back
+// pair, the face on the level's inside), else the lower index; it samples the centre. The others draw that
+// triangle's light.
 //
 // The frame of a texel is the tangent frame of the normal-map UV set (Habel & Wimmer 2010, Sec. 4.3): the
 // interpolated vertex normal, the interpolated tangent made orthogonal to it, and the bitangent

@@ -1,0 +1,214 @@
+// A real game level instead of a procedural scene: OpenArena's oa_dm3 ("The Abandoned Base", a Quake III
+// deathmatch map from Debian's openarena-081-maps), converted with its own lightmap UVs (q3_level.h) and
+// baked by hemi-bake lightmap as a process. The level's lightmaps, as q3map2 packed them, share texels
+// between surfaces whose lighting came out identical (copies of a wall, mirrored corridors) and between
+// coplanar surfaces laid over each other, so the bake meets overlapping lightmap UVs as shipped levels have
+// them.
+#include "../temp_dir.h"
+#include "q3_level.h"
+#include "run_tool.h"
+
+#include <hemi/io/gltf.h>
+#include <hemi/io/lightmap_asset.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace
+{
+
+fs::path dir()
+{
+    return hemi::test::temp_dir("real_level_test");
+}
+
+using hemi::test::q;
+using hemi::test::Result;
+using hemi::test::slurp;
+
+// hemi-bake lightmap as a process.
+Result lightmap(const std::string& args)
+{
+    return hemi::test::run(dir(), HEMI_BAKE_EXE, "lightmap " + args);
+}
+
+const char* const kMap = "maps/oa_dm3.bsp";
+
+const hemi::test::Q3Level& level()
+{
+    static const hemi::test::Q3Level l = hemi::test::read_q3_level(hemi::test::kOpenArenaMaps, kMap);
+    return l;
+}
+
+// The level as the glTF file hemi-bake reads, written once per process.
+const fs::path& level_gltf()
+{
+    static const fs::path p = []
+    {
+        const fs::path path = dir() / "oa_dm3.gltf";
+        hemi::io::write_gltf(path, level().scene);
+        return path;
+    }();
+    return p;
+}
+
+// The words hemi-bake uses for overlapping lightmap UVs, in the warning and in --strict-uv's refusal.
+const char* const kOverlap = "lie inside two or more triangles";
+
+} // namespace
+
+// The conversion keeps the level whole: its polygons and patches (tessellated), thousands of triangles,
+// each in one 128 x 128 lightmap page's cell of the atlas, front faces counter-clockwise as glTF wants them;
+// the sky (faces without a lightmap) is left out. What hemi-bake reads back is the same mesh.
+TEST(RealLevel, ConvertsAQuake3MapWithItsOwnLightmapUvs)
+{
+    const hemi::test::Q3Level& l = level();
+    const hemi::io::Mesh& m = l.scene.mesh;
+    const size_t triangles = m.indices.size() / 3;
+    // oa_dm3: 22459 vertices, 22188 triangles, 1789 polygons and 174 patch faces (470 patches), 14 pages.
+    EXPECT_GT(m.vertex_count(), 10000u);
+    EXPECT_GT(triangles, 10000u);
+    EXPECT_GT(l.polygon_faces, 1000u);
+    EXPECT_GT(l.patches, 100u);
+    EXPECT_GT(l.faces_without_lightmap, 0u) << "the sky was not left out";
+    EXPECT_GT(l.lightmap_pages, 4u);
+    ASSERT_EQ(l.faces.size(), triangles);
+    ASSERT_EQ(m.uvs1.size(), m.vertex_count());
+    ASSERT_EQ(m.uvs.size(), m.vertex_count());
+
+    // TEXCOORD_1 lies in [0, 1], and each triangle inside one page's cell of the grid (a triangle reaching
+    // into the next cell would take another surface's texels).
+    const glm::vec2 grid(float(l.atlas_columns), float(l.atlas_rows));
+    size_t outside = 0, straddling = 0;
+    for (const glm::vec2& uv : m.uvs1)
+        outside += !(uv.x >= 0.0f && uv.x <= 1.0f && uv.y >= 0.0f && uv.y <= 1.0f);
+    for (size_t t = 0; t < triangles; ++t)
+    {
+        glm::vec2 lo(INFINITY), hi(-INFINITY);
+        for (int k = 0; k < 3; ++k)
+        {
+            lo = glm::min(lo, m.uvs1[m.indices[3 * t + k]] * grid);
+            hi = glm::max(hi, m.uvs1[m.indices[3 * t + k]] * grid);
+        }
+        straddling += glm::floor(lo) != glm::floor(glm::max(lo, hi - 1e-4f));
+    }
+    EXPECT_EQ(outside, 0u);
+    EXPECT_EQ(straddling, 0u);
+
+    // The winding turned from Quake's clockwise: triangles face the way their vertex normals point (all
+    // but a few folded patch triangles; measured 22085 of 22090 with area).
+    size_t agree = 0, with_area = 0;
+    for (size_t t = 0; t < triangles; ++t)
+    {
+        const glm::vec3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]],
+                        &c = m.positions[m.indices[3 * t + 2]];
+        const glm::vec3 n = glm::cross(b - a, c - a);
+        if (glm::length(n) < 1e-9f)
+            continue;
+        ++with_area;
+        agree += glm::dot(n, m.normals[m.indices[3 * t]] + m.normals[m.indices[3 * t + 1]] +
+                                 m.normals[m.indices[3 * t + 2]]) > 0.0f;
+    }
+    EXPECT_GT(double(agree), 0.999 * double(with_area)) << agree << " of " << with_area;
+
+    const hemi::io::GltfScene back = hemi::io::read_gltf(level_gltf());
+    ASSERT_EQ(back.mesh.vertex_count(), m.vertex_count());
+    EXPECT_EQ(back.mesh.indices, m.indices);
+    EXPECT_EQ(back.mesh.uvs1, m.uvs1);
+    EXPECT_TRUE(back.tangents_generated);
+    ASSERT_EQ(back.materials.size(), 1u);
+    EXPECT_EQ(back.materials[0].base_color_factor, glm::vec4(0.5f, 0.5f, 0.5f, 1.0f));
+}
+
+// hemi-bake lightmap bakes the level on its own lightmap UVs: the overlapping texels are resolved and named
+// in a warning, the sky's light comes in where the sky was, and --strict-uv refuses the overlaps, naming the
+// scene, with no asset written. About 3 s in a release build on 2 cores (1024 x 1024, 627 k texels covered).
+TEST(RealLevel, BakesItsOwnOverlappingLightmapUvsWithAWarning)
+{
+    const fs::path asset = dir() / "oa_dm3.hemi", json = dir() / "oa_dm3.json";
+    const Result r = lightmap(q(level_gltf()) + " -o " + q(asset) +
+                              " --size 1024 --rays 2 --bases plain --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(report["width"], 1024);
+    EXPECT_EQ(report["triangles"], level().scene.mesh.indices.size() / 3);
+    EXPECT_GT(report["covered_texels"].get<size_t>(), 100000u); // measured 626922
+    // q3map2 gives surfaces it found lit alike one lightmap rectangle (copies of a wall, of a pipe): 7056
+    // texels of the 1024 x 1024 atlas that two triangles claim (measured).
+    EXPECT_GT(report.value("overlapping_texels", size_t(0)), 1000u);
+    ASSERT_TRUE(report["warnings"].is_array());
+    bool named = false;
+    for (const nlohmann::json& w : report["warnings"])
+        named |= w.get<std::string>().find(kOverlap) != std::string::npos;
+    EXPECT_TRUE(named) << report["warnings"];
+
+    // Under uniform radiance, the texels whose rays leave through the openings where the sky faces were are
+    // lit: measured 59201 texels for 626922 covered (the level is mostly indoors; 2 rays, no bounce), and
+    // 5952 when the sky's polygons are kept.
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    const std::vector<float>& plain = a.output("plain").maps.values;
+    size_t lit = 0;
+    for (size_t i = 0; i < plain.size(); i += 3)
+        lit += plain[i] > 0.0f;
+    EXPECT_GT(lit, a.covered_texels / 50) << lit << " of " << a.covered_texels << " texels lit";
+    fs::remove(asset); // 7 MB, in the system's temporary folder
+
+    // The refusal comes after the atlas is rasterised, so a small atlas keeps it quick; the shared
+    // rectangles overlap at any size (407 texels at 256 x 256).
+    const fs::path refused = dir() / "oa_dm3_strict.hemi";
+    const Result s =
+        lightmap(q(level_gltf()) + " -o " + q(refused) + " --size 256 --rays 2 --bases plain --strict-uv");
+    EXPECT_EQ(s.status, 1) << s.out << s.err;
+    EXPECT_NE(s.err.find(kOverlap), std::string::npos) << s.err;
+    EXPECT_NE(s.err.find(level_gltf().string()), std::string::npos) << s.err;
+    EXPECT_FALSE(fs::exists(refused));
+}
+
+// Errors name the file: a missing archive, an entry it does not hold, bytes that are no BSP, a BSP cut short.
+TEST(RealLevel, BadArchivesAndLevelsAreRefusedNamingTheFile)
+{
+    auto message = [](auto&& f)
+    {
+        try
+        {
+            f();
+        }
+        catch (const std::runtime_error& e)
+        {
+            return std::string(e.what());
+        }
+        return std::string("no exception");
+    };
+    const fs::path missing = dir() / "no_such.pk3";
+    EXPECT_NE(message([&] { hemi::test::read_zip_entry(missing, kMap); }).find(missing.string()),
+              std::string::npos);
+    const std::string absent =
+        message([] { hemi::test::read_zip_entry(hemi::test::kOpenArenaMaps, "maps/none.bsp"); });
+    EXPECT_NE(absent.find("maps/none.bsp"), std::string::npos) << absent;
+    EXPECT_NE(absent.find("no such entry"), std::string::npos) << absent;
+    const fs::path not_zip = dir() / "not_a.pk3";
+    std::ofstream(not_zip) << "not a zip archive";
+    EXPECT_NE(message([&] { hemi::test::read_zip_entry(not_zip, kMap); }).find(not_zip.string()),
+              std::string::npos);
+
+    std::vector<uint8_t> bsp = hemi::test::read_zip_entry(hemi::test::kOpenArenaMaps, kMap);
+    const std::string wrong = message(
+        [] {
+            hemi::test::convert_q3_level({'I', 'B', 'S', 'P'}, "short.bsp");
+        });
+    EXPECT_NE(wrong.find("short.bsp"), std::string::npos) << wrong;
+    bsp.resize(bsp.size() / 2);
+    const std::string cut = message([&] { hemi::test::convert_q3_level(bsp, "cut.bsp"); });
+    EXPECT_NE(cut.find("cut.bsp: lump"), std::string::npos) << cut;
+}
