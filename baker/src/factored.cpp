@@ -291,14 +291,19 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& env, const EnvmapBakeOptions& o
     s.mip_seconds = seconds(t0);
     say("diffuse map");
     t0 = clock::now();
-    a.diffuse = math::prefilter_phong(a.mirror, 1.0);
+    auto prefilter = [&](double e, math::PrefilterStats* stats)
+    {
+        return o.exact ? math::prefilter_phong_exact(a.mirror, e, stats)
+                       : math::prefilter_phong(a.mirror, e, stats);
+    };
+    a.diffuse = prefilter(1.0, nullptr);
     s.diffuse_seconds = seconds(t0);
     for (double e : o.exponents)
     {
         say("glossy map, exponent " + number(e) + " (" + std::to_string(math::glossy_size(e, o.size)) +
             "^2)");
         math::PrefilterStats ps;
-        a.glossy.push_back(math::prefilter_phong(a.mirror, e, &ps));
+        a.glossy.push_back(prefilter(e, &ps));
         a.exponents.push_back(float(e));
         s.glossy_seconds.push_back(ps.seconds);
         s.glossy_pairs.push_back(ps.texel_pairs);

@@ -1478,7 +1478,9 @@ TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
             const int32_t i = a.texel_of(x, y);
             ASSERT_EQ(i >= 0, expected.count({x, y}) == 1) << x << ", " << y;
             if (i >= 0)
+            {
                 EXPECT_TRUE(a.texels[size_t(i)].x == x && a.texels[size_t(i)].y == y);
+            }
         }
     // Row-major order of (y, x), as the bake's seeds and checkpoints expect.
     for (size_t i = 1; i < a.texels.size(); ++i)

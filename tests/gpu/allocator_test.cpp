@@ -139,7 +139,9 @@ TEST_F(Allocator, RequestsBeyondTheDevicesLimitsAreRefusedNamingTheLimit)
     EXPECT_NE(why.find("exceeds its memory heap"), std::string::npos) << why;
     // Every limit exceeded is named: lavapipe's heap and maxMemoryAllocationSize are both 2 GiB.
     if (dev.max_allocation_size() && dev.max_allocation_size() < heap + 1)
+    {
         EXPECT_NE(why.find("maxMemoryAllocationSize"), std::string::npos) << why;
+    }
     // Within the heap but beyond one allocation's limit, where the device has such a gap.
     if (dev.max_allocation_size() && dev.max_allocation_size() < heap)
     {

@@ -292,7 +292,9 @@ TEST(BlockMaps, KeepExactlyTheBlocksThatHoldAValueAndReadBackEveryTexel)
     {
         const glm::uvec2 t = m.grid.texel(s);
         if (t.x < w && t.y < h)
+        {
             EXPECT_EQ(m.grid.slot(t.x, t.y), int64_t(s));
+        }
     }
     EXPECT_THROW(hemi::io::BlockGrid(w, h, {4, 2}), std::invalid_argument); // out of order
     EXPECT_THROW(hemi::io::BlockGrid(w, h, {1, 1}), std::invalid_argument); // twice

@@ -274,8 +274,184 @@ uint32_t glossy_size(double exponent, uint32_t full_size)
     return std::min(s, full_size);
 }
 
-ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
-                               PrefilterStats* stats)
+namespace
+{
+
+// The source of a lobe sum as structure of arrays: per texel a direction and its radiance times solid angle
+// inside the circle. At shift 0, a level's texels at their centres. At shift k, each block of 2^k x 2^k
+// texels of that level as one: the sum of its texels' radiance times their solid angle inside the circle
+// (texels outside the circle, whose directions the other half owns, count for nothing, as at shift 0), at the
+// radiance-weighted mean of their directions (luminance weights; the solid angle's mean where the block is
+// black), so that a bright spot inside a block keeps its own direction.
+struct SourceTexels
+{
+    uint32_t size = 0; // texels along a side of a half (the level's size >> shift)
+    double extent = 1.0;
+    std::vector<float> dx, dy, dz, wr, wg, wb;
+};
+
+SourceTexels source_texels(const ParabolicImage& level, uint32_t shift = 0)
+{
+    SourceTexels s;
+    const uint32_t fine = level.size, block = 1u << shift;
+    s.size = fine >> shift;
+    s.extent = level.extent;
+    const uint32_t size = s.size;
+    const std::vector<double> omega = solid_angles(fine, level.extent, true);
+    const size_t texels = size_t(2) * size * size;
+    for (std::vector<float>* v : {&s.dx, &s.dy, &s.dz, &s.wr, &s.wg, &s.wb})
+        v->resize(texels);
+    tbb::parallel_for(uint32_t(0), 2 * size,
+                      [&](uint32_t hr)
+                      {
+                          const int half = int(hr / size);
+                          const uint32_t row = hr % size;
+                          for (uint32_t col = 0; col < size; ++col)
+                          {
+                              glm::dvec3 sum(0.0), lit(0.0), plain(0.0);
+                              double luminance = 0.0;
+                              for (uint32_t j = 0; j < block; ++j)
+                                  for (uint32_t i = 0; i < block; ++i)
+                                  {
+                                      const uint32_t fc = col * block + i, fr = row * block + j;
+                                      const double w = omega[size_t(fr) * fine + fc];
+                                      if (w <= 0.0)
+                                          continue;
+                                      const glm::dvec3 d = level.direction(half, fc, fr);
+                                      const float* t = level.at(half, fc, fr);
+                                      const glm::dvec3 radiance = w * glm::dvec3(t[0], t[1], t[2]);
+                                      const double y =
+                                          0.2126 * radiance.x + 0.7152 * radiance.y + 0.0722 * radiance.z;
+                                      sum += radiance;
+                                      lit += y * d;
+                                      luminance += y;
+                                      plain += w * d;
+                                  }
+                              const glm::dvec3 mean = luminance > 0.0 && glm::length(lit) > 0.0 ? lit : plain;
+                              const glm::dvec3 d = glm::length(mean) > 0.0
+                                                       ? glm::normalize(mean)
+                                                       : level.direction(half, col * block, row * block);
+                              const size_t k = (size_t(half) * size + row) * size + col;
+                              s.dx[k] = float(d.x), s.dy[k] = float(d.y), s.dz[k] = float(d.z);
+                              s.wr[k] = float(sum.x), s.wg[k] = float(sum.y), s.wb[k] = float(sum.z);
+                          }
+                      });
+    return s;
+}
+
+// Eq. 9's sum at direction r over the source texels inside the lobe's cap (where it exceeds 1e-4 of its
+// peak), found as the stereographic image of the cap in each half, each texel at its centre direction with
+// its solid angle inside the circle; without the (e + 1) / 2 pi normalisation. Counts the texels visited.
+glm::dvec3 lobe_sum(const SourceTexels& src, const PhongLobe& lobe, const glm::dvec3& r, uint64_t& pairs)
+{
+    const uint32_t size = src.size;
+    const double m = src.extent;
+    const double gamma = lobe.angle();
+    const double cos_cut = std::cos(gamma);
+    const float cut = lobe.cos_cut();
+    const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
+    double acc[3] = {0, 0, 0};
+    for (int half = 0; half < 2; ++half)
+    {
+        const double sigma = half == 0 ? 1.0 : -1.0;
+        uint32_t c0 = 0, c1 = size - 1, r0 = 0, r1 = size - 1;
+        bool disc = false;
+        double cx = 0.0, cy = 0.0, reach = 0.0;
+        // The cap's image in this half: a disc, unless the cap holds the half's projection pole (0, 0,
+        // -sigma).
+        if (-sigma * r.z < cos_cut)
+        {
+            const double theta = std::atan2(std::sqrt(r.x * r.x + r.y * r.y), r.z);
+            const double phi = std::atan2(r.y, r.x);
+            auto rho = [&](double t) { return std::sin(t) / (1.0 + sigma * std::cos(t)); };
+            // Near the pole test's edge theta +- gamma can round past the pole: keep the whole square.
+            const bool near_pole =
+                1.0 + sigma * std::cos(theta - gamma) < 1e-9 || 1.0 + sigma * std::cos(theta + gamma) < 1e-9;
+            if (!near_pole)
+            {
+                const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
+                const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
+                cx = centre * std::cos(phi), cy = centre * std::sin(phi);
+                // Per row, the texels within the disc widened by one and a half texels: a texel's direction
+                // may lie anywhere in its square (a block's, at shift > 0), and rounding.
+                disc = true;
+                reach = radius + 3.0 * m / size;
+                // Texel centres within [cx - radius, cx + radius] (one texel of margin for rounding).
+                auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
+                auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
+                const double lo_c = std::floor(to_col(cx - radius)) - 1,
+                             hi_c = std::ceil(to_col(cx + radius)) + 1;
+                const double lo_r = std::floor(to_row(cy + radius)) - 1,
+                             hi_r = std::ceil(to_row(cy - radius)) + 1;
+                if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
+                    continue;
+                c0 = uint32_t(std::max(0.0, lo_c));
+                c1 = uint32_t(std::min(double(size - 1), hi_c));
+                r0 = uint32_t(std::max(0.0, lo_r));
+                r1 = uint32_t(std::min(double(size - 1), hi_r));
+            }
+        }
+        for (uint32_t row = r0; row <= r1; ++row)
+        {
+            uint32_t first = c0, last = c1;
+            // Only the texels that own directions count (their solid angle inside the circle is not 0): the
+            // circle's chord on this row, one texel wider.
+            const double y = m * (1.0 - (row + 0.5) * 2.0 / size), texel = 2.0 * m / size;
+            const double ring = 1.0 + 1.5 * texel;
+            if (std::abs(y) > ring)
+                continue;
+            {
+                const double w = std::sqrt(ring * ring - y * y);
+                const double lo = std::floor((-w) / m * 0.5 * size + 0.5 * size - 0.5),
+                             hi = std::ceil(w / m * 0.5 * size + 0.5 * size - 0.5);
+                first = uint32_t(std::max(double(first), lo));
+                last = uint32_t(std::min(double(last), hi));
+                if (first > last)
+                    continue;
+            }
+            if (disc)
+            {
+                const double dy = y - cy;
+                if (std::abs(dy) > reach)
+                    continue;
+                const double w = std::sqrt(reach * reach - dy * dy);
+                const double lo = std::floor((cx - w) / m * 0.5 * size + 0.5 * size - 0.5),
+                             hi = std::ceil((cx + w) / m * 0.5 * size + 0.5 * size - 0.5);
+                if (hi < double(first) || lo > double(last))
+                    continue;
+                first = uint32_t(std::max(double(first), lo));
+                last = uint32_t(std::min(double(last), hi));
+            }
+            const size_t base = (size_t(half) * size + row) * size;
+            float ar = 0, ag = 0, ab = 0;
+            for (uint32_t col = first; col <= last; ++col)
+            {
+                const size_t k = base + col;
+                const float c = src.dx[k] * rx + src.dy[k] * ry + src.dz[k] * rz;
+                if (c > cut)
+                {
+                    const float w = lobe(c); // c may exceed 1 by a rounding step: the lobe clamps it
+                    ar += w * src.wr[k];
+                    ag += w * src.wg[k];
+                    ab += w * src.wb[k];
+                }
+            }
+            acc[0] += ar, acc[1] += ag, acc[2] += ab;
+            pairs += last - first + 1;
+        }
+    }
+    return {acc[0], acc[1], acc[2]};
+}
+
+const ParabolicImage& chain_level(const std::vector<ParabolicImage>& chain, uint32_t size)
+{
+    for (const ParabolicImage& level : chain)
+        if (level.size == size)
+            return level;
+    throw std::invalid_argument("the mipmap chain has no level of size " + std::to_string(size));
+}
+
+void check_prefilter(const std::vector<ParabolicImage>& chain, double exponent)
 {
     if (!std::isfinite(exponent) || !(exponent > 0.0) || exponent > kMaxPhongExponent)
         throw std::invalid_argument("a glossy map's Phong exponent must be in (0, " +
@@ -283,119 +459,124 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
                                     std::to_string(exponent));
     if (chain.empty())
         throw std::invalid_argument("prefilter_phong needs a mipmap chain");
+}
+
+// Catmull-Rom at the midpoint of its middle interval: the cubic through four equally spaced samples.
+inline float midpoint(float a, float b, float c, float d)
+{
+    return (9.0f * (b + c) - (a + d)) / 16.0f;
+}
+
+} // namespace
+
+ParabolicImage prefilter_phong_exact(const std::vector<ParabolicImage>& chain, double exponent,
+                                     PrefilterStats* stats)
+{
+    check_prefilter(chain, exponent);
     const auto start = std::chrono::steady_clock::now();
     const uint32_t size = glossy_size(exponent, chain[0].size);
-    const ParabolicImage* src = nullptr;
-    for (const ParabolicImage& level : chain)
-        if (level.size == size)
-            src = &level;
-    if (!src)
-        throw std::invalid_argument("the mipmap chain has no level of size " + std::to_string(size));
-
-    // The source texels as structure of arrays: centre direction, radiance times solid angle inside the
-    // circle.
-    const std::vector<double> omega = solid_angles(size, src->extent, true);
-    const size_t texels = size_t(2) * size * size;
-    std::vector<float> dx(texels), dy(texels), dz(texels), wr(texels), wg(texels), wb(texels);
-    for (int half = 0; half < 2; ++half)
-        for (uint32_t row = 0; row < size; ++row)
-            for (uint32_t col = 0; col < size; ++col)
-            {
-                const size_t k = (size_t(half) * size + row) * size + col;
-                const glm::dvec3 d = src->direction(half, col, row);
-                const double w = omega[size_t(row) * size + col];
-                const float* t = src->at(half, col, row);
-                dx[k] = float(d.x), dy[k] = float(d.y), dz[k] = float(d.z);
-                wr[k] = float(w * t[0]), wg[k] = float(w * t[1]), wb[k] = float(w * t[2]);
-            }
-
+    const SourceTexels src = source_texels(chain_level(chain, size));
     const PhongLobe lobe(exponent);
-    const double gamma = lobe.angle();
-    const double cos_cut = std::cos(gamma);
-    const float cut = lobe.cos_cut();
     const double norm = (exponent + 1.0) / (2.0 * kPi);
-
     ParabolicImage out;
     out.size = size;
     out.extent = parabolic_extent(size);
-    out.rgb.assign(texels * 3, 0.0f);
-    const double m = src->extent;
+    out.rgb.assign(size_t(2) * size * size * 3, 0.0f);
     std::atomic<uint64_t> pairs{0};
-    tbb::parallel_for(
-        uint32_t(0), 2 * size,
-        [&](uint32_t hr)
-        {
-            const int out_half = int(hr / size);
-            const uint32_t out_row = hr % size;
-            uint64_t local_pairs = 0;
-            for (uint32_t out_col = 0; out_col < size; ++out_col)
-            {
-                const glm::dvec3 r = out.direction(out_half, out_col, out_row);
-                const float rx = float(r.x), ry = float(r.y), rz = float(r.z);
-                double acc[3] = {0, 0, 0};
-                for (int half = 0; half < 2; ++half)
-                {
-                    const double sigma = half == 0 ? 1.0 : -1.0;
-                    uint32_t c0 = 0, c1 = size - 1, r0 = 0, r1 = size - 1;
-                    // The cap's image in this half: a disc, unless the cap holds the half's projection pole
-                    // (0, 0, -sigma).
-                    if (-sigma * r.z < cos_cut)
-                    {
-                        const double theta = std::atan2(std::sqrt(r.x * r.x + r.y * r.y), r.z);
-                        const double phi = std::atan2(r.y, r.x);
-                        auto rho = [&](double t) { return std::sin(t) / (1.0 + sigma * std::cos(t)); };
-                        // Near the pole test's edge theta +- gamma can round past the pole: keep the whole
-                        // square.
-                        const bool near_pole = 1.0 + sigma * std::cos(theta - gamma) < 1e-9 ||
-                                               1.0 + sigma * std::cos(theta + gamma) < 1e-9;
-                        if (!near_pole)
-                        {
-                            const double p0 = rho(theta - gamma), p1 = rho(theta + gamma);
-                            const double centre = 0.5 * (p0 + p1), radius = 0.5 * std::abs(p1 - p0);
-                            const double cx = centre * std::cos(phi), cy = centre * std::sin(phi);
-                            // Texel centres within [cx - radius, cx + radius] (one texel of margin for
-                            // rounding).
-                            auto to_col = [&](double x) { return (x / m + 1.0) * 0.5 * size - 0.5; };
-                            auto to_row = [&](double y) { return (1.0 - y / m) * 0.5 * size - 0.5; };
-                            const double lo_c = std::floor(to_col(cx - radius)) - 1,
-                                         hi_c = std::ceil(to_col(cx + radius)) + 1;
-                            const double lo_r = std::floor(to_row(cy + radius)) - 1,
-                                         hi_r = std::ceil(to_row(cy - radius)) + 1;
-                            if (hi_c < 0 || hi_r < 0 || lo_c > size - 1 || lo_r > size - 1)
-                                continue;
-                            c0 = uint32_t(std::max(0.0, lo_c));
-                            c1 = uint32_t(std::min(double(size - 1), hi_c));
-                            r0 = uint32_t(std::max(0.0, lo_r));
-                            r1 = uint32_t(std::min(double(size - 1), hi_r));
-                        }
-                    }
-                    for (uint32_t row = r0; row <= r1; ++row)
-                    {
-                        const size_t base = (size_t(half) * size + row) * size;
-                        float ar = 0, ag = 0, ab = 0;
-                        for (uint32_t col = c0; col <= c1; ++col)
-                        {
-                            const size_t k = base + col;
-                            const float c = dx[k] * rx + dy[k] * ry + dz[k] * rz;
-                            if (c > cut)
-                            {
-                                const float w =
-                                    lobe(c); // c may exceed 1 by a rounding step: the lobe clamps it
-                                ar += w * wr[k];
-                                ag += w * wg[k];
-                                ab += w * wb[k];
-                            }
-                        }
-                        acc[0] += ar, acc[1] += ag, acc[2] += ab;
-                        local_pairs += c1 - c0 + 1;
-                    }
-                }
-                float* t = out.at(out_half, out_col, out_row);
-                for (int c = 0; c < 3; ++c)
-                    t[c] = float(norm * acc[c]);
-            }
-            pairs += local_pairs;
-        });
+    tbb::parallel_for(uint32_t(0), 2 * size,
+                      [&](uint32_t hr)
+                      {
+                          const int out_half = int(hr / size);
+                          const uint32_t out_row = hr % size;
+                          uint64_t local_pairs = 0;
+                          for (uint32_t out_col = 0; out_col < size; ++out_col)
+                          {
+                              const glm::dvec3 e =
+                                  norm *
+                                  lobe_sum(src, lobe, out.direction(out_half, out_col, out_row), local_pairs);
+                              float* t = out.at(out_half, out_col, out_row);
+                              t[0] = float(e.x), t[1] = float(e.y), t[2] = float(e.z);
+                          }
+                          pairs += local_pairs;
+                      });
+    if (stats)
+    {
+        stats->texel_pairs = pairs;
+        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    return out;
+}
+
+ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
+                               PrefilterStats* stats, const PrefilterOptions& options)
+{
+    check_prefilter(chain, exponent);
+    const auto start = std::chrono::steady_clock::now();
+    const uint32_t size = glossy_size(exponent, chain[0].size);
+    // The source: the coarsest level of the chain at which the lobe still spans options.source_texels texels
+    // (its width 1 / sqrt(e) against a texel's 4 m / size radians at a half's centre), not finer than the
+    // output's own.
+    uint32_t shift = 0;
+    while ((size >> (shift + 1)) >= 8 &&
+           double(size >> (shift + 1)) / (4.0 * parabolic_extent(size) * std::sqrt(exponent)) >=
+               options.source_texels)
+        ++shift;
+    const SourceTexels src = source_texels(chain_level(chain, size), shift);
+    const PhongLobe lobe(exponent);
+    const double norm = (exponent + 1.0) / (2.0 * kPi);
+    ParabolicImage out;
+    out.size = size;
+    out.extent = parabolic_extent(size);
+    out.rgb.assign(size_t(2) * size * size * 3, 0.0f);
+    // The sums at the texels of even index and at 1, size - 3 and size - 1 along each axis; the others from
+    // Catmull-Rom along rows, then along columns (the map is the lobe's blur of the environment: smooth over
+    // the lobe's width, options.output_step of texels apart where it is narrowest).
+    // Interpolation needs the lobe at least 3.5 texels wide at a half's centre (glossy_size makes it 4 unless
+    // the chain's size caps it).
+    const bool sparse = size >= 64 && options.interpolate &&
+                        double(size) / (4.0 * parabolic_extent(size) * std::sqrt(exponent)) >= 3.5;
+    auto exact = [&](uint32_t i)
+    { return !sparse || i % 2 == 0 || i == 1 || i + 3 == size || i + 1 == size; };
+    std::atomic<uint64_t> pairs{0};
+    tbb::parallel_for(uint32_t(0), 2 * size,
+                      [&](uint32_t hr)
+                      {
+                          const int half = int(hr / size);
+                          const uint32_t row = hr % size;
+                          if (!exact(row))
+                              return;
+                          uint64_t local_pairs = 0;
+                          for (uint32_t col = 0; col < size; ++col)
+                              if (exact(col))
+                              {
+                                  const glm::dvec3 e =
+                                      norm * lobe_sum(src, lobe, out.direction(half, col, row), local_pairs);
+                                  float* t = out.at(half, col, row);
+                                  t[0] = float(e.x), t[1] = float(e.y), t[2] = float(e.z);
+                              }
+                          if (sparse)
+                              for (uint32_t col = 3; col + 3 < size; col += 2)
+                                  if (!exact(col))
+                                      for (int c = 0; c < 3; ++c)
+                                          out.at(half, col, row)[c] = midpoint(
+                                              out.at(half, col - 3, row)[c], out.at(half, col - 1, row)[c],
+                                              out.at(half, col + 1, row)[c], out.at(half, col + 3, row)[c]);
+                          pairs += local_pairs;
+                      });
+    if (sparse)
+        tbb::parallel_for(uint32_t(0), 2 * size,
+                          [&](uint32_t hr)
+                          {
+                              const int half = int(hr / size);
+                              const uint32_t row = hr % size;
+                              if (exact(row))
+                                  return;
+                              for (uint32_t col = 0; col < size; ++col)
+                                  for (int c = 0; c < 3; ++c)
+                                      out.at(half, col, row)[c] = midpoint(
+                                          out.at(half, col, row - 3)[c], out.at(half, col, row - 1)[c],
+                                          out.at(half, col, row + 1)[c], out.at(half, col, row + 3)[c]);
+                          });
     if (stats)
     {
         stats->texel_pairs = pairs;

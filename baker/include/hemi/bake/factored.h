@@ -66,6 +66,9 @@ struct EnvmapBakeOptions
     std::vector<double> exponents{10, 100, 1000}; // Phong exponents of the glossy maps
     std::vector<double> iors{1.5};                // indices of refraction of the Fresnel tables
     uint32_t fresnel_samples = 256;
+    // The brute-force sum over every texel of each lobe's cap (math::prefilter_phong_exact) instead of the
+    // faster sum over coarser texels at every other texel (math::prefilter_phong, within 0.5% RMSE of it).
+    bool exact = false;
 };
 
 struct EnvmapBakeStats

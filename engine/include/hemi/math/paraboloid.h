@@ -101,14 +101,29 @@ struct PrefilterStats
 // The prefiltered glossy map of Eq. 9 for Phong exponent e (> 0), at glossy_size(e, chain[0].size):
 //   L_o(r) = ((e + 1) / 2 pi) * integral over the sphere of max(0, r.l)^e L_i(l) d_omega(l)
 // (normalised so that a constant environment stays constant; multiply by ks), for the direction r of every
-// texel of both whole squares (extent parabolic_extent of its size). The integral is a sum over the texels of
-// the chain's level of the same size, each at its centre direction with its solid angle inside the circle,
-// over the texels where the lobe exceeds 1e-4 of its peak (found as the stereographic image of that cap). e =
-// 1 gives the diffuse map: (1 / pi) * integral of max(0, n.l) L_i = E(n) / pi. Throws std::invalid_argument
-// for e <= 0, not finite or above kMaxPhongExponent (a lobe far narrower than any texel: a mirror).
+// texel of both whole squares (extent parabolic_extent of its size). e = 1 gives the diffuse map: (1 / pi) *
+// integral of max(0, n.l) L_i = E(n) / pi. Throws std::invalid_argument for e <= 0, not finite or above
+// kMaxPhongExponent (a lobe far narrower than any texel: a mirror).
+//
+// prefilter_phong_exact sums, for every texel, over the texels of the chain's level of the same size, each at
+// its centre direction with its solid angle inside the circle, over the texels where the lobe exceeds 1e-4
+// of its peak (found as the stereographic image of that cap): the brute force (hemi-bake envmap --exact).
+//
+// prefilter_phong makes the same map faster: the sum over a coarser level of the chain where the lobe is wide
+// enough (it spans options.source_texels texels there), and only at every other texel along each axis (and
+// the texels next to the squares' edges), the rest interpolated (Catmull-Rom: the map is the environment
+// blurred by the lobe, smooth over its width, which glossy_size makes at least 4 texels). Its difference from
+// the exact map is measured in tests/math/factored_test.cpp and docs/factored.md.
 constexpr double kMaxPhongExponent = 1e6;
+struct PrefilterOptions
+{
+    double source_texels = 2.0; // the lobe's width (1 / sqrt(e) radians) in texels of the source level
+    bool interpolate = true;    // sums at every other texel, the rest interpolated
+};
 ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double exponent,
-                               PrefilterStats* stats = nullptr);
+                               PrefilterStats* stats = nullptr, const PrefilterOptions& options = {});
+ParabolicImage prefilter_phong_exact(const std::vector<ParabolicImage>& chain, double exponent,
+                                     PrefilterStats* stats = nullptr);
 
 // max(0, c)^e over the cap where it exceeds `cutoff` of its peak, tabulated (4096 intervals against
 // (1 - c) / (1 - cos_cut): linear interpolation exact to ~1e-6 of the peak): what prefilter_phong sums,
