@@ -145,7 +145,7 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 2;
+constexpr uint64_t kLightmapCheckpointVersion = 3;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -340,6 +340,14 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // The finished work: the SH of the completed passes, the pass being gathered, and the irradiance at each
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
     std::vector<std::array<glm::vec3, 9>> pass_sh(n);
+    std::vector<std::array<glm::vec3, 4>> pass_direct(n);
+    out.direct.assign(n, {});
+    // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
+    // over the hemisphere (lightmap_bake.h).
+    const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
+    double rnm_scale[3];
+    for (size_t b = 0; b < 3; ++b)
+        rnm_scale[b] = 2.0 / (1.0 + double(rnm[b].z));
     std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
     out.valid.assign(n, 1);
     std::vector<uint8_t> pushed(n, 0);
@@ -399,6 +407,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         const glm::vec3 origin = origins[i];
         int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
+        std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
         auto add = [&](const glm::vec3& world, const glm::dvec3& radiance)
         {
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
@@ -406,6 +415,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             const math::Sh9 y = math::sh9_eval(local);
             for (int j = 0; j < 9; ++j)
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
+            direct[0] += radiance * double(std::max(local.z, 0.0f));
+            for (size_t b = 0; b < 3; ++b)
+                direct[1 + b] += radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
         };
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
@@ -483,9 +495,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
         pass_sh[i] = math::convolve_cosine(radiance);
+        for (size_t b = 0; b < 4; ++b)
+            pass_direct[i][b] = glm::vec3(direct[b]);
     };
 
     using ShArray = std::array<glm::vec3, 9>;
+    using DirectArray = std::array<glm::vec3, 4>;
     SliceCheckpoint checkpoint(o.checkpoint,
                                key_of(mesh, atlas, lights, o, surfaces,
                                       surfaces ? std::span<const io::Material>(surfaces->materials())
@@ -493,6 +508,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                uint32_t(passes), n,
                                {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
                                 {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
+                                {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
+                                {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
                                 {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))}},
                                o.checkpoint_seconds);
     SlicePosition state;
@@ -531,7 +548,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 {
                     for (int j = 0; j < 9; ++j)
                         out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
-                    previous[i] = math::sh9_eval_rgb(pass_sh[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                    for (size_t b = 0; b < 4; ++b)
+                        out.direct[i][b] += pass_direct[i][b];
+                    previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
                 }
             }
             checkpoint.slice_done(uint32_t(pass), first);
@@ -587,7 +606,9 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     // What a ray that lands on a surface picks up: the lightmap's irradiance at the surface normal.
     std::vector<glm::vec3> irradiance(atlas.texels.size());
     for (size_t i = 0; i < atlas.texels.size(); ++i)
-        irradiance[i] = math::sh9_eval_rgb(sh.irradiance[i], glm::vec3(0.0f, 0.0f, 1.0f));
+        irradiance[i] = sh.direct.size() == atlas.texels.size()
+                            ? sh.direct[i][0]
+                            : math::sh9_eval_rgb(sh.irradiance[i], glm::vec3(0.0f, 0.0f, 1.0f));
     const io::BlockMaps map = dilated(atlas, irradiance, 1, 2, sh.valid);
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
@@ -751,8 +772,14 @@ io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, c
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel
     std::vector<glm::vec3> values(atlas.texels.size() * size_t(k));
+    // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
+    const bool direct = (name == "plain" || name == "rnm") && sh.direct.size() == atlas.texels.size();
     for (size_t i = 0; i < atlas.texels.size(); ++i)
-        apply(m, sh.irradiance[i], &values[i * size_t(k)]);
+        if (direct)
+            for (int j = 0; j < k; ++j)
+                values[i * size_t(k) + size_t(j)] = sh.direct[i][name == "plain" ? 0 : size_t(1 + j)];
+        else
+            apply(m, sh.irradiance[i], &values[i * size_t(k)]);
     return dilated(atlas, values, k, dilate, sh.valid);
 }
 

@@ -44,13 +44,14 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
 // slot of the outputs' blocks (the touched ones and their dilation) and per output coefficient, a float map,
 // its half copy and the asset's bytes; per covered texel (at most one per slot), the irradiance of every
-// pass, the sample and the texel's record. Measured on a fully covered floor with the default outputs (90
-// coefficients): 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against the 1,240 estimated here. With
+// pass, its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
+// covered floor with the default outputs (90 coefficients): 1,000 bytes per texel at 1024^2 and 955 at
+// 2048^2, against the 1,310 estimated here. With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
 // atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerCoefficient = 10;
-constexpr uint64_t kLightmapBytesPerCoveredTexel = 256;
+constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 
 // The blocks around the touched ones that dilating the outputs by `dilate` texels may fill too.

@@ -1053,8 +1053,7 @@ TEST(LightmapBake, TexelsLeftInsideGeometryTakeTheirValidNeighboursValues)
     EXPECT_EQ(sh.pushed, 10u);
     EXPECT_EQ(sh.invalid, 2u);
     auto index = [&](uint32_t x, uint32_t y) { return size_t(a.texel_of(x, y)); };
-    auto plain = [&](uint32_t x, uint32_t y)
-    { return double(lightmap_coefficients("plain", sh.irradiance[index(x, y)])[0].x); };
+    auto plain = [&](uint32_t x, uint32_t y) { return double(sh.direct[index(x, y)][0].x); };
     const std::vector<float> maps = lightmap_maps("plain", a, sh).dense();
     for (uint32_t y : {5u, 6u})
     {

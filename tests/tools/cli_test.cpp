@@ -654,16 +654,25 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
     }
     ASSERT_TRUE(fs::exists(exrs / "floor_lightmap.sh9.exr"));
 
-    // The sun straight above in hemi's world: E(+z) = sum_l A_l y_l0(z)^2 = pi/4 + pi/2 * ... (SH9 of max(0,
-    // cos)).
-    const fs::path sunny = dir() / "floor_sun.hemi";
-    const Result s =
-        lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun 0,0,1,2,2,2,0 --size 8 --bases plain");
-    ASSERT_EQ(s.status, 0) << s.err;
-    const double expected = 2.0 * (M_PI * 0.282095 * 0.282095 + 2 * M_PI / 3 * 0.488603 * 0.488603 +
-                                   M_PI / 4 * 4 * 0.315392 * 0.315392 * 1.0);
-    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(sunny);
-    EXPECT_NEAR(b.output("plain").maps.at(0, 0, 0).x, expected, 1e-3);
+    // A sun in hemi's world (z up) at 0, 30, 60 and 80 degrees from the floor's normal: the plain lightmap
+    // (the irradiance at the surface normal, integrated directly, not through SH9) is E_sun cos(angle) in
+    // every texel, to 0.5%: 2, 1.7321, 1, 0.34730 (SH9's three bands would give 2.125 straight on, 6% high).
+    for (const auto& [degrees, expected] :
+         {std::pair{0, 2.0}, std::pair{30, 1.7320508}, std::pair{60, 1.0}, std::pair{80, 0.34729636}})
+    {
+        const double a = degrees * M_PI / 180.0;
+        const fs::path sunny = dir() / ("floor_sun" + std::to_string(degrees) + ".hemi");
+        char sun[128];
+        std::snprintf(sun, sizeof sun, "%.9f,0,%.9f,2,2,2,0", std::sin(a), std::cos(a));
+        const Result s = lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun " + sun +
+                                  " --size 8 --sun-rays 4 --bases plain");
+        ASSERT_EQ(s.status, 0) << s.err;
+        const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(sunny);
+        for (uint32_t y = 0; y < 8; ++y)
+            for (uint32_t x = 0; x < 8; ++x)
+                ASSERT_NEAR(b.output("plain").maps.at(0, x, y).x, expected, 0.005 * expected)
+                    << degrees << " degrees, texel " << x << ", " << y;
+    }
 }
 
 // Bad scenes for hemi-bake lightmap: exit status 1 and a message naming the file and the problem.
@@ -791,10 +800,8 @@ TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
             const double px = 2.0 * (x + 0.5) / 16.0 - 1.0, pz = 2.0 * (y + 0.5) / 16.0 - 1.0;
             const double d2 = px * px + pz * pz + 1.0, d = std::sqrt(d2);
             const double cz = 1.0 / d; // the light's direction's cosine to the normal
-            // sum_l A_l y_l0(dir) y_l0(normal): the m = 0 terms are the only ones y(normal) keeps.
-            const double e = 2.0 / d2 *
-                             (M_PI * 0.282095 * 0.282095 + 2.0 * M_PI / 3.0 * 0.488603 * 0.488603 * cz +
-                              M_PI / 4.0 * 0.315392 * 0.315392 * (3.0 * cz * cz - 1.0) * 2.0);
+            // The plain lightmap is the irradiance at the normal itself: I / d^2 times the cosine.
+            const double e = 2.0 / d2 * cz;
             ASSERT_NEAR(plain[(size_t(y) * 16 + x) * 3], e, 2e-3 * e + 1e-4)
                 << "texel (" << x << ", " << y << ")";
         }

@@ -122,6 +122,12 @@ struct LightmapSh
 {
     uint32_t width = 0, height = 0;
     std::vector<std::array<glm::vec3, 9>> irradiance; // one per atlas.texels entry
+    // Per texel, the irradiance the plain and rnm outputs store, integrated from the same rays directly
+    // against each direction's clamped cosine instead of through SH9 (whose three bands give a single
+    // direction's clamped cosine only approximately: 1.1% low straight on, more at grazing angles): E at the
+    // normal, then E(B_i) * 2 / (1 + B_i.z) for rnm's three. The bounces take E at the normal from it.
+    // Empty in a LightmapSh made by hand: the outputs then project the SH9.
+    std::vector<std::array<glm::vec3, 4>> direct;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
     // of single-sided surfaces, after the push below): its outputs come from its valid neighbours.
     std::vector<uint8_t> valid;
@@ -140,13 +146,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                             const std::function<void(const LightmapProgress&)>& progress = {});
 
 // The lightmap outputs besides math::bases(): "plain", the non-directional lightmap (K = 1: the irradiance at
-// the surface normal, E(+z)), and "rnm", the three lightmap colours of radiosity normal mapping (K = 3: the
-// irradiance towards each math::rnm_basis() direction B_i, normalised so that uniform radiance 1 over the
-// texel's hemisphere gives pi each: E(B_i) * 2 / (1 + B_i.z), B_i.z = 1/sqrt 3. Without the factor an open
-// plane, whose lower hemisphere is dark, would give pi (1 + 1/sqrt 3) / 2 = 2.48, and a flat wall lit by
-// Listing 1 or an SSBump map would render 0.79 of its albedo instead of the plain lightmap's value).
-// Every other name is a basis of math::bases(), whose coefficients are its projection_from_sh9 of the SH9
-// irradiance. Throws std::invalid_argument listing the known names.
+// the surface normal, E(+z); lightmap_maps takes it from LightmapSh::direct), and "rnm", the three lightmap
+// colours of radiosity normal mapping (K = 3: the irradiance towards each math::rnm_basis() direction B_i,
+// normalised so that uniform radiance 1 over the texel's hemisphere gives pi each: E(B_i) * 2 / (1 + B_i.z),
+// B_i.z = 1/sqrt 3. Without the factor an open plane, whose lower hemisphere is dark, would give pi (1 +
+// 1/sqrt 3) / 2 = 2.48, and a flat wall lit by Listing 1 or an SSBump map would render 0.79 of its albedo
+// instead of the plain lightmap's value). Every other name is a basis of math::bases(), whose coefficients
+// are its projection_from_sh9 of the SH9 irradiance. Throws std::invalid_argument listing the known names.
+// (lightmap_coefficients below is the projection for every name; lightmap_maps uses LightmapSh::direct for
+// plain and rnm where the bake filled it.)
 int lightmap_output_size(std::string_view name);
 // The coefficients of one texel's SH9 irradiance in the output `name`: lightmap_output_size(name) RGB values.
 std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
