@@ -291,10 +291,10 @@ io::EnvmapAsset bake_envmap(const io::ImageRgba& env, const EnvmapBakeOptions& o
     s.mip_seconds = seconds(t0);
     say("diffuse map");
     t0 = clock::now();
-    auto prefilter = [&](double e, math::PrefilterStats* stats)
+    auto prefilter = [&](double e, math::PrefilterStats* counts)
     {
-        return o.exact ? math::prefilter_phong_exact(a.mirror, e, stats)
-                       : math::prefilter_phong(a.mirror, e, stats);
+        return o.exact ? math::prefilter_phong_exact(a.mirror, e, counts)
+                       : math::prefilter_phong(a.mirror, e, counts);
     };
     a.diffuse = prefilter(1.0, nullptr);
     s.diffuse_seconds = seconds(t0);

@@ -439,6 +439,14 @@ TEST(LightmapAsset, RefusesBadBlockLists)
                              bytes = out;
                          });
     };
+    // No blocks at all: an output that is 0 everywhere, read as such (and written back the same way).
+    const fs::path empty = with_blocks("no_blocks.hemi", {});
+    const hemi::io::LightmapAsset none = hemi::io::read_lightmap_asset(empty);
+    EXPECT_TRUE(none.output("plain").maps.grid.blocks().empty());
+    EXPECT_EQ(none.output("plain").maps.at(0, 2, 1), glm::vec3(0.0f));
+    hemi::io::write_lightmap_asset(dir() / "no_blocks_again.hemi", none);
+    EXPECT_TRUE(
+        hemi::io::read_lightmap_asset(dir() / "no_blocks_again.hemi").output("plain").maps.values.empty());
     for (const auto& [name, blocks, what] :
          {std::tuple{"twice.hemi", std::vector<uint32_t>{0, 0}, "ascending"},
           std::tuple{"past.hemi", std::vector<uint32_t>{3}, "out of the 3-block grid"},

@@ -493,7 +493,9 @@ TEST(Paraboloid, FastPrefilterIsWithinHalfAPercentOfTheExactSum)
                     (unsigned long long)exact_stats.texel_pairs);
         EXPECT_LT(rmse, 0.005) << "exponent " << e;
         if (e > 1.0)
+        {
             EXPECT_LT(fast_stats.texel_pairs * 8, exact_stats.texel_pairs) << "exponent " << e;
+        }
     }
 }
 

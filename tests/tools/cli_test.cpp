@@ -660,10 +660,10 @@ TEST(BakeCli, LightmapBakesAGltfFloorIntoAnAssetAndExrs)
     for (const auto& [degrees, expected] :
          {std::pair{0, 2.0}, std::pair{30, 1.7320508}, std::pair{60, 1.0}, std::pair{80, 0.34729636}})
     {
-        const double a = degrees * M_PI / 180.0;
+        const double angle = degrees * M_PI / 180.0;
         const fs::path sunny = dir() / ("floor_sun" + std::to_string(degrees) + ".hemi");
         char sun[128];
-        std::snprintf(sun, sizeof sun, "%.9f,0,%.9f,2,2,2,0", std::sin(a), std::cos(a));
+        std::snprintf(sun, sizeof sun, "%.9f,0,%.9f,2,2,2,0", std::sin(angle), std::cos(angle));
         const Result s = lightmap(q(scene) + " -o " + q(sunny) + " --env-scale 0 --sun " + sun +
                                   " --size 8 --sun-rays 4 --bases plain");
         ASSERT_EQ(s.status, 0) << s.err;

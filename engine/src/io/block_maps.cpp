@@ -11,9 +11,9 @@ namespace hemi::io
 BlockGrid::BlockGrid(uint32_t width, uint32_t height, std::vector<uint32_t> blocks)
     : width_(width), height_(height), blocks_(std::move(blocks))
 {
-    if (width == 0 || height == 0 || width > (1u << 20) || height > (1u << 20))
+    if (width == 0 || height == 0 || width > (1u << 18) || height > (1u << 18))
         throw std::invalid_argument("a block grid of " + std::to_string(width) + "x" +
-                                    std::to_string(height) + " texels is not in [1, 2^20] per side");
+                                    std::to_string(height) + " texels is not in [1, 2^18] per side");
     const size_t grid = size_t(blocks_x()) * blocks_y();
     row_begin_.assign(size_t(blocks_y()) + 1, 0);
     for (size_t i = 0; i < blocks_.size(); ++i)

@@ -212,7 +212,9 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
         std::vector<uint16_t> halves(4 + blocks.size() * 2 + o.maps.values.size());
         const uint32_t head[2] = {o.k, uint32_t(blocks.size())};
         std::memcpy(halves.data(), head, 8);
-        std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
+        if (!blocks
+                 .empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
+            std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
         uint16_t* out = halves.data() + 4 + blocks.size() * 2;
         for (size_t i = 0; i < o.maps.values.size(); ++i)
             out[i] = glm::packHalf1x16(o.maps.values[i]);
@@ -314,7 +316,8 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
                 throw fail(section + " has " + std::to_string(b.size()) + " bytes, " + std::to_string(n) +
                            " blocks of K = " + std::to_string(k) + " need " + std::to_string(expected));
             std::vector<uint32_t> blocks(n);
-            std::memcpy(blocks.data(), b.data() + 8, size_t(n) * 4);
+            if (n > 0)
+                std::memcpy(blocks.data(), b.data() + 8, size_t(n) * 4);
             try
             {
                 o.maps = BlockMaps(BlockGrid(a.width, a.height, std::move(blocks)), k);

@@ -323,8 +323,8 @@ SourceTexels source_texels(const ParabolicImage& level, uint32_t shift = 0)
                                       const double y =
                                           0.2126 * radiance.x + 0.7152 * radiance.y + 0.0722 * radiance.z;
                                       sum += radiance;
-                                      lit += y * d;
-                                      luminance += y;
+                                      lit += std::max(y, 0.0) * d; // negative pixels cannot pull it out
+                                      luminance += std::max(y, 0.0);
                                       plain += w * d;
                                   }
                               const glm::dvec3 mean = luminance > 0.0 && glm::length(lit) > 0.0 ? lit : plain;
@@ -513,9 +513,9 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
     check_prefilter(chain, exponent);
     const auto start = std::chrono::steady_clock::now();
     const uint32_t size = glossy_size(exponent, chain[0].size);
-    // The source: the coarsest level of the chain at which the lobe still spans options.source_texels texels
-    // (its width 1 / sqrt(e) against a texel's 4 m / size radians at a half's centre), not finer than the
-    // output's own.
+    // The source: the level of the output's size, its texels merged into blocks of 2^shift x 2^shift, the
+    // largest at which the lobe still spans options.source_texels blocks (its width 1 / sqrt(e) against a
+    // block's 4 m 2^shift / size radians at a half's centre).
     uint32_t shift = 0;
     while ((size >> (shift + 1)) >= 8 &&
            double(size >> (shift + 1)) / (4.0 * parabolic_extent(size) * std::sqrt(exponent)) >=
@@ -530,7 +530,7 @@ ParabolicImage prefilter_phong(const std::vector<ParabolicImage>& chain, double 
     out.rgb.assign(size_t(2) * size * size * 3, 0.0f);
     // The sums at the texels of even index and at 1, size - 3 and size - 1 along each axis; the others from
     // Catmull-Rom along rows, then along columns (the map is the lobe's blur of the environment: smooth over
-    // the lobe's width, options.output_step of texels apart where it is narrowest).
+    // the lobe's width, 4 texels where it is narrowest).
     // Interpolation needs the lobe at least 3.5 texels wide at a half's centre (glossy_size makes it 4 unless
     // the chain's size caps it).
     const bool sparse = size >= 64 && options.interpolate &&

@@ -124,8 +124,8 @@ struct LightmapSh
     std::vector<std::array<glm::vec3, 9>> irradiance; // one per atlas.texels entry
     // Per texel, the irradiance the plain and rnm outputs store, integrated from the same rays directly
     // against each direction's clamped cosine instead of through SH9 (whose three bands give a single
-    // direction's clamped cosine only approximately: 1.1% low straight on, more at grazing angles): E at the
-    // normal, then E(B_i) * 2 / (1 + B_i.z) for rnm's three. The bounces take E at the normal from it.
+    // direction's clamped cosine only approximately: 6% high straight on, more off at grazing angles): E at
+    // the normal, then E(B_i) * 2 / (1 + B_i.z) for rnm's three. The bounces take E at the normal from it.
     // Empty in a LightmapSh made by hand: the outputs then project the SH9.
     std::vector<std::array<glm::vec3, 4>> direct;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs

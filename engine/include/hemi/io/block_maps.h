@@ -28,7 +28,7 @@ class BlockGrid
 
     BlockGrid() = default;
     // `blocks`: the kept blocks' indices, strictly ascending. Throws std::invalid_argument for a side of 0 or
-    // over 2^20, or for blocks out of the grid or out of order.
+    // over 2^18 (so that every block index fits 32 bits), or for blocks out of the grid or out of order.
     BlockGrid(uint32_t width, uint32_t height, std::vector<uint32_t> blocks);
 
     uint32_t width() const { return width_; }

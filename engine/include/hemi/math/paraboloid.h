@@ -109,8 +109,10 @@ struct PrefilterStats
 // its centre direction with its solid angle inside the circle, over the texels where the lobe exceeds 1e-4
 // of its peak (found as the stereographic image of that cap): the brute force (hemi-bake envmap --exact).
 //
-// prefilter_phong makes the same map faster: the sum over a coarser level of the chain where the lobe is wide
-// enough (it spans options.source_texels texels there), and only at every other texel along each axis (and
+// prefilter_phong makes the same map faster: the sum over blocks of 2^k x 2^k texels of that level where the
+// lobe is wide enough (it spans options.source_texels blocks), each at the luminance-weighted mean of its
+// texels' directions with their radiance times solid angle inside the circle summed, and only at every
+// other texel along each axis (and
 // the texels next to the squares' edges), the rest interpolated (Catmull-Rom: the map is the environment
 // blurred by the lobe, smooth over its width, which glossy_size makes at least 4 texels). Its difference from
 // the exact map is measured in tests/math/factored_test.cpp and docs/factored.md.
