@@ -435,7 +435,8 @@ TEST(LightmapAsset, RefusesBadBlockLists)
                              std::vector<std::byte> out(8 + n * 4 + size_t(n) * 64 * 3 * 2);
                              std::memcpy(out.data(), bytes.data(), 4); // K = 1
                              std::memcpy(out.data() + 4, &n, 4);
-                             std::memcpy(out.data() + 8, blocks.data(), n * 4);
+                             if (n > 0) // memcpy from an empty vector's null data() is undefined
+                                 std::memcpy(out.data() + 8, blocks.data(), n * 4);
                              bytes = out;
                          });
     };
