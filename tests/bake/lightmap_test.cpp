@@ -19,6 +19,7 @@
 #include <glm/exponential.hpp>
 #include <glm/geometric.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -1439,6 +1440,23 @@ std::vector<float> dense_dilation(const LightmapAtlas& a, const LightmapSh& sh, 
 }
 } // namespace
 
+namespace
+{
+// Three charts of a 64 x 45 atlas (rectangles in texels): one across a block border, one in the atlas's
+// last (partial) block row and column, one small in the middle.
+constexpr uint32_t kChartsWidth = 64, kChartsHeight = 45;
+const std::array<glm::vec4, 3> kChartRects = {
+    glm::vec4{5.3f, 6.2f, 12.6f, 10.7f}, {58.2f, 41.4f, 63.5f, 44.6f}, {30.1f, 20.1f, 31.4f, 21.2f}};
+Mesh three_charts()
+{
+    Mesh m;
+    for (const glm::vec4& r : kChartRects)
+        add_quad(m, {r.x, r.y, 0.0f}, {r.z, r.y, 0.0f}, {r.z, r.w, 0.0f}, {r.x, r.w, 0.0f},
+                 {r.x / kChartsWidth, r.y / kChartsHeight, r.z / kChartsWidth, r.w / kChartsHeight});
+    return m;
+}
+} // namespace
+
 // Three charts of a 64 x 45 atlas: one across a block border, one in the atlas's last (partial) block row
 // and column, one small in the middle. The covered texels are exactly those whose square overlaps a chart's
 // rectangle with area (worked out here from the rectangles), and the atlas keeps exactly the 8x8 blocks that
@@ -1446,13 +1464,9 @@ std::vector<float> dense_dilation(const LightmapAtlas& a, const LightmapSh& sh, 
 // grazes, or that keeps the blocks of the bounding box.
 TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
 {
-    const uint32_t w = 64, h = 45;
-    const glm::vec4 rects[] = {
-        {5.3f, 6.2f, 12.6f, 10.7f}, {58.2f, 41.4f, 63.5f, 44.6f}, {30.1f, 20.1f, 31.4f, 21.2f}};
-    Mesh m;
-    for (const glm::vec4& r : rects)
-        add_quad(m, {r.x, r.y, 0.0f}, {r.z, r.y, 0.0f}, {r.z, r.w, 0.0f}, {r.x, r.w, 0.0f},
-                 {r.x / w, r.y / h, r.z / w, r.w / h});
+    const uint32_t w = kChartsWidth, h = kChartsHeight;
+    const std::array<glm::vec4, 3>& rects = kChartRects;
+    const Mesh m = three_charts();
     LightmapUvReport report;
     const LightmapAtlas a = rasterize_lightmap(m, w, h, report);
     ASSERT_TRUE(report.ok());
@@ -1508,15 +1522,8 @@ TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
 // taken as filled.
 TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
 {
-    const uint32_t w = 64, h = 45;
-    const glm::vec4 rects[] = {
-        {5.3f, 6.2f, 12.6f, 10.7f}, {58.2f, 41.4f, 63.5f, 44.6f}, {30.1f, 20.1f, 31.4f, 21.2f}};
-    Mesh m;
-    for (const glm::vec4& r : rects)
-        add_quad(m, {r.x, r.y, 0.0f}, {r.z, r.y, 0.0f}, {r.z, r.w, 0.0f}, {r.x, r.w, 0.0f},
-                 {r.x / w, r.y / h, r.z / w, r.w / h});
     LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(m, w, h, report);
+    const LightmapAtlas a = rasterize_lightmap(three_charts(), kChartsWidth, kChartsHeight, report);
     const LightmapSh sh = made_up_sh(a, {{8, 8}, {30, 20}});
     for (const auto& [name, k] : {std::pair{std::string("plain"), 1}, std::pair{std::string("h4"), 4}})
         for (int dilate : {2, 11})
