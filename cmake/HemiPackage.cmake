@@ -14,13 +14,14 @@ install(TARGETS ${hemi_install_targets} EXPORT hemiTargets
     RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/engine/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-# The shared C++/GLSL headers and the GLSL basis library, for applications' own materials.
+# hemi's GLSL library (hemi/hemi.glsl, docs/glsl.md) and the shared C++/GLSL headers, for engines' own shaders.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY ${HEMI_GENERATED_INCLUDE_DIR}/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}) # generated basis list
 install(EXPORT hemiTargets NAMESPACE hemi:: DESTINATION ${HEMI_INSTALL_CMAKEDIR})
 
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/hemiConfig.cmake.in
-    ${PROJECT_BINARY_DIR}/hemiConfig.cmake INSTALL_DESTINATION ${HEMI_INSTALL_CMAKEDIR})
+    ${PROJECT_BINARY_DIR}/hemiConfig.cmake INSTALL_DESTINATION ${HEMI_INSTALL_CMAKEDIR}
+    PATH_VARS CMAKE_INSTALL_INCLUDEDIR)
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/hemiConfigVersion.cmake
     VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/hemiConfig.cmake ${PROJECT_BINARY_DIR}/hemiConfigVersion.cmake

@@ -3,10 +3,12 @@
 // normal, base colour, emissive, each through its UV set and KHR_texture_transform), fetch the coefficients
 // from their source (HEMI_SOURCE variant), put the normal in the coefficients' frame, call the technique
 // (hemi_shade, generated from shaders/include/hemi/techniques/). What a technique ignores, the compiler
-// drops. HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1) where the mesh covers the pixel (hemi's
-// OffscreenTarget; tests and tools read it).
+// drops. Everything but its descriptors and the technique switch is hemi's GLSL library (hemi/hemi.glsl),
+// which engines' own shaders call the same way. HEMI_AUX = 1 adds colour attachment 1 = (u, v, draw id, 1)
+// where the mesh covers the pixel (hemi's OffscreenTarget; tests and tools read it).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
+#define HEMI_UNROLL [[unroll]]
 #include "hemi/shared/surface.h"
 #include "hemi/surface/techniques.glsl"
 
@@ -74,8 +76,7 @@ void main()
         emissive =
             material.emissive_factor.rgb * texture(emissive_map, material_uv(material.texcoord.z, 2)).rgb;
     const vec3 bump = texture(normal_map, material_uv(material.texcoord.y, 1)).xyz;
-    vec3 nt = bump * 2.0 - 1.0;
-    nt = normalize(vec3(nt.xy * material.emissive_factor.a, nt.z));
+    const vec3 nt = hemi_normal_map_normal(bump, material.emissive_factor.a);
     if (frame.options.x != 0.0)
     {
         albedo = vec4(1.0);
@@ -83,47 +84,37 @@ void main()
     }
 
     vec3 c[HEMI_BASIS_MAX_SIZE];
-    [[unroll]] for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
+#if HEMI_SOURCE == HEMI_SOURCE_VERTEX
+    hemi_unpack_coefficients(in_packed, K, c);
+#elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
+    hemi_lightmap_coefficients(coefficient_maps, in_uv1, K, c);
+#else
+    HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
     {
         c[k] = vec3(0.0);
+#if HEMI_SOURCE == HEMI_SOURCE_UNIFORM
         if (k < K)
-        {
-#if HEMI_SOURCE == HEMI_SOURCE_VERTEX
-            int i = k * 3;
-            c[k] = vec3(in_packed[i / 4][i % 4], in_packed[(i + 1) / 4][(i + 1) % 4],
-                        in_packed[(i + 2) / 4][(i + 2) % 4]);
-#elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
-            c[k] = texture(coefficient_maps, vec3(in_uv1, float(k))).rgb;
-#elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
             c[k] = probe[k].rgb;
 #endif
-        }
     }
+#endif
 
-    // glTF frame: B = cross(N, T) * w, re-orthogonalised per pixel; a double-sided surface seen from behind
-    // is lit as the other side (its normal flipped).
-    vec3 N = normalize(in_normal);
+    // glTF frame (hemi_tangent_frame): a double-sided surface seen from behind is lit as the other side (its
+    // normal flipped).
+    vec3 N = in_normal;
     if (kDoubleSided != 0 && !gl_FrontFacing)
         N = -N;
-    // A degenerate tangent (parallel to N, or zero) falls back to any frame about N, so the lights'
-    // directions stay finite; the handedness is the sign of the interpolated w.
-    vec3 t = in_tangent.xyz - N * dot(N, in_tangent.xyz);
-    if (dot(t, t) < 1e-12)
-        t = abs(N.x) < 0.9 ? vec3(1.0, 0.0, 0.0) - N * N.x : vec3(0.0, 1.0, 0.0) - N * N.y;
-    const vec3 T = normalize(t);
-    const vec3 B = cross(N, T) * (in_tangent.w < 0.0 ? -1.0 : 1.0);
-    vec3 n = nt;
-    if (kFrame == HEMI_FRAME_WORLD)
-        n = normalize(T * nt.x + B * nt.y + N * nt.z);
+    const HemiTangentFrame tf = hemi_tangent_frame(N, in_tangent);
+    const vec3 n = kFrame == HEMI_FRAME_WORLD ? normalize(hemi_from_tangent(tf, nt)) : nt;
     // World vectors in the coefficients' frame.
-    const mat3 to_frame = kFrame == HEMI_FRAME_WORLD ? mat3(1.0) : transpose(mat3(T, B, N));
+    const mat3 to_frame = kFrame == HEMI_FRAME_WORLD ? mat3(1.0) : transpose(mat3(tf.t, tf.b, tf.n));
 
     HemiSurface s;
     s.albedo = albedo.rgb;
     s.emissive = emissive;
     s.base_color_factor = material.base_color_factor.rgb;
     s.n = n;
-    s.t = kFrame == HEMI_FRAME_WORLD ? T : vec3(1.0, 0.0, 0.0);
+    s.t = kFrame == HEMI_FRAME_WORLD ? tf.t : vec3(1.0, 0.0, 0.0);
     s.bump = bump;
     s.basis = kBasis;
     s.k = K;

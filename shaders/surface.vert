@@ -4,6 +4,8 @@
 // the vertex's K RGB coefficients (texel coefficient_offset + v*K + k of the source's buffer), packed.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
+#define HEMI_UNROLL [[unroll]]
+#include "hemi/hemi.glsl"
 #include "hemi/shared/bases.h"
 #include "hemi/shared/surface.h"
 
@@ -37,24 +39,19 @@ layout(location = 11) out vec3 out_world;
 
 void main()
 {
-    float f[28];
-    [[unroll]] for (int i = 0; i < 28; ++i) f[i] = 0.0;
+    vec3 c[HEMI_BASIS_MAX_SIZE];
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
-    [[unroll]] for (int k = 0; k < K; ++k)
-    {
-        vec3 c = texelFetch(coefficients, int(draw.coefficient_offset) + gl_VertexIndex * K + k).rgb;
-        f[k * 3 + 0] = c.r;
-        f[k * 3 + 1] = c.g;
-        f[k * 3 + 2] = c.b;
-    }
+    hemi_vertex_coefficients(coefficients, int(draw.coefficient_offset) + gl_VertexIndex * K, K, c);
+#else
+    HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k) c[k] = vec3(0.0);
 #endif
-    [[unroll]] for (int i = 0; i < 7; ++i) out_packed[i] =
-        vec4(f[i * 4], f[i * 4 + 1], f[i * 4 + 2], f[i * 4 + 3]);
+    hemi_pack_coefficients(c, out_packed);
     out_uv0 = in_uv0;
     out_uv1 = in_uv1;
-    mat3 m = mat3(draw.model);
-    out_normal = m * in_normal;
-    out_tangent = vec4(m * in_tangent.xyz, in_tangent.w);
+    // Normals through the inverse transpose (non-uniform scale, mirrors), tangents with the surface.
+    const mat3 m = mat3(draw.model);
+    out_normal = hemi_normal_matrix(m) * in_normal;
+    out_tangent = hemi_transform_tangent(m, in_tangent);
     const vec4 world = draw.model * vec4(in_position, 1.0);
     out_world = world.xyz;
     gl_Position = frame.view_projection * world;

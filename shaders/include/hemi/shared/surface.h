@@ -101,7 +101,7 @@ struct EnvironmentUniforms
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
 struct DrawPush
 {
-    mat4 model;              // rotation, uniform scale and translation (normals use its upper 3x3)
+    mat4 model;              // object to world (normals through its inverse transpose: any scale, mirrors)
     uint coefficient_offset; // texels; vertex source only
     uint draw_id;            // written to the aux attachment's blue channel (0 = background): picking, tests
     uint pad0, pad1;

@@ -1,7 +1,6 @@
-// The environment source of the material system (HEMI_SOURCE_ENVIRONMENT, set 2;
-// render::EnvironmentLighting): Heidrich & Seidel's parabolic maps (math/paraboloid.h's conventions: layer 0
-// holds z >= 0, a direction d at (x, y) = d.xy / (1 + |d.z|), texture coordinate ((x / m + 1) / 2, (1 - y /
-// m) / 2) for the map's extent m), the Fresnel table and the factored BRDF's tables. In the other variants
+// The environment source of hemi's own surface shader (HEMI_SOURCE_ENVIRONMENT, set 2;
+// render::EnvironmentLighting): its descriptors, and the library's Heidrich & Seidel terms
+// (hemi/lib/environment.glsl, which engines call with their own bindings) over them. In the other variants
 // these functions return 0, so that every technique compiles everywhere (the specialization constant drops
 // what a pipeline does not use).
 #ifndef HEMI_SURFACE_ENVIRONMENT_GLSL
@@ -32,36 +31,26 @@ layout(set = HEMI_SET_SOURCE, binding = HEMI_ENV_BINDING_BRDF) uniform sampler2D
 // A world direction in the environment's frame.
 vec3 hemi_env_direction(vec3 world)
 {
-    return vec3(dot(environment.world_to_env[0].xyz, world), dot(environment.world_to_env[1].xyz, world),
-                dot(environment.world_to_env[2].xyz, world));
-}
-
-// Where direction d (environment frame, unit) sits in a parabolic map of extent m: (u, v, layer). The two
-// halves agree on the circle (d.z = 0), so u, v and their screen derivatives (the mip level) are continuous
-// across the seam.
-vec3 hemi_parabolic_coord(vec3 d, float m)
-{
-    const vec2 xy = d.xy / (1.0 + abs(d.z));
-    return vec3(0.5 * (xy.x / m + 1.0), 0.5 * (1.0 - xy.y / m), d.z >= 0.0 ? 0.0 : 1.0);
+    return hemi_env_direction(environment.world_to_env[0].xyz, environment.world_to_env[1].xyz,
+                              environment.world_to_env[2].xyz, world);
 }
 
 vec3 hemi_env_mirror(vec3 world_d)
 {
-    return texture(env_mirror, hemi_parabolic_coord(hemi_env_direction(world_d), environment.extents.x)).rgb;
+    return hemi_parabolic_lookup(env_mirror, environment.extents.x, hemi_env_direction(world_d));
 }
 vec3 hemi_env_glossy(vec3 world_d)
 {
-    return texture(env_glossy, hemi_parabolic_coord(hemi_env_direction(world_d), environment.extents.y)).rgb;
+    return hemi_parabolic_lookup(env_glossy, environment.extents.y, hemi_env_direction(world_d));
 }
 vec3 hemi_env_diffuse(vec3 world_n)
 {
-    return texture(env_diffuse, hemi_parabolic_coord(hemi_env_direction(world_n), environment.extents.z)).rgb;
+    return hemi_parabolic_lookup(env_diffuse, environment.extents.z, hemi_env_direction(world_n));
 }
-// F(cos theta) from the table's row for the material's index of refraction (samples at i / (N - 1)).
+// F(cos theta) from the table's row for the material's index of refraction.
 float hemi_env_fresnel(float c)
 {
-    const float n = environment.tables.y;
-    return texture(env_fresnel, vec2((clamp(c, 0.0, 1.0) * (n - 1.0) + 0.5) / n, environment.material.z)).r;
+    return hemi_fresnel_lookup(env_fresnel, environment.tables.y, environment.material.z, c);
 }
 float hemi_env_kd()
 {

@@ -2,7 +2,7 @@
 // surface inputs and the coefficients, in the coefficients' frame.
 #ifndef HEMI_SURFACE_INPUTS_GLSL
 #define HEMI_SURFACE_INPUTS_GLSL
-#include "hemi/basis/all.glsl"
+#include "hemi/hemi.glsl"
 #include "hemi/shared/surface.h"
 
 const float kHemiPi = 3.14159265358979;
@@ -35,14 +35,8 @@ vec3 hemi_dynamic_specular(HemiSurface s, vec3 n)
     if (s.specular_strength == 0.0)
         return sum;
     for (int i = 0; i < s.lights; ++i)
-    {
-        const float nl = max(dot(n, s.l[i]), 0.0);
-        const vec3 lv = s.l[i] + s.v;
-        if (nl == 0.0 || dot(lv, lv) < 1e-12)
-            continue; // no light, or a half vector that does not exist (l = -v)
-        sum += s.e[i] * nl * pow(max(dot(n, normalize(lv)), 1e-6), s.specular_exponent);
-    }
-    return sum * s.specular_strength * (s.specular_exponent + 8.0) / (8.0 * kHemiPi);
+        sum += s.e[i] * hemi_blinn_phong(n, s.l[i], s.v, s.specular_exponent);
+    return sum * s.specular_strength;
 }
 
 #endif

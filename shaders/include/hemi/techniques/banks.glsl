@@ -14,22 +14,10 @@ vec3 hemi_technique_banks(HemiSurface s)
 {
     vec3 sum = hemi_env_kd() * s.albedo * hemi_env_diffuse(s.n);
 #if HEMI_SOURCE == HEMI_SOURCE_ENVIRONMENT
-    vec3 t = s.t - s.n * dot(s.n, s.t);
-    t = dot(t, t) > 1e-12 ? normalize(t)
-                          : (abs(s.n.x) < 0.9 ? normalize(cross(s.n, vec3(1, 0, 0)))
-                                              : normalize(cross(s.n, vec3(0, 1, 0))));
-    const float size = hemi_env_table_size();
     for (int i = 0; i < s.lights; ++i)
     {
-        const float nl = dot(s.n, s.l[i]);
-        if (nl <= 0.0 || dot(s.n, s.v) <= 0.0)
-            continue;
-        const vec2 ds = textureLod(HEMI_ENV_BRDF_TABLES,
-                                   vec3(hemi_table_coord(hemi_axis_angle(dot(t, s.l[i])), size),
-                                        hemi_table_coord(hemi_axis_angle(dot(t, s.v)), size), 0.0),
-                                   0.0)
-                            .rg;
-        sum += s.e[i] * nl * (hemi_env_kd() * s.albedo * ds.x + hemi_env_ks() * ds.y);
+        const vec2 ds = hemi_banks_light(HEMI_ENV_BRDF_TABLES, hemi_env_table_size(), s.n, s.t, s.l[i], s.v);
+        sum += s.e[i] * (hemi_env_kd() * s.albedo * ds.x + hemi_env_ks() * ds.y);
     }
 #endif
     return sum + s.emissive;

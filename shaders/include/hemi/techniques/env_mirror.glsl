@@ -13,7 +13,7 @@
 vec3 hemi_technique_env_mirror(HemiSurface s)
 {
     const float nv = dot(s.n, s.v);
-    const vec3 r = 2.0 * nv * s.n - s.v;
+    const vec3 r = hemi_reflect(s.n, s.v);
     const float f = hemi_env_fresnel(max(nv, 0.0));
     const vec3 ld = hemi_env_kd() * s.albedo * (hemi_env_diffuse(s.n) + hemi_env_lambert(s));
     return f * hemi_env_mirror(r) + (hemi_env_coating() ? 1.0 - f : 1.0) * ld +

@@ -7,15 +7,7 @@
 // hemi-technique: id=0 name=irradiance
 vec3 hemi_technique_irradiance(HemiSurface s)
 {
-    float b[HEMI_BASIS_MAX_SIZE];
-    hemi_eval_basis(s.basis, s.n, s.sep4_weights, b);
-    vec3 e = vec3(0.0);
-    [[unroll]] for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
-    {
-        if (k < s.k)
-            e += s.c[k] * b[k];
-    }
-    return s.albedo * e / kHemiPi + s.emissive;
+    return s.albedo * hemi_basis_irradiance(s.basis, s.k, s.c, s.n, s.sep4_weights) / kHemiPi + s.emissive;
 }
 
 #endif

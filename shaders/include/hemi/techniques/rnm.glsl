@@ -5,21 +5,13 @@
 // lights k at the normal-map normal n (tangent space) and their Blinn-Phong term at n.
 #ifndef HEMI_TECHNIQUE_RNM_GLSL
 #define HEMI_TECHNIQUE_RNM_GLSL
-#include "hemi/shared/rnm.h"
+#include "hemi/lib/rnm.glsl"
 #include "hemi/surface/surface_inputs.glsl"
 
-const vec3 kHemiRnmBasis[3] = vec3[3](vec3(HEMI_RNM_SQRT_2_3, 0.0, HEMI_RNM_INV_SQRT_3),
-                                      vec3(-HEMI_RNM_INV_SQRT_6, HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3),
-                                      vec3(-HEMI_RNM_INV_SQRT_6, -HEMI_RNM_INV_SQRT_2, HEMI_RNM_INV_SQRT_3));
-
 // E: the lightmap's colours blended at the normal-map normal, plus the dynamic lights there.
-vec3 hemi_rnm_irradiance(HemiSurface s)
+vec3 hemi_rnm_surface_irradiance(HemiSurface s)
 {
-    vec3 dp = vec3(clamp(dot(s.n, kHemiRnmBasis[0]), 0.0, 1.0), clamp(dot(s.n, kHemiRnmBasis[1]), 0.0, 1.0),
-                   clamp(dot(s.n, kHemiRnmBasis[2]), 0.0, 1.0));
-    dp *= dp;
-    const float sum = dp.x + dp.y + dp.z;
-    vec3 e = sum > 0.0 ? (dp.x * s.c[0] + dp.y * s.c[1] + dp.z * s.c[2]) / sum : vec3(0.0);
+    vec3 e = hemi_rnm_irradiance(s.n, s.c[0], s.c[1], s.c[2]);
     // Dynamic lights at the normal-map normal.
     for (int i = 0; i < s.lights; ++i)
         e += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
@@ -29,7 +21,7 @@ vec3 hemi_rnm_irradiance(HemiSurface s)
 // hemi-technique: id=2 name=rnm
 vec3 hemi_technique_rnm(HemiSurface s)
 {
-    return s.albedo * hemi_rnm_irradiance(s) / kHemiPi + hemi_dynamic_specular(s, s.n) + s.emissive;
+    return s.albedo * hemi_rnm_surface_irradiance(s) / kHemiPi + hemi_dynamic_specular(s, s.n) + s.emissive;
 }
 
 #endif

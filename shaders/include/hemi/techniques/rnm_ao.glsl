@@ -11,7 +11,7 @@
 // hemi-technique: id=4 name=rnm_ao
 vec3 hemi_technique_rnm_ao(HemiSurface s)
 {
-    return s.occlusion * s.albedo * hemi_rnm_irradiance(s) / kHemiPi + hemi_dynamic_specular(s, s.n) +
+    return s.occlusion * s.albedo * hemi_rnm_surface_irradiance(s) / kHemiPi + hemi_dynamic_specular(s, s.n) +
            s.emissive;
 }
 

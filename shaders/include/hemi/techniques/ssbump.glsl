@@ -9,24 +9,16 @@
 // normal normalize(sum_i w_i B_i).
 #ifndef HEMI_TECHNIQUE_SSBUMP_GLSL
 #define HEMI_TECHNIQUE_SSBUMP_GLSL
+#include "hemi/lib/rnm.glsl"
 #include "hemi/surface/surface_inputs.glsl"
-#include "hemi/techniques/rnm.glsl"
 
 // hemi-technique: id=3 name=ssbump
 vec3 hemi_technique_ssbump(HemiSurface s)
 {
-    vec3 e = s.bump.x * s.c[0] + s.bump.y * s.c[1] + s.bump.z * s.c[2];
+    vec3 e = hemi_ssbump_irradiance(s.bump, s.c[0], s.c[1], s.c[2]);
     for (int i = 0; i < s.lights; ++i)
-    {
-        const vec3 projected = clamp(
-            vec3(dot(kHemiRnmBasis[0], s.l[i]), dot(kHemiRnmBasis[1], s.l[i]), dot(kHemiRnmBasis[2], s.l[i])),
-            0.0, 1.0);
-        e += s.e[i] * (HEMI_RNM_SQRT_3 * dot(s.bump, projected));
-    }
-    const vec3 reconstructed =
-        s.bump.x * kHemiRnmBasis[0] + s.bump.y * kHemiRnmBasis[1] + s.bump.z * kHemiRnmBasis[2];
-    const vec3 n = dot(reconstructed, reconstructed) > 0.0 ? normalize(reconstructed) : vec3(0.0, 0.0, 1.0);
-    return s.albedo * e / kHemiPi + hemi_dynamic_specular(s, n) + s.emissive;
+        e += s.e[i] * hemi_ssbump_light(s.bump, s.l[i]);
+    return s.albedo * e / kHemiPi + hemi_dynamic_specular(s, hemi_ssbump_normal(s.bump)) + s.emissive;
 }
 
 #endif

@@ -58,6 +58,10 @@ class TexelCoefficients
                       std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision = false);
     VkDescriptorSet set() const { return set_; }
     uint32_t k() const { return k_; }
+    // For an engine's own shaders (hemi_lightmap_coefficients, docs/glsl.md): the K-layer image (a 2D_ARRAY
+    // view, SHADER_READ_ONLY_OPTIMAL once the upload is recorded) and its bilinear, edge-clamped sampler.
+    const gpu::Image& maps() const { return maps_; }
+    VkSampler sampler() const { return sampler_; }
 
   private:
     gpu::Image maps_;

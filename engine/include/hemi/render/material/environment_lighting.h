@@ -46,9 +46,19 @@ class EnvironmentLighting
     void record_update(VkCommandBuffer cmd, const EnvironmentMaterial& material) const;
     VkFormat map_format() const { return map_format_; }
 
-  private:
-    shared::EnvironmentUniforms uniforms(const EnvironmentMaterial& m) const;
+    // For an engine's own shaders (hemi/lib/environment.glsl, docs/glsl.md): the uploaded maps and tables
+    // (2D_ARRAY views but the Fresnel table's 2D one, SHADER_READ_ONLY_OPTIMAL once the upload is recorded),
+    // the trilinear sampler hemi reads them with, and the values its uniform block holds for `material`
+    // (extents, weights, the Fresnel row's coordinate, table sizes, the rotation's rows).
+    const gpu::Image& mirror_map() const { return mirror_; }
+    const gpu::Image& glossy_map() const { return glossy_; }
+    const gpu::Image& diffuse_map() const { return diffuse_; }
+    const gpu::Image& fresnel_table() const { return fresnel_; }
+    const gpu::Image& brdf_tables() const { return brdf_; }
+    VkSampler sampler() const { return sampler_; }
+    shared::EnvironmentUniforms uniforms(const EnvironmentMaterial& material) const;
 
+  private:
     gpu::Image mirror_, glossy_, diffuse_, fresnel_, brdf_;
     gpu::Sampler sampler_;
     gpu::Buffer uniforms_;
