@@ -146,7 +146,8 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
 }
 
 MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& textures,
-                                   const io::Material& material, gpu::UploadBatch& upload)
+                                   const io::Material& material, gpu::UploadBatch& upload,
+                                   const MaterialTextures& engine)
     : double_sided_(material.double_sided)
 {
     const gpu::Device& device = system.device();
@@ -169,20 +170,38 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
     // Without an occlusion texture the default is the white sRGB texel (1: no occlusion), not the flat
     // normal.
     const bool occlusion_srgb = !material.occlusion.present();
-    const std::pair<uint32_t, std::pair<const io::TextureRef*, bool>> maps[4] = {
-        {HEMI_MATERIAL_BINDING_BASE_COLOR, {&material.base_color, true}},
-        {HEMI_MATERIAL_BINDING_NORMAL, {&material.normal, false}},
-        {HEMI_MATERIAL_BINDING_EMISSIVE, {&material.emissive, true}},
-        {HEMI_MATERIAL_BINDING_OCCLUSION, {&material.occlusion, occlusion_srgb}},
+    struct Slot
+    {
+        uint32_t binding;
+        const io::TextureRef* ref;
+        bool srgb;
+        const EngineTexture* engine;
+        const char* name;
+    };
+    const Slot maps[4] = {
+        {HEMI_MATERIAL_BINDING_BASE_COLOR, &material.base_color, true, &engine.base_color, "base colour"},
+        {HEMI_MATERIAL_BINDING_NORMAL, &material.normal, false, &engine.normal, "normal"},
+        {HEMI_MATERIAL_BINDING_EMISSIVE, &material.emissive, true, &engine.emissive, "emissive"},
+        {HEMI_MATERIAL_BINDING_OCCLUSION, &material.occlusion, occlusion_srgb, &engine.occlusion,
+         "occlusion"},
     };
     for (int i = 0; i < 4; ++i)
     {
-        const auto& [binding, use] = maps[i];
-        writes[i + 1].binding = binding;
+        const Slot& m = maps[i];
+        writes[i + 1].binding = m.binding;
         writes[i + 1].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        writes[i + 1].image = {textures.sampler(use.first->sampler),
-                               textures.image(use.first->image, use.second).view(),
-                               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+        if (m.engine->view != VK_NULL_HANDLE)
+        {
+            if (m.engine->sampler == VK_NULL_HANDLE)
+                throw std::invalid_argument("hemi: material '" + material.name + "': the engine's " + m.name +
+                                            " texture has a view and no sampler");
+            writes[i + 1].image = {m.engine->sampler, m.engine->view,
+                                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+        }
+        else
+            writes[i + 1].image = {textures.sampler(m.ref->sampler),
+                                   textures.image(m.ref->image, m.srgb).view(),
+                                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
     gpu::write_descriptors(device, set_, writes);
 }

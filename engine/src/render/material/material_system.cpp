@@ -9,6 +9,41 @@ namespace hemi::render
 {
 namespace
 {
+// The pipeline's vertex input from a layout, checked: streams in range with a stride, formats the device
+// reads as vertex attributes.
+void vertex_input(const gpu::Device& device, const VertexLayout& layout, gpu::GraphicsProgramDesc& desc)
+{
+    const std::pair<const char*, const VertexInput*> inputs[5] = {{"position", &layout.position},
+                                                                  {"normal", &layout.normal},
+                                                                  {"tangent", &layout.tangent},
+                                                                  {"uv0", &layout.uv0},
+                                                                  {"uv1", &layout.uv1}};
+    bool used[VertexLayout::kMaxVertexStreams] = {};
+    for (uint32_t location = 0; location < 5; ++location)
+    {
+        const auto& [name, in] = inputs[location];
+        const std::string what = std::string("hemi: the vertex layout's ") + name;
+        if (in->binding >= VertexLayout::kMaxVertexStreams)
+            throw std::invalid_argument(what + " is in stream " + std::to_string(in->binding) +
+                                        "; streams are 0 to " +
+                                        std::to_string(VertexLayout::kMaxVertexStreams - 1));
+        if (layout.strides[in->binding] == 0)
+            throw std::invalid_argument(what + " is in stream " + std::to_string(in->binding) +
+                                        ", which has no stride");
+        VkFormatProperties props{};
+        if (in->format != VK_FORMAT_UNDEFINED)
+            vkGetPhysicalDeviceFormatProperties(device.physical_device(), in->format, &props);
+        if (!(props.bufferFeatures & VK_FORMAT_FEATURE_VERTEX_BUFFER_BIT))
+            throw std::invalid_argument(what + " has format " + std::to_string(int(in->format)) +
+                                        ", which the device does not read as a vertex attribute");
+        used[in->binding] = true;
+        desc.vertex_attributes.push_back({location, in->binding, in->format, in->offset});
+    }
+    for (uint32_t b = 0; b < VertexLayout::kMaxVertexStreams; ++b)
+        if (used[b])
+            desc.vertex_bindings.push_back({b, layout.strides[b], VK_VERTEX_INPUT_RATE_VERTEX});
+}
+
 const math::BasisDesc& basis_of(int id)
 {
     if (id == HEMI_BASIS_VERTEX_IRRADIANCE)
@@ -148,8 +183,7 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_DOUBLE_SIDED, in order.
     desc.specialization = {uint32_t(key.basis), uint32_t(basis.size), uint32_t(key.frame),
                            uint32_t(key.technique), key.double_sided ? 1u : 0u};
-    desc.vertex_bindings = GpuMesh::vertex_bindings();
-    desc.vertex_attributes = GpuMesh::vertex_attributes();
+    vertex_input(*device_, key.vertex, desc);
     desc.render_pass = target_.render_pass;
     desc.subpass = target_.subpass;
     const bool dynamic = target_.render_pass == VK_NULL_HANDLE;

@@ -1,5 +1,6 @@
 #include <hemi/render/scene/gpu_mesh.h>
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -15,6 +16,9 @@ struct Vertex
     float uv0[2];
     float uv1[2];
 };
+// VertexLayout's default describes this struct.
+static_assert(sizeof(Vertex) == 56 && offsetof(Vertex, normal) == 12 && offsetof(Vertex, tangent) == 24 &&
+              offsetof(Vertex, uv0) == 40 && offsetof(Vertex, uv1) == 48);
 } // namespace
 
 GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBatch& upload)
@@ -42,22 +46,6 @@ GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBat
     upload.buffer(indices_, mesh.indices.data(), mesh.indices.size() * 4);
     vertex_count_ = uint32_t(n);
     index_count_ = uint32_t(mesh.indices.size());
-}
-
-std::vector<VkVertexInputBindingDescription> GpuMesh::vertex_bindings()
-{
-    return {{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
-}
-
-std::vector<VkVertexInputAttributeDescription> GpuMesh::vertex_attributes()
-{
-    return {
-        {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
-        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
-        {2, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(Vertex, tangent)},
-        {3, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, uv0)},
-        {4, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, uv1)},
-    };
 }
 
 void GpuMesh::bind(VkCommandBuffer cmd) const

@@ -43,12 +43,29 @@ class TextureSet
     std::vector<std::pair<io::TextureSampler, gpu::Sampler>> samplers_;
 };
 
+// A texture of the engine's own for one slot of a material: a 2D view of an image in
+// SHADER_READ_ONLY_OPTIMAL (sRGB formats for base colour and emissive, linear for the normal map and
+// occlusion, as glTF stores them) and the sampler to read it with. The engine keeps both alive while the
+// instance is drawn. A null view leaves the slot to the material's TextureSet image (or its default).
+struct EngineTexture
+{
+    VkImageView view = VK_NULL_HANDLE;
+    VkSampler sampler = VK_NULL_HANDLE;
+};
+struct MaterialTextures
+{
+    EngineTexture base_color, normal, emissive, occlusion;
+};
+
 class MaterialInstance
 {
   public:
-    // Throws std::invalid_argument when the material refers to an image the set does not have.
+    // The material's factors, UV sets and texture transforms from `material`; each texture from `engine`
+    // where it names a view, else from `textures` (an empty TextureSet gives the defaults: white, the flat
+    // normal). Throws std::invalid_argument when the material refers to an image the set does not have, or
+    // an engine texture has a view and no sampler.
     MaterialInstance(const MaterialSystem& system, TextureSet& textures, const io::Material& material,
-                     gpu::UploadBatch& upload);
+                     gpu::UploadBatch& upload, const MaterialTextures& engine = {});
     VkDescriptorSet set() const { return set_; }
     bool double_sided() const { return double_sided_; }
 

@@ -63,6 +63,45 @@ enum class ShadingFrame : uint32_t
     World = HEMI_FRAME_WORLD,     // coefficients in world space (the normal map is turned into it)
 };
 
+// Where one vertex attribute of the surface shader comes from: a vertex buffer binding (a stream) and a
+// format that the device reads as a vertex attribute (VK_FORMAT_FEATURE_VERTEX_BUFFER_BIT). The shader reads
+// position as vec3, normal as vec3, the glTF tangent as vec4 (w: handedness) and the UV sets as vec2:
+// narrower formats are widened by the input assembler (fp16, snorm, unorm), so an engine's packed meshes
+// draw without conversion; a format with fewer components reads the missing ones as 0 (w as 1).
+struct VertexInput
+{
+    uint32_t binding = 0; // the stream: 0 .. kMaxVertexStreams - 1
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    uint32_t offset = 0; // bytes from the vertex's start in its stream
+
+    auto tie() const { return std::tie(binding, format, offset); }
+};
+
+// The vertex layout a material type reads: the five attributes and the stride of each stream they use. Every
+// attribute must be present (an object without lightmap UVs points uv1 at uv0). The index type is not part
+// of it: the caller binds its own index buffer, 16- or 32-bit. Default: GpuMesh's layout (one interleaved
+// fp32 stream of 56 bytes).
+struct VertexLayout
+{
+    static constexpr uint32_t kMaxVertexStreams = 4;
+    VertexInput position{0, VK_FORMAT_R32G32B32_SFLOAT, 0};
+    VertexInput normal{0, VK_FORMAT_R32G32B32_SFLOAT, 12};
+    VertexInput tangent{0, VK_FORMAT_R32G32B32A32_SFLOAT, 24};
+    VertexInput uv0{0, VK_FORMAT_R32G32_SFLOAT, 40};
+    VertexInput uv1{0, VK_FORMAT_R32G32_SFLOAT, 48};
+    uint32_t strides[kMaxVertexStreams] = {56, 0, 0, 0}; // bytes per vertex of each stream (0: unused)
+
+    auto tie() const
+    {
+        return std::tie(position.binding, position.format, position.offset, normal.binding, normal.format,
+                        normal.offset, tangent.binding, tangent.format, tangent.offset, uv0.binding,
+                        uv0.format, uv0.offset, uv1.binding, uv1.format, uv1.offset, strides[0], strides[1],
+                        strides[2], strides[3]);
+    }
+    bool operator<(const VertexLayout& o) const { return tie() < o.tie(); }
+    bool operator==(const VertexLayout& o) const { return tie() == o.tie(); }
+};
+
 struct MaterialKey
 {
     Technique technique = Technique::Irradiance;
@@ -70,8 +109,9 @@ struct MaterialKey
     int basis = HEMI_BASIS_SH9; // HEMI_BASIS_*: an entry of math::bases(), or classic PRT's vertex irradiance
     ShadingFrame frame = ShadingFrame::Tangent;
     bool double_sided = false; // glTF doubleSided: no culling (world frame: back faces lit with -N)
+    VertexLayout vertex{};     // the meshes' vertex layout (default: GpuMesh's)
 
-    auto tie() const { return std::tie(technique, source, basis, frame, double_sided); }
+    auto tie() const { return std::tie(technique, source, basis, frame, double_sided, vertex); }
     bool operator<(const MaterialKey& o) const { return tie() < o.tie(); }
     bool operator==(const MaterialKey& o) const { return tie() == o.tie(); }
 };
@@ -114,7 +154,9 @@ class MaterialSystem
     MaterialSystem& operator=(const MaterialSystem&) = delete;
 
     // The type of `key`, compiled on first use (at set-up, ideally: prepare() every key a scene needs),
-    // then cached. Throws std::invalid_argument for a basis hemi does not know.
+    // then cached. Throws std::invalid_argument for a basis hemi does not know, or a vertex layout with a
+    // stream out of range or without a stride, or a format the device cannot read as a vertex attribute
+    // (naming the attribute and the format).
     const MaterialType& type(const MaterialKey& key);
     size_t type_count() const { return types_.size(); }
 

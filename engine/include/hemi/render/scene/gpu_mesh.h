@@ -1,11 +1,13 @@
 #pragma once
-// A mesh on the GPU in the one vertex layout every material reads (position, normal, glTF tangent, both UV
-// sets; 32-bit indices), uploaded through the caller's UploadBatch. Shared by every instance drawn from it.
+// A mesh on the GPU in hemi's own vertex layout (position, normal, glTF tangent, both UV sets, fp32,
+// interleaved; 32-bit indices; an engine's meshes in their own layouts draw through MaterialKey::vertex),
+// uploaded through the caller's UploadBatch. Shared by every instance drawn from it.
 
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/io/mesh.h>
+#include <hemi/render/material/material_system.h>
 
 #include <cstdint>
 #include <vector>
@@ -21,9 +23,8 @@ class GpuMesh
     // The vertex and index data are written now or staged in `upload` (record it before the first draw).
     GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBatch& upload);
 
-    // Vertex input of the surface shader: locations 0 position, 1 normal, 2 tangent, 3 uv0, 4 uv1.
-    static std::vector<VkVertexInputBindingDescription> vertex_bindings();
-    static std::vector<VkVertexInputAttributeDescription> vertex_attributes();
+    // Its vertex layout: one interleaved fp32 stream (what MaterialKey::vertex defaults to).
+    static VertexLayout layout() { return VertexLayout{}; }
 
     void bind(VkCommandBuffer cmd) const; // vertex and index buffers
     // Draws indices [first_index, first_index + index_count) (after bind()).

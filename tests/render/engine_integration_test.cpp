@@ -28,9 +28,11 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -607,4 +609,273 @@ TEST_F(EngineShader, NonUniformScaleLightsWithTheInverseTransposeNormal)
     EXPECT_GT(checked, 1000);
     EXPECT_EQ(right, checked);
     EXPECT_LT(naive_right, checked / 2) << "the scale does not tell the two normal transforms apart";
+}
+
+namespace
+{
+class EngineData : public test::GpuTest
+{
+};
+
+// The scene's sphere drawn through hemi's material system with an H6 lightmap (tangent frame: normal,
+// tangent, both UV sets matter), the mesh's buffers bound by `bind` (which returns the index count).
+std::vector<float>
+draw_lightmapped(const render::VertexLayout& layout, const std::function<uint32_t(VkCommandBuffer)>& bind,
+                 const std::function<render::MaterialTextures(render::TextureSet&)>& engine = {})
+{
+    gpu::Device& dev = test::device();
+    const Scene& s = scene();
+    const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    gpu::UploadBatch upload(dev);
+    io::Material material;
+    material.normal.image = 0;
+    material.normal.sampler.mipmaps = false;
+    material.base_color.image = 1;
+    material.base_color.sampler.mipmaps = false;
+    const io::ImageRgba8 images[2] = {s.normal_map, s.albedo};
+    render::TextureSet textures(dev, std::span<const io::ImageRgba8>(images, 2),
+                                std::span<const io::Material>(&material, 1), upload);
+    const render::MaterialInstance instance(system, textures, material, upload,
+                                            engine ? engine(textures) : render::MaterialTextures{});
+    const uint32_t k = 6, w = 16, h = 8;
+    std::vector<float> rgb(size_t(k) * w * h * 3);
+    for (uint32_t i = 0; i < k; ++i)
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+                for (uint32_t ch = 0; ch < 3; ++ch)
+                    rgb[((i * h + y) * w + x) * 3 + ch] =
+                        coefficient(i, ch, 6.28f * (x + 0.5f) / w, 3.14f * (y + 0.5f) / h);
+    const render::TexelCoefficients lightmap(system, w, h, k, rgb, upload);
+    render::MaterialKey key;
+    key.source = render::CoefficientSourceKind::Texel;
+    key.basis = HEMI_BASIS_H6;
+    key.vertex = layout;
+    const render::MaterialType& type = system.type(key);
+    render::FrameSet frame_set(system);
+    render::FrameData frame;
+    frame.view_projection = math::look_at_projection(s.eye, glm::vec3(0.0f), 40.0f, 1.0f);
+    frame.eye = s.eye;
+    const float clear[4] = {kClear, kClear, kClear, kClear};
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      upload.record(cmd);
+                      frame_set.record_update(cmd, frame);
+                      pass.begin(cmd, clear);
+                      render::DrawBindings b;
+                      b.type = &type;
+                      b.frame = frame_set.set();
+                      b.material = instance.set();
+                      b.source = lightmap.set();
+                      b.push.model = glm::mat4(1.0f);
+                      render::bind_material(cmd, b);
+                      vkCmdDrawIndexed(cmd, bind(cmd), 1, 0, 0, 0);
+                      vkCmdEndRenderPass(cmd);
+                  });
+    return read(pass);
+}
+
+// hemi's own layout: a GpuMesh.
+std::vector<float>
+draw_with_gpu_mesh(const std::function<render::MaterialTextures(render::TextureSet&)>& engine = {},
+                   const io::Mesh& m = scene().mesh)
+{
+    gpu::UploadBatch upload(test::device());
+    const render::GpuMesh mesh(test::device(), m, upload);
+    upload.submit_and_wait();
+    return draw_lightmapped(
+        render::GpuMesh::layout(),
+        [&](VkCommandBuffer cmd)
+        {
+            mesh.bind(cmd);
+            return mesh.index_count();
+        },
+        engine);
+}
+
+uint16_t half(float f)
+{
+    // Round-to-nearest fp32 -> fp16 for normal numbers in range (the test's positions: |x| <= 1).
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    const uint32_t sign = (bits >> 16) & 0x8000u;
+    const int exponent = int((bits >> 23) & 0xffu) - 127 + 15;
+    if (exponent <= 0)
+        return uint16_t(sign); // |f| < 2^-14: zero is close enough for positions on a unit sphere
+    uint32_t mantissa = bits & 0x7fffffu;
+    uint32_t h = sign | (uint32_t(exponent) << 10) | (mantissa >> 13);
+    if ((mantissa & 0x1fffu) > 0x1000u || ((mantissa & 0x1fffu) == 0x1000u && (h & 1u)))
+        ++h;
+    return uint16_t(h);
+}
+int16_t snorm16(float f)
+{
+    return int16_t(std::lround(std::clamp(f, -1.0f, 1.0f) * 32767.0f));
+}
+
+} // namespace
+
+// The sphere in an engine's packed layout, two streams: positions as fp16 RGBA (8 bytes) in stream 0; normal
+// and tangent as snorm16 RGBA, then fp32 UV (uv1 pointing at uv0) in stream 1 (24 bytes); 16-bit indices.
+// Drawn through a material key with that layout, it equals the GpuMesh's fp32 drawing of the same values (the
+// packed ones widened on the CPU: the comparison is of the data path, not of the quantisation, which moves
+// pixel centres' barycentrics by enough to change steep texture lookups by 1%).
+TEST_F(EngineData, MeshInTheEnginesOwnLayoutDrawsLikeHemisLayout)
+{
+    gpu::Device& dev = test::device();
+    const io::Mesh& m = scene().mesh;
+    const size_t n = m.vertex_count();
+    std::vector<uint16_t> positions(n * 4);
+    struct Packed
+    {
+        int16_t normal[4], tangent[4];
+        float uv[2];
+    };
+    static_assert(sizeof(Packed) == 24);
+    std::vector<Packed> packed(n);
+    for (size_t v = 0; v < n; ++v)
+    {
+        for (int c = 0; c < 3; ++c)
+            positions[v * 4 + c] = half(m.positions[v][c]);
+        positions[v * 4 + 3] = half(1.0f);
+        for (int c = 0; c < 3; ++c)
+            packed[v].normal[c] = snorm16(m.normals[v][c]);
+        packed[v].normal[3] = 0;
+        for (int c = 0; c < 4; ++c)
+            packed[v].tangent[c] = snorm16(m.tangents[v][c]);
+        packed[v].uv[0] = m.uvs[v].x;
+        packed[v].uv[1] = m.uvs[v].y;
+    }
+    ASSERT_LT(n, 65536u);
+    io::Mesh same = m; // the packed values, widened
+    auto widen_half = [](uint16_t h)
+    {
+        const uint32_t sign = uint32_t(h & 0x8000u) << 16, exponent = (h >> 10) & 0x1fu,
+                       mantissa = h & 0x3ffu;
+        const uint32_t bits = exponent == 0 ? sign : sign | ((exponent - 15 + 127) << 23) | (mantissa << 13);
+        float f;
+        std::memcpy(&f, &bits, 4);
+        return f;
+    };
+    for (size_t v = 0; v < n; ++v)
+        for (int c = 0; c < 4; ++c)
+        {
+            if (c < 3)
+            {
+                same.positions[v][c] = widen_half(positions[v * 4 + c]);
+                same.normals[v][c] = std::max(-1.0f, float(packed[v].normal[c]) / 32767.0f);
+            }
+            same.tangents[v][c] = std::max(-1.0f, float(packed[v].tangent[c]) / 32767.0f);
+        }
+    const std::vector<uint16_t> indices(m.indices.begin(), m.indices.end());
+    const gpu::Buffer stream0 =
+        gpu::create_buffer(dev, {positions.size() * 2, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer stream1 =
+        gpu::create_buffer(dev, {packed.size() * sizeof(Packed), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer index_buffer =
+        gpu::create_buffer(dev, {indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
+    gpu::write_buffer(dev, stream0, positions.data(), positions.size() * 2);
+    gpu::write_buffer(dev, stream1, packed.data(), packed.size() * sizeof(Packed));
+    gpu::write_buffer(dev, index_buffer, indices.data(), indices.size() * 2);
+
+    render::VertexLayout layout;
+    layout.position = {0, VK_FORMAT_R16G16B16A16_SFLOAT, 0};
+    layout.normal = {1, VK_FORMAT_R16G16B16A16_SNORM, offsetof(Packed, normal)};
+    layout.tangent = {1, VK_FORMAT_R16G16B16A16_SNORM, offsetof(Packed, tangent)};
+    layout.uv0 = {1, VK_FORMAT_R32G32_SFLOAT, offsetof(Packed, uv)};
+    layout.uv1 = layout.uv0;
+    layout.strides[0] = 8;
+    layout.strides[1] = sizeof(Packed);
+    const std::vector<float> engine =
+        draw_lightmapped(layout,
+                         [&](VkCommandBuffer cmd)
+                         {
+                             const VkBuffer streams[2] = {stream0, stream1};
+                             const VkDeviceSize offsets[2] = {0, 0};
+                             vkCmdBindVertexBuffers(cmd, 0, 2, streams, offsets);
+                             vkCmdBindIndexBuffer(cmd, index_buffer, 0, VK_INDEX_TYPE_UINT16);
+                             return uint32_t(indices.size());
+                         });
+    const std::vector<float> reference = draw_with_gpu_mesh({}, same);
+    const Agreement a = agree(reference, engine);
+    std::printf("%d pixels, %d outside 0.5%%, worst relative difference %.2e\n", a.covered, a.outside,
+                double(a.worst));
+    EXPECT_GT(a.covered, 4000);
+    EXPECT_EQ(a.mismatched_coverage, 0);
+    EXPECT_EQ(a.outside, 0);
+
+    // A layout the device cannot read, or a stream without a stride, is refused when the type is made.
+    render::RenderTargetDesc target;
+    const test::EnginePass pass(8, 8, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    render::MaterialKey key;
+    key.vertex = layout;
+    key.vertex.strides[1] = 0;
+    EXPECT_THROW(
+        {
+            try
+            {
+                system.type(key);
+            }
+            catch (const std::invalid_argument& e)
+            {
+                EXPECT_NE(std::string(e.what()).find("normal is in stream 1, which has no stride"),
+                          std::string::npos)
+                    << e.what();
+                throw;
+            }
+        },
+        std::invalid_argument);
+    key.vertex = layout;
+    key.vertex.uv0.format = VK_FORMAT_D32_SFLOAT;
+    EXPECT_THROW(system.type(key), std::invalid_argument);
+}
+
+// A material whose base colour and normal map are the engine's own images (uploaded by the engine, its own
+// views and samplers) draws what the same material loaded through a TextureSet draws.
+TEST_F(EngineData, MaterialFromTheEnginesOwnImageViewsEqualsTheTextureSetOne)
+{
+    gpu::Device& dev = test::device();
+    const Scene& s = scene();
+    auto own_image = [&](const io::ImageRgba8& img, VkFormat format)
+    {
+        gpu::Image image =
+            gpu::create_image(dev, {img.width, img.height, format, VK_IMAGE_USAGE_SAMPLED_BIT});
+        gpu::upload_image(dev, image, img.pixels.data(), img.pixels.size(),
+                          VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        return image;
+    };
+    const gpu::Image albedo = own_image(s.albedo, VK_FORMAT_R8G8B8A8_SRGB);
+    const gpu::Image normal = own_image(s.normal_map, VK_FORMAT_R8G8B8A8_UNORM);
+    const gpu::Sampler sampler = gpu::create_sampler(
+        dev, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_NEAREST, VK_SAMPLER_ADDRESS_MODE_REPEAT, 0.0f});
+    const std::vector<float> engine = draw_with_gpu_mesh(
+        [&](render::TextureSet&)
+        {
+            render::MaterialTextures t;
+            t.base_color = {albedo.view(), sampler};
+            t.normal = {normal.view(), sampler};
+            return t;
+        });
+    const std::vector<float> reference = draw_with_gpu_mesh();
+    const Agreement a = agree(reference, engine);
+    std::printf("%d pixels, %d outside 0.5%%, worst relative difference %.2e\n", a.covered, a.outside,
+                double(a.worst));
+    EXPECT_GT(a.covered, 4000);
+    EXPECT_EQ(a.mismatched_coverage, 0);
+    EXPECT_EQ(a.outside, 0);
+    // The engine's images are what is drawn: swapping its two views changes the picture.
+    const std::vector<float> swapped = draw_with_gpu_mesh(
+        [&](render::TextureSet&)
+        {
+            render::MaterialTextures t;
+            t.base_color = {normal.view(), sampler};
+            t.normal = {albedo.view(), sampler};
+            return t;
+        });
+    EXPECT_GT(agree(reference, swapped).outside, a.covered / 4);
 }
