@@ -17,6 +17,7 @@ layout(constant_id = HEMI_SPEC_K) const int K = 9;
 layout(constant_id = HEMI_SPEC_FRAME) const int kFrame = HEMI_FRAME_TANGENT;
 layout(constant_id = HEMI_SPEC_TECHNIQUE) const int kTechnique = HEMI_TECHNIQUE_IRRADIANCE;
 layout(constant_id = HEMI_SPEC_DOUBLE_SIDED) const int kDoubleSided = 0;
+layout(constant_id = HEMI_SPEC_ALPHA) const int kAlpha = HEMI_ALPHA_OPAQUE;
 
 layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame
 {
@@ -70,6 +71,9 @@ vec2 material_uv(uint set, int transform)
 void main()
 {
     vec4 albedo = material.base_color_factor * texture(base_color, material_uv(material.texcoord.x, 0));
+    const float alpha = albedo.a;
+    if (kAlpha == HEMI_ALPHA_MASK && alpha < material.occlusion.y)
+        discard;
     // Most materials emit nothing: skip the fetch (a branch uniform across the draw).
     vec3 emissive = vec3(0.0);
     if (any(notEqual(material.emissive_factor.rgb, vec3(0.0))))
@@ -135,7 +139,7 @@ void main()
     s.v = to_frame * normalize(frame.eye.xyz - in_world);
     s.specular_exponent = frame.options.z;
     s.specular_strength = frame.options.w;
-    out_color = vec4(hemi_shade(kTechnique, s), 1.0);
+    out_color = vec4(hemi_shade(kTechnique, s), kAlpha == HEMI_ALPHA_BLEND ? alpha : 1.0);
 #if HEMI_AUX
     out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
 #endif

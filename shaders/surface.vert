@@ -52,7 +52,11 @@ void main()
     const mat3 m = mat3(draw.model);
     out_normal = hemi_normal_matrix(m) * in_normal;
     out_tangent = hemi_transform_tangent(m, in_tangent);
-    const vec4 world = draw.model * vec4(in_position, 1.0);
+    // Every pass of a key runs this same code (a colour pass tests EQUAL against a depth prepass); precise
+    // keeps the compiler from contracting it differently in different pipelines. (`invariant gl_Position`
+    // would say the same, but Mesa warns about the decoration glslang puts on gl_PerVertex's member.)
+    precise const vec4 world = draw.model * vec4(in_position, 1.0);
+    precise const vec4 clip = frame.view_projection * world;
     out_world = world.xyz;
-    gl_Position = frame.view_projection * world;
+    gl_Position = clip;
 }

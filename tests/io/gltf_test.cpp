@@ -696,14 +696,14 @@ TEST(GltfReader, UnsupportedFeaturesAreNamedInWarnings)
              h.j["materials"] = json::parse(R"([{"alphaMode": "BLEND", "name": "glass"}])");
              h.primitive()["material"] = 0;
          },
-         "alphaMode BLEND drawn opaque: material 0 (glass)"},
+         "alphaMode BLEND baked opaque (drawn with alpha): material 0 (glass)"},
         {"mask",
          [](Handmade& h)
          {
              h.j["materials"] = json::parse(R"([{"alphaMode": "MASK"}])");
              h.primitive()["material"] = 0;
          },
-         "alphaMode MASK drawn opaque"},
+         "alphaMode MASK baked opaque"},
         {"clearcoat",
          [](Handmade& h)
          {

@@ -298,7 +298,7 @@ TEST(Cli, BakeWarnsAboutWhatTheSceneReaderSimplifies)
     const Result r =
         bake(q(blend) + " -o " + q(asset) + " --bases prt --transfer unshadowed --order 3 --json " + q(json));
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_NE(r.err.find("hemi-bake: warning: " + blend.string() + ": alphaMode BLEND drawn opaque"),
+    EXPECT_NE(r.err.find("hemi-bake: warning: " + blend.string() + ": alphaMode BLEND baked opaque"),
               std::string::npos)
         << r.err;
     const nlohmann::json report = nlohmann::json::parse(slurp(json));

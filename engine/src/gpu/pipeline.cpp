@@ -132,7 +132,9 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     p.bind_point = VK_PIPELINE_BIND_POINT_GRAPHICS;
     create_layouts(device, desc.bindings, desc.set_layouts, desc.push_constant_size, p);
     ShaderModule vs = create_shader_module(device, desc.vertex_shader);
-    ShaderModule fs = create_shader_module(device, desc.fragment_shader);
+    ShaderModule fs;
+    if (!desc.fragment_shader.empty())
+        fs = create_shader_module(device, desc.fragment_shader);
     Specialization spec(desc.specialization);
 
     VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
@@ -166,6 +168,12 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     raster.cullMode = desc.cull_mode;
     raster.frontFace = desc.front_face;
     raster.lineWidth = 1.0f;
+    if (desc.depth_bias_constant != 0.0f || desc.depth_bias_slope != 0.0f)
+    {
+        raster.depthBiasEnable = VK_TRUE;
+        raster.depthBiasConstantFactor = desc.depth_bias_constant;
+        raster.depthBiasSlopeFactor = desc.depth_bias_slope;
+    }
 
     VkPipelineMultisampleStateCreateInfo multisample{
         VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
@@ -177,9 +185,23 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     depth.depthCompareOp = desc.depth_compare;
 
     std::vector<VkPipelineColorBlendAttachmentState> blend(desc.color_attachments);
-    for (auto& b : blend)
-        b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                           VK_COLOR_COMPONENT_A_BIT;
+    for (size_t i = 0; i < blend.size(); ++i)
+    {
+        VkPipelineColorBlendAttachmentState& b = blend[i];
+        if (desc.color_writes && (!desc.blend || i == 0))
+            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                               VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+        if (desc.blend && i == 0)
+        {
+            b.blendEnable = VK_TRUE;
+            b.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+            b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+            b.colorBlendOp = VK_BLEND_OP_ADD;
+            b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+            b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+            b.alphaBlendOp = VK_BLEND_OP_ADD;
+        }
+    }
     VkPipelineColorBlendStateCreateInfo blend_state{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
     blend_state.attachmentCount = uint32_t(blend.size());
     blend_state.pAttachments = blend.data();
@@ -190,7 +212,7 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     dynamic.pDynamicStates = dynamic_states;
 
     VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    info.stageCount = 2;
+    info.stageCount = desc.fragment_shader.empty() ? 1 : 2;
     info.pStages = stages;
     info.pVertexInputState = &vertex_input;
     info.pInputAssemblyState = &assembly;

@@ -634,8 +634,14 @@ struct Reader
             fail(label + ": non-finite occlusion strength");
         m.double_sided = in.doubleSided;
         if (in.alphaMode == "MASK" || in.alphaMode == "BLEND")
+        {
+            m.alpha_mode = in.alphaMode == "MASK" ? io::AlphaMode::Mask : io::AlphaMode::Blend;
+            m.alpha_cutoff = float(in.alphaCutoff);
+            if (!std::isfinite(m.alpha_cutoff) || m.alpha_cutoff < 0.0f)
+                fail(label + ": alphaCutoff is not a finite number >= 0");
             warnings.add("alphaMode " + in.alphaMode,
-                         "alphaMode " + in.alphaMode + " drawn opaque: " + label);
+                         "alphaMode " + in.alphaMode + " baked opaque (drawn with alpha): " + label);
+        }
         else if (in.alphaMode != "OPAQUE")
             warnings.add("alphaMode", "unknown alphaMode '" + in.alphaMode + "' drawn opaque: " + label);
         for (const auto& [name, value] : in.extensions)
@@ -1513,6 +1519,11 @@ void write_gltf(const std::filesystem::path& path, const GltfScene& scene,
         out.occlusionTexture.strength = mat.occlusion_strength;
         out.emissiveFactor = {mat.emissive_factor.r, mat.emissive_factor.g, mat.emissive_factor.b};
         out.doubleSided = mat.double_sided;
+        if (mat.alpha_mode != io::AlphaMode::Opaque)
+        {
+            out.alphaMode = mat.alpha_mode == io::AlphaMode::Mask ? "MASK" : "BLEND";
+            out.alphaCutoff = mat.alpha_cutoff;
+        }
         b.m.materials.push_back(out);
     }
     if (transforms)

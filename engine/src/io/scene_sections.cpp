@@ -57,6 +57,11 @@ std::string scene_json(const std::vector<Material>& materials_in, const std::vec
             {"double_sided", m.double_sided}};
         if (m.occlusion.present())
             j["occlusion_strength"] = m.occlusion_strength;
+        if (m.alpha_mode != AlphaMode::Opaque)
+        {
+            j["alpha_mode"] = m.alpha_mode == AlphaMode::Mask ? "mask" : "blend";
+            j["alpha_cutoff"] = m.alpha_cutoff;
+        }
         for (const auto& [ref, key] :
              {std::pair{&m.base_color, "base_color"}, std::pair{&m.normal, "normal"},
               std::pair{&m.emissive, "emissive"}, std::pair{&m.occlusion, "occlusion"}})
@@ -207,6 +212,17 @@ struct SceneJson
             // Optional (assets written before hemi read occlusion textures have neither key).
             if (m.contains("occlusion_strength"))
                 out.occlusion_strength = number(m, "occlusion_strength", where);
+            // Optional: absent = opaque (and in assets written before hemi drew alpha).
+            if (m.contains("alpha_mode"))
+            {
+                const std::string mode = string(m, "alpha_mode", where);
+                if (mode != "mask" && mode != "blend")
+                    fail(where, "alpha_mode '" + mode + "' is neither 'mask' nor 'blend'");
+                out.alpha_mode = mode == "mask" ? AlphaMode::Mask : AlphaMode::Blend;
+                out.alpha_cutoff = number(m, "alpha_cutoff", where);
+                if (!(out.alpha_cutoff >= 0.0f))
+                    fail(where, "alpha_cutoff is not a number >= 0");
+            }
             materials_out.push_back(std::move(out));
         }
         std::vector<uint64_t> sizes;

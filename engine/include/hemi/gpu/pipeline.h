@@ -53,7 +53,7 @@ Program create_compute_program(const Device& device, const ComputeProgramDesc& d
 struct GraphicsProgramDesc
 {
     std::span<const uint32_t> vertex_shader;
-    std::span<const uint32_t> fragment_shader;
+    std::span<const uint32_t> fragment_shader;      // empty: no fragment stage (a depth-only pass)
     std::vector<Binding> bindings;                  // set 0, owned by the program; or:
     std::vector<VkDescriptorSetLayout> set_layouts; // sets 0.. in order, owned by the caller (bindings empty)
     uint32_t push_constant_size = 0;
@@ -73,7 +73,12 @@ struct GraphicsProgramDesc
     VkCompareOp depth_compare = VK_COMPARE_OP_LESS;
     VkCullModeFlags cull_mode = VK_CULL_MODE_BACK_BIT;
     VkFrontFace front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    VkPipelineCache cache = VK_NULL_HANDLE; // the host's pipeline cache, if any
+    // Colour attachment 0 blends src alpha over (src a + dst (1 - a); alpha: a + dst alpha (1 - a)); the
+    // others keep their values. Without blending every attachment is written, or none with colour_writes off.
+    bool blend = false;
+    bool color_writes = true;
+    float depth_bias_constant = 0.0f, depth_bias_slope = 0.0f; // both 0: no depth bias
+    VkPipelineCache cache = VK_NULL_HANDLE;                    // the host's pipeline cache, if any
 };
 // Viewport and scissor are dynamic state.
 Program create_graphics_program(const Device& device, const GraphicsProgramDesc& desc);

@@ -73,9 +73,18 @@ struct TextureRef
     bool operator==(const TextureRef&) const = default;
 };
 
+// glTF's alphaMode: OPAQUE ignores alpha; MASK draws where the base colour's alpha reaches alphaCutoff;
+// BLEND blends by alpha (not depth-written, not in depth prepasses). The bakes treat every surface as
+// opaque (read_gltf warns for MASK and BLEND).
+enum class AlphaMode
+{
+    Opaque,
+    Mask,
+    Blend,
+};
+
 // glTF's metallic-roughness material, the inputs hemi's techniques read. Metallic and roughness are not
-// read by any technique yet (the precomputed-lighting techniques are diffuse); alphaMode MASK and BLEND
-// are drawn opaque (read_gltf warns).
+// read by any technique yet (the precomputed-lighting techniques are diffuse).
 struct Material
 {
     std::string name;
@@ -88,6 +97,8 @@ struct Material
     TextureRef occlusion;            // glTF's occlusionTexture: ambient occlusion in the red channel, linear
     float occlusion_strength = 1.0f; // occlusion = 1 + strength (texel.r - 1)
     bool double_sided = false;       // no back-face culling; back faces are lit with the flipped normal
+    AlphaMode alpha_mode = AlphaMode::Opaque;
+    float alpha_cutoff = 0.5f; // MASK: alpha (base colour factor x texture) below it is cut
     bool operator==(const Material&) const = default;
 };
 

@@ -141,14 +141,14 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
     }
     u.texcoord =
         glm::uvec4(m.base_color.texcoord, m.normal.texcoord, m.emissive.texcoord, m.occlusion.texcoord);
-    u.occlusion = glm::vec4(m.occlusion_strength, 0.0f, 0.0f, 0.0f);
+    u.occlusion = glm::vec4(m.occlusion_strength, m.alpha_cutoff, 0.0f, 0.0f);
     return u;
 }
 
 MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& textures,
                                    const io::Material& material, gpu::UploadBatch& upload,
                                    const MaterialTextures& engine)
-    : double_sided_(material.double_sided)
+    : double_sided_(material.double_sided), alpha_mode_(material.alpha_mode)
 {
     const gpu::Device& device = system.device();
     for (const io::TextureRef* r :

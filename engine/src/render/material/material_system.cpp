@@ -118,21 +118,37 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
     throw std::invalid_argument("hemi: unknown coefficient source kind");
 }
 
-MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
-                               VkPipelineCache cache)
-    : device_(&device), target_(target), cache_(cache)
+namespace
 {
+// A pass's target checked: colour attachments for a colour pass (two with aux output), dynamic rendering
+// where there is no render pass.
+void check_target(const gpu::Device& device, const PassDesc& pass)
+{
+    const RenderTargetDesc& target = pass.target;
     const bool dynamic = target.render_pass == VK_NULL_HANDLE;
     const uint32_t colors = dynamic ? uint32_t(target.color_formats.size()) : target.color_attachments;
-    if (colors == 0)
-        throw std::invalid_argument("hemi: a material target needs at least one colour attachment");
-    if (target.aux_output && colors < 2)
+    if (pass.kind == PassKind::Color && colors == 0)
+        throw std::invalid_argument("hemi: a colour pass's target needs at least one colour attachment");
+    if (pass.kind == PassKind::Color && target.aux_output && colors < 2)
         throw std::invalid_argument("hemi: a material target with aux output needs two colour attachments");
+    if (pass.kind != PassKind::Color &&
+        (!target.depth_test || (dynamic && target.depth_format == VK_FORMAT_UNDEFINED)))
+        throw std::invalid_argument(
+            "hemi: a depth or shadow pass's target needs a depth attachment and depth test");
     if (dynamic && !device.dynamic_rendering())
         throw std::invalid_argument(
             "hemi: a material target without a render pass needs dynamic rendering, which "
             "device " +
             std::string(device.name()) + " does not have enabled");
+}
+} // namespace
+
+MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
+                               VkPipelineCache cache)
+    : device_(&device), cache_(cache)
+{
+    default_pass_.target = target;
+    check_target(device, default_pass_);
     frame_layout_ = gpu::create_set_layout(device, frame_bindings());
     material_layout_ = gpu::create_set_layout(device, material_bindings());
     for (CoefficientSourceKind kind : {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel,
@@ -149,10 +165,51 @@ VkDescriptorSetLayout MaterialSystem::source_layout(CoefficientSourceKind kind) 
     return source_layouts_[uint32_t(kind)];
 }
 
+size_t MaterialSystem::type_count() const
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    return types_.size();
+}
+
 const MaterialType& MaterialSystem::type(const MaterialKey& key)
 {
-    if (auto it = types_.find(key); it != types_.end())
-        return *it->second;
+    return type(key, default_pass_);
+}
+
+const MaterialType& MaterialSystem::type(const MaterialKey& key_in, const PassDesc& pass)
+{
+    // A depth pipeline does not depend on the technique, basis or frame: one per the rest of the key.
+    MaterialKey key = key_in;
+    if (pass.kind != PassKind::Color)
+    {
+        key.technique = Technique::Irradiance;
+        key.basis = HEMI_BASIS_SH9;
+        key.frame = ShadingFrame::Tangent;
+    }
+    PassDesc p = pass;
+    if (p.kind != PassKind::Shadow)
+        p.depth_bias_constant = p.depth_bias_slope = 0.0f;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (auto it = types_.find({key, p}); it != types_.end())
+            return *it->second;
+    }
+    std::unique_ptr<MaterialType> compiled = compile(key, p); // outside the lock: other threads go on
+    std::lock_guard<std::mutex> lock(mutex_);
+    // Another thread may have compiled the same type meanwhile: the first one in stays.
+    return *types_.emplace(std::pair{key, p}, std::move(compiled)).first->second;
+}
+
+void MaterialSystem::prepare(std::span<const MaterialKey> keys, const PassDesc& pass)
+{
+    for (const MaterialKey& key : keys)
+        type(key, pass);
+}
+
+std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, const PassDesc& pass) const
+{
+    check_target(*device_, pass);
+    const RenderTargetDesc& target = pass.target;
     const math::BasisDesc& basis = basis_of(key.basis);
     if (key.frame == ShadingFrame::World && key.basis != HEMI_BASIS_SH9)
         throw std::invalid_argument("hemi: world-frame materials evaluate SH9 (the sphere), not basis '" +
@@ -161,46 +218,66 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key)
     const bool environment_technique =
         key.technique == Technique::Factored || key.technique == Technique::Banks ||
         key.technique == Technique::EnvMirror || key.technique == Technique::EnvGlossy;
-    if (environment_technique != (key.source == CoefficientSourceKind::Environment))
+    if (pass.kind == PassKind::Color &&
+        environment_technique != (key.source == CoefficientSourceKind::Environment))
         throw std::invalid_argument(
             "hemi: the factored, banks, env_mirror and env_glossy techniques, and only they, "
             "take the environment source");
-    if (environment_technique && key.frame != ShadingFrame::World)
+    if (pass.kind == PassKind::Color && environment_technique && key.frame != ShadingFrame::World)
         throw std::invalid_argument("hemi: environment materials shade in the world frame");
     auto type = std::make_unique<MaterialType>();
     type->key = key;
+    type->pass = pass.kind;
     type->k = uint32_t(basis.size);
 
+    const bool depth = pass.kind != PassKind::Color;
+    const bool alpha_tested =
+        key.alpha == io::AlphaMode::Mask || (depth && key.alpha == io::AlphaMode::Blend);
     const std::string source = source_name(key.source);
+    // The colour pass's vertex variant in every pass: the same code for positions, so depths match exactly
+    // (invariant gl_Position) and a colour pass can test EQUAL against a prepass.
     const std::string vs =
         key.source == CoefficientSourceKind::Vertex ? "surface_vertex.vert" : "surface_other.vert";
-    const std::string fs = "surface_" + source + (target_.aux_output ? "_aux" : "") + ".frag";
     gpu::GraphicsProgramDesc desc;
     desc.vertex_shader = gpu::embedded_spirv(vs);
-    desc.fragment_shader = gpu::embedded_spirv(fs);
+    if (!depth)
+        desc.fragment_shader =
+            gpu::embedded_spirv("surface_" + source + (target.aux_output ? "_aux" : "") + ".frag");
+    else if (alpha_tested)
+        desc.fragment_shader = gpu::embedded_spirv("surface_depth.frag");
     desc.set_layouts = {frame_layout_, material_layout_, source_layout(key.source)};
     desc.push_constant_size = sizeof(shared::DrawPush);
-    // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_DOUBLE_SIDED, in order.
-    desc.specialization = {uint32_t(key.basis), uint32_t(basis.size), uint32_t(key.frame),
-                           uint32_t(key.technique), key.double_sided ? 1u : 0u};
+    // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_ALPHA, in order.
+    desc.specialization = {
+        uint32_t(key.basis),        uint32_t(basis.size),
+        uint32_t(key.frame),        uint32_t(key.technique),
+        key.double_sided ? 1u : 0u, alpha_tested ? 1u : key.alpha == io::AlphaMode::Blend ? 2u : 0u};
     vertex_input(*device_, key.vertex, desc);
-    desc.render_pass = target_.render_pass;
-    desc.subpass = target_.subpass;
-    const bool dynamic = target_.render_pass == VK_NULL_HANDLE;
-    desc.color_attachments = dynamic ? uint32_t(target_.color_formats.size()) : target_.color_attachments;
-    desc.color_formats = target_.color_formats;
-    desc.depth_format = target_.depth_format;
-    desc.samples = target_.samples;
-    desc.depth_test = target_.depth_test && (!dynamic || target_.depth_format != VK_FORMAT_UNDEFINED);
-    desc.depth_write = target_.depth_write;
-    desc.depth_compare = target_.depth_compare;
+    desc.render_pass = target.render_pass;
+    desc.subpass = target.subpass;
+    const bool dynamic = target.render_pass == VK_NULL_HANDLE;
+    desc.color_attachments = dynamic ? uint32_t(target.color_formats.size()) : target.color_attachments;
+    desc.color_formats = target.color_formats;
+    desc.depth_format = target.depth_format;
+    desc.samples = target.samples;
+    desc.depth_test = target.depth_test && (!dynamic || target.depth_format != VK_FORMAT_UNDEFINED);
+    desc.depth_write =
+        target.depth_write && !(pass.kind == PassKind::Color && key.alpha == io::AlphaMode::Blend);
+    desc.depth_compare = target.depth_compare;
+    desc.blend = pass.kind == PassKind::Color && key.alpha == io::AlphaMode::Blend;
+    desc.color_writes = !depth;
+    if (pass.kind == PassKind::Shadow)
+    {
+        desc.depth_bias_constant = pass.depth_bias_constant;
+        desc.depth_bias_slope = pass.depth_bias_slope;
+    }
     desc.cull_mode = key.double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT;
     // Meshes are counter-clockwise seen from outside; with a y-flipped projection (Vulkan clip space) the
     // facing rule, whose area formula is negated for y-down framebuffers, keeps them counter-clockwise.
     desc.front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
     desc.cache = cache_;
     type->program = gpu::create_graphics_program(*device_, desc);
-    return *types_.emplace(key, std::move(type)).first->second;
+    return type;
 }
 
 void bind_material(VkCommandBuffer cmd, const DrawBindings& draw)

@@ -80,12 +80,12 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
 LightmapModel::~LightmapModel() = default;
 
 void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
-                         const glm::mat4& model) const
+                         const glm::mat4& model, size_t pass) const
 {
     for (size_t i = 0; i < names_.size(); ++i)
         if (names_[i] == technique)
         {
-            surfaces_->draw(cmd, frame, coefficients_[i]->set(), 0, model, i);
+            surfaces_->draw(cmd, frame, coefficients_[i]->set(), 0, model, i, pass);
             return;
         }
     throw std::invalid_argument("hemi: technique '" + technique + "' is not loaded in this lightmap model");

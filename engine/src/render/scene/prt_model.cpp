@@ -100,13 +100,14 @@ void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const
                         VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
 }
 
-void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance,
-                    const glm::mat4& model) const
+void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+                    size_t pass) const
 {
     if (instance >= source_->instances())
         throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
                                     std::to_string(source_->instances()));
-    surfaces_.draw(cmd, frame, coefficient_set_->set(), uint32_t(source_->instance_offset(instance)), model);
+    surfaces_.draw(cmd, frame, coefficient_set_->set(), uint32_t(source_->instance_offset(instance)), model,
+                   0, pass);
 }
 
 } // namespace hemi::render

@@ -11,7 +11,8 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
                              const std::vector<io::Material>& asset_materials,
                              const std::vector<io::Primitive>& asset_primitives, CoefficientSourceKind source,
                              const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload)
-    : mesh_(system.device(), mesh, upload), textures_(system.device(), images, asset_materials, upload)
+    : system_(&system), mesh_(system.device(), mesh, upload),
+      textures_(system.device(), images, asset_materials, upload)
 {
     if (variants.empty())
         throw std::invalid_argument("hemi: scene surfaces need at least one variant");
@@ -28,7 +29,7 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
         if (p.material >= materials_.size())
             throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) +
                                         " of " + std::to_string(materials_.size()));
-        Draw d{p.first_index, p.index_count, p.material, {}};
+        Draw d{p.first_index, p.index_count, p.material, {}, {}};
         for (const SurfaceVariant& v : variants)
         {
             MaterialKey key;
@@ -37,25 +38,45 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
             key.basis = v.basis;
             key.frame = v.frame;
             key.double_sided = materials_[p.material]->double_sided();
-            d.types.push_back(&system.type(key));
+            key.alpha = materials_[p.material]->alpha_mode();
+            d.keys.push_back(key);
         }
         draws_.push_back(std::move(d));
     }
+    add_pass(system.default_pass());
+}
+
+size_t SceneSurfaces::add_pass(const PassDesc& pass)
+{
+    for (Draw& d : draws_)
+    {
+        std::vector<const MaterialType*> types;
+        for (const MaterialKey& key : d.keys)
+            types.push_back(&system_->type(key, pass));
+        d.types.push_back(std::move(types));
+    }
+    passes_.push_back(pass.kind);
+    return passes_.size() - 1;
 }
 
 SceneSurfaces::~SceneSurfaces() = default;
 
 void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
-                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant) const
+                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
+                         size_t pass) const
 {
-    if (draws_.empty() || variant >= draws_.front().types.size())
+    if (draws_.empty() || variant >= draws_.front().keys.size())
         throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
+    if (pass >= passes_.size())
+        throw std::invalid_argument("hemi: surface pass " + std::to_string(pass) + " was not added");
     mesh_.bind(cmd);
     for (size_t i = 0; i < draws_.size(); ++i)
     {
         const Draw& d = draws_[i];
+        if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
+            continue;
         DrawBindings b;
-        b.type = d.types[variant];
+        b.type = d.types[pass][variant];
         b.frame = frame;
         b.material = materials_[d.material]->set();
         b.source = source;

@@ -62,6 +62,12 @@ using uint = uint32_t;
 #define HEMI_SPEC_FRAME 2
 #define HEMI_SPEC_TECHNIQUE 3
 #define HEMI_SPEC_DOUBLE_SIDED 4
+#define HEMI_SPEC_ALPHA 5 // HEMI_ALPHA_*
+
+// Alpha modes (glTF alphaMode; specialization constant HEMI_SPEC_ALPHA).
+#define HEMI_ALPHA_OPAQUE 0 // alpha ignored, output alpha 1
+#define HEMI_ALPHA_MASK 1   // discarded where alpha < the material's alphaCutoff, output alpha 1
+#define HEMI_ALPHA_BLEND 2  // output alpha = base colour alpha (the pipeline blends)
 
 // Dynamic lights (added to the precomputed lighting by the techniques that take them: rnm, rnm_ao, ssbump).
 #define HEMI_MAX_LIGHTS 4
@@ -85,7 +91,7 @@ struct MaterialUniforms
     vec4 emissive_factor;   // rgb linear; a = normal scale
     vec4 uv_transform[8]; // rows of the 2x3 KHR_texture_transform of base colour, normal, emissive, occlusion
     uvec4 texcoord;       // UV set (0 or 1) of base colour, normal, emissive, occlusion
-    vec4 occlusion;       // x = glTF's occlusion strength; yzw unused
+    vec4 occlusion;       // x = glTF's occlusion strength; y = alphaCutoff (MASK); zw unused
 };
 
 // The environment source's uniforms (set 2, binding HEMI_ENV_BINDING_UNIFORMS).

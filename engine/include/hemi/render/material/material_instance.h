@@ -68,12 +68,14 @@ class MaterialInstance
                      gpu::UploadBatch& upload, const MaterialTextures& engine = {});
     VkDescriptorSet set() const { return set_; }
     bool double_sided() const { return double_sided_; }
+    io::AlphaMode alpha_mode() const { return alpha_mode_; }
 
   private:
     gpu::Buffer uniforms_;
     gpu::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
     bool double_sided_ = false;
+    io::AlphaMode alpha_mode_ = io::AlphaMode::Opaque;
 };
 
 // The MaterialUniforms block of a material (KHR_texture_transform rows, factors, UV sets): what the surface

@@ -21,6 +21,7 @@
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/handle.h>
 #include <hemi/gpu/pipeline.h>
+#include <hemi/io/material.h>
 
 #include "hemi/shared/bases.h"
 #include "hemi/shared/surface.h"
@@ -28,6 +29,8 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -110,8 +113,11 @@ struct MaterialKey
     ShadingFrame frame = ShadingFrame::Tangent;
     bool double_sided = false; // glTF doubleSided: no culling (world frame: back faces lit with -N)
     VertexLayout vertex{};     // the meshes' vertex layout (default: GpuMesh's)
+    // glTF alphaMode: Mask discards where alpha < the material's alphaCutoff; Blend blends over attachment 0
+    // without writing depth (the caller draws blended surfaces after the opaque ones, back to front).
+    io::AlphaMode alpha = io::AlphaMode::Opaque;
 
-    auto tie() const { return std::tie(technique, source, basis, frame, double_sided, vertex); }
+    auto tie() const { return std::tie(technique, source, basis, frame, double_sided, vertex, alpha); }
     bool operator<(const MaterialKey& o) const { return tie() < o.tie(); }
     bool operator==(const MaterialKey& o) const { return tie() == o.tie(); }
 };
@@ -135,10 +141,43 @@ struct RenderTargetDesc
     VkCompareOp depth_compare = VK_COMPARE_OP_LESS; // reverse-Z: VK_COMPARE_OP_GREATER_OR_EQUAL
 };
 
-// A compiled material type: the pipeline of one key for one target.
+// What a pass of the engine's frame draws, and so which pipeline of a material key it needs:
+//   Color:  the technique's colour into the target's attachments;
+//   Depth:  depth only (a depth prepass): no fragment shader but for alpha-tested (Mask, and Blend when
+//           the caller draws it) materials, which discard where alpha < alphaCutoff; colour attachments, if
+//           the target has any, are not written;
+//   Shadow: Depth with depth bias (a shadow map from the light's view: the FrameSet the caller binds).
+// The technique, basis and frame do not change a depth pipeline: keys that differ only in them share one.
+enum class PassKind : uint32_t
+{
+    Color,
+    Depth,
+    Shadow,
+};
+
+struct PassDesc
+{
+    PassKind kind = PassKind::Color;
+    RenderTargetDesc target;
+    // Shadow: the rasteriser's depth bias (constant in units of the depth format's resolution, and times
+    // the polygon's depth slope).
+    float depth_bias_constant = 1.25f, depth_bias_slope = 1.75f;
+
+    auto tie() const
+    {
+        return std::tie(kind, target.render_pass, target.subpass, target.color_attachments,
+                        target.color_formats, target.depth_format, target.aux_output, target.samples,
+                        target.depth_test, target.depth_write, target.depth_compare, depth_bias_constant,
+                        depth_bias_slope);
+    }
+    bool operator<(const PassDesc& o) const { return tie() < o.tie(); }
+};
+
+// A compiled material type: the pipeline of one key for one pass and target.
 struct MaterialType
 {
     MaterialKey key;
+    PassKind pass = PassKind::Color;
     uint32_t k = 0;       // coefficients the basis takes
     gpu::Program program; // pipeline + layout (sets 0-2 of the system's shared layouts, shared::DrawPush)
 };
@@ -146,7 +185,10 @@ struct MaterialType
 class MaterialSystem
 {
   public:
-    // `cache` is the host's VkPipelineCache (or null); it must outlive the system.
+    // `target` is the default pass's (a Color pass into it): what type(key) compiles for. Every object made
+    // with the system (material instances, coefficient sources) draws in any pass: the descriptor set
+    // layouts are the system's, not a pass's. `cache` is the host's VkPipelineCache (or null); it must
+    // outlive the system.
     MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
                    VkPipelineCache cache = VK_NULL_HANDLE);
     ~MaterialSystem();
@@ -158,7 +200,13 @@ class MaterialSystem
     // stream out of range or without a stride, or a format the device cannot read as a vertex attribute
     // (naming the attribute and the format).
     const MaterialType& type(const MaterialKey& key);
-    size_t type_count() const { return types_.size(); }
+    // The type of `key` for `pass` (its kind and target), compiled on first use and cached per (key, pass).
+    // Safe to call from several threads at once (the compile runs outside the cache's lock).
+    const MaterialType& type(const MaterialKey& key, const PassDesc& pass);
+    // Compiles every key for `pass` now (at load time, so that no draw waits for a pipeline).
+    void prepare(std::span<const MaterialKey> keys, const PassDesc& pass);
+    const PassDesc& default_pass() const { return default_pass_; }
+    size_t type_count() const;
 
     // The shared layouts of sets 0 (frame), 1 (material) and 2 (per coefficient source).
     VkDescriptorSetLayout frame_layout() const { return frame_layout_; }
@@ -172,15 +220,18 @@ class MaterialSystem
     static std::vector<gpu::Binding> source_bindings(CoefficientSourceKind kind);
 
     const gpu::Device& device() const { return *device_; }
-    const RenderTargetDesc& target() const { return target_; }
+    const RenderTargetDesc& target() const { return default_pass_.target; }
 
   private:
+    std::unique_ptr<MaterialType> compile(const MaterialKey& key, const PassDesc& pass) const;
+
     const gpu::Device* device_;
-    RenderTargetDesc target_;
+    PassDesc default_pass_;
     VkPipelineCache cache_;
     gpu::DescriptorSetLayout frame_layout_, material_layout_;
     gpu::DescriptorSetLayout source_layouts_[4];
-    std::map<MaterialKey, std::unique_ptr<MaterialType>> types_;
+    mutable std::mutex mutex_;
+    std::map<std::pair<MaterialKey, PassDesc>, std::unique_ptr<MaterialType>> types_;
 };
 
 // What one draw binds: the type (pipeline), the three sets, the per-draw push constants.

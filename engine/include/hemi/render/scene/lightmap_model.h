@@ -51,10 +51,15 @@ class LightmapModel
                   const std::vector<std::string>& techniques, gpu::UploadBatch& upload);
     ~LightmapModel();
 
+    // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
+    // index for draw(). Pass 0 is the system's default colour pass.
+    size_t add_pass(const PassDesc& pass) { return surfaces_->add_pass(pass); }
+
     // Inside the caller's render pass: every primitive with its material, lit by `technique` (one of those
-    // loaded), under `model`.
+    // loaded), under `model`, with the pipelines of `pass`. Depth and shadow passes ignore the technique's
+    // lighting (any loaded technique will do).
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
-              const glm::mat4& model) const;
+              const glm::mat4& model, size_t pass = 0) const;
 
     const io::LightmapAsset& asset() const { return *asset_; }
 

@@ -74,8 +74,11 @@ class PrtModel
     void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting);
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
     // with its own material, under `model`, with the frame set of this view. Primitive p is draw id p + 1 in
-    // the aux attachment.
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const;
+    // the aux attachment. `pass`: an index from add_pass (0: the system's default colour pass).
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+              size_t pass = 0) const;
+    // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass).
+    size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
 
     CoefficientSource& coefficients() { return *source_; }
     const io::PrtAsset& asset() const { return *asset_; }

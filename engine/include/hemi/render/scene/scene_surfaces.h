@@ -41,25 +41,34 @@ class SceneSurfaces
                   gpu::UploadBatch& upload);
     ~SceneSurfaces();
 
+    // Compiles every primitive's type for another pass of the caller's frame (a depth prepass, a shadow
+    // map, a colour pass into another target) and returns its index for draw(). Pass 0 is the system's
+    // default colour pass. The mesh, textures and materials are shared by every pass.
+    size_t add_pass(const PassDesc& pass);
+
     // Inside the caller's render pass: every primitive with its material and variants[variant],
-    // coefficients from `source` at `coefficient_offset` (the DrawPush field), under `model`. Primitive p is
-    // draw id p + 1.
+    // coefficients from `source` at `coefficient_offset` (the DrawPush field), under `model`, with the
+    // pipelines of `pass` (add_pass). Primitive p is draw id p + 1. A depth pass (PassKind::Depth) skips
+    // blended primitives; a shadow pass draws them alpha-tested at their alphaCutoff.
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
-              const glm::mat4& model, size_t variant = 0) const;
+              const glm::mat4& model, size_t variant = 0, size_t pass = 0) const;
 
     const GpuMesh& mesh() const { return mesh_; }
     size_t material_count() const { return materials_.size(); }
 
   private:
+    MaterialSystem* system_;
     GpuMesh mesh_;
     TextureSet textures_;
     std::vector<std::unique_ptr<MaterialInstance>> materials_;
     struct Draw
     {
         uint32_t first_index, index_count, material;
-        std::vector<const MaterialType*> types; // per variant
+        std::vector<MaterialKey> keys;                       // per variant
+        std::vector<std::vector<const MaterialType*>> types; // per pass, per variant
     };
     std::vector<Draw> draws_;
+    std::vector<PassKind> passes_;
 };
 
 } // namespace hemi::render

@@ -1,0 +1,500 @@
+// One loaded level in every pass of an engine's frame (render::PassDesc): a depth prepass, a colour pass
+// testing EQUAL against it, and a shadow map from a light's view, all from one LightmapModel; and glTF's
+// alpha modes: MASK cuts at alphaCutoff (in colour and depth passes), BLEND blends over what is there.
+// Known pixels: analytic depths of the level's planes, the clear colour, the texture's colours.
+#include "../gpu_fixture.h"
+
+#include "engine_pass.h"
+
+#include <hemi/bake/lightmap_atlas.h>
+#include <hemi/bake/lightmap_bake.h>
+#include <hemi/gpu/commands.h>
+#include <hemi/io/image.h>
+#include <hemi/math/camera.h>
+#include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/material/material_instance.h>
+#include <hemi/render/scene/gpu_mesh.h>
+#include <hemi/render/scene/lightmap_model.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+namespace
+{
+using namespace hemi;
+
+class Passes : public test::GpuTest
+{
+};
+
+constexpr uint32_t kSize = 64;
+
+// A render pass with one D32 attachment, cleared to 1 and stored (a shadow map, or a prepass read back).
+struct DepthPass
+{
+    gpu::Image depth;
+    gpu::RenderPass render_pass;
+    gpu::Framebuffer framebuffer;
+
+    DepthPass()
+    {
+        const VkDevice d = test::device().device();
+        depth = gpu::create_image(test::device(), {kSize, kSize, VK_FORMAT_D32_SFLOAT,
+                                                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+        VkAttachmentDescription a{};
+        a.format = VK_FORMAT_D32_SFLOAT;
+        a.samples = VK_SAMPLE_COUNT_1_BIT;
+        a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+        a.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+        a.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        a.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        a.finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+        const VkAttachmentReference ref{0, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+        VkSubpassDescription subpass{};
+        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        subpass.pDepthStencilAttachment = &ref;
+        VkSubpassDependency dependency{};
+        dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
+        dependency.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+        dependency.dstStageMask = VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT;
+        dependency.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+        dependency.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+        VkRenderPassCreateInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        rp.attachmentCount = 1;
+        rp.pAttachments = &a;
+        rp.subpassCount = 1;
+        rp.pSubpasses = &subpass;
+        rp.dependencyCount = 1;
+        rp.pDependencies = &dependency;
+        VkRenderPass raw_pass;
+        if (vkCreateRenderPass(d, &rp, nullptr, &raw_pass) != VK_SUCCESS)
+            throw std::runtime_error("vkCreateRenderPass failed");
+        render_pass = gpu::RenderPass(d, raw_pass);
+        const VkImageView view = depth.view();
+        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fb.renderPass = render_pass;
+        fb.attachmentCount = 1;
+        fb.pAttachments = &view;
+        fb.width = fb.height = kSize;
+        fb.layers = 1;
+        VkFramebuffer raw_fb;
+        if (vkCreateFramebuffer(d, &fb, nullptr, &raw_fb) != VK_SUCCESS)
+            throw std::runtime_error("vkCreateFramebuffer failed");
+        framebuffer = gpu::Framebuffer(d, raw_fb);
+    }
+    void begin(VkCommandBuffer cmd) const
+    {
+        VkClearValue clear{};
+        clear.depthStencil = {1.0f, 0};
+        VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+        begin.renderPass = render_pass;
+        begin.framebuffer = framebuffer;
+        begin.renderArea = {{0, 0}, {kSize, kSize}};
+        begin.clearValueCount = 1;
+        begin.pClearValues = &clear;
+        vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+        test::EnginePass::set_viewport(cmd, kSize, kSize);
+    }
+    std::vector<float> read() const
+    {
+        const auto bytes =
+            gpu::read_image(test::device(), depth, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
+        std::vector<float> out(bytes.size() / 4);
+        std::memcpy(out.data(), bytes.data(), bytes.size());
+        return out;
+    }
+};
+
+std::vector<float> read_color(const test::EnginePass& pass)
+{
+    const auto bytes =
+        gpu::read_image(test::device(), pass.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    std::vector<float> out(bytes.size() / 4);
+    std::memcpy(out.data(), bytes.data(), bytes.size());
+    return out;
+}
+
+// A level of two primitives: a floor z = 0 over [-1, 1]^2 and a table top z = 0.5 over [-0.5, 0.5]^2, both
+// facing up, with their own lightmap charts, baked under a sky and a sun (H6), at 32^2.
+io::LightmapAsset level()
+{
+    io::LightmapAsset a;
+    io::Mesh& m = a.mesh;
+    auto quad = [&](float half, float z, glm::vec2 uv_origin)
+    {
+        const uint32_t base = uint32_t(m.positions.size());
+        const glm::vec2 corners[4] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        for (const glm::vec2& c : corners)
+        {
+            m.positions.emplace_back(half * c.x, half * c.y, z);
+            m.normals.emplace_back(0, 0, 1);
+            m.tangents.emplace_back(1, 0, 0, 1);
+            m.uvs.push_back(c * 0.5f + 0.5f);
+            m.uvs1.push_back(uv_origin + (c * 0.5f + 0.5f) * 0.45f);
+        }
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    };
+    quad(1.0f, 0.0f, {0.02f, 0.02f});
+    quad(0.5f, 0.5f, {0.52f, 0.52f});
+    io::Material floor, top;
+    floor.base_color_factor = glm::vec4(0.8f, 0.7f, 0.6f, 1.0f);
+    top.base_color_factor = glm::vec4(0.3f, 0.5f, 0.8f, 1.0f);
+    a.materials = {floor, top};
+    a.primitives = {{0, 6, 0}, {6, 6, 1}};
+    bake::LightmapUvReport report;
+    const bake::LightmapAtlas atlas = bake::rasterize_lightmap(m, 32, 32, report);
+    bake::LightmapLights lights;
+    lights.uniform = glm::vec3(0.3f, 0.35f, 0.4f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.5f, -0.3f, 0.7f));
+    lights.sun_irradiance = glm::vec3(2.0f, 1.8f, 1.5f);
+    bake::LightmapBakeOptions o;
+    o.rays = 16;
+    const bake::LightmapSh sh = bake::bake_lightmap_sh(m, atlas, lights, o);
+    a.width = a.height = 32;
+    a.covered_texels = uint32_t(atlas.texels.size());
+    a.outputs.push_back({"h6", 6, bake::lightmap_maps("h6", atlas, sh)});
+    return a;
+}
+
+// Vulkan clip space from a light straight above, looking down -z: x right, y down, depth (2 - z - 0.5) / 2.5
+// (z = 0.5: 0.4, z = 0: 0.6) over [-1.25, 1.25]^2.
+glm::mat4 light_view_projection()
+{
+    glm::mat4 m(0.0f);
+    m[0][0] = 1.0f / 1.25f;  // x
+    m[1][1] = -1.0f / 1.25f; // y down
+    m[2][2] = -1.0f / 2.5f;  // depth = (1.5 - z) / 2.5
+    m[3][2] = 1.5f / 2.5f;
+    m[3][3] = 1.0f;
+    return m;
+}
+
+} // namespace
+
+// The level drawn three ways from one LightmapModel (one load, three sets of pipelines): a colour pass with
+// LESS (the reference); a depth prepass, then the colour pass with EQUAL and no depth writes, which equals
+// the reference at every pixel (and draws nothing without the prepass); and a shadow map from above whose
+// texels are the planes' analytic depths plus the depth bias asked for.
+TEST_F(Passes, OneLevelDrawsInAPrepassAShadowPassAndTheColourPass)
+{
+    gpu::Device& dev = test::device();
+    const io::LightmapAsset asset = level();
+    const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    const DepthPass shadow_target;
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    gpu::UploadBatch upload(dev);
+    render::LightmapModel model(system, asset, {"h6"}, upload);
+
+    render::PassDesc prepass;
+    prepass.kind = render::PassKind::Depth;
+    prepass.target = target;
+    render::PassDesc equal;
+    equal.target = target;
+    equal.target.depth_compare = VK_COMPARE_OP_EQUAL;
+    equal.target.depth_write = false;
+    render::PassDesc shadow;
+    shadow.kind = render::PassKind::Shadow;
+    shadow.target.render_pass = shadow_target.render_pass;
+    shadow.target.color_attachments = 0;
+    shadow.depth_bias_constant = 1000.0f;
+    shadow.depth_bias_slope = 0.0f;
+    render::PassDesc unbiased = shadow;
+    unbiased.kind = render::PassKind::Depth;
+    const size_t prepass_index = model.add_pass(prepass), equal_index = model.add_pass(equal),
+                 shadow_index = model.add_pass(shadow), unbiased_index = model.add_pass(unbiased);
+    const size_t types = system.type_count();
+    // Every pass of the level is compiled once: adding the same pass again compiles nothing.
+    model.add_pass(prepass);
+    EXPECT_EQ(system.type_count(), types);
+
+    render::FrameSet camera(system), light(system);
+    render::FrameData view;
+    view.eye = glm::vec3(0.8f, -2.2f, 2.0f);
+    view.view_projection = math::look_at_projection(view.eye, glm::vec3(0.0f), 45.0f, 1.0f);
+    render::FrameData from_light;
+    from_light.view_projection = light_view_projection();
+    const float clear[4] = {0, 0, 0, 0};
+    auto colour = [&](bool with_prepass, size_t colour_index)
+    {
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          upload.record(cmd);
+                          camera.record_update(cmd, view);
+                          pass.begin(cmd, clear);
+                          if (with_prepass)
+                              model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), prepass_index);
+                          model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), colour_index);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        return read_color(pass);
+    };
+    const std::vector<float> reference = colour(false, 0);
+    const std::vector<float> after_prepass = colour(true, equal_index);
+    const std::vector<float> without_prepass = colour(false, equal_index);
+    int covered = 0, different = 0, drawn_without = 0;
+    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
+    {
+        covered += reference[p * 4 + 3] == 1.0f;
+        drawn_without += without_prepass[p * 4 + 3] != 0.0f;
+        for (int c = 0; c < 4; ++c)
+            different += std::abs(after_prepass[p * 4 + c] - reference[p * 4 + c]) >
+                         0.005f * std::abs(reference[p * 4 + c]);
+    }
+    EXPECT_GT(covered, 1500);
+    EXPECT_EQ(different, 0) << "the colour pass after the prepass differs from the plain colour pass";
+    EXPECT_EQ(drawn_without, 0) << "EQUAL drew without a prepass: the test cannot tell the prepass's depth";
+
+    auto depth_from_light = [&](size_t index)
+    {
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          light.record_update(cmd, from_light);
+                          shadow_target.begin(cmd);
+                          model.draw(cmd, light.set(), "h6", glm::mat4(1.0f), index);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        return shadow_target.read();
+    };
+    const std::vector<float> biased = depth_from_light(shadow_index),
+                             exact = depth_from_light(unbiased_index);
+    // D32_SFLOAT: the bias is constant x 2^(e - 23) with e the exponent of the primitive's largest depth:
+    // 2^-25 for the top (depth 0.4), 2^-24 for the floor (0.6).
+    int table = 0, floor = 0;
+    for (uint32_t y = 2; y + 2 < kSize; y += 3)
+        for (uint32_t x = 2; x + 2 < kSize; x += 3)
+        {
+            // The texel centre's world position under the light.
+            const float wx = ((x + 0.5f) / kSize * 2.0f - 1.0f) * 1.25f,
+                        wy = -((y + 0.5f) / kSize * 2.0f - 1.0f) * 1.25f;
+            const float e = exact[y * kSize + x], b = biased[y * kSize + x];
+            const bool on_table = std::abs(wx) < 0.48f && std::abs(wy) < 0.48f;
+            const bool off_table = std::abs(wx) > 0.52f || std::abs(wy) > 0.52f;
+            const bool on_floor = off_table && std::abs(wx) < 0.98f && std::abs(wy) < 0.98f;
+            if (on_table)
+            {
+                ++table;
+                EXPECT_NEAR(e, 0.4f, 1e-6f) << x << "," << y;
+                EXPECT_NEAR(b - e, 1000.0f * std::ldexp(1.0f, -25), 2e-6f) << x << "," << y;
+            }
+            else if (on_floor)
+            {
+                ++floor;
+                EXPECT_NEAR(e, 0.6f, 1e-6f) << x << "," << y;
+                EXPECT_NEAR(b - e, 1000.0f * std::ldexp(1.0f, -24), 4e-6f) << x << "," << y;
+            }
+            else if (off_table && (std::abs(wx) > 1.02f || std::abs(wy) > 1.02f))
+            {
+                EXPECT_EQ(e, 1.0f) << "outside the level " << x << "," << y;
+            }
+        }
+    EXPECT_GT(table, 50);
+    EXPECT_GT(floor, 100);
+}
+
+namespace
+{
+// A quad facing the camera with a 2 x 1 base colour texture, nearest-sampled: the left texel's alpha is 0.25,
+// the right one's 0.75; alphaCutoff 0.5. Lit by a white furnace probe (colour = albedo), over a clear colour.
+struct AlphaQuad
+{
+    io::Mesh mesh;
+    // Colours whose sRGB decoding is exact (0 and 1: lavapipe decodes others to within ~0.7%).
+    io::ImageRgba8 texture{2, 1, {255, 0, 255, 64, 0, 255, 255, 191}};
+    glm::vec3 left{0.0f}, right{0.0f}; // linear albedo of the two texels
+    AlphaQuad()
+    {
+        mesh.positions = {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
+        mesh.normals.assign(4, glm::vec3(0, -1, 0));
+        mesh.tangents.assign(4, glm::vec4(1, 0, 0, 1));
+        mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+        mesh.indices = {0, 1, 2, 0, 2, 3};
+        auto linear = [](uint8_t v)
+        {
+            const float c = v / 255.0f;
+            return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+        };
+        for (int c = 0; c < 3; ++c)
+        {
+            left[c] = linear(texture.pixels[size_t(c)]);
+            right[c] = linear(texture.pixels[size_t(4 + c)]);
+        }
+    }
+};
+
+struct AlphaImages
+{
+    std::vector<float> color, depth;
+};
+
+AlphaImages draw_alpha(io::AlphaMode mode, const float clear[4])
+{
+    gpu::Device& dev = test::device();
+    const AlphaQuad q;
+    const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    const DepthPass depth;
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    gpu::UploadBatch upload(dev);
+    const render::GpuMesh mesh(dev, q.mesh, upload);
+    io::Material material;
+    material.base_color.image = 0;
+    material.base_color.sampler.mag_filter = io::Filter::Nearest;
+    material.base_color.sampler.min_filter = io::Filter::Nearest;
+    material.base_color.sampler.mipmaps = false;
+    material.alpha_mode = mode;
+    material.alpha_cutoff = 0.5f;
+    render::TextureSet textures(dev, std::span<const io::ImageRgba8>(&q.texture, 1),
+                                std::span<const io::Material>(&material, 1), upload);
+    const render::MaterialInstance instance(system, textures, material, upload);
+    render::ProbeCoefficients probe(system);
+    std::vector<glm::vec3> furnace(9, glm::vec3(0.0f));
+    furnace[0] = glm::vec3(float(M_PI) * 2.0f * std::sqrt(float(M_PI))); // E = pi everywhere
+    render::MaterialKey key;
+    key.source = render::CoefficientSourceKind::Uniform;
+    key.frame = render::ShadingFrame::World;
+    key.alpha = instance.alpha_mode();
+    render::PassDesc depth_pass;
+    depth_pass.kind = render::PassKind::Shadow;
+    depth_pass.target.render_pass = depth.render_pass;
+    depth_pass.target.color_attachments = 0;
+    depth_pass.depth_bias_constant = depth_pass.depth_bias_slope = 0.0f;
+    const render::MaterialType& colour_type = system.type(key);
+    const render::MaterialType& depth_type = system.type(key, depth_pass);
+    render::FrameSet frame(system);
+    render::FrameData f;
+    f.view_projection = math::look_at_projection(glm::vec3(0, -3, 0), glm::vec3(0.0f), 45.0f, 1.0f);
+    auto draw = [&](VkCommandBuffer cmd, const render::MaterialType& type)
+    {
+        render::DrawBindings b;
+        b.type = &type;
+        b.frame = frame.set();
+        b.material = instance.set();
+        b.source = probe.set();
+        b.push.model = glm::mat4(1.0f);
+        render::bind_material(cmd, b);
+        mesh.bind(cmd);
+        mesh.draw(cmd, 0, mesh.index_count());
+    };
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      upload.record(cmd);
+                      frame.record_update(cmd, f);
+                      probe.record_update(cmd, furnace);
+                      pass.begin(cmd, clear);
+                      draw(cmd, colour_type);
+                      vkCmdEndRenderPass(cmd);
+                      depth.begin(cmd);
+                      draw(cmd, depth_type);
+                      vkCmdEndRenderPass(cmd);
+                  });
+    return {read_color(pass), depth.read()};
+}
+} // namespace
+
+// MASK: the left half (alpha 0.25) is cut, in the colour pass and in a depth pass alike; the right half
+// (0.75) is drawn opaque with its albedo. BLEND: each half is albedo * a + clear * (1 - a) (alpha a + clear
+// alpha * (1 - a)), and the opaque drawing of the same quad ignores alpha.
+TEST_F(Passes, MaskCutsAtAlphaCutoffAndBlendBlends)
+{
+    const float clear[4] = {0.1f, 0.2f, 0.9f, 0.5f};
+    const AlphaQuad q;
+    const AlphaImages mask = draw_alpha(io::AlphaMode::Mask, clear);
+    const AlphaImages blend = draw_alpha(io::AlphaMode::Blend, clear);
+    const AlphaImages opaque = draw_alpha(io::AlphaMode::Opaque, clear);
+    int left = 0, right = 0;
+    auto near = [](float got, float want) { return std::abs(got - want) <= 0.005f * std::abs(want) + 1e-5f; };
+    for (uint32_t y = kSize / 2 - 4; y < kSize / 2 + 4; ++y)
+        for (uint32_t x = 16; x < 48; ++x)
+        {
+            if (x >= 30 && x < 34)
+                continue; // where the two texels meet
+            const bool is_left = x < 32;
+            const glm::vec3 albedo = is_left ? q.left : q.right;
+            const float a = is_left ? 64.0f / 255.0f : 191.0f / 255.0f;
+            (is_left ? left : right)++;
+            const size_t p = (size_t(y) * kSize + x) * 4;
+            for (int c = 0; c < 3; ++c)
+            {
+                EXPECT_TRUE(near(mask.color[p + c], is_left ? clear[c] : albedo[c]))
+                    << "mask " << x << "," << y << " channel " << c << ": " << mask.color[p + c];
+                EXPECT_TRUE(near(blend.color[p + c], albedo[c] * a + clear[c] * (1.0f - a)))
+                    << "blend " << x << "," << y << " channel " << c << ": " << blend.color[p + c];
+                EXPECT_TRUE(near(opaque.color[p + c], albedo[c]))
+                    << "opaque " << x << "," << y << " " << opaque.color[p + c] << " vs " << albedo[c];
+            }
+            EXPECT_TRUE(near(mask.color[p + 3], is_left ? clear[3] : 1.0f));
+            EXPECT_TRUE(near(blend.color[p + 3], a + clear[3] * (1.0f - a))) << blend.color[p + 3];
+            // Depth: the cut half stays at the clear depth; the other half, and every texel of the opaque
+            // and (alpha-tested in depth passes) blended quads, holds the quad's depth.
+            const float d = mask.depth[size_t(y) * kSize + x];
+            if (is_left)
+            {
+                EXPECT_EQ(d, 1.0f) << "mask depth " << x << "," << y;
+            }
+            else
+            {
+                EXPECT_LT(d, 1.0f) << "mask depth " << x << "," << y;
+            }
+            EXPECT_LT(opaque.depth[size_t(y) * kSize + x], 1.0f);
+        }
+    EXPECT_GT(left, 50);
+    EXPECT_GT(right, 50);
+}
+
+// Types requested from several threads at once (an engine's loading jobs): each key is compiled once and
+// every thread gets the same type; prepare() compiles a list up front.
+TEST_F(Passes, TypesAreMadeOnceWhenSeveralThreadsAskAtOnce)
+{
+    const test::EnginePass pass(8, 8, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(test::device(), target);
+    std::vector<render::MaterialKey> keys;
+    for (int basis : {HEMI_BASIS_SH9, HEMI_BASIS_H4, HEMI_BASIS_H6, HEMI_BASIS_HL2})
+    {
+        render::MaterialKey key;
+        key.source = render::CoefficientSourceKind::Texel;
+        key.basis = basis;
+        keys.push_back(key);
+        key.alpha = io::AlphaMode::Mask;
+        keys.push_back(key);
+    }
+    std::vector<std::vector<const render::MaterialType*>> got(4);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < got.size(); ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                got[t].resize(keys.size());
+                for (size_t i = 0; i < keys.size(); ++i)
+                {
+                    const size_t k = (i + t * 3) % keys.size(); // each thread in its own order
+                    got[t][k] = &system.type(keys[k]);
+                }
+            });
+    for (std::thread& t : threads)
+        t.join();
+    EXPECT_EQ(system.type_count(), keys.size());
+    for (size_t t = 1; t < got.size(); ++t)
+        EXPECT_EQ(got[t], got[0]) << "thread " << t;
+    render::PassDesc depth;
+    depth.kind = render::PassKind::Depth;
+    depth.target = target;
+    system.prepare(keys, depth);
+    // Depth pipelines ignore the basis: one for the opaque keys, one for the alpha-tested ones.
+    EXPECT_EQ(system.type_count(), keys.size() + 2);
+}
