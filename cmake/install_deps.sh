@@ -9,6 +9,8 @@ packages=(
     build-essential cmake ninja-build pkg-config
     # Vulkan: loader + headers, Mesa lavapipe (software Vulkan), Khronos validation layers, tools
     libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools spirv-tools
+    # volk: the test of an engine that loads Vulkan with it (tests/volk/)
+    libvulkan-volk-dev
     # shaders
     glslang-tools glslang-dev
     # math, scene and image formats

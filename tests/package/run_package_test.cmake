@@ -27,3 +27,15 @@ execute_process(COMMAND ${WORK_DIR}/build/consumer RESULT_VARIABLE rc)
 if(rc)
     message(FATAL_ERROR "the consumer program failed (${rc})")
 endif()
+# The link interface does not force the Vulkan loader (hemi loads its entry points at run time): the
+# exported targets name only Vulkan's headers, and the consumer, which makes a hemi::gpu::Device and draws
+# nothing with Vulkan itself, runs without linking libvulkan.
+file(GLOB targets_files ${WORK_DIR}/prefix/lib*/cmake/hemi/hemiTargets.cmake)
+file(READ ${targets_files} targets)
+if(targets MATCHES "Vulkan::Vulkan" OR targets MATCHES "libvulkan")
+    message(FATAL_ERROR "the installed package's link interface forces the Vulkan loader")
+endif()
+execute_process(COMMAND ldd ${WORK_DIR}/build/consumer OUTPUT_VARIABLE linked RESULT_VARIABLE rc)
+if(rc OR linked MATCHES "libvulkan")
+    message(FATAL_ERROR "the consumer links the Vulkan loader (${rc}):\n${linked}")
+endif()

@@ -194,6 +194,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
 #if defined(__SANITIZE_ADDRESS__)
     pin_vulkan_libraries();
 #endif
+    dispatch::load_global(nullptr); // the loader, opened at run time
     bool validation = desc.validation;
     if (const char* env = std::getenv("HEMI_VALIDATION"); env && *env)
         validation = std::string_view(env) != "0";
@@ -240,6 +241,17 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     if (validation)
         instance_info.pNext = &messenger_info;
     HEMI_VK_CHECK(vkCreateInstance(&instance_info, nullptr, &instance_));
+    try
+    {
+        dispatch::load_instance(instance_);
+    }
+    catch (...)
+    {
+        if (auto destroy = reinterpret_cast<PFN_vkDestroyInstance>(
+                vkGetInstanceProcAddr(instance_, "vkDestroyInstance")))
+            destroy(instance_, nullptr);
+        throw;
+    }
 
     try
     {
@@ -326,6 +338,8 @@ Device::Device(const ExternalDevice& external)
 #endif
     if (!instance_ || !physical_device_ || !device_ || !queue_)
         throw std::invalid_argument("hemi: ExternalDevice needs instance, physical_device, device and queue");
+    dispatch::load_global(external.get_instance_proc_addr);
+    dispatch::load_instance(instance_);
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);
     std::vector<VkQueueFamilyProperties> families(count);

@@ -58,6 +58,10 @@ struct ExternalDevice
     // True when `device` was created with Vulkan 1.3's dynamicRendering feature enabled: then hemi's
     // materials can also draw inside vkCmdBeginRendering (RenderTargetDesc without a render pass).
     bool dynamic_rendering = false;
+    // Where hemi gets its Vulkan entry points: the engine's vkGetInstanceProcAddr (volk's, its own loader's,
+    // a layer chain's); null opens the system's loader (libvulkan.so.1) at run time. hemi does not link the
+    // loader.
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
 };
 
 // Whether a debug-utils message comes from the Vulkan loader (e.g. "Layer ... forced enabled due to env var

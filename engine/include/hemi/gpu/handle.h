@@ -1,5 +1,7 @@
 #pragma once
 // A move-only owner of one device-level Vulkan handle: destroys it with its vkDestroy* on destruction.
+// The destroy calls live in hemi's sources (gpu/handle.cpp, through hemi's own entry points), so this header
+// names no Vulkan function: it compiles beside volk (VK_NO_PROTOTYPES) or any other way of loading Vulkan.
 
 #include <vulkan/vulkan.h>
 
@@ -8,7 +10,30 @@
 namespace hemi::gpu
 {
 
-template <typename T, auto Destroy> class UniqueHandle
+namespace detail
+{
+// Non-dispatchable handles are distinct pointer types on 64-bit targets (what hemi supports), so each has
+// its own overload.
+static_assert(sizeof(void*) == 8, "hemi supports 64-bit targets only");
+void destroy(VkDevice device, VkSampler handle);
+void destroy(VkDevice device, VkBufferView handle);
+void destroy(VkDevice device, VkImageView handle);
+void destroy(VkDevice device, VkShaderModule handle);
+void destroy(VkDevice device, VkDescriptorSetLayout handle);
+void destroy(VkDevice device, VkPipelineLayout handle);
+void destroy(VkDevice device, VkPipeline handle);
+void destroy(VkDevice device, VkDescriptorPool handle);
+void destroy(VkDevice device, VkRenderPass handle);
+void destroy(VkDevice device, VkFramebuffer handle);
+void destroy(VkDevice device, VkQueryPool handle);
+void destroy(VkDevice device, VkCommandPool handle);
+void destroy(VkDevice device, VkFence handle);
+void destroy(VkDevice device, VkDeviceMemory handle);
+void destroy(VkDevice device, VkBuffer handle);
+void destroy(VkDevice device, VkImage handle);
+} // namespace detail
+
+template <typename T> class UniqueHandle
 {
   public:
     UniqueHandle() = default;
@@ -37,7 +62,7 @@ template <typename T, auto Destroy> class UniqueHandle
     void reset()
     {
         if (handle_ != VK_NULL_HANDLE)
-            Destroy(device_, handle_, nullptr);
+            detail::destroy(device_, handle_);
         handle_ = VK_NULL_HANDLE;
     }
 
@@ -46,21 +71,21 @@ template <typename T, auto Destroy> class UniqueHandle
     T handle_ = VK_NULL_HANDLE;
 };
 
-using Sampler = UniqueHandle<VkSampler, vkDestroySampler>;
-using BufferView = UniqueHandle<VkBufferView, vkDestroyBufferView>;
-using ImageView = UniqueHandle<VkImageView, vkDestroyImageView>;
-using ShaderModule = UniqueHandle<VkShaderModule, vkDestroyShaderModule>;
-using DescriptorSetLayout = UniqueHandle<VkDescriptorSetLayout, vkDestroyDescriptorSetLayout>;
-using PipelineLayout = UniqueHandle<VkPipelineLayout, vkDestroyPipelineLayout>;
-using Pipeline = UniqueHandle<VkPipeline, vkDestroyPipeline>;
-using DescriptorPool = UniqueHandle<VkDescriptorPool, vkDestroyDescriptorPool>;
-using RenderPass = UniqueHandle<VkRenderPass, vkDestroyRenderPass>;
-using Framebuffer = UniqueHandle<VkFramebuffer, vkDestroyFramebuffer>;
-using QueryPool = UniqueHandle<VkQueryPool, vkDestroyQueryPool>;
-using CommandPool = UniqueHandle<VkCommandPool, vkDestroyCommandPool>;
-using Fence = UniqueHandle<VkFence, vkDestroyFence>;
-using DeviceMemory = UniqueHandle<VkDeviceMemory, vkFreeMemory>;
-using VkBufferHandle = UniqueHandle<VkBuffer, vkDestroyBuffer>;
-using VkImageHandle = UniqueHandle<VkImage, vkDestroyImage>;
+using Sampler = UniqueHandle<VkSampler>;
+using BufferView = UniqueHandle<VkBufferView>;
+using ImageView = UniqueHandle<VkImageView>;
+using ShaderModule = UniqueHandle<VkShaderModule>;
+using DescriptorSetLayout = UniqueHandle<VkDescriptorSetLayout>;
+using PipelineLayout = UniqueHandle<VkPipelineLayout>;
+using Pipeline = UniqueHandle<VkPipeline>;
+using DescriptorPool = UniqueHandle<VkDescriptorPool>;
+using RenderPass = UniqueHandle<VkRenderPass>;
+using Framebuffer = UniqueHandle<VkFramebuffer>;
+using QueryPool = UniqueHandle<VkQueryPool>;
+using CommandPool = UniqueHandle<VkCommandPool>;
+using Fence = UniqueHandle<VkFence>;
+using DeviceMemory = UniqueHandle<VkDeviceMemory>;
+using VkBufferHandle = UniqueHandle<VkBuffer>;
+using VkImageHandle = UniqueHandle<VkImage>;
 
 } // namespace hemi::gpu
