@@ -91,7 +91,8 @@ void main()
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
-    hemi_lightmap_coefficients(coefficient_maps, in_uv1, K, c);
+    hemi_lightmap_coefficients(coefficient_maps,
+                               in_uv1 * draw.lightmap_scale_offset.xy + draw.lightmap_scale_offset.zw, K, c);
 #else
     HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
     {

@@ -421,6 +421,7 @@ hemi::io::GltfScene blender_like_scene()
     brick.occlusion.image = 0; // occlusionTexture (red channel) and its strength
     brick.occlusion.sampler.wrap_s = Wrap::ClampToEdge;
     brick.occlusion_strength = 0.7f;
+    brick.technique = "ssbump"; // a custom property: Blender exports it as the material's extras
     Material panel;
     panel.name = "panel";
     panel.base_color.image = 2;
@@ -432,6 +433,8 @@ hemi::io::GltfScene blender_like_scene()
     panel.emissive_factor = {0.1f, 0.2f, 0.3f};
     panel.emissive.image = 0; // the brick image again, with the default sampler
     panel.double_sided = true;
+    panel.alpha_mode = AlphaMode::Mask;
+    panel.alpha_cutoff = 0.3f;
     Material plain;
     plain.name = "plain";
     plain.base_color_factor = {0.2f, 0.4f, 0.6f, 1.0f};
@@ -495,7 +498,9 @@ TEST(GltfReader, BlenderLikeSceneReadsBackAsWritten)
         EXPECT_EQ(out.mesh.indices, in.mesh.indices);
         // TEXCOORD_1 on the panel only: the others read zeros, and the reader says so.
         EXPECT_NE(warning_naming(out, "TEXCOORD_1"), "") << all_warnings(out);
-        EXPECT_EQ(out.warnings.size(), 1u) << all_warnings(out);
+        // The panel's MASK: drawn with alpha, baked opaque, and the reader says so.
+        EXPECT_NE(warning_naming(out, "alphaMode MASK"), "") << all_warnings(out);
+        EXPECT_EQ(out.warnings.size(), 2u) << all_warnings(out);
         // The images, encoded as they were, and decoding to the pixels written.
         ASSERT_EQ(out.images.size(), 3u);
         EXPECT_EQ(out.images[0].name, "brick base.png");

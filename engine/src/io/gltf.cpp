@@ -633,6 +633,13 @@ struct Reader
         if (!std::isfinite(m.occlusion_strength))
             fail(label + ": non-finite occlusion strength");
         m.double_sided = in.doubleSided;
+        if (in.extras.IsObject() && in.extras.Has("hemi_technique"))
+        {
+            const tinygltf::Value& t = in.extras.Get("hemi_technique");
+            if (!t.IsString() || t.Get<std::string>().empty())
+                fail(label + ": extras.hemi_technique is not a technique name");
+            m.technique = t.Get<std::string>();
+        }
         if (in.alphaMode == "MASK" || in.alphaMode == "BLEND")
         {
             m.alpha_mode = in.alphaMode == "MASK" ? io::AlphaMode::Mask : io::AlphaMode::Blend;
@@ -1519,6 +1526,12 @@ void write_gltf(const std::filesystem::path& path, const GltfScene& scene,
         out.occlusionTexture.strength = mat.occlusion_strength;
         out.emissiveFactor = {mat.emissive_factor.r, mat.emissive_factor.g, mat.emissive_factor.b};
         out.doubleSided = mat.double_sided;
+        if (!mat.technique.empty())
+        {
+            tinygltf::Value::Object extras;
+            extras["hemi_technique"] = tinygltf::Value(mat.technique);
+            out.extras = tinygltf::Value(extras);
+        }
         if (mat.alpha_mode != io::AlphaMode::Opaque)
         {
             out.alphaMode = mat.alpha_mode == io::AlphaMode::Mask ? "MASK" : "BLEND";

@@ -57,6 +57,8 @@ std::string scene_json(const std::vector<Material>& materials_in, const std::vec
             {"double_sided", m.double_sided}};
         if (m.occlusion.present())
             j["occlusion_strength"] = m.occlusion_strength;
+        if (!m.technique.empty())
+            j["technique"] = m.technique;
         if (m.alpha_mode != AlphaMode::Opaque)
         {
             j["alpha_mode"] = m.alpha_mode == AlphaMode::Mask ? "mask" : "blend";
@@ -212,6 +214,8 @@ struct SceneJson
             // Optional (assets written before hemi read occlusion textures have neither key).
             if (m.contains("occlusion_strength"))
                 out.occlusion_strength = number(m, "occlusion_strength", where);
+            if (m.contains("technique"))
+                out.technique = string(m, "technique", where);
             // Optional: absent = opaque (and in assets written before hemi drew alpha).
             if (m.contains("alpha_mode"))
             {

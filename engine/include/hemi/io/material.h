@@ -98,6 +98,10 @@ struct Material
     float occlusion_strength = 1.0f; // occlusion = 1 + strength (texel.r - 1)
     bool double_sided = false;       // no back-face culling; back faces are lit with the flipped normal
     AlphaMode alpha_mode = AlphaMode::Opaque;
+    // The lighting technique this material asks for when a level is drawn (e.g. "ssbump" for a wall whose
+    // normal-map slot holds an SSBump map), from glTF's material extras {"hemi_technique": "..."}; empty: the
+    // level's. render::LightmapModel draws it so (and can override it at load).
+    std::string technique;
     float alpha_cutoff = 0.5f; // MASK: alpha (base colour factor x texture) below it is cut
     bool operator==(const Material&) const = default;
 };

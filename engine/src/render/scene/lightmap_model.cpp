@@ -3,6 +3,7 @@
 
 #include <glm/matrix.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -42,11 +43,23 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
 }
 
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
-                             const std::vector<std::string>& techniques, gpu::UploadBatch& upload)
+                             const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
+                             const std::map<std::string, std::string>& material_techniques)
     : asset_(&asset)
 {
-    if (techniques.empty())
+    if (default_techniques.empty())
         throw std::invalid_argument("hemi: a lightmap model needs at least one technique");
+    // Each material's own technique (the asset's, or the caller's override by material name).
+    std::vector<std::string> material_technique;
+    for (const io::Material& m : asset.materials)
+    {
+        const auto it = material_techniques.find(m.name);
+        material_technique.push_back(it != material_techniques.end() ? it->second : m.technique);
+    }
+    std::vector<std::string> techniques = default_techniques;
+    for (const std::string& t : material_technique)
+        if (!t.empty() && std::find(techniques.begin(), techniques.end(), t) == techniques.end())
+            techniques.push_back(t);
     std::vector<SurfaceVariant> variants;
     for (const std::string& name : techniques)
     {
@@ -75,20 +88,55 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
     surfaces_ =
         std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
                                         CoefficientSourceKind::Texel, variants, upload);
+    for (size_t p = 0; p < surfaces_->primitive_count(); ++p)
+    {
+        const uint32_t m = surfaces_->primitive(p).material;
+        const std::string own = m < material_technique.size() ? material_technique[m] : std::string();
+        primitive_variant_.push_back(
+            own.empty() ? -1 : int(std::find(names_.begin(), names_.end(), own) - names_.begin()));
+    }
 }
 
 LightmapModel::~LightmapModel() = default;
 
+std::vector<LightmapDraw> LightmapModel::draw_list(const std::string& technique, size_t pass) const
+{
+    const auto it = std::find(names_.begin(), names_.end(), technique);
+    if (it == names_.end())
+        throw std::invalid_argument("hemi: technique '" + technique +
+                                    "' is not loaded in this lightmap model");
+    const size_t fallback = size_t(it - names_.begin());
+    std::vector<LightmapDraw> list;
+    for (size_t p = 0; p < surfaces_->primitive_count(); ++p)
+    {
+        const SceneSurfaces::Primitive prim = surfaces_->primitive(p);
+        LightmapDraw d;
+        d.primitive = p;
+        d.first_index = prim.first_index;
+        d.index_count = prim.index_count;
+        d.material = &surfaces_->material(p);
+        d.variant = primitive_variant_[p] >= 0 ? size_t(primitive_variant_[p]) : fallback;
+        d.technique = &names_[d.variant];
+        d.type = &surfaces_->type(p, d.variant, pass);
+        d.bounds_min = prim.bounds_min;
+        d.bounds_max = prim.bounds_max;
+        list.push_back(d);
+    }
+    return list;
+}
+
+void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry,
+                         const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset) const
+{
+    surfaces_->draw_primitive(cmd, frame, coefficients_.at(entry.variant)->set(), 0, model, entry.variant,
+                              pass, entry.primitive, lightmap_scale_offset);
+}
+
 void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
                          const glm::mat4& model, size_t pass) const
 {
-    for (size_t i = 0; i < names_.size(); ++i)
-        if (names_[i] == technique)
-        {
-            surfaces_->draw(cmd, frame, coefficients_[i]->set(), 0, model, i, pass);
-            return;
-        }
-    throw std::invalid_argument("hemi: technique '" + technique + "' is not loaded in this lightmap model");
+    for (const LightmapDraw& entry : draw_list(technique, pass))
+        draw(cmd, frame, entry, model, pass);
 }
 
 } // namespace hemi::render

@@ -1,5 +1,8 @@
 #include <hemi/render/scene/scene_surfaces.h>
 
+#include <glm/common.hpp>
+
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -21,6 +24,7 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
         materials.emplace_back(); // glTF's default material
     for (const io::Material& m : materials)
         materials_.push_back(std::make_unique<MaterialInstance>(system, textures_, m, upload));
+    material_data_ = materials;
     std::vector<io::Primitive> primitives = asset_primitives;
     if (primitives.empty())
         primitives.push_back({0, uint32_t(mesh.indices.size()), 0});
@@ -29,7 +33,12 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
         if (p.material >= materials_.size())
             throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) +
                                         " of " + std::to_string(materials_.size()));
-        Draw d{p.first_index, p.index_count, p.material, {}, {}};
+        Draw d{p.first_index, p.index_count, p.material, glm::vec3(INFINITY), glm::vec3(-INFINITY), {}, {}};
+        for (uint32_t i = p.first_index; i < p.first_index + p.index_count && i < mesh.indices.size(); ++i)
+        {
+            d.bounds_min = glm::min(d.bounds_min, mesh.positions[mesh.indices[i]]);
+            d.bounds_max = glm::max(d.bounds_max, mesh.positions[mesh.indices[i]]);
+        }
         for (const SurfaceVariant& v : variants)
         {
             MaterialKey key;
@@ -69,23 +78,54 @@ void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
         throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
     if (pass >= passes_.size())
         throw std::invalid_argument("hemi: surface pass " + std::to_string(pass) + " was not added");
-    mesh_.bind(cmd);
     for (size_t i = 0; i < draws_.size(); ++i)
-    {
-        const Draw& d = draws_[i];
-        if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
-            continue;
-        DrawBindings b;
-        b.type = d.types[pass][variant];
-        b.frame = frame;
-        b.material = materials_[d.material]->set();
-        b.source = source;
-        b.push.model = model;
-        b.push.coefficient_offset = coefficient_offset;
-        b.push.draw_id = uint32_t(i + 1);
-        bind_material(cmd, b);
-        mesh_.draw(cmd, d.first_index, d.index_count);
-    }
+        draw_primitive(cmd, frame, source, coefficient_offset, model, variant, pass, i);
+}
+
+void SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+                                   uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
+                                   size_t pass, size_t primitive,
+                                   const glm::vec4& lightmap_scale_offset) const
+{
+    const Draw& d = draws_.at(primitive);
+    if (variant >= d.keys.size() || pass >= passes_.size())
+        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " or pass " +
+                                    std::to_string(pass) + " does not exist");
+    if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
+        return;
+    DrawBindings b;
+    b.type = d.types[pass][variant];
+    b.frame = frame;
+    b.material = materials_[d.material]->set();
+    b.source = source;
+    b.push.model = model;
+    b.push.coefficient_offset = coefficient_offset;
+    b.push.draw_id = uint32_t(primitive + 1);
+    b.push.lightmap_scale_offset = lightmap_scale_offset;
+    bind_material(cmd, b);
+    mesh_.bind(cmd);
+    mesh_.draw(cmd, d.first_index, d.index_count);
+}
+
+SceneSurfaces::Primitive SceneSurfaces::primitive(size_t p) const
+{
+    const Draw& d = draws_.at(p);
+    return {d.first_index, d.index_count, d.material, d.bounds_min, d.bounds_max};
+}
+
+const MaterialType& SceneSurfaces::type(size_t primitive, size_t variant, size_t pass) const
+{
+    return *draws_.at(primitive).types.at(pass).at(variant);
+}
+
+VkDescriptorSet SceneSurfaces::material_set(size_t primitive) const
+{
+    return materials_.at(draws_.at(primitive).material)->set();
+}
+
+const io::Material& SceneSurfaces::material(size_t primitive) const
+{
+    return material_data_.at(draws_.at(primitive).material);
 }
 
 } // namespace hemi::render

@@ -111,12 +111,19 @@ struct DrawPush
     uint coefficient_offset; // texels; vertex source only
     uint draw_id;            // written to the aux attachment's blue channel (0 = background): picking, tests
     uint pad0, pad1;
+    // Texel source: where this draw's lightmap lookup goes, TEXCOORD_1 * xy + zw, so that several objects
+    // share one atlas, each in its own rectangle (default: (1, 1, 0, 0), the whole atlas).
+#ifdef __cplusplus
+    vec4 lightmap_scale_offset{1.0f, 1.0f, 0.0f, 0.0f};
+#else
+    vec4 lightmap_scale_offset;
+#endif
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 2 * HEMI_MAX_LIGHTS * 16, "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
-static_assert(sizeof(DrawPush) == 80, "push constants");
+static_assert(sizeof(DrawPush) == 96, "push constants (within the 128 bytes every device has)");
 static_assert(sizeof(EnvironmentUniforms) == 6 * 16, "std140 layout");
 } // namespace hemi::shared
 #endif

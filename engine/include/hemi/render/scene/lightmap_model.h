@@ -21,7 +21,10 @@
 #include <hemi/render/scene/scene_surfaces.h>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,22 +45,46 @@ const math::BasisDesc& lightmap_basis(const std::string& output);
 std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
                                       const glm::mat4& model);
 
+// One entry of a level's draw list: a primitive with its material and the technique that lights it, the
+// pipeline it binds and its bounds, for an engine to cull, sort and draw (LightmapModel::draw(cmd, frame,
+// entry, ...)).
+struct LightmapDraw
+{
+    size_t primitive = 0;
+    uint32_t first_index = 0, index_count = 0;
+    const io::Material* material = nullptr;
+    const std::string* technique = nullptr;       // the material's own, or the level's default
+    const MaterialType* type = nullptr;           // the pipeline (its key and pass): equal pointers share one
+    glm::vec3 bounds_min{0.0f}, bounds_max{0.0f}; // of the primitive's vertices, in the model's space
+    size_t variant = 0;                           // which loaded technique (internal)
+};
+
 class LightmapModel
 {
   public:
-    // `asset` must outlive the model. Loads each of `techniques` (outputs of the asset). Uploads go into
+    // `asset` must outlive the model. Loads each of `techniques` (outputs of the asset) and every technique
+    // a material asks for (io::Material::technique, e.g. an SSBump wall's "ssbump"), overridden by
+    // `material_techniques` (material name -> technique; "" = the level's default). Uploads go into
     // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
     LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
-                  const std::vector<std::string>& techniques, gpu::UploadBatch& upload);
+                  const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
+                  const std::map<std::string, std::string>& material_techniques = {});
     ~LightmapModel();
+
+    // The level's draw list for `technique` (its default: materials with their own technique keep it) in
+    // `pass`: no per-primitive decision is left to the caller.
+    std::vector<LightmapDraw> draw_list(const std::string& technique, size_t pass = 0) const;
+    // Inside the caller's render pass: one entry, under `model`, with this draw's lightmap rectangle
+    // (TEXCOORD_1 * xy + zw: several objects sharing one atlas).
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
+              size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
 
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
     // index for draw(). Pass 0 is the system's default colour pass.
     size_t add_pass(const PassDesc& pass) { return surfaces_->add_pass(pass); }
 
-    // Inside the caller's render pass: every primitive with its material, lit by `technique` (one of those
-    // loaded), under `model`, with the pipelines of `pass`. Depth and shadow passes ignore the technique's
-    // lighting (any loaded technique will do).
+    // Inside the caller's render pass: every entry of draw_list(technique, pass), under `model`. Depth and
+    // shadow passes ignore the technique's lighting (any loaded technique will do).
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
               const glm::mat4& model, size_t pass = 0) const;
 
@@ -66,6 +93,7 @@ class LightmapModel
   private:
     const io::LightmapAsset* asset_;
     std::vector<std::string> names_;
+    std::vector<int> primitive_variant_;      // per primitive: its material's technique, or -1 (the default)
     std::unique_ptr<SceneSurfaces> surfaces_; // variant i draws technique names_[i]
     std::vector<std::unique_ptr<TexelCoefficients>> coefficients_;
 };

@@ -12,6 +12,8 @@
 #include <hemi/render/scene/gpu_mesh.h>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <memory>
 #include <vector>
@@ -53,6 +55,25 @@ class SceneSurfaces
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
               const glm::mat4& model, size_t variant = 0, size_t pass = 0) const;
 
+    // One primitive (draw() is every primitive in order), with this draw's lightmap rectangle
+    // (shared::DrawPush::lightmap_scale_offset). Binds the mesh too.
+    void draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+                        uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
+                        size_t primitive,
+                        const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+
+    // What an engine's draw list needs of each primitive.
+    struct Primitive
+    {
+        uint32_t first_index, index_count, material;
+        glm::vec3 bounds_min, bounds_max; // of its vertices, in the model's space
+    };
+    size_t primitive_count() const { return draws_.size(); }
+    Primitive primitive(size_t p) const;
+    const MaterialType& type(size_t primitive, size_t variant, size_t pass) const;
+    VkDescriptorSet material_set(size_t primitive) const;
+    const io::Material& material(size_t primitive) const;
+
     const GpuMesh& mesh() const { return mesh_; }
     size_t material_count() const { return materials_.size(); }
 
@@ -61,9 +82,11 @@ class SceneSurfaces
     GpuMesh mesh_;
     TextureSet textures_;
     std::vector<std::unique_ptr<MaterialInstance>> materials_;
+    std::vector<io::Material> material_data_;
     struct Draw
     {
         uint32_t first_index, index_count, material;
+        glm::vec3 bounds_min, bounds_max;
         std::vector<MaterialKey> keys;                       // per variant
         std::vector<std::vector<const MaterialType*>> types; // per pass, per variant
     };
