@@ -498,3 +498,65 @@ TEST_F(Passes, TypesAreMadeOnceWhenSeveralThreadsAskAtOnce)
     // Depth pipelines ignore the basis: one for the opaque keys, one for the alpha-tested ones.
     EXPECT_EQ(system.type_count(), keys.size() + 2);
 }
+
+// A colour pass with a second colour attachment of the engine's (a G-buffer target, say) and no aux output:
+// hemi's pipeline writes attachment 0 and leaves attachment 1 as the engine left it, also where it draws.
+TEST_F(Passes, ExtraColourAttachmentsAreLeftToTheEngine)
+{
+    gpu::Device& dev = test::device();
+    const AlphaQuad q;
+    const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    target.color_attachments = 2;
+    render::MaterialSystem system(dev, target);
+    gpu::UploadBatch upload(dev);
+    const render::GpuMesh mesh(dev, q.mesh, upload);
+    const io::Material material;
+    render::TextureSet textures(dev, std::span<const io::ImageRgba8>(), std::span<const io::Material>(),
+                                upload);
+    const render::MaterialInstance instance(system, textures, material, upload);
+    render::ProbeCoefficients probe(system);
+    std::vector<glm::vec3> furnace(9, glm::vec3(0.0f));
+    furnace[0] = glm::vec3(float(M_PI) * 2.0f * std::sqrt(float(M_PI)));
+    render::MaterialKey key;
+    key.source = render::CoefficientSourceKind::Uniform;
+    key.frame = render::ShadingFrame::World;
+    render::FrameSet frame(system);
+    render::FrameData f;
+    f.view_projection = math::look_at_projection(glm::vec3(0, -3, 0), glm::vec3(0.0f), 45.0f, 1.0f);
+    const float clear[4] = {0.25f, 0.5f, 0.75f, 0.125f};
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      upload.record(cmd);
+                      frame.record_update(cmd, f);
+                      probe.record_update(cmd, furnace);
+                      pass.begin(cmd, clear);
+                      render::DrawBindings b;
+                      b.type = &system.type(key);
+                      b.frame = frame.set();
+                      b.material = instance.set();
+                      b.source = probe.set();
+                      b.push.model = glm::mat4(1.0f);
+                      render::bind_material(cmd, b);
+                      mesh.bind(cmd);
+                      mesh.draw(cmd, 0, mesh.index_count());
+                      vkCmdEndRenderPass(cmd);
+                  });
+    const std::vector<float> colour = read_color(pass);
+    const auto bytes =
+        gpu::read_image(test::device(), pass.colors[1], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    std::vector<float> engine(bytes.size() / 4);
+    std::memcpy(engine.data(), bytes.data(), bytes.size());
+    int drawn = 0;
+    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
+    {
+        if (colour[p * 4 + 3] != 1.0f)
+            continue;
+        ++drawn;
+        for (int c = 0; c < 4; ++c)
+            ASSERT_EQ(engine[p * 4 + c], clear[c]) << "pixel " << p;
+    }
+    EXPECT_GT(drawn, 500);
+}

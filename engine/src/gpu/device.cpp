@@ -306,6 +306,13 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
             if (dynamic)
                 device_info.pNext = &features13;
         }
+        // independentBlend where the device has it: hemi's colour pipelines then leave an engine's extra
+        // colour attachments alone (gpu::GraphicsProgramDesc::written_color_attachments).
+        VkPhysicalDeviceFeatures supported{}, enabled{};
+        vkGetPhysicalDeviceFeatures(physical_device_, &supported);
+        enabled.independentBlend = supported.independentBlend;
+        independent_blend_ = supported.independentBlend;
+        device_info.pEnabledFeatures = &enabled;
         device_info.queueCreateInfoCount = 1;
         device_info.pQueueCreateInfos = &queue_info;
         HEMI_VK_CHECK(vkCreateDevice(physical_device_, &device_info, nullptr, &device_));
@@ -331,7 +338,8 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
 Device::Device(const ExternalDevice& external)
     : instance_(external.instance), physical_device_(external.physical_device), device_(external.device),
       queue_(external.queue), queue_family_(external.queue_family), owns_(false),
-      dynamic_rendering_(external.dynamic_rendering), log_(external.log)
+      dynamic_rendering_(external.dynamic_rendering), independent_blend_(external.independent_blend),
+      log_(external.log)
 {
 #if defined(__SANITIZE_ADDRESS__)
     pin_vulkan_libraries(); // the host's instance loaded them; keep them for LeakSanitizer's report

@@ -188,10 +188,12 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     for (size_t i = 0; i < blend.size(); ++i)
     {
         VkPipelineColorBlendAttachmentState& b = blend[i];
-        if (desc.color_writes && (!desc.blend || i == 0))
+        // Without independentBlend every attachment needs the same state: all written, all blended.
+        const bool independent = device.independent_blend();
+        if (desc.color_writes && (i < desc.written_color_attachments || !independent))
             b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
                                VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-        if (desc.blend && i == 0)
+        if (desc.blend && (i == 0 || !independent))
         {
             b.blendEnable = VK_TRUE;
             b.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;

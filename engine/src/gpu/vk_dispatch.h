@@ -84,6 +84,7 @@
     X(vkGetBufferMemoryRequirements)                                                                         \
     X(vkGetDeviceQueue)                                                                                      \
     X(vkGetImageMemoryRequirements)                                                                          \
+    X(vkGetPhysicalDeviceFeatures)                                                                           \
     X(vkGetPhysicalDeviceFeatures2)                                                                          \
     X(vkGetPhysicalDeviceFormatProperties)                                                                   \
     X(vkGetPhysicalDeviceMemoryProperties)                                                                   \

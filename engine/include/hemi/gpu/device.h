@@ -58,6 +58,10 @@ struct ExternalDevice
     // True when `device` was created with Vulkan 1.3's dynamicRendering feature enabled: then hemi's
     // materials can also draw inside vkCmdBeginRendering (RenderTargetDesc without a render pass).
     bool dynamic_rendering = false;
+    // True when `device` was created with the independentBlend feature: then hemi's colour pipelines leave
+    // colour attachments past their own (0, and 1 for aux output) as the engine left them; without it every
+    // attachment of a subpass gets the same blend state, so hemi writes them all.
+    bool independent_blend = false;
     // Where hemi gets its Vulkan entry points: the engine's vkGetInstanceProcAddr (volk's, its own loader's,
     // a layer chain's); null opens the system's loader (libvulkan.so.1) at run time. hemi does not link the
     // loader.
@@ -109,6 +113,7 @@ class Device
     // Whether pipelines may draw with dynamic rendering (Vulkan 1.3 dynamicRendering enabled: hemi enables
     // it on devices it creates when the device supports it).
     bool dynamic_rendering() const { return dynamic_rendering_; }
+    bool independent_blend() const { return independent_blend_; }
     // Nanoseconds per timestamp tick; 0 when the queue does not support timestamps.
     double timestamp_period_ns() const { return timestamp_period_ns_; }
 
@@ -141,6 +146,7 @@ class Device
     uint32_t queue_family_ = 0;
     bool owns_ = false;
     bool dynamic_rendering_ = false;
+    bool independent_blend_ = false;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memory_{};
     uint32_t subgroup_size_ = 1;

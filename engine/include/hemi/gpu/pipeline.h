@@ -77,6 +77,9 @@ struct GraphicsProgramDesc
     // others keep their values. Without blending every attachment is written, or none with colour_writes off.
     bool blend = false;
     bool color_writes = true;
+    // Attachments from this index on keep their values (with the independentBlend feature; without it,
+    // every attachment is written and blended alike, as Vulkan then requires).
+    uint32_t written_color_attachments = ~0u;
     float depth_bias_constant = 0.0f, depth_bias_slope = 0.0f; // both 0: no depth bias
     VkPipelineCache cache = VK_NULL_HANDLE;                    // the host's pipeline cache, if any
 };

@@ -266,6 +266,7 @@ std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, co
     desc.depth_compare = target.depth_compare;
     desc.blend = pass.kind == PassKind::Color && key.alpha == io::AlphaMode::Blend;
     desc.color_writes = !depth;
+    desc.written_color_attachments = target.aux_output ? 2 : 1; // the others are the engine's
     if (pass.kind == PassKind::Shadow)
     {
         desc.depth_bias_constant = pass.depth_bias_constant;

@@ -133,7 +133,8 @@ struct RenderTargetDesc
     VkFormat depth_format = VK_FORMAT_UNDEFINED; // dynamic rendering: UNDEFINED = no depth attachment
     // Colour attachment 1 receives (u, v, draw id, 1) where the mesh covers the pixel (hemi's
     // OffscreenTarget; shared::DrawPush::draw_id, e.g. PrtModel's primitive index + 1); otherwise only
-    // attachment 0 is written (further attachments are left undefined where drawn).
+    // attachment 0 is written. Further attachments are the engine's: hemi's pipelines leave them as they are
+    // (on devices with independentBlend: gpu::Device::independent_blend(); else they are written too).
     bool aux_output = false;
     VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
     bool depth_test = true;
