@@ -171,16 +171,6 @@ struct Images
     std::vector<float> hemi, engine; // RGBA32F, kSize^2
 };
 
-// Reads colour attachment 0 of a pass.
-std::vector<float> read(const test::EnginePass& pass)
-{
-    const auto bytes =
-        gpu::read_image(test::device(), pass.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    std::vector<float> out(bytes.size() / sizeof(float));
-    std::memcpy(out.data(), bytes.data(), bytes.size());
-    return out;
-}
-
 // The case drawn by hemi's material system and by the engine's shader, each into a pass of its own.
 Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const Scene& s = scene(),
                  const std::vector<glm::vec3>& probe_override = {})
@@ -472,7 +462,7 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
                       vkCmdDrawIndexed(cmd, uint32_t(indices.size()), 1, 0, 0, 0);
                       vkCmdEndRenderPass(cmd);
                   });
-    return {read(hemi_pass), read(engine_pass)};
+    return {hemi_pass.read_color(), engine_pass.read_color()};
 }
 
 struct Agreement
@@ -675,7 +665,7 @@ draw_lightmapped(const render::VertexLayout& layout, const std::function<uint32_
                       vkCmdDrawIndexed(cmd, bind(cmd), 1, 0, 0, 0);
                       vkCmdEndRenderPass(cmd);
                   });
-    return read(pass);
+    return pass.read_color();
 }
 
 // hemi's own layout: a GpuMesh.

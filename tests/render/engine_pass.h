@@ -100,6 +100,15 @@ struct EnginePass
         set_viewport(cmd, width, height);
     }
 
+    // Colour attachment `i` read back as floats (an RGBA32F attachment; after the pass has ended).
+    std::vector<float> read_color(size_t i = 0) const
+    {
+        const auto bytes = gpu::read_image(device(), colors.at(i), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+        std::vector<float> out(bytes.size() / sizeof(float));
+        std::memcpy(out.data(), bytes.data(), bytes.size());
+        return out;
+    }
+
     static void set_viewport(VkCommandBuffer cmd, uint32_t w, uint32_t h)
     {
         const VkViewport viewport{0.0f, 0.0f, float(w), float(h), 0.0f, 1.0f};

@@ -4,6 +4,7 @@
 #include "../gpu_fixture.h"
 
 #include "engine_pass.h"
+#include "table_level.h"
 
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
@@ -31,39 +32,10 @@ class LevelDrawList : public test::GpuTest
 
 constexpr uint32_t kSize = 64;
 
-std::vector<float> read_color(const test::EnginePass& pass)
-{
-    const auto bytes =
-        gpu::read_image(test::device(), pass.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    std::vector<float> out(bytes.size() / 4);
-    std::memcpy(out.data(), bytes.data(), bytes.size());
-    return out;
-}
-
-// A floor z = 0 over [-1, 1]^2 (material "floor") and a wall-like top z = 0.5 over [-0.5, 0.5]^2 (material
-// "ssbump wall", its normal slot an SSBump texel, technique "ssbump"), baked into H4 and rnm outputs.
+// The tests' table level (table_level.h): the floor (material "floor") and the top as a wall-like primitive
+// (material "ssbump wall", its normal slot an SSBump texel, technique "ssbump"), baked into H4 and rnm.
 io::LightmapAsset level()
 {
-    io::LightmapAsset a;
-    io::Mesh& m = a.mesh;
-    auto quad = [&](float half, float z, glm::vec2 uv_origin)
-    {
-        const uint32_t base = uint32_t(m.positions.size());
-        const glm::vec2 corners[4] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-        for (const glm::vec2& c : corners)
-        {
-            m.positions.emplace_back(half * c.x, half * c.y, z);
-            m.normals.emplace_back(0, 0, 1);
-            m.tangents.emplace_back(1, 0, 0, 1);
-            m.uvs.push_back(c * 0.5f + 0.5f);
-            m.uvs1.push_back(uv_origin + (c * 0.5f + 0.5f) * 0.45f);
-        }
-        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-    };
-    quad(1.0f, 0.0f, {0.02f, 0.02f});
-    quad(0.5f, 0.5f, {0.52f, 0.52f});
-    // The SSBump texel: weights (0.2, 0.5, 0.3) of Valve's three directions.
-    a.images.push_back({"ssbump.png", "image/png", io::encode_png({1, 1, {51, 128, 77, 255}})});
     io::Material floor, wall;
     floor.name = "floor";
     floor.base_color_factor = glm::vec4(0.8f, 0.7f, 0.6f, 1.0f);
@@ -71,24 +43,10 @@ io::LightmapAsset level()
     wall.base_color_factor = glm::vec4(0.6f, 0.7f, 0.8f, 1.0f);
     wall.normal.image = 0;
     wall.technique = "ssbump";
-    a.materials = {floor, wall};
-    a.primitives = {{0, 6, 0}, {6, 6, 1}};
-    bake::LightmapUvReport report;
-    const bake::LightmapAtlas atlas = bake::rasterize_lightmap(m, 32, 32, report);
-    bake::LightmapLights lights;
-    lights.uniform = glm::vec3(0.3f, 0.35f, 0.4f);
-    lights.sun = true;
-    lights.sun_direction = glm::normalize(glm::vec3(0.5f, -0.3f, 0.7f));
-    lights.sun_irradiance = glm::vec3(2.0f, 1.8f, 1.5f);
-    bake::LightmapBakeOptions o;
-    o.rays = 16;
-    const bake::LightmapSh sh = bake::bake_lightmap_sh(m, atlas, lights, o);
-    a.width = a.height = 32;
-    a.covered_texels = uint32_t(atlas.texels.size());
-    for (const char* name : {"h4", "rnm"})
-        a.outputs.push_back(
-            {name, uint32_t(bake::lightmap_output_size(name)), bake::lightmap_maps(name, atlas, sh)});
-    return a;
+    // The SSBump texel: weights (0.2, 0.5, 0.3) of Valve's three directions.
+    return test::table_level(floor, wall,
+                             {{"ssbump.png", "image/png", io::encode_png({1, 1, {51, 128, 77, 255}})}},
+                             {"h4", "rnm"});
 }
 
 } // namespace
@@ -137,7 +95,7 @@ TEST_F(LevelDrawList, EachMaterialDrawsInItsOwnTechniqueThroughTheLevelsDrawList
                           m.draw(cmd, camera.set(), technique, glm::mat4(1.0f));
                           vkCmdEndRenderPass(cmd);
                       });
-        return read_color(pass);
+        return pass.read_color();
     };
     const std::vector<float> mixed = render(model, "h4"), h4 = render(all_h4, "h4"),
                              ssbump = render(all_ssbump, "ssbump");
@@ -242,7 +200,7 @@ TEST_F(LevelDrawList, ObjectsSharingOneAtlasEachSampleTheirOwnRectangle)
                       }
                       vkCmdEndRenderPass(cmd);
                   });
-    const std::vector<float> image = read_color(pass);
+    const std::vector<float> image = pass.read_color();
     int red = 0, blue = 0;
     for (uint32_t y = 0; y < kSize; ++y)
         for (uint32_t x = 0; x < kSize; ++x)

@@ -5,6 +5,7 @@
 #include "../gpu_fixture.h"
 
 #include "engine_pass.h"
+#include "table_level.h"
 
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
@@ -112,56 +113,13 @@ struct DepthPass
     }
 };
 
-std::vector<float> read_color(const test::EnginePass& pass)
-{
-    const auto bytes =
-        gpu::read_image(test::device(), pass.colors[0], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    std::vector<float> out(bytes.size() / 4);
-    std::memcpy(out.data(), bytes.data(), bytes.size());
-    return out;
-}
-
-// A level of two primitives: a floor z = 0 over [-1, 1]^2 and a table top z = 0.5 over [-0.5, 0.5]^2, both
-// facing up, with their own lightmap charts, baked under a sky and a sun (H6), at 32^2.
+// The tests' table level (table_level.h), baked into H6.
 io::LightmapAsset level()
 {
-    io::LightmapAsset a;
-    io::Mesh& m = a.mesh;
-    auto quad = [&](float half, float z, glm::vec2 uv_origin)
-    {
-        const uint32_t base = uint32_t(m.positions.size());
-        const glm::vec2 corners[4] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-        for (const glm::vec2& c : corners)
-        {
-            m.positions.emplace_back(half * c.x, half * c.y, z);
-            m.normals.emplace_back(0, 0, 1);
-            m.tangents.emplace_back(1, 0, 0, 1);
-            m.uvs.push_back(c * 0.5f + 0.5f);
-            m.uvs1.push_back(uv_origin + (c * 0.5f + 0.5f) * 0.45f);
-        }
-        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-    };
-    quad(1.0f, 0.0f, {0.02f, 0.02f});
-    quad(0.5f, 0.5f, {0.52f, 0.52f});
     io::Material floor, top;
     floor.base_color_factor = glm::vec4(0.8f, 0.7f, 0.6f, 1.0f);
     top.base_color_factor = glm::vec4(0.3f, 0.5f, 0.8f, 1.0f);
-    a.materials = {floor, top};
-    a.primitives = {{0, 6, 0}, {6, 6, 1}};
-    bake::LightmapUvReport report;
-    const bake::LightmapAtlas atlas = bake::rasterize_lightmap(m, 32, 32, report);
-    bake::LightmapLights lights;
-    lights.uniform = glm::vec3(0.3f, 0.35f, 0.4f);
-    lights.sun = true;
-    lights.sun_direction = glm::normalize(glm::vec3(0.5f, -0.3f, 0.7f));
-    lights.sun_irradiance = glm::vec3(2.0f, 1.8f, 1.5f);
-    bake::LightmapBakeOptions o;
-    o.rays = 16;
-    const bake::LightmapSh sh = bake::bake_lightmap_sh(m, atlas, lights, o);
-    a.width = a.height = 32;
-    a.covered_texels = uint32_t(atlas.texels.size());
-    a.outputs.push_back({"h6", 6, bake::lightmap_maps("h6", atlas, sh)});
-    return a;
+    return test::table_level(floor, top, {}, {"h6"});
 }
 
 // Vulkan clip space from a light straight above, looking down -z: x right, y down, depth (2 - z - 0.5) / 2.5
@@ -237,7 +195,7 @@ TEST_F(Passes, OneLevelDrawsInAPrepassAShadowPassAndTheColourPass)
                           model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), colour_index);
                           vkCmdEndRenderPass(cmd);
                       });
-        return read_color(pass);
+        return pass.read_color();
     };
     const std::vector<float> reference = colour(false, 0);
     const std::vector<float> after_prepass = colour(true, equal_index);
@@ -401,7 +359,7 @@ AlphaImages draw_alpha(io::AlphaMode mode, const float clear[4])
                       draw(cmd, depth_type);
                       vkCmdEndRenderPass(cmd);
                   });
-    return {read_color(pass), depth.read()};
+    return {pass.read_color(), depth.read()};
 }
 } // namespace
 
@@ -544,11 +502,8 @@ TEST_F(Passes, ExtraColourAttachmentsAreLeftToTheEngine)
                       mesh.draw(cmd, 0, mesh.index_count());
                       vkCmdEndRenderPass(cmd);
                   });
-    const std::vector<float> colour = read_color(pass);
-    const auto bytes =
-        gpu::read_image(test::device(), pass.colors[1], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    std::vector<float> engine(bytes.size() / 4);
-    std::memcpy(engine.data(), bytes.data(), bytes.size());
+    const std::vector<float> colour = pass.read_color();
+    const std::vector<float> engine = pass.read_color(1);
     int drawn = 0;
     for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
     {
