@@ -9,8 +9,10 @@ packages=(
     build-essential cmake ninja-build pkg-config
     # Vulkan: loader + headers, Mesa lavapipe (software Vulkan), Khronos validation layers, tools
     libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools spirv-tools
-    # volk: the test of an engine that loads Vulkan with it (tests/volk/)
+    # volk: the test of an engine that loads Vulkan with it (tests/volk/), and samples/engine's loader
     libvulkan-volk-dev
+    # samples/engine's window (GLFW), and the X server its tests present to without a display (xvfb-run)
+    libglfw3-dev xvfb xauth
     # shaders
     glslang-tools glslang-dev
     # math, scene and image formats

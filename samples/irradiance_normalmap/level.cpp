@@ -168,7 +168,7 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
         const float d = std::min(std::min(x, 1.0f - x) * 0.5f, std::min(y, 1.0f - y) * 0.25f);
         return bevel(d, 0.04f, 1.19f);
     };
-    if (maps == LevelMaps::Normal)
+    if (maps == LevelMaps::Normal || maps == LevelMaps::SsbumpWall)
     {
         scene.images.push_back(normal_map("tiles normal map", 256, tiles));
         scene.images.push_back(normal_map("bricks normal map", 256, bricks));
@@ -181,6 +181,12 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
     if (maps != LevelMaps::None)
         for (size_t k = 0; k < scene.materials.size(); ++k)
             scene.materials[k].normal.image = k == 0 ? 0 : 1;
+    if (maps == LevelMaps::SsbumpWall)
+    {
+        scene.images.push_back(ssbump_map("bricks ssbump map", 256, bricks, 0.04f * 1.19f));
+        scene.materials[3].normal.image = 2;
+        scene.materials[3].technique = "ssbump";
+    }
     // One primitive per material: quads grouped by material.
     for (uint32_t material = 0; material < 4; ++material)
     {

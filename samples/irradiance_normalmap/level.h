@@ -22,6 +22,9 @@ enum class LevelMaps
     None,
     Normal, // tangent-space normal maps
     Ssbump, // SSBump maps with directional occlusion (300 rays a texel)
+    // Normal maps, but the blue wall (material 3) holds the bricks' SSBump map and asks for the "ssbump"
+    // technique (io::Material::technique): an SSBump wall inside a level drawn with a basis (samples/engine).
+    SsbumpWall,
 };
 
 io::GltfScene make_level(uint32_t atlas = 512, LevelMaps maps = LevelMaps::Normal);

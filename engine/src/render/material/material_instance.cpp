@@ -103,7 +103,7 @@ const gpu::Image& TextureSet::image(int index, bool srgb) const
     return it->second;
 }
 
-VkSampler TextureSet::sampler(const io::TextureSampler& state)
+VkSampler TextureSet::sampler(const io::TextureSampler& state) const
 {
     for (const auto& [s, sampler] : samplers_)
         if (s == state)

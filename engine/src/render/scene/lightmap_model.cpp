@@ -125,6 +125,15 @@ std::vector<LightmapDraw> LightmapModel::draw_list(const std::string& technique,
     return list;
 }
 
+const TexelCoefficients& LightmapModel::coefficients(const std::string& technique) const
+{
+    const auto it = std::find(names_.begin(), names_.end(), technique);
+    if (it == names_.end())
+        throw std::invalid_argument("hemi: technique '" + technique +
+                                    "' is not loaded in this lightmap model");
+    return *coefficients_[size_t(it - names_.begin())];
+}
+
 void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry,
                          const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset) const
 {

@@ -32,15 +32,15 @@ class TextureSet
 
     // The image `index` (or, for -1, a 1x1 default: white for colour, the flat normal (0, 0, 1) for normals).
     const gpu::Image& image(int index, bool srgb) const;
-    // A sampler for glTF's sampler state (cached: one per distinct state).
-    VkSampler sampler(const io::TextureSampler& state);
+    // A sampler for glTF's sampler state (cached: one per distinct state; not thread-safe).
+    VkSampler sampler(const io::TextureSampler& state) const;
 
   private:
     void create(std::span<const io::ImageRgba8> images, std::span<const io::Material> materials,
                 gpu::UploadBatch& upload);
     const gpu::Device* device_;
     std::map<std::pair<int, bool>, gpu::Image> images_;
-    std::vector<std::pair<io::TextureSampler, gpu::Sampler>> samplers_;
+    mutable std::vector<std::pair<io::TextureSampler, gpu::Sampler>> samplers_;
 };
 
 // A texture of the engine's own for one slot of a material: a 2D view of an image in

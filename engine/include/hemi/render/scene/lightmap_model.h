@@ -90,6 +90,17 @@ class LightmapModel
 
     const io::LightmapAsset& asset() const { return *asset_; }
 
+    // hemi's data for an engine's own shaders (its main pass including hemi's GLSL library, docs/
+    // integration.md): the mesh (GpuMesh::layout(), bound by surfaces().mesh().bind()), the materials'
+    // textures (surfaces().textures()) and the coefficient maps of each loaded technique (an entry's own,
+    // or by name; std::invalid_argument names a technique that is not loaded).
+    const SceneSurfaces& surfaces() const { return *surfaces_; }
+    const TexelCoefficients& coefficients(const LightmapDraw& entry) const
+    {
+        return *coefficients_.at(entry.variant);
+    }
+    const TexelCoefficients& coefficients(const std::string& technique) const;
+
   private:
     const io::LightmapAsset* asset_;
     std::vector<std::string> names_;

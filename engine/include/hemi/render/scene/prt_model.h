@@ -84,6 +84,8 @@ class PrtModel
     const io::PrtAsset& asset() const { return *asset_; }
     const math::BasisDesc& basis() const { return *basis_; }
     const GpuMesh& mesh() const { return surfaces_.mesh(); }
+    // The primitives, materials and textures, for an engine's own shaders (docs/integration.md).
+    const SceneSurfaces& surfaces() const { return surfaces_; }
     size_t material_count() const { return surfaces_.material_count(); }
 
   private:

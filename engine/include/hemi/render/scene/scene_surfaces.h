@@ -75,6 +75,8 @@ class SceneSurfaces
     const io::Material& material(size_t primitive) const;
 
     const GpuMesh& mesh() const { return mesh_; }
+    // The scene's images on the GPU (an engine's own shaders sample them: image(material.normal.image, ...)).
+    const TextureSet& textures() const { return textures_; }
     size_t material_count() const { return materials_.size(); }
 
   private:

@@ -1,0 +1,237 @@
+// engine: hemi inside an engine's own frame. The engine owns the window (GLFW), the Vulkan instance and
+// device (loaded with volk), the swapchain (FIFO, re-made on resize), two frames in flight and its render
+// graph (shadow map, depth prepass, main pass with its own shaders, post pass); hemi supplies the baked data
+// (a lightmapped level with an SSBump wall, light probes, a PRT torus relit every frame, a Heidrich-Seidel
+// glossy ball's parabolic maps), its depth and shadow pipelines, and the GLSL library the engine's shaders
+// include. docs/integration.md walks through it.
+//
+//   engine [--assets DIR] [--size WxH] [--frames N] [--screenshot FILE] [--validation] [--baked-only]
+//          [--basis auto|h6|h4] [--exposure E] [--no-tonemap] [--fog D] [--camera EYE,TARGET]
+//          [--resize-at N]
+//
+// Keys: T next basis (H6 near / H4 far, H6, H4), W lighting only, B baked lighting only, L pause the light,
+// E pause the environment, O pause the objects, F fog, M tonemap, P screenshot (engine_NNN.png), Esc quit.
+// Exit status 2 when the validation layer reported anything (--validation).
+#include "assets.h"
+#include "context.h"
+#include "renderer.h"
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <string>
+
+namespace
+{
+
+struct Input
+{
+    engine::Settings* settings;
+    bool pause_light = false, pause_env = false, pause_objects = false, screenshot = false, resized = false;
+};
+
+void on_key(GLFWwindow* window, int key, int, int action, int)
+{
+    if (action != GLFW_PRESS)
+        return;
+    auto* in = static_cast<Input*>(glfwGetWindowUserPointer(window));
+    engine::Settings& s = *in->settings;
+    switch (key)
+    {
+    case GLFW_KEY_ESCAPE:
+        glfwSetWindowShouldClose(window, GLFW_TRUE);
+        break;
+    case GLFW_KEY_T:
+        s.basis = (s.basis + 1) % 3;
+        break;
+    case GLFW_KEY_W:
+        s.lighting_only = !s.lighting_only;
+        break;
+    case GLFW_KEY_B:
+        s.baked_only = !s.baked_only;
+        break;
+    case GLFW_KEY_L:
+        in->pause_light = !in->pause_light;
+        break;
+    case GLFW_KEY_E:
+        in->pause_env = !in->pause_env;
+        break;
+    case GLFW_KEY_O:
+        in->pause_objects = !in->pause_objects;
+        break;
+    case GLFW_KEY_F:
+        s.fog = s.fog > 0.0f ? 0.0f : 0.02f;
+        break;
+    case GLFW_KEY_M:
+        s.tonemap = !s.tonemap;
+        break;
+    case GLFW_KEY_P:
+        in->screenshot = true;
+        break;
+    default:
+        break;
+    }
+}
+
+void on_resize(GLFWwindow* window, int, int)
+{
+    static_cast<Input*>(glfwGetWindowUserPointer(window))->resized = true;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    CLI::App app{
+        "engine: hemi's techniques in an engine's own frame (window, swapchain, render graph, shaders)"};
+    std::string assets_dir = "engine_assets", size = "960x540", screenshot, basis = "auto", camera;
+    int frames = 0, resize_at = -1;
+    bool validation = false, no_tonemap = false;
+    engine::Settings settings;
+    app.add_option("--assets", assets_dir, "folder of the baked assets (baked there when missing)")
+        ->capture_default_str();
+    app.add_option("--size", size, "window size WIDTHxHEIGHT")->capture_default_str();
+    app.add_option("--frames", frames, "draw N frames and exit (0: until the window closes)")
+        ->check(CLI::Range(0, 1000000));
+    app.add_option("--screenshot", screenshot, "with --frames: the last frame as this PNG");
+    app.add_flag("--validation", validation,
+                 "the Khronos validation layer with synchronisation validation; any message makes the exit "
+                 "status 2");
+    app.add_flag(
+        "--baked-only", settings.baked_only,
+        "the level alone in H4 (its SSBump wall in SSBump), lit by its lightmap, no fog, no tonemap: "
+        "what `hemi-render engine_level.hemi --technique h4` draws from the same camera");
+    app.add_option("--basis", basis, "the level's lightmap basis: auto (H6 near, H4 far), h6 or h4")
+        ->check(CLI::IsMember({"auto", "h6", "h4"}))
+        ->capture_default_str();
+    app.add_option("--exposure", settings.exposure, "exposure before the tonemap (--baked-only: 1)")
+        ->check(CLI::Range(1e-6f, 1e6f))
+        ->capture_default_str();
+    app.add_flag("--no-tonemap", no_tonemap, "clamp instead of the filmic tonemap");
+    app.add_option("--fog", settings.fog, "fog density per unit of distance (0: none)")
+        ->check(CLI::Range(0.0f, 10.0f))
+        ->capture_default_str();
+    app.add_option("--camera", camera,
+                   "EYE,TARGET as x,y,z,x,y,z in world space (z up), as hemi-render's --camera takes it "
+                   "(default -3.5,0.8,1.6,3,-0.6,0.9)");
+    app.add_option("--resize-at", resize_at,
+                   "resize the window to 3/4 of --size at this frame (tests resizing)");
+    CLI11_PARSE(app, argc, argv);
+    settings.tonemap = !no_tonemap;
+    settings.basis = basis == "auto" ? 0 : basis == "h6" ? 1 : 2;
+
+    try
+    {
+        unsigned w = 0, h = 0;
+        char x = 0, rest = 0;
+        if (std::sscanf(size.c_str(), "%u%c%u%c", &w, &x, &h, &rest) != 3 || x != 'x' || w < 64 || h < 64 ||
+            w > 8192 || h > 8192)
+            throw std::invalid_argument("--size expects WIDTHxHEIGHT (64 to 8192 each), got '" + size + "'");
+        if (!camera.empty())
+        {
+            const std::optional<hemi::math::Camera> c = hemi::math::parse_camera(camera);
+            if (!c)
+                throw std::invalid_argument("--camera takes EYE,TARGET (six numbers), not 'auto'");
+            settings.camera = *c;
+        }
+        if (!screenshot.empty() && frames == 0)
+            throw std::invalid_argument("--screenshot needs --frames N (interactively, press P)");
+
+        const auto t0 = std::chrono::steady_clock::now();
+        const hemi::samples::EngineAssets assets = hemi::samples::prepare_engine_assets(
+            assets_dir, [](const std::string& line) { std::fprintf(stderr, "engine: %s\n", line.c_str()); });
+
+        if (!glfwInit())
+            throw std::runtime_error("GLFW cannot open a display (headless: run under xvfb-run)");
+        glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+        GLFWwindow* window = glfwCreateWindow(int(w), int(h), "hemi engine sample", nullptr, nullptr);
+        if (!window)
+            throw std::runtime_error("GLFW could not create a window");
+        Input input{&settings};
+        glfwSetWindowUserPointer(window, &input);
+        glfwSetKeyCallback(window, on_key);
+        glfwSetFramebufferSizeCallback(window, on_resize);
+
+        uint64_t messages = 0;
+        int status = 0;
+        {
+            engine::Context context(window, validation);
+            engine::Swapchain swapchain(context, window);
+            engine::Renderer renderer(context, swapchain, assets);
+            std::fprintf(stderr, "engine: ready in %.1f s (%ux%u, %s)\n",
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                         swapchain.extent.width, swapchain.extent.height,
+                         validation ? "validation on" : "no validation");
+
+            // Headless runs step time by 1/60 s a frame, so the same frame number gives the same image.
+            engine::FrameState state;
+            auto last = std::chrono::steady_clock::now();
+            double total_ms = 0.0;
+            int timed = 0, shots = 0, drawn = 0;
+            engine::FrameStats stats;
+            for (int frame = 0; (frames == 0 || frame < frames) && !glfwWindowShouldClose(window); ++frame)
+            {
+                glfwPollEvents();
+                if (frame == resize_at)
+                    glfwSetWindowSize(window, int(w * 3 / 4), int(h * 3 / 4));
+                if (input.resized)
+                {
+                    input.resized = false;
+                    swapchain.recreate();
+                }
+                const auto now = std::chrono::steady_clock::now();
+                const float dt = frames > 0 ? 1.0f / 60.0f : std::chrono::duration<float>(now - last).count();
+                if (frame > 0)
+                {
+                    // Frame time: from one frame's start to the next (the first includes pipeline warm-up).
+                    if (frame > 1)
+                    {
+                        total_ms += std::chrono::duration<double, std::milli>(now - last).count();
+                        ++timed;
+                    }
+                    if (!input.pause_light)
+                        state.light_time += dt;
+                    if (!input.pause_env)
+                        state.env_time += dt;
+                    if (!input.pause_objects)
+                        state.object_time += dt;
+                }
+                last = now;
+                std::string shot;
+                if (frames > 0 && frame == frames - 1)
+                    shot = screenshot;
+                else if (input.screenshot)
+                {
+                    char name[32];
+                    std::snprintf(name, sizeof name, "engine_%03d.png", shots++);
+                    shot = name;
+                }
+                input.screenshot = false;
+                stats = renderer.frame(settings, state, shot);
+                ++drawn;
+                if (!shot.empty())
+                    std::fprintf(stderr, "engine: wrote %s\n", shot.c_str());
+            }
+            renderer.finish();
+            messages = context.messages();
+            std::printf(
+                "engine: %d frames at %ux%u, %.1f ms a frame (mean over %d), %u level draws, %u culled, "
+                "%llu validation message(s)\n",
+                drawn, swapchain.extent.width, swapchain.extent.height, timed > 0 ? total_ms / timed : 0.0,
+                timed, stats.draws, stats.culled, (unsigned long long)messages);
+            if (validation && messages > 0)
+                status = 2;
+        }
+        glfwDestroyWindow(window);
+        glfwTerminate();
+        return status;
+    }
+    catch (const std::exception& e)
+    {
+        std::fprintf(stderr, "engine: %s\n", e.what());
+        return 1;
+    }
+}

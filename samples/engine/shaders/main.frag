@@ -1,0 +1,143 @@
+#version 450
+// The engine's own main-pass fragment shader: the baked lighting from hemi's GLSL library, plus what is the
+// engine's alone (a shadowed spot light, fog) into an HDR target that the post pass exposes and tonemaps.
+// ENGINE_SOURCE: 1 = the lightmapped level (technique: 0 = H6 near / H4 far, 1 = SSBump), 2 = a PRT object's
+// per-vertex coefficients, 3 = a probe-lit sphere (SH9 from the level's probes), 4 = Heidrich & Seidel's
+// glossy object (prefiltered parabolic maps).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+#include "hemi/hemi.glsl"
+
+layout(constant_id = 0) const int kTechnique = 0;
+layout(constant_id = 1) const int K = 4;
+layout(constant_id = 2) const int kBasis = 0;
+
+layout(set = 0, binding = 1) uniform sampler2DShadow shadow_map;
+#if ENGINE_SOURCE == 1 || ENGINE_SOURCE == 2
+layout(set = 1, binding = 0) uniform sampler2D base_color; // sRGB
+layout(set = 1, binding = 1) uniform sampler2D normal_map; // or an SSBump map (technique 1)
+#endif
+#if ENGINE_SOURCE == 1
+layout(set = 1, binding = 2) uniform sampler2DArray h6_maps;
+layout(set = 1, binding = 3) uniform sampler2DArray h4_maps;
+layout(set = 1, binding = 5) uniform sampler2DArray rnm_maps;
+#elif ENGINE_SOURCE == 4
+layout(set = 1, binding = 6) uniform sampler2DArray glossy_map;
+layout(set = 1, binding = 7) uniform sampler2DArray diffuse_map;
+#endif
+
+layout(location = 0) in vec4 in_coefficients[7];
+layout(location = 7) in vec2 in_uv0;
+layout(location = 8) in vec2 in_uv1;
+layout(location = 9) in vec3 in_normal;
+layout(location = 10) in vec4 in_tangent;
+layout(location = 11) in vec3 in_world;
+
+layout(location = 0) out vec4 out_color;
+
+const float kPi = 3.14159265358979;
+
+// The spot light's irradiance on a surface facing it (shadowed, 3 x 3 PCF) and the direction towards it.
+vec3 spot_light(vec3 world, out vec3 l)
+{
+    const vec3 to = frame.light_position.xyz - world;
+    const float d2 = max(dot(to, to), 1e-6);
+    l = to * inversesqrt(d2);
+    if (frame.light_position.w == 0.0)
+        return vec3(0.0);
+    const float cone =
+        smoothstep(frame.light_axis.w, frame.light_axis.w + 0.08, dot(-l, frame.light_axis.xyz));
+    if (cone <= 0.0)
+        return vec3(0.0);
+    const vec4 p = frame.light_view_projection * vec4(world, 1.0);
+    const vec3 ndc = p.xyz / p.w;
+    float lit = 1.0;
+    if (p.w > 0.0 && all(lessThan(abs(ndc.xy), vec2(1.0))))
+    {
+        const vec2 uv = ndc.xy * 0.5 + 0.5, texel = 1.0 / vec2(textureSize(shadow_map, 0));
+        lit = 0.0;
+        for (int y = -1; y <= 1; ++y)
+            for (int x = -1; x <= 1; ++x)
+                lit += texture(shadow_map, vec3(uv + vec2(x, y) * texel, ndc.z));
+        lit /= 9.0;
+    }
+    return frame.light_intensity.rgb * (cone * lit / d2);
+}
+
+void main()
+{
+    vec3 l;
+    const vec3 light = spot_light(in_world, l);
+    vec4 sep4[9]; // no basis here uses SEP4's weights
+    for (int i = 0; i < 9; ++i)
+        sep4[i] = vec4(0.0);
+    vec3 color = vec3(0.0);
+#if ENGINE_SOURCE == 1 || ENGINE_SOURCE == 2
+    vec3 albedo = object.albedo.rgb * texture(base_color, in_uv0).rgb;
+    if (frame.mode.y != 0)
+        albedo = vec3(1.0);
+    const vec3 bump = texture(normal_map, in_uv0).xyz;
+    const HemiTangentFrame tf = hemi_tangent_frame(in_normal, in_tangent);
+    const vec3 lt = hemi_to_tangent(tf, l);
+    vec3 c[HEMI_BASIS_MAX_SIZE];
+#if ENGINE_SOURCE == 1
+    if (kTechnique == 1)
+    {
+        // SSBump (Green 2007, Listing 2): the map's three weights over Valve's basis, light included.
+        hemi_lightmap_coefficients(rnm_maps, in_uv1, 3, c);
+        const vec3 e = hemi_ssbump_irradiance(bump, c[0], c[1], c[2]) + light * hemi_ssbump_light(bump, lt);
+        color = albedo * e / kPi;
+    }
+    else
+    {
+        // Habel & Wimmer's shader level of detail: H6 near the eye, H4 beyond.
+        const vec3 nt = hemi_normal_map_normal(bump, 1.0);
+        const bool near =
+            frame.mode.x == 1 || (frame.mode.x == 0 && distance(frame.eye.xyz, in_world) < frame.eye.w);
+        vec3 e;
+        if (near)
+        {
+            hemi_lightmap_coefficients(h6_maps, in_uv1, 6, c);
+            e = hemi_basis_irradiance(HEMI_BASIS_H6, 6, c, nt, sep4);
+        }
+        else
+        {
+            hemi_lightmap_coefficients(h4_maps, in_uv1, 4, c);
+            e = hemi_basis_irradiance(HEMI_BASIS_H4, 4, c, nt, sep4);
+        }
+        color = albedo * (e + light * max(dot(nt, lt), 0.0)) / kPi;
+    }
+#else
+    // PRT: this frame's coefficients at the vertices (hemi's transfer pass), in the tangent frame.
+    hemi_unpack_coefficients(in_coefficients, K, c);
+    const vec3 nt = hemi_normal_map_normal(bump, 1.0);
+    color = albedo * (hemi_basis_irradiance(kBasis, K, c, nt, sep4) + light * max(dot(nt, lt), 0.0)) / kPi;
+#endif
+#elif ENGINE_SOURCE == 3
+    // A dynamic object lit by the level's light probes: world-space SH9 irradiance.
+    const vec3 n = normalize(in_normal);
+    vec3 c[HEMI_BASIS_MAX_SIZE];
+    for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
+        c[i] = i < 9 ? frame.probe_sh[object.index.x * 9 + i].rgb : vec3(0.0);
+    const vec3 albedo = frame.mode.y != 0 ? vec3(1.0) : object.albedo.rgb;
+    color = albedo * (hemi_sh9_irradiance(c, n) + light * max(dot(n, l), 0.0)) / kPi;
+#elif ENGINE_SOURCE == 4
+    // Heidrich & Seidel: a Phong-prefiltered glossy reflection and the diffuse map of the same environment.
+    const vec3 n = normalize(in_normal);
+    const vec3 v = normalize(frame.eye.xyz - in_world);
+    const vec3 r = hemi_reflect(n, v);
+    const vec3 r0 = frame.env.world_to_env[0].xyz, r1 = frame.env.world_to_env[1].xyz,
+               r2 = frame.env.world_to_env[2].xyz;
+    const float kd = frame.env.material.x, ks = frame.env.material.y;
+    const vec3 albedo = frame.mode.y != 0 ? vec3(1.0) : object.albedo.rgb;
+    const vec3 diffuse =
+        hemi_parabolic_lookup(diffuse_map, frame.env.extents.z, hemi_env_direction(r0, r1, r2, n));
+    const vec3 glossy =
+        hemi_parabolic_lookup(glossy_map, frame.env.extents.y, hemi_env_direction(r0, r1, r2, r));
+    color = ks * glossy + kd * albedo * (diffuse + light * max(dot(n, l), 0.0) / kPi);
+#endif
+    // Exponential fog over the distance from the eye.
+    if (frame.fog.w > 0.0)
+        color = mix(frame.fog.rgb, color, exp(-frame.fog.w * distance(frame.eye.xyz, in_world)));
+    out_color = vec4(color, 1.0);
+}
