@@ -30,6 +30,7 @@ class Context
     uint32_t queue_family = 0;
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     bool independent_blend = false;
+    bool debug_utils = false; // VK_EXT_debug_utils is on (with --validation): hemi names its objects
     // Validation messages (warnings and errors, the loader's notes left out) since the start.
     uint64_t messages() const { return messages_.load(); }
 

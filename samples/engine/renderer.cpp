@@ -286,6 +286,7 @@ struct Renderer::Impl
         e.queue = c.queue;
         e.queue_family = c.queue_family;
         e.independent_blend = c.independent_blend;
+        e.debug_utils = c.debug_utils; // hemi names its objects: RenderDoc and the layer's messages show them
         e.get_instance_proc_addr = vkGetInstanceProcAddr; // volk's: hemi runs on the engine's entry points
         e.log = [](gpu::LogLevel level, bool, std::string_view message)
         {

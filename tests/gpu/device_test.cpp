@@ -3,7 +3,12 @@
 
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/resources.h>
+#include <hemi/gpu/upload.h>
 #include <hemi/gpu/vk_check.h>
+#include <hemi/io/image.h>
+#include <hemi/io/mesh.h>
+#include <hemi/render/material/material_instance.h>
+#include <hemi/render/scene/gpu_mesh.h>
 #include <hemi/render/transfer.h>
 
 #include <cstdlib>
@@ -89,56 +94,87 @@ TEST_F(DeviceTest, BuffersRoundTripAndRejectOutOfRangeAccess)
                  std::invalid_argument);
 }
 
+namespace
+{
+
+// A host engine's own Vulkan: an instance with the validation layer, debug utils and its own messenger, the
+// lavapipe device, one queue. Destroyed by the host, after hemi let go of it.
+struct HostVulkan
+{
+    VkInstance instance = VK_NULL_HANDLE;
+    VkPhysicalDevice pd = VK_NULL_HANDLE;
+    VkDevice vk_device = VK_NULL_HANDLE;
+    VkQueue queue = VK_NULL_HANDLE;
+
+    HostVulkan() { create(); } // a failure leaves queue null: the test checks it
+    ~HostVulkan()
+    {
+        if (vk_device)
+            vkDestroyDevice(vk_device, nullptr);
+        if (instance)
+            vkDestroyInstance(instance, nullptr);
+    }
+
+  private:
+    void create()
+    {
+        VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+        app.apiVersion = VK_API_VERSION_1_1;
+        const char* layer = "VK_LAYER_KHRONOS_validation";
+        const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+        VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+        mi.messageSeverity =
+            VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+        mi.messageType =
+            VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+        mi.pfnUserCallback = host_messenger;
+        VkInstanceCreateInfo ii{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+        ii.pNext = &mi;
+        ii.pApplicationInfo = &app;
+        ii.enabledLayerCount = 1;
+        ii.ppEnabledLayerNames = &layer;
+        ii.enabledExtensionCount = 1;
+        ii.ppEnabledExtensionNames = &ext;
+        ASSERT_EQ(vkCreateInstance(&ii, nullptr, &instance), VK_SUCCESS);
+
+        uint32_t count = 0;
+        vkEnumeratePhysicalDevices(instance, &count, nullptr);
+        std::vector<VkPhysicalDevice> pds(count);
+        vkEnumeratePhysicalDevices(instance, &count, pds.data());
+        for (VkPhysicalDevice p : pds)
+        {
+            VkPhysicalDeviceProperties props;
+            vkGetPhysicalDeviceProperties(p, &props);
+            if (std::strstr(props.deviceName, "llvmpipe"))
+                pd = p;
+        }
+        ASSERT_NE(pd, VK_NULL_HANDLE);
+        float priority = 1.0f;
+        VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+        qi.queueFamilyIndex = 0;
+        qi.queueCount = 1;
+        qi.pQueuePriorities = &priority;
+        VkDeviceCreateInfo di{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        di.queueCreateInfoCount = 1;
+        di.pQueueCreateInfos = &qi;
+        ASSERT_EQ(vkCreateDevice(pd, &di, nullptr, &vk_device), VK_SUCCESS);
+        vkGetDeviceQueue(vk_device, 0, 0, &queue);
+    }
+};
+
+} // namespace
+
 // A host engine creates its own instance (with its own validation messenger) and device, hands them to
 // hemi, runs hemi work on them, destroys hemi's Device, and then destroys its objects itself: hemi must
 // neither destroy the host's objects nor leak its own (the host instance's object tracker reports leaks).
 TEST_F(DeviceTest, AdoptsAHostEngineDevice)
 {
-    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-    app.apiVersion = VK_API_VERSION_1_1;
-    const char* layer = "VK_LAYER_KHRONOS_validation";
-    const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
-    VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    mi.messageSeverity =
-        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    mi.messageType =
-        VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
-    mi.pfnUserCallback = host_messenger;
-    VkInstanceCreateInfo ii{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-    ii.pNext = &mi;
-    ii.pApplicationInfo = &app;
-    ii.enabledLayerCount = 1;
-    ii.ppEnabledLayerNames = &layer;
-    ii.enabledExtensionCount = 1;
-    ii.ppEnabledExtensionNames = &ext;
-    VkInstance instance;
-    ASSERT_EQ(vkCreateInstance(&ii, nullptr, &instance), VK_SUCCESS);
-
-    uint32_t count = 0;
-    vkEnumeratePhysicalDevices(instance, &count, nullptr);
-    std::vector<VkPhysicalDevice> pds(count);
-    vkEnumeratePhysicalDevices(instance, &count, pds.data());
-    VkPhysicalDevice pd = VK_NULL_HANDLE;
-    for (VkPhysicalDevice p : pds)
-    {
-        VkPhysicalDeviceProperties props;
-        vkGetPhysicalDeviceProperties(p, &props);
-        if (std::strstr(props.deviceName, "llvmpipe"))
-            pd = p;
-    }
-    ASSERT_NE(pd, VK_NULL_HANDLE);
-    float priority = 1.0f;
-    VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-    qi.queueFamilyIndex = 0;
-    qi.queueCount = 1;
-    qi.pQueuePriorities = &priority;
-    VkDeviceCreateInfo di{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-    di.queueCreateInfoCount = 1;
-    di.pQueueCreateInfos = &qi;
-    VkDevice vk_device;
-    ASSERT_EQ(vkCreateDevice(pd, &di, nullptr, &vk_device), VK_SUCCESS);
-    VkQueue queue;
-    vkGetDeviceQueue(vk_device, 0, 0, &queue);
+    HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    VkInstance instance = host.instance;
+    VkPhysicalDevice pd = host.pd;
+    VkDevice vk_device = host.vk_device;
+    VkQueue queue = host.queue;
 
     {
         hemi::gpu::Device adopted(hemi::gpu::ExternalDevice{instance, pd, vk_device, queue, 0, {}});
@@ -156,8 +192,80 @@ TEST_F(DeviceTest, AdoptsAHostEngineDevice)
     }
     // Still alive and usable after hemi let go.
     EXPECT_EQ(vkDeviceWaitIdle(vk_device), VK_SUCCESS);
-    vkDestroyDevice(vk_device, nullptr);
-    vkDestroyInstance(instance, nullptr);
+}
+
+// hemi names its Vulkan objects for debuggers (RenderDoc, the validation layer's messages) when the host's
+// instance has VK_EXT_debug_utils and says so (ExternalDevice::debug_utils), and names nothing otherwise (the
+// extension may not be enabled). Seen through the host's own vkGetInstanceProcAddr, which hands hemi a
+// vkSetDebugUtilsObjectNameEXT that records each name and passes it on to the layer.
+namespace
+{
+std::vector<std::pair<VkObjectType, std::string>> g_names;
+PFN_vkSetDebugUtilsObjectNameEXT g_set_name = nullptr;
+
+VKAPI_ATTR VkResult VKAPI_CALL record_name(VkDevice device, const VkDebugUtilsObjectNameInfoEXT* info)
+{
+    g_names.emplace_back(info->objectType, info->pObjectName);
+    return g_set_name(device, info);
+}
+
+VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL recording_proc_addr(VkInstance instance, const char* name)
+{
+    if (std::strcmp(name, "vkSetDebugUtilsObjectNameEXT") == 0)
+    {
+        g_set_name =
+            reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(vkGetInstanceProcAddr(instance, name));
+        return reinterpret_cast<PFN_vkVoidFunction>(&record_name);
+    }
+    return vkGetInstanceProcAddr(instance, name);
+}
+} // namespace
+
+TEST_F(DeviceTest, NamesItsObjectsWhenTheHostHasDebugUtils)
+{
+    HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    for (bool debug_utils : {true, false})
+    {
+        g_names.clear();
+        hemi::gpu::ExternalDevice e{host.instance, host.pd, host.vk_device, host.queue, 0, {}};
+        e.get_instance_proc_addr = recording_proc_addr;
+        e.debug_utils = debug_utils;
+        {
+            hemi::gpu::Device adopted(e);
+            hemi::gpu::UploadBatch upload(adopted);
+            const hemi::render::GpuMesh mesh(adopted, hemi::io::make_uv_sphere(1.0f, 8, 4), upload);
+            hemi::io::Material material;
+            material.base_color.image = 0;
+            const hemi::io::EncodedImage image{"bricks", "image/png",
+                                               hemi::io::encode_png({1, 1, {10, 20, 30, 255}})};
+            const hemi::render::TextureSet textures(
+                adopted, std::span<const hemi::io::EncodedImage>(&image, 1),
+                std::span<const hemi::io::Material>(&material, 1), upload);
+            upload.submit_and_wait();
+            const hemi::render::TransferMatrices m(4, 4, 9, std::vector<float>(4 * 4 * 9, 0.5f));
+            const hemi::render::TransferPass pass(adopted, m);
+        }
+        if (!debug_utils)
+        {
+            EXPECT_TRUE(g_names.empty())
+                << g_names.size() << " names without debug utils, e.g. " << g_names.front().second;
+            continue;
+        }
+        auto named = [&](VkObjectType type, const std::string& name)
+        {
+            for (const auto& [t, n] : g_names)
+                if (t == type && n == name)
+                    return true;
+            return false;
+        };
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_BUFFER, "hemi mesh vertices"));
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_BUFFER, "hemi mesh indices"));
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_IMAGE, "hemi texture 'bricks' (sRGB)"));
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_BUFFER, "hemi PRT transfer matrices"));
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_BUFFER, "hemi PRT coefficients"));
+        EXPECT_TRUE(named(VK_OBJECT_TYPE_PIPELINE, "hemi PRT transfer pass"));
+    }
 }
 
 // The host instance's messenger above drops the loader's notes and keeps the layer's findings: what

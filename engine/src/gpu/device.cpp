@@ -260,6 +260,8 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
             auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
                 vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
             HEMI_VK_CHECK(create(instance_, &messenger_info, nullptr, &messenger_));
+            set_object_name_ = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
+                vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
             // HEMI_VALIDATION_SELFTEST=1 (test-only) submits one synthetic validation warning through the
             // messenger, so that a test can see a real message arrive at debug_callback, be counted by
             // validation_messages() and reach the log callback, without provoking a driver bug on purpose.
@@ -348,6 +350,9 @@ Device::Device(const ExternalDevice& external)
         throw std::invalid_argument("hemi: ExternalDevice needs instance, physical_device, device and queue");
     dispatch::load_global(external.get_instance_proc_addr);
     dispatch::load_instance(instance_);
+    if (external.debug_utils)
+        set_object_name_ = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
+            vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);
     std::vector<VkQueueFamilyProperties> families(count);
@@ -359,6 +364,25 @@ Device::Device(const ExternalDevice& external)
     init_properties();
     if (properties_.apiVersion < VK_API_VERSION_1_1)
         throw std::invalid_argument("hemi: ExternalDevice must support Vulkan 1.1");
+}
+
+void Device::set_name(VkObjectType type, uint64_t handle, std::string_view name) const noexcept
+{
+    if (!set_object_name_ || handle == 0)
+        return;
+    try
+    {
+        const std::string text(name); // null-terminated
+        VkDebugUtilsObjectNameInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_OBJECT_NAME_INFO_EXT};
+        info.objectType = type;
+        info.objectHandle = handle;
+        info.pObjectName = text.c_str();
+        set_object_name_(device_,
+                         &info); // its VkResult only reports host memory running out: names are optional
+    }
+    catch (...)
+    {
+    }
 }
 
 Device::~Device()

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 
 namespace hemi::gpu
 {
@@ -66,6 +67,11 @@ struct ExternalDevice
     // a layer chain's); null opens the system's loader (libvulkan.so.1) at run time. hemi does not link the
     // loader.
     PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
+    // True when `instance` was created with VK_EXT_debug_utils enabled: then hemi names the Vulkan objects it
+    // creates (vkSetDebugUtilsObjectNameEXT: "hemi mesh vertices", "hemi lightmap 'h4'", "hemi material
+    // irradiance/h4/texel ...", a texture's glTF image name), so RenderDoc and the validation layer's
+    // messages show them by name.
+    bool debug_utils = false;
 };
 
 // Whether a debug-utils message comes from the Vulkan loader (e.g. "Layer ... forced enabled due to env var
@@ -131,6 +137,20 @@ class Device
     void log(LogLevel level, std::string_view message) const;
     void wait_idle() const;
 
+    // Names one of hemi's Vulkan objects for debuggers (RenderDoc, the validation layer's messages) when the
+    // instance has VK_EXT_debug_utils enabled (a device of hemi's own: with validation on; an engine's:
+    // ExternalDevice::debug_utils); otherwise does nothing. Never throws.
+    void set_name(VkObjectType type, uint64_t handle, std::string_view name) const noexcept;
+    template <class Handle>
+    void set_name(VkObjectType type, Handle handle, std::string_view name) const noexcept
+    {
+        if constexpr (std::is_pointer_v<Handle>)
+            set_name(type, uint64_t(reinterpret_cast<uintptr_t>(handle)), name);
+        else
+            set_name(type, uint64_t(handle), name);
+    }
+    bool debug_utils() const { return set_object_name_ != nullptr; }
+
   private:
     void init_properties();
     static VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -153,6 +173,7 @@ class Device
     VkDeviceSize max_allocation_size_ = 0;
     double timestamp_period_ns_ = 0.0;
     LogCallback log_;
+    PFN_vkSetDebugUtilsObjectNameEXT set_object_name_ = nullptr;
     std::unique_ptr<MemoryAllocator> allocator_;
     std::atomic<uint64_t> validation_messages_{0};
 };

@@ -99,6 +99,9 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
     const math::ParabolicImage& glossy = env.glossy.empty() ? env.diffuse : env.glossy[material.glossy];
     glossy_ = parabolic_image(device, {&glossy, 1}, map_format_, upload);
     diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload);
+    device.set_name(VK_OBJECT_TYPE_IMAGE, mirror_.handle(), "hemi environment mirror map");
+    device.set_name(VK_OBJECT_TYPE_IMAGE, glossy_.handle(), "hemi environment glossy map");
+    device.set_name(VK_OBJECT_TYPE_IMAGE, diffuse_.handle(), "hemi environment diffuse map");
     extents_[0] = float(env.mirror[0].extent);
     extents_[1] = float(glossy.extent);
     extents_[2] = float(env.diffuse.extent);

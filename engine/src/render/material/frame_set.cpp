@@ -27,6 +27,7 @@ FrameSet::FrameSet(const MaterialSystem& system)
     const gpu::Device& device = system.device();
     uniforms_ =
         gpu::create_buffer(device, {sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    device.set_name(VK_OBJECT_TYPE_BUFFER, uniforms_.handle(), "hemi frame uniforms");
     const auto bindings = MaterialSystem::frame_bindings();
     pool_ = gpu::create_descriptor_pool(device, bindings, 1);
     set_ = gpu::allocate_descriptor_set(device, pool_, system.frame_layout());

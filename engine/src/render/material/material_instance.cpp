@@ -45,6 +45,15 @@ TextureSet::TextureSet(const gpu::Device& device, std::span<const io::EncodedIma
                 decoded[size_t(r->image)] = io::decode_image(images[size_t(r->image)]);
         }
     create(decoded, materials, upload);
+    // Named as the scene names them (a glTF image's name, else its index).
+    for (const auto& [slot, image] : images_)
+        if (slot.first >= 0)
+        {
+            const std::string& name = images[size_t(slot.first)].name;
+            device.set_name(VK_OBJECT_TYPE_IMAGE, image.handle(),
+                            "hemi texture '" + (name.empty() ? std::to_string(slot.first) : name) +
+                                (slot.second ? "' (sRGB)" : "'"));
+        }
 }
 
 TextureSet::TextureSet(const gpu::Device& device, std::span<const io::ImageRgba8> images,

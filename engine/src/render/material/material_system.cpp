@@ -278,6 +278,14 @@ std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, co
     desc.front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
     desc.cache = cache_;
     type->program = gpu::create_graphics_program(*device_, desc);
+    if (device_->debug_utils())
+    {
+        static const char* const kPasses[] = {"color", "depth", "shadow"};
+        device_->set_name(VK_OBJECT_TYPE_PIPELINE, type->program.pipeline.get(),
+                          "hemi material technique " + std::to_string(int(key.technique)) + " basis " +
+                              std::string(basis.name) + " source " + source + " " +
+                              kPasses[std::min<size_t>(size_t(pass.kind), 2)] + " pass");
+    }
     return type;
 }
 

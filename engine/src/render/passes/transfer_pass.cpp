@@ -77,6 +77,10 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     std::vector<gpu::Binding> bindings = transfer_bindings();
     s.program = gpu::create_compute_program(
         device, {gpu::embedded_spirv("prt_transfer.comp"), bindings, sizeof(TransferPush), {s.k, s.l}});
+    device.set_name(VK_OBJECT_TYPE_BUFFER, s.matrices.handle(), "hemi PRT transfer matrices");
+    device.set_name(VK_OBJECT_TYPE_BUFFER, s.lighting.handle(), "hemi PRT lighting");
+    device.set_name(VK_OBJECT_TYPE_BUFFER, s.coefficients.handle(), "hemi PRT coefficients");
+    device.set_name(VK_OBJECT_TYPE_PIPELINE, s.program.pipeline.get(), "hemi PRT transfer pass");
 
     // Segments: whole blocks, at most maxTexelBufferElements texels of matrices (and of coefficients) per
     // view, with view offsets that respect minTexelBufferOffsetAlignment.

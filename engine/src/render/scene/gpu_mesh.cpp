@@ -44,6 +44,8 @@ GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBat
     upload.buffer(vertices_, vertices.data(), vertices.size() * sizeof(Vertex));
     indices_ = gpu::create_buffer(device, {mesh.indices.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
     upload.buffer(indices_, mesh.indices.data(), mesh.indices.size() * 4);
+    device.set_name(VK_OBJECT_TYPE_BUFFER, vertices_.handle(), "hemi mesh vertices");
+    device.set_name(VK_OBJECT_TYPE_BUFFER, indices_.handle(), "hemi mesh indices");
     vertex_count_ = uint32_t(n);
     index_count_ = uint32_t(mesh.indices.size());
 }

@@ -84,6 +84,8 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         names_.push_back(name);
         coefficients_.push_back(std::make_unique<TexelCoefficients>(system, asset.width, asset.height,
                                                                     output.k, output.maps.dense(), upload));
+        system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->maps().handle(),
+                                 "hemi lightmap '" + name + "'");
     }
     surfaces_ =
         std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
