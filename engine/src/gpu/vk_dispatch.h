@@ -80,6 +80,7 @@
     X(vkDeviceWaitIdle)                                                                                      \
     X(vkEndCommandBuffer)                                                                                    \
     X(vkEnumeratePhysicalDevices)                                                                            \
+    X(vkFreeDescriptorSets)                                                                                  \
     X(vkFreeMemory)                                                                                          \
     X(vkGetBufferMemoryRequirements)                                                                         \
     X(vkGetDeviceQueue)                                                                                      \

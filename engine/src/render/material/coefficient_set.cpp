@@ -12,15 +12,14 @@ namespace hemi::render
 {
 namespace
 {
-// Set 2 of `kind` with its one binding written: every coefficient set is one descriptor in a pool of its own.
-VkDescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind,
-                                gpu::DescriptorWrite write, gpu::DescriptorPool& pool)
+// Set 2 of `kind` with its one binding written, from the system's descriptor allocator.
+gpu::DescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind,
+                                   gpu::DescriptorWrite write)
 {
-    const gpu::Device& device = system.device();
-    pool = gpu::create_descriptor_pool(device, MaterialSystem::source_bindings(kind), 1);
-    const VkDescriptorSet set = gpu::allocate_descriptor_set(device, pool, system.source_layout(kind));
+    gpu::DescriptorSet set =
+        system.descriptors().allocate(system.source_layout(kind), MaterialSystem::source_bindings(kind));
     write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
-    gpu::write_descriptors(device, set, {&write, 1});
+    gpu::write_descriptors(system.device(), set, {&write, 1});
     return set;
 }
 } // namespace
@@ -42,7 +41,7 @@ VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::
     gpu::DescriptorWrite write;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     write.texel_view = view_;
-    set_ = make_source_set(system, CoefficientSourceKind::Vertex, write, pool_);
+    set_ = make_source_set(system, CoefficientSourceKind::Vertex, write);
 }
 
 ProbeCoefficients::ProbeCoefficients(const MaterialSystem& system)
@@ -52,7 +51,7 @@ ProbeCoefficients::ProbeCoefficients(const MaterialSystem& system)
     gpu::DescriptorWrite write;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     write.buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    set_ = make_source_set(system, CoefficientSourceKind::Uniform, write, pool_);
+    set_ = make_source_set(system, CoefficientSourceKind::Uniform, write);
 }
 
 void ProbeCoefficients::record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const
@@ -116,7 +115,7 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
     gpu::DescriptorWrite write;
     write.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     write.image = {sampler_, maps_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    set_ = make_source_set(system, CoefficientSourceKind::Texel, write, pool_);
+    set_ = make_source_set(system, CoefficientSourceKind::Texel, write);
 }
 
 } // namespace hemi::render

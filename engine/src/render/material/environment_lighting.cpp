@@ -149,9 +149,7 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
 
     const std::vector<gpu::Binding> bindings =
         MaterialSystem::source_bindings(CoefficientSourceKind::Environment);
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ =
-        gpu::allocate_descriptor_set(device, pool_, system.source_layout(CoefficientSourceKind::Environment));
+    set_ = system.descriptors().allocate(system.source_layout(CoefficientSourceKind::Environment), bindings);
     gpu::DescriptorWrite writes[6];
     writes[0].binding = HEMI_ENV_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;

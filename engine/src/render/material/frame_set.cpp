@@ -29,8 +29,7 @@ FrameSet::FrameSet(const MaterialSystem& system)
         gpu::create_buffer(device, {sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     device.set_name(VK_OBJECT_TYPE_BUFFER, uniforms_.handle(), "hemi frame uniforms");
     const auto bindings = MaterialSystem::frame_bindings();
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.frame_layout());
+    set_ = system.descriptors().allocate(system.frame_layout(), bindings);
     gpu::DescriptorWrite write;
     write.binding = HEMI_FRAME_BINDING_UNIFORMS;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;

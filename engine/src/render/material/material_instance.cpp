@@ -154,7 +154,7 @@ shared::MaterialUniforms material_uniforms(const io::Material& m)
     return u;
 }
 
-MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& textures,
+MaterialInstance::MaterialInstance(const MaterialSystem& system, const TextureSet& textures,
                                    const io::Material& material, gpu::UploadBatch& upload,
                                    const MaterialTextures& engine)
     : double_sided_(material.double_sided), alpha_mode_(material.alpha_mode)
@@ -170,8 +170,7 @@ MaterialInstance::MaterialInstance(const MaterialSystem& system, TextureSet& tex
     uniforms_ = gpu::create_buffer(device, {sizeof u, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     upload.buffer(uniforms_, &u, sizeof u);
     const auto bindings = MaterialSystem::material_bindings();
-    pool_ = gpu::create_descriptor_pool(device, bindings, 1);
-    set_ = gpu::allocate_descriptor_set(device, pool_, system.material_layout());
+    set_ = system.descriptors().allocate(system.material_layout(), bindings);
     gpu::DescriptorWrite writes[5];
     writes[0].binding = HEMI_MATERIAL_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;

@@ -154,6 +154,7 @@ MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc
     for (CoefficientSourceKind kind : {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel,
                                        CoefficientSourceKind::Uniform, CoefficientSourceKind::Environment})
         source_layouts_[uint32_t(kind)] = gpu::create_set_layout(device, source_bindings(kind));
+    descriptors_ = std::make_unique<gpu::DescriptorAllocator>(device);
 }
 
 MaterialSystem::~MaterialSystem() = default;

@@ -7,6 +7,7 @@
 //   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps): a K-layer 2D
 //                       array image, bilinear, clamped to the edge.
 
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/render/material/material_system.h>
@@ -24,12 +25,11 @@ class VertexCoefficients
     // Views `texels` RGBA32F texels of `coefficients` from its start (every instance of a multi-instance
     // source; draws pick theirs by shared::DrawPush::coefficient_offset). The buffer must outlive this.
     VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients, uint64_t texels);
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
 
   private:
     gpu::BufferView view_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
 };
 
 class ProbeCoefficients
@@ -38,12 +38,11 @@ class ProbeCoefficients
     explicit ProbeCoefficients(const MaterialSystem& system);
     // Outside a render pass: up to HEMI_BASIS_MAX_SIZE RGB coefficients (finite; std::invalid_argument else).
     void record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const;
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
 
   private:
     gpu::Buffer uniforms_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
 };
 
 class TexelCoefficients
@@ -56,7 +55,7 @@ class TexelCoefficients
     // is not finite or does not fit a half float.
     TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
                       std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision = false);
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
     uint32_t k() const { return k_; }
     // For an engine's own shaders (hemi_lightmap_coefficients, docs/glsl.md): the K-layer image (a 2D_ARRAY
     // view, SHADER_READ_ONLY_OPTIMAL once the upload is recorded) and its bilinear, edge-clamped sampler.
@@ -66,8 +65,7 @@ class TexelCoefficients
   private:
     gpu::Image maps_;
     gpu::Sampler sampler_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
     uint32_t k_ = 0;
 };
 

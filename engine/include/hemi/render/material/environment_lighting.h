@@ -6,6 +6,7 @@
 // BRDF's tables (hemi-bake brdf) and the material's weights, so one set serves one (environment, material)
 // pair; objects with the same pair share it.
 
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/io/envmap_asset.h>
@@ -41,7 +42,7 @@ class EnvironmentLighting
     EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& environment,
                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
                         gpu::UploadBatch& upload);
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
     // Outside a render pass: new weights, blend or rotation (the glossy and Fresnel indices are fixed).
     void record_update(VkCommandBuffer cmd, const EnvironmentMaterial& material) const;
     VkFormat map_format() const { return map_format_; }
@@ -62,8 +63,7 @@ class EnvironmentLighting
     gpu::Image mirror_, glossy_, diffuse_, fresnel_, brdf_;
     gpu::Sampler sampler_;
     gpu::Buffer uniforms_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
     VkFormat map_format_ = VK_FORMAT_UNDEFINED;
     float extents_[3] = {1, 1, 1};
     uint32_t fresnel_rows_ = 1, fresnel_samples_ = 2, fresnel_row_ = 0, table_size_ = 2;

@@ -2,6 +2,7 @@
 // Descriptor set 0 of the material system: what every draw of one view shares (camera, options, the
 // separable basis's weights), updated once per frame.
 
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/render/material/material_system.h>
 
@@ -43,12 +44,11 @@ class FrameSet
     // Outside a render pass, once per frame: the previous frame's reads finish before the update, which
     // finishes before this frame's draws read it.
     void record_update(VkCommandBuffer cmd, const FrameData& frame) const;
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
 
   private:
     gpu::Buffer uniforms_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
 };
 
 // The update-with-barriers of a small uniform block read by vertex and fragment shaders (vkCmdUpdateBuffer).

@@ -3,6 +3,7 @@
 // and the GPU textures of a scene's images they sample (decoded once, mipmapped, shared by every material
 // and every object instance that uses them).
 
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/io/image.h>
@@ -64,16 +65,15 @@ class MaterialInstance
     // where it names a view, else from `textures` (an empty TextureSet gives the defaults: white, the flat
     // normal). Throws std::invalid_argument when the material refers to an image the set does not have, or
     // an engine texture has a view and no sampler.
-    MaterialInstance(const MaterialSystem& system, TextureSet& textures, const io::Material& material,
+    MaterialInstance(const MaterialSystem& system, const TextureSet& textures, const io::Material& material,
                      gpu::UploadBatch& upload, const MaterialTextures& engine = {});
-    VkDescriptorSet set() const { return set_; }
+    VkDescriptorSet set() const { return set_.get(); }
     bool double_sided() const { return double_sided_; }
     io::AlphaMode alpha_mode() const { return alpha_mode_; }
 
   private:
     gpu::Buffer uniforms_;
-    gpu::DescriptorPool pool_;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    gpu::DescriptorSet set_;
     bool double_sided_ = false;
     io::AlphaMode alpha_mode_ = io::AlphaMode::Opaque;
 };

@@ -18,6 +18,7 @@
 // outside in hemi's meshes (glTF's rule); single-sided materials cull back faces. Reverse-Z is the
 // caller's projection plus depth_compare = VK_COMPARE_OP_GREATER(_OR_EQUAL) and a depth clear of 0.
 
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/handle.h>
 #include <hemi/gpu/pipeline.h>
@@ -223,6 +224,11 @@ class MaterialSystem
     const gpu::Device& device() const { return *device_; }
     const RenderTargetDesc& target() const { return default_pass_.target; }
 
+    // Where every material instance, coefficient source, frame set and environment made with this system gets
+    // its descriptor set: one growable allocator (a pool per 1,024 sets), thread-safe. Those objects must be
+    // destroyed before the system.
+    gpu::DescriptorAllocator& descriptors() const { return *descriptors_; }
+
   private:
     std::unique_ptr<MaterialType> compile(const MaterialKey& key, const PassDesc& pass) const;
 
@@ -231,6 +237,7 @@ class MaterialSystem
     VkPipelineCache cache_;
     gpu::DescriptorSetLayout frame_layout_, material_layout_;
     gpu::DescriptorSetLayout source_layouts_[4];
+    std::unique_ptr<gpu::DescriptorAllocator> descriptors_;
     mutable std::mutex mutex_;
     std::map<std::pair<MaterialKey, PassDesc>, std::unique_ptr<MaterialType>> types_;
 };
