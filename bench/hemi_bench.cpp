@@ -899,6 +899,45 @@ void lightmap_material(benchmark::State& state, std::string technique)
     state.counters["overhead_ratio"] = lit / trivial;
 }
 
+// Issue 22's scale: 1,000 material instances and 1,000 probe-lit objects' coefficient sources made with one
+// material system, as an engine loading a large scene would. Counters: the descriptor pools they take
+// (before the shared allocator: one each, 2,000), the sets, and the CPU time per object made.
+void scale_materials(benchmark::State& state)
+{
+    hemi::gpu::Device& device = bench_device();
+    const uint32_t n = 1000;
+    hemi::render::OffscreenTarget target(device, 8, 8);
+    hemi::render::MaterialSystem system(device, target.desc());
+    hemi::gpu::UploadBatch upload(device);
+    const hemi::io::Material material;
+    const hemi::render::TextureSet textures(device, std::span<const hemi::io::ImageRgba8>(),
+                                            std::span<const hemi::io::Material>(&material, 1), upload);
+    double seconds = 0.0;
+    size_t pools = 0, sets = 0;
+    for (auto _ : state)
+    {
+        std::vector<std::unique_ptr<hemi::render::MaterialInstance>> materials;
+        std::vector<std::unique_ptr<hemi::render::ProbeCoefficients>> probes;
+        const auto t0 = std::chrono::steady_clock::now();
+        for (uint32_t i = 0; i < n; ++i)
+        {
+            materials.push_back(
+                std::make_unique<hemi::render::MaterialInstance>(system, textures, material, upload));
+            probes.push_back(std::make_unique<hemi::render::ProbeCoefficients>(system));
+        }
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        seconds += s;
+        state.SetIterationTime(s);
+        pools = system.descriptors().pool_count();
+        sets = system.descriptors().live_sets();
+        upload.submit_and_wait();
+    }
+    state.counters["objects"] = 2.0 * n;
+    state.counters["descriptor_pools"] = double(pools);
+    state.counters["descriptor_sets"] = double(sets);
+    state.counters["create_us_per_object"] = seconds / double(state.iterations()) / (2.0 * n) * 1e6;
+}
+
 } // namespace
 
 // Heidrich & Seidel's prefiltering (math::prefilter_phong, what hemi-bake envmap runs, and
@@ -1041,6 +1080,10 @@ int main(int argc, char** argv)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);
+    full_iterations(add("scale/materials:1000/probes:1000", scale_materials)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    3);
     const size_t run = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     g_device.reset(); // its messages at destruction (leaks) count too
