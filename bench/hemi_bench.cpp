@@ -42,6 +42,7 @@
 #include "level.h"
 #include "models.h"
 #include "relief.h"
+#include "vulkan_calls.h"
 
 #include <hemi/bake/cpca.h>
 #include <hemi/bake/embree_scene.h>
@@ -61,7 +62,9 @@
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_instance.h>
+#include <hemi/render/scene/draw_queue.h>
 #include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/probe_object.h>
 #include <hemi/render/transfer.h>
 #include <hemi/render/view/prt_view.h>
 
@@ -578,7 +581,7 @@ void material_overhead(benchmark::State& state, std::string technique)
     hemi::render::TextureSet textures(device, std::span<const hemi::io::EncodedImage>(),
                                       std::span<const hemi::io::Material>(&plain, 1), upload);
     hemi::render::MaterialInstance instance(system, textures, plain, upload);
-    hemi::render::ProbeCoefficients probe(system);
+    hemi::render::ProbeBuffer probe(system, 1);
     hemi::render::FrameSet constant_frame(system);
     upload.submit_and_wait();
     hemi::render::MaterialKey key;
@@ -917,13 +920,13 @@ void scale_materials(benchmark::State& state)
     for (auto _ : state)
     {
         std::vector<std::unique_ptr<hemi::render::MaterialInstance>> materials;
-        std::vector<std::unique_ptr<hemi::render::ProbeCoefficients>> probes;
+        std::vector<std::unique_ptr<hemi::render::ProbeBuffer>> probes;
         const auto t0 = std::chrono::steady_clock::now();
         for (uint32_t i = 0; i < n; ++i)
         {
             materials.push_back(
                 std::make_unique<hemi::render::MaterialInstance>(system, textures, material, upload));
-            probes.push_back(std::make_unique<hemi::render::ProbeCoefficients>(system));
+            probes.push_back(std::make_unique<hemi::render::ProbeBuffer>(system, 1));
         }
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         seconds += s;
@@ -936,6 +939,125 @@ void scale_materials(benchmark::State& state)
     state.counters["descriptor_pools"] = double(pools);
     state.counters["descriptor_sets"] = double(sets);
     state.counters["create_us_per_object"] = seconds / double(state.iterations()) / (2.0 * n) * 1e6;
+}
+
+// Issue 22's frame at scale: 1,000 probe-lit objects whose lighting changes every frame, 2 frames in flight,
+// drawn as 10,000 draws of 2 material types (each object 10 primitives alternating a single- and a
+// double-sided material) through a sorted DrawQueue. hemi runs on an adopted device whose Vulkan entry
+// points count their calls (tests/vulkan_calls.h), so the counters are what a capture would show:
+// barriers and buffer updates in a frame's command buffer, pipeline and descriptor-set binds of the sorted
+// draws (and of the same packets unsorted, for comparison), CPU recording time per draw; and the adopted
+// device's own allocator: blocks per live MiB while the objects live, blocks left once they are destroyed.
+void scale_frame(benchmark::State& state)
+{
+    hemi::gpu::Device& base = bench_device();
+    hemi::gpu::ExternalDevice adopt{base.instance(), base.physical_device(), base.device(),
+                                    base.queue(),    base.queue_family(),    {}};
+    adopt.get_instance_proc_addr = hemi::test::counting_proc_addr;
+    hemi::gpu::Device device(adopt);
+    hemi::test::VulkanCalls& calls = hemi::test::vulkan_calls();
+    const uint32_t objects = 1000, primitives = 10, frames = 2;
+    double record_seconds = 0.0, allocator_blocks = 0.0, live_mib = 0.0;
+    uint64_t barriers = 0, updates = 0, pipeline_binds = 0, set_binds = 0, draws = 0, unsorted_binds = 0;
+    uint64_t lighting_barriers = 0, lighting_updates = 0;
+    {
+        hemi::render::OffscreenTarget target(device, 64, 64);
+        hemi::render::MaterialSystem system(device, target.desc());
+        hemi::gpu::UploadBatch upload(device);
+        const hemi::io::Mesh mesh = hemi::io::make_uv_sphere(1.0f, 20, 10);
+        std::vector<hemi::io::Material> materials(2);
+        materials[1].double_sided = true;
+        std::vector<hemi::io::Primitive> parts;
+        const uint32_t triangles = uint32_t(mesh.indices.size() / 3);
+        for (uint32_t p = 0; p < primitives; ++p)
+        {
+            const uint32_t first = triangles * p / primitives, last = triangles * (p + 1) / primitives;
+            parts.push_back({first * 3, (last - first) * 3, p % 2});
+        }
+        hemi::render::ProbeObject spheres(system, mesh, {}, materials, parts, objects, upload, frames);
+        hemi::render::FrameSet frame_set(system, frames);
+        upload.submit_and_wait();
+        const hemi::gpu::MemoryAllocator::Stats memory = device.allocator().stats();
+        allocator_blocks = double(memory.blocks);
+        live_mib = double(memory.used_bytes) / double(1 << 20);
+
+        hemi::render::DrawQueue queue;
+        std::vector<glm::vec3> sh(9, glm::vec3(0.0f));
+        uint32_t frame = 0;
+        for (auto _ : state)
+        {
+            const uint32_t slot = frame % frames;
+            calls.reset();
+            const auto t0 = std::chrono::steady_clock::now();
+            // The frame's data through mapped memory: view, then each object's lighting.
+            hemi::render::FrameData f;
+            f.view_projection = glm::scale(glm::mat4(1.0f), glm::vec3(0.02f, 0.02f, 0.5f));
+            frame_set.write(slot, f);
+            for (uint32_t i = 0; i < objects; ++i)
+            {
+                sh[0] = glm::vec3(1.0f + 0.5f * std::sin(0.1f * float(frame + i)));
+                spheres.write_lighting(slot, i, sh);
+            }
+            lighting_barriers = calls.pipeline_barriers;
+            lighting_updates = calls.buffer_updates;
+            queue.clear();
+            for (uint32_t i = 0; i < objects; ++i)
+            {
+                const glm::vec3 at(float(i % 40) - 20.0f, float(i / 40) - 12.0f, 0.0f);
+                spheres.enqueue(queue, frame_set.set(slot), i, glm::translate(glm::mat4(1.0f), at), slot, 0,
+                                float(i) / float(objects));
+            }
+            queue.sort();
+            const double prepare =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            double recording = 0.0;
+            hemi::render::DrawStats stats;
+            hemi::gpu::one_shot(
+                device,
+                [&](VkCommandBuffer cmd)
+                {
+                    const auto r0 = std::chrono::steady_clock::now();
+                    target.begin(cmd);
+                    stats = queue.record(cmd);
+                    target.end(cmd);
+                    recording = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+                    barriers = calls.pipeline_barriers;
+                    updates = calls.buffer_updates;
+                });
+            state.SetIterationTime(prepare + recording);
+            record_seconds += prepare + recording;
+            pipeline_binds = calls.pipeline_binds;
+            set_binds = calls.descriptor_set_binds;
+            draws = calls.draws;
+            ++frame;
+        }
+        // The same draws in the order they were made (each object's primitives in turn), unsorted.
+        hemi::render::DrawQueue made;
+        for (uint32_t i = 0; i < objects; ++i)
+            spheres.enqueue(made, frame_set.set(0), i, glm::mat4(1.0f), 0);
+        const std::span<const hemi::render::DrawPacket> unsorted = made.packets();
+        hemi::gpu::one_shot(device,
+                            [&](VkCommandBuffer cmd)
+                            {
+                                target.begin(cmd);
+                                unsorted_binds = hemi::render::record_packets(cmd, unsorted).pipeline_binds;
+                                target.end(cmd);
+                            });
+    }
+    state.counters["objects"] = objects;
+    state.counters["draws"] = double(draws);
+    state.counters["lighting_barriers"] = double(lighting_barriers);
+    state.counters["lighting_buffer_updates"] = double(lighting_updates);
+    state.counters["frame_barriers"] = double(barriers);
+    state.counters["frame_buffer_updates"] = double(updates);
+    state.counters["pipeline_binds"] = double(pipeline_binds);
+    state.counters["unsorted_pipeline_binds"] = double(unsorted_binds);
+    state.counters["descriptor_set_binds"] = double(set_binds);
+    state.counters["record_us_per_draw"] =
+        record_seconds / double(state.iterations()) / double(objects * primitives) * 1e6;
+    state.counters["allocator_blocks"] = allocator_blocks;
+    state.counters["blocks_per_live_mib"] = allocator_blocks / std::max(live_mib, 1e-9);
+    state.counters["blocks_after_destroy"] = double(device.allocator().stats().blocks);
 }
 
 } // namespace
@@ -1080,6 +1202,10 @@ int main(int argc, char** argv)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);
+    full_iterations(add("scale/frame/probe_objects:1000/draws:10000", scale_frame)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    10);
     full_iterations(add("scale/materials:1000/probes:1000", scale_materials)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),

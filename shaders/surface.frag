@@ -38,9 +38,10 @@ layout(set = HEMI_SET_MATERIAL,
 layout(set = HEMI_SET_SOURCE,
        binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
-layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std140) uniform Probe
+// Every probe of every frame in flight (render::ProbeBuffer); this draw's from vec4 draw.coefficient_offset.
+layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std430) readonly buffer Probes
 {
-    vec4 probe[HEMI_BASIS_MAX_SIZE];
+    vec4 probes[];
 };
 #endif
 
@@ -99,7 +100,7 @@ void main()
         c[k] = vec3(0.0);
 #if HEMI_SOURCE == HEMI_SOURCE_UNIFORM
         if (k < K)
-            c[k] = probe[k].rgb;
+            c[k] = probes[draw.coefficient_offset + uint(k)].rgb;
 #endif
     }
 #endif

@@ -82,7 +82,7 @@ io::ImageRgba render_sh_normalmap(const gpu::Device& device, const ShNormalMapSc
     render::TextureSet textures(device, std::span<const io::ImageRgba8>(&normal_map, 1),
                                 std::span<const io::Material>(&material, 1), upload);
     render::MaterialInstance instance(system, textures, material, upload);
-    render::ProbeCoefficients probe(system);
+    render::ProbeBuffer probe(system, 1);
     render::FrameSet frame(system);
     render::MaterialKey key;
     key.source = render::CoefficientSourceKind::Uniform;
@@ -102,7 +102,7 @@ io::ImageRgba render_sh_normalmap(const gpu::Device& device, const ShNormalMapSc
                       f.view_projection = render::look_at_projection(scene.eye, glm::vec3(0.0f), 40.0f,
                                                                      float(width) / float(height));
                       frame.record_update(cmd, f);
-                      probe.record_update(cmd, scene.irradiance);
+                      probe.record_update(cmd, 0, 0, scene.irradiance);
                       target.begin(cmd, glm::vec4(0.0f));
                       render::bind_material(cmd, draw);
                       mesh.bind(cmd);

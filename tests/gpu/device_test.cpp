@@ -1,5 +1,6 @@
 // Device creation, selection, adoption of a host engine's device, and error reporting.
 #include "../gpu_fixture.h"
+#include "../host_vulkan.h"
 
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/resources.h>
@@ -20,18 +21,6 @@ namespace
 class DeviceTest : public hemi::test::GpuTest
 {
 };
-
-// The host instance's messenger: the layer's messages fail the test, the loader's notes about the setup (e.g.
-// that VK_LOADER_LAYERS_ENABLE forced the layer on) do not, by the same test hemi's own messenger uses.
-VKAPI_ATTR VkBool32 VKAPI_CALL host_messenger(VkDebugUtilsMessageSeverityFlagBitsEXT,
-                                              VkDebugUtilsMessageTypeFlagsEXT types,
-                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void*)
-{
-    if (hemi::gpu::is_loader_message(types, data))
-        return VK_FALSE;
-    hemi::test::validation_log().add(std::string("(host instance) ") + data->pMessage);
-    return VK_FALSE;
-}
 
 } // namespace
 
@@ -94,82 +83,12 @@ TEST_F(DeviceTest, BuffersRoundTripAndRejectOutOfRangeAccess)
                  std::invalid_argument);
 }
 
-namespace
-{
-
-// A host engine's own Vulkan: an instance with the validation layer, debug utils and its own messenger, the
-// lavapipe device, one queue. Destroyed by the host, after hemi let go of it.
-struct HostVulkan
-{
-    VkInstance instance = VK_NULL_HANDLE;
-    VkPhysicalDevice pd = VK_NULL_HANDLE;
-    VkDevice vk_device = VK_NULL_HANDLE;
-    VkQueue queue = VK_NULL_HANDLE;
-
-    HostVulkan() { create(); } // a failure leaves queue null: the test checks it
-    ~HostVulkan()
-    {
-        if (vk_device)
-            vkDestroyDevice(vk_device, nullptr);
-        if (instance)
-            vkDestroyInstance(instance, nullptr);
-    }
-
-  private:
-    void create()
-    {
-        VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-        app.apiVersion = VK_API_VERSION_1_1;
-        const char* layer = "VK_LAYER_KHRONOS_validation";
-        const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
-        VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-        mi.messageSeverity =
-            VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-        mi.messageType =
-            VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
-        mi.pfnUserCallback = host_messenger;
-        VkInstanceCreateInfo ii{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-        ii.pNext = &mi;
-        ii.pApplicationInfo = &app;
-        ii.enabledLayerCount = 1;
-        ii.ppEnabledLayerNames = &layer;
-        ii.enabledExtensionCount = 1;
-        ii.ppEnabledExtensionNames = &ext;
-        ASSERT_EQ(vkCreateInstance(&ii, nullptr, &instance), VK_SUCCESS);
-
-        uint32_t count = 0;
-        vkEnumeratePhysicalDevices(instance, &count, nullptr);
-        std::vector<VkPhysicalDevice> pds(count);
-        vkEnumeratePhysicalDevices(instance, &count, pds.data());
-        for (VkPhysicalDevice p : pds)
-        {
-            VkPhysicalDeviceProperties props;
-            vkGetPhysicalDeviceProperties(p, &props);
-            if (std::strstr(props.deviceName, "llvmpipe"))
-                pd = p;
-        }
-        ASSERT_NE(pd, VK_NULL_HANDLE);
-        float priority = 1.0f;
-        VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-        qi.queueFamilyIndex = 0;
-        qi.queueCount = 1;
-        qi.pQueuePriorities = &priority;
-        VkDeviceCreateInfo di{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-        di.queueCreateInfoCount = 1;
-        di.pQueueCreateInfos = &qi;
-        ASSERT_EQ(vkCreateDevice(pd, &di, nullptr, &vk_device), VK_SUCCESS);
-        vkGetDeviceQueue(vk_device, 0, 0, &queue);
-    }
-};
-
-} // namespace
-
 // A host engine creates its own instance (with its own validation messenger) and device, hands them to
 // hemi, runs hemi work on them, destroys hemi's Device, and then destroys its objects itself: hemi must
 // neither destroy the host's objects nor leak its own (the host instance's object tracker reports leaks).
 TEST_F(DeviceTest, AdoptsAHostEngineDevice)
 {
-    HostVulkan host;
+    hemi::test::HostVulkan host;
     ASSERT_NE(host.queue, VK_NULL_HANDLE);
     VkInstance instance = host.instance;
     VkPhysicalDevice pd = host.pd;
@@ -223,7 +142,7 @@ VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL recording_proc_addr(VkInstance instance
 
 TEST_F(DeviceTest, NamesItsObjectsWhenTheHostHasDebugUtils)
 {
-    HostVulkan host;
+    hemi::test::HostVulkan host;
     ASSERT_NE(host.queue, VK_NULL_HANDLE);
     for (bool debug_utils : {true, false})
     {
@@ -291,10 +210,10 @@ TEST(DeviceValidation, HostMessengerDropsLoaderNotesOnly)
     EXPECT_FALSE(hemi::gpu::is_loader_message(validation, &layer));
     EXPECT_FALSE(hemi::gpu::is_loader_message(general, nullptr));
 
-    host_messenger(warning, general, &loader, nullptr);
+    hemi::test::host_messenger(warning, general, &loader, nullptr);
     EXPECT_TRUE(hemi::test::validation_log().take().empty()) << "a loader note failed the host's test";
-    host_messenger(warning, validation, &layer, nullptr);
-    host_messenger(warning, general, &layer, nullptr);
+    hemi::test::host_messenger(warning, validation, &layer, nullptr);
+    hemi::test::host_messenger(warning, general, &layer, nullptr);
     const std::vector<std::string> kept = hemi::test::validation_log().take();
     ASSERT_EQ(kept.size(), 2u) << "the layer's messages must still fail the host's test";
     EXPECT_NE(kept[0].find("usage must not be 0"), std::string::npos) << kept[0];

@@ -40,12 +40,12 @@ TEST_F(Descriptors, ThousandsOfMaterialsAndProbesShareAFewPools)
     for (int round = 0; round < 2; ++round)
     {
         std::vector<std::unique_ptr<render::MaterialInstance>> materials;
-        std::vector<std::unique_ptr<render::ProbeCoefficients>> probes;
+        std::vector<std::unique_ptr<render::ProbeBuffer>> probes;
         for (int i = 0; i < 1000; ++i)
         {
             materials.push_back(
                 std::make_unique<render::MaterialInstance>(system, textures, material, upload));
-            probes.push_back(std::make_unique<render::ProbeCoefficients>(system));
+            probes.push_back(std::make_unique<render::ProbeBuffer>(system, 1));
         }
         upload.submit_and_wait();
         EXPECT_LE(descriptors.pool_count(), 4u);

@@ -199,7 +199,7 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
 
     std::unique_ptr<render::TexelCoefficients> texel;
     std::unique_ptr<render::VertexCoefficients> vertex;
-    std::unique_ptr<render::ProbeCoefficients> probe;
+    std::unique_ptr<render::ProbeBuffer> probe;
     std::unique_ptr<render::EnvironmentLighting> env;
     gpu::Buffer prt_buffer, probe_buffer, env_buffer;
     std::vector<glm::vec3> probe_values;
@@ -247,7 +247,8 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
             probe_values.push_back(glm::vec3(coefficient(i, 0, 0.3f, 0.2f), coefficient(i, 1, 0.3f, 0.2f),
                                              coefficient(i, 2, 0.3f, 0.2f)) *
                                    (i == 0 ? 2.0f : 1.0f));
-        probe = std::make_unique<render::ProbeCoefficients>(system);
+        // Probe 2 of frame slot 1 of a buffer of 3 probes and 2 frames: the draw finds it by its offset.
+        probe = std::make_unique<render::ProbeBuffer>(system, 3, 2);
         source_set = probe->set();
         break;
     case Source::Environment:
@@ -432,7 +433,7 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
                       upload.record(cmd);
                       frame_set.record_update(cmd, frame);
                       if (probe)
-                          probe->record_update(cmd, probe_values);
+                          probe->record_update(cmd, 1, 2, probe_values);
                       hemi_pass.begin(cmd, clear);
                       render::DrawBindings b;
                       b.type = &type;
@@ -440,7 +441,7 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
                       b.material = instance.set();
                       b.source = source_set;
                       b.push.model = model;
-                      b.push.coefficient_offset = vertex_offset;
+                      b.push.coefficient_offset = probe ? probe->offset(1, 2) : vertex_offset;
                       render::bind_material(cmd, b);
                       mesh.bind(cmd);
                       mesh.draw(cmd, 0, mesh.index_count());

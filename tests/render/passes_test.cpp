@@ -317,7 +317,7 @@ AlphaImages draw_alpha(io::AlphaMode mode, const float clear[4])
     render::TextureSet textures(dev, std::span<const io::ImageRgba8>(&q.texture, 1),
                                 std::span<const io::Material>(&material, 1), upload);
     const render::MaterialInstance instance(system, textures, material, upload);
-    render::ProbeCoefficients probe(system);
+    render::ProbeBuffer probe(system, 1);
     std::vector<glm::vec3> furnace(9, glm::vec3(0.0f));
     furnace[0] = glm::vec3(float(M_PI) * 2.0f * std::sqrt(float(M_PI))); // E = pi everywhere
     render::MaterialKey key;
@@ -351,7 +351,7 @@ AlphaImages draw_alpha(io::AlphaMode mode, const float clear[4])
                   {
                       upload.record(cmd);
                       frame.record_update(cmd, f);
-                      probe.record_update(cmd, furnace);
+                      probe.record_update(cmd, 0, 0, furnace);
                       pass.begin(cmd, clear);
                       draw(cmd, colour_type);
                       vkCmdEndRenderPass(cmd);
@@ -474,7 +474,7 @@ TEST_F(Passes, ExtraColourAttachmentsAreLeftToTheEngine)
     render::TextureSet textures(dev, std::span<const io::ImageRgba8>(), std::span<const io::Material>(),
                                 upload);
     const render::MaterialInstance instance(system, textures, material, upload);
-    render::ProbeCoefficients probe(system);
+    render::ProbeBuffer probe(system, 1);
     std::vector<glm::vec3> furnace(9, glm::vec3(0.0f));
     furnace[0] = glm::vec3(float(M_PI) * 2.0f * std::sqrt(float(M_PI)));
     render::MaterialKey key;
@@ -489,7 +489,7 @@ TEST_F(Passes, ExtraColourAttachmentsAreLeftToTheEngine)
                   {
                       upload.record(cmd);
                       frame.record_update(cmd, f);
-                      probe.record_update(cmd, furnace);
+                      probe.record_update(cmd, 0, 0, furnace);
                       pass.begin(cmd, clear);
                       render::DrawBindings b;
                       b.type = &system.type(key);

@@ -70,7 +70,7 @@ TEST_F(PipelineState, MipmappedTexturesAverageWhatAPixelCovers)
                             {
                                 object.upload.record(cmd);
                                 frame.record_update(cmd, f);
-                                object.probe->record_update(cmd, furnace_probe());
+                                object.probe->record_update(cmd, 0, 0, furnace_probe());
                                 target.begin(cmd);
                                 object.draw(cmd, frame.set());
                                 target.end(cmd);
@@ -129,7 +129,7 @@ TEST_F(PipelineState, MultisampledTargetsResolveTheSameInteriorAndSmoothEdges)
                         {
                             one_object.upload.record(cmd);
                             one_frame.record_update(cmd, f);
-                            one_object.probe->record_update(cmd, furnace_probe());
+                            one_object.probe->record_update(cmd, 0, 0, furnace_probe());
                             single.begin(cmd, clear);
                             one_object.draw(cmd, one_frame.set());
                             vkCmdEndRenderPass(cmd);
@@ -238,7 +238,7 @@ TEST_F(PipelineState, MultisampledTargetsResolveTheSameInteriorAndSmoothEdges)
                         {
                             four_object.upload.record(cmd);
                             four_frame.record_update(cmd, f);
-                            four_object.probe->record_update(cmd, furnace_probe());
+                            four_object.probe->record_update(cmd, 0, 0, furnace_probe());
                             VkClearValue clears[3] = {};
                             clears[1].depthStencil = {1.0f, 0};
                             VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};

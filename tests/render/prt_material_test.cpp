@@ -446,7 +446,7 @@ TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
                         {
                             object.upload.record(cmd);
                             frame.record_update(cmd, f);
-                            object.probe->record_update(cmd, probe);
+                            object.probe->record_update(cmd, 0, 0, probe);
                             target.begin(cmd);
                             object.draw(cmd, frame.set());
                             target.end(cmd);

@@ -23,7 +23,7 @@ struct SurfaceObject
     render::TextureSet textures;
     render::MaterialInstance instance;
     std::unique_ptr<render::VertexCoefficients> vertex;
-    std::unique_ptr<render::ProbeCoefficients> probe;
+    std::unique_ptr<render::ProbeBuffer> probe;
     const render::MaterialType* type = nullptr;
     VkDescriptorSet source_set = VK_NULL_HANDLE; // overrides the vertex or probe set (e.g. coefficient maps)
 
@@ -49,7 +49,7 @@ struct SurfaceObject
         }
         else
         {
-            probe = std::make_unique<render::ProbeCoefficients>(system);
+            probe = std::make_unique<render::ProbeBuffer>(system, 1);
             key.source = render::CoefficientSourceKind::Uniform;
             key.frame = render::ShadingFrame::World;
         }

@@ -171,7 +171,8 @@ void MemoryAllocator::free(Block* block, VkDeviceSize offset, VkDeviceSize size)
 {
     std::lock_guard<std::mutex> lock(mutex_);
     --block->live;
-    if (block->dedicated)
+    // An empty block goes back to the driver at once: a level unloaded leaves no memory behind.
+    if (block->dedicated || block->live == 0)
     {
         vkFreeMemory(device_->device(), block->memory, nullptr);
         blocks_.erase(

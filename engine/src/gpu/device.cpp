@@ -442,6 +442,10 @@ uint32_t Device::memory_type(uint32_t type_bits, MemoryUsage usage) const
         required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
         preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
         break;
+    case MemoryUsage::Dynamic:
+        required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        break;
     }
     int fallback = -1;
     for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i)

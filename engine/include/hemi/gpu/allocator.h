@@ -4,8 +4,9 @@
 // vkAllocateMemory per block, not per resource. Each Device owns one allocator (Device::allocator()).
 //
 // Blocks are per memory type and per kind (linear: buffers; optimal: images), so bufferImageGranularity never
-// applies inside a block. A request larger than half a block gets a block of its own, returned to the driver
-// when freed. Host-visible coherent blocks are mapped once, persistently. Thread-safe.
+// applies inside a block. A request larger than half a block gets a block of its own. A block whose last
+// resource is freed goes back to the driver at once (stats().blocks counts only blocks in use). Host-visible
+// coherent blocks are mapped once, persistently. Thread-safe.
 
 #include <hemi/gpu/device.h>
 

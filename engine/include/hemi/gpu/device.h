@@ -86,6 +86,7 @@ enum class MemoryUsage
     GpuOnly,  // device-local; uploads go through a staging copy unless the memory is also host-visible
     Upload,   // host-visible, coherent, written by the CPU
     Readback, // host-visible, preferably cached, read by the CPU
+    Dynamic,  // host-visible, coherent, preferably device-local: per-frame data the CPU writes, the GPU reads
 };
 
 class Device

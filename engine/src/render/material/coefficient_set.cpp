@@ -5,6 +5,7 @@
 #include <glm/vec4.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -44,30 +45,64 @@ VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::
     set_ = make_source_set(system, CoefficientSourceKind::Vertex, write);
 }
 
-ProbeCoefficients::ProbeCoefficients(const MaterialSystem& system)
+ProbeBuffer::ProbeBuffer(const MaterialSystem& system, uint32_t probes, uint32_t frames_in_flight)
+    : probes_(probes), frames_(frames_in_flight)
 {
     const gpu::Device& device = system.device();
-    uniforms_ = gpu::create_buffer(device, {HEMI_BASIS_MAX_SIZE * 16, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    if (probes == 0 || frames_in_flight == 0)
+        throw std::invalid_argument("hemi: a probe buffer needs at least one probe and one frame, got " +
+                                    std::to_string(probes) + " and " + std::to_string(frames_in_flight));
+    const VkDeviceSize bytes = VkDeviceSize(probes) * frames_in_flight * HEMI_BASIS_MAX_SIZE * 16;
+    buffer_ =
+        gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
+    device.set_name(VK_OBJECT_TYPE_BUFFER, buffer_.handle(), "hemi light probes");
+    std::memset(buffer_.mapped(), 0, bytes);
     gpu::DescriptorWrite write;
-    write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    write.buffer = {uniforms_, 0, VK_WHOLE_SIZE};
+    write.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    write.buffer = {buffer_, 0, VK_WHOLE_SIZE};
     set_ = make_source_set(system, CoefficientSourceKind::Uniform, write);
 }
 
-void ProbeCoefficients::record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const
+uint32_t ProbeBuffer::offset(uint32_t frame, uint32_t probe) const
 {
+    if (frame >= frames_ || probe >= probes_)
+        throw std::invalid_argument("hemi: probe " + std::to_string(probe) + " of frame slot " +
+                                    std::to_string(frame) + " in a buffer of " + std::to_string(probes_) +
+                                    " probes and " + std::to_string(frames_) + " frame(s)");
+    return (frame * probes_ + probe) * HEMI_BASIS_MAX_SIZE;
+}
+
+void ProbeBuffer::pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients,
+                       glm::vec4* out) const
+{
+    (void)offset(frame, probe);
     if (coefficients.size() > HEMI_BASIS_MAX_SIZE)
         throw std::invalid_argument("hemi: a probe holds at most " + std::to_string(HEMI_BASIS_MAX_SIZE) +
                                     " coefficients, got " + std::to_string(coefficients.size()));
-    glm::vec4 packed[HEMI_BASIS_MAX_SIZE] = {};
-    for (size_t i = 0; i < coefficients.size(); ++i)
+    for (size_t i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
     {
-        const glm::vec3& c = coefficients[i];
+        const glm::vec3 c = i < coefficients.size() ? coefficients[i] : glm::vec3(0.0f);
         if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
-            throw std::invalid_argument("hemi: probe coefficient " + std::to_string(i) + " is not finite");
-        packed[i] = glm::vec4(c, 0.0f);
+            throw std::invalid_argument("hemi: probe " + std::to_string(probe) + "'s coefficient " +
+                                        std::to_string(i) + " is not finite");
+        out[i] = glm::vec4(c, 0.0f);
     }
-    record_uniform_update(cmd, uniforms_, packed, sizeof packed);
+}
+
+void ProbeBuffer::write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients)
+{
+    glm::vec4 packed[HEMI_BASIS_MAX_SIZE];
+    pack(frame, probe, coefficients, packed);
+    std::memcpy(static_cast<glm::vec4*>(buffer_.mapped()) + offset(frame, probe), packed, sizeof packed);
+}
+
+void ProbeBuffer::record_update(VkCommandBuffer cmd, uint32_t frame, uint32_t probe,
+                                std::span<const glm::vec3> coefficients) const
+{
+    glm::vec4 packed[HEMI_BASIS_MAX_SIZE];
+    pack(frame, probe, coefficients, packed);
+    record_uniform_update(cmd, buffer_, packed, sizeof packed, VkDeviceSize(offset(frame, probe)) * 16,
+                          VK_ACCESS_SHADER_READ_BIT);
 }
 
 TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height,

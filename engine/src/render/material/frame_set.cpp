@@ -4,40 +4,67 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
 namespace hemi::render
 {
 
-void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, const void* data, size_t size)
+void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, const void* data, size_t size,
+                           VkDeviceSize offset, VkAccessFlags read_access)
 {
     const VkPipelineStageFlags shaders =
         VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT;
-    gpu::memory_barrier(cmd, shaders, VK_ACCESS_UNIFORM_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+    gpu::memory_barrier(cmd, shaders, read_access, VK_PIPELINE_STAGE_TRANSFER_BIT,
                         VK_ACCESS_TRANSFER_WRITE_BIT);
-    vkCmdUpdateBuffer(cmd, uniforms, 0, size, data);
+    vkCmdUpdateBuffer(cmd, buffer, offset, size, data);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, shaders,
-                        VK_ACCESS_UNIFORM_READ_BIT);
+                        read_access);
 }
 
-FrameSet::FrameSet(const MaterialSystem& system)
+FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight)
 {
     const gpu::Device& device = system.device();
-    uniforms_ =
-        gpu::create_buffer(device, {sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    if (frames_in_flight == 0)
+        throw std::invalid_argument("hemi: a frame set needs at least one frame in flight");
+    const VkDeviceSize align = std::max<VkDeviceSize>(1, device.limits().minUniformBufferOffsetAlignment);
+    stride_ = (sizeof(shared::FrameUniforms) + align - 1) / align * align;
+    uniforms_ = gpu::create_buffer(
+        device, {stride_ * frames_in_flight, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
     device.set_name(VK_OBJECT_TYPE_BUFFER, uniforms_.handle(), "hemi frame uniforms");
     const auto bindings = MaterialSystem::frame_bindings();
-    set_ = system.descriptors().allocate(system.frame_layout(), bindings);
-    gpu::DescriptorWrite write;
-    write.binding = HEMI_FRAME_BINDING_UNIFORMS;
-    write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    write.buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    gpu::write_descriptors(device, set_, {&write, 1});
+    for (uint32_t slot = 0; slot < frames_in_flight; ++slot)
+    {
+        sets_.push_back(system.descriptors().allocate(system.frame_layout(), bindings));
+        gpu::DescriptorWrite write;
+        write.binding = HEMI_FRAME_BINDING_UNIFORMS;
+        write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        write.buffer = {uniforms_, slot * stride_, sizeof(shared::FrameUniforms)};
+        gpu::write_descriptors(device, sets_.back(), {&write, 1});
+    }
 }
 
-void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame) const
+VkDeviceSize FrameSet::slot_offset(uint32_t slot) const
+{
+    if (slot >= sets_.size())
+        throw std::invalid_argument("hemi: frame slot " + std::to_string(slot) + " of a frame set made for " +
+                                    std::to_string(sets_.size()) + " frame(s) in flight");
+    return slot * stride_;
+}
+
+VkDescriptorSet FrameSet::set(uint32_t slot) const
+{
+    (void)slot_offset(slot);
+    return sets_[slot].get();
+}
+
+namespace
+{
+shared::FrameUniforms pack_frame(const FrameData& frame)
 {
     shared::FrameUniforms u{};
     u.view_projection = frame.view_projection;
@@ -66,7 +93,20 @@ void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame) const
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)
         u.sep4_weights[j] = glm::vec4(w[j * 4], w[j * 4 + 1], w[j * 4 + 2], w[j * 4 + 3]);
-    record_uniform_update(cmd, uniforms_, &u, sizeof u);
+    return u;
+}
+} // namespace
+
+void FrameSet::write(uint32_t slot, const FrameData& frame)
+{
+    const shared::FrameUniforms u = pack_frame(frame);
+    std::memcpy(static_cast<std::byte*>(uniforms_.mapped()) + slot_offset(slot), &u, sizeof u);
+}
+
+void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot) const
+{
+    const shared::FrameUniforms u = pack_frame(frame);
+    record_uniform_update(cmd, uniforms_, &u, sizeof u, slot_offset(slot));
 }
 
 } // namespace hemi::render

@@ -101,7 +101,7 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
         return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                  VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Uniform:
-        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+        return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                  VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Environment:
     {
@@ -198,6 +198,7 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key_in, const PassDe
     std::unique_ptr<MaterialType> compiled = compile(key, p); // outside the lock: other threads go on
     std::lock_guard<std::mutex> lock(mutex_);
     // Another thread may have compiled the same type meanwhile: the first one in stays.
+    compiled->id = uint32_t(types_.size());
     return *types_.emplace(std::pair{key, p}, std::move(compiled)).first->second;
 }
 

@@ -216,15 +216,17 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
 
 CpcaTransferPass::~CpcaTransferPass() = default;
 
-void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                              uint32_t first_instance)
 {
     Impl& s = *impl_;
-    const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count);
-    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride);
+    const uint32_t count = lighting_instances(lighting, s.l, s.instances.count, first_instance);
+    const uint32_t instances = first_instance + count;
+    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.pipeline);
     const CpcaPush push{s.rows, 0, s.per_cluster, uint32_t(s.projected_stride / 16)};
     vkCmdPushConstants(cmd, s.project.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
-    for (uint32_t i = 0; i < instances; ++i)
+    for (uint32_t i = first_instance; i < instances; ++i)
     {
         const uint32_t lighting_offset = uint32_t(i * s.instances.lighting_stride);
         vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1,
@@ -234,7 +236,7 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.pipeline);
-    for (uint32_t i = 0; i < instances; ++i)
+    for (uint32_t i = first_instance; i < instances; ++i)
         for (const Impl::Run& run : s.runs)
         {
             const uint32_t offset = uint32_t(run.cluster * s.projected_stride);

@@ -70,12 +70,15 @@ InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, ui
 
 // How many instances `lighting` holds (L coefficients each); throws when it is not a whole number of them
 // within the capacity.
-uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity)
+uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity,
+                            uint32_t first)
 {
-    if (lighting.empty() || lighting.size() % l != 0 || lighting.size() / l > capacity)
+    const uint32_t room = first < capacity ? capacity - first : 0;
+    if (lighting.empty() || lighting.size() % l != 0 || lighting.size() / l > room)
         throw std::invalid_argument("hemi: lighting has " + std::to_string(lighting.size()) +
                                     " SH coefficients: expected L = " + std::to_string(l) +
-                                    " per instance for 1 to " + std::to_string(capacity) + " instances");
+                                    " per instance for 1 to " + std::to_string(room) + " instances" +
+                                    (first ? " from instance " + std::to_string(first) : std::string()));
     for (size_t i = 0; i < lighting.size(); i += l)
         check_lighting(lighting.subspan(i, l), l);
     return uint32_t(lighting.size() / l);
@@ -83,7 +86,8 @@ uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uin
 
 // The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
 void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
-                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride)
+                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride,
+                            uint32_t first)
 {
     const size_t instances = lighting.size() / l;
     std::vector<float> packed(instances * stride / 4, 0.0f);
@@ -106,7 +110,7 @@ void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
     // vkCmdUpdateBuffer takes at most 65,536 bytes per call.
     const VkDeviceSize bytes = packed.size() * 4;
     for (VkDeviceSize offset = 0; offset < bytes; offset += 65536)
-        vkCmdUpdateBuffer(cmd, buffer, offset, std::min<VkDeviceSize>(65536, bytes - offset),
+        vkCmdUpdateBuffer(cmd, buffer, first * stride + offset, std::min<VkDeviceSize>(65536, bytes - offset),
                           reinterpret_cast<const std::byte*>(packed.data()) + offset);
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);

@@ -34,10 +34,13 @@ struct InstanceLayout
 InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, uint32_t n, uint32_t k);
 
 // How many instances `lighting` holds (L coefficients each); throws when it is not a whole number of them
-// within the capacity, or a value is not finite.
-uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity);
-// The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
+// within the capacity from `first` on, or a value is not finite.
+uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity,
+                            uint32_t first = 0);
+// The per-frame lighting update both passes start with: instance first + i's L coefficients at
+// (first + i) * stride bytes.
 void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
-                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride);
+                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride,
+                            uint32_t first = 0);
 
 } // namespace hemi::render::detail

@@ -144,13 +144,14 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
 
 TransferPass::~TransferPass() = default;
 
-void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting, uint32_t first_instance)
 {
     Impl& s = *impl_;
-    const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count);
-    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride);
+    const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count, first_instance);
+    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.pipeline);
-    for (uint32_t i = 0; i < instances * s.segment_count; ++i)
+    for (uint32_t i = first_instance * s.segment_count; i < (first_instance + instances) * s.segment_count;
+         ++i)
     {
         const Impl::Segment& seg = s.segments[i];
         const uint32_t offset = uint32_t((i / s.segment_count) * s.instances.lighting_stride);

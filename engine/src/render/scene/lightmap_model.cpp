@@ -143,6 +143,19 @@ void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const Light
                               pass, entry.primitive, lightmap_scale_offset);
 }
 
+void LightmapModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+                            const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset,
+                            uint32_t layer, float depth) const
+{
+    DrawPacket p;
+    if (surfaces_->packet(p, frame, coefficients_.at(entry.variant)->set(), 0, model, entry.variant, pass,
+                          entry.primitive, lightmap_scale_offset))
+    {
+        p.key = draw_key(layer, *p.type, p.material, p.source, depth);
+        queue.add(p);
+    }
+}
+
 void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
                          const glm::mat4& model, size_t pass) const
 {

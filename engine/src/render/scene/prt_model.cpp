@@ -52,23 +52,26 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
         return std::make_unique<CpcaTransferPass>(
             device,
             CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
-            desc.instances, &upload);
+            desc.instances * desc.frames_in_flight, &upload);
     }
     if (t.matrices.empty())
         throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique +
                                     "' (use --cpca)");
     return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0,
-                                          desc.instances, &upload);
+                                          desc.instances * desc.frames_in_flight, &upload);
 }
 } // namespace
 
 PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
                    gpu::UploadBatch& upload)
-    : system_(&system), asset_(&asset), basis_(&math::technique(desc.technique)),
+    : system_(&system), instances_(desc.instances), frames_(desc.frames_in_flight), asset_(&asset),
+      basis_(&math::technique(desc.technique)),
       surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives,
                 CoefficientSourceKind::Vertex, {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
 {
     const gpu::Device& device = system.device();
+    if (desc.instances == 0 || desc.frames_in_flight == 0)
+        throw std::invalid_argument("hemi: a PRT model needs at least one instance and one frame in flight");
     source_ = make_source(device, asset, desc, upload);
     if (int(source_->k()) != basis_->size)
         throw std::invalid_argument("hemi: technique '" + desc.technique +
@@ -80,7 +83,17 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
 
 PrtModel::~PrtModel() = default;
 
-void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances)
+uint32_t PrtModel::first_instance(uint32_t frame) const
+{
+    if (frame >= frames_)
+        throw std::invalid_argument("hemi: frame slot " + std::to_string(frame) +
+                                    " of a PRT model made for " + std::to_string(frames_) +
+                                    " frame(s) in flight");
+    return frame * instances_;
+}
+
+void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
+                               bool to_vertex_shaders)
 {
     std::vector<glm::vec3> lighting;
     lighting.reserve(instances.size() * asset_->l());
@@ -90,24 +103,46 @@ void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance>
             object_lighting(i.world_lighting, int(asset_->order), i.model, i.rotate_degrees);
         lighting.insert(lighting.end(), o.begin(), o.end());
     }
-    record_transfer_object_space(cmd, lighting);
+    record_transfer_object_space(cmd, lighting, frame, to_vertex_shaders);
 }
 
-void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting)
+void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                                            uint32_t frame, bool to_vertex_shaders)
 {
-    source_->record(cmd, lighting);
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    if (lighting.size() > size_t(instances_) * asset_->l())
+        throw std::invalid_argument("hemi: lighting for " + std::to_string(lighting.size() / asset_->l()) +
+                                    " instances of a PRT model made for " + std::to_string(instances_));
+    source_->record(cmd, lighting, first_instance(frame));
+    if (to_vertex_shaders)
+        gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                            VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+}
+
+PrtModel::BufferRange PrtModel::coefficient_range(uint32_t frame) const
+{
+    const VkDeviceSize stride = source_->instance_stride() * 16;
+    return {source_->coefficients().handle(), first_instance(frame) * stride, instances_ * stride};
 }
 
 void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
-                    size_t pass) const
+                    size_t pass, uint32_t frame_slot) const
 {
-    if (instance >= source_->instances())
+    if (instance >= instances_)
         throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
-                                    std::to_string(source_->instances()));
-    surfaces_.draw(cmd, frame, coefficient_set_->set(), uint32_t(source_->instance_offset(instance)), model,
-                   0, pass);
+                                    std::to_string(instances_));
+    surfaces_.draw(cmd, frame, coefficient_set_->set(),
+                   uint32_t(source_->instance_offset(first_instance(frame_slot) + instance)), model, 0, pass);
+}
+
+void PrtModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+                       size_t pass, uint32_t frame_slot, uint32_t layer, float depth) const
+{
+    if (instance >= instances_)
+        throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
+                                    std::to_string(instances_));
+    surfaces_.enqueue(queue, frame, coefficient_set_->set(),
+                      uint32_t(source_->instance_offset(first_instance(frame_slot) + instance)), model, 0,
+                      pass, layer, depth);
 }
 
 } // namespace hemi::render

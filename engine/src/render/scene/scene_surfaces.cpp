@@ -78,8 +78,49 @@ void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
         throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
     if (pass >= passes_.size())
         throw std::invalid_argument("hemi: surface pass " + std::to_string(pass) + " was not added");
+    std::vector<DrawPacket> packets(draws_.size());
+    size_t n = 0;
     for (size_t i = 0; i < draws_.size(); ++i)
-        draw_primitive(cmd, frame, source, coefficient_offset, model, variant, pass, i);
+        n += packet(packets[n], frame, source, coefficient_offset, model, variant, pass, i) ? 1 : 0;
+    record_packets(cmd, std::span(packets).first(n));
+}
+
+void SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source,
+                            uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
+                            uint32_t layer, float depth) const
+{
+    DrawPacket p;
+    for (size_t i = 0; i < draws_.size(); ++i)
+        if (packet(p, frame, source, coefficient_offset, model, variant, pass, i))
+        {
+            p.key = draw_key(layer, *p.type, p.material, p.source, depth);
+            queue.add(p);
+        }
+}
+
+bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorSet source,
+                           uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
+                           size_t primitive, const glm::vec4& lightmap_scale_offset) const
+{
+    const Draw& d = draws_.at(primitive);
+    if (variant >= d.keys.size() || pass >= passes_.size())
+        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " or pass " +
+                                    std::to_string(pass) + " does not exist");
+    if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
+        return false;
+    out.type = d.types[pass][variant];
+    out.frame = frame;
+    out.material = materials_[d.material]->set();
+    out.source = source;
+    out.mesh = &mesh_;
+    out.first_index = d.first_index;
+    out.index_count = d.index_count;
+    out.push = {};
+    out.push.model = model;
+    out.push.coefficient_offset = coefficient_offset;
+    out.push.draw_id = uint32_t(primitive + 1);
+    out.push.lightmap_scale_offset = lightmap_scale_offset;
+    return true;
 }
 
 void SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
@@ -87,24 +128,9 @@ void SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, V
                                    size_t pass, size_t primitive,
                                    const glm::vec4& lightmap_scale_offset) const
 {
-    const Draw& d = draws_.at(primitive);
-    if (variant >= d.keys.size() || pass >= passes_.size())
-        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " or pass " +
-                                    std::to_string(pass) + " does not exist");
-    if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
-        return;
-    DrawBindings b;
-    b.type = d.types[pass][variant];
-    b.frame = frame;
-    b.material = materials_[d.material]->set();
-    b.source = source;
-    b.push.model = model;
-    b.push.coefficient_offset = coefficient_offset;
-    b.push.draw_id = uint32_t(primitive + 1);
-    b.push.lightmap_scale_offset = lightmap_scale_offset;
-    bind_material(cmd, b);
-    mesh_.bind(cmd);
-    mesh_.draw(cmd, d.first_index, d.index_count);
+    DrawPacket p;
+    if (packet(p, frame, source, coefficient_offset, model, variant, pass, primitive, lightmap_scale_offset))
+        record_packets(cmd, {&p, 1});
 }
 
 SceneSurfaces::Primitive SceneSurfaces::primitive(size_t p) const

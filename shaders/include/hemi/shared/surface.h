@@ -35,7 +35,7 @@ using uint = uint32_t;
 // Coefficient sources (a shader variant each: they bind different descriptor types).
 #define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)
 #define HEMI_SOURCE_TEXEL 1   // 2D array texture, layer k, sampled at TEXCOORD_1 (lightmaps)
-#define HEMI_SOURCE_UNIFORM 2 // uniform block of K vec4 (an SH probe, an environment)
+#define HEMI_SOURCE_UNIFORM 2 // K vec4 per object in a storage buffer (an SH probe; render::ProbeBuffer)
 #define HEMI_SOURCE_ENVIRONMENT                                                                              \
     3 // parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
 
@@ -107,9 +107,10 @@ struct EnvironmentUniforms
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
 struct DrawPush
 {
-    mat4 model;              // object to world (normals through its inverse transpose: any scale, mirrors)
-    uint coefficient_offset; // texels; vertex source only
-    uint draw_id;            // written to the aux attachment's blue channel (0 = background): picking, tests
+    mat4 model; // object to world (normals through its inverse transpose: any scale, mirrors)
+    uint
+        coefficient_offset; // texels (vertex source) or vec4s (probe source) of this draw's first coefficient
+    uint draw_id;           // written to the aux attachment's blue channel (0 = background): picking, tests
     uint pad0, pad1;
     // Texel source: where this draw's lightmap lookup goes, TEXCOORD_1 * xy + zw, so that several objects
     // share one atlas, each in its own rectangle (default: (1, 1, 0, 0), the whole atlas).

@@ -2,8 +2,8 @@
 // Descriptor set 2 of the material system: where one object instance's coefficients come from.
 //   VertexCoefficients: a transfer or CPCA pass's output buffer (per vertex; shared::DrawPush carries the
 //                       instance's texel offset into it).
-//   ProbeCoefficients:  one set of K RGB coefficients for the whole object (an SH9 irradiance probe in
-//                       world space, say), updated per frame.
+//   ProbeBuffer:        one set of K RGB coefficients per object (an SH9 irradiance probe in world space,
+//                       say), many objects and frames in flight in one buffer, updated per frame.
 //   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps): a K-layer 2D
 //                       array image, bilinear, clamped to the edge.
 
@@ -32,17 +32,40 @@ class VertexCoefficients
     gpu::DescriptorSet set_;
 };
 
-class ProbeCoefficients
+// Light-probe coefficients (an SH9 irradiance probe in world space, say) of many objects in one storage
+// buffer: the descriptor set of every probe-lit draw. A draw picks its probe by shared::DrawPush::
+// coefficient_offset = offset(frame, probe). `frames_in_flight` slots let an engine write frame N+1's
+// lighting while the GPU still reads frame N's.
+//   write():         through persistently mapped memory (host-visible, device-local where the device has
+//                    such memory): no command, no barrier. Write slot `frame` only once the GPU has finished
+//                    the frame that last read it (the engine's per-frame fence); the queue submission that
+//                    follows makes the host writes visible.
+//   record_update(): in the command buffer (vkCmdUpdateBuffer between two barriers), for a frame recorded and
+//                    submitted at once (tools, tests, one object).
+class ProbeBuffer
 {
   public:
-    explicit ProbeCoefficients(const MaterialSystem& system);
-    // Outside a render pass: up to HEMI_BASIS_MAX_SIZE RGB coefficients (finite; std::invalid_argument else).
-    void record_update(VkCommandBuffer cmd, std::span<const glm::vec3> coefficients) const;
+    // Throws std::invalid_argument for no probes or no frames.
+    ProbeBuffer(const MaterialSystem& system, uint32_t probes, uint32_t frames_in_flight = 1);
+    // Up to HEMI_BASIS_MAX_SIZE RGB coefficients (finite; std::invalid_argument else) of probe `probe` in
+    // slot `frame` (< frames_in_flight); the rest of the probe's coefficients become 0.
+    void write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients);
+    // Outside a render pass: the same, recorded (the previous reads of the buffer finish first).
+    void record_update(VkCommandBuffer cmd, uint32_t frame, uint32_t probe,
+                       std::span<const glm::vec3> coefficients) const;
+    // shared::DrawPush::coefficient_offset of probe `probe` in slot `frame`.
+    uint32_t offset(uint32_t frame, uint32_t probe) const;
     VkDescriptorSet set() const { return set_.get(); }
+    uint32_t probes() const { return probes_; }
+    uint32_t frames_in_flight() const { return frames_; }
+    // For an engine's own shaders: vec4 coefficients, probe p of slot f from vec4 offset(f, p).
+    const gpu::Buffer& buffer() const { return buffer_; }
 
   private:
-    gpu::Buffer uniforms_;
+    void pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients, glm::vec4* out) const;
+    gpu::Buffer buffer_;
     gpu::DescriptorSet set_;
+    uint32_t probes_ = 0, frames_ = 0;
 };
 
 class TexelCoefficients

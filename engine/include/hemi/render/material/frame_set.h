@@ -37,21 +37,33 @@ struct FrameData
     float specular_strength = 0.0f;
 };
 
+// Per-frame data for `frames_in_flight` frames, each slot its own range of one buffer and its own set.
+//   write():         through persistently mapped memory (host-visible, device-local where the device has such
+//                    memory): no command, no barrier. Write slot `slot` only once the GPU has finished the
+//                    frame that last read it (the engine's per-frame fence); the queue submission that
+//                    follows makes the host writes visible.
+//   record_update(): outside a render pass, in the command buffer: the previous frame's reads finish before
+//                    the update, which finishes before this frame's draws read it (a frame recorded and
+//                    submitted at once: tools, tests).
 class FrameSet
 {
   public:
-    explicit FrameSet(const MaterialSystem& system);
-    // Outside a render pass, once per frame: the previous frame's reads finish before the update, which
-    // finishes before this frame's draws read it.
-    void record_update(VkCommandBuffer cmd, const FrameData& frame) const;
-    VkDescriptorSet set() const { return set_.get(); }
+    explicit FrameSet(const MaterialSystem& system, uint32_t frames_in_flight = 1);
+    void write(uint32_t slot, const FrameData& frame);
+    void record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot = 0) const;
+    VkDescriptorSet set(uint32_t slot = 0) const;
+    uint32_t frames_in_flight() const { return uint32_t(sets_.size()); }
 
   private:
+    VkDeviceSize slot_offset(uint32_t slot) const;
     gpu::Buffer uniforms_;
-    gpu::DescriptorSet set_;
+    VkDeviceSize stride_ = 0;
+    std::vector<gpu::DescriptorSet> sets_;
 };
 
-// The update-with-barriers of a small uniform block read by vertex and fragment shaders (vkCmdUpdateBuffer).
-void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& uniforms, const void* data, size_t size);
+// The update-with-barriers of a small block of `buffer` at `offset` read by vertex and fragment shaders
+// with `read_access` (uniform or storage reads; vkCmdUpdateBuffer).
+void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, const void* data, size_t size,
+                           VkDeviceSize offset = 0, VkAccessFlags read_access = VK_ACCESS_UNIFORM_READ_BIT);
 
 } // namespace hemi::render

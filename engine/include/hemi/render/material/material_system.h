@@ -182,6 +182,7 @@ struct MaterialType
     PassKind pass = PassKind::Color;
     uint32_t k = 0;       // coefficients the basis takes
     gpu::Program program; // pipeline + layout (sets 0-2 of the system's shared layouts, shared::DrawPush)
+    uint32_t id = 0; // 0, 1, 2, ... in the order the system compiled its types: a draw sort key's pipeline
 };
 
 class MaterialSystem

@@ -24,8 +24,11 @@ class CoefficientSource
     // with a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
     // `lighting` holds L finite entries per instance, for 1 to instances() instances (instance i's at
     // i * L): every instance shares the matrices and is relit with its own lighting (each object's
-    // environment rotated into its frame), into its own coefficients at instance_offset(i).
-    virtual void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) = 0;
+    // environment rotated into its frame), into its own coefficients at instance_offset(i). With
+    // `first_instance`, the lighting is that of instances first_instance, first_instance + 1, ... (a frame in
+    // flight's range of instances: PrtModel).
+    virtual void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                        uint32_t first_instance = 0) = 0;
     virtual uint32_t instances() const = 0;
     // Texels between two instances' coefficients (>= N*K, aligned for texel-buffer views).
     virtual uint64_t instance_stride() const = 0;

@@ -29,7 +29,8 @@ class CpcaTransferPass : public CoefficientSource
     CpcaTransferPass(const CpcaTransferPass&) = delete;
     CpcaTransferPass& operator=(const CpcaTransferPass&) = delete;
 
-    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) override;
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                uint32_t first_instance = 0) override;
     const gpu::Buffer& coefficients() const override;
     uint32_t vertex_count() const override;
     uint32_t k() const override;

@@ -34,7 +34,8 @@ class TransferPass : public CoefficientSource
     // frames), a barrier, and the dispatches. The caller orders later reads of coefficients() with a
     // barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_WRITE_BIT.
     // `lighting` must have L entries of finite values.
-    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting) override;
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                uint32_t first_instance = 0) override;
 
     // RGBA32F texels: coefficient k of vertex v is texel v*K + k. Usable as a uniform texel buffer.
     const gpu::Buffer& coefficients() const override;

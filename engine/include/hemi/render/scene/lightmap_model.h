@@ -40,7 +40,7 @@ const math::BasisDesc& lightmap_basis(const std::string& output);
 // The light of the asset's probes (io::LightProbes, hemi-bake lightmap --probes) for a dynamic object at
 // `world_position` in a level placed by `model` (a rotation, uniform scale and translation): the probes'
 // interpolation at the position in the level's space, rotated into the world, as the 9 world-space SH9
-// irradiance coefficients a ProbeCoefficients source takes (technique "sh9" on the world frame: the object's
+// irradiance coefficients a ProbeBuffer takes (technique "sh9" on the world frame: the object's
 // normal-map normal in world space). Throws std::invalid_argument when the asset has no probes.
 std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
                                       const glm::mat4& model);
@@ -78,6 +78,11 @@ class LightmapModel
     // (TEXCOORD_1 * xy + zw: several objects sharing one atlas).
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
               size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+    // The same as a draw packet (draw_queue.h), keyed by `layer` and `depth`. The entry must come from
+    // draw_list(..., pass).
+    void enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
+                 size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f},
+                 uint32_t layer = 0, float depth = 0.0f) const;
 
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
     // index for draw(). Pass 0 is the system's default colour pass.

@@ -26,23 +26,35 @@ namespace hemi::render
 class ProbeObject
 {
   public:
-    // The mesh, images and materials must outlive the object. Throws std::invalid_argument for no instances.
+    // The mesh, images and materials must outlive the object. Each of `instances` gets its probe in a buffer
+    // of `frames_in_flight` slots (ProbeBuffer). Throws std::invalid_argument for no instances or frames.
     ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                 const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
-                uint32_t instances, gpu::UploadBatch& upload);
+                uint32_t instances, gpu::UploadBatch& upload, uint32_t frames_in_flight = 1);
     ~ProbeObject();
 
-    // Outside a render pass: instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g.
-    // probe_lighting() at its position) for the draws that follow.
-    void record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9) const;
-    // Inside the caller's render pass: instance `instance` under `model`.
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model) const;
+    // Instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g. probe_lighting() at its
+    // position) in frame slot `frame`, through mapped memory (no command; ProbeBuffer::write's contract).
+    void write_lighting(uint32_t frame, uint32_t instance, std::span<const glm::vec3> sh9);
+    // Outside a render pass: the same, recorded in the command buffer (ProbeBuffer::record_update).
+    void record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
+                         uint32_t frame = 0) const;
+    // Inside the caller's render pass: instance `instance` under `model` with its lighting of slot `frame`.
+    void draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
+              uint32_t frame = 0) const;
 
-    uint32_t instances() const { return uint32_t(probes_.size()); }
+    // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
+    void enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
+                 uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f) const;
+
+    uint32_t instances() const { return probes_.probes(); }
+    const ProbeBuffer& probes() const { return probes_; }
+    const SceneSurfaces& surfaces() const { return surfaces_; }
 
   private:
+    static void check_sh9(std::span<const glm::vec3> sh9);
     SceneSurfaces surfaces_;
-    std::vector<std::unique_ptr<ProbeCoefficients>> probes_;
+    ProbeBuffer probes_;
 };
 
 } // namespace hemi::render

@@ -46,6 +46,10 @@ struct PrtModelDesc
     std::string technique = "gs"; // math::technique() names: gs, prt, hl2, sal4, h4, h6, sep4, ...
     bool cpca = false;            // the technique's CPCA data instead of the dense matrices
     uint32_t instances = 1;       // objects relit per frame from this model
+    // Frames the engine keeps in flight: each slot has its own lighting and coefficients of every instance,
+    // so the transfer pass of frame N+1 (on a compute queue, say) runs while frame N's draws still read
+    // frame N's.
+    uint32_t frames_in_flight = 1;
 };
 
 // One object drawn from a model, per frame.
@@ -68,15 +72,38 @@ class PrtModel
     ~PrtModel();
 
     // Outside a render pass: the lighting of instances.size() <= desc.instances objects rotated into their
-    // frames, the coefficient pass, and the barrier to the vertex shaders that read its output.
-    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances);
+    // frames, the coefficient pass into frame slot `frame` (< desc.frames_in_flight), and the barrier to the
+    // vertex shaders that read its output. What it writes: the slot's lighting (transfer write, then compute
+    // uniform read, both its own) and the slot's coefficients (compute shader write; coefficient_range()),
+    // with a barrier of its own before (earlier reads of the buffers, any stage of this queue) and one after
+    // (to vertex shader reads).
+    // On a compute-only queue the barrier after names the vertex stage, which such a queue does not have:
+    // record with `to_vertex_shaders` false there and release the coefficients to the graphics queue
+    // (docs/integration.md).
+    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame = 0,
+                         bool to_vertex_shaders = true);
     // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
-    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting);
+    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
+                                      uint32_t frame = 0, bool to_vertex_shaders = true);
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
     // with its own material, under `model`, with the frame set of this view. Primitive p is draw id p + 1 in
     // the aux attachment. `pass`: an index from add_pass (0: the system's default colour pass).
+    // `frame_slot`: whose coefficients (record_transfer's `frame`).
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
-              size_t pass = 0) const;
+              size_t pass = 0, uint32_t frame_slot = 0) const;
+    // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
+    void enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+                 size_t pass = 0, uint32_t frame_slot = 0, uint32_t layer = 0, float depth = 0.0f) const;
+    uint32_t frames_in_flight() const { return frames_; }
+    uint32_t instances() const { return instances_; }
+    // The coefficient buffer's range frame slot `frame` writes and draws read (bytes): what an engine's
+    // render graph names in a buffer barrier or a queue-family ownership transfer.
+    struct BufferRange
+    {
+        VkBuffer buffer;
+        VkDeviceSize offset, size;
+    };
+    BufferRange coefficient_range(uint32_t frame) const;
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass).
     size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
 
@@ -89,7 +116,9 @@ class PrtModel
     size_t material_count() const { return surfaces_.material_count(); }
 
   private:
+    uint32_t first_instance(uint32_t frame) const;
     MaterialSystem* system_;
+    uint32_t instances_ = 1, frames_ = 1;
     const io::PrtAsset* asset_;
     const math::BasisDesc* basis_;
     SceneSurfaces surfaces_;

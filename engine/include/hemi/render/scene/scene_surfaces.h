@@ -9,6 +9,7 @@
 #include <hemi/io/mesh.h>
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/material/material_system.h>
+#include <hemi/render/scene/draw_queue.h>
 #include <hemi/render/scene/gpu_mesh.h>
 
 #include <glm/mat4x4.hpp>
@@ -61,6 +62,16 @@ class SceneSurfaces
                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
                         size_t primitive,
                         const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+
+    // Draw packets instead of draws (draw_queue.h): every primitive draw() would record, each keyed by
+    // `layer`, its material type and sets, and `depth`; sorted and recorded with the rest of the frame's.
+    void enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
+                 const glm::mat4& model, size_t variant = 0, size_t pass = 0, uint32_t layer = 0,
+                 float depth = 0.0f) const;
+    // The packet of one primitive; false for a primitive the pass does not draw (blended, in a depth pass).
+    bool packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
+                const glm::mat4& model, size_t variant, size_t pass, size_t primitive,
+                const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
 
     // What an engine's draw list needs of each primitive.
     struct Primitive

@@ -1,0 +1,172 @@
+// No library call on an engine's path submits to a queue or waits on the device: loading (models, textures,
+// materials, probes, frame data: uploads recorded into the engine's command buffer through an UploadBatch)
+// and every frame's recording (per-frame data written through mapped memory, the PRT transfer pass, draws
+// through a sorted DrawQueue). hemi runs on the engine's own device, and gets its Vulkan entry points from a
+// vkGetInstanceProcAddr that counts vkQueueSubmit, vkWaitForFences and vkDeviceWaitIdle
+// (tests/vulkan_calls.h); the engine submits with its own loader. A library that kept a one-shot submit
+// anywhere on this path (a staging copy submitted at once, a readback, a wait for idle before freeing)
+// counts one here. The frame is then checked to have drawn something, so the path is not vacuous.
+#include "../gpu_fixture.h"
+#include "../host_vulkan.h"
+#include "../vulkan_calls.h"
+#include "table_level.h"
+
+#include <hemi/bake/prt_bake.h>
+#include <hemi/bake/transfer_fold.h>
+#include <hemi/gpu/upload.h>
+#include <hemi/io/prt_asset.h>
+#include <hemi/math/camera.h>
+#include <hemi/math/sh.h>
+#include <hemi/render/material/frame_set.h>
+#include <hemi/render/scene/draw_queue.h>
+#include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/probe_object.h>
+#include <hemi/render/scene/prt_model.h>
+#include <hemi/render/view/offscreen.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <vector>
+
+namespace
+{
+
+class EnginePath : public hemi::test::GpuTest
+{
+};
+
+hemi::io::PrtAsset sphere_asset()
+{
+    hemi::io::PrtAsset a;
+    a.mesh = hemi::io::make_uv_sphere(1.0f, 16, 8);
+    a.order = 3;
+    a.transfer_kind = 0;
+    hemi::bake::PrtBakeOptions o;
+    o.kind = hemi::bake::TransferKind::Unshadowed;
+    o.order = 3;
+    hemi::io::PrtTechnique t;
+    t.name = "h4";
+    t.k = 4;
+    t.matrices = hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(a.mesh, o), a.mesh, "h4");
+    a.techniques.push_back(std::move(t));
+    return a;
+}
+
+} // namespace
+
+TEST_F(EnginePath, NoLibraryCallSubmitsOrWaits)
+{
+    using namespace hemi;
+    test::HostVulkan host(true);
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    test::VulkanCalls& calls = test::vulkan_calls();
+    const io::PrtAsset prt_asset = sphere_asset();
+    const io::LightmapAsset level = test::table_level(io::Material{}, io::Material{}, {}, {"h4"});
+    const io::Mesh probe_mesh = io::make_uv_sphere(0.3f, 12, 6);
+    constexpr uint32_t kW = 64, kH = 64, kInFlight = 2;
+
+    VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pi.queueFamilyIndex = host.family;
+    VkCommandPool pool = VK_NULL_HANDLE;
+    ASSERT_EQ(vkCreateCommandPool(host.vk_device, &pi, nullptr, &pool), VK_SUCCESS);
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = pool;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    ASSERT_EQ(vkAllocateCommandBuffers(host.vk_device, &ai, &cmd), VK_SUCCESS);
+    VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkFence fence = VK_NULL_HANDLE;
+    ASSERT_EQ(vkCreateFence(host.vk_device, &fi, nullptr, &fence), VK_SUCCESS);
+    // The engine's own submission, with its own loader's entry points (not counted).
+    auto submit = [&]
+    {
+        VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        si.commandBufferCount = 1;
+        si.pCommandBuffers = &cmd;
+        ASSERT_EQ(vkQueueSubmit(host.queue, 1, &si, fence), VK_SUCCESS);
+        ASSERT_EQ(vkWaitForFences(host.vk_device, 1, &fence, VK_TRUE, UINT64_MAX), VK_SUCCESS);
+        ASSERT_EQ(vkResetFences(host.vk_device, 1, &fence), VK_SUCCESS);
+    };
+    auto begin = [&]
+    {
+        VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        ASSERT_EQ(vkBeginCommandBuffer(cmd, &bi), VK_SUCCESS);
+    };
+
+    {
+        calls.reset();
+        gpu::Device dev(host.external(test::counting_proc_addr));
+        render::OffscreenTarget target(dev, kW, kH);
+        render::MaterialSystem system(dev, target.desc());
+        // Loading: everything uploads through the batch the engine records.
+        gpu::UploadBatch upload(dev);
+        render::PrtModelDesc desc;
+        desc.technique = "h4";
+        desc.frames_in_flight = kInFlight;
+        render::PrtModel prt(system, prt_asset, desc, upload);
+        render::LightmapModel lightmap(system, level, {"h4"}, upload);
+        render::ProbeObject probes(system, probe_mesh, {}, {io::Material{}}, {}, 4, upload, kInFlight);
+        render::FrameSet frame_set(system, kInFlight);
+        begin();
+        upload.record(cmd);
+        ASSERT_EQ(vkEndCommandBuffer(cmd), VK_SUCCESS);
+        EXPECT_EQ(calls.queue_work(), 0u) << "loading submitted or waited";
+        submit();
+
+        // Two frames, each recorded into the engine's command buffer.
+        const glm::mat4 view = math::look_at_projection(glm::vec3(0, -4, 2), glm::vec3(0), 50.0f, 1.0f);
+        std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+        render::DrawQueue queue;
+        for (uint32_t frame = 0; frame < 2 * kInFlight; ++frame)
+        {
+            const uint32_t slot = frame % kInFlight;
+            calls.reset();
+            render::FrameData data;
+            data.view_projection = view;
+            frame_set.write(slot, data);
+            float y[9];
+            math::sh_eval(3, glm::normalize(glm::vec3(0.3f * float(frame), -1.0f, 1.0f)), y);
+            for (int i = 0; i < 9; ++i)
+                light[i] = glm::vec3(y[i]);
+            for (uint32_t i = 0; i < probes.instances(); ++i)
+                probes.write_lighting(slot, i, light);
+            begin();
+            const render::PrtInstance instance{glm::mat4(1.0f), light, 0.0f};
+            prt.record_transfer(cmd, {&instance, 1}, slot);
+            queue.clear();
+            for (const render::LightmapDraw& d : lightmap.draw_list("h4"))
+                lightmap.enqueue(queue, frame_set.set(slot), d, glm::mat4(1.0f));
+            prt.enqueue(queue, frame_set.set(slot), 0, glm::translate(glm::mat4(1.0f), glm::vec3(0, 0, 1)), 0,
+                        slot);
+            for (uint32_t i = 0; i < probes.instances(); ++i)
+                probes.enqueue(queue, frame_set.set(slot), i,
+                               glm::translate(glm::mat4(1.0f), glm::vec3(float(i) - 1.5f, -1.0f, 0.5f)),
+                               slot);
+            queue.sort();
+            target.begin(cmd);
+            const render::DrawStats stats = queue.record(cmd);
+            target.end(cmd);
+            ASSERT_EQ(vkEndCommandBuffer(cmd), VK_SUCCESS);
+            EXPECT_EQ(calls.queue_work(), 0u) << "frame " << frame << " submitted or waited";
+            EXPECT_GT(stats.draws, 5u);
+            EXPECT_EQ(calls.draws, stats.draws);
+            submit();
+        }
+        // Something was drawn (read back by the test, which may submit). The readback is a tool's one-shot
+        // submit: the counter must see it, or it would see nothing at all.
+        const io::ImageRgba aux = target.read_aux();
+        EXPECT_GT(calls.queue_work(), 0u) << "the counting entry points missed hemi's own readback";
+        size_t covered = 0;
+        for (size_t p = 0; p < size_t(kW) * kH; ++p)
+            covered += aux.pixels[p * 4 + 3] == 1.0f ? 1 : 0;
+        EXPECT_GT(covered, size_t(kW) * kH / 10);
+        ASSERT_EQ(vkDeviceWaitIdle(host.vk_device), VK_SUCCESS);
+        calls.reset();
+    }
+    EXPECT_EQ(calls.queue_work(), 0u) << "destroying hemi's objects submitted or waited";
+    vkDestroyFence(host.vk_device, fence, nullptr);
+    vkDestroyCommandPool(host.vk_device, pool, nullptr);
+}
