@@ -2,10 +2,12 @@
 // ranges are reused, a block emptied goes back to the driver, and a request larger than half a block gets a
 // block of its own. Objects retired to a DeletionQueue live until their frame is collected.
 #include "../gpu_fixture.h"
+#include "../host_vulkan.h"
 
 #include <hemi/gpu/allocator.h>
 #include <hemi/gpu/deletion_queue.h>
 #include <hemi/gpu/resources.h>
+#include <hemi/render/transfer.h>
 #include <hemi/render/view/offscreen.h>
 
 #include <functional>
@@ -163,4 +165,128 @@ TEST_F(Allocator, RequestsBeyondTheDevicesLimitsAreRefusedNamingTheLimit)
         EXPECT_NE(why.find("maxMemoryAllocationSize"), std::string::npos) << why;
         EXPECT_EQ(why.find("heap"), std::string::npos) << why;
     }
+}
+
+namespace
+{
+// An engine's own allocator, as simple as one can be: one vkAllocateMemory per resource, mapped when the
+// memory is host-visible and coherent, counted.
+struct EngineMemory final : hemi::gpu::MemoryProvider
+{
+    VkDevice device = VK_NULL_HANDLE;
+    VkPhysicalDeviceMemoryProperties props{};
+    int live = 0, total = 0;
+    bool forget_mapping = false; // a broken provider: no host pointer for memory the CPU writes
+
+    explicit EngineMemory(const hemi::test::HostVulkan& host) : device(host.vk_device)
+    {
+        vkGetPhysicalDeviceMemoryProperties(host.pd, &props);
+    }
+    Range allocate(const VkMemoryRequirements& req, hemi::gpu::MemoryUsage usage, bool) override
+    {
+        const VkMemoryPropertyFlags host =
+            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        const VkMemoryPropertyFlags need = usage == hemi::gpu::MemoryUsage::GpuOnly ? 0 : host;
+        uint32_t type = 32;
+        for (uint32_t i = 0; i < props.memoryTypeCount && type == 32; ++i)
+            if ((req.memoryTypeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & need) == need)
+                type = i;
+        if (type == 32)
+            throw std::runtime_error("engine: no memory type");
+        VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        info.allocationSize = req.size;
+        info.memoryTypeIndex = type;
+        Range r;
+        if (vkAllocateMemory(device, &info, nullptr, &r.memory) != VK_SUCCESS)
+            throw std::runtime_error("engine: vkAllocateMemory failed");
+        r.size = req.size;
+        r.memory_type = type;
+        if (!forget_mapping && (props.memoryTypes[type].propertyFlags & host) == host)
+            vkMapMemory(device, r.memory, 0, VK_WHOLE_SIZE, 0, &r.mapped);
+        ++live;
+        ++total;
+        return r;
+    }
+    void free(const Range& r) noexcept override
+    {
+        vkFreeMemory(device, r.memory, nullptr);
+        --live;
+    }
+};
+} // namespace
+
+// An engine's own allocator serves hemi (ExternalDevice::memory): every buffer and image hemi makes on the
+// adopted device comes from it, hemi's own allocator holds nothing, the data round-trips, and every range
+// goes back when hemi's objects are destroyed. A provider that returns no host pointer for memory the CPU
+// must write is refused by name, and its range given back.
+TEST_F(Allocator, AnEnginesOwnProviderServesEveryResource)
+{
+    hemi::test::HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    EngineMemory engine(host);
+    hemi::gpu::ExternalDevice external = host.external();
+    external.memory = &engine;
+    {
+        hemi::gpu::Device dev(external);
+        std::vector<float> t(40 * 4 * 9);
+        for (size_t i = 0; i < t.size(); ++i)
+            t[i] = float(i % 5) - 2.0f;
+        hemi::render::TransferMatrices m(40, 4, 9, t);
+        hemi::render::TransferPass pass(dev, m);
+        std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+        light[4] = glm::vec3(1.0f);
+        pass.run(light);
+        const std::vector<float> c = pass.read_coefficients();
+        EXPECT_EQ(c[(39 * 4 + 2) * 4 + 1], t[(39 * 4 + 2) * 9 + 4]);
+        const hemi::gpu::Image image = hemi::gpu::create_image(dev, {32, 32, VK_FORMAT_R8G8B8A8_UNORM});
+        EXPECT_GE(engine.live, 4) << "the matrices, lighting, coefficients and the image";
+        EXPECT_EQ(dev.allocator().stats().blocks, 0u) << "hemi allocated memory of its own";
+    }
+    EXPECT_EQ(engine.live, 0) << "a range was not given back";
+    EXPECT_GE(engine.total, 4);
+
+    engine.forget_mapping = true;
+    hemi::gpu::Device dev(external);
+    try
+    {
+        (void)hemi::gpu::create_buffer(
+            dev, {256, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, hemi::gpu::MemoryUsage::Upload});
+        ADD_FAILURE() << "a range without a host pointer was taken for upload memory";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("no host pointer"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(engine.live, 0) << "the refused range was not given back";
+}
+
+// A budget (MemoryAllocator::set_budget) refuses the block that would exceed it, with an error that names
+// the budget, before the driver is asked; within it, and without one, the same requests succeed.
+TEST_F(Allocator, ABudgetRefusesTheBlockBeyondIt)
+{
+    hemi::test::HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    hemi::gpu::Device dev(host.external());
+    const VkDeviceSize mib = VkDeviceSize(1) << 20;
+    dev.allocator().set_budget(100 * mib);
+    const hemi::gpu::Buffer small = hemi::gpu::create_buffer(dev, {4096, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    EXPECT_EQ(dev.allocator().stats().block_bytes, 64 * mib);
+    try
+    {
+        (void)hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+        ADD_FAILURE() << "64 + 40 MiB of blocks under a budget of 100 MiB";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("budget of 100 MiB"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(dev.allocator().stats().blocks, 1u);
+    // 30 MiB fits the block already held: no new block, within the budget.
+    const hemi::gpu::Buffer fits =
+        hemi::gpu::create_buffer(dev, {30 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    EXPECT_EQ(dev.allocator().stats().blocks, 1u);
+    dev.allocator().set_budget(0);
+    const hemi::gpu::Buffer unbounded =
+        hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    EXPECT_EQ(dev.allocator().stats().blocks, 2u);
 }

@@ -161,7 +161,7 @@ TEST_F(PipelineState, MultisampledTargetsResolveTheSameInteriorAndSmoothEdges)
     {
         VkMemoryRequirements req;
         vkGetImageMemoryRequirements(d, img, &req);
-        memory.push_back(dev.allocator().allocate(req, hemi::gpu::MemoryUsage::GpuOnly, false));
+        memory.push_back(hemi::gpu::allocate(dev, req, hemi::gpu::MemoryUsage::GpuOnly, false));
         ASSERT_EQ(vkBindImageMemory(d, img, memory.back().memory(), memory.back().offset()), VK_SUCCESS);
         VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
         v.image = img;

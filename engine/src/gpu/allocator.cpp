@@ -2,15 +2,40 @@
 #include <hemi/gpu/vk_check.h>
 
 #include <algorithm>
+#include <cstddef>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
 namespace hemi::gpu
 {
 
+Allocation::Allocation(MemoryProvider& provider, const MemoryProvider::Range& range,
+                       const VkMemoryRequirements& req, MemoryUsage usage)
+    : provider_(&provider), range_(range)
+{
+    std::string problem;
+    if (range.memory == VK_NULL_HANDLE)
+        problem = "no VkDeviceMemory";
+    else if (range.memory_type >= 32 || !(req.memoryTypeBits & (1u << range.memory_type)))
+        problem =
+            "memory type " + std::to_string(range.memory_type) + " outside the resource's memoryTypeBits";
+    else if (req.alignment > 1 && range.offset % req.alignment != 0)
+        problem = "offset " + std::to_string(range.offset) + " not a multiple of the alignment " +
+                  std::to_string(req.alignment);
+    else if (range.size < req.size)
+        problem = std::to_string(range.size) + " bytes for a resource of " + std::to_string(req.size);
+    else if (usage != MemoryUsage::GpuOnly && range.mapped == nullptr)
+        problem = "no host pointer for memory the CPU writes or reads";
+    if (!problem.empty())
+    {
+        release();
+        throw std::runtime_error("hemi: the memory provider returned " + problem);
+    }
+}
+
 Allocation::Allocation(Allocation&& o) noexcept
-    : allocator_(std::exchange(o.allocator_, nullptr)), block_(std::exchange(o.block_, nullptr)),
-      offset_(std::exchange(o.offset_, 0)), size_(std::exchange(o.size_, 0))
+    : provider_(std::exchange(o.provider_, nullptr)), range_(std::exchange(o.range_, {}))
 {
 }
 
@@ -19,10 +44,8 @@ Allocation& Allocation::operator=(Allocation&& o) noexcept
     if (this != &o)
     {
         release();
-        allocator_ = std::exchange(o.allocator_, nullptr);
-        block_ = std::exchange(o.block_, nullptr);
-        offset_ = std::exchange(o.offset_, 0);
-        size_ = std::exchange(o.size_, 0);
+        provider_ = std::exchange(o.provider_, nullptr);
+        range_ = std::exchange(o.range_, {});
     }
     return *this;
 }
@@ -34,26 +57,17 @@ Allocation::~Allocation()
 
 void Allocation::release()
 {
-    if (block_)
-        allocator_->free(static_cast<MemoryAllocator::Block*>(block_), offset_, size_);
-    block_ = nullptr;
-    allocator_ = nullptr;
+    if (provider_)
+        provider_->free(range_);
+    provider_ = nullptr;
+    range_ = {};
 }
 
-VkDeviceMemory Allocation::memory() const
+Allocation allocate(const Device& device, const VkMemoryRequirements& requirements, MemoryUsage usage,
+                    bool linear)
 {
-    return block_ ? static_cast<const MemoryAllocator::Block*>(block_)->memory : VK_NULL_HANDLE;
-}
-
-uint32_t Allocation::memory_type() const
-{
-    return block_ ? static_cast<const MemoryAllocator::Block*>(block_)->type : 0;
-}
-
-void* Allocation::mapped() const
-{
-    const auto* b = static_cast<const MemoryAllocator::Block*>(block_);
-    return b && b->mapped ? static_cast<std::byte*>(b->mapped) + offset_ : nullptr;
+    MemoryProvider& provider = device.memory();
+    return Allocation(provider, provider.allocate(requirements, usage, linear), requirements, usage);
 }
 
 MemoryAllocator::MemoryAllocator(const Device& device, VkDeviceSize block_size)
@@ -77,6 +91,19 @@ MemoryAllocator::~MemoryAllocator()
 MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, VkDeviceSize size,
                                                    bool dedicated)
 {
+    if (budget_)
+    {
+        VkDeviceSize held = 0;
+        for (const auto& b : blocks_)
+            held += b->size;
+        if (held + size > budget_)
+        {
+            auto mib = [](VkDeviceSize b) { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20); };
+            throw std::runtime_error("hemi: a memory block of " + mib(size) +
+                                     " MiB would exceed the budget of " + mib(budget_) + " MiB (" +
+                                     mib(held) + " MiB held)");
+        }
+    }
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = size;
     info.memoryTypeIndex = type;
@@ -103,7 +130,14 @@ MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, V
     return blocks_.back().get();
 }
 
-Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsage usage, bool linear)
+void MemoryAllocator::set_budget(VkDeviceSize bytes)
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    budget_ = bytes;
+}
+
+MemoryProvider::Range MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsage usage,
+                                                bool linear)
 {
     const uint32_t type = device_->memory_type(req.memoryTypeBits, usage);
     const VkDeviceSize align = std::max<VkDeviceSize>(1, req.alignment);
@@ -159,16 +193,20 @@ Allocation MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsag
     if (offset + req.size < start + length)
         chosen->free[offset + req.size] = start + length - offset - req.size;
     ++chosen->live;
-    Allocation a;
-    a.allocator_ = this;
-    a.block_ = chosen;
-    a.offset_ = offset;
-    a.size_ = req.size;
-    return a;
+    Range r;
+    r.memory = chosen->memory;
+    r.offset = offset;
+    r.size = req.size;
+    r.memory_type = chosen->type;
+    r.mapped = chosen->mapped ? static_cast<std::byte*>(chosen->mapped) + offset : nullptr;
+    r.user = chosen;
+    return r;
 }
 
-void MemoryAllocator::free(Block* block, VkDeviceSize offset, VkDeviceSize size)
+void MemoryAllocator::free(const Range& range) noexcept
 {
+    Block* block = static_cast<Block*>(range.user);
+    const VkDeviceSize offset = range.offset, size = range.size;
     std::lock_guard<std::mutex> lock(mutex_);
     --block->live;
     // An empty block goes back to the driver at once: a level unloaded leaves no memory behind.

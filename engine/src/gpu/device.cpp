@@ -341,7 +341,7 @@ Device::Device(const ExternalDevice& external)
     : instance_(external.instance), physical_device_(external.physical_device), device_(external.device),
       queue_(external.queue), queue_family_(external.queue_family), owns_(false),
       dynamic_rendering_(external.dynamic_rendering), independent_blend_(external.independent_blend),
-      log_(external.log)
+      log_(external.log), memory_provider_(external.memory)
 {
 #if defined(__SANITIZE_ADDRESS__)
     pin_vulkan_libraries(); // the host's instance loaded them; keep them for LeakSanitizer's report
@@ -364,6 +364,13 @@ Device::Device(const ExternalDevice& external)
     init_properties();
     if (properties_.apiVersion < VK_API_VERSION_1_1)
         throw std::invalid_argument("hemi: ExternalDevice must support Vulkan 1.1");
+}
+
+MemoryProvider& Device::memory() const
+{
+    if (memory_provider_)
+        return *memory_provider_;
+    return *allocator_;
 }
 
 void Device::set_name(VkObjectType type, uint64_t handle, std::string_view name) const noexcept

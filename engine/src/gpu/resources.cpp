@@ -25,7 +25,7 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc)
 
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(d, buffer, &req);
-    b.memory_ = device.allocator().allocate(req, desc.memory, true);
+    b.memory_ = allocate(device, req, desc.memory, true);
     HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, b.memory_.memory(), b.memory_.offset()));
     b.mapped_ = b.memory_.mapped(); // coherent memory only: hemi never flushes or invalidates ranges
     b.size_ = desc.size;
@@ -148,7 +148,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
 
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(d, image, &req);
-    img.memory_ = device.allocator().allocate(req, MemoryUsage::GpuOnly, false);
+    img.memory_ = allocate(device, req, MemoryUsage::GpuOnly, false);
     HEMI_VK_CHECK(vkBindImageMemory(d, image, img.memory_.memory(), img.memory_.offset()));
 
     VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};

@@ -1,7 +1,8 @@
 #pragma once
 // Device memory for hemi's buffers and images, sub-allocated from few large VkDeviceMemory blocks: an engine
 // drawing thousands of objects stays far below maxMemoryAllocationCount (4096 on many drivers) and pays one
-// vkAllocateMemory per block, not per resource. Each Device owns one allocator (Device::allocator()).
+// vkAllocateMemory per block, not per resource. Each Device owns one allocator (Device::allocator()), used
+// unless the engine hands hemi a MemoryProvider of its own (ExternalDevice::memory).
 //
 // Blocks are per memory type and per kind (linear: buffers; optimal: images), so bufferImageGranularity never
 // applies inside a block. A request larger than half a block gets a block of its own. A block whose last
@@ -20,36 +21,68 @@
 namespace hemi::gpu
 {
 
-class MemoryAllocator;
+// Where hemi's buffers and images get their memory. hemi's MemoryAllocator is one; an engine with an
+// allocator of its own (its VMA instance, its heaps) implements this interface and hands it to hemi
+// (ExternalDevice::memory), so that every byte hemi binds comes from the engine's budget and statistics.
+class MemoryProvider
+{
+  public:
+    struct Range
+    {
+        VkDeviceMemory memory = VK_NULL_HANDLE;
+        VkDeviceSize offset = 0; // where the resource binds: a multiple of the requirements' alignment
+        VkDeviceSize size = 0;   // at least the requirements' size
+        uint32_t memory_type = 0;
+        // The range's host pointer. Required (host-visible, coherent memory, persistently mapped) for
+        // MemoryUsage::Upload, Readback and Dynamic; optional for GpuOnly (hemi then writes through it
+        // instead of a staging copy).
+        void* mapped = nullptr;
+        void* user = nullptr; // the provider's own handle for free() (a VmaAllocation, a block)
+    };
+    virtual ~MemoryProvider() = default;
+    // Memory for a buffer (`linear`) or an optimally tiled image with `requirements`, of a memory type in
+    // requirements.memoryTypeBits with the properties `usage` needs (Device::memory_type(bits, usage) is
+    // hemi's choice). Throws when there is none (hemi passes the exception on to its caller).
+    virtual Range allocate(const VkMemoryRequirements& requirements, MemoryUsage usage, bool linear) = 0;
+    // The buffer or image bound to `range` is destroyed: the engine destroys hemi's objects once the GPU no
+    // longer uses them, so the memory may be reused at once.
+    virtual void free(const Range& range) noexcept = 0;
+};
 
-// A range of a block, freed when destroyed. Move-only.
+// A range from a provider, given back when destroyed. Move-only.
 class Allocation
 {
   public:
     Allocation() = default;
+    // Takes `range` from `provider` (checked against `requirements` and `usage`: std::runtime_error naming
+    // what an engine's provider got wrong, after giving the range back).
+    Allocation(MemoryProvider& provider, const MemoryProvider::Range& range,
+               const VkMemoryRequirements& requirements, MemoryUsage usage);
     Allocation(Allocation&& o) noexcept;
     Allocation& operator=(Allocation&& o) noexcept;
     Allocation(const Allocation&) = delete;
     Allocation& operator=(const Allocation&) = delete;
     ~Allocation();
 
-    VkDeviceMemory memory() const;
-    VkDeviceSize offset() const { return offset_; }
-    VkDeviceSize size() const { return size_; }
-    uint32_t memory_type() const;
-    // The range's host pointer when the block is host-visible and coherent, else nullptr.
-    void* mapped() const;
-    explicit operator bool() const { return block_ != nullptr; }
+    VkDeviceMemory memory() const { return range_.memory; }
+    VkDeviceSize offset() const { return range_.offset; }
+    VkDeviceSize size() const { return range_.size; }
+    uint32_t memory_type() const { return range_.memory_type; }
+    // The range's host pointer when host-visible and coherent, else nullptr.
+    void* mapped() const { return range_.mapped; }
+    explicit operator bool() const { return provider_ != nullptr; }
 
   private:
-    friend class MemoryAllocator;
     void release();
-    MemoryAllocator* allocator_ = nullptr;
-    void* block_ = nullptr; // MemoryAllocator::Block
-    VkDeviceSize offset_ = 0, size_ = 0;
+    MemoryProvider* provider_ = nullptr;
+    MemoryProvider::Range range_;
 };
 
-class MemoryAllocator
+// Memory for `requirements` from the device's provider (Device::memory()).
+Allocation allocate(const Device& device, const VkMemoryRequirements& requirements, MemoryUsage usage,
+                    bool linear);
+
+class MemoryAllocator final : public MemoryProvider
 {
   public:
     explicit MemoryAllocator(const Device& device, VkDeviceSize block_size = VkDeviceSize(64) << 20);
@@ -59,8 +92,14 @@ class MemoryAllocator
     MemoryAllocator& operator=(const MemoryAllocator&) = delete;
 
     // Memory for `requirements` with the properties `usage` needs; `linear` for buffers, false for optimally
-    // tiled images. Throws VulkanError when the driver refuses a new block (VK_ERROR_OUT_OF_DEVICE_MEMORY).
-    Allocation allocate(const VkMemoryRequirements& requirements, MemoryUsage usage, bool linear);
+    // tiled images. Throws VulkanError when the driver refuses a new block (VK_ERROR_OUT_OF_DEVICE_MEMORY),
+    // std::runtime_error when a new block would exceed the budget.
+    Range allocate(const VkMemoryRequirements& requirements, MemoryUsage usage, bool linear) override;
+    void free(const Range& range) noexcept override;
+
+    // At most `bytes` of blocks alive at once (0: no limit, the default): a request that needs a new block
+    // beyond it is refused with an error naming the budget, before the driver is asked.
+    void set_budget(VkDeviceSize bytes);
 
     struct Stats
     {
@@ -72,7 +111,6 @@ class MemoryAllocator
     Stats stats() const;
 
   private:
-    friend class Allocation;
     struct Block
     {
         VkDeviceMemory memory = VK_NULL_HANDLE;
@@ -83,11 +121,11 @@ class MemoryAllocator
         std::map<VkDeviceSize, VkDeviceSize> free; // offset -> size, coalesced
         size_t live = 0;
     };
-    void free(Block* block, VkDeviceSize offset, VkDeviceSize size);
     Block* new_block(uint32_t type, bool linear, VkDeviceSize size, bool dedicated);
 
     const Device* device_;
     VkDeviceSize block_size_;
+    VkDeviceSize budget_ = 0;
     mutable std::mutex mutex_;
     std::vector<std::unique_ptr<Block>> blocks_;
 };

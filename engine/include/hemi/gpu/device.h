@@ -16,6 +16,7 @@ namespace hemi::gpu
 {
 
 class MemoryAllocator;
+class MemoryProvider;
 
 enum class LogLevel
 {
@@ -72,6 +73,10 @@ struct ExternalDevice
     // irradiance/h4/texel ...", a texture's glTF image name), so RenderDoc and the validation layer's
     // messages show them by name.
     bool debug_utils = false;
+    // The engine's own memory allocator (gpu/allocator.h), which then serves every buffer and image hemi
+    // makes on this device; it must outlive the Device and everything made with it. Null: hemi's own
+    // MemoryAllocator (Device::allocator()).
+    MemoryProvider* memory = nullptr;
 };
 
 // Whether a debug-utils message comes from the Vulkan loader (e.g. "Layer ... forced enabled due to env var
@@ -129,8 +134,11 @@ class Device
     bool memory_is_host_visible(uint32_t memory_type) const;
     bool memory_is_host_coherent(uint32_t memory_type) const;
 
-    // Where hemi's buffers and images get their memory (gpu/allocator.h): sub-allocated from few blocks.
+    // hemi's own allocator (gpu/allocator.h): sub-allocated from few blocks, its statistics and budget.
     MemoryAllocator& allocator() const { return *allocator_; }
+    // Where hemi's buffers and images get their memory: the engine's provider (ExternalDevice::memory), or
+    // allocator().
+    MemoryProvider& memory() const;
 
     // Validation-layer warnings and errors seen so far (always 0 without validation).
     uint64_t validation_messages() const { return validation_messages_.load(); }
@@ -176,6 +184,7 @@ class Device
     LogCallback log_;
     PFN_vkSetDebugUtilsObjectNameEXT set_object_name_ = nullptr;
     std::unique_ptr<MemoryAllocator> allocator_;
+    MemoryProvider* memory_provider_ = nullptr; // the engine's, or null
     std::atomic<uint64_t> validation_messages_{0};
 };
 
