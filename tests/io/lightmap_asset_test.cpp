@@ -105,6 +105,35 @@ TEST(LightmapAsset, RoundTripKeepsEveryValueToHalfPrecision)
     EXPECT_EQ(hemi::io::asset_kind(p), "lightmap");
 }
 
+// An engine's pack file hands hemi the asset's bytes: read from memory, the asset is the one read from its
+// file, and a corrupted copy is refused naming the name the engine gave it.
+TEST(LightmapAsset, ReadsFromBytesInMemory)
+{
+    const fs::path p = dir() / "in_memory.hemi";
+    hemi::io::write_lightmap_asset(p, small_asset());
+    std::ifstream f(p, std::ios::binary);
+    const std::vector<char> chars((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    std::vector<std::byte> bytes(chars.size());
+    std::memcpy(bytes.data(), chars.data(), chars.size());
+    const hemi::io::LightmapAsset from_file = hemi::io::read_lightmap_asset(p);
+    const hemi::io::LightmapAsset from_memory = hemi::io::read_lightmap_asset(bytes, "levels.pak:level.hemi");
+    EXPECT_EQ(from_memory.mesh.indices, from_file.mesh.indices);
+    EXPECT_EQ(from_memory.mesh.uvs1, from_file.mesh.uvs1);
+    ASSERT_EQ(from_memory.outputs.size(), from_file.outputs.size());
+    for (size_t i = 0; i < from_file.outputs.size(); ++i)
+        EXPECT_EQ(from_memory.outputs[i].maps.dense(), from_file.outputs[i].maps.dense());
+    bytes[bytes.size() / 2] ^= std::byte{0x10};
+    try
+    {
+        hemi::io::read_lightmap_asset(bytes, "levels.pak:level.hemi");
+        ADD_FAILURE() << "a corrupted copy in memory was read";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_EQ(std::string(e.what()).rfind("levels.pak:level.hemi: checksum mismatch", 0), 0u) << e.what();
+    }
+}
+
 TEST(LightmapAsset, BrokenFilesAreRefusedNamingTheFile)
 {
     const fs::path good = dir() / "good.hemi";

@@ -98,6 +98,17 @@ AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string(
     f.read(reinterpret_cast<char*>(data_.data()), std::streamsize(bytes));
     if (size_t(f.gcount()) != data_.size())
         throw FormatError(file_ + ": read error");
+    parse();
+}
+
+AssetReader::AssetReader(std::span<const std::byte> bytes, std::string name)
+    : file_(std::move(name)), data_(bytes.begin(), bytes.end())
+{
+    parse();
+}
+
+void AssetReader::parse()
+{
     if (data_.size() < 8 || std::memcmp(data_.data(), kMagic, 8) != 0)
         throw FormatError(file_ + ": not a hemi asset (wrong magic)");
     if (data_.size() < kHeaderBytes + 8)

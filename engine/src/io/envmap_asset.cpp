@@ -159,10 +159,11 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
     w.write(path);
 }
 
-EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
+namespace
 {
-    const AssetReader r(path);
-    const std::string file = path.string();
+EnvmapAsset read_envmap_asset_from(const AssetReader& r)
+{
+    const std::string file = r.name();
     auto fail = [&](const std::string& what) { return FormatError(file + ": " + what); };
     if (!r.has("envmap.info"))
         throw fail("not an environment asset (no envmap.info)");
@@ -243,6 +244,17 @@ EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
     }
     cf.end();
     return a;
+}
+} // namespace
+
+EnvmapAsset read_envmap_asset(const std::filesystem::path& path)
+{
+    return read_envmap_asset_from(AssetReader(path));
+}
+
+EnvmapAsset read_envmap_asset(std::span<const std::byte> bytes, const std::string& name)
+{
+    return read_envmap_asset_from(AssetReader(bytes, name));
 }
 
 } // namespace hemi::io

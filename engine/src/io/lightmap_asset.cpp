@@ -235,10 +235,11 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
     w.write(path);
 }
 
-LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
+namespace
 {
-    const AssetReader r(path);
-    const std::string file = path.string();
+LightmapAsset read_lightmap_asset_from(const AssetReader& r)
+{
+    const std::string file = r.name();
     auto fail = [&](const std::string& what) -> FormatError { return FormatError(file + ": " + what); };
     if (!r.has("lightmap.info"))
         throw fail(r.has("prt.info") ? "a PRT asset, not a lightmap asset"
@@ -359,6 +360,17 @@ LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
     if (std::string p = problem(a); !p.empty())
         throw fail(p);
     return a;
+}
+} // namespace
+
+LightmapAsset read_lightmap_asset(const std::filesystem::path& path)
+{
+    return read_lightmap_asset_from(AssetReader(path));
+}
+
+LightmapAsset read_lightmap_asset(std::span<const std::byte> bytes, const std::string& name)
+{
+    return read_lightmap_asset_from(AssetReader(bytes, name));
 }
 
 std::string asset_kind(const std::filesystem::path& path)

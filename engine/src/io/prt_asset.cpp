@@ -157,10 +157,11 @@ void write_prt_asset(const std::filesystem::path& path, const PrtAsset& a)
     w.write(path);
 }
 
-PrtAsset read_prt_asset(const std::filesystem::path& path)
+namespace
 {
-    const AssetReader r(path);
-    const std::string file = path.string();
+PrtAsset read_prt_asset_from(const AssetReader& r)
+{
+    const std::string file = r.name();
     auto fail = [&](const std::string& what) -> FormatError { return FormatError(file + ": " + what); };
 
     std::span<const std::byte> info_bytes = r.section("prt.info");
@@ -256,6 +257,17 @@ PrtAsset read_prt_asset(const std::filesystem::path& path)
     if (std::string p = problem(a); !p.empty())
         throw fail(p);
     return a;
+}
+} // namespace
+
+PrtAsset read_prt_asset(const std::filesystem::path& path)
+{
+    return read_prt_asset_from(AssetReader(path));
+}
+
+PrtAsset read_prt_asset(std::span<const std::byte> bytes, const std::string& name)
+{
+    return read_prt_asset_from(AssetReader(bytes, name));
 }
 
 } // namespace hemi::io

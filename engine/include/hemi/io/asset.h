@@ -47,6 +47,9 @@ class AssetReader
     // not a hemi asset (magic), unsupported version, truncated, checksum mismatch (corrupted), or a section
     // table that points outside the file.
     explicit AssetReader(const std::filesystem::path& path);
+    // The same checks on bytes in memory (copied); `name` stands for the file in errors.
+    AssetReader(std::span<const std::byte> bytes, std::string name);
+    const std::string& name() const { return file_; }
 
     uint32_t version() const { return version_; }
     bool has(const std::string& name) const { return sections_.count(name) != 0; }
@@ -72,6 +75,7 @@ class AssetReader
     }
 
   private:
+    void parse();
     void check_multiple(const std::string& name, size_t size, size_t element) const;
 
     std::string file_;

@@ -16,8 +16,10 @@
 
 #include <hemi/math/paraboloid.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -46,5 +48,8 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& as
 // Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset,
 // sizes that disagree, non-finite values).
 EnvmapAsset read_envmap_asset(const std::filesystem::path& path);
+// The same from bytes in memory (an engine's pack file, a memory-mapped archive); `name` names them in
+// errors.
+EnvmapAsset read_envmap_asset(std::span<const std::byte> bytes, const std::string& name = "<memory>");
 
 } // namespace hemi::io

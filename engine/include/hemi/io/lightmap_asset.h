@@ -30,8 +30,10 @@
 
 #include <array>
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -95,6 +97,9 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
 // Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset,
 // sizes that disagree, non-finite values).
 LightmapAsset read_lightmap_asset(const std::filesystem::path& path);
+// The same from bytes in memory (an engine's pack file, a memory-mapped archive); `name` names them in
+// errors.
+LightmapAsset read_lightmap_asset(std::span<const std::byte> bytes, const std::string& name = "<memory>");
 
 // What a .hemi file holds, from its sections: "prt", "lightmap" or "envmap". Throws FormatError naming the
 // file when it is not a hemi asset or neither kind.

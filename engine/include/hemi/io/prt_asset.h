@@ -25,9 +25,11 @@
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -87,5 +89,8 @@ void write_prt_asset(const std::filesystem::path& path, const PrtAsset& asset);
 // indices, a UV set other than 0 or 1, an image that is not the PNG or JPEG its mime type says). Images are
 // checked by signature, not decoded: io::decode_image does that where they are used.
 PrtAsset read_prt_asset(const std::filesystem::path& path);
+// The same from bytes in memory (an engine's pack file, a memory-mapped archive); `name` names them in
+// errors.
+PrtAsset read_prt_asset(std::span<const std::byte> bytes, const std::string& name = "<memory>");
 
 } // namespace hemi::io
