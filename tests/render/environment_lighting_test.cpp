@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -183,4 +184,53 @@ TEST_F(EnvironmentLightingRefusals, EveryRefusalNamesTheProblem)
                             }
                             lighting.record_update(cmd, material);
                         });
+}
+
+namespace
+{
+class EnvironmentMapsSharing : public hemi::test::GpuTest
+{
+};
+} // namespace
+
+// Materials lit by one environment share its maps (render::EnvironmentMaps): the maps are uploaded once,
+// each material adds only its BRDF tables and uniform block (exactly the bytes a material with maps of its
+// own adds beyond those maps), and each binds the glossy map of its own exponent. A library that uploaded
+// the maps per material would add their bytes for each of the 8 materials.
+TEST_F(EnvironmentMapsSharing, MaterialsShareOneUploadOfTheMaps)
+{
+    const hemi::gpu::Device& dev = hemi::test::device();
+    hemi::render::OffscreenTarget target(dev, 8, 8);
+    hemi::render::MaterialSystem system(dev, target.desc());
+    const hemi::io::EnvmapAsset env = environment();
+    const std::vector<hemi::math::BrdfTable> ts = hemi::math::torrance_sparrow_tables(
+        hemi::math::TorranceSparrow(hemi::math::FacetDistribution::Beckmann, 0.3, 1.5), 8);
+    hemi::gpu::UploadBatch upload(dev);
+    auto used = [&] { return dev.allocator().stats().used_bytes; };
+
+    const VkDeviceSize before = used();
+    const auto maps = std::make_shared<const hemi::render::EnvironmentMaps>(dev, env, upload);
+    const VkDeviceSize maps_bytes = used() - before;
+    std::vector<std::unique_ptr<hemi::render::EnvironmentLighting>> materials;
+    const VkDeviceSize before_materials = used();
+    for (uint32_t i = 0; i < 8; ++i)
+    {
+        hemi::render::EnvironmentMaterial m;
+        m.kd = 0.1f * float(i);
+        m.glossy = i % 2;
+        m.fresnel = i % 2;
+        materials.push_back(std::make_unique<hemi::render::EnvironmentLighting>(system, maps, ts, m, upload));
+        EXPECT_EQ(materials.back()->mirror_map().handle(), maps->mirror_map().handle());
+        EXPECT_EQ(materials.back()->glossy_map().handle(), maps->glossy_map(i % 2).handle());
+        EXPECT_EQ(materials.back()->maps().get(), maps.get());
+    }
+    const VkDeviceSize per_material = (used() - before_materials) / 8;
+    EXPECT_NE(maps->glossy_map(0).handle(), maps->glossy_map(1).handle());
+
+    const VkDeviceSize before_own = used();
+    const hemi::render::EnvironmentLighting own(system, env, ts, hemi::render::EnvironmentMaterial{}, upload);
+    EXPECT_NE(own.mirror_map().handle(), maps->mirror_map().handle());
+    EXPECT_EQ(used() - before_own, maps_bytes + per_material)
+        << "a material over shared maps should add only its own tables and uniforms";
+    hemi::gpu::one_shot(dev, [&](VkCommandBuffer cmd) { upload.record(cmd); });
 }

@@ -62,19 +62,85 @@ gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::Para
 }
 } // namespace
 
+EnvironmentMaps::EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& env,
+                                 gpu::UploadBatch& upload)
+{
+    if (const std::string problem = io::envmap_problem(env); !problem.empty())
+        throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
+    map_format_ = filters_linearly(device, VK_FORMAT_R32G32B32A32_SFLOAT) ? VK_FORMAT_R32G32B32A32_SFLOAT
+                                                                          : VK_FORMAT_R16G16B16A16_SFLOAT;
+    mirror_ = parabolic_image(device, env.mirror, map_format_, upload);
+    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload);
+    device.set_name(VK_OBJECT_TYPE_IMAGE, mirror_.handle(), "hemi environment mirror map");
+    device.set_name(VK_OBJECT_TYPE_IMAGE, diffuse_.handle(), "hemi environment diffuse map");
+    for (const math::ParabolicImage& g : env.glossy)
+    {
+        glossy_.push_back(parabolic_image(device, {&g, 1}, map_format_, upload));
+        glossy_extents_.push_back(float(g.extent));
+        device.set_name(VK_OBJECT_TYPE_IMAGE, glossy_.back().handle(),
+                        "hemi environment glossy map " + std::to_string(glossy_.size() - 1));
+    }
+    mirror_extent_ = float(env.mirror[0].extent);
+    diffuse_extent_ = float(env.diffuse.extent);
+
+    // The Fresnel tables, a row each (a 2 x 1 table of 1 without any).
+    fresnel_count_ = uint32_t(env.iors.size());
+    fresnel_rows_ = std::max<uint32_t>(1, fresnel_count_);
+    fresnel_samples_ = env.iors.empty() ? 2 : env.fresnel_samples;
+    std::vector<float> fresnel_rgb;
+    for (uint32_t r = 0; r < fresnel_rows_; ++r)
+        for (uint32_t i = 0; i < fresnel_samples_; ++i)
+        {
+            const float f = env.iors.empty() ? 1.0f : env.fresnel[size_t(r) * fresnel_samples_ + i];
+            fresnel_rgb.insert(fresnel_rgb.end(), {f, f, f});
+        }
+    const VkFormat half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
+    fresnel_ = gpu::create_image(device, {fresnel_samples_, fresnel_rows_, half4});
+    const std::vector<std::byte> fresnel_bytes = pack(fresnel_rgb, half4);
+    upload.image(fresnel_, fresnel_bytes.data(), fresnel_bytes.size());
+    sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                                            VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_LOD_CLAMP_NONE});
+}
+
+const gpu::Image& EnvironmentMaps::glossy_map(uint32_t i) const
+{
+    if (glossy_.empty())
+        return diffuse_;
+    return glossy_.at(i);
+}
+
+float EnvironmentMaps::glossy_extent(uint32_t i) const
+{
+    if (glossy_extents_.empty())
+        return diffuse_extent_;
+    return glossy_extents_.at(i);
+}
+
 EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& env,
                                          std::span<const math::BrdfTable> brdf,
                                          const EnvironmentMaterial& material, gpu::UploadBatch& upload)
+    : EnvironmentLighting(system, std::make_shared<const EnvironmentMaps>(system.device(), env, upload), brdf,
+                          material, upload)
+{
+}
+
+EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
+                                         std::shared_ptr<const EnvironmentMaps> maps,
+                                         std::span<const math::BrdfTable> brdf,
+                                         const EnvironmentMaterial& material, gpu::UploadBatch& upload)
+    : maps_(std::move(maps))
 {
     const gpu::Device& device = system.device();
-    if (const std::string problem = io::envmap_problem(env); !problem.empty())
-        throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
-    if (!env.glossy.empty() && material.glossy >= env.glossy.size())
+    if (!maps_)
+        throw std::invalid_argument("hemi: an environment material needs its environment's maps");
+    if (maps_->glossy_count() != 0 && material.glossy >= maps_->glossy_count())
         throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) +
-                                    " of an environment with " + std::to_string(env.glossy.size()));
-    if (!env.iors.empty() && material.fresnel >= env.iors.size())
+                                    " of an environment with " + std::to_string(maps_->glossy_count()));
+    if (maps_->fresnel_count() != 0 && material.fresnel >= maps_->fresnel_count())
         throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
-                                    " of an environment with " + std::to_string(env.iors.size()));
+                                    " of an environment with " + std::to_string(maps_->fresnel_count()));
+    glossy_ = material.glossy;
+    fresnel_row_ = material.fresnel;
     for (const math::BrdfTable& t : brdf)
     {
         if (t.size != brdf[0].size || t.size < 2)
@@ -93,35 +159,7 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
         throw std::invalid_argument("hemi: BRDF tables must be Torrance-Sparrow's two (FD, G) or Banks' one "
                                     "(diffuse, specular)");
 
-    map_format_ = filters_linearly(device, VK_FORMAT_R32G32B32A32_SFLOAT) ? VK_FORMAT_R32G32B32A32_SFLOAT
-                                                                          : VK_FORMAT_R16G16B16A16_SFLOAT;
-    mirror_ = parabolic_image(device, env.mirror, map_format_, upload);
-    const math::ParabolicImage& glossy = env.glossy.empty() ? env.diffuse : env.glossy[material.glossy];
-    glossy_ = parabolic_image(device, {&glossy, 1}, map_format_, upload);
-    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload);
-    device.set_name(VK_OBJECT_TYPE_IMAGE, mirror_.handle(), "hemi environment mirror map");
-    device.set_name(VK_OBJECT_TYPE_IMAGE, glossy_.handle(), "hemi environment glossy map");
-    device.set_name(VK_OBJECT_TYPE_IMAGE, diffuse_.handle(), "hemi environment diffuse map");
-    extents_[0] = float(env.mirror[0].extent);
-    extents_[1] = float(glossy.extent);
-    extents_[2] = float(env.diffuse.extent);
-
-    // The Fresnel tables, a row each (a 2 x 1 table of 1 without any).
-    fresnel_rows_ = std::max<uint32_t>(1, uint32_t(env.iors.size()));
-    fresnel_samples_ = env.iors.empty() ? 2 : env.fresnel_samples;
-    fresnel_row_ = material.fresnel;
-    std::vector<float> fresnel_rgb;
-    for (uint32_t r = 0; r < fresnel_rows_; ++r)
-        for (uint32_t i = 0; i < fresnel_samples_; ++i)
-        {
-            const float f = env.iors.empty() ? 1.0f : env.fresnel[size_t(r) * fresnel_samples_ + i];
-            fresnel_rgb.insert(fresnel_rgb.end(), {f, f, f});
-        }
     const VkFormat half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
-    fresnel_ = gpu::create_image(device, {fresnel_samples_, fresnel_rows_, half4});
-    const std::vector<std::byte> fresnel_bytes = pack(fresnel_rgb, half4);
-    upload.image(fresnel_, fresnel_bytes.data(), fresnel_bytes.size());
-
     // The BRDF tables, a layer each, channels into r, g (2 x 2 zeros without any).
     table_size_ = brdf.empty() ? 2 : brdf[0].size;
     const uint32_t layers = std::max<uint32_t>(1, uint32_t(brdf.size()));
@@ -140,8 +178,6 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
     const std::vector<std::byte> table_bytes = pack(table_rgb, half4);
     upload.image(brdf_, table_bytes.data(), table_bytes.size());
 
-    sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_LINEAR,
-                                            VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_LOD_CLAMP_NONE});
     uniforms_ =
         gpu::create_buffer(device, {sizeof(shared::EnvironmentUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     const shared::EnvironmentUniforms u = uniforms(material);
@@ -154,14 +190,15 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io:
     writes[0].binding = HEMI_ENV_BINDING_UNIFORMS;
     writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[0].buffer = {uniforms_, 0, VK_WHOLE_SIZE};
-    const gpu::Image* images[5] = {&mirror_, &glossy_, &diffuse_, &fresnel_, &brdf_};
+    const gpu::Image* images[5] = {&maps_->mirror_map(), &maps_->glossy_map(glossy_), &maps_->diffuse_map(),
+                                   &maps_->fresnel_table(), &brdf_};
     const uint32_t binding[5] = {HEMI_ENV_BINDING_MIRROR, HEMI_ENV_BINDING_GLOSSY, HEMI_ENV_BINDING_DIFFUSE,
                                  HEMI_ENV_BINDING_FRESNEL, HEMI_ENV_BINDING_BRDF};
     for (int i = 0; i < 5; ++i)
     {
         writes[1 + i].binding = binding[i];
         writes[1 + i].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        writes[1 + i].image = {sampler_, images[i]->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+        writes[1 + i].image = {maps_->sampler(), images[i]->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
     gpu::write_descriptors(device, set_, writes);
 }
@@ -178,10 +215,11 @@ shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMater
                 throw std::invalid_argument(
                     "hemi: an environment's world_to_env must be a rotation (orthonormal)");
     shared::EnvironmentUniforms u{};
-    u.extents = glm::vec4(extents_[0], extents_[1], extents_[2], 0.0f);
-    u.material =
-        glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(fresnel_rows_), m.coating ? 1.0f : 0.0f);
-    u.tables = glm::vec4(float(table_size_), float(fresnel_samples_), 0.0f, 0.0f);
+    u.extents =
+        glm::vec4(maps_->mirror_extent(), maps_->glossy_extent(glossy_), maps_->diffuse_extent(), 0.0f);
+    u.material = glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(maps_->fresnel_rows()),
+                           m.coating ? 1.0f : 0.0f);
+    u.tables = glm::vec4(float(table_size_), float(maps_->fresnel_samples()), 0.0f, 0.0f);
     for (int r = 0; r < 3; ++r) // rows of world_to_env (glm is column-major: element [column][row])
         u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r], 0.0f);
     return u;

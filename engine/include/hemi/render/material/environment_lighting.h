@@ -4,7 +4,8 @@
 // shaders/include/hemi/techniques/). It holds one environment asset's maps (hemi-bake envmap: the mirror map
 // with its solid-angle mipmaps as baked, one glossy map, the diffuse map, the Fresnel tables), a factored
 // BRDF's tables (hemi-bake brdf) and the material's weights, so one set serves one (environment, material)
-// pair; objects with the same pair share it.
+// pair; objects with the same pair share it. The environment's maps are an EnvironmentMaps, uploaded once
+// and shared by every material lit by that environment.
 
 #include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
@@ -15,7 +16,9 @@
 
 #include <glm/mat3x3.hpp>
 
+#include <memory>
 #include <span>
+#include <vector>
 
 namespace hemi::render
 {
@@ -30,43 +33,82 @@ struct EnvironmentMaterial
     glm::mat3 world_to_env{1.0f}; // rotation from world space into the environment's (z up: identity)
 };
 
+// One environment asset's maps on the GPU (every map and table of the asset: the mirror chain, each glossy
+// map, the diffuse map, the Fresnel tables) and the trilinear sampler hemi reads them with. Maps are RGBA32F
+// where the device filters it linearly, else RGBA16F (radiance clamped to 65504). Throws
+// std::invalid_argument for an inconsistent asset (io::envmap_problem).
+class EnvironmentMaps
+{
+  public:
+    EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& environment, gpu::UploadBatch& upload);
+
+    const gpu::Image& mirror_map() const { return mirror_; }
+    // Glossy map `i` (std::out_of_range past glossy_count()); the diffuse map when the asset has none.
+    const gpu::Image& glossy_map(uint32_t i) const;
+    const gpu::Image& diffuse_map() const { return diffuse_; }
+    const gpu::Image& fresnel_table() const { return fresnel_; }
+    VkSampler sampler() const { return sampler_; }
+    VkFormat map_format() const { return map_format_; }
+    uint32_t glossy_count() const { return uint32_t(glossy_.size()); }
+    uint32_t fresnel_count() const { return fresnel_count_; } // the asset's tables (indices of refraction)
+    uint32_t fresnel_rows() const { return fresnel_rows_; }   // of the table image: 1 without any
+    uint32_t fresnel_samples() const { return fresnel_samples_; }
+    // The maps' extents (the paraboloid's coordinate range), as the uniform block holds them.
+    float mirror_extent() const { return mirror_extent_; }
+    float glossy_extent(uint32_t i) const;
+    float diffuse_extent() const { return diffuse_extent_; }
+
+  private:
+    gpu::Image mirror_, diffuse_, fresnel_;
+    std::vector<gpu::Image> glossy_;
+    std::vector<float> glossy_extents_;
+    gpu::Sampler sampler_;
+    VkFormat map_format_ = VK_FORMAT_UNDEFINED;
+    float mirror_extent_ = 1.0f, diffuse_extent_ = 1.0f;
+    uint32_t fresnel_count_ = 0, fresnel_rows_ = 1, fresnel_samples_ = 2;
+};
+
 class EnvironmentLighting
 {
   public:
+    // The material over maps shared with other materials (`maps` stays alive as long as any of them).
+    EnvironmentLighting(const MaterialSystem& system, std::shared_ptr<const EnvironmentMaps> maps,
+                        std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
+                        gpu::UploadBatch& upload);
     // `brdf` holds the factored BRDF's tables, one layer each, all of one size: Torrance-Sparrow's FD and G
     // (channel 0 each), or Banks' one table (channels diffuse, specular); empty binds zero tables (for the
-    // env_* techniques). Maps are RGBA32F where the device filters it linearly, else RGBA16F (radiance
-    // clamped to 65504). Throws std::invalid_argument for an inconsistent asset (io::envmap_problem), a
-    // glossy or Fresnel index the asset does not have, tables of different sizes or neither
-    // Torrance-Sparrow's nor Banks', weights that are not finite, or a world_to_env that is not a rotation.
+    // env_* techniques). The environment's maps are uploaded for this material alone (an EnvironmentMaps of
+    // its own; share one between materials with the constructor above). Throws std::invalid_argument for an
+    // inconsistent asset (io::envmap_problem), a glossy or Fresnel index the asset does not have, tables of
+    // different sizes or neither Torrance-Sparrow's nor Banks', weights that are not finite, or a
+    // world_to_env that is not a rotation.
     EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& environment,
                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
                         gpu::UploadBatch& upload);
     VkDescriptorSet set() const { return set_.get(); }
     // Outside a render pass: new weights, blend or rotation (the glossy and Fresnel indices are fixed).
     void record_update(VkCommandBuffer cmd, const EnvironmentMaterial& material) const;
-    VkFormat map_format() const { return map_format_; }
+    VkFormat map_format() const { return maps_->map_format(); }
+    const std::shared_ptr<const EnvironmentMaps>& maps() const { return maps_; }
 
     // For an engine's own shaders (hemi/lib/environment.glsl, docs/glsl.md): the uploaded maps and tables
     // (2D_ARRAY views but the Fresnel table's 2D one, SHADER_READ_ONLY_OPTIMAL once the upload is recorded),
     // the trilinear sampler hemi reads them with, and the values its uniform block holds for `material`
     // (extents, weights, the Fresnel row's coordinate, table sizes, the rotation's rows).
-    const gpu::Image& mirror_map() const { return mirror_; }
-    const gpu::Image& glossy_map() const { return glossy_; }
-    const gpu::Image& diffuse_map() const { return diffuse_; }
-    const gpu::Image& fresnel_table() const { return fresnel_; }
+    const gpu::Image& mirror_map() const { return maps_->mirror_map(); }
+    const gpu::Image& glossy_map() const { return maps_->glossy_map(glossy_); }
+    const gpu::Image& diffuse_map() const { return maps_->diffuse_map(); }
+    const gpu::Image& fresnel_table() const { return maps_->fresnel_table(); }
     const gpu::Image& brdf_tables() const { return brdf_; }
-    VkSampler sampler() const { return sampler_; }
+    VkSampler sampler() const { return maps_->sampler(); }
     shared::EnvironmentUniforms uniforms(const EnvironmentMaterial& material) const;
 
   private:
-    gpu::Image mirror_, glossy_, diffuse_, fresnel_, brdf_;
-    gpu::Sampler sampler_;
+    std::shared_ptr<const EnvironmentMaps> maps_;
+    gpu::Image brdf_;
     gpu::Buffer uniforms_;
     gpu::DescriptorSet set_;
-    VkFormat map_format_ = VK_FORMAT_UNDEFINED;
-    float extents_[3] = {1, 1, 1};
-    uint32_t fresnel_rows_ = 1, fresnel_samples_ = 2, fresnel_row_ = 0, table_size_ = 2;
+    uint32_t glossy_ = 0, fresnel_row_ = 0, table_size_ = 2;
 };
 
 } // namespace hemi::render
