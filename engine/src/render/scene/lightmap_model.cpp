@@ -45,7 +45,6 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                              const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
                              const std::map<std::string, std::string>& material_techniques)
-    : asset_(&asset)
 {
     if (default_techniques.empty())
         throw std::invalid_argument("hemi: a lightmap model needs at least one technique");

@@ -64,7 +64,7 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
 
 PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
                    gpu::UploadBatch& upload)
-    : system_(&system), instances_(desc.instances), frames_(desc.frames_in_flight), asset_(&asset),
+    : system_(&system), instances_(desc.instances), frames_(desc.frames_in_flight), order_(asset.order),
       basis_(&math::technique(desc.technique)),
       surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives,
                 CoefficientSourceKind::Vertex, {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
@@ -96,11 +96,11 @@ void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance>
                                bool to_vertex_shaders)
 {
     std::vector<glm::vec3> lighting;
-    lighting.reserve(instances.size() * asset_->l());
+    lighting.reserve(instances.size() * l());
     for (const PrtInstance& i : instances)
     {
         const std::vector<glm::vec3> o =
-            object_lighting(i.world_lighting, int(asset_->order), i.model, i.rotate_degrees);
+            object_lighting(i.world_lighting, int(order_), i.model, i.rotate_degrees);
         lighting.insert(lighting.end(), o.begin(), o.end());
     }
     record_transfer_object_space(cmd, lighting, frame, to_vertex_shaders);
@@ -109,8 +109,8 @@ void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance>
 void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
                                             uint32_t frame, bool to_vertex_shaders)
 {
-    if (lighting.size() > size_t(instances_) * asset_->l())
-        throw std::invalid_argument("hemi: lighting for " + std::to_string(lighting.size() / asset_->l()) +
+    if (lighting.size() > size_t(instances_) * l())
+        throw std::invalid_argument("hemi: lighting for " + std::to_string(lighting.size() / l()) +
                                     " instances of a PRT model made for " + std::to_string(instances_));
     source_->record(cmd, lighting, first_instance(frame));
     if (to_vertex_shaders)

@@ -62,7 +62,8 @@ struct LightmapDraw
 class LightmapModel
 {
   public:
-    // `asset` must outlive the model. Loads each of `techniques` (outputs of the asset) and every technique
+    // Everything the model draws is uploaded (or copied into `upload`) here: the asset may be freed once the
+    // model is made. Loads each of `techniques` (outputs of the asset) and every technique
     // a material asks for (io::Material::technique, e.g. an SSBump wall's "ssbump"), overridden by
     // `material_techniques` (material name -> technique; "" = the level's default). Uploads go into
     // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
@@ -93,8 +94,6 @@ class LightmapModel
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
               const glm::mat4& model, size_t pass = 0) const;
 
-    const io::LightmapAsset& asset() const { return *asset_; }
-
     // hemi's data for an engine's own shaders (its main pass including hemi's GLSL library, docs/
     // integration.md): the mesh (GpuMesh::layout(), bound by surfaces().mesh().bind()), the materials'
     // textures (surfaces().textures()) and the coefficient maps of each loaded technique (an entry's own,
@@ -107,7 +106,6 @@ class LightmapModel
     const TexelCoefficients& coefficients(const std::string& technique) const;
 
   private:
-    const io::LightmapAsset* asset_;
     std::vector<std::string> names_;
     std::vector<int> primitive_variant_;      // per primitive: its material's technique, or -1 (the default)
     std::unique_ptr<SceneSurfaces> surfaces_; // variant i draws technique names_[i]

@@ -26,8 +26,9 @@ namespace hemi::render
 class ProbeObject
 {
   public:
-    // The mesh, images and materials must outlive the object. Each of `instances` gets its probe in a buffer
-    // of `frames_in_flight` slots (ProbeBuffer). Throws std::invalid_argument for no instances or frames.
+    // The mesh, images and materials are uploaded or copied here (they may be freed afterwards). Each of
+    // `instances` gets its probe in a buffer of `frames_in_flight` slots (ProbeBuffer). Throws
+    // std::invalid_argument for no instances or frames.
     ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                 const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
                 uint32_t instances, gpu::UploadBatch& upload, uint32_t frames_in_flight = 1);

@@ -63,7 +63,8 @@ struct PrtInstance
 class PrtModel
 {
   public:
-    // `asset` must outlive the model. Compiles (or finds in `system`) the material type of every primitive.
+    // Everything the model draws is uploaded (or copied into `upload`) here: the asset may be freed once the
+    // model is made. Compiles (or finds in `system`) the material type of every primitive.
     // Uploads go into `upload` (record it, or submit_and_wait(), before the first frame). Throws
     // std::invalid_argument when the asset lacks the technique (or its CPCA data), io::FormatError when one
     // of its images is corrupt.
@@ -108,7 +109,9 @@ class PrtModel
     size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
 
     CoefficientSource& coefficients() { return *source_; }
-    const io::PrtAsset& asset() const { return *asset_; }
+    // The asset's lighting order and L = order^2 (what record_transfer_object_space takes per instance).
+    uint32_t order() const { return order_; }
+    uint32_t l() const { return order_ * order_; }
     const math::BasisDesc& basis() const { return *basis_; }
     const GpuMesh& mesh() const { return surfaces_.mesh(); }
     // The primitives, materials and textures, for an engine's own shaders (docs/integration.md).
@@ -118,8 +121,7 @@ class PrtModel
   private:
     uint32_t first_instance(uint32_t frame) const;
     MaterialSystem* system_;
-    uint32_t instances_ = 1, frames_ = 1;
-    const io::PrtAsset* asset_;
+    uint32_t instances_ = 1, frames_ = 1, order_ = 3;
     const math::BasisDesc* basis_;
     SceneSurfaces surfaces_;
     std::unique_ptr<CoefficientSource> source_;

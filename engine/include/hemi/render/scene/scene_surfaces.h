@@ -33,11 +33,11 @@ struct SurfaceVariant
 class SceneSurfaces
 {
   public:
-    // The mesh, images and materials must outlive the object. Compiles (or finds in `system`) the material
-    // type of every primitive for `source` and each of `variants` (what a draw picks from). No primitives
-    // draws the whole mesh with material 0; no materials uses glTF's default one. Throws
-    // std::invalid_argument for a primitive whose material does not exist or no bases, io::FormatError when
-    // an image is corrupt.
+    // The mesh, images and materials are uploaded or copied here (they may be freed afterwards). Compiles (or
+    // finds in `system`) the material type of every primitive for `source` and each of `variants` (what a
+    // draw picks from). No primitives draws the whole mesh with material 0; no materials uses glTF's default
+    // one. Throws std::invalid_argument for a primitive whose material does not exist or no bases,
+    // io::FormatError when an image is corrupt.
     SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                   const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
                   CoefficientSourceKind source, const std::vector<SurfaceVariant>& variants,
