@@ -996,7 +996,7 @@ void scale_frame(benchmark::State& state)
             for (uint32_t i = 0; i < objects; ++i)
             {
                 sh[0] = glm::vec3(1.0f + 0.5f * std::sin(0.1f * float(frame + i)));
-                spheres.write_lighting(slot, i, sh);
+                spheres.write_lighting(i, sh, slot);
             }
             lighting_barriers = calls.pipeline_barriers;
             lighting_updates = calls.buffer_updates;

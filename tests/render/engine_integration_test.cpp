@@ -870,3 +870,37 @@ TEST_F(EngineData, MaterialFromTheEnginesOwnImageViewsEqualsTheTextureSetOne)
         });
     EXPECT_GT(agree(reference, swapped).outside, a.covered / 4);
 }
+
+// ProbeBuffer::write puts a probe's coefficients where offset(frame, probe) says (the vec4 index the surface
+// shader reads, checked by the probe case above through record_update), zero-fills the rest of the probe
+// and touches no other probe or frame slot.
+TEST_F(EngineShader, ProbeBufferWritesEachProbeOfEachFrameAtItsOffset)
+{
+    const gpu::Device& dev = hemi::test::device();
+    const test::EnginePass pass(8, 8, {VK_FORMAT_R8G8B8A8_UNORM});
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    render::ProbeBuffer probes(system, 3, 2);
+    const glm::vec4* mapped = static_cast<const glm::vec4*>(probes.buffer().mapped());
+    ASSERT_NE(mapped, nullptr);
+    for (uint32_t f = 0; f < 2; ++f)
+        for (uint32_t p = 0; p < 3; ++p)
+        {
+            const std::vector<glm::vec3> c = {glm::vec3(float(f), float(p), 1.0f),
+                                              glm::vec3(float(f * 10 + p))};
+            probes.write(f, p, c);
+        }
+    for (uint32_t f = 0; f < 2; ++f)
+        for (uint32_t p = 0; p < 3; ++p)
+        {
+            const uint32_t at = probes.offset(f, p);
+            EXPECT_EQ(at, (f * 3 + p) * uint32_t(HEMI_BASIS_MAX_SIZE));
+            EXPECT_EQ(mapped[at], glm::vec4(float(f), float(p), 1.0f, 0.0f));
+            EXPECT_EQ(mapped[at + 1], glm::vec4(glm::vec3(float(f * 10 + p)), 0.0f));
+            for (uint32_t k = 2; k < HEMI_BASIS_MAX_SIZE; ++k)
+                EXPECT_EQ(mapped[at + k], glm::vec4(0.0f));
+        }
+    EXPECT_THROW(probes.offset(2, 0), std::invalid_argument);
+    EXPECT_THROW(probes.write(0, 3, {}), std::invalid_argument);
+}

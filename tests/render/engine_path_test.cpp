@@ -143,7 +143,7 @@ TEST_F(EnginePath, NoLibraryCallSubmitsOrWaits)
             for (int i = 0; i < 9; ++i)
                 light[i] = glm::vec3(y[i]);
             for (uint32_t i = 0; i < probes.instances(); ++i)
-                probes.write_lighting(slot, i, light);
+                probes.write_lighting(i, light, slot);
             begin();
             const render::PrtInstance instance{glm::mat4(1.0f), light, 0.0f};
             prt.record_transfer(cmd, {&instance, 1}, slot);

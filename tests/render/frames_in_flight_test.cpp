@@ -78,16 +78,28 @@ struct Result
 {
     uint32_t covered = 0, wrong = 0;
     float worst = 0.0f;
+    float centre_error =
+        0.0f; // pixels between the sphere's covered centroid and where the frame's camera puts it
 };
+
+// Each frame's camera is its own (moved sideways per frame), written to the frame's FrameSet slot: a frame
+// drawn with another slot's view lands ~10 pixels away.
+glm::mat4 view_projection(uint32_t frame)
+{
+    const float dx = 0.3f * float(frame % 3) - 0.3f;
+    return hemi::math::look_at_projection(glm::vec3(dx, -4.0f, 0), glm::vec3(dx, 0, 0), 40.0f, float(W) / H);
+}
 
 // Frame `frame`'s image against the CPU: covered pixels (aux alpha 1) within 2% of the brightest value.
 Result check(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& aux, uint32_t frame)
 {
     Result r;
+    double cx = 0.0;
     for (size_t p = 0; p < size_t(W) * H; ++p)
     {
         if (aux.pixels[p * 4 + 3] != 1.0f)
             continue;
+        cx += double(p % W) + 0.5;
         const float u = aux.pixels[p * 4], v = aux.pixels[p * 4 + 1];
         const float phi = 2.0f * float(M_PI) * u, theta = float(M_PI) * v;
         const glm::vec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
@@ -97,6 +109,9 @@ Result check(const hemi::io::ImageRgba& color, const hemi::io::ImageRgba& aux, u
         if (error > 0.02f * expected(light_direction(frame), frame))
             ++r.wrong;
     }
+    const glm::vec4 clip = view_projection(frame) * glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    const float centre = (clip.x / clip.w * 0.5f + 0.5f) * float(W);
+    r.centre_error = r.covered ? std::abs(float(cx / r.covered) - centre) : float(W);
     return r;
 }
 
@@ -169,8 +184,7 @@ std::vector<Result> run_frames(hemi::test::HostVulkan& host, uint32_t model_fram
         {
             const uint32_t f = k - 1;
             hemi::render::FrameData data;
-            data.view_projection =
-                hemi::math::look_at_projection(glm::vec3(0, -4.0f, 0), glm::vec3(0), 40.0f, float(W) / H);
+            data.view_projection = view_projection(f);
             data.lighting_only = true;
             frame_set.write(f % kInFlight, data);
             targets[f % kInFlight]->begin(cmds[slot]);
@@ -206,6 +220,7 @@ TEST_F(FramesInFlight, ThreePrtFramesEachShowTheirOwnLightingUnderSynchronisatio
     for (uint32_t f = 0; f < kFrames; ++f)
     {
         EXPECT_GT(results[f].covered, W * H / 4) << "frame " << f << " drew too little";
+        EXPECT_LT(results[f].centre_error, 1.5f) << "frame " << f << " was drawn with another frame's view";
         EXPECT_EQ(results[f].wrong, 0u)
             << "frame " << f << ": " << results[f].wrong << " of " << results[f].covered
             << " pixels differ from the CPU by more than 2% "

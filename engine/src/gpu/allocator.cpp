@@ -67,7 +67,12 @@ Allocation allocate(const Device& device, const VkMemoryRequirements& requiremen
                     bool linear)
 {
     MemoryProvider& provider = device.memory();
-    return Allocation(provider, provider.allocate(requirements, usage, linear), requirements, usage);
+    Allocation a(provider, provider.allocate(requirements, usage, linear), requirements, usage);
+    // hemi never flushes or invalidates: a host pointer into non-coherent memory would lose writes.
+    if (a.mapped() && !device.memory_is_host_coherent(a.memory_type()))
+        throw std::runtime_error("hemi: the memory provider returned a host pointer into memory type " +
+                                 std::to_string(a.memory_type()) + ", which is not host-coherent");
+    return a;
 }
 
 MemoryAllocator::MemoryAllocator(const Device& device, VkDeviceSize block_size)

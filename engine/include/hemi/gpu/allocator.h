@@ -33,9 +33,9 @@ class MemoryProvider
         VkDeviceSize offset = 0; // where the resource binds: a multiple of the requirements' alignment
         VkDeviceSize size = 0;   // at least the requirements' size
         uint32_t memory_type = 0;
-        // The range's host pointer. Required (host-visible, coherent memory, persistently mapped) for
-        // MemoryUsage::Upload, Readback and Dynamic; optional for GpuOnly (hemi then writes through it
-        // instead of a staging copy).
+        // The range's host pointer, into host-coherent memory only (hemi never flushes or invalidates).
+        // Required (persistently mapped) for MemoryUsage::Upload, Readback and Dynamic; optional for GpuOnly
+        // (hemi then writes through it instead of a staging copy).
         void* mapped = nullptr;
         void* user = nullptr; // the provider's own handle for free() (a VmaAllocation, a block)
     };

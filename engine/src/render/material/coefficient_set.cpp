@@ -53,6 +53,11 @@ ProbeBuffer::ProbeBuffer(const MaterialSystem& system, uint32_t probes, uint32_t
         throw std::invalid_argument("hemi: a probe buffer needs at least one probe and one frame, got " +
                                     std::to_string(probes) + " and " + std::to_string(frames_in_flight));
     const VkDeviceSize bytes = VkDeviceSize(probes) * frames_in_flight * HEMI_BASIS_MAX_SIZE * 16;
+    if (bytes > device.limits().maxStorageBufferRange)
+        throw std::invalid_argument("hemi: " + std::to_string(probes) + " probes x " +
+                                    std::to_string(frames_in_flight) + " frames (" + std::to_string(bytes) +
+                                    " bytes) exceed the device's maxStorageBufferRange (" +
+                                    std::to_string(device.limits().maxStorageBufferRange) + ")");
     buffer_ =
         gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
     device.set_name(VK_OBJECT_TYPE_BUFFER, buffer_.handle(), "hemi light probes");

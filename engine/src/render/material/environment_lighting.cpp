@@ -116,11 +116,73 @@ float EnvironmentMaps::glossy_extent(uint32_t i) const
     return glossy_extents_.at(i);
 }
 
+namespace
+{
+// A material's weights and rotation (the constructor's and record_update's check).
+void check_values(const EnvironmentMaterial& material)
+{
+    if (!std::isfinite(material.kd) || !std::isfinite(material.ks))
+        throw std::invalid_argument("hemi: an environment material's kd and ks must be finite");
+    const glm::mat3 identity = glm::transpose(material.world_to_env) * material.world_to_env;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (!std::isfinite(material.world_to_env[i][j]) ||
+                std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
+                throw std::invalid_argument(
+                    "hemi: an environment's world_to_env must be a rotation (orthonormal)");
+}
+
+// What a material asks of its environment and tables, checked before anything is uploaded (a refused
+// material leaves nothing of its own in the caller's upload batch).
+void check_material(uint32_t glossy_count, uint32_t fresnel_count, std::span<const math::BrdfTable> brdf,
+                    const EnvironmentMaterial& material)
+{
+    if (glossy_count != 0 && material.glossy >= glossy_count)
+        throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) +
+                                    " of an environment with " + std::to_string(glossy_count));
+    if (fresnel_count != 0 && material.fresnel >= fresnel_count)
+        throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
+                                    " of an environment with " + std::to_string(fresnel_count));
+    for (const math::BrdfTable& t : brdf)
+    {
+        if (t.size != brdf[0].size || t.size < 2)
+            throw std::invalid_argument(
+                "hemi: the BRDF tables of one material must all have one size (>= 2)");
+        if (t.channels == 0 || t.values.size() != size_t(t.size) * t.size * t.channels)
+            throw std::invalid_argument("hemi: a BRDF table of " + std::to_string(t.size) + "^2 x " +
+                                        std::to_string(t.channels) + " channels holds " +
+                                        std::to_string(t.values.size()) + " values");
+        for (float v : t.values)
+            if (!std::isfinite(v) || std::abs(v) > 65504.0f)
+                throw std::invalid_argument("hemi: a BRDF table value does not fit a half float");
+    }
+    // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one
+    // two-channel table (banks).
+    const bool torrance_sparrow = brdf.size() == 2 && brdf[0].channels == 1 && brdf[1].channels == 1;
+    const bool banks = brdf.size() == 1 && brdf[0].channels == 2;
+    if (!brdf.empty() && !torrance_sparrow && !banks)
+        throw std::invalid_argument("hemi: BRDF tables must be Torrance-Sparrow's two (FD, G) or Banks' one "
+                                    "(diffuse, specular)");
+    check_values(material);
+}
+
+std::shared_ptr<const EnvironmentMaps> checked_maps(const gpu::Device& device, const io::EnvmapAsset& env,
+                                                    std::span<const math::BrdfTable> brdf,
+                                                    const EnvironmentMaterial& material,
+                                                    gpu::UploadBatch& upload)
+{
+    if (const std::string problem = io::envmap_problem(env); !problem.empty())
+        throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
+    check_material(uint32_t(env.glossy.size()), uint32_t(env.iors.size()), brdf, material);
+    return std::make_shared<const EnvironmentMaps>(device, env, upload);
+}
+} // namespace
+
 EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& env,
                                          std::span<const math::BrdfTable> brdf,
                                          const EnvironmentMaterial& material, gpu::UploadBatch& upload)
-    : EnvironmentLighting(system, std::make_shared<const EnvironmentMaps>(system.device(), env, upload), brdf,
-                          material, upload)
+    : EnvironmentLighting(system, checked_maps(system.device(), env, brdf, material, upload), brdf, material,
+                          upload)
 {
 }
 
@@ -133,32 +195,9 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
     const gpu::Device& device = system.device();
     if (!maps_)
         throw std::invalid_argument("hemi: an environment material needs its environment's maps");
-    if (maps_->glossy_count() != 0 && material.glossy >= maps_->glossy_count())
-        throw std::invalid_argument("hemi: glossy map " + std::to_string(material.glossy) +
-                                    " of an environment with " + std::to_string(maps_->glossy_count()));
-    if (maps_->fresnel_count() != 0 && material.fresnel >= maps_->fresnel_count())
-        throw std::invalid_argument("hemi: Fresnel table " + std::to_string(material.fresnel) +
-                                    " of an environment with " + std::to_string(maps_->fresnel_count()));
+    check_material(maps_->glossy_count(), maps_->fresnel_count(), brdf, material);
     glossy_ = material.glossy;
     fresnel_row_ = material.fresnel;
-    for (const math::BrdfTable& t : brdf)
-    {
-        if (t.size != brdf[0].size || t.size < 2)
-            throw std::invalid_argument(
-                "hemi: the BRDF tables of one material must all have one size (>= 2)");
-        if (t.channels == 0 || t.values.size() != size_t(t.size) * t.size * t.channels)
-            throw std::invalid_argument("hemi: a BRDF table of " + std::to_string(t.size) + "^2 x " +
-                                        std::to_string(t.channels) + " channels holds " +
-                                        std::to_string(t.values.size()) + " values");
-    }
-    // What the techniques read: Torrance-Sparrow's two one-channel tables (factored) or Banks' one
-    // two-channel table (banks).
-    const bool torrance_sparrow = brdf.size() == 2 && brdf[0].channels == 1 && brdf[1].channels == 1;
-    const bool banks = brdf.size() == 1 && brdf[0].channels == 2;
-    if (!brdf.empty() && !torrance_sparrow && !banks)
-        throw std::invalid_argument("hemi: BRDF tables must be Torrance-Sparrow's two (FD, G) or Banks' one "
-                                    "(diffuse, specular)");
-
     const VkFormat half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
     // The BRDF tables, a layer each, channels into r, g (2 x 2 zeros without any).
     table_size_ = brdf.empty() ? 2 : brdf[0].size;
@@ -168,10 +207,8 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
         for (size_t i = 0; i < size_t(table_size_) * table_size_; ++i)
             for (uint32_t c = 0; c < std::min(brdf[k].channels, 3u); ++c)
             {
-                const float v = brdf[k].values[i * brdf[k].channels + c];
-                if (!std::isfinite(v) || std::abs(v) > 65504.0f)
-                    throw std::invalid_argument("hemi: a BRDF table value does not fit a half float");
-                table_rgb[(k * table_size_ * table_size_ + i) * 3 + c] = v;
+                table_rgb[(k * table_size_ * table_size_ + i) * 3 + c] =
+                    brdf[k].values[i * brdf[k].channels + c];
             }
     brdf_ = gpu::create_image(device,
                               {table_size_, table_size_, half4, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
@@ -205,15 +242,7 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
 
 shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMaterial& m) const
 {
-    if (!std::isfinite(m.kd) || !std::isfinite(m.ks))
-        throw std::invalid_argument("hemi: an environment material's kd and ks must be finite");
-    const glm::mat3 identity = glm::transpose(m.world_to_env) * m.world_to_env;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (!std::isfinite(m.world_to_env[i][j]) ||
-                std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
-                throw std::invalid_argument(
-                    "hemi: an environment's world_to_env must be a rotation (orthonormal)");
+    check_values(m);
     shared::EnvironmentUniforms u{};
     u.extents =
         glm::vec4(maps_->mirror_extent(), maps_->glossy_extent(glossy_), maps_->diffuse_extent(), 0.0f);

@@ -27,7 +27,7 @@ void ProbeObject::check_sh9(std::span<const glm::vec3> sh9)
                                     std::to_string(sh9.size()));
 }
 
-void ProbeObject::write_lighting(uint32_t frame, uint32_t instance, std::span<const glm::vec3> sh9)
+void ProbeObject::write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame)
 {
     check_sh9(sh9);
     probes_.write(frame, instance, sh9);

@@ -78,7 +78,8 @@ void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
         throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
     if (pass >= passes_.size())
         throw std::invalid_argument("hemi: surface pass " + std::to_string(pass) + " was not added");
-    std::vector<DrawPacket> packets(draws_.size());
+    thread_local std::vector<DrawPacket> packets; // reused: no allocation per draw call
+    packets.resize(draws_.size());
     size_t n = 0;
     for (size_t i = 0; i < draws_.size(); ++i)
         n += packet(packets[n], frame, source, coefficient_offset, model, variant, pass, i) ? 1 : 0;

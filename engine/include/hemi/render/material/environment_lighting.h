@@ -77,8 +77,9 @@ class EnvironmentLighting
                         gpu::UploadBatch& upload);
     // `brdf` holds the factored BRDF's tables, one layer each, all of one size: Torrance-Sparrow's FD and G
     // (channel 0 each), or Banks' one table (channels diffuse, specular); empty binds zero tables (for the
-    // env_* techniques). The environment's maps are uploaded for this material alone (an EnvironmentMaps of
-    // its own; share one between materials with the constructor above). Throws std::invalid_argument for an
+    // env_* techniques). The environment's maps (all of them, every glossy map too) are uploaded for this
+    // material alone (an EnvironmentMaps of its own; share one between materials with the constructor
+    // above). Nothing is uploaded for a material that is refused. Throws std::invalid_argument for an
     // inconsistent asset (io::envmap_problem), a glossy or Fresnel index the asset does not have, tables of
     // different sizes or neither Torrance-Sparrow's nor Banks', weights that are not finite, or a
     // world_to_env that is not a rotation.

@@ -57,7 +57,7 @@ enum class CoefficientSourceKind : uint32_t
 {
     Vertex = HEMI_SOURCE_VERTEX,           // transfer or CPCA pass output, interpolated across triangles
     Texel = HEMI_SOURCE_TEXEL,             // coefficient textures sampled at TEXCOORD_1
-    Uniform = HEMI_SOURCE_UNIFORM,         // one set of coefficients for the whole object (an SH probe)
+    Uniform = HEMI_SOURCE_UNIFORM,         // K coefficients per object from a storage buffer (ProbeBuffer)
     Environment = HEMI_SOURCE_ENVIRONMENT, // parabolic environment maps and BRDF tables (EnvironmentLighting)
 };
 

@@ -36,7 +36,7 @@ class ProbeObject
 
     // Instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g. probe_lighting() at its
     // position) in frame slot `frame`, through mapped memory (no command; ProbeBuffer::write's contract).
-    void write_lighting(uint32_t frame, uint32_t instance, std::span<const glm::vec3> sh9);
+    void write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame = 0);
     // Outside a render pass: the same, recorded in the command buffer (ProbeBuffer::record_update).
     void record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
                          uint32_t frame = 0) const;

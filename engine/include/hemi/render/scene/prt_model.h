@@ -47,8 +47,8 @@ struct PrtModelDesc
     bool cpca = false;            // the technique's CPCA data instead of the dense matrices
     uint32_t instances = 1;       // objects relit per frame from this model
     // Frames the engine keeps in flight: each slot has its own lighting and coefficients of every instance,
-    // so the transfer pass of frame N+1 (on a compute queue, say) runs while frame N's draws still read
-    // frame N's.
+    // so the transfer pass of frame N+1 never overwrites what frame N's draws read (the two overlap when the
+    // transfer is recorded on a compute queue; on one queue its first barrier waits for earlier work).
     uint32_t frames_in_flight = 1;
 };
 
