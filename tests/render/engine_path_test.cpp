@@ -10,6 +10,7 @@
 #include "../gpu_fixture.h"
 #include "../host_vulkan.h"
 #include "../vulkan_calls.h"
+#include "sphere_asset.h"
 #include "table_level.h"
 
 #include <hemi/bake/prt_bake.h>
@@ -39,19 +40,7 @@ class EnginePath : public hemi::test::GpuTest
 
 hemi::io::PrtAsset sphere_asset()
 {
-    hemi::io::PrtAsset a;
-    a.mesh = hemi::io::make_uv_sphere(1.0f, 16, 8);
-    a.order = 3;
-    a.transfer_kind = 0;
-    hemi::bake::PrtBakeOptions o;
-    o.kind = hemi::bake::TransferKind::Unshadowed;
-    o.order = 3;
-    hemi::io::PrtTechnique t;
-    t.name = "h4";
-    t.k = 4;
-    t.matrices = hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(a.mesh, o), a.mesh, "h4");
-    a.techniques.push_back(std::move(t));
-    return a;
+    return hemi::test::unshadowed_sphere_asset(16, 8, "h4", 4);
 }
 
 } // namespace

@@ -14,6 +14,7 @@
 // k's coefficients: the same schedule with it must fail the same check, and does (asserted below).
 #include "../gpu_fixture.h"
 #include "../host_vulkan.h"
+#include "sphere_asset.h"
 
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/transfer_fold.h>
@@ -40,19 +41,7 @@ constexpr uint32_t W = 96, H = 96, kFrames = 9, kInFlight = 3;
 
 hemi::io::PrtAsset sphere_asset()
 {
-    hemi::io::PrtAsset a;
-    a.mesh = hemi::io::make_uv_sphere(1.0f, 64, 32);
-    a.order = 3;
-    a.transfer_kind = 0;
-    hemi::bake::PrtBakeOptions o;
-    o.kind = hemi::bake::TransferKind::Unshadowed;
-    o.order = 3;
-    hemi::io::PrtTechnique t;
-    t.name = "gs";
-    t.k = 9;
-    t.matrices = hemi::bake::fold_technique(hemi::bake::bake_prt_transfer(a.mesh, o), a.mesh, "gs");
-    a.techniques.push_back(std::move(t));
-    return a;
+    return hemi::test::unshadowed_sphere_asset(64, 32, "gs", 9);
 }
 
 glm::vec3 light_direction(uint32_t frame)
