@@ -22,12 +22,16 @@
 //                                     values, so the assets hold unshadowed transfer (the 1M model's CPCA
 //                                     data are random, with the real shapes: CPCA of 1M x 225 values is a
 //                                     bake-time job).
-//   material/overhead/complex/...     the PRT material against the constant one, same mesh, same run.
+//   material/overhead/complex/...     the PRT material (each Table 1 technique) against the fair baseline
+//                                     (Technique::Lambert: the same textures, one light), same mesh, frames
+//                                     interleaved: medians of each pass and of their ratio, with the ratio's
+//                                     10th and 90th percentiles.
 //   bake/complex                      the PRT bake's first (visibility) pass on the complex model, 64 rays
 //                                     per vertex: rays_per_s, and embree_ratio = Embree's own rays/s tracing
 //                                     the same rays with nothing else (bake::trace_bake_rays) / the bake's.
 //   ssbump/...                        the SSBump bake (1024^2, 300 rays) and its tracer against Embree.
-//   lightmap/material/level/WxH/TECH  the lightmap material against the constant one on the sample's level,
+//   lightmap/material/level/WxH/TECH  the lightmap material against the fair baseline on the sample's level
+//                                     (the same interleaved medians),
 //                                     baked and read back as hemi-bake lightmap and hemi-render do.
 //   lightmap/bake/level/...           the lightmap bake of the sample's level (1280^2, 2 bounces).
 //
@@ -533,34 +537,92 @@ void table1(benchmark::State& state, Table1Row row, std::string technique, bool 
     }
 }
 
-// The material system's cost: the PRT material (gs, per-vertex coefficients, basis per pixel, normal and
-// base colour maps) against the trivial material (Technique::Constant: one colour, no texture, no
-// coefficient) on the same mesh at the same resolution, both timed by GPU timestamps in every iteration, so
-// `overhead_ratio` compares two draws of one run.
-// The frame-time ratios' loop: `record` records a frame, writing GPU timestamps 0, 1 and 2 around the
-// material's pass and the constant technique's when `timed`; after three warm-up frames, each iteration is
-// one timed frame. Returns the mean seconds of the two passes.
-std::pair<double, double> time_two_passes(benchmark::State& state, hemi::gpu::Device& device,
-                                          hemi::gpu::TimestampQueries& queries,
-                                          const std::function<void(VkCommandBuffer, bool)>& record)
+// The frame-time ratios' loop (the material system's cost): `record(cmd, timed, measured_first)` records one
+// frame holding the measured material's pass and the baseline's (the same mesh drawn by the fair baseline,
+// Technique::Lambert: the same textures, one dynamic light), writing GPU timestamps 0, 1 and 2 around the
+// two passes when `timed`, the measured one first when `measured_first`. The order alternates every frame,
+// so neither pass always runs after the other. After three warm-up frames each iteration is one timed frame.
+// Reported as medians over the frames: each pass's time and the ratio of the two within a frame, with the
+// ratio's 10th and 90th percentiles (its spread on a shared machine).
+struct PassTimes
 {
+    double measured = 0.0, baseline = 0.0; // median seconds
+    double ratio = 0.0, ratio_p10 = 0.0, ratio_p90 = 0.0;
+};
+
+double quantile(std::vector<double> v, double q)
+{
+    if (v.empty())
+        return 0.0;
+    std::sort(v.begin(), v.end());
+    const double x = q * double(v.size() - 1);
+    const size_t i = size_t(x);
+    const double f = x - double(i);
+    return i + 1 < v.size() ? v[i] * (1.0 - f) + v[i + 1] * f : v[i];
+}
+
+PassTimes time_against_baseline(benchmark::State& state, hemi::gpu::Device& device,
+                                const std::function<void(VkCommandBuffer)>& prepare,
+                                const std::function<void(VkCommandBuffer)>& measured,
+                                const std::function<void(VkCommandBuffer)>& baseline)
+{
+    hemi::gpu::TimestampQueries queries(device, 3);
     hemi::gpu::CommandContext ctx(device);
+    auto frame = [&](VkCommandBuffer cmd, bool timed, bool measured_first)
+    {
+        prepare(cmd);
+        if (timed)
+            queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        (measured_first ? measured : baseline)(cmd);
+        if (timed)
+            queries.write(cmd, 1, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+        (measured_first ? baseline : measured)(cmd);
+        if (timed)
+            queries.write(cmd, 2, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
+    };
     for (int i = 0; i < 3; ++i) // warm-up
-        ctx.run([&](VkCommandBuffer cmd) { record(cmd, false); });
-    double first = 0.0, second = 0.0;
+        ctx.run([&](VkCommandBuffer cmd) { frame(cmd, false, i % 2 == 0); });
+    std::vector<double> measured_s, baseline_s, ratio;
+    bool measured_first = true;
     for (auto _ : state)
     {
         VkCommandBuffer cmd = ctx.begin();
         queries.reset(cmd);
-        record(cmd, true);
+        frame(cmd, true, measured_first);
         ctx.submit_and_wait();
         const std::vector<double> ns = queries.read_ns();
-        first += (ns[1] - ns[0]) * 1e-9;
-        second += (ns[2] - ns[1]) * 1e-9;
-        state.SetIterationTime((ns[2] - ns[0]) * 1e-9);
+        const double first = (ns[1] - ns[0]) * 1e-9, second = (ns[2] - ns[1]) * 1e-9;
+        measured_s.push_back(measured_first ? first : second);
+        baseline_s.push_back(measured_first ? second : first);
+        ratio.push_back(measured_s.back() / baseline_s.back());
+        state.SetIterationTime(first + second);
+        measured_first = !measured_first;
     }
-    const double iters = double(state.iterations());
-    return {first / iters, second / iters};
+    PassTimes t;
+    t.measured = quantile(measured_s, 0.5);
+    t.baseline = quantile(baseline_s, 0.5);
+    t.ratio = quantile(ratio, 0.5);
+    t.ratio_p10 = quantile(ratio, 0.1);
+    t.ratio_p90 = quantile(ratio, 0.9);
+    return t;
+}
+
+void set_ratio_counters(benchmark::State& state, const std::string& name, const PassTimes& t)
+{
+    state.counters[name + "_ms"] = t.measured * 1e3;
+    state.counters["lambert_ms"] = t.baseline * 1e3;
+    state.counters["overhead_ratio"] = t.ratio;
+    state.counters["ratio_p10"] = t.ratio_p10;
+    state.counters["ratio_p90"] = t.ratio_p90;
+}
+
+// The fair baseline's one light: a directional light from above and to the side, white.
+hemi::render::DynamicLight baseline_light()
+{
+    hemi::render::DynamicLight l;
+    l.position = glm::normalize(glm::vec3(0.3f, -0.4f, 1.0f));
+    l.irradiance = glm::vec3(2.0f);
+    return l;
 }
 
 void material_overhead(benchmark::State& state, std::string technique)
@@ -574,53 +636,45 @@ void material_overhead(benchmark::State& state, std::string technique)
     frame.world_lighting = hemi::render::environment_lighting("sky", int(asset.order));
     frame.camera = hemi::render::auto_camera(asset.mesh, frame.model, float(w) / float(h));
 
-    // The trivial material, drawn with the view's own material system, frame set and mesh.
+    // The fair baseline (Technique::Lambert: the same base colour and normal maps through the same material,
+    // one dynamic light), drawn with the view's own material system, mesh and material instance.
     hemi::render::MaterialSystem& system = view.materials();
     hemi::gpu::UploadBatch upload(device);
-    const hemi::io::Material plain;
-    hemi::render::TextureSet textures(device, std::span<const hemi::io::EncodedImage>(),
-                                      std::span<const hemi::io::Material>(&plain, 1), upload);
-    hemi::render::MaterialInstance instance(system, textures, plain, upload);
     hemi::render::ProbeBuffer probe(system, 1);
-    hemi::render::FrameSet constant_frame(system);
+    hemi::render::FrameSet baseline_frame(system);
     upload.submit_and_wait();
-    hemi::render::MaterialKey key;
-    key.technique = hemi::render::Technique::Constant;
+    hemi::render::MaterialKey key = view.model().surfaces().type(0, 0, 0).key;
+    key.technique = hemi::render::Technique::Lambert;
     key.source = hemi::render::CoefficientSourceKind::Uniform;
-    key.frame = hemi::render::ShadingFrame::World;
-    hemi::render::DrawBindings constant;
-    constant.type = &system.type(key);
-    constant.frame = constant_frame.set();
-    constant.material = instance.set();
-    constant.source = probe.set();
-    constant.push.model = frame.model;
+    hemi::render::DrawBindings baseline;
+    baseline.type = &system.type(key);
+    baseline.frame = baseline_frame.set();
+    baseline.material = view.model().surfaces().material_set(0);
+    baseline.source = probe.set();
+    baseline.push.model = frame.model;
+    hemi::render::FrameData f;
+    f.view_projection =
+        hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, float(w) / float(h));
+    f.lights = {baseline_light()};
 
-    hemi::gpu::TimestampQueries queries(device, 3);
-    auto record = [&](VkCommandBuffer cmd, bool timed)
-    {
-        view.record_transfer(cmd, frame);
-        hemi::render::FrameData f;
-        f.view_projection =
-            hemi::render::camera_matrix(frame.camera, asset.mesh, frame.model, float(w) / float(h));
-        constant_frame.record_update(cmd, f);
-        if (timed)
-            queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-        view.record_raster(cmd);
-        if (timed)
-            queries.write(cmd, 1, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-        view.target().begin(cmd);
-        hemi::render::bind_material(cmd, constant);
-        view.model().mesh().bind(cmd);
-        view.model().mesh().draw(cmd, 0, view.model().mesh().index_count());
-        view.target().end(cmd);
-        if (timed)
-            queries.write(cmd, 2, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-    };
-    const auto [prt, trivial] = time_two_passes(state, device, queries, record);
+    const PassTimes t = time_against_baseline(
+        state, device,
+        [&](VkCommandBuffer cmd)
+        {
+            view.record_transfer(cmd, frame);
+            baseline_frame.record_update(cmd, f);
+        },
+        [&](VkCommandBuffer cmd) { view.record_raster(cmd); },
+        [&](VkCommandBuffer cmd)
+        {
+            view.target().begin(cmd);
+            hemi::render::bind_material(cmd, baseline);
+            view.model().mesh().bind(cmd);
+            view.model().mesh().draw(cmd, 0, view.model().mesh().index_count());
+            view.target().end(cmd);
+        });
     state.counters["vertices"] = double(asset.mesh.vertex_count());
-    state.counters["prt_ms"] = prt * 1e3;
-    state.counters["constant_ms"] = trivial * 1e3;
-    state.counters["overhead_ratio"] = prt / trivial;
+    set_ratio_counters(state, "prt", t);
 }
 
 void prt_bake(benchmark::State& state)
@@ -872,34 +926,37 @@ void lightmap_material(benchmark::State& state, std::string technique)
     hemi::render::OffscreenTarget target(device, w, h);
     hemi::render::MaterialSystem system(device, target.desc());
     hemi::gpu::UploadBatch upload(device);
-    hemi::render::LightmapModel model(system, asset, {technique, "constant"}, upload);
+    hemi::render::LightmapModel model(system, asset, {technique, "lambert"}, upload);
     upload.submit_and_wait();
-    hemi::render::FrameSet frame(system);
+    // The measured technique's frame (no dynamic light: hemi's techniques light from their coefficients) and
+    // the baseline's (one light).
+    hemi::render::FrameSet frame(system), baseline_frame(system);
     hemi::render::FrameData f;
     f.view_projection = hemi::render::look_at_projection(
         glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f, float(w) / float(h));
+    hemi::render::FrameData lit = f;
+    lit.lights = {baseline_light()};
     const glm::mat4 placement = hemi::render::gltf_to_world();
-    hemi::gpu::TimestampQueries queries(device, 3);
-    auto record = [&](VkCommandBuffer cmd, bool timed)
-    {
-        frame.record_update(cmd, f);
-        if (timed)
-            queries.write(cmd, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-        target.begin(cmd);
-        model.draw(cmd, frame.set(), technique, placement);
-        target.end(cmd);
-        if (timed)
-            queries.write(cmd, 1, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-        target.begin(cmd);
-        model.draw(cmd, frame.set(), "constant", placement);
-        target.end(cmd);
-        if (timed)
-            queries.write(cmd, 2, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT);
-    };
-    const auto [lit, trivial] = time_two_passes(state, device, queries, record);
-    state.counters["lightmap_ms"] = lit * 1e3;
-    state.counters["constant_ms"] = trivial * 1e3;
-    state.counters["overhead_ratio"] = lit / trivial;
+    const PassTimes t = time_against_baseline(
+        state, device,
+        [&](VkCommandBuffer cmd)
+        {
+            frame.record_update(cmd, f);
+            baseline_frame.record_update(cmd, lit);
+        },
+        [&](VkCommandBuffer cmd)
+        {
+            target.begin(cmd);
+            model.draw(cmd, frame.set(), technique, placement);
+            target.end(cmd);
+        },
+        [&](VkCommandBuffer cmd)
+        {
+            target.begin(cmd);
+            model.draw(cmd, baseline_frame.set(), "lambert", placement);
+            target.end(cmd);
+        });
+    set_ratio_counters(state, "lightmap", t);
 }
 
 // Issue 22's scale: 1,000 material instances and 1,000 probe-lit objects' coefficient sources made with one
@@ -1167,7 +1224,7 @@ int main(int argc, char** argv)
                     add(name, table1, row, t, cpca, cpu_path)->Unit(benchmark::kMillisecond)->UseManualTime(),
                     0.2);
             }
-    for (const char* technique : {"gs", "h4", "hl2"})
+    for (const char* technique : {"gs", "sep4", "sal4", "hl2", "h4", "h6", "prt"})
         full_min_time(add("material/overhead/" + g_sizes.overhead.label + "/640x480/" + technique,
                           material_overhead, std::string(technique))
                           ->Unit(benchmark::kMillisecond)

@@ -129,8 +129,9 @@ void main()
     // glTF: occlusion = 1 + strength (r - 1); the compiler drops the fetch from techniques that ignore it.
     s.occlusion =
         1.0 + material.occlusion.x * (texture(occlusion_map, material_uv(material.texcoord.w, 3)).r - 1.0);
-    s.lights = int(frame.options.y);
-    for (int i = 0; i < HEMI_MAX_LIGHTS; ++i)
+    s.lights = min(int(frame.options.y), HEMI_MAX_LIGHTS);
+    // Only the frame's lights (a bound uniform across the draw): a technique reads l[i], e[i] for i < lights.
+    for (int i = 0; i < s.lights; ++i)
     {
         const vec4 p = frame.light_position[i];
         const vec3 to = p.w == 0.0 ? p.xyz : p.xyz - in_world;

@@ -76,7 +76,7 @@ struct ImageDesc
     // TRANSFER_SRC and TRANSFER_DST are always added (uploads, readback).
     VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT;
     uint32_t mip_levels = 1;
-    uint32_t layers = 1; // > 1: a 2D array image with a 2D_ARRAY view (coefficient maps, one layer each)
+    uint32_t layers = 1; // > 1: a 2D array image with a 2D_ARRAY view (packed coefficient maps)
     bool array = false;  // a 2D_ARRAY view even for one layer (what a sampler2DArray needs)
 };
 

@@ -131,23 +131,32 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
             throw std::invalid_argument(
                 "hemi: coefficient map value " + std::to_string(i) +
                 (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
+    // Packed (hemi_lightmap_coefficients): float f = 3 k + c of texel t is channel f % 4 of layer f / 4.
+    const uint32_t layers = packed_layers(k);
+    const size_t plane = size_t(width) * height;
     const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
-    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, k, true});
+    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
+    auto pack = [&](auto convert, auto& rgba)
+    {
+        rgba.assign(plane * layers * 4, convert(0.0f));
+        for (uint32_t c = 0; c < k; ++c)
+            for (size_t t = 0; t < plane; ++t)
+                for (uint32_t ch = 0; ch < 3; ++ch)
+                {
+                    const uint32_t f = 3 * c + ch;
+                    rgba[((f / 4) * plane + t) * 4 + f % 4] = convert(rgb[(c * plane + t) * 3 + ch]);
+                }
+        upload.image(maps_, rgba.data(), rgba.size() * sizeof(rgba[0]));
+    };
     if (full_precision)
     {
-        std::vector<float> rgba(texels * 4, 0.0f);
-        for (size_t t = 0; t < texels; ++t)
-            for (int c = 0; c < 3; ++c)
-                rgba[t * 4 + c] = rgb[t * 3 + c];
-        upload.image(maps_, rgba.data(), rgba.size() * sizeof(float));
+        std::vector<float> rgba;
+        pack([](float v) { return v; }, rgba);
     }
     else
     {
-        std::vector<uint16_t> rgba(texels * 4, 0);
-        for (size_t t = 0; t < texels; ++t)
-            for (int c = 0; c < 3; ++c)
-                rgba[t * 4 + c] = uint16_t(glm::packHalf1x16(rgb[t * 3 + c]));
-        upload.image(maps_, rgba.data(), rgba.size() * sizeof(uint16_t));
+        std::vector<uint16_t> rgba;
+        pack([](float v) { return uint16_t(glm::packHalf1x16(v)); }, rgba);
     }
     // Bilinear, clamped: a lightmap's charts are padded, and nothing wraps across the atlas's border.
     sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_NEAREST,

@@ -65,10 +65,13 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         // rnm and ssbump draw the "rnm" output (K = 3, carried by the 3-function HL2 basis's id); the others
         // their own output with their basis.
         const bool rnm = name == "rnm" || name == "ssbump" || name == "rnm_ao";
-        if (name == "constant" && asset.outputs.empty())
+        // "constant" (the base colour factor) and "lambert" (the textures and dynamic lights alone):
+        // hemi-bench's baselines, binding some output they do not read.
+        const bool baseline = name == "constant" || name == "lambert";
+        const Technique baseline_technique = name == "constant" ? Technique::Constant : Technique::Lambert;
+        if (baseline && asset.outputs.empty())
             throw std::invalid_argument("hemi: the lightmap asset has no outputs");
-        // "constant" (the base colour factor: hemi-bench's baseline) binds some output it does not read.
-        const std::string source = rnm ? "rnm" : name == "constant" ? asset.outputs.front().name : name;
+        const std::string source = rnm ? "rnm" : baseline ? asset.outputs.front().name : name;
         const io::LightmapOutput& output = asset.output(source); // lists what the asset has
         if (rnm)
             variants.push_back({name == "rnm"      ? Technique::Rnm
@@ -76,10 +79,10 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
                                                    : Technique::Ssbump,
                                 HEMI_BASIS_HL2});
         else if (source == "rnm")
-            variants.push_back({Technique::Constant, HEMI_BASIS_HL2});
+            variants.push_back({baseline_technique, HEMI_BASIS_HL2});
         else
-            variants.push_back({name == "constant" ? Technique::Constant : Technique::Irradiance,
-                                lightmap_basis(source).id});
+            variants.push_back(
+                {baseline ? baseline_technique : Technique::Irradiance, lightmap_basis(source).id});
         names_.push_back(name);
         coefficients_.push_back(std::make_unique<TexelCoefficients>(system, asset.width, asset.height,
                                                                     output.k, output.maps.dense(), upload));

@@ -11,10 +11,7 @@
 // The dynamic lights' irradiance over pi at the normal: sum_i E_i max(0, n.l_i) / pi.
 vec3 hemi_env_lambert(HemiSurface s)
 {
-    vec3 sum = vec3(0.0);
-    for (int i = 0; i < s.lights; ++i)
-        sum += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
-    return sum / kHemiPi;
+    return hemi_dynamic_irradiance(s, s.n) / kHemiPi;
 }
 
 #if HEMI_SOURCE == HEMI_SOURCE_ENVIRONMENT

@@ -28,6 +28,15 @@ struct HemiSurface
     float specular_exponent, specular_strength;
 };
 
+// The dynamic lights' irradiance at normal n: sum_i E_i max(0, n . l_i).
+vec3 hemi_dynamic_irradiance(HemiSurface s, vec3 n)
+{
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < s.lights; ++i)
+        sum += s.e[i] * max(dot(n, s.l[i]), 0.0);
+    return sum;
+}
+
 // The dynamic lights' normalised Blinn-Phong term at normal n: (m + 8) / (8 pi) (n.h)^m (n.l) E, summed.
 vec3 hemi_dynamic_specular(HemiSurface s, vec3 n)
 {

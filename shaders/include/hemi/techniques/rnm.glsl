@@ -11,11 +11,8 @@
 // E: the lightmap's colours blended at the normal-map normal, plus the dynamic lights there.
 vec3 hemi_rnm_surface_irradiance(HemiSurface s)
 {
-    vec3 e = hemi_rnm_irradiance(s.n, s.c[0], s.c[1], s.c[2]);
     // Dynamic lights at the normal-map normal.
-    for (int i = 0; i < s.lights; ++i)
-        e += s.e[i] * max(dot(s.n, s.l[i]), 0.0);
-    return e;
+    return hemi_rnm_irradiance(s.n, s.c[0], s.c[1], s.c[2]) + hemi_dynamic_irradiance(s, s.n);
 }
 
 // hemi-technique: id=2 name=rnm

@@ -4,8 +4,8 @@
 //                       instance's texel offset into it).
 //   ProbeBuffer:        one set of K RGB coefficients per object (an SH9 irradiance probe in world space,
 //                       say), many objects and frames in flight in one buffer, updated per frame.
-//   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps): a K-layer 2D
-//                       array image, bilinear, clamped to the edge.
+//   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps), packed into the
+//                       RGBA layers of a ceil(3K / 4)-layer 2D array image, bilinear, clamped to the edge.
 
 #include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
@@ -72,16 +72,22 @@ class TexelCoefficients
 {
   public:
     // `rgb` holds K maps of width x height RGB texels, map after map, rows from the top (v = 0), 3 floats a
-    // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored as RGBA16F
-    // (half floats, as lightmaps usually are; `full_precision` stores RGBA32F), uploaded through `upload`.
+    // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored packed, as
+    // hemi_lightmap_coefficients reads them: the texel's 3K floats fill the RGBA channels of
+    // packed_layers(K) = ceil(3K / 4) layers in order (float f = 3 k + c is channel f % 4 of layer f / 4),
+    // as RGBA16F (half floats, as lightmaps usually are; `full_precision` stores RGBA32F), uploaded through
+    // `upload`. Bilinear filtering is linear per channel, so packing changes no value.
     // Throws std::invalid_argument for K outside [1, HEMI_BASIS_MAX_SIZE], a size mismatch or a value that
     // is not finite or does not fit a half float.
     TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
                       std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision = false);
     VkDescriptorSet set() const { return set_.get(); }
     uint32_t k() const { return k_; }
-    // For an engine's own shaders (hemi_lightmap_coefficients, docs/glsl.md): the K-layer image (a 2D_ARRAY
-    // view, SHADER_READ_ONLY_OPTIMAL once the upload is recorded) and its bilinear, edge-clamped sampler.
+    // The layers K packed coefficients take: ceil(3K / 4) (sh9: 7, h6: 5, h4: 3, hl2 and rnm: 3, plain: 1).
+    static constexpr uint32_t packed_layers(uint32_t k) { return (3 * k + 3) / 4; }
+    // For an engine's own shaders (hemi_lightmap_coefficients, docs/glsl.md): the packed_layers(K)-layer
+    // image (a 2D_ARRAY view, SHADER_READ_ONLY_OPTIMAL once the upload is recorded) and its bilinear,
+    // edge-clamped sampler.
     const gpu::Image& maps() const { return maps_; }
     VkSampler sampler() const { return sampler_; }
 

@@ -51,6 +51,9 @@ enum class Technique : uint32_t
     EnvMirror =
         HEMI_TECHNIQUE_ENV_MIRROR, // Fresnel-weighted mirror reflection of the parabolic map + diffuse
     EnvGlossy = HEMI_TECHNIQUE_ENV_GLOSSY, // the prefiltered glossy map at the reflection vector + diffuse
+    // The material's textures (base colour, normal map, emissive) lit by the frame's dynamic lights alone
+    // (Lambert at the normal-map normal), no precomputed lighting: hemi-bench's fair baseline.
+    Lambert = HEMI_TECHNIQUE_LAMBERT,
 };
 
 enum class CoefficientSourceKind : uint32_t

@@ -8,8 +8,8 @@
 // non-directional lightmap (the irradiance at the surface normal; the normal map does not change it); and,
 // from the asset's "rnm" output (Valve's three lightmap colours), "rnm" (radiosity normal mapping with the
 // material's normal map, Green 2007 Listing 1) and "ssbump" (the material's normal-map slot holds an SSBump
-// map in the normalised convention, Listing 2); "constant", the base colour factor alone (hemi-bench's
-// baseline).
+// map in the normalised convention, Listing 2); "constant", the base colour factor alone, and "lambert", the
+// material's textures lit by the frame's dynamic lights alone (hemi-bench's baselines).
 // Several techniques may be loaded at once and switched between per draw: the H6 -> H4 shader level of
 // detail of Habel & Wimmer is technique("h6") near, technique("h4") far.
 
