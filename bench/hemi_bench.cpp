@@ -1229,7 +1229,7 @@ int main(int argc, char** argv)
                           material_overhead, std::string(technique))
                           ->Unit(benchmark::kMillisecond)
                           ->UseManualTime(),
-                      0.5);
+                      3.0); // medians of ~100 interleaved frames
     full_iterations(
         add("bake/" + g_sizes.overhead.label, prt_bake)->Unit(benchmark::kMillisecond)->UseManualTime(), 2);
     const std::string relief = std::to_string(g_sizes.relief) + "x" + std::to_string(g_sizes.relief);
@@ -1248,7 +1248,7 @@ int main(int argc, char** argv)
                           std::string(technique))
                           ->Unit(benchmark::kMillisecond)
                           ->UseManualTime(),
-                      0.5);
+                      3.0);
     const std::string atlas = std::to_string(g_sizes.bake_atlas) + "x" + std::to_string(g_sizes.bake_atlas);
     full_iterations(add("lightmap/bake/level/" + atlas + "/bounces:2/rays:64", lightmap_level)
                         ->Unit(benchmark::kMillisecond)
