@@ -312,6 +312,45 @@ glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const i
 
 } // namespace
 
+namespace
+{
+
+// A texel's sample point, kept at least `margin` inside its triangle (in the triangle's plane) from each
+// edge. Artist UVs can put a texel centre exactly on a triangle's edge or corner; where that edge is where a
+// floor meets a wall, the ray origin lifted off the floor lies in the wall's plane and rays from it pass the
+// wall's edge: light from outside a sealed room
+// (LightmapBake.SealedRoomsLeakNothingWhereSamplesLieOnEdgesAndCorners). A point already that far inside is
+// returned as it is; a triangle too small for the margin gives its centroid.
+glm::vec3 inside_triangle(const io::Mesh& mesh, const LightmapTexel& t, float margin)
+{
+    const glm::vec3 p[3] = {mesh.positions[mesh.indices[3 * size_t(t.triangle)]],
+                            mesh.positions[mesh.indices[3 * size_t(t.triangle) + 1]],
+                            mesh.positions[mesh.indices[3 * size_t(t.triangle) + 2]]};
+    const double area2 = double(glm::length(glm::cross(p[1] - p[0], p[2] - p[0])));
+    glm::dvec3 least(0.0); // per vertex k, the barycentric weight at `margin` from the edge opposite k
+    for (int k = 0; k < 3; ++k)
+    {
+        const double edge = double(glm::length(p[(k + 2) % 3] - p[(k + 1) % 3]));
+        least[k] = area2 > 0.0 ? double(margin) * edge / area2 : 1.0; // margin / the altitude from vertex k
+    }
+    const glm::dvec3 b(t.barycentric);
+    glm::dvec3 out;
+    const double room = 1.0 - (least.x + least.y + least.z);
+    const glm::dvec3 excess = glm::max(b - least, glm::dvec3(0.0));
+    const double sum = excess.x + excess.y + excess.z;
+    if (room <= 0.0)
+        out = glm::dvec3(1.0 / 3.0);
+    else if (sum <= 0.0)
+        out = least + glm::dvec3(room / 3.0);
+    else
+        out = least + excess * (room / sum); // = b where b is at least `least` everywhere
+    if (out == b)
+        return t.position;
+    return glm::vec3(out.x * glm::dvec3(p[0]) + out.y * glm::dvec3(p[1]) + out.z * glm::dvec3(p[2]));
+}
+
+} // namespace
+
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
                             const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
                             const std::function<void(const LightmapProgress&)>& progress)
@@ -369,7 +408,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                       [&](uint32_t i)
                       {
                           const LightmapTexel& t = atlas.texels[i];
-                          glm::vec3 p = t.position;
+                          glm::vec3 p = inside_triangle(mesh, t, 2.0f * offset);
                           const glm::vec3 g = t.geometric_normal;
                           glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
                           if (glm::length(u) < 1e-6f)

@@ -487,6 +487,95 @@ TEST(LightmapBake, SealedRoomLitFromOutsideStaysBlack)
     EXPECT_GT(lightmap_coefficients("plain", lit.irradiance[b.texel_of(8, 8)])[0].x, 10.0f);
 }
 
+// Corners (issue 25): artist UVs may put texel samples exactly on a room's edges and corners, where a ray
+// origin lifted off the floor lies in the wall's plane and a ray from it can pass the wall's edge. Two
+// sealed rooms of single-sided inward faces, every face's UV rectangle drawn from texel centre to texel
+// centre so that its border texels' centres lie exactly on its edges and its corner texels' exactly on the
+// room's corners: a box, and an L-shaped room (a concave corner, and a T-junction where the floor's two quads
+// meet the inner walls). Under a low sun of 100 and a sky of 5 outside, every texel of both rooms, and every
+// output texel they make, is exactly black; a ground quad outside, in the same bake, is lit.
+TEST(LightmapBake, SealedRoomsLeakNothingWhereSamplesLieOnEdgesAndCorners)
+{
+    const uint32_t w = 128, h = 32;
+    Mesh m;
+    int cell = 0;
+    // Each quad's lightmap rectangle: 6 x 6 texel spacings from texel centre to texel centre.
+    auto add = [&](glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3)
+    {
+        const float x0 = float(1 + 8 * (cell % 15)) + 0.5f, y0 = float(1 + 8 * (cell / 15)) + 0.5f;
+        ++cell;
+        add_quad(m, p0, p1, p2, p3, {x0 / w, (y0 + 6.0f) / h, (x0 + 6.0f) / w, y0 / h});
+    };
+    // A room over the floor polygon `floor_quads` (each [x0, x1] x [y0, y1], z in [0, height]) with walls
+    // along `outline` (counter-clockwise seen from above), all facing in.
+    auto room = [&](const std::vector<glm::vec4>& floor_quads, const std::vector<glm::vec2>& outline,
+                    glm::vec3 offset, float height)
+    {
+        for (const glm::vec4& q : floor_quads)
+        {
+            const glm::vec3 a(q.x, q.y, 0), b(q.z, q.y, 0), c(q.z, q.w, 0), d(q.x, q.w, 0);
+            const glm::vec3 up(0, 0, height);
+            add(a + offset, b + offset, c + offset, d + offset);                     // floor, facing up
+            add(d + up + offset, c + up + offset, b + up + offset, a + up + offset); // ceiling, facing down
+        }
+        for (size_t i = 0; i < outline.size(); ++i)
+        {
+            const glm::vec3 a(outline[i], 0.0f), b(outline[(i + 1) % outline.size()], 0.0f), up(0, 0, height);
+            add(b + offset, a + offset, a + up + offset, b + up + offset); // facing the room's inside
+        }
+    };
+    room({{0, 0, 2, 1.5f}}, {{0, 0}, {2, 0}, {2, 1.5f}, {0, 1.5f}}, {-3, 0, 0}, 1.2f); // the box
+    room({{0, 0, 2, 1}, {0, 1, 1, 2}}, {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}, {1, 0, 0},
+         1.5f); // the L
+    const size_t sealed_triangles = m.indices.size() / 3;
+    add({-4, -4, -0.5f}, {4, -4, -0.5f}, {4, -2, -0.5f}, {-4, -2, -0.5f}); // ground outside, in the sun
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, w, h, report);
+    EXPECT_TRUE(report.ok()) << report.problems[0];
+    LightmapLights lights;
+    lights.uniform = glm::vec3(5.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+    lights.sun_irradiance = glm::vec3(100.0f);
+    LightmapBakeOptions o;
+    o.rays = 256;
+    o.bounces = 1;
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.8f, 0.8f, 0.8f, 1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    const LightmapSh sh = bake_lightmap_sh(m, a, lights, o, &surfaces);
+    const std::vector<float> plain = lightmap_maps("plain", a, sh).dense();
+    const std::vector<float> h6 = lightmap_maps("h6", a, sh).dense();
+    size_t inside = 0, on_edges = 0;
+    double ground = 0.0;
+    for (size_t i = 0; i < a.texels.size(); ++i)
+    {
+        const LightmapTexel& t = a.texels[i];
+        const size_t at = size_t(t.y) * w + t.x;
+        if (t.triangle >= sealed_triangles)
+        {
+            ground = std::max(ground, double(plain[at * 3]));
+            continue;
+        }
+        ++inside;
+        // Texel centres on a rectangle's border: x or y at 0 or 6 spacings from the rectangle's first centre.
+        on_edges += (t.x - 1) % 8 == 0 || (t.x - 1) % 8 == 6 || (t.y - 1) % 8 == 0 || (t.y - 1) % 8 == 6;
+        for (const glm::vec3& v : sh.irradiance[i])
+            ASSERT_EQ(v, glm::vec3(0.0f))
+                << "texel (" << t.x << ", " << t.y << ") of triangle " << t.triangle;
+        for (size_t c = 0; c < 3; ++c)
+            ASSERT_EQ(plain[at * 3 + c], 0.0f) << "plain output at (" << t.x << ", " << t.y << ")";
+        for (size_t k = 0; k < 6 * 3; ++k)
+            ASSERT_EQ(h6[(size_t(k / 3) * w * h + at) * 3 + k % 3], 0.0f)
+                << "h6 output at (" << t.x << ", " << t.y << ")";
+    }
+    EXPECT_EQ(sh.invalid, 0u);
+    EXPECT_GE(inside, size_t(16 * 49));
+    EXPECT_GE(on_edges, size_t(16 * 24));
+    EXPECT_GT(ground, 10.0) << "the ground outside is lit";
+}
+
 // The same bytes on one thread and on all, and after resuming; dilation fills the ring around a chart.
 TEST(LightmapBake, DeterministicResumableAndDilated)
 {
