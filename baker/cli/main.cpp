@@ -374,6 +374,32 @@ int run_ssbump(SsbumpCli& c)
 }
 
 // The light options hemi-bake lightmap and hemi-bake reference share: the same words give the same lights.
+// Real HDRIs (Poly Haven's, Blender's studio lights) hold a few slightly negative values, left by their
+// lossy compression or processing: read as 0, with a warning, where they are within 1% of the image's
+// brightest value; a larger negative radiance is an error in the image and stays refused (the bake names the
+// pixel).
+void clamp_small_negatives(hemi::io::ImageRgba& image, const std::string& name)
+{
+    float brightest = 0.0f, least = 0.0f;
+    size_t count = 0;
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (i % 4 != 3 && std::isfinite(image.pixels[i]))
+        {
+            brightest = std::max(brightest, image.pixels[i]);
+            least = std::min(least, image.pixels[i]);
+            count += image.pixels[i] < 0.0f;
+        }
+    if (count == 0 || -least > 0.01f * brightest)
+        return;
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (i % 4 != 3 && image.pixels[i] < 0.0f)
+            image.pixels[i] = 0.0f;
+    std::fprintf(stderr,
+                 "hemi-bake: warning: %s: %zu pixel value(s) below zero (down to %g, the brightest %g) read "
+                 "as 0\n",
+                 name.c_str(), count, double(least), double(brightest));
+}
+
 struct LightCli
 {
     std::string env = "uniform", sun;
@@ -413,6 +439,7 @@ struct LightCli
         {
             l.environment = hemi::io::read_exr(env); // names the file when it is missing or not an EXR
             l.environment_name = env;
+            clamp_small_negatives(l.environment, env);
         }
         l.environment_scale = env_scale;
         l.uniform = glm::vec3(env_scale);
@@ -502,6 +529,8 @@ int run_lightmap(LightmapCli& c)
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
             "their neighbours)\n",
             s.pushed, s.invalid);
+    for (const auto& [name, changed] : s.non_negative)
+        std::printf("--non-negative: %zu texel(s) of %s blended towards their mean\n", changed, name.c_str());
     if (s.uv_report.overlapping_texels)
         std::printf("%zu texel(s) of overlapping lightmap UVs, each given to one triangle%s\n",
                     s.uv_report.overlapping_texels, c.uv_report.empty() ? " (--uv-report shows where)" : "");
@@ -1004,6 +1033,10 @@ int main(int argc, char** argv)
     lightmap->add_flag("--strict-uv", lm.options.strict_uv,
                        "refuse overlapping lightmap UVs instead of giving each contested texel to one "
                        "triangle (with a warning)");
+    lightmap->add_flag("--non-negative", lm.options.non_negative,
+                       "ringing-free directional outputs: each texel's coefficients blended towards their "
+                       "hemispherical mean just enough that no normal gets negative irradiance (a low sun's "
+                       "SH9 and H-basis fits ring); plain and rnm are never negative");
     lightmap->add_option("--uv-report", lm.uv_report,
                          "write a PNG of the atlas before the bake: covered texels grey, texels two or more "
                          "triangles overlap red (at most 2048 pixels a side, each the worst of its texels)");

@@ -805,8 +805,112 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
     return out;
 }
 
+namespace
+{
+// What make_non_negative evaluates for one output: the basis at 1024 normals spread evenly over the upper
+// hemisphere (a Fibonacci spiral in z, equal areas, so the mean over them is the mean over solid angle), and
+// the fit u of the constant 1 with its values there, scaled to a mean of 1 over them.
+struct NonNegativeTable
+{
+    size_t k = 0;
+    std::vector<double> basis; // per normal, k values
+    std::vector<double> unit;  // the constant's fit at each normal
+    std::vector<double> u;     // its k coefficients
+};
+
+const NonNegativeTable& non_negative_table(std::string_view name)
+{
+    static std::mutex lock;
+    static std::map<std::string, NonNegativeTable, std::less<>> cache;
+    std::lock_guard<std::mutex> guard(lock);
+    if (const auto it = cache.find(name); it != cache.end())
+        return it->second;
+    const math::BasisDesc& basis = math::basis(name);
+    NonNegativeTable t;
+    t.k = size_t(basis.size);
+    // The constant 1 is y00 / y00(any) = 2 sqrt(pi) y00; its fit is the output matrix's first column times
+    // that.
+    const std::vector<double>& m = output_matrix(name);
+    for (size_t i = 0; i < t.k; ++i)
+        t.u.push_back(m[i * 9] * 2.0 * std::sqrt(M_PI));
+    const int count = 1024;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    float b[HEMI_BASIS_MAX_SIZE];
+    for (int j = 0; j < count; ++j)
+    {
+        const double z = 1.0 - (j + 0.5) / count, r = std::sqrt(1.0 - z * z);
+        basis.eval(glm::vec3(float(r * std::cos(golden * j)), float(r * std::sin(golden * j)), float(z)), b);
+        double unit = 0.0;
+        for (size_t i = 0; i < t.k; ++i)
+        {
+            t.basis.push_back(double(b[i]));
+            unit += t.u[i] * double(b[i]);
+        }
+        t.unit.push_back(unit);
+    }
+    // Scaled to a mean of 1 over the hemisphere, so that blending towards m u keeps the mean m (HL2 cannot
+    // hold a constant: its fit of one is n.z-like, with a mean of its own).
+    double unit_mean = 0.0;
+    for (const double v : t.unit)
+        unit_mean += v / double(count);
+    for (double& v : t.unit)
+        v /= unit_mean;
+    for (double& v : t.u)
+        v /= unit_mean;
+    return cache.emplace(std::string(name), std::move(t)).first->second;
+}
+} // namespace
+
+bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
+{
+    const NonNegativeTable& t = non_negative_table(name);
+    if (c.size() != t.k)
+        throw std::invalid_argument("make_non_negative: output '" + std::string(name) + "' has " +
+                                    std::to_string(t.k) + " coefficients, got " + std::to_string(c.size()));
+    const double margin = 0.02;
+    const size_t normals = t.unit.size();
+    bool changed = false;
+    for (int ch = 0; ch < 3; ++ch)
+    {
+        // The mean over the hemisphere, and how far the blend may go at each normal where E falls below the
+        // margin: a E + (1 - a) m U >= margin m U  <=>  a <= (1 - margin) m U / (m U - E).
+        double mean = 0.0;
+        std::vector<double> e(normals);
+        for (size_t j = 0; j < normals; ++j)
+        {
+            double sum = 0.0;
+            for (size_t i = 0; i < t.k; ++i)
+                sum += double(c[i][ch]) * t.basis[j * t.k + i];
+            e[j] = sum;
+            mean += sum / double(normals);
+        }
+        if (!(mean > 0.0))
+        {
+            for (size_t i = 0; i < t.k; ++i)
+            {
+                changed = changed || c[i][ch] != 0.0f;
+                c[i][ch] = 0.0f;
+            }
+            continue;
+        }
+        double a = 1.0;
+        for (size_t j = 0; j < normals; ++j)
+        {
+            const double safe = mean * t.unit[j];
+            if (e[j] < margin * safe)
+                a = std::min(a, safe > e[j] ? std::max(0.0, (1.0 - margin) * safe / (safe - e[j])) : 0.0);
+        }
+        if (a >= 1.0)
+            continue;
+        changed = true;
+        for (size_t i = 0; i < t.k; ++i)
+            c[i][ch] = float(a * double(c[i][ch]) + (1.0 - a) * mean * t.u[i]);
+    }
+    return changed;
+}
+
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
-                            int dilate)
+                            int dilate, bool non_negative, size_t* adjusted)
 {
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel
@@ -818,7 +922,12 @@ io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, c
             for (int j = 0; j < k; ++j)
                 values[i * size_t(k) + size_t(j)] = sh.direct[i][name == "plain" ? 0 : size_t(1 + j)];
         else
+        {
             apply(m, sh.irradiance[i], &values[i * size_t(k)]);
+            if (non_negative && name != "plain" && name != "rnm" &&
+                make_non_negative(name, std::span<glm::vec3>(&values[i * size_t(k)], size_t(k))) && adjusted)
+                ++*adjusted;
+        }
     return dilated(atlas, values, k, dilate, sh.valid);
 }
 

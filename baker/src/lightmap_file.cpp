@@ -368,8 +368,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
     for (const std::string& name : o.outputs)
-        asset.outputs.push_back(
-            {name, uint32_t(lightmap_output_size(name)), lightmap_maps(name, atlas, sh, o.dilate)});
+    {
+        size_t adjusted = 0;
+        asset.outputs.push_back({name, uint32_t(lightmap_output_size(name)),
+                                 lightmap_maps(name, atlas, sh, o.dilate, o.non_negative, &adjusted)});
+        if (o.non_negative && name != "plain" && name != "rnm")
+            summary.non_negative[name] = adjusted;
+    }
     summary.blocks = asset.outputs.front().maps.grid.blocks().size();
     if (o.probes != glm::uvec3(0))
     {
@@ -441,6 +446,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["rays"] = s.rays;
     j["texels_moved_out_of_walls"] = s.pushed;
     j["texels_inside_geometry"] = s.invalid;
+    if (o.non_negative)
+        j["non_negative_texels_changed"] = s.non_negative; // per directional output
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)

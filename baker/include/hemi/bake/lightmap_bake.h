@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <span>
 #include <string>
 #include <string_view>
@@ -163,8 +164,22 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
 // or their dilation; BlockMaps::dense() gives render::TexelCoefficients' layout). Texels that no triangle
 // covers take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a
 // chart's border does not pull in black), else 0.
+// With `non_negative`, every texel's coefficients of a directional basis go through
+// make_non_negative first (plain and rnm hold integrals of radiance, never negative); `adjusted`, when
+// given, counts the texels it changed.
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
-                            int dilate = 2);
+                            int dilate = 2, bool non_negative = false, size_t* adjusted = nullptr);
+
+// Ringing-free coefficients (hemi-bake lightmap --non-negative): a basis fitted to SH9 irradiance rings where
+// the light is concentrated (a low sun's delta lobe gives negative irradiance at normals facing away from
+// it), and normal mapping shows it as dark or negative pixels. Per colour channel, the K coefficients of
+// output `name` are blended towards the basis's fit of the constant with the same mean over the upper
+// hemisphere of normals, c' = a c + (1 - a) m u, with the largest a in [0, 1] that keeps the irradiance at
+// least 2% of that constant's at every one of 1024 normals spread evenly over the hemisphere (z >= 0). The
+// mean over the hemisphere is kept; coefficients that are already that far from negative are returned
+// unchanged; a channel whose mean is not positive becomes 0. Bilinear filtering and dilation mix texels
+// convexly, so rendered irradiance stays non-negative too. Returns whether anything changed.
+bool make_non_negative(std::string_view name, std::span<glm::vec3> coefficients);
 
 // An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
 // hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
@@ -210,6 +225,8 @@ struct LightmapFileOptions
     // Make the lightmap UVs (unwrap_lightmap: planar charts at one texel density) instead of reading
     // TEXCOORD_1, with texel_size and width x height as its options; the asset keeps the unwrapped mesh.
     bool unwrap = false;
+    // Ringing-free directional outputs (make_non_negative); the summary counts the texels it changed.
+    bool non_negative = false;
 };
 
 struct LightmapBakeSummary
@@ -221,8 +238,9 @@ struct LightmapBakeSummary
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     size_t probes = 0, invalid_probes = 0;
-    size_t blocks = 0;           // 8x8 blocks of the atlas stored per output (covered texels and dilation)
-    size_t unwrapped_charts = 0; // with unwrap
+    size_t blocks = 0; // 8x8 blocks of the atlas stored per output (covered texels and dilation)
+    std::map<std::string, size_t> non_negative; // with non_negative: per directional output, texels changed
+    size_t unwrapped_charts = 0;                // with unwrap
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
