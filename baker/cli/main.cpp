@@ -530,7 +530,8 @@ int run_lightmap(LightmapCli& c)
             "their neighbours)\n",
             s.pushed, s.invalid);
     for (const auto& [name, changed] : s.non_negative)
-        std::printf("--non-negative: %zu texel(s) of %s blended towards their mean\n", changed, name.c_str());
+        std::printf("--non-negative: %zu texel(s) of %s lifted out of negative irradiance\n", changed,
+                    name.c_str());
     if (s.uv_report.overlapping_texels)
         std::printf("%zu texel(s) of overlapping lightmap UVs, each given to one triangle%s\n",
                     s.uv_report.overlapping_texels, c.uv_report.empty() ? " (--uv-report shows where)" : "");
@@ -1033,10 +1034,11 @@ int main(int argc, char** argv)
     lightmap->add_flag("--strict-uv", lm.options.strict_uv,
                        "refuse overlapping lightmap UVs instead of giving each contested texel to one "
                        "triangle (with a warning)");
-    lightmap->add_flag("--non-negative", lm.options.non_negative,
-                       "ringing-free directional outputs: each texel's coefficients blended towards their "
-                       "hemispherical mean just enough that no normal gets negative irradiance (a low sun's "
-                       "SH9 and H-basis fits ring); plain and rnm are never negative");
+    lightmap->add_flag(
+        "--non-negative", lm.options.non_negative,
+        "ringing-free directional outputs: each texel's coefficients lifted by the least "
+        "change that keeps every normal within 75 degrees of the surface's from negative "
+        "irradiance (a low sun's SH9 and H-basis fits ring); plain and rnm are never negative");
     lightmap->add_option("--uv-report", lm.uv_report,
                          "write a PNG of the atlas before the bake: covered texels grey, texels two or more "
                          "triangles overlap red (at most 2048 pixels a side, each the worst of its texels)");

@@ -11,6 +11,7 @@
 #include <hemi/math/sh.h>
 #include <hemi/math/sh_environment.h>
 
+#include <Eigen/Dense>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -807,13 +808,21 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name, const std::a
 
 namespace
 {
-// What make_non_negative evaluates for one output: the basis at 1024 normals spread evenly over the upper
-// hemisphere (a Fibonacci spiral in z, equal areas, so the mean over them is the mean over solid angle), and
-// the fit u of the constant 1 with its values there, scaled to a mean of 1 over them.
+// The normals make_non_negative keeps non-negative: within 75 degrees of the surface's (normal maps tilt
+// less). At the horizon itself a basis that holds a linear function (HL2, H4's first band) could only be
+// non-negative with no direction left at all.
+constexpr double kNonNegativeMinZ = 0.2588190451; // cos 75 degrees
+
+// What make_non_negative evaluates for one output: the basis at 1024 normals spread evenly over that cap
+// (a Fibonacci spiral in z, equal areas, so the mean over them is the mean over solid angle); per
+// normal j the least change of coefficients (in the hemisphere's L2 norm, the basis's Gram matrix G) that
+// raises the irradiance there by 1: G^-1 b_j / (b_j^T G^-1 b_j); and the fit u of the constant 1 with its
+// values there, scaled to a mean of 1 over them (the fallback's target).
 struct NonNegativeTable
 {
     size_t k = 0;
     std::vector<double> basis; // per normal, k values
+    std::vector<double> lift;  // per normal, k values
     std::vector<double> unit;  // the constant's fit at each normal
     std::vector<double> u;     // its k coefficients
 };
@@ -828,8 +837,10 @@ const NonNegativeTable& non_negative_table(std::string_view name)
     const math::BasisDesc& basis = math::basis(name);
     NonNegativeTable t;
     t.k = size_t(basis.size);
-    // The constant 1 is y00 / y00(any) = 2 sqrt(pi) y00; its fit is the output matrix's first column times
-    // that.
+    const Eigen::Index k = Eigen::Index(t.k);
+    const std::vector<double> gram = math::gram_matrix(basis);
+    const Eigen::MatrixXd g_inverse = Eigen::Map<const Eigen::MatrixXd>(gram.data(), k, k).inverse();
+    // The constant 1 is 2 sqrt(pi) y00; its fit is the output matrix's first column times that.
     const std::vector<double>& m = output_matrix(name);
     for (size_t i = 0; i < t.k; ++i)
         t.u.push_back(m[i * 9] * 2.0 * std::sqrt(M_PI));
@@ -838,18 +849,22 @@ const NonNegativeTable& non_negative_table(std::string_view name)
     float b[HEMI_BASIS_MAX_SIZE];
     for (int j = 0; j < count; ++j)
     {
-        const double z = 1.0 - (j + 0.5) / count, r = std::sqrt(1.0 - z * z);
+        const double z = 1.0 - (j + 0.5) / count * (1.0 - kNonNegativeMinZ), r = std::sqrt(1.0 - z * z);
         basis.eval(glm::vec3(float(r * std::cos(golden * j)), float(r * std::sin(golden * j)), float(z)), b);
+        Eigen::VectorXd v(k);
         double unit = 0.0;
         for (size_t i = 0; i < t.k; ++i)
         {
             t.basis.push_back(double(b[i]));
+            v[Eigen::Index(i)] = double(b[i]);
             unit += t.u[i] * double(b[i]);
         }
         t.unit.push_back(unit);
+        const Eigen::VectorXd w = g_inverse * v;
+        const double norm = v.dot(w);
+        for (size_t i = 0; i < t.k; ++i)
+            t.lift.push_back(norm > 0.0 ? w[Eigen::Index(i)] / norm : 0.0);
     }
-    // Scaled to a mean of 1 over the hemisphere, so that blending towards m u keeps the mean m (HL2 cannot
-    // hold a constant: its fit of one is n.z-like, with a mean of its own).
     double unit_mean = 0.0;
     for (const double v : t.unit)
         unit_mean += v / double(count);
@@ -867,23 +882,28 @@ bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
     if (c.size() != t.k)
         throw std::invalid_argument("make_non_negative: output '" + std::string(name) + "' has " +
                                     std::to_string(t.k) + " coefficients, got " + std::to_string(c.size()));
-    const double margin = 0.02;
     const size_t normals = t.unit.size();
     bool changed = false;
+    std::vector<double> e(normals);
     for (int ch = 0; ch < 3; ++ch)
     {
-        // The mean over the hemisphere, and how far the blend may go at each normal where E falls below the
-        // margin: a E + (1 - a) m U >= margin m U  <=>  a <= (1 - margin) m U / (m U - E).
-        double mean = 0.0;
-        std::vector<double> e(normals);
-        for (size_t j = 0; j < normals; ++j)
+        std::array<double, HEMI_BASIS_MAX_SIZE> x{};
+        for (size_t i = 0; i < t.k; ++i)
+            x[i] = double(c[i][ch]);
+        auto evaluate = [&]
         {
-            double sum = 0.0;
-            for (size_t i = 0; i < t.k; ++i)
-                sum += double(c[i][ch]) * t.basis[j * t.k + i];
-            e[j] = sum;
-            mean += sum / double(normals);
-        }
+            double mean = 0.0;
+            for (size_t j = 0; j < normals; ++j)
+            {
+                double sum = 0.0;
+                for (size_t i = 0; i < t.k; ++i)
+                    sum += x[i] * t.basis[j * t.k + i];
+                e[j] = sum;
+                mean += sum / double(normals);
+            }
+            return mean;
+        };
+        const double mean = evaluate();
         if (!(mean > 0.0))
         {
             for (size_t i = 0; i < t.k; ++i)
@@ -893,18 +913,48 @@ bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
             }
             continue;
         }
-        double a = 1.0;
-        for (size_t j = 0; j < normals; ++j)
+        // Raise the lowest normal to a small floor by the least change that does it, and again, until none
+        // is below (each step raises its neighbours too, so a few steps do).
+        const double floor = 0.01 * mean;
+        bool lifted = false, done = false;
+        for (int step = 0; step < 64 && !done; ++step)
         {
-            const double safe = mean * t.unit[j];
-            if (e[j] < margin * safe)
-                a = std::min(a, safe > e[j] ? std::max(0.0, (1.0 - margin) * safe / (safe - e[j])) : 0.0);
+            if (step > 0)
+                evaluate();
+            size_t lowest = 0;
+            for (size_t j = 1; j < normals; ++j)
+                if (e[j] < e[lowest])
+                    lowest = j;
+            if (e[lowest] >= 0.5 * floor)
+            {
+                done = true;
+                break;
+            }
+            const double raise = floor - e[lowest];
+            for (size_t i = 0; i < t.k; ++i)
+                x[i] += raise * t.lift[lowest * t.k + i];
+            lifted = true;
         }
-        if (a >= 1.0)
+        if (!done)
+        {
+            // Not settled (it always has been in practice): blend towards the constant of the same mean,
+            // x' = a x + (1 - a) m u, as far as needed; a = 0 is the constant itself, which is not negative.
+            evaluate();
+            double a = 1.0;
+            for (size_t j = 0; j < normals; ++j)
+            {
+                const double safe = mean * t.unit[j];
+                if (e[j] < floor * t.unit[j])
+                    a = std::min(a, safe > e[j] ? std::max(0.0, (1.0 - 0.01) * safe / (safe - e[j])) : 0.0);
+            }
+            for (size_t i = 0; i < t.k; ++i)
+                x[i] = a * x[i] + (1.0 - a) * mean * t.u[i];
+        }
+        if (!lifted)
             continue;
         changed = true;
         for (size_t i = 0; i < t.k; ++i)
-            c[i][ch] = float(a * double(c[i][ch]) + (1.0 - a) * mean * t.u[i]);
+            c[i][ch] = float(x[i]);
     }
     return changed;
 }

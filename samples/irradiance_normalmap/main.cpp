@@ -51,6 +51,12 @@ struct Column
 // Habel's order, best first, and the non-directional baseline.
 const Column kTechniques[] = {
     {"sh9", "SH9"}, {"h6", "H6"}, {"h4", "H4"}, {"hl2", "HL2"}, {"plain", "plain lightmap"}};
+// The directional bases again with their ringing-free outputs (hemi-bake lightmap --non-negative): the
+// table's last rows.
+const Column kNonNegative[] = {{"sh9", "SH9, --non-negative"},
+                               {"h6", "H6, --non-negative"},
+                               {"h4", "H4, --non-negative"},
+                               {"hl2", "HL2, --non-negative"}};
 
 struct Error
 {
@@ -319,6 +325,26 @@ int main(int argc, char** argv)
                                     {exposure, hemi::io::ToneMap::Curve::Clamp});
                 tiles.push_back(half(image));
             }
+            // The same bake's ringing-free outputs: the table's last rows.
+            hemi::io::LightmapAsset clean = asset;
+            clean.outputs.clear();
+            std::vector<std::string> clean_techniques;
+            for (const Column& c : kNonNegative)
+            {
+                clean_techniques.push_back(c.technique);
+                clean.outputs.push_back(
+                    {c.technique, uint32_t(hemi::bake::lightmap_output_size(c.technique)),
+                     hemi::bake::lightmap_maps(c.technique, lightmap_atlas, sh, 2, true)});
+            }
+            {
+                hemi::render::LightmapView clean_view(device, clean, clean_techniques, w, h);
+                hemi::render::LightmapFrame clean_frame = frame;
+                for (const Column& c : kNonNegative)
+                {
+                    clean_frame.technique = c.technique;
+                    setup.errors.push_back(compare(clean_view.render(clean_frame), reference));
+                }
+            }
             frame.technique = "sh9";
             frame.white = false;
             // Three dynamic objects, lit by the probes: one in the sun's patch, one in the shade, one by a
@@ -372,9 +398,12 @@ int main(int argc, char** argv)
         for (size_t i = 0; i < setups.size(); ++i)
             md << "---|---|---|";
         md << "\n";
-        for (size_t i = 0; i < std::size(kTechniques); ++i)
+        for (size_t i = 0; i < std::size(kTechniques) + std::size(kNonNegative); ++i)
         {
-            md << "| " << kTechniques[i].label << " |";
+            md << "| "
+               << (i < std::size(kTechniques) ? kTechniques[i].label
+                                              : kNonNegative[i - std::size(kTechniques)].label)
+               << " |";
             for (const Setup& setup : setups)
             {
                 char cell[128];

@@ -1691,11 +1691,12 @@ TEST(LightmapAtlas, OverlapsGoToTheChartTheyContinueElseTheFaceTowardsTheScene)
 // make_non_negative (hemi-bake lightmap --non-negative): the SH9 irradiance of a sun 5 degrees above the
 // horizon, typed here from the clamped-cosine convolution (A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4 times
 // y_lm(sun)), rings below zero at normals facing away from it in SH9 and its hemispherical fits. After
-// make_non_negative, each basis's irradiance is >= 0 at 20,000 normals of a (theta, phi) grid over the
-// hemisphere (not the function's own 1024 normals), and its mean over the hemisphere (Gauss-Legendre,
-// math::integrate_hemisphere) is kept within 0.5%. Uniform radiance, which does not ring, is left exactly as
-// it was.
-TEST(LightmapOutputs, NonNegativeRemovesRingingAndKeepsTheMean)
+// make_non_negative, each basis's irradiance is >= 0 at 20,000 normals of a (theta, phi) grid over the cap
+// within 75 degrees of the surface normal (not the function's own 1024 normals), and the change is small:
+// its RMS over the cap is at most a tenth of the function's for SH9 and H6 (0.4 for H4 and
+// SAL4, whose four functions cannot hold a low sun without ringing).
+// Uniform radiance, which does not ring, is left exactly as it was.
+TEST(LightmapOutputs, NonNegativeLiftsRingingWithASmallChange)
 {
     const float elevation = float(5.0 * M_PI / 180.0);
     const glm::vec3 sun(std::cos(elevation), 0.0f, std::sin(elevation));
@@ -1706,7 +1707,8 @@ TEST(LightmapOutputs, NonNegativeRemovesRingingAndKeepsTheMean)
         e[size_t(j)] = glm::vec3(10.0f, 7.0f, 4.0f) * a[j == 0 ? 0 : j < 4 ? 1 : 2] * y[size_t(j)];
     std::array<glm::vec3, 9> uniform{};
     uniform[0] = glm::vec3(float(2.0 * M_PI * std::sqrt(M_PI))); // E = pi everywhere
-    for (const char* name : {"sh9", "h6", "h4", "hl2", "sal4"})
+    const double max_theta = 75.0 * M_PI / 180.0;
+    for (const char* name : {"sh9", "h6", "h4", "sal4"})
     {
         SCOPED_TRACE(name);
         const hemi::math::BasisDesc& basis = hemi::math::basis(name);
@@ -1719,42 +1721,42 @@ TEST(LightmapOutputs, NonNegativeRemovesRingingAndKeepsTheMean)
                 sum += glm::dvec3(c[k]) * double(b[k]);
             return sum;
         };
-        auto least = [&](const std::vector<glm::vec3>& c)
+        // Over the cap, solid-angle weighted: the least value, and the RMS of f and of f - g.
+        auto over_cap = [&](const std::vector<glm::vec3>& f, const std::vector<glm::vec3>& g, double& least,
+                            double& rms_f, double& rms_diff)
         {
-            double m = INFINITY;
+            least = INFINITY;
+            double w = 0.0, ff = 0.0, dd = 0.0;
             for (int i = 0; i < 100; ++i)
                 for (int j = 0; j < 200; ++j)
                 {
-                    const double theta = (i + 0.5) / 100.0 * M_PI / 2.0, phi = (j + 0.5) / 200.0 * 2.0 * M_PI;
-                    const glm::dvec3 v = irradiance(c, {std::sin(theta) * std::cos(phi),
-                                                        std::sin(theta) * std::sin(phi), std::cos(theta)});
-                    m = std::min({m, v.x, v.y, v.z});
+                    const double theta = (i + 0.5) / 100.0 * max_theta, phi = (j + 0.5) / 200.0 * 2.0 * M_PI;
+                    const glm::dvec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                                       std::cos(theta));
+                    const glm::dvec3 vf = irradiance(f, n), vg = irradiance(g, n);
+                    least = std::min({least, vf.x, vf.y, vf.z});
+                    const double weight = std::sin(theta);
+                    w += weight;
+                    ff += weight * glm::dot(vf, vf);
+                    dd += weight * glm::dot(vf - vg, vf - vg);
                 }
-            return m;
-        };
-        auto mean = [&](const std::vector<glm::vec3>& c, int ch)
-        {
-            return hemi::math::integrate_hemisphere([&](const glm::dvec3& n)
-                                                    { return irradiance(c, n)[ch]; }) /
-                   (2.0 * M_PI);
+            rms_f = std::sqrt(ff / w);
+            rms_diff = std::sqrt(dd / w);
         };
         const std::vector<glm::vec3> before = lightmap_coefficients(name, e);
         std::vector<glm::vec3> after = before;
-        const bool changed = make_non_negative(name, after);
-        if (std::string(name) != "h6")
-        {
-            EXPECT_LT(least(before), -0.01) << "the fit rings";
-            EXPECT_TRUE(changed);
-        }
-        EXPECT_GE(least(after), 0.0);
-        for (int ch = 0; ch < 3; ++ch)
-            EXPECT_NEAR(mean(after, ch), mean(before, ch), 0.005 * mean(before, ch)) << "channel " << ch;
-        if (std::string(name) != "hl2") // HL2 cannot hold a constant: its fit of one is not a safe target
-        {
-            const std::vector<glm::vec3> flat = lightmap_coefficients(name, uniform);
-            std::vector<glm::vec3> kept = flat;
-            EXPECT_FALSE(make_non_negative(name, kept));
-            EXPECT_EQ(kept, flat);
-        }
+        EXPECT_TRUE(make_non_negative(name, after));
+        double least_before, least_after, rms, change;
+        over_cap(before, before, least_before, rms, change);
+        over_cap(after, before, least_after, rms, change);
+        std::printf("%s: least %.4f before, %.4f after; RMS change %.4f of %.4f\n", name, least_before,
+                    least_after, change, rms);
+        EXPECT_LT(least_before, -0.01) << "the fit rings";
+        EXPECT_GE(least_after, 0.0);
+        EXPECT_LE(change, (std::string(name) == "sh9" || std::string(name) == "h6" ? 0.1 : 0.4) * rms);
+        const std::vector<glm::vec3> flat = lightmap_coefficients(name, uniform);
+        std::vector<glm::vec3> kept = flat;
+        EXPECT_FALSE(make_non_negative(name, kept));
+        EXPECT_EQ(kept, flat);
     }
 }

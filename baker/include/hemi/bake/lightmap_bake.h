@@ -173,12 +173,14 @@ io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, c
 // Ringing-free coefficients (hemi-bake lightmap --non-negative): a basis fitted to SH9 irradiance rings where
 // the light is concentrated (a low sun's delta lobe gives negative irradiance at normals facing away from
 // it), and normal mapping shows it as dark or negative pixels. Per colour channel, the K coefficients of
-// output `name` are blended towards the basis's fit of the constant with the same mean over the upper
-// hemisphere of normals, c' = a c + (1 - a) m u, with the largest a in [0, 1] that keeps the irradiance at
-// least 2% of that constant's at every one of 1024 normals spread evenly over the hemisphere (z >= 0). The
-// mean over the hemisphere is kept; coefficients that are already that far from negative are returned
-// unchanged; a channel whose mean is not positive becomes 0. Bilinear filtering and dilation mix texels
-// convexly, so rendered irradiance stays non-negative too. Returns whether anything changed.
+// output `name` are raised where the irradiance they give falls below 1% of its mean, at 1024 normals spread
+// evenly over the cap within 75 degrees of the surface normal (normal maps tilt less; at the horizon a
+// linear function could only be non-negative with no direction left): each step raises the lowest normal to
+// that floor by the least change of coefficients (in the L2 norm over the hemisphere), until none is below
+// half the floor (after 64 steps, which has not happened, the coefficients are blended towards the constant
+// of the same mean instead). Coefficients that do not ring are returned unchanged; a channel whose mean is
+// not positive becomes 0. Bilinear filtering and dilation mix texels convexly, so rendered irradiance stays
+// non-negative too. Returns whether anything changed.
 bool make_non_negative(std::string_view name, std::span<glm::vec3> coefficients);
 
 // An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
