@@ -374,30 +374,17 @@ int run_ssbump(SsbumpCli& c)
 }
 
 // The light options hemi-bake lightmap and hemi-bake reference share: the same words give the same lights.
-// Real HDRIs (Poly Haven's, Blender's studio lights) hold a few slightly negative values, left by their
-// lossy compression or processing: read as 0, with a warning, where they are within 1% of the image's
-// brightest value; a larger negative radiance is an error in the image and stays refused (the bake names the
-// pixel).
-void clamp_small_negatives(hemi::io::ImageRgba& image, const std::string& name)
+// An environment EXR for a bake: read, its small negative values (real HDRIs' compression) read as 0 with a
+// warning, a larger negative radiance refused naming the pixel (io::clamp_negative_radiance).
+hemi::io::ImageRgba read_environment(const std::string& path, const char* tool)
 {
-    float brightest = 0.0f, least = 0.0f;
-    size_t count = 0;
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        if (i % 4 != 3 && std::isfinite(image.pixels[i]))
-        {
-            brightest = std::max(brightest, image.pixels[i]);
-            least = std::min(least, image.pixels[i]);
-            count += image.pixels[i] < 0.0f;
-        }
-    if (count == 0 || -least > 0.01f * brightest)
-        return;
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        if (i % 4 != 3 && image.pixels[i] < 0.0f)
-            image.pixels[i] = 0.0f;
-    std::fprintf(stderr,
-                 "hemi-bake: warning: %s: %zu pixel value(s) below zero (down to %g, the brightest %g) read "
-                 "as 0\n",
-                 name.c_str(), count, double(least), double(brightest));
+    hemi::io::ImageRgba image = hemi::io::read_exr(path); // names the file when it is missing or not an EXR
+    const hemi::io::NegativeRadiance n = hemi::io::clamp_negative_radiance(image, path);
+    if (n.clamped)
+        std::fprintf(
+            stderr, "%s: warning: %s: %zu pixel value(s) below zero (down to %g; the mean is %g) read as 0\n",
+            tool, path.c_str(), n.clamped, double(n.least), double(n.mean));
+    return image;
 }
 
 struct LightCli
@@ -437,9 +424,8 @@ struct LightCli
         }
         if (env != "uniform")
         {
-            l.environment = hemi::io::read_exr(env); // names the file when it is missing or not an EXR
+            l.environment = read_environment(env, "hemi-bake");
             l.environment_name = env;
-            clamp_small_negatives(l.environment, env);
         }
         l.environment_scale = env_scale;
         l.uniform = glm::vec3(env_scale);
@@ -749,7 +735,7 @@ int run_envmap(EnvmapCli& c)
         hemi::tool::make_folder(c.exr_dir, "--exr-dir");
         hemi::io::check_writable(std::filesystem::path(c.exr_dir) / "mirror_0_front.exr");
     }
-    const hemi::io::ImageRgba env = hemi::io::read_exr(c.input);
+    const hemi::io::ImageRgba env = read_environment(c.input, "hemi-bake envmap");
     hemi::bake::EnvmapBakeStats stats;
     ProgressLine line("hemi-bake envmap");
     const auto t0 = std::chrono::steady_clock::now();

@@ -335,6 +335,8 @@ glm::vec3 inside_triangle(const io::Mesh& mesh, const LightmapTexel& t, float ma
         least[k] = area2 > 0.0 ? double(margin) * edge / area2 : 1.0; // margin / the altitude from vertex k
     }
     const glm::dvec3 b(t.barycentric);
+    if (glm::all(glm::greaterThanEqual(b, least)))
+        return t.position; // already that far inside: untouched
     glm::dvec3 out;
     const double room = 1.0 - (least.x + least.y + least.z);
     const glm::dvec3 excess = glm::max(b - least, glm::dvec3(0.0));
@@ -345,8 +347,6 @@ glm::vec3 inside_triangle(const io::Mesh& mesh, const LightmapTexel& t, float ma
         out = least + glm::dvec3(room / 3.0);
     else
         out = least + excess * (room / sum); // = b where b is at least `least` everywhere
-    if (out == b)
-        return t.position;
     return glm::vec3(out.x * glm::dvec3(p[0]) + out.y * glm::dvec3(p[1]) + out.z * glm::dvec3(p[2]));
 }
 

@@ -974,3 +974,34 @@ TEST(ImageDecode, JpegScansWithUndefinedHuffmanTablesAreRefused)
     EXPECT_THROW(hemi::io::decode_image({"baseline.jpg", "image/jpeg", baseline}), hemi::io::FormatError);
     EXPECT_EQ(hemi::io::decode_image({"good.jpg", "image/jpeg", good}).width, 16u);
 }
+
+// Real HDRIs' few slightly negative values (all of Blender's studio-light worlds hold some, down to -0.004)
+// are read as 0 and counted; a negative value beyond 1% of the image's mean is refused, naming the image and
+// the pixel; alpha is not radiance and is left alone.
+TEST(EnvironmentImage, SmallNegativeRadianceIsReadAsZeroAndALargeOneRefused)
+{
+    hemi::io::ImageRgba image{3, 2, std::vector<float>(24, 1.0f)};
+    image.pixels[1] = -0.004f;         // pixel (0, 0), green
+    image.pixels[4 * 4 + 2] = -0.001f; // pixel (1, 1), blue
+    image.pixels[4 * 5 + 3] = -5.0f;   // pixel (2, 1), alpha: not radiance
+    const hemi::io::NegativeRadiance n = hemi::io::clamp_negative_radiance(image, "sky.exr");
+    EXPECT_EQ(n.clamped, 2u);
+    EXPECT_FLOAT_EQ(n.least, -0.004f);
+    EXPECT_EQ(image.pixels[1], 0.0f);
+    EXPECT_EQ(image.pixels[4 * 4 + 2], 0.0f);
+    EXPECT_EQ(image.pixels[4 * 5 + 3], -5.0f);
+    EXPECT_EQ(image.pixels[0], 1.0f);
+
+    hemi::io::ImageRgba bad{3, 2, std::vector<float>(24, 1.0f)};
+    bad.pixels[4 * 5 + 0] = -0.02f; // pixel (2, 1): 2% of the mean
+    try
+    {
+        hemi::io::clamp_negative_radiance(bad, "sky.exr");
+        ADD_FAILURE() << "a negative radiance of 2% of the mean was accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("sky.exr: pixel (2, 1)"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(bad.pixels[4 * 5 + 0], -0.02f) << "nothing changed when refused";
+}

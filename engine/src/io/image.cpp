@@ -548,6 +548,40 @@ constexpr uint64_t kExrBandBytes = uint64_t(16) << 20;
 
 } // namespace
 
+NegativeRadiance clamp_negative_radiance(ImageRgba& image, const std::string& name, float tolerance)
+{
+    NegativeRadiance r;
+    size_t worst = 0, values = 0;
+    double sum = 0.0;
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (i % 4 != 3 && std::isfinite(image.pixels[i]))
+        {
+            sum += std::max(image.pixels[i], 0.0f);
+            ++values;
+            r.brightest = std::max(r.brightest, image.pixels[i]);
+            if (image.pixels[i] < r.least)
+            {
+                r.least = image.pixels[i];
+                worst = i;
+            }
+        }
+    if (r.least == 0.0f)
+        return r;
+    r.mean = values ? float(sum / double(values)) : 0.0f;
+    if (-r.least > tolerance * r.mean)
+        throw std::invalid_argument(
+            name + ": pixel (" + std::to_string(worst / 4 % std::max(image.width, 1u)) + ", " +
+            std::to_string(worst / 4 / std::max(image.width, 1u)) + ") holds a negative radiance, " +
+            std::to_string(r.least) + " (the image's mean value is " + std::to_string(r.mean) + ")");
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        if (i % 4 != 3 && image.pixels[i] < 0.0f)
+        {
+            image.pixels[i] = 0.0f;
+            ++r.clamped;
+        }
+    return r;
+}
+
 ImageRgba read_exr(const std::filesystem::path& path)
 {
     std::error_code ec;

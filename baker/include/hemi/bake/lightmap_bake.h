@@ -165,7 +165,8 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
 // covers take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a
 // chart's border does not pull in black), else 0.
 // With `non_negative`, every texel's coefficients of a directional basis go through
-// make_non_negative first (plain and rnm hold integrals of radiance, never negative); `adjusted`, when
+// make_non_negative first (plain and rnm, integrated directly where the bake filled LightmapSh::direct, are
+// integrals of radiance and never negative); `adjusted`, when
 // given, counts the texels it changed.
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                             int dilate = 2, bool non_negative = false, size_t* adjusted = nullptr);

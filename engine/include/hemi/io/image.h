@@ -59,6 +59,20 @@ struct ToneMap
 // margin of 2); a chunk may overhang the data window by at most 64 MiB of buffers beyond that. The pixels are
 // then read in bands that grow with what has decoded.
 ImageRgba read_exr(const std::filesystem::path& path);
+
+// Radiance an environment image holds below zero. Real HDRIs (Poly Haven's, Blender's studio lights) hold a
+// few slightly negative values left by their lossy compression or processing (every one of Blender's eight
+// studio-light worlds does, down to -0.004): when the most negative is within `tolerance` of the image's mean
+// colour value, the negative values are set to 0 and counted (a caller may warn); a larger negative value is
+// an error in the image: std::invalid_argument naming `name` and the pixel. Alpha is not looked at.
+struct NegativeRadiance
+{
+    size_t clamped = 0; // colour values set to 0
+    float least = 0.0f; // the most negative of them
+    float mean = 0.0f;  // of the finite colour values, negatives counted as 0
+    float brightest = 0.0f;
+};
+NegativeRadiance clamp_negative_radiance(ImageRgba& image, const std::string& name, float tolerance = 0.01f);
 // read_exr's caps: the display window holds at most 2^27 pixels (16384 x 8192, 2 GiB of RGBA floats), and
 // one larger than 1024 x 1024 may be at most 64 times its data window (what auto-cropping pads with zeros).
 constexpr uint64_t kMaxExrPixels = uint64_t(1) << 27;

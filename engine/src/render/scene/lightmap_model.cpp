@@ -71,7 +71,12 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         const Technique baseline_technique = name == "constant" ? Technique::Constant : Technique::Lambert;
         if (baseline && asset.outputs.empty())
             throw std::invalid_argument("hemi: the lightmap asset has no outputs");
-        const std::string source = rnm ? "rnm" : baseline ? asset.outputs.front().name : name;
+        // A baseline binds the output with the fewest coefficients (it reads none of them).
+        const io::LightmapOutput* smallest = asset.outputs.empty() ? nullptr : &asset.outputs.front();
+        for (const io::LightmapOutput& o : asset.outputs)
+            if (o.k < smallest->k)
+                smallest = &o;
+        const std::string source = rnm ? "rnm" : baseline ? smallest->name : name;
         const io::LightmapOutput& output = asset.output(source); // lists what the asset has
         if (rnm)
             variants.push_back({name == "rnm"      ? Technique::Rnm

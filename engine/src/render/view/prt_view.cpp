@@ -31,7 +31,8 @@ std::vector<glm::vec3> environment_lighting(const std::string& environment, int 
         return math::project_sh(
             order, [&](const glm::vec3& d) { return sky.radiance(d); }, 256);
     }
-    const io::ImageRgba image = io::read_exr(environment);
+    io::ImageRgba image = io::read_exr(environment);
+    io::clamp_negative_radiance(image, environment); // small negatives (HDRI compression) read as 0
     return math::project_equirect(order, image.width, image.height, image.pixels);
 }
 
