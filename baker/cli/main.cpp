@@ -515,6 +515,14 @@ int run_lightmap(LightmapCli& c)
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
             "their neighbours)\n",
             s.pushed, s.invalid);
+    if (s.seams)
+    {
+        const auto& [mean, p95] = s.seam_difference.begin()->second;
+        std::printf(
+            "%zu seam edge(s) between charts: their sides differ by %.1f%% on average, %.1f%% at the 95th "
+            "percentile (%s; --json has every output)\n",
+            s.seams, 100.0 * mean, 100.0 * p95, s.seam_difference.begin()->first.c_str());
+    }
     for (const auto& [name, changed] : s.non_negative)
         std::printf("--non-negative: %zu texel(s) of %s lifted out of negative irradiance\n", changed,
                     name.c_str());

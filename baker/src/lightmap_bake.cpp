@@ -290,25 +290,12 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> val
 }
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
 // (Embree's barycentrics): what a ray that lands there picks up.
-glm::vec3 atlas_lookup(const io::Mesh& mesh, const LightmapAtlas& atlas, const io::BlockMaps& map,
-                       uint32_t triangle, float bu, float bv)
+glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t triangle, float bu, float bv)
 {
     const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
     const glm::vec2 uv =
         (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
-    const double fx = std::clamp(double(uv.x), 0.0, 1.0) * atlas.width - 0.5;
-    const double fy = std::clamp(double(uv.y), 0.0, 1.0) * atlas.height - 0.5;
-    const double x0 = std::floor(fx), y0 = std::floor(fy);
-    const float tx = float(fx - x0), ty = float(fy - y0);
-    auto at = [&](int64_t x, int64_t y)
-    {
-        x = std::clamp<int64_t>(x, 0, int64_t(atlas.width) - 1);
-        y = std::clamp<int64_t>(y, 0, int64_t(atlas.height) - 1);
-        return map.at(0, x, y);
-    };
-    const int64_t ix = int64_t(x0), iy = int64_t(y0);
-    return (at(ix, iy) * (1.0f - tx) + at(ix + 1, iy) * tx) * (1.0f - ty) +
-           (at(ix, iy + 1) * (1.0f - tx) + at(ix + 1, iy + 1) * tx) * ty;
+    return map.bilinear(0, uv);
 }
 
 } // namespace
@@ -393,7 +380,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     std::vector<uint8_t> pushed(n, 0);
     io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     auto lookup_previous = [&](uint32_t triangle, float bu, float bv)
-    { return atlas_lookup(mesh, atlas, previous_map, triangle, bu, bv); };
+    { return atlas_lookup(mesh, previous_map, triangle, bu, bv); };
 
     // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
     // or under one, seen from the wall's back) is moved through that surface to its front, so it sees what
@@ -690,10 +677,10 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                     }
                     if (!surfaces)
                         continue;
-                    const glm::vec3 radiance =
-                        surfaces->emission(hit->primitive, hit->u, hit->v) +
-                        surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                            atlas_lookup(mesh, atlas, map, hit->primitive, hit->u, hit->v) / float(M_PI);
+                    const glm::vec3 radiance = surfaces->emission(hit->primitive, hit->u, hit->v) +
+                                               surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                                                   atlas_lookup(mesh, map, hit->primitive, hit->u, hit->v) /
+                                                   float(M_PI);
                     add(d, glm::dvec3(radiance) * weight);
                 }
                 const uint64_t item =

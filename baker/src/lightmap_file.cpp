@@ -1,6 +1,7 @@
 // hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
@@ -376,6 +377,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             summary.non_negative[name] = adjusted;
     }
     summary.blocks = asset.outputs.front().maps.grid.blocks().size();
+    const std::vector<LightmapSeam> seams = find_lightmap_seams(asset.mesh);
+    summary.seams = seams.size();
+    for (const io::LightmapOutput& output : asset.outputs)
+    {
+        const LightmapSeamMetric m = measure_lightmap_seams(seams, output.maps);
+        summary.seam_difference[output.name] = {m.mean, m.p95};
+    }
     if (o.probes != glm::uvec3(0))
     {
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
@@ -448,6 +456,10 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["texels_inside_geometry"] = s.invalid;
     if (o.non_negative)
         j["non_negative_texels_changed"] = s.non_negative; // per directional output
+    nlohmann::json seams = {{"edges", s.seams}};
+    for (const auto& [name, difference] : s.seam_difference)
+        seams["outputs"][name] = {{"mean", difference.first}, {"p95", difference.second}};
+    j["seams"] = seams; // relative |difference| of the two sides' lookups along the seams (lightmap_seams.h)
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)

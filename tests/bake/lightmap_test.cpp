@@ -8,6 +8,7 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/material.h>
 #include <hemi/math/basis.h>
@@ -1759,4 +1760,52 @@ TEST(LightmapOutputs, NonNegativeLiftsRingingWithASmallChange)
         EXPECT_FALSE(make_non_negative(name, kept));
         EXPECT_EQ(kept, flat);
     }
+}
+
+// Seams (issue 25's metric): a floor of two quads sharing an edge in 3D, each in a chart of its own (the
+// shared vertices split, as exporters write them), plus a wall standing on the far edge of one (a crease: 90
+// degrees) and the quads' own diagonals (one chart on both sides). Exactly one seam is found, the shared
+// edge, with its two sides' UVs. With every texel of chart A at plain = 1 and of chart B at 1.2 (dilated as
+// the bake dilates), the two sides' lookups differ by 0.2 everywhere along it: the metric is 0.2 / 1.1, mean
+// and 95th percentile. A wall folded 90 degrees instead of the floor's second half is no seam.
+TEST(LightmapSeams, FindsTheEdgeTwoChartsShareAndMeasuresTheStepAcrossIt)
+{
+    Mesh m;
+    add_quad(m, {-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {0.05f, 0.9f, 0.45f, 0.1f}); // chart A
+    add_quad(m, {0, -1, 0}, {1, -1, 0}, {1, 1, 0}, {0, 1, 0}, {0.55f, 0.9f, 0.95f, 0.1f});   // chart B
+    add_quad(m, {1, -1, 0}, {1, 1, 0}, {1, 1, 1}, {1, -1, 1}, {0.0f, 1.0f, 0.02f, 0.98f});   // a wall: crease
+    const std::vector<LightmapSeam> seams = find_lightmap_seams(m);
+    ASSERT_EQ(seams.size(), 1u);
+    const LightmapSeam& s = seams[0];
+    // The shared edge x = 0: on A the right side (u = 0.45), on B the left (u = 0.55); a0 and b0 one point.
+    EXPECT_EQ(s.a0.x, 0.45f);
+    EXPECT_EQ(s.a1.x, 0.45f);
+    EXPECT_EQ(s.b0.x, 0.55f);
+    EXPECT_EQ(s.b1.x, 0.55f);
+    EXPECT_EQ(s.a0.y, s.b0.y);
+    EXPECT_EQ(s.a1.y, s.b1.y);
+
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 32, 32, report);
+    LightmapSh sh;
+    sh.width = sh.height = 32;
+    sh.irradiance.assign(a.texels.size(), {});
+    sh.direct.assign(a.texels.size(), {});
+    sh.valid.assign(a.texels.size(), 1);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+        sh.direct[i][0] = glm::vec3(a.texels[i].triangle < 2 ? 1.0f : 1.2f);
+    const hemi::io::BlockMaps maps = lightmap_maps("plain", a, sh);
+    const LightmapSeamMetric metric = measure_lightmap_seams(seams, maps);
+    EXPECT_EQ(metric.seams, 1u);
+    EXPECT_GE(metric.points, 26u) << "a texel apart along the 26-texel edge";
+    EXPECT_NEAR(metric.mean, 0.2 / 1.1, 1e-5);
+    EXPECT_NEAR(metric.p95, 0.2 / 1.1, 1e-5);
+
+    // Chart B folded up 90 degrees about the shared edge: a crease, no seam.
+    Mesh folded;
+    add_quad(folded, {-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {0.05f, 0.9f, 0.45f, 0.1f});
+    add_quad(folded, {0, -1, 0}, {0, -1, 1}, {0, 1, 1}, {0, 1, 0}, {0.55f, 0.9f, 0.95f, 0.1f});
+    EXPECT_TRUE(find_lightmap_seams(folded).empty());
+    // One chart over both halves: no seam either.
+    EXPECT_TRUE(find_lightmap_seams(plane(2)).empty());
 }

@@ -1052,6 +1052,28 @@ TEST(BakeCli, LightmapUnwrapsScenesWithoutLightmapUvs)
     EXPECT_FLOAT_EQ(j["unwrap"]["texel_size"].get<float>(), 0.1f);
     EXPECT_NEAR(j["texel_size"]["min"].get<float>(), 0.1f, 0.002f);
     EXPECT_NEAR(j["texel_size"]["max"].get<float>(), 0.1f, 0.002f);
+    // The level's charts meet only at creases (its walls, floor and pillars are planar): no seam.
+    EXPECT_EQ(j["seams"]["edges"].get<int>(), 0);
+    // A curved mesh unwraps into bands of charts: seams, and how far their sides differ, in the JSON
+    // (LightmapSeams.* checks the numbers).
+    const fs::path knot_asset = dir() / "unwrapped_knot.hemi", knot_json = dir() / "unwrapped_knot.json";
+    const Result k = lightmap(q(knot()) + " -o " + q(knot_asset) +
+                              " --unwrap --size 256 --rays 8 --bases sh9,h4 --json " + q(knot_json));
+    ASSERT_EQ(k.status, 0) << k.err;
+    EXPECT_NE(k.out.find("seam edge(s) between charts"), std::string::npos) << k.out;
+    const nlohmann::json kj = nlohmann::json::parse(slurp(knot_json));
+    std::printf("unwrapped knot: %d seam edge(s), sh9 sides differ by %.4f on average, %.4f at the 95th "
+                "percentile\n",
+                kj["seams"]["edges"].get<int>(), kj["seams"]["outputs"]["sh9"]["mean"].get<double>(),
+                kj["seams"]["outputs"]["sh9"]["p95"].get<double>());
+    EXPECT_GT(kj["seams"]["edges"].get<int>(), 10);
+    for (const char* output : {"sh9", "h4"})
+    {
+        EXPECT_GT(kj["seams"]["outputs"][output]["mean"].get<double>(), 0.0) << output;
+        EXPECT_GE(kj["seams"]["outputs"][output]["p95"].get<double>(),
+                  kj["seams"]["outputs"][output]["mean"].get<double>())
+            << output;
+    }
     const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
     EXPECT_EQ(a.mesh.uvs1.size(), a.mesh.positions.size());
     EXPECT_EQ(a.mesh.indices.size(), level.mesh.indices.size());

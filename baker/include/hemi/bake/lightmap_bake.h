@@ -243,7 +243,11 @@ struct LightmapBakeSummary
     size_t probes = 0, invalid_probes = 0;
     size_t blocks = 0; // 8x8 blocks of the atlas stored per output (covered texels and dilation)
     std::map<std::string, size_t> non_negative; // with non_negative: per directional output, texels changed
-    size_t unwrapped_charts = 0;                // with unwrap
+    // Seams (lightmap_seams.h): the edges where the surface continues from one chart into another, and per
+    // output how far the two sides' lookups differ there (relative mean and 95th percentile).
+    size_t seams = 0;
+    std::map<std::string, std::pair<double, double>> seam_difference;
+    size_t unwrapped_charts = 0; // with unwrap
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;

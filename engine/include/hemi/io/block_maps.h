@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -97,6 +98,23 @@ struct BlockMaps
             return glm::vec3(0.0f);
         const float* v = &values[index(map, size_t(s))];
         return {v[0], v[1], v[2]};
+    }
+    // Coefficient `map` at `uv` ([0, 1]^2 over the atlas, v down) as the runtime's sampler reads it: bilinear
+    // between texel centres, clamped to the atlas's edge.
+    glm::vec3 bilinear(uint32_t map, glm::vec2 uv) const
+    {
+        const double fx = std::clamp(double(uv.x), 0.0, 1.0) * width() - 0.5;
+        const double fy = std::clamp(double(uv.y), 0.0, 1.0) * height() - 0.5;
+        const double x0 = std::floor(fx), y0 = std::floor(fy);
+        const float tx = float(fx - x0), ty = float(fy - y0);
+        auto texel = [&](int64_t x, int64_t y)
+        {
+            return at(map, std::clamp<int64_t>(x, 0, int64_t(width()) - 1),
+                      std::clamp<int64_t>(y, 0, int64_t(height()) - 1));
+        };
+        const int64_t ix = int64_t(x0), iy = int64_t(y0);
+        return (texel(ix, iy) * (1.0f - tx) + texel(ix + 1, iy) * tx) * (1.0f - ty) +
+               (texel(ix, iy + 1) * (1.0f - tx) + texel(ix + 1, iy + 1) * tx) * ty;
     }
 };
 
