@@ -417,6 +417,28 @@ TEST_F(PrtMaterial, DrawsIntoAnEnginesOwnRenderPass)
     EXPECT_GT(covered, 1000u);
 }
 
+// Every pixel the mesh covers (the target's aux attachment) is `want` within `relative` of it (0: exactly),
+// every channel; returns how many are covered. Stops after the first few failures.
+static size_t covered_pixels_equal(hemi::render::OffscreenTarget& target, const glm::vec3& want,
+                                   float relative)
+{
+    const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
+    size_t covered = 0;
+    int failures = 0;
+    for (uint32_t y = 0; y < color.height; ++y)
+        for (uint32_t x = 0; x < color.width; ++x)
+            if (aux.at(x, y)[3] == 1.0f)
+            {
+                ++covered;
+                for (int c = 0; c < 3; ++c)
+                    if (!(std::abs(color.at(x, y)[c] - want[c]) <= relative * std::abs(want[c])) &&
+                        failures++ < 5)
+                        ADD_FAILURE() << "pixel " << x << "," << y << " ch " << c << ": " << color.at(x, y)[c]
+                                      << ", want " << want[c];
+            }
+    return covered;
+}
+
 // The constant technique (hemi-bench's baseline) renders exactly its base colour factor, whatever the
 // coefficients and the normal map: every covered pixel, to float precision.
 TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
@@ -451,17 +473,7 @@ TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
                             object.draw(cmd, frame.set());
                             target.end(cmd);
                         });
-    const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
-    size_t covered = 0;
-    for (uint32_t y = 0; y < h; ++y)
-        for (uint32_t x = 0; x < w; ++x)
-            if (aux.at(x, y)[3] == 1.0f)
-            {
-                ++covered;
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_EQ(color.at(x, y)[c], factor[c]) << x << "," << y;
-            }
-    EXPECT_GT(covered, 300u);
+    EXPECT_GT(covered_pixels_equal(target, factor, 0.0f), 300u);
 }
 
 // The per-texel coefficient source (directional lightmaps), packed: K RGB maps of 16 x 8 half-float texels
@@ -624,15 +636,5 @@ TEST_F(PrtMaterial, LambertBaselineIsTheTexturesLitByTheFramesLightsAlone)
     for (const hemi::render::DynamicLight& l : f.lights)
         e += l.irradiance * std::max(0.0f, glm::dot(world_normal, l.position));
     const glm::vec3 want = albedo * e / float(M_PI);
-    const hemi::io::ImageRgba color = target.read_color(), aux = target.read_aux();
-    size_t covered = 0;
-    for (uint32_t y = 0; y < h; ++y)
-        for (uint32_t x = 0; x < w; ++x)
-            if (aux.at(x, y)[3] == 1.0f)
-            {
-                ++covered;
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_NEAR(color.at(x, y)[c], want[c], 2e-3f * want[c]) << x << "," << y << " ch " << c;
-            }
-    EXPECT_GT(covered, 1000u);
+    EXPECT_GT(covered_pixels_equal(target, want, 2e-3f), 1000u);
 }
