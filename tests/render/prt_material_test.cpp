@@ -439,7 +439,7 @@ static size_t covered_pixels_equal(hemi::render::OffscreenTarget& target, const 
     return covered;
 }
 
-// The constant technique (hemi-bench's baseline) renders exactly its base colour factor, whatever the
+// The constant technique (a debug view) renders exactly its base colour factor, whatever the
 // coefficients and the normal map: every covered pixel, to float precision.
 TEST_F(PrtMaterial, ConstantTechniqueRendersItsFactor)
 {
