@@ -517,11 +517,18 @@ int run_lightmap(LightmapCli& c)
             s.pushed, s.invalid);
     if (s.seams)
     {
-        const auto& [mean, p95] = s.seam_difference.begin()->second;
-        std::printf(
-            "%zu seam edge(s) between charts: their sides differ by %.1f%% on average, %.1f%% at the 95th "
-            "percentile (%s; --json has every output)\n",
-            s.seams, 100.0 * mean, 100.0 * p95, s.seam_difference.begin()->first.c_str());
+        const auto& [before, after] = s.seam_difference.begin()->second;
+        if (s.stitched_texels)
+            std::printf("%zu seam edge(s) between charts, stitched (%zu texels): their sides differed by "
+                        "%.1f%% on average, %.1f%% at the 95th percentile, and now by %.2f%%, %.2f%% (%s; "
+                        "--json has every output)\n",
+                        s.seams, s.stitched_texels, 100.0 * before.first, 100.0 * before.second,
+                        100.0 * after.first, 100.0 * after.second, s.seam_difference.begin()->first.c_str());
+        else
+            std::printf("%zu seam edge(s) between charts, not stitched: their sides differ by %.1f%% on "
+                        "average, %.1f%% at the 95th percentile (%s; --json has every output)\n",
+                        s.seams, 100.0 * before.first, 100.0 * before.second,
+                        s.seam_difference.begin()->first.c_str());
     }
     for (const auto& [name, changed] : s.non_negative)
         std::printf("--non-negative: %zu texel(s) of %s lifted out of negative irradiance\n", changed,
@@ -1033,6 +1040,17 @@ int main(int argc, char** argv)
         "ringing-free directional outputs: each texel's coefficients lifted by the least "
         "change that keeps every normal within 75 degrees of the surface's from negative "
         "irradiance (a low sun's SH9 and H-basis fits ring); plain and rnm are never negative");
+    lightmap->add_flag("--no-stitch{false}", lm.options.stitch,
+                       "keep the seams between charts as baked: without it, the texels along every edge "
+                       "where a smooth surface continues into another chart are changed, in least squares, "
+                       "until both sides' bilinear lookups agree (the JSON's \"seams\" has the difference "
+                       "before and after)");
+    lightmap
+        ->add_option("--stitch-closeness", lm.options.stitch_closeness,
+                     "stitching's weight on keeping the baked texels against one texel of seam agreeing "
+                     "(smaller stitches tighter)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     lightmap->add_option("--uv-report", lm.uv_report,
                          "write a PNG of the atlas before the bake: covered texels grey, texels two or more "
                          "triangles overlap red (at most 2048 pixels a side, each the worst of its texels)");

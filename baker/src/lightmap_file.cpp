@@ -382,7 +382,36 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     for (const io::LightmapOutput& output : asset.outputs)
     {
         const LightmapSeamMetric m = measure_lightmap_seams(seams, output.maps);
-        summary.seam_difference[output.name] = {m.mean, m.p95};
+        summary.seam_difference[output.name] = {{m.mean, m.p95}, {m.mean, m.p95}};
+    }
+    if (o.stitch && !seams.empty())
+    {
+        // One factorisation for every output (they share the grid); the ringing-free lift runs again on the
+        // texels the stitch changed, since least squares does not keep a texel's function non-negative.
+        const LightmapSeamStitch stitch(seams, asset.outputs.front().maps.grid, o.stitch_closeness);
+        summary.stitched_texels = stitch.slots().size();
+        for (io::LightmapOutput& output : asset.outputs)
+        {
+            stitch.apply(output.maps);
+            if (o.non_negative && output.name != "plain" && output.name != "rnm")
+            {
+                std::vector<glm::vec3> texel(output.k);
+                for (const size_t slot : stitch.slots())
+                {
+                    for (uint32_t k = 0; k < output.k; ++k)
+                        std::memcpy(&texel[k], &output.maps.values[output.maps.index(k, slot)],
+                                    sizeof texel[k]);
+                    if (!make_non_negative(output.name, texel))
+                        continue;
+                    ++summary.non_negative[output.name];
+                    for (uint32_t k = 0; k < output.k; ++k)
+                        std::memcpy(&output.maps.values[output.maps.index(k, slot)], &texel[k],
+                                    sizeof texel[k]);
+                }
+            }
+            const LightmapSeamMetric m = measure_lightmap_seams(seams, output.maps);
+            summary.seam_difference[output.name].second = {m.mean, m.p95};
+        }
     }
     if (o.probes != glm::uvec3(0))
     {
@@ -457,8 +486,12 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     if (o.non_negative)
         j["non_negative_texels_changed"] = s.non_negative; // per directional output
     nlohmann::json seams = {{"edges", s.seams}};
+    seams["stitched"] = s.stitched_texels > 0;
+    seams["stitched_texels"] = s.stitched_texels;
     for (const auto& [name, difference] : s.seam_difference)
-        seams["outputs"][name] = {{"mean", difference.first}, {"p95", difference.second}};
+        seams["outputs"][name] = {
+            {"before", {{"mean", difference.first.first}, {"p95", difference.first.second}}},
+            {"after", {{"mean", difference.second.first}, {"p95", difference.second.second}}}};
     j["seams"] = seams; // relative |difference| of the two sides' lookups along the seams (lightmap_seams.h)
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};

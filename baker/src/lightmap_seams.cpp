@@ -1,5 +1,7 @@
 #include <hemi/bake/lightmap_seams.h>
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -118,6 +120,161 @@ LightmapSeamMetric measure_lightmap_seams(std::span<const LightmapSeam> seams, c
     std::nth_element(differences.begin(), differences.begin() + std::ptrdiff_t(at), differences.end());
     m.p95 = differences[at] / scale;
     return m;
+}
+
+namespace
+{
+// The parameters in (0, 1) where the segment p0 + (p1 - p0) t, in texel-centre coordinates, crosses a
+// texel-grid line (an integer x or y): there its bilinear lookup changes from one quad of texels to the next.
+void grid_crossings(glm::dvec2 p0, glm::dvec2 p1, std::vector<double>& out)
+{
+    for (int axis = 0; axis < 2; ++axis)
+    {
+        const double a = p0[axis], b = p1[axis];
+        if (a == b)
+            continue;
+        for (double n = std::ceil(std::min(a, b)); n <= std::max(a, b); n += 1.0)
+        {
+            const double t = (n - a) / (b - a);
+            if (t > 0.0 && t < 1.0)
+                out.push_back(t);
+        }
+    }
+}
+} // namespace
+
+struct LightmapSeamStitch::Impl
+{
+    uint32_t width = 0, height = 0;
+    std::vector<uint32_t> blocks;
+    std::vector<size_t> slots;
+    Eigen::SparseMatrix<double> s; // the seam term S over the unknowns
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+};
+
+LightmapSeamStitch::LightmapSeamStitch(std::span<const LightmapSeam> seams, const io::BlockGrid& grid,
+                                       double closeness)
+    : impl_(std::make_unique<Impl>())
+{
+    if (!(closeness > 0.0) || !std::isfinite(closeness))
+        throw std::invalid_argument("seam stitching needs a positive closeness weight");
+    Impl& m = *impl_;
+    m.width = grid.width();
+    m.height = grid.height();
+    m.blocks = grid.blocks();
+    const glm::dvec2 texels(m.width, m.height);
+    // Every quadrature point of every seam: the (slot, weight) pairs of L_a - L_b there, and its weight.
+    struct Row
+    {
+        std::array<std::pair<int64_t, double>, 8> terms;
+        double weight;
+    };
+    std::vector<Row> rows;
+    std::vector<double> cuts;
+    const double gauss_t[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
+    const double gauss_w[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+    for (const LightmapSeam& seam : seams)
+    {
+        const glm::dvec2 a0 = glm::dvec2(seam.a0) * texels - 0.5, a1 = glm::dvec2(seam.a1) * texels - 0.5;
+        const glm::dvec2 b0 = glm::dvec2(seam.b0) * texels - 0.5, b1 = glm::dvec2(seam.b1) * texels - 0.5;
+        const double length = std::max(glm::length(a1 - a0), glm::length(b1 - b0));
+        if (!(length > 0.0))
+            continue;
+        cuts.assign({0.0, 1.0});
+        grid_crossings(a0, a1, cuts);
+        grid_crossings(b0, b1, cuts);
+        std::sort(cuts.begin(), cuts.end());
+        for (size_t c = 0; c + 1 < cuts.size(); ++c)
+        {
+            const double half = 0.5 * (cuts[c + 1] - cuts[c]), mid = 0.5 * (cuts[c + 1] + cuts[c]);
+            if (!(half > 0.0))
+                continue;
+            for (int q = 0; q < 3; ++q)
+            {
+                const float t = float(mid + half * gauss_t[q]);
+                const io::BilinearFootprint fa =
+                    io::bilinear_footprint(seam.a0 + (seam.a1 - seam.a0) * t, m.width, m.height);
+                const io::BilinearFootprint fb =
+                    io::bilinear_footprint(seam.b0 + (seam.b1 - seam.b0) * t, m.width, m.height);
+                Row row{};
+                row.weight = gauss_w[q] * half * length;
+                size_t term = 0;
+                for (const auto& [f, sign] : {std::pair{fa, 1.0}, std::pair{fb, -1.0}})
+                {
+                    const double tx = f.tx, ty = f.ty;
+                    row.terms[term++] = {grid.slot(f.x0, f.y0), sign * (1 - tx) * (1 - ty)};
+                    row.terms[term++] = {grid.slot(f.x1, f.y0), sign * tx * (1 - ty)};
+                    row.terms[term++] = {grid.slot(f.x0, f.y1), sign * (1 - tx) * ty};
+                    row.terms[term++] = {grid.slot(f.x1, f.y1), sign * tx * ty};
+                }
+                rows.push_back(row);
+                for (const auto& [slot, w] : row.terms)
+                    if (slot >= 0 && w != 0.0)
+                        m.slots.push_back(size_t(slot));
+            }
+        }
+    }
+    std::sort(m.slots.begin(), m.slots.end());
+    m.slots.erase(std::unique(m.slots.begin(), m.slots.end()), m.slots.end());
+    const auto unknown = [&](int64_t slot) {
+        return Eigen::Index(std::lower_bound(m.slots.begin(), m.slots.end(), size_t(slot)) - m.slots.begin());
+    };
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(rows.size() * 64);
+    for (const Row& row : rows)
+        for (const auto& [si, wi] : row.terms)
+            if (si >= 0 && wi != 0.0)
+                for (const auto& [sj, wj] : row.terms)
+                    if (sj >= 0 && wj != 0.0)
+                        triplets.emplace_back(unknown(si), unknown(sj), row.weight * wi * wj);
+    const Eigen::Index n = Eigen::Index(m.slots.size());
+    m.s.resize(n, n);
+    m.s.setFromTriplets(triplets.begin(), triplets.end());
+    if (n == 0)
+        return;
+    Eigen::SparseMatrix<double> system = m.s;
+    for (Eigen::Index i = 0; i < n; ++i)
+        system.coeffRef(i, i) += closeness;
+    m.solver.compute(system);
+    if (m.solver.info() != Eigen::Success)
+        throw std::runtime_error("seam stitching: the least-squares system could not be factored");
+}
+
+LightmapSeamStitch::~LightmapSeamStitch() = default;
+LightmapSeamStitch::LightmapSeamStitch(LightmapSeamStitch&&) noexcept = default;
+LightmapSeamStitch& LightmapSeamStitch::operator=(LightmapSeamStitch&&) noexcept = default;
+
+const std::vector<size_t>& LightmapSeamStitch::slots() const
+{
+    return impl_->slots;
+}
+
+void LightmapSeamStitch::apply(io::BlockMaps& maps) const
+{
+    const Impl& m = *impl_;
+    if (maps.width() != m.width || maps.height() != m.height || maps.grid.blocks() != m.blocks)
+        throw std::invalid_argument("seam stitching: the maps are not on the grid the stitch was built for");
+    const Eigen::Index n = Eigen::Index(m.slots.size());
+    if (n == 0 || maps.k == 0)
+        return;
+    const Eigen::Index columns = Eigen::Index(maps.k) * 3;
+    Eigen::MatrixXd x(n, columns);
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (uint32_t k = 0; k < maps.k; ++k)
+            for (int c = 0; c < 3; ++c)
+                x(i, Eigen::Index(k) * 3 + c) =
+                    double(maps.values[maps.index(k, m.slots[size_t(i)]) + size_t(c)]);
+    const Eigen::MatrixXd rhs = -(m.s * x);
+    const Eigen::MatrixXd d = m.solver.solve(rhs);
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (uint32_t k = 0; k < maps.k; ++k)
+            for (int c = 0; c < 3; ++c)
+            {
+                const double change = d(i, Eigen::Index(k) * 3 + c);
+                if (change != 0.0)
+                    maps.values[maps.index(k, m.slots[size_t(i)]) + size_t(c)] =
+                        float(x(i, Eigen::Index(k) * 3 + c) + change);
+            }
 }
 
 } // namespace hemi::bake

@@ -230,6 +230,10 @@ struct LightmapFileOptions
     bool unwrap = false;
     // Ringing-free directional outputs (make_non_negative); the summary counts the texels it changed.
     bool non_negative = false;
+    // Seam stitching (lightmap_seams.h: LightmapSeamStitch) of every output after the bake, on by default;
+    // stitch_closeness is its weight on keeping the baked values.
+    bool stitch = true;
+    double stitch_closeness = 0.01;
 };
 
 struct LightmapBakeSummary
@@ -244,9 +248,11 @@ struct LightmapBakeSummary
     size_t blocks = 0; // 8x8 blocks of the atlas stored per output (covered texels and dilation)
     std::map<std::string, size_t> non_negative; // with non_negative: per directional output, texels changed
     // Seams (lightmap_seams.h): the edges where the surface continues from one chart into another, and per
-    // output how far the two sides' lookups differ there (relative mean and 95th percentile).
-    size_t seams = 0;
-    std::map<std::string, std::pair<double, double>> seam_difference;
+    // output how far the two sides' lookups differ there (relative mean and 95th percentile), before and
+    // after stitching (the same without it), and the texels the stitch could change.
+    size_t seams = 0, stitched_texels = 0;
+    using SeamDifference = std::pair<double, double>; // mean, p95
+    std::map<std::string, std::pair<SeamDifference, SeamDifference>> seam_difference;
     size_t unwrapped_charts = 0; // with unwrap
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;

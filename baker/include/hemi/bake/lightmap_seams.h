@@ -2,7 +2,8 @@
 // Lightmap seams: edges where a surface continues in 3D from one lightmap chart into another. On each side
 // the runtime's bilinear lookup reads its own chart's texels, so whatever the two texel rows baked shows as a
 // step across the edge. find_lightmap_seams finds them and measure_lightmap_seams says how large the step is
-// (what hemi-bake lightmap reports in its JSON); stitching them is the next step (not built yet).
+// (what hemi-bake lightmap reports in its JSON) and LightmapSeamStitch changes the texels along them, in
+// least squares, until both sides' lookups agree.
 
 #include <hemi/io/block_maps.h>
 #include <hemi/io/mesh.h>
@@ -10,6 +11,7 @@
 #include <glm/vec2.hpp>
 
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -40,5 +42,45 @@ struct LightmapSeamMetric
     double mean = 0.0, p95 = 0.0;
 };
 LightmapSeamMetric measure_lightmap_seams(std::span<const LightmapSeam> seams, const io::BlockMaps& maps);
+
+// Seam stitching (Sloan's least-squares seams; Liu, Ferguson, Jacobson and Gingold 2017, "Seamless"): the
+// smallest change d of the texels along the seams that makes the two sides' bilinear lookups agree,
+//     minimise  sum over seams of  integral over the edge of |L_a(x + d) - L_b(x + d)|^2  +  closeness |d|^2,
+// where L_a and L_b are the runtime's bilinear lookups along side a and side b. Along an edge a lookup is a
+// quadratic in the edge's parameter between the texel-grid lines either side crosses, so each piece's
+// integral is exact with 3 Gauss-Legendre points; an edge's integral is scaled by its length in texels (the
+// longer side's). The unknowns are the texels those lookups read (4 per point and side, clamped to the atlas
+// as the sampler clamps it) that the grid stores; a texel it does not store reads 0 and stays 0. The system
+// (S + closeness I) d = -S x is the same for every map, coefficient and channel, so it is factored once
+// (sparse Cholesky, double precision) and solved for each: a constant or any field the seams already agree on
+// is left exactly as it is (S x = 0), and a texel no seam reads is never touched. Linear in the values, so
+// what is stitched is what the runtime interpolates (every output basis, every coefficient). Deterministic:
+// no threads, assembly in the seams' order.
+//
+// `closeness` weighs keeping a texel's baked value against one texel of seam length agreeing: smaller
+// stitches tighter and lets texels move further. With the default a step between two charts closes to about
+// 1/100 of itself (the tests measure it).
+class LightmapSeamStitch
+{
+  public:
+    static constexpr double kDefaultCloseness = 0.01;
+
+    // Throws std::invalid_argument for a closeness that is not positive.
+    LightmapSeamStitch(std::span<const LightmapSeam> seams, const io::BlockGrid& grid,
+                       double closeness = kDefaultCloseness);
+    ~LightmapSeamStitch();
+    LightmapSeamStitch(LightmapSeamStitch&&) noexcept;
+    LightmapSeamStitch& operator=(LightmapSeamStitch&&) noexcept;
+
+    // The slots (io::BlockGrid) of the texels the stitch may change, ascending.
+    const std::vector<size_t>& slots() const;
+    // Stitches every map and channel of `maps`, whose grid must be the one given above (else
+    // std::invalid_argument).
+    void apply(io::BlockMaps& maps) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 } // namespace hemi::bake

@@ -66,6 +66,28 @@ class BlockGrid
     std::vector<uint32_t> row_begin_; // per block row, and one past the last: its first kept block's slot
 };
 
+// What a bilinear lookup at `uv` ([0, 1]^2 over a width x height atlas, v down) reads, as the runtime's
+// sampler reads it: texels (x0 or x1, y0 or y1), clamped to the atlas's edge, weighted by (1 - tx or tx)
+// times (1 - ty or ty). BlockMaps::bilinear and the seam stitch (bake/lightmap_seams.h) both use it.
+struct BilinearFootprint
+{
+    int64_t x0, x1, y0, y1;
+    float tx, ty;
+};
+inline BilinearFootprint bilinear_footprint(glm::vec2 uv, uint32_t width, uint32_t height)
+{
+    const double fx = std::clamp(double(uv.x), 0.0, 1.0) * width - 0.5;
+    const double fy = std::clamp(double(uv.y), 0.0, 1.0) * height - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    const int64_t ix = int64_t(x0), iy = int64_t(y0), w = int64_t(width) - 1, h = int64_t(height) - 1;
+    return {std::clamp<int64_t>(ix, 0, w),
+            std::clamp<int64_t>(ix + 1, 0, w),
+            std::clamp<int64_t>(iy, 0, h),
+            std::clamp<int64_t>(iy + 1, 0, h),
+            float(fx - x0),
+            float(fy - y0)};
+}
+
 // K RGB maps over a BlockGrid: coefficient k of the texel at slot s, channel c, at
 // ((s / 64 * K + k) * 64 + s % 64) * 3 + c (block after block; in a block, map after map). Texels of blocks
 // that are not kept read as 0.
@@ -103,18 +125,9 @@ struct BlockMaps
     // between texel centres, clamped to the atlas's edge.
     glm::vec3 bilinear(uint32_t map, glm::vec2 uv) const
     {
-        const double fx = std::clamp(double(uv.x), 0.0, 1.0) * width() - 0.5;
-        const double fy = std::clamp(double(uv.y), 0.0, 1.0) * height() - 0.5;
-        const double x0 = std::floor(fx), y0 = std::floor(fy);
-        const float tx = float(fx - x0), ty = float(fy - y0);
-        auto texel = [&](int64_t x, int64_t y)
-        {
-            return at(map, std::clamp<int64_t>(x, 0, int64_t(width()) - 1),
-                      std::clamp<int64_t>(y, 0, int64_t(height()) - 1));
-        };
-        const int64_t ix = int64_t(x0), iy = int64_t(y0);
-        return (texel(ix, iy) * (1.0f - tx) + texel(ix + 1, iy) * tx) * (1.0f - ty) +
-               (texel(ix, iy + 1) * (1.0f - tx) + texel(ix + 1, iy + 1) * tx) * ty;
+        const BilinearFootprint f = bilinear_footprint(uv, width(), height());
+        return (at(map, f.x0, f.y0) * (1.0f - f.tx) + at(map, f.x1, f.y0) * f.tx) * (1.0f - f.ty) +
+               (at(map, f.x0, f.y1) * (1.0f - f.tx) + at(map, f.x1, f.y1) * f.tx) * f.ty;
     }
 };
 
