@@ -515,6 +515,8 @@ int run_lightmap(LightmapCli& c)
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
             "their neighbours)\n",
             s.pushed, s.invalid);
+    if (s.denoised_texels)
+        std::printf("--denoise: %zu texels filtered (%d passes)\n", s.denoised_texels, o.denoise_passes);
     if (s.seams)
     {
         const auto& [before, after] = s.seam_difference.begin()->second;
@@ -1050,6 +1052,15 @@ int main(int argc, char** argv)
                      "stitching's weight on keeping the baked texels against one texel of seam agreeing "
                      "(smaller stitches tighter)")
         ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    lightmap->add_flag("--denoise", lm.options.denoise,
+                       "filter the baked texels' noise (an edge-avoiding a-trous filter inside each chart, "
+                       "guided by positions, normals and the bake's own per-texel variance) before the "
+                       "outputs are made");
+    lightmap
+        ->add_option("--denoise-passes", lm.options.denoise_passes,
+                     "a-trous passes of --denoise: it reaches 2 (2^N - 1) texels")
+        ->check(CLI::Range(1, 10))
         ->capture_default_str();
     lightmap->add_option("--uv-report", lm.uv_report,
                          "write a PNG of the atlas before the bake: covered texels grey, texels two or more "

@@ -2,6 +2,7 @@
 #include "light_sampler.h"
 
 #include <hemi/bake/ray_generator.h>
+#include <hemi/math/luminance.h>
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
@@ -28,7 +29,7 @@ EnvironmentSampler::EnvironmentSampler(const io::ImageRgba& env) : w_(env.width)
         for (uint32_t x = 0; x < w_; ++x)
         {
             const float* p = env.at(x, y);
-            const double lum = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            const double lum = math::luminance(glm::dvec3(p[0], p[1], p[2]));
             const double mean = (double(p[0]) + p[1] + p[2]) / 3.0;
             // Luminance, kept above zero wherever any channel shines (a pure blue pixel is still sampled).
             const double wgt = std::max(0.0, std::max(lum, 0.01 * mean)) * solid;

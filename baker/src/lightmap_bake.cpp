@@ -7,6 +7,7 @@
 #include <hemi/bake/ray_generator.h>
 #include <hemi/io/image.h>
 #include <hemi/math/basis.h>
+#include <hemi/math/luminance.h>
 #include <hemi/math/rnm_basis.h>
 #include <hemi/math/sh.h>
 #include <hemi/math/sh_environment.h>
@@ -368,7 +369,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
     std::vector<std::array<glm::vec3, 9>> pass_sh(n);
     std::vector<std::array<glm::vec3, 4>> pass_direct(n);
+    std::vector<LightmapSh::Half> pass_half(n);
     out.direct.assign(n, {});
+    out.half.assign(n, {});
     // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
     // over the hemisphere (lightmap_bake.h).
     const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
@@ -435,16 +438,33 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
         std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
-        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance)
+        // Half A of the samples (LightmapSh::half): rays 0, 3, 4, 7, 8, ... of each stream (every other pair,
+        // so that A and B each take one of two neighbouring strata, alternately the lower and the upper),
+        // and half of every exact sample.
+        std::array<glm::dvec3, 9> acc_a{};
+        std::array<glm::dvec3, 4> direct_a{};
+        // `ray`: the sample's index in its stream, or -1 for an exact one (a punctual light).
+        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int ray)
         {
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
                                   glm::dot(world, t.normal));
             const math::Sh9 y = math::sh9_eval(local);
+            const double share = ray < 0 ? 0.5 : (((ray + 1) >> 1) & 1) == 0 ? 1.0 : 0.0;
             for (int j = 0; j < 9; ++j)
+            {
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
-            direct[0] += radiance * double(std::max(local.z, 0.0f));
+                acc_a[size_t(j)] += share * radiance * double(y[size_t(j)]);
+            }
+            const glm::dvec3 e = radiance * double(std::max(local.z, 0.0f));
+            direct[0] += e;
+            direct_a[0] += share * e;
             for (size_t b = 0; b < 3; ++b)
-                direct[1 + b] += radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
+            {
+                const glm::dvec3 eb =
+                    radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
+                direct[1 + b] += eb;
+                direct_a[1 + b] += share * eb;
+            }
         };
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
@@ -462,7 +482,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (!hit)
             {
                 if (pass == 0 && !image_env)
-                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight, r);
                 continue;
             }
             // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
@@ -478,7 +498,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                      : surfaces->albedo(hit->primitive, hit->u, hit->v) *
                                            lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
-                add(d, glm::dvec3(radiance) * weight);
+                add(d, glm::dvec3(radiance) * weight, r);
         }
         if (pass == 0 && image_env)
             for (int r = 0; r < o.rays; ++r)
@@ -489,7 +509,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
                     scene.occluded(origin, d))
                     continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
-                add(d, glm::dvec3(lights.environment_radiance(d)) * w);
+                add(d, glm::dvec3(lights.environment_radiance(d)) * w, r);
             }
         if (lights.sun && pass == 0)
             for (int r = 0; r < o.sun_rays; ++r)
@@ -498,7 +518,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (glm::dot(d, t.geometric_normal) <= 0.0f || scene.occluded(origin, d))
                     continue;
                 // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
-                add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
+                add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays), r);
             }
         if (pass == 0)
             for (const io::PunctualLight& p : lights.punctual)
@@ -512,7 +532,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (scene.occluded(origin, d, 0.0f,
                                    std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
                     continue;
-                add(d, glm::dvec3(e));
+                add(d, glm::dvec3(e), -1);
             }
         // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value
         // comes from its valid neighbours (dilation), in the outputs and for the bounces.
@@ -524,6 +544,13 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         pass_sh[i] = math::convolve_cosine(radiance);
         for (size_t b = 0; b < 4; ++b)
             pass_direct[i][b] = glm::vec3(direct[b]);
+        for (int j = 0; j < 9; ++j)
+            radiance[size_t(j)] = glm::vec3(acc_a[size_t(j)]);
+        const math::Sh9Rgb half_sh = math::convolve_cosine(radiance);
+        for (size_t j = 0; j < 9; ++j)
+            pass_half[i][j] = half_sh[j];
+        for (size_t b = 0; b < 4; ++b)
+            pass_half[i][9 + b] = glm::vec3(direct_a[b]);
     };
 
     using ShArray = std::array<glm::vec3, 9>;
@@ -537,6 +564,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                 {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
                                 {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
                                 {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
+                                {"half", std::as_writable_bytes(std::span<LightmapSh::Half>(out.half))},
+                                {"pass_half", std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half))},
                                 {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))}},
                                o.checkpoint_seconds);
     SlicePosition state;
@@ -577,6 +606,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                         out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
                     for (size_t b = 0; b < 4; ++b)
                         out.direct[i][b] += pass_direct[i][b];
+                    for (size_t c = 0; c < out.half[i].size(); ++c)
+                        out.half[i][c] += pass_half[i][c];
                     previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
                 }
             }

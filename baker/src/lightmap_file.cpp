@@ -1,6 +1,7 @@
 // hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/atomic_file.h>
@@ -45,14 +46,17 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
 // slot of the outputs' blocks (the touched ones and their dilation) and per output coefficient, a float map,
 // its half copy and the asset's bytes; per covered texel (at most one per slot), the irradiance of every
-// pass, its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
-// covered floor with the default outputs (90 coefficients): 1,000 bytes per texel at 1024^2 and 955 at
-// 2048^2, against the 1,310 estimated here. With
+// pass, its directly integrated plain and rnm values, the sample and the texel's record (352 bytes), and the
+// half of its samples that the denoiser needs, for the bake and for the pass (312). Measured on a fully
+// covered floor with the default outputs (90 coefficients) before the halves were kept: 1,000 bytes per
+// texel at 1024^2 and 955 at 2048^2, against the 1,310 then estimated here. --denoise adds its working
+// copies: both halves twice, and five guides of four floats (kDenoiseBytesPerCoveredTexel). With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
 // atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerCoefficient = 10;
-constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
+constexpr uint64_t kLightmapBytesPerCoveredTexel = 352 + 312;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 4 * 156 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 
 // The blocks around the touched ones that dilating the outputs by `dilate` texels may fill too.
@@ -300,7 +304,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     const uint64_t block_bytes =
         slots * kLightmapBytesPerSlot + output_slots * coefficients * kLightmapBytesPerCoefficient;
-    io::check_memory(block_bytes + slots * kLightmapBytesPerCoveredTexel + exr_bytes,
+    const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
+    io::check_memory(block_bytes + slots * per_texel + exr_bytes,
                      scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
                          std::to_string(slots / io::BlockGrid::kTexels) + " blocks of 8x8 texels, with " +
                          std::to_string(coefficients) +
@@ -329,7 +334,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             std::to_string(report.zero_area) +
             " of zero area in space); the lightmap would be empty: lay out TEXCOORD_1 inside [0, 1] "
             "or bake with --unwrap");
-    io::check_memory(block_bytes + atlas.texels.size() * kLightmapBytesPerCoveredTexel + exr_bytes,
+    io::check_memory(block_bytes + atlas.texels.size() * per_texel + exr_bytes,
                      scene_path.string() + ": a " + atlas_text + " with " +
                          std::to_string(atlas.texels.size()) + " covered texels");
     for (const std::string& warning : report.warnings)
@@ -349,7 +354,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
     check_lightmap_range(o.lights, scene.materials, scene_path);
-    const LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &*surfaces, progress);
+    LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &*surfaces, progress);
+    if (o.denoise)
+    {
+        LightmapDenoiseOptions d;
+        d.iterations = o.denoise_passes;
+        summary.denoised_texels = denoise_lightmap(scene.mesh, atlas, sh, d).texels;
+    }
     summary.rays = sh.rays;
     summary.pushed = sh.pushed;
     summary.invalid = sh.invalid;
@@ -486,6 +497,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     if (o.non_negative)
         j["non_negative_texels_changed"] = s.non_negative; // per directional output
     nlohmann::json seams = {{"edges", s.seams}};
+    if (s.denoised_texels)
+        j["denoised_texels"] = s.denoised_texels;
     seams["stitched"] = s.stitched_texels > 0;
     seams["stitched_texels"] = s.stitched_texels;
     for (const auto& [name, difference] : s.seam_difference)

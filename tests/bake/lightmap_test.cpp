@@ -8,6 +8,7 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/material.h>
@@ -1873,13 +1874,17 @@ TEST(LightmapSeams, StitchingClosesTheStepAndChangesOnlyTexelsAlongTheSeam)
         const bool touched = std::binary_search(stitch.slots().begin(), stitch.slots().end(), slot);
         const float x = float(stepped.grid.texel(slot).x) + 0.5f;
         if (touched)
+        {
             EXPECT_TRUE((x > 13.4f && x < 15.4f) || (x > 16.6f && x < 18.6f)) << x;
+        }
         for (uint32_t k = 0; k < 9; ++k)
             for (int c = 0; c < 3; ++c)
             {
                 const size_t i = stepped.index(k, slot) + size_t(c);
                 if (!touched)
+                {
                     EXPECT_EQ(stitched.values[i], stepped.values[i]);
+                }
                 changed += stitched.values[i] != stepped.values[i];
             }
     }
@@ -1916,3 +1921,200 @@ TEST(LightmapSeams, StitchingClosesTheStepAndChangesOnlyTexelsAlongTheSeam)
     EXPECT_THROW(stitch.apply(other), std::invalid_argument);
 }
 
+// The denoiser (issue 25) keeps what must not move: inside a closed box whose every surface emits 1 with
+// albedo 0.5, every texel after 3 bounces is E = pi (1 + 0.5 + 0.25 + 0.125) within 0.2% with --denoise as
+// without; a sealed room lit from outside stays exactly 0 in every value of every floor texel, though the
+// walls' outsides in the same atlas are bright and noisy.
+TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
+{
+    const Mesh box = hemi::test::unit_box(true);
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
+    materials[0].emissive_factor = glm::vec3(1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(box.indices.size()), 0}};
+    const LightmapSurfaces surfaces(box, materials, {}, primitives);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(box, 48, 32, report);
+    LightmapLights dark;
+    dark.uniform = glm::vec3(0.0f);
+    LightmapBakeOptions o;
+    o.rays = 64;
+    o.bounces = 3;
+    LightmapSh furnace = bake_lightmap_sh(box, a, dark, o, &surfaces);
+    const LightmapDenoiseReport r = denoise_lightmap(box, a, furnace);
+    EXPECT_EQ(r.charts, 6u);
+    EXPECT_EQ(r.texels, a.texels.size());
+    const double expected = M_PI * (1.0 + 0.5 + 0.25 + 0.125);
+    double worst = 0.0;
+    for (size_t i = 0; i < a.texels.size(); ++i)
+        worst = std::max(worst, std::abs(double(furnace.direct[i][0].x) / expected - 1.0));
+    std::printf("closed-box furnace, 64 rays, 3 bounces, denoised: worst texel off by %.5f\n", worst);
+    EXPECT_LT(worst, 0.002);
+
+    // The sealed room of SealedRoomLitFromOutsideStaysBlack, its box facing out: lit outside, black inside.
+    Mesh m;
+    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.0f, 0.5f, 0.5f, 0.0f});
+    const glm::vec3 c[8] = {{-2, -2, -1}, {2, -2, -1}, {2, 2, -1}, {-2, 2, -1},
+                            {-2, -2, 3},  {2, -2, 3},  {2, 2, 3},  {-2, 2, 3}};
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (int f = 0; f < 6; ++f) // both sides of every wall
+    {
+        const float u0 = 0.52f + 0.08f * float(f);
+        add_quad(m, c[faces[f][0]], c[faces[f][1]], c[faces[f][2]], c[faces[f][3]],
+                 {u0, 0.65f, u0 + 0.07f, 0.55f});
+        add_quad(m, c[faces[f][3]], c[faces[f][2]], c[faces[f][1]], c[faces[f][0]],
+                 {u0, 0.8f, u0 + 0.07f, 0.7f});
+    }
+    const LightmapAtlas s = rasterize_lightmap(m, 48, 48, report);
+    LightmapLights lights;
+    lights.uniform = glm::vec3(5.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.3f, 0.2f, 1.0f));
+    lights.sun_irradiance = glm::vec3(100.0f);
+    o.rays = 32;
+    o.bounces = 0;
+    LightmapSh sealed = bake_lightmap_sh(m, s, lights, o);
+    denoise_lightmap(m, s, sealed);
+    size_t inside = 0, lit_outside = 0;
+    for (size_t i = 0; i < s.texels.size(); ++i)
+    {
+        if (s.texels[i].triangle < 2)
+        {
+            ++inside;
+            for (const glm::vec3& v : sealed.irradiance[i])
+                ASSERT_EQ(v, glm::vec3(0.0f)) << "texel " << i;
+            for (const glm::vec3& v : sealed.direct[i])
+                ASSERT_EQ(v, glm::vec3(0.0f)) << "texel " << i;
+        }
+        lit_outside += sealed.direct[i][0].x > 1.0f;
+    }
+    EXPECT_GE(inside, 500u);
+    EXPECT_GT(lit_outside, 100u);
+}
+
+// The denoiser against a 4096-ray bake: a floor with a wall standing on it, a sky of 1 and a sun of 10 at 45
+// degrees whose shadow the wall casts on the floor. Baked at 32 rays and denoised, the irradiance at the
+// normal (plain) and the SH9 irradiance come 2.4x closer to the 4096-ray bake (RMSE over every texel: at
+// most 0.45 of the undenoised 32-ray bake's; measured 0.38 and 0.41), the mean stays within 0.5% (0.04%),
+// and the sun's shadow edge on the floor keeps its width: the 10-90% rise across it, per texel row, within
+// one texel of the 4096-ray bake's (0.85 texels both). A 128-ray bake is printed beside it: on this scene,
+// whose wall is a chart 10 texels high with the sky's occlusion curving along all of it, 32 denoised rays
+// stay 13-30% short of 128 rays (docs/lightmaps.md has the sample level, where they reach it).
+TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
+{
+    Mesh m;
+    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f}); // the floor
+    // The wall x = -0.2, 0.5 high, both sides; the sun comes from -x, so its shadow reaches x = 0.3.
+    add_quad(m, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
+             {0.66f, 0.62f, 0.81f, 0.02f});
+    add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
+             {0.83f, 0.62f, 0.98f, 0.02f});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 64, 64, report);
+    ASSERT_TRUE(report.ok());
+    LightmapLights lights;
+    lights.uniform = glm::vec3(1.0f);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(-1.0f, 0.0f, 1.0f));
+    lights.sun_irradiance = glm::vec3(10.0f);
+    const auto bake = [&](int rays, uint64_t seed)
+    {
+        LightmapBakeOptions o;
+        o.rays = rays;
+        o.sun_rays = 16;
+        o.seed = seed;
+        return bake_lightmap_sh(m, a, lights, o);
+    };
+    const LightmapSh reference = bake(4096, 3), more = bake(128, 2);
+    LightmapSh denoised = bake(32, 1);
+    const LightmapSh noisy = denoised;
+    denoise_lightmap(m, a, denoised);
+    {
+        // Every texel reads only the previous pass: one thread gives the same bytes.
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        LightmapSh again = noisy;
+        denoise_lightmap(m, a, again);
+        EXPECT_EQ(0, std::memcmp(again.irradiance.data(), denoised.irradiance.data(),
+                                 denoised.irradiance.size() * sizeof(denoised.irradiance[0])));
+        EXPECT_EQ(0, std::memcmp(again.direct.data(), denoised.direct.data(),
+                                 denoised.direct.size() * sizeof(denoised.direct[0])));
+    }
+    // RMSE of plain and of SH9's nine coefficients (red; the light is white) over every texel, and means.
+    const auto rmse = [&](const LightmapSh& sh, bool plain)
+    {
+        double sum = 0.0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            for (size_t k = 0; k < (plain ? 1u : 9u); ++k)
+            {
+                const double d = plain ? sh.direct[i][0].x - reference.direct[i][0].x
+                                       : sh.irradiance[i][k].x - reference.irradiance[i][k].x;
+                sum += d * d;
+            }
+        return std::sqrt(sum / double(a.texels.size() * (plain ? 1 : 9)));
+    };
+    const auto mean = [&](const LightmapSh& sh)
+    {
+        double sum = 0.0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            sum += sh.direct[i][0].x;
+        return sum / double(a.texels.size());
+    };
+    for (const bool plain : {true, false})
+    {
+        std::printf("%s RMSE against 4096 rays: 32 rays %.4f, denoised %.4f; 128 rays %.4f\n",
+                    plain ? "plain" : "sh9", rmse(noisy, plain), rmse(denoised, plain), rmse(more, plain));
+        EXPECT_LE(rmse(denoised, plain), 0.45 * rmse(noisy, plain)) << (plain ? "plain" : "sh9");
+    }
+    std::printf("mean: 4096 rays %.4f, 32 denoised %.4f\n", mean(reference), mean(denoised));
+    EXPECT_NEAR(mean(denoised) / mean(reference), 1.0, 0.005);
+
+    // The shadow edge, per texel row of the floor: where plain rises from 10% to 90% of the way from the
+    // shadow's level (x in [0, 0.2]) to the lit floor's (x in [0.4, 0.8]), by linear interpolation between
+    // texel centres, in texels.
+    const auto edge_width = [&](const LightmapSh& sh)
+    {
+        std::map<uint32_t, std::vector<std::pair<float, float>>> rows; // y -> (x, plain) along the row
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            if (a.texels[i].triangle < 2 && a.texels[i].centre_inside)
+                rows[a.texels[i].y].emplace_back(a.texels[i].position.x, sh.direct[i][0].x);
+        double width = 0.0;
+        int counted = 0;
+        const float texel = 2.0f / (0.6f * 64.0f);
+        for (auto& [y, row] : rows)
+        {
+            if (row.size() < 20)
+                continue;
+            std::sort(row.begin(), row.end());
+            double shadow = 0.0, lit = 0.0;
+            int ns = 0, nl = 0;
+            for (const auto& [x, e] : row)
+            {
+                if (x >= 0.0f && x <= 0.2f)
+                    shadow += e, ++ns;
+                if (x >= 0.4f && x <= 0.8f)
+                    lit += e, ++nl;
+            }
+            shadow /= ns;
+            lit /= nl;
+            const auto crossing = [&](double level)
+            {
+                const double target = shadow + level * (lit - shadow);
+                for (size_t k = 1; k < row.size(); ++k)
+                    if (row[k - 1].first >= 0.0f && row[k - 1].second < target && row[k].second >= target)
+                        return row[k - 1].first + (row[k].first - row[k - 1].first) *
+                                                      (target - row[k - 1].second) /
+                                                      (row[k].second - row[k - 1].second);
+                return double(NAN);
+            };
+            width += (crossing(0.9) - crossing(0.1)) / texel;
+            ++counted;
+        }
+        EXPECT_GT(counted, 10);
+        return width / counted;
+    };
+    const double reference_width = edge_width(reference), denoised_width = edge_width(denoised);
+    std::printf("shadow edge, 10-90%% rise: 4096 rays %.2f texels, 32 denoised %.2f texels\n",
+                reference_width, denoised_width);
+    EXPECT_LE(std::abs(denoised_width - reference_width), 1.0);
+}

@@ -1128,6 +1128,49 @@ fs::path write_split_floor(const std::string& name, bool seamed)
 }
 } // namespace
 
+// --denoise through the command line: a glTF floor under uniform radiance 1 at 8 rays per texel, whose E = pi
+// everywhere. Denoised, the worst texel is at most half as far from pi as without, the mean within 0.5%; the
+// JSON counts the texels it filtered, and a pass count out of range is refused naming the option.
+TEST(BakeCli, DenoiseFiltersTheBakedTexels)
+{
+    const fs::path scene = write_floor_gltf("denoise_floor.glb", 2);
+    const auto bake = [&](const std::string& name, const std::string& extra)
+    {
+        const fs::path asset = dir() / (name + ".hemi"), json = dir() / (name + ".json");
+        const Result r = lightmap(q(scene) + " -o " + q(asset) + " --size 16 --rays 8 --bases plain" + extra +
+                                  " --json " + q(json));
+        EXPECT_EQ(r.status, 0) << r.err;
+        return std::tuple{r, hemi::io::read_lightmap_asset(asset), nlohmann::json::parse(slurp(json))};
+    };
+    const auto [r, denoised, j] = bake("denoise_floor", " --denoise");
+    EXPECT_NE(r.out.find("--denoise: 256 texels filtered (3 passes)"), std::string::npos) << r.out;
+    EXPECT_EQ(j["denoised_texels"].get<int>(), 256);
+    const auto [r0, noisy, j0] = bake("noisy_floor", "");
+    EXPECT_FALSE(j0.contains("denoised_texels"));
+    const auto worst = [](const hemi::io::LightmapAsset& a, double& mean)
+    {
+        double w = 0.0;
+        mean = 0.0;
+        for (int64_t i = 0; i < 256; ++i)
+        {
+            const double e = a.output("plain").maps.at(0, i % 16, i / 16).x;
+            w = std::max(w, std::abs(e / M_PI - 1.0));
+            mean += e / 256.0;
+        }
+        return w;
+    };
+    double mean_denoised = 0.0, mean_noisy = 0.0;
+    const double worst_denoised = worst(denoised, mean_denoised), worst_noisy = worst(noisy, mean_noisy);
+    std::printf("floor at 8 rays: worst texel off pi by %.4f, denoised %.4f; mean %.5f, denoised %.5f\n",
+                worst_noisy, worst_denoised, mean_noisy / M_PI, mean_denoised / M_PI);
+    EXPECT_LE(worst_denoised, 0.5 * worst_noisy);
+    EXPECT_NEAR(mean_denoised / M_PI, 1.0, 0.005);
+    const Result bad = lightmap(q(scene) + " -o " + q(dir() / "bad.hemi") +
+                                " --size 16 --rays 8 --denoise --denoise-passes 0");
+    EXPECT_NE(bad.status, 0);
+    EXPECT_NE(bad.err.find("--denoise-passes"), std::string::npos) << bad.err;
+}
+
 // Seam stitching as it renders (issue 25): the split floor baked with its halves in two charts and with one
 // chart over both, each drawn by hemi-render from above with the seam down the middle of the image. Across
 // the seam (the 16 pixel columns around it, about 1.5 texels either side) the two-chart bake, stitched,

@@ -1,4 +1,5 @@
 #include <hemi/math/brdf.h>
+#include <hemi/math/luminance.h>
 #include <hemi/math/paraboloid.h>
 #include <hemi/math/quadrature.h>
 #include <hemi/math/sh_environment.h>
@@ -320,8 +321,7 @@ SourceTexels source_texels(const ParabolicImage& level, uint32_t shift = 0)
                                       const glm::dvec3 d = level.direction(half, fc, fr);
                                       const float* t = level.at(half, fc, fr);
                                       const glm::dvec3 radiance = w * glm::dvec3(t[0], t[1], t[2]);
-                                      const double y =
-                                          0.2126 * radiance.x + 0.7152 * radiance.y + 0.0722 * radiance.z;
+                                      const double y = math::luminance(radiance);
                                       sum += radiance;
                                       lit += std::max(y, 0.0) * d; // negative pixels cannot pull it out
                                       luminance += std::max(y, 0.0);

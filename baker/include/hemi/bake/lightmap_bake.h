@@ -129,6 +129,14 @@ struct LightmapSh
     // the normal, then E(B_i) * 2 / (1 + B_i.z) for rnm's three. The bounces take E at the normal from it.
     // Empty in a LightmapSh made by hand: the outputs then project the SH9.
     std::vector<std::array<glm::vec3, 4>> direct;
+    // Per texel, half A of its samples: `irradiance` (0..8) and `direct` (9..12) from rays 0, 3, 4, 7, 8, ...
+    // of each stream of samples (hemisphere rays, environment rays, sun rays; every other pair, so that the
+    // two halves take neighbouring strata alternately) and half of each exact one (punctual lights); half B
+    // is the whole less A. Two independent estimates of half the light: their difference measures the
+    // noise, and lightmap_denoise.h filters each half with weights taken from the other. Empty in a
+    // LightmapSh made by hand.
+    using Half = std::array<glm::vec3, 13>;
+    std::vector<Half> half;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
     // of single-sided surfaces, after the push below): its outputs come from its valid neighbours.
     std::vector<uint8_t> valid;
@@ -234,6 +242,10 @@ struct LightmapFileOptions
     // stitch_closeness is its weight on keeping the baked values.
     bool stitch = true;
     double stitch_closeness = 0.01;
+    // The chart-aware denoiser (lightmap_denoise.h) on the baked texels before the outputs are made from
+    // them, with denoise_passes a-trous passes; off by default.
+    bool denoise = false;
+    int denoise_passes = 3;
 };
 
 struct LightmapBakeSummary
@@ -250,6 +262,7 @@ struct LightmapBakeSummary
     // Seams (lightmap_seams.h): the edges where the surface continues from one chart into another, and per
     // output how far the two sides' lookups differ there (relative mean and 95th percentile), before and
     // after stitching (the same without it), and the texels the stitch could change.
+    size_t denoised_texels = 0; // with denoise
     size_t seams = 0, stitched_texels = 0;
     using SeamDifference = std::pair<double, double>; // mean, p95
     std::map<std::string, std::pair<SeamDifference, SeamDifference>> seam_difference;
