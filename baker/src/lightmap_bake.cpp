@@ -147,7 +147,7 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 3;
+constexpr uint64_t kLightmapCheckpointVersion = 4;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -193,7 +193,8 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
         .add_value(o.sun_rays)
         .add_value(o.seed)
         .add_value(o.ray_offset)
-        .add_value(o.bounces);
+        .add_value(o.bounces)
+        .add_value(o.keep_halves);
     key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
     for (const io::Material& m : materials)
         key.add_value(m.base_color_factor).add_value(m.emissive_factor).add_value(m.double_sided);
@@ -369,9 +370,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
     std::vector<std::array<glm::vec3, 9>> pass_sh(n);
     std::vector<std::array<glm::vec3, 4>> pass_direct(n);
-    std::vector<LightmapSh::Half> pass_half(n);
+    std::vector<LightmapSh::Half> pass_half(o.keep_halves ? n : 0);
     out.direct.assign(n, {});
-    out.half.assign(n, {});
+    out.half.assign(o.keep_halves ? n : 0, {});
     // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
     // over the hemisphere (lightmap_bake.h).
     const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
@@ -438,18 +439,21 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
         std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
-        // Half A of the samples (LightmapSh::half): rays 0, 3, 4, 7, 8, ... of each stream (every other pair,
-        // so that A and B each take one of two neighbouring strata, alternately the lower and the upper),
-        // and half of every exact sample.
+        // Half A of the samples (LightmapSh::half): rays 0, 3, 4, 7, 8, ... of each stream of `count` rays
+        // (every other pair, so that A and B each take one of two neighbouring strata, alternately the lower
+        // and the upper), half of each of the last count % 4 (which no such pairs balance), and half of every
+        // exact sample.
         std::array<glm::dvec3, 9> acc_a{};
         std::array<glm::dvec3, 4> direct_a{};
-        // `ray`: the sample's index in its stream, or -1 for an exact one (a punctual light).
-        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int ray)
+        // `ray`: the sample's index in its stream of `count`, or -1 for an exact one (a punctual light).
+        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int ray, int count)
         {
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
                                   glm::dot(world, t.normal));
             const math::Sh9 y = math::sh9_eval(local);
-            const double share = ray < 0 ? 0.5 : (((ray + 1) >> 1) & 1) == 0 ? 1.0 : 0.0;
+            const double share = ray < 0 || ray >= count - count % 4 ? 0.5
+                                 : (((ray + 1) >> 1) & 1) == 0       ? 1.0
+                                                                     : 0.0;
             for (int j = 0; j < 9; ++j)
             {
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
@@ -482,7 +486,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (!hit)
             {
                 if (pass == 0 && !image_env)
-                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight, r);
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight, r, o.rays);
                 continue;
             }
             // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
@@ -498,7 +502,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                      : surfaces->albedo(hit->primitive, hit->u, hit->v) *
                                            lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
-                add(d, glm::dvec3(radiance) * weight, r);
+                add(d, glm::dvec3(radiance) * weight, r, o.rays);
         }
         if (pass == 0 && image_env)
             for (int r = 0; r < o.rays; ++r)
@@ -509,7 +513,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
                     scene.occluded(origin, d))
                     continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
-                add(d, glm::dvec3(lights.environment_radiance(d)) * w, r);
+                add(d, glm::dvec3(lights.environment_radiance(d)) * w, r, o.rays);
             }
         if (lights.sun && pass == 0)
             for (int r = 0; r < o.sun_rays; ++r)
@@ -518,7 +522,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (glm::dot(d, t.geometric_normal) <= 0.0f || scene.occluded(origin, d))
                     continue;
                 // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
-                add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays), r);
+                add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays), r, o.sun_rays);
             }
         if (pass == 0)
             for (const io::PunctualLight& p : lights.punctual)
@@ -532,7 +536,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (scene.occluded(origin, d, 0.0f,
                                    std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
                     continue;
-                add(d, glm::dvec3(e), -1);
+                add(d, glm::dvec3(e), -1, 0);
             }
         // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value
         // comes from its valid neighbours (dilation), in the outputs and for the bounces.
@@ -544,13 +548,16 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         pass_sh[i] = math::convolve_cosine(radiance);
         for (size_t b = 0; b < 4; ++b)
             pass_direct[i][b] = glm::vec3(direct[b]);
-        for (int j = 0; j < 9; ++j)
-            radiance[size_t(j)] = glm::vec3(acc_a[size_t(j)]);
-        const math::Sh9Rgb half_sh = math::convolve_cosine(radiance);
-        for (size_t j = 0; j < 9; ++j)
-            pass_half[i][j] = half_sh[j];
-        for (size_t b = 0; b < 4; ++b)
-            pass_half[i][9 + b] = glm::vec3(direct_a[b]);
+        if (o.keep_halves)
+        {
+            for (int j = 0; j < 9; ++j)
+                radiance[size_t(j)] = glm::vec3(acc_a[size_t(j)]);
+            const math::Sh9Rgb half_sh = math::convolve_cosine(radiance);
+            for (size_t j = 0; j < 9; ++j)
+                pass_half[i][j] = half_sh[j];
+            for (size_t b = 0; b < 4; ++b)
+                pass_half[i][9 + b] = glm::vec3(direct_a[b]);
+        }
     };
 
     using ShArray = std::array<glm::vec3, 9>;
@@ -606,8 +613,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                         out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
                     for (size_t b = 0; b < 4; ++b)
                         out.direct[i][b] += pass_direct[i][b];
-                    for (size_t c = 0; c < out.half[i].size(); ++c)
-                        out.half[i][c] += pass_half[i][c];
+                    if (o.keep_halves)
+                        for (size_t c = 0; c < out.half[i].size(); ++c)
+                            out.half[i][c] += pass_half[i][c];
                     previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
                 }
             }

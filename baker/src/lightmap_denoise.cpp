@@ -185,8 +185,10 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                     // The light's term for neighbour j whose guides differ by `difference` (from the
                     // centre's, or from the fitted planes): its worst guide, in standard deviations of the
                     // two texels' noise together (the same both ways); 0 where the weighing half's guide has
-                    // no variance at the centre and the neighbour's differs from it at all (a sealed room's
-                    // black).
+                    // no variance at the centre and the neighbour's differs from it at all (a sealed room,
+                    // black in both halves everywhere, stays black; a texel black only by chance, where the
+                    // light is dim, takes neighbours that are black in the weighing half, whatever the other
+                    // half saw, so that dim light is not lost to the texels that happened to miss it).
                     const auto light_weight = [&](size_t j, const std::array<double, 4>& difference)
                     {
                         double worst = 0.0;

@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <stdexcept>
 
@@ -46,17 +47,17 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
 // slot of the outputs' blocks (the touched ones and their dilation) and per output coefficient, a float map,
 // its half copy and the asset's bytes; per covered texel (at most one per slot), the irradiance of every
-// pass, its directly integrated plain and rnm values, the sample and the texel's record (352 bytes), and the
-// half of its samples that the denoiser needs, for the bake and for the pass (312). Measured on a fully
-// covered floor with the default outputs (90 coefficients) before the halves were kept: 1,000 bytes per
-// texel at 1024^2 and 955 at 2048^2, against the 1,310 then estimated here. --denoise adds its working
-// copies: both halves twice, and five guides of four floats (kDenoiseBytesPerCoveredTexel). With
+// pass, its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
+// covered floor with the default outputs (90 coefficients): 1,000 bytes per texel at 1024^2 and 955 at
+// 2048^2, against the 1,310 estimated here. --denoise adds the half of each texel's samples the bake keeps
+// apart, for the bake and for the pass (312 bytes), and the filter's working copies: both halves twice,
+// seven arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel). With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
 // atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerCoefficient = 10;
-constexpr uint64_t kLightmapBytesPerCoveredTexel = 352 + 312;
-constexpr uint64_t kDenoiseBytesPerCoveredTexel = 4 * 156 + 5 * 16;
+constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 4 * 156 + 7 * 16 + 4;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 
 // The blocks around the touched ones that dilating the outputs by `dilate` texels may fill too.
@@ -354,7 +355,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
     check_lightmap_range(o.lights, scene.materials, scene_path);
-    LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, o.bake, &*surfaces, progress);
+    LightmapBakeOptions bake_options = o.bake;
+    bake_options.keep_halves = o.denoise;
+    LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, bake_options, &*surfaces, progress);
     if (o.denoise)
     {
         LightmapDenoiseOptions d;
@@ -388,39 +391,54 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             summary.non_negative[name] = adjusted;
     }
     summary.blocks = asset.outputs.front().maps.grid.blocks().size();
+    // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
+    // seams whose two sides' frames agree (LightmapSeam::frames_agree).
     const std::vector<LightmapSeam> seams = find_lightmap_seams(asset.mesh);
+    std::vector<LightmapSeam> framed;
+    for (const LightmapSeam& seam : seams)
+        if (seam.frames_agree)
+            framed.push_back(seam);
     summary.seams = seams.size();
+    summary.seams_across_frames = seams.size() - framed.size();
+    const auto seams_of = [&](const std::string& name) -> const std::vector<LightmapSeam>&
+    { return name == "plain" ? seams : framed; };
     for (const io::LightmapOutput& output : asset.outputs)
     {
-        const LightmapSeamMetric m = measure_lightmap_seams(seams, output.maps);
+        const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
         summary.seam_difference[output.name] = {{m.mean, m.p95}, {m.mean, m.p95}};
     }
     if (o.stitch && !seams.empty())
     {
-        // One factorisation for every output (they share the grid); the ringing-free lift runs again on the
-        // texels the stitch changed, since least squares does not keep a texel's function non-negative.
-        const LightmapSeamStitch stitch(seams, asset.outputs.front().maps.grid, o.stitch_closeness);
-        summary.stitched_texels = stitch.slots().size();
+        // One factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free
+        // lift runs again on the texels the stitch changed, since least squares does not keep a texel's
+        // function non-negative.
+        std::optional<LightmapSeamStitch> all, along_frames;
         for (io::LightmapOutput& output : asset.outputs)
         {
-            stitch.apply(output.maps);
-            if (o.non_negative && output.name != "plain" && output.name != "rnm")
+            const bool plain = output.name == "plain";
+            if (!plain && framed.empty())
+                continue;
+            std::optional<LightmapSeamStitch>& stitch =
+                plain || framed.size() == seams.size() ? all : along_frames;
+            if (!stitch)
+                stitch.emplace(seams_of(output.name), output.maps.grid, o.stitch_closeness);
+            summary.stitched_texels = std::max(summary.stitched_texels, stitch->slots().size());
+            stitch->apply(output.maps);
+            if (o.non_negative && !plain && output.name != "rnm")
             {
                 std::vector<glm::vec3> texel(output.k);
-                for (const size_t slot : stitch.slots())
+                for (const size_t slot : stitch->slots())
                 {
                     for (uint32_t k = 0; k < output.k; ++k)
                         std::memcpy(&texel[k], &output.maps.values[output.maps.index(k, slot)],
                                     sizeof texel[k]);
-                    if (!make_non_negative(output.name, texel))
-                        continue;
-                    ++summary.non_negative[output.name];
-                    for (uint32_t k = 0; k < output.k; ++k)
-                        std::memcpy(&output.maps.values[output.maps.index(k, slot)], &texel[k],
-                                    sizeof texel[k]);
+                    if (make_non_negative(output.name, texel))
+                        for (uint32_t k = 0; k < output.k; ++k)
+                            std::memcpy(&output.maps.values[output.maps.index(k, slot)], &texel[k],
+                                        sizeof texel[k]);
                 }
             }
-            const LightmapSeamMetric m = measure_lightmap_seams(seams, output.maps);
+            const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
             summary.seam_difference[output.name].second = {m.mean, m.p95};
         }
     }
@@ -499,6 +517,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     nlohmann::json seams = {{"edges", s.seams}};
     if (s.denoised_texels)
         j["denoised_texels"] = s.denoised_texels;
+    seams["across_tangent_frames"] = s.seams_across_frames; // stitched in plain only
     seams["stitched"] = s.stitched_texels > 0;
     seams["stitched_texels"] = s.stitched_texels;
     for (const auto& [name, difference] : s.seam_difference)

@@ -75,7 +75,20 @@ std::vector<LightmapSeam> find_lightmap_seams(const io::Mesh& mesh, float crease
                         glm::dot(glm::normalize(mesh.normals[a.second]),
                                  glm::normalize(mesh.normals[b.second])) < cos_crease))
             continue; // a crease
-        seams.push_back({a0, a1, b0, b1});
+        bool frames_agree = true;
+        if (mesh.tangents.size() == mesh.positions.size() && normals)
+            for (const auto& [va, vb] : {std::pair{a.first, b.first}, std::pair{a.second, b.second}})
+            {
+                const glm::vec4 ta = mesh.tangents[va], tb = mesh.tangents[vb];
+                const glm::vec3 n = glm::normalize(mesh.normals[va]);
+                const glm::vec3 pa = glm::vec3(ta) - n * glm::dot(n, glm::vec3(ta)),
+                                pb = glm::vec3(tb) - n * glm::dot(n, glm::vec3(tb));
+                const float la = glm::length(pa), lb = glm::length(pb);
+                if ((ta.w < 0.0f) != (tb.w < 0.0f) || !(la > 0.0f && lb > 0.0f) ||
+                    glm::dot(pa, pb) < cos_crease * la * lb)
+                    frames_agree = false;
+            }
+        seams.push_back({a0, a1, b0, b1, frames_agree});
     }
     return seams;
 }
@@ -163,23 +176,23 @@ LightmapSeamStitch::LightmapSeamStitch(std::span<const LightmapSeam> seams, cons
     m.height = grid.height();
     m.blocks = grid.blocks();
     const glm::dvec2 texels(m.width, m.height);
-    // Every quadrature point of every seam: the (slot, weight) pairs of L_a - L_b there, and its weight.
+    // Every quadrature point of a seam: the (slot, weight) pairs of L_a - L_b there, and its weight. Walked
+    // twice (the texels first, then the system), so that no list of every point is kept.
     struct Row
     {
         std::array<std::pair<int64_t, double>, 8> terms;
         double weight;
     };
-    std::vector<Row> rows;
     std::vector<double> cuts;
     const double gauss_t[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
     const double gauss_w[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
-    for (const LightmapSeam& seam : seams)
+    const auto rows_of = [&](const LightmapSeam& seam, auto&& use)
     {
         const glm::dvec2 a0 = glm::dvec2(seam.a0) * texels - 0.5, a1 = glm::dvec2(seam.a1) * texels - 0.5;
         const glm::dvec2 b0 = glm::dvec2(seam.b0) * texels - 0.5, b1 = glm::dvec2(seam.b1) * texels - 0.5;
         const double length = std::max(glm::length(a1 - a0), glm::length(b1 - b0));
         if (!(length > 0.0))
-            continue;
+            return;
         cuts.assign({0.0, 1.0});
         grid_crossings(a0, a1, cuts);
         grid_crossings(b0, b1, cuts);
@@ -207,26 +220,51 @@ LightmapSeamStitch::LightmapSeamStitch(std::span<const LightmapSeam> seams, cons
                     row.terms[term++] = {grid.slot(f.x0, f.y1), sign * (1 - tx) * ty};
                     row.terms[term++] = {grid.slot(f.x1, f.y1), sign * tx * ty};
                 }
-                rows.push_back(row);
-                for (const auto& [slot, w] : row.terms)
-                    if (slot >= 0 && w != 0.0)
-                        m.slots.push_back(size_t(slot));
+                use(row);
             }
         }
-    }
+    };
+    for (const LightmapSeam& seam : seams)
+        rows_of(seam,
+                [&](const Row& row)
+                {
+                    for (const auto& [slot, w] : row.terms)
+                        if (slot >= 0 && w != 0.0)
+                            m.slots.push_back(size_t(slot));
+                });
     std::sort(m.slots.begin(), m.slots.end());
     m.slots.erase(std::unique(m.slots.begin(), m.slots.end()), m.slots.end());
     const auto unknown = [&](int64_t slot) {
         return Eigen::Index(std::lower_bound(m.slots.begin(), m.slots.end(), size_t(slot)) - m.slots.begin());
     };
-    std::vector<Eigen::Triplet<double>> triplets;
-    triplets.reserve(rows.size() * 64);
-    for (const Row& row : rows)
-        for (const auto& [si, wi] : row.terms)
-            if (si >= 0 && wi != 0.0)
-                for (const auto& [sj, wj] : row.terms)
-                    if (sj >= 0 && wj != 0.0)
-                        triplets.emplace_back(unknown(si), unknown(sj), row.weight * wi * wj);
+    // S's entries, a seam at a time: its points share texels, so each seam's are summed before they join
+    // the rest (a few dozen per seam instead of 64 per point).
+    std::vector<Eigen::Triplet<double>> triplets, seam_triplets;
+    for (const LightmapSeam& seam : seams)
+    {
+        seam_triplets.clear();
+        rows_of(seam,
+                [&](const Row& row)
+                {
+                    for (const auto& [si, wi] : row.terms)
+                        if (si >= 0 && wi != 0.0)
+                            for (const auto& [sj, wj] : row.terms)
+                                if (sj >= 0 && wj != 0.0)
+                                    seam_triplets.emplace_back(unknown(si), unknown(sj),
+                                                               row.weight * wi * wj);
+                });
+        std::sort(seam_triplets.begin(), seam_triplets.end(),
+                  [](const auto& x, const auto& y)
+                  { return x.row() != y.row() ? x.row() < y.row() : x.col() < y.col(); });
+        const size_t first = triplets.size();
+        for (const Eigen::Triplet<double>& e : seam_triplets)
+            if (triplets.size() > first && triplets.back().row() == e.row() &&
+                triplets.back().col() == e.col())
+                triplets.back() =
+                    Eigen::Triplet<double>(e.row(), e.col(), triplets.back().value() + e.value());
+            else
+                triplets.push_back(e);
+    }
     const Eigen::Index n = Eigen::Index(m.slots.size());
     m.s.resize(n, n);
     m.s.setFromTriplets(triplets.begin(), triplets.end());

@@ -109,6 +109,9 @@ struct LightmapBakeOptions
     int bounces = 0;
     std::filesystem::path checkpoint; // empty: none
     double checkpoint_seconds = 30.0;
+    // Keep half of each texel's samples apart (LightmapSh::half), for the denoiser: 312 bytes more per
+    // texel, in the bake and its checkpoint.
+    bool keep_halves = false;
 };
 
 struct LightmapProgress
@@ -133,8 +136,10 @@ struct LightmapSh
     // of each stream of samples (hemisphere rays, environment rays, sun rays; every other pair, so that the
     // two halves take neighbouring strata alternately) and half of each exact one (punctual lights); half B
     // is the whole less A. Two independent estimates of half the light: their difference measures the
-    // noise, and lightmap_denoise.h filters each half with weights taken from the other. Empty in a
-    // LightmapSh made by hand.
+    // noise, and lightmap_denoise.h filters each half with weights taken from the other. Bounce samples read
+    // the previous pass's whole map in both halves, so its noise is common to A and B: the difference
+    // measures a bounce pass's own noise, not what it inherits. Empty unless the bake kept them
+    // (LightmapBakeOptions::keep_halves), and in a LightmapSh made by hand.
     using Half = std::array<glm::vec3, 13>;
     std::vector<Half> half;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
@@ -264,6 +269,7 @@ struct LightmapBakeSummary
     // after stitching (the same without it), and the texels the stitch could change.
     size_t denoised_texels = 0; // with denoise
     size_t seams = 0, stitched_texels = 0;
+    size_t seams_across_frames = 0; // seams whose sides' tangent frames differ: plain alone measures them
     using SeamDifference = std::pair<double, double>; // mean, p95
     std::map<std::string, std::pair<SeamDifference, SeamDifference>> seam_difference;
     size_t unwrapped_charts = 0; // with unwrap

@@ -24,15 +24,18 @@
 //     over its 3 x 3 neighbours in the chart (one texel's estimate is a single draw: (A - B)^2 / 2 to begin
 //     with, then what the previous passes left of it, sum l_j^2 v_j). Where the weighing half's variance of
 //     a guide is 0 at the centre (its halves agreed, like all of a sealed room's: no light), only texels with
-//     exactly its value of that guide weigh anything, so a sealed room stays exactly black.
+//     exactly its value of that guide in the weighing half weigh anything: where every texel in reach saw no
+//     light in either half (a sealed room), the result is exactly 0. (A texel black only by chance, where the
+//     light is dim, must still take its neighbours' light: requiring them black in both halves kept 16% of a
+//     dim level's light out.)
 // With those weights the texel fits v ~ b0 + b1 dx + b2 dy over the window (dx, dy its offsets; the slopes
 // damped by a ridge of 1% of the total weight, so that a window without the spread to fit them gives the
-// weighted mean) and takes b0 = sum l_j v_j: exact for light that changes linearly along the surface, also
-// where the window is one-sided (a chart's border, beside a shadow), where a weighted mean would be pulled
-// towards the side that has neighbours. Where the centre's noise is known, the light's term is then taken
-// again against the guides' fitted planes rather than the centre's values, and the fit repeated: a
-// neighbour off the plane by more than the noise (across an edge, or where the light curves) weighs less,
-// one along the gradient does not. sum l_j = 1, so a constant stays constant (to rounding).
+// weighted mean) and takes b0 = sum l_j v_j: exact, but for the ridge's small pull, for light that changes
+// linearly along the surface, also where the window is one-sided (a chart's border, beside a shadow), where a
+// weighted mean would be pulled towards the side that has neighbours. Where the centre's noise is known, the
+// light's term is then taken again against the guides' fitted planes rather than the centre's values, and the
+// fit repeated: a neighbour off the plane by more than the noise (across an edge, or where the light curves)
+// weighs less, one along the gradient does not. sum l_j = 1, so a constant stays constant (to rounding).
 // Every value of a texel (its SH9 irradiance, and plain's and rnm's directly integrated values) goes through
 // the same l_j, so the outputs stay consistent with each other; plain's and rnm's are kept >= 0. Texels
 // inside geometry (LightmapSh::valid 0) are neither filtered nor used. Deterministic on any thread count
@@ -60,7 +63,8 @@ struct LightmapDenoiseReport
     size_t charts = 0; // charts of the atlas (connected in lightmap UV space)
 };
 
-// Denoises `sh` (from bake_lightmap_sh on this mesh and atlas) in place (its halves too). Throws
+// Denoises `sh` (from bake_lightmap_sh on this mesh and atlas, with LightmapBakeOptions::keep_halves) in
+// place (its halves too). Throws
 // std::invalid_argument when `sh` lacks the halves or the directly integrated values, or its sizes do not
 // match the atlas, or for options out of range (iterations in [0, 10], sigmas > 0).
 LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,

@@ -23,6 +23,11 @@ namespace hemi::bake
 struct LightmapSeam
 {
     glm::vec2 a0, a1, b0, b1;
+    // The two sides' tangent frames agree at both ends (the same handedness, and tangents within the crease
+    // angle of each other in the surface's plane). Every output but plain holds its coefficients in the
+    // texel's tangent frame, so only where the frames agree do equal coefficients mean equal light: the
+    // directional outputs are measured and stitched along those seams only, plain along all.
+    bool frames_agree = true;
 };
 
 // Every edge two triangles share in 3D (the same positions at both ends, bit for bit, as exporters write the
