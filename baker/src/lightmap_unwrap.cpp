@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace hemi::bake
@@ -29,6 +30,36 @@ struct Chart
 uint64_t edge_key(uint32_t a, uint32_t b)
 {
     return a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
+}
+
+using Triangle2 = std::array<glm::dvec2, 3>;
+
+// Whether two triangles of a chart's plane overlap by more than `tolerance` (separating axes: the six edge
+// normals). Triangles that only touch (a shared edge or corner) do not.
+bool overlap(const Triangle2& a, const Triangle2& b, double tolerance)
+{
+    for (const Triangle2* t : {&a, &b})
+        for (int e = 0; e < 3; ++e)
+        {
+            const glm::dvec2 d = (*t)[size_t((e + 1) % 3)] - (*t)[size_t(e)];
+            const glm::dvec2 axis(-d.y, d.x);
+            const double length = glm::length(axis);
+            if (!(length > 0.0))
+                continue;
+            double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
+            for (int k = 0; k < 3; ++k)
+            {
+                const double pa = glm::dot(a[size_t(k)], axis) / length,
+                             pb = glm::dot(b[size_t(k)], axis) / length;
+                lo_a = std::min(lo_a, pa);
+                hi_a = std::max(hi_a, pa);
+                lo_b = std::min(lo_b, pb);
+                hi_b = std::max(hi_b, pb);
+            }
+            if (hi_a <= lo_b + tolerance || hi_b <= lo_a + tolerance)
+                return false;
+        }
+    return true;
 }
 
 // Skyline packing (bottom-left, best fit), tallest first, into a `width`-texel-wide atlas: each chart goes
@@ -168,8 +199,70 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
         Chart c;
         c.n = normal[seed];
         const uint32_t id = uint32_t(charts.size());
+        // A triangle joins only where its projection onto the seed's plane overlaps none of the chart's: two
+        // faces of one plane modelled over each other (as shipped levels have them) or a surface folding
+        // back within the angle would otherwise give two triangles one texel. Projections are looked up in
+        // a grid of cells as large as the seed's longest edge (the seed is the chart's largest triangle).
+        const glm::dvec3 fu =
+            glm::normalize(glm::dvec3(std::abs(c.n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)) -
+                           glm::dvec3(c.n) * double(std::abs(c.n.x) < 0.9f ? c.n.x : c.n.y));
+        const glm::dvec3 fv = glm::cross(glm::dvec3(c.n), fu);
+        const auto project = [&](uint32_t t)
+        {
+            Triangle2 q;
+            for (size_t k = 0; k < 3; ++k)
+            {
+                const glm::dvec3 p(mesh.positions[mesh.indices[size_t(t) * 3 + k]]);
+                q[k] = {glm::dot(p, fu), glm::dot(p, fv)};
+            }
+            return q;
+        };
+        const Triangle2 first = project(seed);
+        double cell = 0.0;
+        for (size_t k = 0; k < 3; ++k)
+            cell = std::max(cell, glm::length(first[(k + 1) % 3] - first[k]));
+        const double tolerance = 1e-5 * cell;
+        std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
+        const auto cells_of = [&](const Triangle2& q, auto&& use)
+        {
+            const glm::dvec2 lo = glm::min(glm::min(q[0], q[1]), q[2]),
+                             hi = glm::max(glm::max(q[0], q[1]), q[2]);
+            const int64_t x0 = int64_t(std::floor(lo.x / cell)), x1 = int64_t(std::floor(hi.x / cell)),
+                          y0 = int64_t(std::floor(lo.y / cell)), y1 = int64_t(std::floor(hi.y / cell));
+            for (int64_t y = y0; y <= y1; ++y)
+                for (int64_t x = x0; x <= x1; ++x)
+                    if (!use(uint64_t(x) * 0x9E3779B97F4A7C15ull ^ uint64_t(y)))
+                        return false;
+            return true;
+        };
+        std::unordered_set<uint32_t> rejected; // tried for this chart and overlapping it
+        const auto fits = [&](uint32_t t)
+        {
+            const Triangle2 q = project(t);
+            return cells_of(q,
+                            [&](uint64_t key)
+                            {
+                                const auto it = grid.find(key);
+                                if (it == grid.end())
+                                    return true;
+                                for (const uint32_t other : it->second)
+                                    if (overlap(q, project(other), tolerance))
+                                        return false;
+                                return true;
+                            });
+        };
+        const auto place = [&](uint32_t t)
+        {
+            cells_of(project(t),
+                     [&](uint64_t key)
+                     {
+                         grid[key].push_back(t);
+                         return true;
+                     });
+        };
         std::vector<uint32_t> stack = {seed};
         chart_of[seed] = id;
+        place(seed);
         while (!stack.empty())
         {
             const uint32_t t = stack.back();
@@ -179,9 +272,15 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
             for (int e = 0; e < 3; ++e)
                 for (uint32_t other : edges[edge_key(weld[i[e]], weld[i[(e + 1) % 3]])])
                     if (chart_of[other] == kNone && area[other] > 0.0 &&
-                        glm::dot(normal[other], c.n) >= cos_max)
+                        glm::dot(normal[other], c.n) >= cos_max && !rejected.count(other))
                     {
+                        if (!fits(other))
+                        {
+                            rejected.insert(other);
+                            continue;
+                        }
                         chart_of[other] = id;
+                        place(other);
                         stack.push_back(other);
                     }
         }

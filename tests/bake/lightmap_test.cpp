@@ -2217,3 +2217,46 @@ TEST(LightmapSeams, StitchingClosesTheWholeEdgeAndFlagsFramesThatDiffer)
     ASSERT_EQ(across.size(), 1u);
     EXPECT_FALSE(across[0].frames_agree);
 }
+
+// Unwrapping faces that overlap in their plane (issue 25), as shipped levels have them: a floor quad, the
+// same quad modelled again over it with the other diagonal (sharing its edges), a triangle folding back over
+// the floor from its right edge, a quad continuing the floor to the right (which does not overlap it), and a
+// wall with its back face on the same four corners. Unwrapped, the continuing quad joins the floor's chart,
+// the copy, the folded triangle and the back face get charts of their own, and no texel lies in two
+// triangles: the bake takes the atlas even with --strict-uv's refusal.
+TEST(LightmapUnwrap, OverlappingAndBackToBackFacesNeverShareATexel)
+{
+    Mesh m;
+    const glm::vec4 uv(0.0f, 1.0f, 1.0f, 0.0f);                  // replaced by the unwrap
+    add_quad(m, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, uv); // triangles 0, 1: the floor
+    add_quad(m, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}, uv); // 2, 3: the same, other diagonal
+    add_quad(m, {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, uv); // 4, 5: continues the floor
+    add_quad(m, {0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}, uv); // 6, 7: a wall facing +x
+    add_quad(m, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}, {0, 0, 0}, uv); // 8, 9: its back, facing -x
+    const uint32_t base = uint32_t(m.positions.size());          // 10: folds back over the floor
+    for (const glm::vec3 p : {glm::vec3(1, 0, 0), glm::vec3(1, 1, 0), glm::vec3(0.4f, 0.5f, 0)})
+    {
+        m.positions.push_back(p);
+        m.normals.emplace_back(0, 0, 1);
+        m.tangents.emplace_back(1, 0, 0, 1);
+        m.uvs.emplace_back(0, 0);
+        m.uvs1.emplace_back(0, 0);
+    }
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2});
+    UnwrapOptions o;
+    o.width = o.height = 64;
+    const UnwrapResult r = unwrap_lightmap(m, o);
+    const auto& chart = r.chart_of;
+    EXPECT_EQ(chart[0], chart[1]);
+    EXPECT_EQ(chart[4], chart[0]) << "a quad continuing the floor joins its chart";
+    EXPECT_NE(chart[2], chart[0]) << "the floor modelled twice";
+    EXPECT_NE(chart[3], chart[0]);
+    EXPECT_NE(chart[10], chart[0]) << "the triangle folding back over the floor";
+    EXPECT_NE(chart[8], chart[6]) << "the wall's back";
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, r.width, r.height, report);
+    EXPECT_TRUE(report.ok());
+    EXPECT_EQ(report.overlapping_texels, 0u)
+        << "triangles " << report.overlap_example[0] << " and " << report.overlap_example[1];
+    EXPECT_GT(a.texels.size(), 100u);
+}

@@ -181,6 +181,22 @@ TEST(RealLevel, BakesItsOwnOverlappingLightmapUvsWithAWarning)
     EXPECT_FALSE(fs::exists(refused));
 }
 
+// --unwrap on the real level (issue 25): its coplanar faces that overlap (a face modelled twice, a patch over
+// a wall) used to join one planar chart, and the bake then refused its own atlas ("176 lightmap texel(s) lie
+// inside two or more triangles"). Unwrapped now, no texel lies in two triangles: --strict-uv bakes it.
+TEST(RealLevel, UnwrapsItsOverlappingFacesIntoChartsThatShareNoTexel)
+{
+    const fs::path asset = dir() / "oa_dm3_unwrapped.hemi", json = dir() / "oa_dm3_unwrapped.json";
+    const Result r =
+        lightmap(q(level_gltf()) + " -o " + q(asset) +
+                 " --unwrap --texel-size 0.4 --rays 2 --bases plain --strict-uv --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(report.value("overlapping_texels", size_t(0)), 0u);
+    EXPECT_GT(report["unwrap"]["charts"].get<int>(), 1000);
+    fs::remove(asset);
+}
+
 // Errors name the file: a missing archive, an entry it does not hold, bytes that are no BSP, a BSP cut short.
 TEST(RealLevel, BadArchivesAndLevelsAreRefusedNamingTheFile)
 {

@@ -2,10 +2,13 @@
 // Lightmap UVs for scenes that have none (hemi-bake lightmap --unwrap): planar charts, packed at one texel
 // density. Triangles that share an edge (vertices welded by position, so seams of the other UV sets do not
 // cut charts) join the chart of a seed triangle while their normal stays within `max_chart_angle` of the
-// seed's; each chart is projected onto the seed's plane, turned so that its longest edge runs along u, and
-// the charts' rectangles are packed on a skyline (bottom-left best fit, tallest first) with `padding` texels
-// between them, so that conservative rasterisation never gives two charts one texel. A level of flat walls
-// gets one chart per wall; a curved surface gets bands of at most `max_chart_angle` of curvature.
+// seed's and their projection onto the seed's plane overlaps none of the chart's (two faces of one plane
+// modelled over each other, as shipped levels have them, or a surface folding back, go to charts of their
+// own, so no two triangles share a texel); each chart is projected onto the seed's plane, turned so that its
+// longest edge runs along u, and the charts' rectangles are packed on a skyline (bottom-left best fit,
+// tallest first) with `padding` texels between them, so that conservative rasterisation never gives two
+// charts one texel. A level of flat walls gets one chart per wall; a curved surface gets bands of at most
+// `max_chart_angle` of curvature.
 //
 // What this is not: an optimising unwrapper (xatlas, UVAtlas: not packaged in Debian). Curved meshes get
 // many small charts and so many seams; an artist's second UV map (Blender's Lightmap Pack, or a hand-made
