@@ -202,7 +202,9 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
         // A triangle joins only where its projection onto the seed's plane overlaps none of the chart's: two
         // faces of one plane modelled over each other (as shipped levels have them) or a surface folding
         // back within the angle would otherwise give two triangles one texel. Projections are looked up in
-        // a grid of cells as large as the seed's longest edge (the seed is the chart's largest triangle).
+        // a grid of cells as large as the seed's longest edge (the seed has the chart's largest area, but a
+        // long sliver can span many cells, and many small triangles can share one: a mesh of very uneven
+        // triangles would want a grid of several levels). Overlaps shallower than the tolerance pass.
         const glm::dvec3 fu =
             glm::normalize(glm::dvec3(std::abs(c.n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)) -
                            glm::dvec3(c.n) * double(std::abs(c.n.x) < 0.9f ? c.n.x : c.n.y));

@@ -2222,8 +2222,9 @@ TEST(LightmapSeams, StitchingClosesTheWholeEdgeAndFlagsFramesThatDiffer)
 // same quad modelled again over it with the other diagonal (sharing its edges), a triangle folding back over
 // the floor from its right edge, a quad continuing the floor to the right (which does not overlap it), and a
 // wall with its back face on the same four corners. Unwrapped, the continuing quad joins the floor's chart,
-// the copy, the folded triangle and the back face get charts of their own, and no texel lies in two
-// triangles: the bake takes the atlas even with --strict-uv's refusal.
+// the copy and the folded triangle get charts of their own (the overlap check: they face the same way and
+// share the floor's edges), so does the back face (the angle check: it faces the other way), and no texel
+// lies in two triangles: the bake takes the atlas even with --strict-uv's refusal.
 TEST(LightmapUnwrap, OverlappingAndBackToBackFacesNeverShareATexel)
 {
     Mesh m;
