@@ -451,24 +451,28 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
                                   glm::dot(world, t.normal));
             const math::Sh9 y = math::sh9_eval(local);
-            const double share = ray < 0 || ray >= count - count % 4 ? 0.5
-                                 : (((ray + 1) >> 1) & 1) == 0       ? 1.0
-                                                                     : 0.0;
+            // The sample's share in half A (0 when the bake keeps no halves: nothing to add).
+            const double share = !o.keep_halves                        ? 0.0
+                                 : ray < 0 || ray >= count - count % 4 ? 0.5
+                                 : (((ray + 1) >> 1) & 1) == 0         ? 1.0
+                                                                       : 0.0;
             for (int j = 0; j < 9; ++j)
-            {
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
-                acc_a[size_t(j)] += share * radiance * double(y[size_t(j)]);
-            }
             const glm::dvec3 e = radiance * double(std::max(local.z, 0.0f));
             direct[0] += e;
-            direct_a[0] += share * e;
+            std::array<glm::dvec3, 3> eb;
             for (size_t b = 0; b < 3; ++b)
             {
-                const glm::dvec3 eb =
-                    radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
-                direct[1 + b] += eb;
-                direct_a[1 + b] += share * eb;
+                eb[b] = radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
+                direct[1 + b] += eb[b];
             }
+            if (share == 0.0)
+                return;
+            for (int j = 0; j < 9; ++j)
+                acc_a[size_t(j)] += share * radiance * double(y[size_t(j)]);
+            direct_a[0] += share * e;
+            for (size_t b = 0; b < 3; ++b)
+                direct_a[1 + b] += share * eb[b];
         };
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
