@@ -424,7 +424,28 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 stitch.emplace(seams_of(output.name), output.maps.grid, o.stitch_closeness);
             summary.stitched_texels = std::max(summary.stitched_texels, stitch->slots().size());
             stitch->apply(output.maps);
-            if (o.non_negative && !plain && output.name != "rnm")
+            if (plain || output.name == "rnm")
+            {
+                // Irradiance is never negative; least squares can swing a texel that only a seam's lookups
+                // read (a gutter texel between a bright and a dark side) below 0. Such values go to 0, and
+                // that seam agrees a little less.
+                size_t clamped = 0;
+                for (const size_t slot : stitch->slots())
+                    for (uint32_t k = 0; k < output.k; ++k)
+                    {
+                        float* v = &output.maps.values[output.maps.index(k, slot)];
+                        bool any = false;
+                        for (int c = 0; c < 3; ++c)
+                            if (v[c] < 0.0f)
+                            {
+                                v[c] = 0.0f;
+                                any = true;
+                            }
+                        clamped += any;
+                    }
+                summary.stitch_clamped[output.name] = clamped;
+            }
+            else if (o.non_negative)
             {
                 std::vector<glm::vec3> texel(output.k);
                 for (const size_t slot : stitch->slots())
@@ -520,6 +541,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     seams["across_tangent_frames"] = s.seams_across_frames; // stitched in plain only
     seams["stitched"] = s.stitched_texels > 0;
     seams["stitched_texels"] = s.stitched_texels;
+    for (const auto& [name, n] : s.stitch_clamped)
+        seams["negative_clamped"][name] = n;
     for (const auto& [name, difference] : s.seam_difference)
         seams["outputs"][name] = {
             {"before", {{"mean", difference.first.first}, {"p95", difference.first.second}}},

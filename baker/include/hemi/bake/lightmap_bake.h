@@ -270,6 +270,9 @@ struct LightmapBakeSummary
     size_t denoised_texels = 0; // with denoise
     size_t seams = 0, stitched_texels = 0;
     size_t seams_across_frames = 0; // seams whose sides' tangent frames differ: plain alone measures them
+    // Per irradiance output (plain, rnm): stitched texels (coefficient maps of one texel counted each) that
+    // least squares took below 0 and that were set to 0.
+    std::map<std::string, size_t> stitch_clamped;
     using SeamDifference = std::pair<double, double>; // mean, p95
     std::map<std::string, std::pair<SeamDifference, SeamDifference>> seam_difference;
     size_t unwrapped_charts = 0; // with unwrap
