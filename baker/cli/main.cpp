@@ -19,6 +19,7 @@
 //       [--report REPORT.json]
 //   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B]
 //       [--camera auto|EYE,TARGET] [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
+//   export LEVEL.hemi -o LEVEL_LIT.glb|.gltf [--outputs all|none|NAME,...] [--rgbm-range R]
 // Every error names the file or option it is about and exits 1 (usage errors too); outputs are checked
 // (writable, regular files, none of them an input) before any work starts (tool_options.h).
 #include <hemi/bake/basis_report.h>
@@ -30,6 +31,7 @@
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+#include <hemi/io/lightmap_gltf.h>
 #include <hemi/io/memory.h>
 #include <hemi/math/camera.h>
 #include <hemi/math/paraboloid.h>
@@ -684,6 +686,53 @@ int run_brdf(BrdfCli& c)
     return 0;
 }
 
+struct ExportCli
+{
+    std::string input, output, outputs = "all";
+    float rgbm_range = 0.0f;
+};
+
+// hemi-bake export: a baked lightmap level as glTF (io/lightmap_gltf.h, docs/gltf_export.md).
+int run_export(const ExportCli& c)
+{
+    hemi::io::LightmapGltfOptions options;
+    options.rgbm_range = c.rgbm_range;
+    if (c.outputs == "none")
+        options.all_outputs = false;
+    else if (c.outputs != "all")
+        options.outputs = hemi::tool::parse_names(c.outputs, "--outputs");
+    hemi::tool::Files files;
+    files.input("LEVEL", c.input);
+    files.output("-o", c.output);
+    files.check();
+    const std::filesystem::path out(c.output);
+    if (out.extension() != ".glb" && out.extension() != ".gltf")
+        throw std::invalid_argument("-o " + c.output + ": the output must end in .glb or .gltf");
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string kind = hemi::io::asset_kind(c.input);
+    if (kind != "lightmap")
+        throw std::invalid_argument(
+            c.input + ": a " + kind +
+            " asset; export writes lightmap assets (hemi-bake lightmap -o LEVEL.hemi)");
+    const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(c.input);
+    const hemi::io::LightmapGltfSummary s = hemi::tool::naming_input(
+        c.input, files, [&] { return hemi::io::write_lightmap_gltf(out, asset, options); });
+    std::string names;
+    for (const std::string& n : s.outputs)
+        names += (names.empty() ? "" : ",") + n;
+    std::printf("wrote %s: %zu triangles, %u x %u lightmap (RGBM, range %g), outputs under HEMI_lightmaps: "
+                "%s, %.1f MiB of buffer (%.2f s)\n",
+                c.output.c_str(), asset.mesh.indices.size() / 3, asset.width, asset.height,
+                double(s.rgbm_range), names.empty() ? "none" : names.c_str(), double(s.bytes) / (1 << 20),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (s.clipped_texels)
+        std::fprintf(stderr,
+                     "hemi-bake export: warning: %llu texel(s) of the plain lightmap lie outside [0, %g] and "
+                     "were clipped in the RGBM image (a larger --rgbm-range keeps them)\n",
+                     (unsigned long long)s.clipped_texels, double(s.rgbm_range));
+    return 0;
+}
+
 struct EnvmapCli
 {
     std::string input, output, exponents = "10,100,1000", iors = "1.5", exr_dir, report;
@@ -1159,9 +1208,32 @@ int main(int argc, char** argv)
                        "also write every image (each half, mip level, exponent) as EXR into DIR");
     envmap->add_option("--report", em.report,
                        "write the sampling comparison with cube maps and the timings as JSON");
+    ExportCli ex;
+    CLI::App* exporter = app.add_subcommand(
+        "export",
+        "write a baked lightmap level as glTF 2.0 for engines and viewers without hemi: the plain "
+        "lightmap as an RGBM PNG on TEXCOORD_1, every output under HEMI_lightmaps (docs/gltf_export.md)");
+    exporter->add_option("level", ex.input, "lightmap asset (.hemi, from hemi-bake lightmap)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    exporter
+        ->add_option("-o,--output", ex.output, "glTF file to write (.glb, or .gltf with its buffer embedded)")
+        ->required();
+    exporter
+        ->add_option("--outputs", ex.outputs,
+                     "the asset's outputs stored at full precision (half floats) under HEMI_lightmaps: all, "
+                     "none, or comma-separated names (plain, rnm, sh9, ...)")
+        ->capture_default_str();
+    exporter
+        ->add_option("--rgbm-range", ex.rgbm_range,
+                     "the RGBM lightmap's range R (E = rgb * a * R); 0: the brightest texel's channel")
+        ->capture_default_str()
+        ->check(hemi::tool::finite(0.0, 1e30));
     return hemi::tool::run(app, argc, argv, "hemi-bake",
                            [&]() -> int
                            {
+                               if (exporter->parsed())
+                                   return run_export(ex);
                                if (brdf->parsed())
                                    return run_brdf(br);
                                if (envmap->parsed())

@@ -1,0 +1,180 @@
+#include <hemi/io/lightmap_gltf.h>
+
+#include "gltf_builder.h"
+
+#include <glm/gtc/packing.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace hemi::io
+{
+
+std::array<uint8_t, 4> encode_rgbm(glm::vec3 value, float range)
+{
+    const glm::vec3 v = glm::clamp(value, glm::vec3(0.0f), glm::vec3(range));
+    const float m = std::max({v.r, v.g, v.b});
+    if (!(m > 0.0f))
+        return {0, 0, 0, 0};
+    const float a = std::clamp(std::ceil(m / range * 255.0f), 1.0f, 255.0f);
+    const float scale = 255.0f / (a / 255.0f * range);
+    auto code = [&](float c) { return uint8_t(std::clamp(std::lround(c * scale), 0l, 255l)); };
+    return {code(v.r), code(v.g), code(v.b), uint8_t(a)};
+}
+
+LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const LightmapAsset& asset,
+                                        const LightmapGltfOptions& options)
+{
+    const std::string cannot = "hemi: cannot export " + path.string() + ": ";
+    std::vector<const LightmapOutput*> stored;
+    if (options.outputs.empty() && options.all_outputs)
+        for (const LightmapOutput& o : asset.outputs)
+            stored.push_back(&o);
+    for (const std::string& name : options.outputs)
+        stored.push_back(&asset.output(name)); // throws naming the outputs the asset has
+    const LightmapOutput* plain = nullptr;
+    for (const LightmapOutput& o : asset.outputs)
+        if (o.name == "plain")
+            plain = &o;
+    if (!plain)
+        throw std::invalid_argument(cannot + "the asset has no \"plain\" output, which the RGBM lightmap is "
+                                             "made of (bake it with --bases including plain)");
+
+    const uint32_t w = asset.width, h = asset.height;
+    LightmapGltfSummary summary;
+    float range = options.rgbm_range;
+    if (range == 0.0f)
+    {
+        for (float v : plain->maps.values)
+            range = std::max(range, v);
+        if (range == 0.0f)
+            range = 1.0f;
+    }
+    if (!std::isfinite(range) || range <= 0.0f)
+        throw std::invalid_argument(cannot + "the RGBM range must be finite and positive");
+    summary.rgbm_range = range;
+
+    // The buffer's size before anything is built: a .glb's chunk lengths are 32-bit.
+    uint64_t bytes = 0;
+    for (const LightmapOutput* o : stored)
+        bytes += uint64_t(w) * h * o->k * 6;
+    if (bytes > (uint64_t(1) << 32) - (uint64_t(1) << 28))
+        throw std::invalid_argument(cannot + "the outputs' half floats alone take " +
+                                    std::to_string(bytes >> 20) +
+                                    " MiB, more than one glTF buffer holds (4 GiB); store fewer outputs");
+
+    // The RGBM lightmap.
+    ImageRgba8 rgbm{w, h, std::vector<uint8_t>(size_t(w) * h * 4)};
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+        {
+            const glm::vec3 v = plain->maps.at(0, x, y);
+            if (glm::any(glm::greaterThan(v, glm::vec3(range))) ||
+                glm::any(glm::lessThan(v, glm::vec3(0.0f))))
+                ++summary.clipped_texels;
+            const std::array<uint8_t, 4> c = encode_rgbm(v, range);
+            std::copy(c.begin(), c.end(), rgbm.pixels.begin() + (size_t(y) * w + x) * 4);
+        }
+
+    GltfScene scene;
+    scene.mesh = asset.mesh;
+    scene.materials = asset.materials;
+    scene.images = asset.images;
+    scene.primitives = asset.primitives;
+    detail::GltfBuilder b = detail::scene_builder(
+        path, scene, std::vector<ImageStorage>(scene.images.size(), ImageStorage::BufferView));
+    tinygltf::Model& m = b.m;
+
+    const std::vector<uint8_t> png = encode_png(rgbm);
+    tinygltf::Image image;
+    image.name = "hemi lightmap (RGBM)";
+    image.bufferView = b.view(png.data(), png.size(), 0);
+    image.mimeType = "image/png";
+    m.images.push_back(image);
+    tinygltf::Sampler sampler; // no mipmaps: a coarser level would mix neighbouring charts
+    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    sampler.wrapS = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+    sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+    m.samplers.push_back(sampler);
+    tinygltf::Texture texture;
+    texture.name = image.name;
+    texture.source = int(m.images.size() - 1);
+    texture.sampler = int(m.samplers.size() - 1);
+    m.textures.push_back(texture);
+    const int lightmap = int(m.textures.size() - 1);
+
+    using Value = tinygltf::Value;
+    auto number = [](double v) { return Value(v); };
+    auto vec3 = [&](const glm::vec3& v) {
+        return Value(Value::Array{number(v.x), number(v.y), number(v.z)});
+    };
+    for (tinygltf::Material& mat : m.materials)
+    {
+        Value::Object extras;
+        if (mat.extras.IsObject())
+            for (const std::string& key : mat.extras.Keys())
+                extras[key] = mat.extras.Get(key);
+        Value::Object info;
+        info["index"] = Value(lightmap);
+        info["texCoord"] = Value(1);
+        info["encoding"] = Value(std::string("RGBM"));
+        info["range"] = number(range);
+        extras["lightmap"] = Value(info);
+        mat.extras = Value(extras);
+    }
+
+    Value::Object ext;
+    ext["width"] = Value(int(w));
+    ext["height"] = Value(int(h));
+    ext["texCoord"] = Value(1);
+    ext["rays"] = Value(int(asset.rays));
+    ext["bounces"] = Value(int(asset.bounces));
+    Value::Object rgbm_info;
+    rgbm_info["index"] = Value(lightmap);
+    rgbm_info["range"] = number(range);
+    ext["rgbm"] = Value(rgbm_info);
+    Value::Array outputs;
+    for (const LightmapOutput* o : stored)
+    {
+        std::vector<uint16_t> halves(size_t(w) * h * o->k * 3);
+        size_t i = 0;
+        for (uint32_t k = 0; k < o->k; ++k)
+            for (uint32_t y = 0; y < h; ++y)
+                for (uint32_t x = 0; x < w; ++x)
+                {
+                    const glm::vec3 v = o->maps.at(k, x, y);
+                    for (int c = 0; c < 3; ++c)
+                        halves[i++] = glm::packHalf1x16(v[c]);
+                }
+        Value::Object out;
+        out["name"] = Value(o->name);
+        out["coefficients"] = Value(int(o->k));
+        out["format"] = Value(std::string("RGB16F"));
+        out["bufferView"] = Value(b.view(halves.data(), halves.size() * 2, 0));
+        outputs.push_back(Value(out));
+        summary.outputs.push_back(o->name);
+    }
+    ext["outputs"] = Value(outputs);
+    if (!asset.probes.empty())
+    {
+        const LightProbes& p = asset.probes;
+        Value::Object probes;
+        probes["count"] =
+            Value(Value::Array{Value(int(p.count.x)), Value(int(p.count.y)), Value(int(p.count.z))});
+        probes["min"] = vec3(p.lo);
+        probes["max"] = vec3(p.hi);
+        probes["irradiance"] =
+            Value(b.view(p.irradiance.data(), p.irradiance.size() * sizeof(p.irradiance[0]), 0));
+        probes["valid"] = Value(b.view(p.valid.data(), p.valid.size(), 0));
+        ext["probes"] = Value(probes);
+    }
+    m.extensions["HEMI_lightmaps"] = Value(ext);
+    m.extensionsUsed.push_back("HEMI_lightmaps");
+    summary.bytes = m.buffers[0].data.size();
+    b.write(path);
+    return summary;
+}
+
+} // namespace hemi::io

@@ -1,0 +1,299 @@
+// hemi-bake export: a baked level as glTF, read back with tinygltf's own loader (which decodes the PNGs with
+// its stb_image, not hemi's reader) and the RGBM formula typed here, against the asset the bake wrote. With
+// HEMI_GLTF_VALIDATOR set (CI's .ci/gltf_validator sets it to a script that runs the Khronos glTF validator
+// from npm), the file must also pass the validator with no error and no warning.
+#include "../png_writer.h"
+#include "../temp_dir.h"
+#include "run_tool.h"
+
+#include <hemi/io/gltf.h>
+#include <hemi/io/lightmap_asset.h>
+
+#include <glm/gtc/packing.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace
+{
+
+fs::path dir()
+{
+    return hemi::test::temp_dir("export_test");
+}
+
+using hemi::test::q;
+using hemi::test::Result;
+
+Result bake(const std::string& args)
+{
+    return hemi::test::run(dir(), HEMI_BAKE_EXE, args);
+}
+
+// A floor of 4 x 4 quads in glTF's y-up space with a post standing on it (so that the light has a shadow and
+// a bounce to bake), two materials, the floor's with a base colour PNG and a technique in its extras, and
+// TEXCOORD_1 laid out by hand: the floor over [0, 0.75] x [0, 1], the post's four sides in columns of
+// [0.8, 1] x [0, 1].
+fs::path write_level(const std::string& name)
+{
+    hemi::io::GltfScene s;
+    hemi::io::Mesh& m = s.mesh;
+    auto quad = [&](glm::vec3 o, glm::vec3 du, glm::vec3 dv, glm::vec2 uv0, glm::vec2 uv_size)
+    {
+        const uint32_t base = uint32_t(m.positions.size());
+        const glm::vec3 n = glm::normalize(glm::cross(dv, du));
+        const glm::vec2 corners[4] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+        for (const glm::vec2& c : corners)
+        {
+            m.positions.push_back(o + c.x * du + c.y * dv);
+            m.normals.push_back(n);
+            m.tangents.emplace_back(glm::normalize(du), 1.0f);
+            m.uvs.push_back(c);
+            m.uvs1.push_back(uv0 + c * uv_size);
+        }
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    };
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i)
+            quad({-1.0f + 0.5f * i, 0.0f, -1.0f + 0.5f * j}, {0.5f, 0, 0}, {0, 0, 0.5f},
+                 {0.75f * i / 4.0f, j / 4.0f}, {0.75f / 4.0f, 0.25f});
+    s.primitives.push_back({0, uint32_t(m.indices.size()), 0});
+    // The post, 0.2 wide and 0.8 high, its sides facing out (counter-clockwise seen from outside).
+    const float r = 0.1f, hgt = 0.8f;
+    const glm::vec3 side[4][2] = {{{-r, 0, r}, {2 * r, 0, 0}},
+                                  {{r, 0, r}, {0, 0, -2 * r}},
+                                  {{r, 0, -r}, {-2 * r, 0, 0}},
+                                  {{-r, 0, -r}, {0, 0, 2 * r}}};
+    for (int k = 0; k < 4; ++k)
+        quad(side[k][0], side[k][1], {0, hgt, 0}, {0.8f + 0.05f * k, 0.02f}, {0.04f, 0.96f});
+    s.primitives.push_back(
+        {s.primitives[0].index_count, uint32_t(m.indices.size()) - s.primitives[0].index_count, 1});
+    s.materials.resize(2);
+    s.materials[0].name = "floor";
+    s.materials[0].technique = "sh9";
+    s.materials[0].base_color.image = 0;
+    s.materials[1].name = "post";
+    s.materials[1].base_color_factor = {0.8f, 0.5f, 0.3f, 1.0f};
+    std::vector<uint16_t> texels;
+    for (int i = 0; i < 16; ++i)
+        texels.insert(texels.end(), {uint16_t(i * 16), 128, uint16_t(255 - i * 16)});
+    s.images.push_back({"checker.png", "image/png", hemi::test::encode_png_samples(4, 4, 3, 8, texels)});
+    const fs::path p = dir() / name;
+    hemi::io::write_gltf(p, s);
+    return p;
+}
+
+// The glTF file as the Khronos validator's JSON report sees it: its error and warning counts.
+std::pair<int, int> validate(const fs::path& file, const std::string& validator)
+{
+    const fs::path report = dir() / "validator_report.json";
+    const Result r = hemi::test::run(dir(), "node", q(validator) + " " + q(file) + " " + q(report));
+    EXPECT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(report));
+    return {j["issues"]["numErrors"].get<int>(), j["issues"]["numWarnings"].get<int>()};
+}
+
+} // namespace
+
+// The issue's form: a level baked with a sun, a bounce and probes, exported; every material names the RGBM
+// lightmap on TEXCOORD_1 with its range, every texel decodes within RGBM's stated precision, and every output
+// and the probes are the asset's own values, bit for bit.
+TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
+{
+    const fs::path scene = write_level("post.glb"), asset = dir() / "post.hemi", glb = dir() / "post_lit.glb";
+    const Result b =
+        bake("lightmap " + q(scene) + " -o " + q(asset) +
+             " --env uniform --env-scale 0.5 --sun 0.4,0.3,1,4,3.6,3 --bounces 1 --size 64 --rays "
+             "32 --probes 3,2,2 --probe-rays 64");
+    ASSERT_EQ(b.status, 0) << b.err;
+    const Result e = bake("export " + q(asset) + " -o " + q(glb));
+    ASSERT_EQ(e.status, 0) << e.err;
+    EXPECT_EQ(e.err, "") << "nothing clipped with the default range";
+    EXPECT_NE(e.out.find("wrote"), std::string::npos) << e.out;
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+
+    tinygltf::Model m;
+    tinygltf::TinyGLTF loader;
+    std::string err, warn;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, glb.string())) << err;
+    EXPECT_EQ(err, "");
+    EXPECT_EQ(warn, "");
+
+    // The lightmap: one texture, named by every material with the same range.
+    ASSERT_EQ(m.materials.size(), 2u);
+    int texture = -1;
+    double range = 0.0;
+    for (const tinygltf::Material& mat : m.materials)
+    {
+        ASSERT_TRUE(mat.extras.Has("lightmap")) << mat.name;
+        const tinygltf::Value& l = mat.extras.Get("lightmap");
+        EXPECT_EQ(l.Get("texCoord").GetNumberAsInt(), 1);
+        EXPECT_EQ(l.Get("encoding").Get<std::string>(), "RGBM");
+        if (texture < 0)
+        {
+            texture = l.Get("index").GetNumberAsInt();
+            range = l.Get("range").GetNumberAsDouble();
+        }
+        EXPECT_EQ(l.Get("index").GetNumberAsInt(), texture);
+        EXPECT_EQ(l.Get("range").GetNumberAsDouble(), range);
+    }
+    EXPECT_EQ(m.materials[0].extras.Get("hemi_technique").Get<std::string>(), "sh9")
+        << "the scene's extras kept";
+    ASSERT_GE(texture, 0);
+    ASSERT_LT(size_t(texture), m.textures.size());
+    const tinygltf::Image& image = m.images[size_t(m.textures[size_t(texture)].source)];
+    ASSERT_EQ(image.width, int(a.width));
+    ASSERT_EQ(image.height, int(a.height));
+    ASSERT_EQ(image.component, 4);
+    ASSERT_EQ(image.bits, 8);
+    const tinygltf::Sampler& sampler = m.samplers[size_t(m.textures[size_t(texture)].sampler)];
+    EXPECT_EQ(sampler.minFilter, TINYGLTF_TEXTURE_FILTER_LINEAR) << "no mipmaps across charts";
+    EXPECT_EQ(sampler.wrapS, TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE);
+
+    // Every texel: E = rgb / 255 * a / 255 * range, within (brightest channel + range / 255) / 510.
+    const hemi::io::LightmapOutput& plain = a.output("plain");
+    float brightest = 0.0f;
+    size_t lit = 0;
+    for (uint32_t y = 0; y < a.height; ++y)
+        for (uint32_t x = 0; x < a.width; ++x)
+        {
+            const glm::vec3 baked = plain.maps.at(0, x, y);
+            const unsigned char* p = &image.image[(size_t(y) * a.width + x) * 4];
+            const float mx = std::max({baked.r, baked.g, baked.b});
+            brightest = std::max(brightest, mx);
+            lit += mx > 0.0f;
+            const double bound = (mx + range / 255.0) / 510.0 * (1.0 + 1e-5);
+            for (int c = 0; c < 3; ++c)
+            {
+                const double decoded = p[c] / 255.0 * (p[3] / 255.0) * range;
+                ASSERT_NEAR(decoded, baked[c], bound) << "texel " << x << ", " << y << " channel " << c;
+            }
+        }
+    EXPECT_EQ(float(range), brightest) << "the default range is the brightest channel";
+    EXPECT_GT(lit, size_t(a.covered_texels)) << "covered and dilated texels are lit";
+
+    // The base colour image, byte for byte.
+    const tinygltf::Material& floor = m.materials[0];
+    const int base = m.textures[size_t(floor.pbrMetallicRoughness.baseColorTexture.index)].source;
+    const tinygltf::BufferView& bv = m.bufferViews[size_t(m.images[size_t(base)].bufferView)];
+    const std::vector<uint8_t> stored(m.buffers[0].data.begin() + long(bv.byteOffset),
+                                      m.buffers[0].data.begin() + long(bv.byteOffset + bv.byteLength));
+    EXPECT_EQ(stored, a.images[0].bytes);
+
+    // HEMI_lightmaps: every output of the asset, its half floats as the asset holds them.
+    EXPECT_NE(std::find(m.extensionsUsed.begin(), m.extensionsUsed.end(), "HEMI_lightmaps"),
+              m.extensionsUsed.end());
+    EXPECT_TRUE(m.extensionsRequired.empty());
+    ASSERT_TRUE(m.extensions.count("HEMI_lightmaps"));
+    const tinygltf::Value& ext = m.extensions.at("HEMI_lightmaps");
+    EXPECT_EQ(ext.Get("width").GetNumberAsInt(), int(a.width));
+    EXPECT_EQ(ext.Get("height").GetNumberAsInt(), int(a.height));
+    EXPECT_EQ(ext.Get("rgbm").Get("index").GetNumberAsInt(), texture);
+    const tinygltf::Value& outputs = ext.Get("outputs");
+    ASSERT_EQ(outputs.ArrayLen(), a.outputs.size());
+    for (size_t i = 0; i < a.outputs.size(); ++i)
+    {
+        const hemi::io::LightmapOutput& o = a.outputs[i];
+        const tinygltf::Value& out = outputs.Get(int(i));
+        EXPECT_EQ(out.Get("name").Get<std::string>(), o.name);
+        ASSERT_EQ(out.Get("coefficients").GetNumberAsInt(), int(o.k));
+        EXPECT_EQ(out.Get("format").Get<std::string>(), "RGB16F");
+        const tinygltf::BufferView& v = m.bufferViews[size_t(out.Get("bufferView").GetNumberAsInt())];
+        ASSERT_EQ(v.byteLength, size_t(o.k) * a.width * a.height * 6) << o.name;
+        const uint8_t* bytes = m.buffers[0].data.data() + v.byteOffset;
+        size_t differ = 0;
+        for (uint32_t k = 0; k < o.k; ++k)
+            for (uint32_t y = 0; y < a.height; ++y)
+                for (uint32_t x = 0; x < a.width; ++x)
+                    for (int c = 0; c < 3; ++c)
+                    {
+                        uint16_t h;
+                        std::memcpy(&h, bytes + (((size_t(k) * a.height + y) * a.width + x) * 3 + c) * 2, 2);
+                        differ += glm::unpackHalf1x16(h) != o.maps.at(k, x, y)[c];
+                    }
+        EXPECT_EQ(differ, 0u) << o.name;
+    }
+    // The probes, as the asset has them.
+    const tinygltf::Value& probes = ext.Get("probes");
+    ASSERT_TRUE(probes.IsObject());
+    EXPECT_EQ(probes.Get("count").Get(0).GetNumberAsInt(), 3);
+    EXPECT_EQ(probes.Get("count").Get(2).GetNumberAsInt(), 2);
+    const tinygltf::BufferView& pv = m.bufferViews[size_t(probes.Get("irradiance").GetNumberAsInt())];
+    ASSERT_EQ(pv.byteLength, a.probes.irradiance.size() * 9 * 12);
+    EXPECT_EQ(
+        std::memcmp(m.buffers[0].data.data() + pv.byteOffset, a.probes.irradiance.data(), pv.byteLength), 0);
+
+    // The geometry reads back (hemi's reader) with the asset's lightmap UVs.
+    const hemi::io::GltfScene back = hemi::io::read_gltf(glb);
+    EXPECT_EQ(back.mesh.uvs1, a.mesh.uvs1);
+    EXPECT_EQ(back.mesh.positions, a.mesh.positions);
+
+    if (const char* validator = std::getenv("HEMI_GLTF_VALIDATOR"))
+    {
+        const auto [errors, warnings] = validate(glb, validator);
+        EXPECT_EQ(errors, 0) << "Khronos glTF validator, " << glb;
+        EXPECT_EQ(warnings, 0) << "Khronos glTF validator, " << glb;
+    }
+
+    // --outputs none: the RGBM lightmap alone; a smaller --rgbm-range clips and says how much.
+    const fs::path small = dir() / "post_small.gltf";
+    const Result n = bake("export " + q(asset) + " -o " + q(small) + " --outputs none --rgbm-range 1");
+    ASSERT_EQ(n.status, 0) << n.err;
+    EXPECT_NE(n.err.find("clipped"), std::string::npos) << n.err;
+    tinygltf::Model s;
+    ASSERT_TRUE(loader.LoadASCIIFromFile(&s, &err, &warn, small.string())) << err;
+    EXPECT_EQ(s.extensions.at("HEMI_lightmaps").Get("outputs").ArrayLen(), 0u);
+    EXPECT_EQ(s.materials[1].extras.Get("lightmap").Get("range").GetNumberAsDouble(), 1.0);
+    if (const char* validator = std::getenv("HEMI_GLTF_VALIDATOR"))
+    {
+        EXPECT_EQ(validate(small, validator), std::make_pair(0, 0)) << small;
+    }
+}
+
+// Bad input: exit status 1, a message naming the file and the problem, no output left behind.
+TEST(HemiBakeExport, RefusesWhatIsNotALightmapLevelWithTheFileNamed)
+{
+    const fs::path scene = write_level("post_bad.glb"), asset = dir() / "post_sh9.hemi",
+                   out = dir() / "bad.glb";
+    ASSERT_EQ(
+        bake("lightmap " + q(scene) + " -o " + q(asset) + " --env uniform --size 16 --rays 4 --bases sh9")
+            .status,
+        0);
+    const Result no_plain = bake("export " + q(asset) + " -o " + q(out));
+    EXPECT_EQ(no_plain.status, 1);
+    EXPECT_NE(no_plain.err.find("no \"plain\" output"), std::string::npos) << no_plain.err;
+    const Result unknown = bake("export " + q(asset) + " -o " + q(out) + " --outputs sh9,h7");
+    EXPECT_EQ(unknown.status, 1);
+    EXPECT_NE(unknown.err.find("h7"), std::string::npos) << unknown.err;
+    const Result extension = bake("export " + q(asset) + " -o " + q(dir() / "bad.obj"));
+    EXPECT_EQ(extension.status, 1);
+    EXPECT_NE(extension.err.find(".glb or .gltf"), std::string::npos) << extension.err;
+
+    // Not a lightmap asset: a PRT asset.
+    const fs::path prt = dir() / "post_prt.hemi";
+    ASSERT_EQ(bake("prt " + q(scene) + " -o " + q(prt) + " --rays 16 --bases gs").status, 0);
+    const Result kind = bake("export " + q(prt) + " -o " + q(out));
+    EXPECT_EQ(kind.status, 1);
+    EXPECT_NE(kind.err.find(prt.string()), std::string::npos) << kind.err;
+    EXPECT_NE(kind.err.find("prt asset"), std::string::npos) << kind.err;
+
+    // A truncated asset.
+    const fs::path cut = dir() / "post_cut.hemi";
+    {
+        const std::string bytes = hemi::test::slurp(asset);
+        std::ofstream(cut, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 2));
+    }
+    const Result truncated = bake("export " + q(cut) + " -o " + q(out));
+    EXPECT_EQ(truncated.status, 1);
+    EXPECT_NE(truncated.err.find(cut.string()), std::string::npos) << truncated.err;
+    EXPECT_FALSE(fs::exists(out));
+}
