@@ -1347,6 +1347,36 @@ TEST(LightmapUnwrap, ChartsJoinWithinTenDegreesAndStartAQuarterTexelIn)
 // charts) unwraps without overlaps; a closed emissive box unwrapped and baked
 // with one bounce gives E = pi (1 + 0.5) in every texel (the bounce looks the irradiance up through the new
 // UVs; 0.2%); an atlas too small for the texel size is refused, naming both.
+// The determinism line: the same atlas, bit for bit, on one thread and on all (a UV sphere and the
+// sample level, so curved and planar charts both).
+TEST(LightmapUnwrap, SameAtlasBytesOnOneThreadAndOnAll)
+{
+    for (const bool curved : {true, false})
+    {
+        hemi::io::Mesh mesh =
+            curved ? hemi::io::make_uv_sphere(1.0f, 48, 24) : hemi::samples::make_level(256).mesh;
+        mesh.uvs1.clear();
+        hemi::bake::UnwrapOptions u;
+        u.texel_size = curved ? 0.02f : 0.05f;
+        hemi::io::Mesh all = mesh, one = mesh;
+        const hemi::bake::UnwrapResult ra = hemi::bake::unwrap_lightmap(all, u);
+        hemi::bake::UnwrapResult r1;
+        {
+            tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+            r1 = hemi::bake::unwrap_lightmap(one, u);
+        }
+        EXPECT_EQ(ra.width, r1.width);
+        EXPECT_EQ(ra.height, r1.height);
+        EXPECT_EQ(ra.charts, r1.charts);
+        EXPECT_EQ(ra.chart_of, r1.chart_of);
+        ASSERT_EQ(all.uvs1.size(), one.uvs1.size());
+        EXPECT_EQ(0, std::memcmp(all.uvs1.data(), one.uvs1.data(), all.uvs1.size() * sizeof(all.uvs1[0])))
+            << (curved ? "sphere" : "level");
+        EXPECT_EQ(all.indices, one.indices);
+        EXPECT_EQ(all.positions, one.positions);
+    }
+}
+
 TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
 {
     hemi::io::GltfScene level = hemi::samples::make_level(256);

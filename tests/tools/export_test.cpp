@@ -1,12 +1,15 @@
 // hemi-bake export: a baked level as glTF, read back with tinygltf's own loader (which decodes the PNGs with
 // its stb_image, not hemi's reader) and the RGBM formula typed here, against the asset the bake wrote. With
-// HEMI_GLTF_VALIDATOR set (CI's .ci/gltf_validator sets it to a script that runs the Khronos glTF validator
-// from npm), the file must also pass the validator with no error and no warning.
+// HEMI_GLTF_VALIDATOR set (CI's .ci/gltf_export sets it to a script that runs the Khronos glTF validator
+// from npm), the file must also pass the validator with no error and no warning; with HEMI_THREEJS_SHOT set
+// (docs/threejs/shot.mjs, which the same script installs), three.js must draw it as hemi-render draws the
+// asset.
 #include "../png_writer.h"
 #include "../temp_dir.h"
 #include "run_tool.h"
 
 #include <hemi/io/gltf.h>
+#include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 
 #include <glm/gtc/packing.hpp>
@@ -15,6 +18,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -242,6 +246,59 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
         const auto [errors, warnings] = validate(glb, validator);
         EXPECT_EQ(errors, 0) << "Khronos glTF validator, " << glb;
         EXPECT_EQ(warnings, 0) << "Khronos glTF validator, " << glb;
+    }
+
+    // An independent renderer: three.js (docs/threejs/index.html, the loader docs/gltf_export.md shows) draws
+    // the .glb as hemi-render draws the asset's plain lightmap, from the same camera. three.js's diffuse
+    // gives the share its specular layer reflects (F0 = 0.04) to that layer, so it is a few per cent darker.
+    if (const char* shot = std::getenv("HEMI_THREEJS_SHOT"))
+    {
+        const fs::path ours = dir() / "post_hemi.png", theirs = dir() / "post_three.png";
+        const Result h = hemi::test::run(dir(), HEMI_RENDER_EXE,
+                                         q(asset) +
+                                             " --technique plain --camera 1.2,-1.7,1.3,0,0,0.3 --size "
+                                             "320x200 -o " +
+                                             q(ours),
+                                         "HEMI_VALIDATION=1");
+        ASSERT_EQ(h.status, 0) << h.err;
+        // The same camera in the glTF's frame (world (x, y, z) is glTF (x, z, -y)).
+        const Result t = hemi::test::run(
+            dir(), "node", q(shot) + " " + q(glb) + " " + q(theirs) + " 320x200 1.2,1.3,1.7 0,0.3,0");
+        ASSERT_EQ(t.status, 0) << t.err << t.out;
+        const hemi::io::ImageRgba8 a8 = hemi::io::read_png(ours), b8 = hemi::io::read_png(theirs);
+        ASSERT_EQ(a8.width, b8.width);
+        ASSERT_EQ(a8.height, b8.height);
+        auto linear = [](uint8_t c)
+        {
+            const double v = c / 255.0;
+            return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+        };
+        double sum_a = 0.0, sum_b = 0.0;
+        std::vector<std::array<double, 2>> pairs;
+        for (size_t i = 0; i < a8.pixels.size(); i += 4)
+        {
+            const uint8_t* pa = &a8.pixels[i];
+            const uint8_t* pb = &b8.pixels[i];
+            const uint8_t ma = std::max({pa[0], pa[1], pa[2]}), mb = std::max({pb[0], pb[1], pb[2]});
+            if (mb < 5 || ma == 255 || mb == 255)
+                continue; // three.js's black background, or clipped in either
+            for (int c = 0; c < 3; ++c)
+            {
+                pairs.push_back({linear(pa[c]), linear(pb[c])});
+                sum_a += pairs.back()[0];
+                sum_b += pairs.back()[1];
+            }
+        }
+        ASSERT_GT(pairs.size(), size_t(3 * 320 * 200 / 4)) << "the level fills the view";
+        const double ratio = sum_b / sum_a;
+        EXPECT_GT(ratio, 0.92) << "three.js / hemi-render, linear";
+        EXPECT_LT(ratio, 1.0) << "three.js / hemi-render, linear";
+        // Past that one factor, pixel for pixel (texture filtering and edges differ a little).
+        std::vector<double> relative;
+        for (const auto& [ours_value, theirs_value] : pairs)
+            relative.push_back(std::abs(theirs_value / ratio - ours_value) / (ours_value + 1e-3));
+        std::nth_element(relative.begin(), relative.begin() + long(relative.size() / 2), relative.end());
+        EXPECT_LT(relative[relative.size() / 2], 0.02) << "median relative difference per pixel";
     }
 
     // --outputs none: the RGBM lightmap alone; a smaller --rgbm-range clips and says how much.
