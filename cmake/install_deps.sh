@@ -25,6 +25,8 @@ packages=(
     libembree-dev libtbb-dev
     # command line, hashing (xxHash, header-only)
     libcli11-dev libxxhash-dev
+    # distributed bakes: hemi-bake under mpirun (optional for the build; the tests run it when it is there)
+    libopenmpi-dev openmpi-bin
     # tests and benchmarks; clang's libFuzzer and sanitizer runtimes for the fuzz preset
     libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
     # a real game level for the lightmap tests: OpenArena 0.8.1's Quake III maps (pak1-maps.pk3, 40 MB;

@@ -22,6 +22,8 @@
 //   export LEVEL.hemi -o LEVEL_LIT.glb|.gltf [--outputs all|none|NAME,...] [--rgbm-range R]
 // Every error names the file or option it is about and exits 1 (usage errors too); outputs are checked
 // (writable, regular files, none of them an input) before any work starts (tool_options.h).
+// `mpirun -np N hemi-bake lightmap ...` shares the bake among N processes (mpi_distribution.h,
+// docs/distributed.md); rank 0 writes the outputs, the same bytes as one process.
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/factored.h>
@@ -39,6 +41,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mpi_distribution.h"
 #include "tool_options.h"
 
 #include <CLI/CLI.hpp>
@@ -474,7 +477,9 @@ int run_lightmap(LightmapCli& c)
         for (const std::string& name : o.outputs)
             files.output("--exr-dir", bake::lightmap_exr_path(c.exr_dir, c.asset, name));
     }
-    files.check();
+    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
+    if (leader) // the other ranks write nothing (their machines may not even see the outputs' folder)
+        files.check();
     o.lights = c.light.lights(); // read_exr names the environment's file; check_lights names it too
     ProgressLine line("hemi-bake lightmap");
     const bake::LightmapBakeSummary s = hemi::tool::naming_input(
@@ -494,6 +499,8 @@ int run_lightmap(LightmapCli& c)
                     line.update(fraction, what, p.pass + 1 == p.passes && p.texels_done == p.texels);
                 });
         });
+    if (!leader)
+        return 0;
     for (const std::string& w : s.warnings)
         std::fprintf(stderr, "hemi-bake lightmap: warning: %s: %s\n", c.scene.c_str(), w.c_str());
     std::printf("baked %s: %ux%u atlas, %zu texels covered, %zu triangles, outputs %s\n", c.asset.c_str(),
@@ -951,6 +958,9 @@ int run_basis_report(const std::string& json, const std::string& plot, int signa
 
 int main(int argc, char** argv)
 {
+    // Under mpirun every rank runs this; the bakes that share their work (lightmap) hand it out, rank 0
+    // writes the outputs (mpi_distribution.h, docs/distributed.md).
+    const std::unique_ptr<hemi::tool::MpiJob> job = hemi::tool::join_mpi_job(argc, argv);
     CLI::App app{"hemi-bake: precompute lighting data for hemi"};
     app.require_subcommand(1);
 
@@ -1229,23 +1239,32 @@ int main(int argc, char** argv)
                      "the RGBM lightmap's range R (E = rgb * a * R); 0: the brightest texel's channel")
         ->capture_default_str()
         ->check(hemi::tool::finite(0.0, 1e30));
-    return hemi::tool::run(app, argc, argv, "hemi-bake",
-                           [&]() -> int
-                           {
-                               if (exporter->parsed())
-                                   return run_export(ex);
-                               if (brdf->parsed())
-                                   return run_brdf(br);
-                               if (envmap->parsed())
-                                   return run_envmap(em);
-                               if (reference->parsed())
-                                   return run_reference(rf);
-                               if (lightmap->parsed())
-                                   return run_lightmap(lm);
-                               if (ssbump->parsed())
-                                   return run_ssbump(sb);
-                               if (prt->parsed())
-                                   return run_prt(pc);
-                               return run_basis_report(json, plot, signals, seed);
-                           });
+    const int code = hemi::tool::run(
+        app, argc, argv, "hemi-bake",
+        [&]() -> int
+        {
+            if (job && job->ranks() > 1 && !lightmap->parsed())
+                throw std::invalid_argument(
+                    "runs as one process: of the bakes, only lightmap is shared among mpirun's ranks so far "
+                    "(run this one without mpirun)");
+            lm.options.bake.distribution = job.get();
+            if (exporter->parsed())
+                return run_export(ex);
+            if (brdf->parsed())
+                return run_brdf(br);
+            if (envmap->parsed())
+                return run_envmap(em);
+            if (reference->parsed())
+                return run_reference(rf);
+            if (lightmap->parsed())
+                return run_lightmap(lm);
+            if (ssbump->parsed())
+                return run_ssbump(sb);
+            if (prt->parsed())
+                return run_prt(pc);
+            return run_basis_report(json, plot, signals, seed);
+        });
+    if (job && code != 0)
+        job->abort(code); // no rank waits for this one
+    return code;
 }

@@ -147,7 +147,7 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 4;
+constexpr uint64_t kLightmapCheckpointVersion = 5;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -566,7 +566,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 
     using ShArray = std::array<glm::vec3, 9>;
     using DirectArray = std::array<glm::vec3, 4>;
-    SliceCheckpoint checkpoint(o.checkpoint,
+    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(),
                                key_of(mesh, atlas, lights, o, surfaces,
                                       surfaces ? std::span<const io::Material>(surfaces->materials())
                                                : std::span<const io::Material>()),
@@ -577,13 +578,35 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                 {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
                                 {"half", std::as_writable_bytes(std::span<LightmapSh::Half>(out.half))},
                                 {"pass_half", std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half))},
-                                {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))}},
+                                {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
+                                {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}},
                                o.checkpoint_seconds);
     SlicePosition state;
     if (const std::optional<SlicePosition> resumed = checkpoint.resume())
     {
         state = *resumed;
         out.resumed = true;
+    }
+    if (dist.ranks() > 1)
+    {
+        // Every rank goes on from where the leader's checkpoint left the bake.
+        uint8_t resumed = out.resumed;
+        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
+        out.resumed = resumed != 0;
+        if (out.resumed)
+        {
+            dist.broadcast(std::as_writable_bytes(std::span<SlicePosition>(&state, 1)));
+            for (const std::span<std::byte> bytes :
+                 {std::as_writable_bytes(std::span<ShArray>(out.irradiance)),
+                  std::as_writable_bytes(std::span<ShArray>(pass_sh)),
+                  std::as_writable_bytes(std::span<DirectArray>(out.direct)),
+                  std::as_writable_bytes(std::span<DirectArray>(pass_direct)),
+                  std::as_writable_bytes(std::span<LightmapSh::Half>(out.half)),
+                  std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half)),
+                  std::as_writable_bytes(std::span<glm::vec3>(previous)),
+                  std::as_writable_bytes(std::span<uint8_t>(out.valid))})
+                dist.broadcast(bytes);
+        }
     }
     const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
                                     (lights.sun ? uint64_t(o.sun_rays) : 0) +
@@ -592,41 +615,54 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     const auto t0 = std::chrono::steady_clock::now();
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
-        uint32_t first = pass == int(state.pass) ? state.next_item : 0;
+        const uint32_t first = pass == int(state.pass) ? state.next_item : 0;
+        if (first == n)
+            continue; // resumed after this pass was added in
         if (pass > 0)
             previous_map = dilated(atlas, previous, 1, 2, out.valid);
-        if (progress)
+        if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
-        while (first < n)
-        {
-            const uint32_t last = std::min(n, first + slice);
-            tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 64),
-                              [&](const tbb::blocked_range<uint32_t>& r)
-                              {
-                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
-                                      texel(i, pass);
-                              });
-            out.rays += uint64_t(last - first) * (pass == 0 ? rays_per_texel : uint64_t(o.rays));
-            first = last;
-            if (first == n)
+        // What a texel's work writes, which every rank gathers (valid only in the first pass).
+        std::vector<ItemArray> arrays = {
+            {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
+            {reinterpret_cast<std::byte*>(pass_direct.data()), sizeof(DirectArray)}};
+        if (o.keep_halves)
+            arrays.push_back({reinterpret_cast<std::byte*>(pass_half.data()), sizeof(LightmapSh::Half)});
+        if (pass == 0)
+            arrays.push_back({reinterpret_cast<std::byte*>(out.valid.data()), 1});
+        dist.run(
+            first, n, slice, arrays,
+            [&](uint32_t begin, uint32_t end)
             {
-                // The pass is complete: add it, and keep its irradiance at each normal for the next bounce.
-                for (uint32_t i = 0; i < n; ++i)
-                {
-                    for (int j = 0; j < 9; ++j)
-                        out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
-                    for (size_t b = 0; b < 4; ++b)
-                        out.direct[i][b] += pass_direct[i][b];
-                    if (o.keep_halves)
-                        for (size_t c = 0; c < out.half[i].size(); ++c)
-                            out.half[i][c] += pass_half[i][c];
-                    previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
-                }
-            }
-            checkpoint.slice_done(uint32_t(pass), first);
-            if (progress)
-                progress({pass, passes, first, n, checkpoint.error()});
+                tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
+                                  [&](const tbb::blocked_range<uint32_t>& r)
+                                  {
+                                      for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                          texel(i, pass);
+                                  });
+            },
+            [&](uint32_t next)
+            {
+                checkpoint.slice_done(uint32_t(pass), next);
+                if (progress)
+                    progress({pass, passes, next, n, checkpoint.error()});
+            });
+        out.rays += uint64_t(n - first) * (pass == 0 ? rays_per_texel : uint64_t(o.rays));
+        // The pass is complete: add it, and keep its irradiance at each normal for the next bounce.
+        for (uint32_t i = 0; i < n; ++i)
+        {
+            for (int j = 0; j < 9; ++j)
+                out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
+            for (size_t b = 0; b < 4; ++b)
+                out.direct[i][b] += pass_direct[i][b];
+            if (o.keep_halves)
+                for (size_t c = 0; c < out.half[i].size(); ++c)
+                    out.half[i][c] += pass_half[i][c];
+            previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
         }
+        checkpoint.slice_done(uint32_t(pass), n);
+        if (progress && dist.leader())
+            progress({pass, passes, n, n, checkpoint.error()});
     }
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();

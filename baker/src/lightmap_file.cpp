@@ -187,14 +187,19 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                     " is not in [1, 2^20]");
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
+    // Under a distribution, the other ranks only compute: rank 0 checks and writes every output.
+    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
     // Fail fast: every output's folder before the scene is even read.
-    io::check_writable(asset_path);
-    io::check_writable(o.bake.checkpoint);
-    if (!o.uv_report.empty())
-        io::check_writable(o.uv_report);
-    if (!o.exr_dir.empty())
-        for (const std::string& name : o.outputs)
-            io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
+    if (leader)
+    {
+        io::check_writable(asset_path);
+        io::check_writable(o.bake.checkpoint);
+        if (!o.uv_report.empty())
+            io::check_writable(o.uv_report);
+        if (!o.exr_dir.empty())
+            for (const std::string& name : o.outputs)
+                io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
+    }
 
     io::GltfScene scene = io::read_gltf(scene_path);
     LightmapBakeSummary summary;
@@ -315,7 +320,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     LightmapUvReport report;
     const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
     summary.uv_report = report;
-    if (!o.uv_report.empty())
+    if (!o.uv_report.empty() && leader)
         write_uv_report(o.uv_report, atlas, report);
     if (!report.ok())
         throw io::FormatError(scene_path.string() + ": " + report.problems.front());
@@ -357,7 +362,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     check_lightmap_range(o.lights, scene.materials, scene_path);
     LightmapBakeOptions bake_options = o.bake;
     bake_options.keep_halves = o.denoise;
+    Distribution& dist = o.bake.distribution ? *o.bake.distribution : local_distribution();
+    const std::vector<uint64_t> items_before = dist.items_by_rank();
     LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, bake_options, &*surfaces, progress);
+    summary.texels_by_rank = dist.items_by_rank();
+    for (size_t r = 0; r < summary.texels_by_rank.size() && r < items_before.size(); ++r)
+        summary.texels_by_rank[r] -= items_before[r];
+    if (!leader)
+        return summary; // the texels are on rank 0: its outputs, its probes
     if (o.denoise)
     {
         LightmapDenoiseOptions d;
@@ -369,6 +381,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.invalid = sh.invalid;
     summary.trace_seconds = sh.trace_seconds;
     summary.resumed = sh.resumed;
+    summary.texels_by_rank =
+        (o.bake.distribution ? *o.bake.distribution : local_distribution()).items_by_rank();
     summary.checkpoint_error = sh.checkpoint_error;
 
     io::LightmapAsset asset;
@@ -559,6 +573,8 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;
     j["resumed"] = s.resumed;
+    j["ranks"] = s.texels_by_rank.size();
+    j["texels_by_rank"] = s.texels_by_rank; // over all passes: how the ranks shared the work
     j["tangents_generated"] = s.tangents_generated;
     j["warnings"] = s.warnings;
     j["texel_size"] = {{"min", s.uv_report.min_texel_size}, {"max", s.uv_report.max_texel_size}};

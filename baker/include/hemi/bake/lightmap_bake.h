@@ -12,6 +12,7 @@
 // Units: radiance in the scene's linear RGB; the sun's value is the irradiance it gives a surface facing it.
 // Directions are in world space, z up, like hemi-render's environments.
 
+#include <hemi/bake/distribution.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
@@ -112,6 +113,10 @@ struct LightmapBakeOptions
     // Keep half of each texel's samples apart (LightmapSh::half), for the denoiser: 312 bytes more per
     // texel, in the bake and its checkpoint.
     bool keep_halves = false;
+    // Who computes the texels (distribution.h): null, this process; else the ranks of a job, which all call
+    // bake_lightmap_sh with the same arguments and all return the same result. Only the leader resumes and
+    // saves the checkpoint and reports progress.
+    Distribution* distribution = nullptr;
 };
 
 struct LightmapProgress
@@ -279,6 +284,8 @@ struct LightmapBakeSummary
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
+    // The ranks that shared the bake and the texels (over all passes) each computed; {n} on one process.
+    std::vector<uint64_t> texels_by_rank;
     std::string checkpoint_error;
     std::vector<std::filesystem::path> exr_files;
 };

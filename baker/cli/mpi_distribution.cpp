@@ -1,0 +1,232 @@
+#include "mpi_distribution.h"
+
+// The C API only: mpi.h in C++ would also declare the removed C++ bindings (libmpi_cxx).
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
+#include <mpi.h>
+
+#include <algorithm>
+#include <climits>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemi::tool
+{
+namespace
+{
+
+constexpr int kAssign = 1; // leader -> worker: int64 slice index, or -1: no more in this pass
+constexpr int kResult = 2; // worker -> leader: u32 slice index, then the slice's items of every array
+
+void check(int code, const char* what)
+{
+    if (code != MPI_SUCCESS)
+    {
+        char text[MPI_MAX_ERROR_STRING];
+        int length = 0;
+        MPI_Error_string(code, text, &length);
+        throw std::runtime_error(std::string("MPI: ") + what + " failed: " + std::string(text, size_t(length)));
+    }
+}
+
+class Job final : public MpiJob
+{
+  public:
+    Job(int& argc, char**& argv)
+    {
+        int provided = 0;
+        check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+        int r = 0, n = 1;
+        MPI_Comm_rank(MPI_COMM_WORLD, &r);
+        MPI_Comm_size(MPI_COMM_WORLD, &n);
+        rank_ = uint32_t(r);
+        ranks_ = uint32_t(n);
+        items_.assign(ranks_, 0);
+    }
+    ~Job() override { MPI_Finalize(); }
+
+    uint32_t rank() const override { return rank_; }
+    uint32_t ranks() const override { return ranks_; }
+
+    [[noreturn]] void abort(int code) override
+    {
+        MPI_Abort(MPI_COMM_WORLD, code);
+        std::_Exit(code);
+    }
+
+    void broadcast(std::span<std::byte> bytes) override
+    {
+        constexpr size_t kChunk = size_t(1) << 30;
+        for (size_t at = 0; at < bytes.size(); at += kChunk)
+            check(MPI_Bcast(bytes.data() + at, int(std::min(kChunk, bytes.size() - at)), MPI_BYTE, 0,
+                            MPI_COMM_WORLD),
+                  "MPI_Bcast");
+    }
+
+    void run(uint32_t first, uint32_t items, uint32_t slice, std::span<const bake::ItemArray> arrays,
+             const std::function<void(uint32_t, uint32_t)>& compute,
+             const std::function<void(uint32_t)>& finished) override
+    {
+        if (ranks_ == 1)
+        {
+            bake::local_distribution().run(first, items, slice, arrays, compute, finished);
+            items_[0] += items - std::min(first, items);
+            return;
+        }
+        if (first >= items)
+            return;
+        slice = std::max(slice, 1u);
+        const uint32_t slices = (items - first + slice - 1) / slice;
+        size_t item_bytes = 0;
+        for (const bake::ItemArray& a : arrays)
+            item_bytes += a.item_bytes;
+        if (4 + uint64_t(slice) * item_bytes > uint64_t(INT_MAX))
+            throw std::runtime_error("MPI: a slice of " + std::to_string(slice) + " items of " +
+                                     std::to_string(item_bytes) + " bytes does not fit one message");
+        const auto range = [&](uint32_t s)
+        { return std::pair<uint32_t, uint32_t>(first + s * slice, std::min(items, first + (s + 1) * slice)); };
+        std::vector<std::byte> buffer;
+        if (rank_ == 0)
+            lead(slices, range, arrays, compute, finished, buffer);
+        else
+            work(range, arrays, compute, buffer);
+        // Every rank gets the whole pass.
+        for (const bake::ItemArray& a : arrays)
+            broadcast({a.data + size_t(first) * a.item_bytes, size_t(items - first) * a.item_bytes});
+    }
+
+  private:
+    template <class Range>
+    void lead(uint32_t slices, const Range& range, std::span<const bake::ItemArray> arrays,
+              const std::function<void(uint32_t, uint32_t)>& compute, const std::function<void(uint32_t)>& finished,
+              std::vector<std::byte>& buffer)
+    {
+        std::vector<uint8_t> done(slices, 0), stopped(ranks_, 0);
+        uint32_t next = 0, prefix = 0, completed = 0;
+        const auto assign = [&](int worker)
+        {
+            int64_t s = next < slices ? int64_t(next++) : -1;
+            if (s < 0)
+            {
+                if (stopped[size_t(worker)])
+                    return;
+                stopped[size_t(worker)] = 1;
+            }
+            check(MPI_Send(&s, 1, MPI_INT64_T, worker, kAssign, MPI_COMM_WORLD), "MPI_Send");
+        };
+        const auto mark = [&](uint32_t s)
+        {
+            done[s] = 1;
+            ++completed;
+            const uint32_t before = prefix;
+            while (prefix < slices && done[prefix])
+                ++prefix;
+            if (prefix != before && prefix < slices && finished)
+                finished(range(prefix).first);
+        };
+        const auto receive = [&](const MPI_Status& status)
+        {
+            int count = 0;
+            MPI_Get_count(&status, MPI_BYTE, &count);
+            buffer.resize(size_t(count));
+            check(MPI_Recv(buffer.data(), count, MPI_BYTE, status.MPI_SOURCE, kResult, MPI_COMM_WORLD,
+                           MPI_STATUS_IGNORE),
+                  "MPI_Recv");
+            uint32_t s = 0;
+            std::memcpy(&s, buffer.data(), 4);
+            const auto [begin, end] = range(s);
+            size_t at = 4;
+            for (const bake::ItemArray& a : arrays)
+            {
+                const size_t bytes = size_t(end - begin) * a.item_bytes;
+                std::memcpy(a.data + size_t(begin) * a.item_bytes, buffer.data() + at, bytes);
+                at += bytes;
+            }
+            items_[size_t(status.MPI_SOURCE)] += end - begin;
+            mark(s);
+            assign(status.MPI_SOURCE);
+        };
+        // Two slices in every worker's hand: it starts the second while its first result travels.
+        for (int round = 0; round < 2; ++round)
+            for (uint32_t w = 1; w < ranks_; ++w)
+                assign(int(w));
+        while (completed < slices)
+        {
+            int flag = 0;
+            MPI_Status status;
+            check(MPI_Iprobe(MPI_ANY_SOURCE, kResult, MPI_COMM_WORLD, &flag, &status), "MPI_Iprobe");
+            if (flag)
+                receive(status);
+            else if (next < slices)
+            {
+                const uint32_t s = next++;
+                const auto [begin, end] = range(s);
+                compute(begin, end);
+                items_[0] += end - begin;
+                mark(s);
+            }
+            else
+            {
+                check(MPI_Probe(MPI_ANY_SOURCE, kResult, MPI_COMM_WORLD, &status), "MPI_Probe");
+                receive(status);
+            }
+        }
+    }
+
+    template <class Range>
+    void work(const Range& range, std::span<const bake::ItemArray> arrays,
+              const std::function<void(uint32_t, uint32_t)>& compute, std::vector<std::byte>& buffer)
+    {
+        while (true)
+        {
+            int64_t s = -1;
+            check(MPI_Recv(&s, 1, MPI_INT64_T, 0, kAssign, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
+            if (s < 0)
+                return;
+            const auto [begin, end] = range(uint32_t(s));
+            compute(begin, end);
+            size_t bytes = 4;
+            for (const bake::ItemArray& a : arrays)
+                bytes += size_t(end - begin) * a.item_bytes;
+            buffer.resize(bytes);
+            const uint32_t index = uint32_t(s);
+            std::memcpy(buffer.data(), &index, 4);
+            size_t at = 4;
+            for (const bake::ItemArray& a : arrays)
+            {
+                const size_t n = size_t(end - begin) * a.item_bytes;
+                std::memcpy(buffer.data() + at, a.data + size_t(begin) * a.item_bytes, n);
+                at += n;
+            }
+            check(MPI_Send(buffer.data(), int(bytes), MPI_BYTE, 0, kResult, MPI_COMM_WORLD), "MPI_Send");
+        }
+    }
+
+    std::vector<uint64_t> items_by_rank() const override { return items_; }
+
+    uint32_t rank_ = 0, ranks_ = 1;
+    std::vector<uint64_t> items_; // on the leader, per rank
+};
+
+// Whether a launcher started this process as a rank of a job: Open MPI's mpirun, or a PMIx/PMI one (srun).
+bool launched_as_rank()
+{
+    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK"})
+        if (std::getenv(name))
+            return true;
+    return false;
+}
+
+} // namespace
+
+std::unique_ptr<MpiJob> join_mpi_job(int& argc, char**& argv)
+{
+    if (!launched_as_rank())
+        return nullptr;
+    return std::make_unique<Job>(argc, argv);
+}
+
+} // namespace hemi::tool
