@@ -28,7 +28,8 @@ void check(int code, const char* what)
         char text[MPI_MAX_ERROR_STRING];
         int length = 0;
         MPI_Error_string(code, text, &length);
-        throw std::runtime_error(std::string("MPI: ") + what + " failed: " + std::string(text, size_t(length)));
+        throw std::runtime_error(std::string("MPI: ") + what +
+                                 " failed: " + std::string(text, size_t(length)));
     }
 }
 
@@ -86,8 +87,9 @@ class Job final : public MpiJob
         if (4 + uint64_t(slice) * item_bytes > uint64_t(INT_MAX))
             throw std::runtime_error("MPI: a slice of " + std::to_string(slice) + " items of " +
                                      std::to_string(item_bytes) + " bytes does not fit one message");
-        const auto range = [&](uint32_t s)
-        { return std::pair<uint32_t, uint32_t>(first + s * slice, std::min(items, first + (s + 1) * slice)); };
+        const auto range = [&](uint32_t s) {
+            return std::pair<uint32_t, uint32_t>(first + s * slice, std::min(items, first + (s + 1) * slice));
+        };
         std::vector<std::byte> buffer;
         if (rank_ == 0)
             lead(slices, range, arrays, compute, finished, buffer);
@@ -101,8 +103,8 @@ class Job final : public MpiJob
   private:
     template <class Range>
     void lead(uint32_t slices, const Range& range, std::span<const bake::ItemArray> arrays,
-              const std::function<void(uint32_t, uint32_t)>& compute, const std::function<void(uint32_t)>& finished,
-              std::vector<std::byte>& buffer)
+              const std::function<void(uint32_t, uint32_t)>& compute,
+              const std::function<void(uint32_t)>& finished, std::vector<std::byte>& buffer)
     {
         std::vector<uint8_t> done(slices, 0), stopped(ranks_, 0);
         uint32_t next = 0, prefix = 0, completed = 0;

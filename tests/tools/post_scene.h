@@ -64,5 +64,4 @@ inline std::filesystem::path write_post_scene(const std::filesystem::path& p)
     return p;
 }
 
-
 } // namespace hemi::test

@@ -38,11 +38,11 @@ class Distribution
     virtual uint32_t ranks() const = 0;
     bool leader() const { return rank() == 0; }
 
-    // Computes items [first, items) in slices of `slice` items (the last may be shorter; first, items and slice
-    // are the same on every rank): compute(begin, end) fills those items of `arrays` on whichever rank runs
-    // it. Returns when every item of [first, items) is in `arrays` on every rank. On the leader, `finished`
-    // is called with next each time the finished prefix [first, next) grows (next < items; the caller knows
-    // when the pass is whole), so that a checkpoint saves only finished work.
+    // Computes items [first, items) in slices of `slice` items (the last may be shorter; first, items and
+    // slice are the same on every rank): compute(begin, end) fills those items of `arrays` on whichever rank
+    // runs it. Returns when every item of [first, items) is in `arrays` on every rank. On the leader,
+    // `finished` is called with next each time the finished prefix [first, next) grows (next < items; the
+    // caller knows when the pass is whole), so that a checkpoint saves only finished work.
     virtual void run(uint32_t first, uint32_t items, uint32_t slice, std::span<const ItemArray> arrays,
                      const std::function<void(uint32_t begin, uint32_t end)>& compute,
                      const std::function<void(uint32_t next)>& finished) = 0;
