@@ -20,6 +20,7 @@ namespace
 
 constexpr int kAssign = 1; // leader -> worker: int64 slice index, or -1: no more in this pass
 constexpr int kResult = 2; // worker -> leader: u32 slice index, then the slice's items of every array
+constexpr int kInHand = 3; // slices assigned to a worker ahead of its results
 
 void check(int code, const char* what)
 {
@@ -151,8 +152,8 @@ class Job final : public MpiJob
             mark(s);
             assign(status.MPI_SOURCE);
         };
-        // Two slices in every worker's hand: it starts the second while its first result travels.
-        for (int round = 0; round < 2; ++round)
+        // Three slices in every worker's hand: it goes on with the next while its results wait for rank 0.
+        for (int round = 0; round < kInHand; ++round)
             for (uint32_t w = 1; w < ranks_; ++w)
                 assign(int(w));
         while (completed < slices)
@@ -180,16 +181,22 @@ class Job final : public MpiJob
 
     template <class Range>
     void work(const Range& range, std::span<const bake::ItemArray> arrays,
-              const std::function<void(uint32_t, uint32_t)>& compute, std::vector<std::byte>& buffer)
+              const std::function<void(uint32_t, uint32_t)>& compute, std::vector<std::byte>&)
     {
-        while (true)
+        // Results go out without waiting for rank 0 to take them (it does between its own slices): two
+        // buffers in turn, the older send finished before its buffer is filled again.
+        std::vector<std::byte> buffers[2];
+        MPI_Request sent[2] = {MPI_REQUEST_NULL, MPI_REQUEST_NULL};
+        for (int turn = 0;; turn ^= 1)
         {
             int64_t s = -1;
             check(MPI_Recv(&s, 1, MPI_INT64_T, 0, kAssign, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
             if (s < 0)
-                return;
+                break;
             const auto [begin, end] = range(uint32_t(s));
             compute(begin, end);
+            check(MPI_Wait(&sent[turn], MPI_STATUS_IGNORE), "MPI_Wait");
+            std::vector<std::byte>& buffer = buffers[turn];
             size_t bytes = 4;
             for (const bake::ItemArray& a : arrays)
                 bytes += size_t(end - begin) * a.item_bytes;
@@ -203,8 +210,10 @@ class Job final : public MpiJob
                 std::memcpy(buffer.data() + at, a.data + size_t(begin) * a.item_bytes, n);
                 at += n;
             }
-            check(MPI_Send(buffer.data(), int(bytes), MPI_BYTE, 0, kResult, MPI_COMM_WORLD), "MPI_Send");
+            check(MPI_Isend(buffer.data(), int(bytes), MPI_BYTE, 0, kResult, MPI_COMM_WORLD, &sent[turn]),
+                  "MPI_Isend");
         }
+        check(MPI_Waitall(2, sent, MPI_STATUSES_IGNORE), "MPI_Waitall");
     }
 
     std::vector<uint64_t> items_by_rank() const override { return items_; }

@@ -1,7 +1,7 @@
 #pragma once
 // hemi-bake's bakes spread over the ranks of an Open MPI job (bake/distribution.h): `mpirun -np N hemi-bake
-// lightmap ...`. Rank 0 hands the slices of each pass out as ranks ask for more (each rank keeps two in hand,
-// so none waits on the leader), computes slices itself between messages, and sends every rank the whole
+// lightmap ...`. Rank 0 hands the slices of each pass out as ranks ask for more (each rank keeps three in
+// hand, so none waits on the leader), computes slices itself between messages, and sends every rank the whole
 // pass when it is done. Built only when CMake finds MPI (HEMI_WITH_MPI); without it hemi-bake is the one
 // process it always was. docs/distributed.md shows mpirun, a hostfile and a Slurm script.
 #include <hemi/bake/distribution.h>
