@@ -22,7 +22,7 @@
 //   export LEVEL.hemi -o LEVEL_LIT.glb|.gltf [--outputs all|none|NAME,...] [--rgbm-range R]
 // Every error names the file or option it is about and exits 1 (usage errors too); outputs are checked
 // (writable, regular files, none of them an input) before any work starts (tool_options.h).
-// `mpirun -np N hemi-bake lightmap ...` shares the bake among N processes (mpi_distribution.h,
+// `mpirun -np N hemi-bake lightmap|prt|ssbump ...` shares the bake among N processes (mpi_distribution.h,
 // docs/distributed.md); rank 0 writes the outputs, the same bytes as one process.
 #include <hemi/bake/basis_report.h>
 #include <hemi/bake/checkpoint.h>
@@ -229,7 +229,12 @@ int run_ssbump(SsbumpCli& c)
     files.output("--json", c.json);
     if (!c.input.empty())
         files.output("its checkpoint", bake::checkpoint_path(c.output));
-    files.check();
+    // Under mpirun only the bake is shared; rank 0 checks, converts and writes.
+    const bool leader = !c.options.distribution || c.options.distribution->leader();
+    if (leader)
+        files.check();
+    else if (!c.to_normal.empty() || !c.from_normal.empty())
+        return 0;
     if (!c.to_normal.empty())
     {
         // The way back: a tangent-space ("bent") normal from each texel's weights.
@@ -302,10 +307,11 @@ int run_ssbump(SsbumpCli& c)
     char filter_text[64] = "off";
     if (o.filter.enabled())
         std::snprintf(filter_text, sizeof filter_text, "%d,%g", o.filter.radius, double(o.filter.sigma));
-    std::printf("%s: %ux%u, %d-bit, scale %g texels, %s, %s convention, filter %s%s\n", c.input.c_str(),
-                file.field.width, file.field.height, file.bits, double(o.scale),
-                o.wrap ? "tiling" : "not tiling", std::string(to_string(o.convention)).c_str(), filter_text,
-                filter_given ? "" : " (default)");
+    if (leader)
+        std::printf("%s: %ux%u, %d-bit, scale %g texels, %s, %s convention, filter %s%s\n", c.input.c_str(),
+                    file.field.width, file.field.height, file.bits, double(o.scale),
+                    o.wrap ? "tiling" : "not tiling", std::string(to_string(o.convention)).c_str(),
+                    filter_text, filter_given ? "" : " (default)");
     ProgressLine line("hemi-bake ssbump");
     const bake::SsbumpMap m = hemi::tool::naming_input(
         c.input, files,
@@ -321,6 +327,8 @@ int run_ssbump(SsbumpCli& c)
                                                          "occlusion", p.texels_done == p.texels);
                                      });
         });
+    if (!leader)
+        return 0;
     write_ssbump_png(c.output, m, file.alpha, false);
     std::printf("wrote %s\n", c.output.c_str());
     if (!c.exr.empty())
@@ -367,6 +375,12 @@ int run_ssbump(SsbumpCli& c)
         j["trace_seconds"] = m.trace_seconds;
         j["rays_per_second"] = m.trace_seconds > 0 ? double(m.rays) / m.trace_seconds : 0.0;
         j["resumed"] = m.resumed;
+        // How the ranks shared the rows (one process: all of them on rank 0).
+        const std::vector<uint64_t> rows = o.distribution
+                                               ? o.distribution->items_by_rank()
+                                               : std::vector<uint64_t>{o.occlusion ? m.height : 0u};
+        j["ranks"] = rows.size();
+        j["rows_by_rank"] = rows;
         j["mean_occlusion"] = {mean.x, mean.y, mean.z};
         j["lowest_occlusion"] = lowest;
         j["output"] = c.output;
@@ -471,13 +485,14 @@ int run_lightmap(LightmapCli& c)
     files.output("--json", c.json);
     files.output("--uv-report", c.uv_report);
     o.uv_report = c.uv_report;
+    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
     if (!c.exr_dir.empty())
     {
-        hemi::tool::make_folder(c.exr_dir, "--exr-dir");
+        if (leader) // the other ranks write nothing
+            hemi::tool::make_folder(c.exr_dir, "--exr-dir");
         for (const std::string& name : o.outputs)
             files.output("--exr-dir", bake::lightmap_exr_path(c.exr_dir, c.asset, name));
     }
-    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
     if (leader) // the other ranks write nothing (their machines may not even see the outputs' folder)
         files.check();
     o.lights = c.light.lights(); // read_exr names the environment's file; check_lights names it too
@@ -917,10 +932,14 @@ int run_prt(PrtCli& c)
     files.output("-o", c.asset);
     files.output("its checkpoint", hemi::bake::checkpoint_path(c.asset));
     files.output("--json", c.json);
-    files.check();
+    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
+    if (leader) // the other ranks write nothing
+        files.check();
     PrtProgressLine line;
     const hemi::bake::PrtBakeSummary s = hemi::tool::naming_input(
         c.scene, files, [&] { return hemi::bake::bake_prt_file(c.scene, c.asset, o, std::ref(line)); });
+    if (!leader)
+        return 0;
     print_prt_summary(s, o, c.scene, c.asset);
     if (!c.json.empty())
     {
@@ -1243,11 +1262,14 @@ int main(int argc, char** argv)
         app, argc, argv, "hemi-bake",
         [&]() -> int
         {
-            if (job && job->ranks() > 1 && !lightmap->parsed())
-                throw std::invalid_argument(
-                    "runs as one process: of the bakes, only lightmap is shared among mpirun's ranks so far "
-                    "(run this one without mpirun)");
+            if (job && job->ranks() > 1 && !lightmap->parsed() && !prt->parsed() && !ssbump->parsed())
+                throw std::invalid_argument("runs as one process: of the bakes, only lightmap, prt and "
+                                            "ssbump are shared among mpirun's "
+                                            "ranks so far "
+                                            "(run this one without mpirun)");
             lm.options.bake.distribution = job.get();
+            pc.options.bake.distribution = job.get();
+            sb.options.distribution = job.get();
             if (exporter->parsed())
                 return run_export(ex);
             if (brdf->parsed())

@@ -9,6 +9,7 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+#include <list>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -91,11 +92,10 @@ class Job final : public MpiJob
         const auto range = [&](uint32_t s) {
             return std::pair<uint32_t, uint32_t>(first + s * slice, std::min(items, first + (s + 1) * slice));
         };
-        std::vector<std::byte> buffer;
         if (rank_ == 0)
-            lead(slices, range, arrays, compute, finished, buffer);
+            lead(slices, range, arrays, compute, finished);
         else
-            work(range, arrays, compute, buffer);
+            work(range, arrays, compute);
         // Every rank gets the whole pass.
         for (const bake::ItemArray& a : arrays)
             broadcast({a.data + size_t(first) * a.item_bytes, size_t(items - first) * a.item_bytes});
@@ -105,7 +105,7 @@ class Job final : public MpiJob
     template <class Range>
     void lead(uint32_t slices, const Range& range, std::span<const bake::ItemArray> arrays,
               const std::function<void(uint32_t, uint32_t)>& compute,
-              const std::function<void(uint32_t)>& finished, std::vector<std::byte>& buffer)
+              const std::function<void(uint32_t)>& finished)
     {
         std::vector<uint8_t> done(slices, 0), stopped(ranks_, 0);
         uint32_t next = 0, prefix = 0, completed = 0;
@@ -130,40 +130,78 @@ class Job final : public MpiJob
             if (prefix != before && prefix < slices && finished)
                 finished(range(prefix).first);
         };
-        const auto receive = [&](const MPI_Status& status)
+        // Results are received without blocking: across machines (TCP) a large message moves only while its
+        // sender is inside an MPI call, which a worker is not while it computes; rank 0 goes on with its own
+        // slices meanwhile and takes each result when it has arrived.
+        struct Incoming
         {
-            int count = 0;
-            MPI_Get_count(&status, MPI_BYTE, &count);
-            buffer.resize(size_t(count));
-            check(MPI_Recv(buffer.data(), count, MPI_BYTE, status.MPI_SOURCE, kResult, MPI_COMM_WORLD,
-                           MPI_STATUS_IGNORE),
-                  "MPI_Recv");
+            std::vector<std::byte> bytes;
+            MPI_Request request = MPI_REQUEST_NULL;
+            int source = 0;
+        };
+        std::list<Incoming> incoming;
+        const auto take = [&](Incoming& in)
+        {
             uint32_t s = 0;
-            std::memcpy(&s, buffer.data(), 4);
+            std::memcpy(&s, in.bytes.data(), 4);
             const auto [begin, end] = range(s);
             size_t at = 4;
             for (const bake::ItemArray& a : arrays)
             {
                 const size_t bytes = size_t(end - begin) * a.item_bytes;
-                std::memcpy(a.data + size_t(begin) * a.item_bytes, buffer.data() + at, bytes);
+                std::memcpy(a.data + size_t(begin) * a.item_bytes, in.bytes.data() + at, bytes);
                 at += bytes;
             }
-            items_[size_t(status.MPI_SOURCE)] += end - begin;
+            items_[size_t(in.source)] += end - begin;
             mark(s);
-            assign(status.MPI_SOURCE);
+            assign(in.source);
         };
-        // Three slices in every worker's hand: it goes on with the next while its results wait for rank 0.
-        for (int round = 0; round < kInHand; ++round)
+        // Starts receiving every result that has arrived (matched probes: each message is received by the
+        // receive started for it), and takes those whose data is in.
+        const auto poll = [&]
+        {
+            while (true)
+            {
+                int flag = 0;
+                MPI_Message message;
+                MPI_Status status;
+                check(MPI_Improbe(MPI_ANY_SOURCE, kResult, MPI_COMM_WORLD, &flag, &message, &status),
+                      "MPI_Improbe");
+                if (!flag)
+                    break;
+                int count = 0;
+                MPI_Get_count(&status, MPI_BYTE, &count);
+                Incoming& in = incoming.emplace_back();
+                in.bytes.resize(size_t(count));
+                in.source = status.MPI_SOURCE;
+                check(MPI_Imrecv(in.bytes.data(), count, MPI_BYTE, &message, &in.request), "MPI_Imrecv");
+            }
+            for (auto it = incoming.begin(); it != incoming.end();)
+            {
+                int arrived = 0;
+                check(MPI_Test(&it->request, &arrived, MPI_STATUS_IGNORE), "MPI_Test");
+                if (arrived)
+                {
+                    take(*it);
+                    it = incoming.erase(it);
+                }
+                else
+                    ++it;
+            }
+        };
+        // Up to three slices in every worker's hand, so that it goes on with the next while its results wait
+        // for rank 0; fewer when the pass has few slices, so that rank 0 keeps its share.
+        const uint32_t ahead = std::clamp(slices / ranks_, 1u, uint32_t(kInHand));
+        for (uint32_t round = 0; round < ahead; ++round)
             for (uint32_t w = 1; w < ranks_; ++w)
-                assign(int(w));
+                if (next + 1 < slices) // the last slice stays with rank 0
+                    assign(int(w));
         while (completed < slices)
         {
-            int flag = 0;
-            MPI_Status status;
-            check(MPI_Iprobe(MPI_ANY_SOURCE, kResult, MPI_COMM_WORLD, &flag, &status), "MPI_Iprobe");
-            if (flag)
-                receive(status);
-            else if (next < slices)
+            poll();
+            if (completed == slices)
+                break;
+            if (next < slices)
             {
                 const uint32_t s = next++;
                 const auto [begin, end] = range(s);
@@ -171,17 +209,27 @@ class Job final : public MpiJob
                 items_[0] += end - begin;
                 mark(s);
             }
+            else if (!incoming.empty())
+            {
+                // Nothing left to compute here: wait for the oldest result on its way.
+                check(MPI_Wait(&incoming.front().request, MPI_STATUS_IGNORE), "MPI_Wait");
+                take(incoming.front());
+                incoming.pop_front();
+            }
             else
             {
+                MPI_Status status;
                 check(MPI_Probe(MPI_ANY_SOURCE, kResult, MPI_COMM_WORLD, &status), "MPI_Probe");
-                receive(status);
             }
         }
+        // A worker that never got a slice (a pass of few slices) has not been told to stop yet.
+        for (uint32_t w = 1; w < ranks_; ++w)
+            assign(int(w));
     }
 
     template <class Range>
     void work(const Range& range, std::span<const bake::ItemArray> arrays,
-              const std::function<void(uint32_t, uint32_t)>& compute, std::vector<std::byte>&)
+              const std::function<void(uint32_t, uint32_t)>& compute)
     {
         // Results go out without waiting for rank 0 to take them (it does between its own slices): two
         // buffers in turn, the older send finished before its buffer is filled again.

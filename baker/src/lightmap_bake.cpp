@@ -567,11 +567,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     using ShArray = std::array<glm::vec3, 9>;
     using DirectArray = std::array<glm::vec3, 4>;
     Distribution& dist = o.distribution ? *o.distribution : local_distribution();
-    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(),
-                               key_of(mesh, atlas, lights, o, surfaces,
-                                      surfaces ? std::span<const io::Material>(surfaces->materials())
-                                               : std::span<const io::Material>()),
-                               uint32_t(passes), n,
+    const uint64_t key = key_of(mesh, atlas, lights, o, surfaces,
+                                surfaces ? std::span<const io::Material>(surfaces->materials())
+                                         : std::span<const io::Material>());
+    dist.check_same(key, "baked a lightmap whose scene, atlas, lights or options");
+    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
+                               n,
                                {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
                                 {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
                                 {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},

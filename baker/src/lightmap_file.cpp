@@ -381,8 +381,6 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.invalid = sh.invalid;
     summary.trace_seconds = sh.trace_seconds;
     summary.resumed = sh.resumed;
-    summary.texels_by_rank =
-        (o.bake.distribution ? *o.bake.distribution : local_distribution()).items_by_rank();
     summary.checkpoint_error = sh.checkpoint_error;
 
     io::LightmapAsset asset;

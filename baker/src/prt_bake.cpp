@@ -137,7 +137,11 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
     // Exit radiance per vertex of the previous pass, as an L-vector over the lighting: (albedo / pi) t_{b-1}.
     std::vector<float> exitant(size_t(n) * L), bounce_irradiance(size_t(n) * L);
     // The finished work, all of it: M and t so far, and the bounce being gathered with its source.
-    SliceCheckpoint checkpoint(o.checkpoint, checkpoint_key(mesh, o), uint32_t(passes), n,
+    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    const uint64_t key = checkpoint_key(mesh, o);
+    dist.check_same(key, "baked a PRT transfer whose mesh or options");
+    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
+                               n,
                                {{"radiance", std::as_writable_bytes(std::span<float>(out.radiance))},
                                 {"irradiance", std::as_writable_bytes(std::span<float>(out.irradiance))},
                                 {"exitant", std::as_writable_bytes(std::span<float>(exitant))},
@@ -150,6 +154,21 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
         out.resumed = true;
         out.resumed_pass = int(state.pass);
         out.resumed_vertex = state.next_item;
+    }
+    if (dist.ranks() > 1)
+    {
+        // Every rank goes on from where the leader's checkpoint left the bake.
+        uint8_t resumed = out.resumed;
+        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
+        if (resumed)
+        {
+            dist.broadcast(std::as_writable_bytes(std::span<SlicePosition>(&state, 1)));
+            for (std::vector<float>* v : {&out.radiance, &out.irradiance, &exitant, &bounce_irradiance})
+                dist.broadcast(std::as_writable_bytes(std::span<float>(*v)));
+            out.resumed = true;
+            out.resumed_pass = int(state.pass);
+            out.resumed_vertex = state.next_item;
+        }
     }
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
     const uint32_t slice = std::max<uint32_t>(
@@ -220,22 +239,32 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
                     t[c] += sign * t_acc[c];
             }
         };
-        uint32_t first = resuming_mid_pass ? state.next_item : 0;
-        if (progress)
+        const uint32_t first = resuming_mid_pass ? state.next_item : 0;
+        if (first == n)
+            continue; // resumed after this pass was added in
+        if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
-        while (first < n)
-        {
-            const uint32_t last = std::min(n, first + slice);
-            tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, kChunk), work);
-            out.rays_traced += uint64_t(last - first) * uint64_t(o.rays);
-            first = last;
-            if (first == n && pass > 0)
-                for (size_t i = 0; i < out.irradiance.size(); ++i)
-                    out.irradiance[i] += bounce_irradiance[i];
-            checkpoint.slice_done(uint32_t(pass), first);
-            if (progress)
-                progress({pass, passes, first, n, checkpoint.error()});
-        }
+        // What a vertex's work writes (it adds to M, and to t or the bounce), which every rank gathers.
+        float* t_array = pass == 0 ? out.irradiance.data() : bounce_irradiance.data();
+        const ItemArray arrays[2] = {{reinterpret_cast<std::byte*>(out.radiance.data()), size_t(9) * L * 4},
+                                     {reinterpret_cast<std::byte*>(t_array), size_t(L) * 4}};
+        dist.run(
+            first, n, slice, arrays,
+            [&](uint32_t begin, uint32_t end)
+            { tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, kChunk), work); },
+            [&](uint32_t next)
+            {
+                checkpoint.slice_done(uint32_t(pass), next);
+                if (progress)
+                    progress({pass, passes, next, n, checkpoint.error()});
+            });
+        out.rays_traced += uint64_t(n - first) * uint64_t(o.rays);
+        if (pass > 0)
+            for (size_t i = 0; i < out.irradiance.size(); ++i)
+                out.irradiance[i] += bounce_irradiance[i];
+        checkpoint.slice_done(uint32_t(pass), n);
+        if (progress && dist.leader())
+            progress({pass, passes, n, n, checkpoint.error()});
     }
     out.checkpoint_error = checkpoint.error();
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -350,7 +379,14 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     if (mesh.tangents.size() != mesh.vertex_count() || mesh.uvs.size() != mesh.vertex_count())
         throw std::invalid_argument("hemi: the PRT bake needs a tangent and UV per vertex");
 
+    Distribution& dist = options.bake.distribution ? *options.bake.distribution : local_distribution();
+    const std::vector<uint64_t> items_before = dist.items_by_rank();
     const PrtTransfer transfer = bake_prt_transfer(mesh, options.bake, progress);
+    std::vector<uint64_t> vertices_by_rank = dist.items_by_rank();
+    for (size_t r = 0; r < vertices_by_rank.size() && r < items_before.size(); ++r)
+        vertices_by_rank[r] -= items_before[r];
+    if (options.bake.distribution && !options.bake.distribution->leader())
+        return {}; // the transfer is on rank 0: its folds, CPCA and asset
     io::PrtAsset asset;
     asset.mesh = mesh;
     asset.order = uint32_t(options.bake.order);
@@ -363,6 +399,7 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     asset.materials[0].name = "default";
     asset.primitives = {io::Primitive{0, uint32_t(mesh.indices.size()), 0}};
     summary = {};
+    summary.vertices_by_rank = std::move(vertices_by_rank);
     summary.materials = 1;
     summary.primitives = 1;
     summary.vertices = uint32_t(mesh.vertex_count());
@@ -410,15 +447,22 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     PrtAssetOptions o = options;
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
+    // Under a distribution, the other ranks only compute: rank 0 checks and writes every output.
+    const bool leader = !o.bake.distribution || o.bake.distribution->leader();
     // Fail fast: the outputs' folders are checked before the scene is even read.
-    io::check_writable(asset_path);
-    io::check_writable(o.bake.checkpoint);
+    if (leader)
+    {
+        io::check_writable(asset_path);
+        io::check_writable(o.bake.checkpoint);
+    }
     const io::GltfScene scene = io::read_gltf(scene_path);
     // The asset carries the scene's images: each is decoded once now, so a corrupt one stops the bake
     // before it starts rather than the renderer after it.
     io::check_images(scene.images, scene_path.string());
     PrtBakeSummary summary;
     io::PrtAsset asset = make_prt_asset(scene.mesh, o, summary, progress); // scene.mesh: uvs1 included
+    if (!leader)
+        return summary;
     summary.tangents_generated = scene.tangents_generated;
     asset.materials = scene.materials;
     asset.images = scene.images;
@@ -457,6 +501,8 @@ void write_prt_bake_json(const std::filesystem::path& path, const PrtBakeSummary
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     j["rays_per_second"] = s.rays_per_second();
+    j["ranks"] = s.vertices_by_rank.size();
+    j["vertices_by_rank"] = s.vertices_by_rank; // over all passes: how the ranks shared the work
     if (s.resumed)
         j["resumed"] = {{"pass", s.resumed_pass}, {"vertex", s.resumed_vertex}};
     if (o.cpca_clusters)

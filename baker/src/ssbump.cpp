@@ -554,39 +554,62 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
             occ[i] = all[i] > 0.0 ? float(seen[i] / all[i]) : 1.0f;
     };
 
-    SliceCheckpoint checkpoint(o.checkpoint, ssbump_key(input, o), 1, uint32_t(field.height),
-                               {{"occlusion", std::as_writable_bytes(std::span<glm::vec3>(out.occlusion))}},
-                               o.checkpoint_seconds);
+    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    const uint64_t key = ssbump_key(input, o);
+    dist.check_same(key, "baked an SSBump map whose height map or options");
+    SliceCheckpoint checkpoint(
+        dist.leader() ? o.checkpoint : std::filesystem::path(), key, 1, uint32_t(field.height),
+        {{"occlusion", std::as_writable_bytes(std::span<glm::vec3>(out.occlusion))}}, o.checkpoint_seconds);
     uint32_t row = 0;
     if (const std::optional<SlicePosition> resumed = checkpoint.resume())
     {
         row = resumed->next_item;
         out.resumed = true;
     }
+    if (dist.ranks() > 1)
+    {
+        // Every rank goes on from where the leader's checkpoint left the bake.
+        uint8_t resumed = out.resumed;
+        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
+        out.resumed = resumed != 0;
+        if (out.resumed)
+        {
+            dist.broadcast(std::as_writable_bytes(std::span<uint32_t>(&row, 1)));
+            dist.broadcast(std::as_writable_bytes(std::span<glm::vec3>(out.occlusion)));
+        }
+    }
     // Slices of about 2^22 rays: progress and checkpoints between them, on this thread.
     const uint32_t slice_rows = uint32_t(std::clamp<uint64_t>(
         (uint64_t(1) << 22) / (uint64_t(field.width) * uint64_t(o.rays)), 1, field.height));
     const uint64_t texels = uint64_t(n);
-    if (progress)
+    if (progress && dist.leader())
         progress({uint64_t(row) * field.width, texels, checkpoint.error()});
     const auto trace0 = std::chrono::steady_clock::now();
-    while (row < field.height)
-    {
-        const uint32_t last = std::min(field.height, row + slice_rows);
-        tbb::parallel_for(tbb::blocked_range<uint32_t>(row, last, 1),
-                          [&](const tbb::blocked_range<uint32_t>& rows)
-                          {
-                              std::vector<double> z;
-                              for (uint32_t y = rows.begin(); y != rows.end(); ++y)
-                                  for (uint32_t x = 0; x < field.width; ++x)
-                                      texel(x, y, z);
-                          });
-        out.rays += uint64_t(last - row) * field.width * uint64_t(o.rays);
-        row = last;
-        checkpoint.slice_done(0, row);
-        if (progress)
-            progress({uint64_t(row) * field.width, texels, checkpoint.error()});
-    }
+    // A row's work writes its texels' occlusion, which every rank gathers.
+    const ItemArray rows[1] = {
+        {reinterpret_cast<std::byte*>(out.occlusion.data()), sizeof(glm::vec3) * size_t(field.width)}};
+    dist.run(
+        row, field.height, slice_rows, rows,
+        [&](uint32_t begin, uint32_t end)
+        {
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 1),
+                              [&](const tbb::blocked_range<uint32_t>& r)
+                              {
+                                  std::vector<double> z;
+                                  for (uint32_t y = r.begin(); y != r.end(); ++y)
+                                      for (uint32_t x = 0; x < field.width; ++x)
+                                          texel(x, y, z);
+                              });
+        },
+        [&](uint32_t next)
+        {
+            checkpoint.slice_done(0, next);
+            if (progress)
+                progress({uint64_t(next) * field.width, texels, checkpoint.error()});
+        });
+    out.rays += uint64_t(field.height - std::min(row, field.height)) * field.width * uint64_t(o.rays);
+    if (progress && dist.leader())
+        progress({texels, texels, checkpoint.error()});
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - trace0).count();
     out.checkpoint_error = checkpoint.error();
     finish();

@@ -1,15 +1,21 @@
 // hemi-bake under mpirun (Open MPI, on this machine, oversubscribed): the same bytes as the one-process tool
 // for any number of ranks, the work shared among them, and a job killed mid-pass resumed with another rank
 // count to the same bytes. Built when hemi-bake is (HEMI_HAS_MPI); Debian's openmpi-bin runs it.
+#include "../png_writer.h"
 #include "../temp_dir.h"
+#include "models.h"
 #include "post_scene.h"
 #include "run_tool.h"
+
+#include <hemi/io/asset.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numeric>
 #include <thread>
 
@@ -39,10 +45,11 @@ constexpr const char* kEnvironment = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS
                                      "OMPI_MCA_btl=self,vader ASAN_OPTIONS=detect_leaks=0:halt_on_error=1";
 Result mpirun(int ranks, const std::string& args)
 {
-    return hemi::test::run(dir(), HEMI_MPIEXEC,
-                           "--oversubscribe --bind-to none -np " + std::to_string(ranks) + " " +
-                               q(HEMI_BAKE_EXE) + " " + args,
-                           kEnvironment);
+    std::string command = "300 ";
+    command.append(q(HEMI_MPIEXEC));
+    command.append(" --oversubscribe --bind-to none -np " + std::to_string(ranks) + " ");
+    command.append(q(HEMI_BAKE_EXE) + " " + args);
+    return hemi::test::run(dir(), "timeout", command, kEnvironment); // a job that hangs fails, after 5 min
 }
 
 // The issue's bake: two bounces and probes, a sun and a sky, 1024 rays a texel so that each pass has 8
@@ -88,8 +95,10 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
     }
 }
 
-// A 2-rank job killed (SIGTERM, as a queue's time limit does) once its checkpoint holds finished work, then
-// resumed with 3 ranks: the same bytes as the one-process tool, and the JSON says it resumed.
+// A 2-rank job killed (SIGTERM to the whole job, as a queue's time limit does) once its checkpoint is in
+// the first bounce, then resumed with 3 ranks: the same bytes as the one-process tool (the resumed ranks get
+// the previous pass, the valid texels and the finished slices from rank 0's checkpoint), and the JSON says
+// it resumed.
 TEST(DistributedBake, AJobKilledMidPassResumesWithAnotherRankCountToTheSameBytes)
 {
     const fs::path scene = dir() / "post_resume.glb";
@@ -100,7 +109,7 @@ TEST(DistributedBake, AJobKilledMidPassResumesWithAnotherRankCountToTheSameBytes
     ASSERT_EQ(s.status, 0) << s.err;
 
     std::string command = kEnvironment;
-    command.append(" exec ");
+    command.append(" exec timeout 300 ");
     command.append(q(HEMI_MPIEXEC));
     command.append(" --oversubscribe --bind-to none -np 2 ");
     command.append(q(HEMI_BAKE_EXE));
@@ -113,23 +122,40 @@ TEST(DistributedBake, AJobKilledMidPassResumesWithAnotherRankCountToTheSameBytes
     ASSERT_GE(pid, 0);
     if (pid == 0)
     {
+        setsid(); // its own process group: the test ends mpirun and every rank with one signal
         execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
         _exit(127);
     }
-    // Kill it once the checkpoint holds work, but before it has finished.
+    // Kill it once the checkpoint says the first bounce has begun (pass 1 of 3).
+    const auto pass_saved = [&]() -> int
+    {
+        try
+        {
+            const std::vector<uint32_t> state = hemi::io::AssetReader(partial).array<uint32_t>("ckpt.state");
+            return state.empty() ? -1 : int(state[0]);
+        }
+        catch (const std::exception&)
+        {
+            return -1; // not there yet
+        }
+    };
     const auto t0 = std::chrono::steady_clock::now();
-    int status = 0;
+    int status = 0, pass = -1;
     bool ended = false;
-    while (!fs::exists(partial) && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120) &&
-           !(ended = waitpid(pid, &status, WNOHANG) == pid))
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    const bool saved = fs::exists(partial);
+    while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120) &&
+           !(ended = waitpid(pid, &status, WNOHANG) == pid) && (pass = pass_saved()) < 1)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
     if (!ended)
     {
-        kill(pid, SIGTERM);
+        kill(-pid, SIGTERM);
         waitpid(pid, &status, 0);
     }
-    ASSERT_TRUE(saved) << "no checkpoint within 120 s: " << hemi::test::slurp(dir() / "killed.out");
+    // Every process of the job gone before the next one starts.
+    for (int i = 0; i < 1000 && kill(-pid, 0) == 0; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_NE(kill(-pid, 0), 0) << "a rank of the killed job is still running";
+    ASSERT_EQ(pass, 1) << "the checkpoint never reached the first bounce: "
+                       << hemi::test::slurp(dir() / "killed.out");
     ASSERT_FALSE(fs::exists(asset)) << "the job finished before it was killed; the test needs a longer bake";
 
     const Result r = mpirun(3, lightmap_args(scene, asset, json));
@@ -141,15 +167,68 @@ TEST(DistributedBake, AJobKilledMidPassResumesWithAnotherRankCountToTheSameBytes
     EXPECT_FALSE(fs::exists(partial)) << "the checkpoint is removed once the asset is written";
 }
 
-// Bad use: another bake under several ranks is refused (only lightmap is shared so far), naming why, and the
-// job ends instead of hanging.
+// SSBump (rows) and PRT (vertices, with a bounce) shared by 2 and 3 ranks: the one-process tool's bytes,
+// every rank working.
+TEST(DistributedBake, SsbumpAndPrtGiveTheSameBytesOnTwoAndThreeRanks)
+{
+    // A 256 x 256 height map of bumps: 300 rays a texel make 54-row slices, five of them.
+    std::vector<uint16_t> heights(256 * 256);
+    for (uint32_t y = 0; y < 256; ++y)
+        for (uint32_t x = 0; x < 256; ++x)
+            heights[y * 256 + x] =
+                uint16_t(127.5 + 127.5 * std::sin(0.15 * double(x)) * std::cos(0.11 * double(y)));
+    const fs::path height = dir() / "bumps.png";
+    {
+        const std::vector<uint8_t> png = hemi::test::encode_png_samples(256, 256, 1, 8, heights);
+        std::ofstream(height, std::ios::binary)
+            .write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    }
+    // A trefoil knot that shadows itself (1,220 vertices): 4096 rays a vertex make 256-vertex slices.
+    const fs::path knot =
+        hemi::samples::write_prt_model(dir() / "models", "knot", hemi::samples::PrtModel::Complex, 0.2f);
+    const std::string ssbump = "ssbump " + q(height) + " --rays 300 -o ",
+                      prt = "prt " + q(knot) + " --rays 4096 --bounces 1 --bases gs,h4 -o ";
+    const Result a = hemi::test::run(dir(), HEMI_BAKE_EXE, ssbump + q(dir() / "bumps_1.png"));
+    ASSERT_EQ(a.status, 0) << a.err;
+    const Result b = hemi::test::run(dir(), HEMI_BAKE_EXE, prt + q(dir() / "knot_1.hemi"));
+    ASSERT_EQ(b.status, 0) << b.err;
+    for (int ranks : {2, 3})
+    {
+        const std::string n = std::to_string(ranks);
+        const fs::path sb_json = dir() / ("bumps_" + n + ".json"), prt_json = dir() / ("knot_" + n + ".json");
+        const Result sb =
+            mpirun(ranks, ssbump + q(dir() / ("bumps_" + n + ".png")) + " --json " + q(sb_json));
+        ASSERT_EQ(sb.status, 0) << sb.err;
+        EXPECT_TRUE(hemi::test::slurp(dir() / ("bumps_" + n + ".png")) ==
+                    hemi::test::slurp(dir() / "bumps_1.png"))
+            << ranks << " ranks: the SSBump map's bytes differ";
+        const Result pr = mpirun(ranks, prt + q(dir() / ("knot_" + n + ".hemi")) + " --json " + q(prt_json));
+        ASSERT_EQ(pr.status, 0) << pr.err;
+        EXPECT_TRUE(hemi::test::slurp(dir() / ("knot_" + n + ".hemi")) ==
+                    hemi::test::slurp(dir() / "knot_1.hemi"))
+            << ranks << " ranks: the PRT asset's bytes differ";
+        for (const auto& [file, key] :
+             {std::pair{sb_json, "rows_by_rank"}, std::pair{prt_json, "vertices_by_rank"}})
+        {
+            const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(file));
+            EXPECT_EQ(j["ranks"], ranks) << file;
+            const std::vector<uint64_t> by_rank = j[key];
+            ASSERT_EQ(by_rank.size(), size_t(ranks)) << file;
+            for (int k = 0; k < ranks; ++k)
+                EXPECT_GT(by_rank[size_t(k)], 0u) << file << ": rank " << k << " computed nothing";
+        }
+    }
+}
+
+// Bad use: a bake that is not shared (reference) under several ranks is refused, naming why, and the job
+// ends instead of hanging.
 TEST(DistributedBake, RefusesBakesThatDoNotShareTheirWorkYet)
 {
-    const fs::path scene = dir() / "post_prt.glb";
+    const fs::path scene = dir() / "post_reference.glb";
     hemi::test::write_post_scene(scene);
-    const Result r =
-        mpirun(2, "prt " + q(scene) + " -o " + q(dir() / "post_prt.hemi") + " --rays 16 --bases gs");
+    const Result r = mpirun(2, "reference " + q(scene) + " -o " + q(dir() / "post_reference.exr") +
+                                   " --env uniform --size 32x32 --rays 4");
     EXPECT_NE(r.status, 0);
-    EXPECT_NE(r.err.find("only lightmap"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(dir() / "post_prt.hemi"));
+    EXPECT_NE(r.err.find("only lightmap, prt and ssbump"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir() / "post_reference.exr"));
 }

@@ -156,7 +156,8 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
         outputs.push_back(Value(out));
         summary.outputs.push_back(o->name);
     }
-    ext["outputs"] = Value(outputs);
+    if (!outputs.empty()) // (tinygltf writes an empty array as null)
+        ext["outputs"] = Value(outputs);
     if (!asset.probes.empty())
     {
         const LightProbes& p = asset.probes;
@@ -173,6 +174,12 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
     m.extensions["HEMI_lightmaps"] = Value(ext);
     m.extensionsUsed.push_back("HEMI_lightmaps");
     summary.bytes = m.buffers[0].data.size();
+    // Everything counted now (the mesh, images, probes): a .glb's chunk lengths are 32-bit, and tinygltf
+    // would cut them silently.
+    if (summary.bytes > (uint64_t(1) << 32) - (uint64_t(1) << 26))
+        throw std::invalid_argument(cannot + "the file's binary data would take " +
+                                    std::to_string(summary.bytes >> 20) +
+                                    " MiB, more than one glTF buffer holds (4 GiB); store fewer outputs");
     b.write(path);
     return summary;
 }

@@ -17,6 +17,8 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace hemi::bake
@@ -49,6 +51,21 @@ class Distribution
 
     // The leader's bytes, to every rank (a resumed checkpoint's state). The same size on every rank.
     virtual void broadcast(std::span<std::byte> bytes) = 0;
+
+    // Throws std::runtime_error on a rank whose `value` (a bake's checkpoint key: a hash of its inputs and
+    // options) differs from the leader's: ranks that would bake different scenes must not share slices.
+    void check_same(uint64_t value, const std::string& what)
+    {
+        if (ranks() == 1)
+            return;
+        uint64_t leaders = value;
+        broadcast(std::as_writable_bytes(std::span<uint64_t>(&leaders, 1)));
+        if (leaders != value)
+            throw std::runtime_error(
+                "rank " + std::to_string(rank()) + " " + what +
+                " differs from rank 0's: every rank needs the same hemi-bake and the same "
+                "inputs at the same paths");
+    }
 
     // On the leader: how many items each rank has computed in run() so far (the load balance, for reports).
     virtual std::vector<uint64_t> items_by_rank() const = 0;

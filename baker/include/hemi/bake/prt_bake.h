@@ -20,6 +20,7 @@
 // same seed gives the same bytes. The rays, the Embree scene they are traced in and the checkpoints are the
 // baker's shared parts: hemi/bake/ray_generator.h, embree_scene.h and checkpoint.h.
 
+#include <hemi/bake/distribution.h>
 #include <hemi/io/mesh.h>
 #include <hemi/io/prt_asset.h>
 
@@ -62,6 +63,10 @@ struct PrtBakeOptions
     double checkpoint_seconds = 30.0;
     // Rays traced between two progress calls (and possible checkpoints); slices are whole 256-vertex groups.
     uint64_t rays_per_slice = uint64_t(1) << 20;
+    // Who computes the vertices (distribution.h): null, this process; else the ranks of a job, which all call
+    // bake_prt_transfer with the same arguments and all return the same transfer. Only the leader resumes
+    // and saves the checkpoint and reports progress.
+    Distribution* distribution = nullptr;
 };
 
 struct PrtBakeProgress
@@ -142,6 +147,8 @@ struct PrtBakeSummary
     uint32_t resumed_vertex = 0;
     std::string checkpoint_error; // non-empty: checkpoints stopped for this reason (the asset is complete)
     std::vector<PrtTechniqueSummary> techniques;
+    // The ranks that shared the bake and the vertices (over all passes) each computed; {n} on one process.
+    std::vector<uint64_t> vertices_by_rank;
     double rays_per_second() const { return trace_seconds > 0.0 ? double(rays) / trace_seconds : 0.0; }
 };
 

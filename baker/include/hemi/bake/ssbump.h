@@ -24,6 +24,7 @@
 // there.
 
 #include <glm/vec3.hpp>
+#include <hemi/bake/distribution.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -161,6 +162,10 @@ struct SsbumpOptions
     // Checkpoints (checkpoint.h): empty is off. The bake of hemi-bake writes OUT.png.partial.
     std::filesystem::path checkpoint;
     double checkpoint_seconds = 30.0;
+    // Who computes the rows (distribution.h): null, this process; else the ranks of a job, which all call
+    // bake_ssbump with the same arguments and all return the same map. Only the leader resumes and saves
+    // the checkpoint and reports progress.
+    Distribution* distribution = nullptr;
 };
 // Throws std::invalid_argument naming the option that is out of range.
 void check_ssbump_options(const SsbumpOptions& options);

@@ -19,14 +19,14 @@
 //                                       "bufferView": V}, ...],
 //                          "probes": {"count": [NX, NY, NZ], "min": [x, y, z], "max": [x, y, z],
 //                                     "irradiance": V1, "valid": V2}}
-//   Buffer view V holds K maps one after the other, each H rows from the top (v = 0) of W texels of three
-//   IEEE binary16 values (R, G, B), little-endian: the bytes of the .hemi asset's half floats, dense over the
-//   atlas (texels the scene does not cover are 0). The coefficients are the asset's (io/lightmap_asset.h):
-//   irradiance in each texel's TEXCOORD_0 tangent frame (the glTF's TANGENT attribute), so that
-//   sum_k c_k b_k(n) at the normal-map normal n is E(n). Probes (when the asset has them) as
-//   io::LightProbes: V1 holds NX * NY * NZ probes of 9 x 3 float32 (coefficient j, channel c at j * 3 + c),
-//   x fastest; V2 one byte per probe (1 valid, 0 inside geometry). The scene's frame is the glTF's own
-//   (hemi reads glTF's y-up space into its z-up world; the probe grid is in the glTF's frame).
+//   ("outputs" is absent when none is stored.) Buffer view V holds K maps one after the other, each H rows
+//   from the top (v = 0) of W texels of three IEEE binary16 values (R, G, B), little-endian: the bytes of the
+//   .hemi asset's half floats, dense over the atlas (texels the scene does not cover are 0). The coefficients
+//   are the asset's (io/lightmap_asset.h): irradiance in each texel's TEXCOORD_0 tangent frame (the glTF's
+//   TANGENT attribute), so that sum_k c_k b_k(n) at the normal-map normal n is E(n). Probes (when the asset
+//   has them) as io::LightProbes: V1 holds NX * NY * NZ probes of 9 x 3 float32 (coefficient j, channel c at
+//   j * 3 + c), x fastest; V2 one byte per probe (1 valid, 0 inside geometry). The scene's frame is the
+//   glTF's own (hemi reads glTF's y-up space into its z-up world; the probe grid is in the glTF's frame).
 #include <hemi/io/lightmap_asset.h>
 
 #include <glm/vec3.hpp>
@@ -63,8 +63,9 @@ std::array<uint8_t, 4> encode_rgbm(glm::vec3 value, float range);
 
 // Writes `asset` to `path` (.glb, or .gltf with its buffer embedded), atomically. Throws
 // std::invalid_argument when the asset has no "plain" output, an output named in options.outputs is not in
-// the asset, the range is not finite and positive, or the binary buffer would exceed 4 GiB (the message
-// says how large; fewer outputs fit); FormatError when the file cannot be written.
+// the asset, the range is not finite and positive, or the binary buffer (outputs, mesh, images, probes)
+// would exceed 4 GiB (the message says how large; fewer outputs fit); FormatError when the file cannot be
+// written.
 LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const LightmapAsset& asset,
                                         const LightmapGltfOptions& options = {});
 
