@@ -17,6 +17,8 @@ packages=(
     glslang-tools glslang-dev
     # math, scene and image formats
     libglm-dev libeigen3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libopenexr-dev libimath-dev
+    # JPEG textures: libjpeg-turbo (PNG stays with stb_image)
+    libjpeg62-turbo-dev
     # zlib: the tests write PNGs of any depth (tests/png_writer.h)
     zlib1g-dev
     # Debian 12's Imath CMake config names its Python binding library; without it every configure warns

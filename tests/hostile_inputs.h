@@ -3,6 +3,8 @@
 // targets' regression corpora (tests/fuzz/fuzz_seeds.cpp).
 #include <cstdint>
 #include <cstring>
+#include <iterator>
+#include <string>
 #include <vector>
 
 namespace hemi::test
@@ -103,6 +105,43 @@ inline std::vector<uint8_t> jpeg_with_undefined_ac_table_in_a_baseline_scan(std:
             return jpeg;
         }
     return {};
+}
+
+// The fuzz seed's JPEG (io::encode_jpeg(pattern(16, 8), 80) in tests/fuzz/fuzz_seeds.cpp, 722 bytes) as
+// the fuzzer changed it: a Huffman table's symbols and the entropy-coded data damaged, fill bytes inserted.
+// stb_image then shifted its bit buffer by 34 (undefined behaviour); libjpeg refuses it. Byte edits at
+// offsets of the original ({offset, bytes erased, bytes inserted as hex}), applied from the last.
+inline std::vector<uint8_t> jpeg_with_damaged_entropy_data(std::vector<uint8_t> jpeg)
+{
+    struct Edit
+    {
+        size_t offset, erase;
+        const char* hex;
+    };
+    static const Edit edits[] = {
+        {232, 1, "32"},
+        {454, 4, "64616669"},
+        {617, 0,
+         "ffffffffffff00fefffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffffff"
+         "fff"
+         "ffffffffffffffffff"},
+        {635, 1, "35"},
+        {639, 45, ""},
+        {689, 1, "fe"},
+        {704, 2, "0981"},
+    };
+    if (jpeg.size() != 722)
+        return {};
+    for (size_t e = std::size(edits); e-- > 0;)
+    {
+        std::vector<uint8_t> insert;
+        for (const char* h = edits[e].hex; h[0] && h[1]; h += 2)
+            insert.push_back(uint8_t(std::stoi(std::string(h, 2), nullptr, 16)));
+        jpeg.erase(jpeg.begin() + long(edits[e].offset),
+                   jpeg.begin() + long(edits[e].offset + edits[e].erase));
+        jpeg.insert(jpeg.begin() + long(edits[e].offset), insert.begin(), insert.end());
+    }
+    return jpeg;
 }
 
 } // namespace hemi::test

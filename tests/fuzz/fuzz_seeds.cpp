@@ -255,6 +255,8 @@ int main(int argc, char** argv)
         test::jpeg_with_undefined_huffman_table(io::encode_jpeg(pattern(16, 8), 80)), 1);
     put(out / "image/regressions/jpeg_undefined_ac_table_in_a_baseline_scan",
         test::jpeg_with_undefined_ac_table_in_a_baseline_scan(io::encode_jpeg(pattern(16, 8), 80)), 1);
+    put(out / "image/regressions/jpeg_damaged_entropy_data",
+        test::jpeg_with_damaged_entropy_data(io::encode_jpeg(pattern(16, 8), 80)), 1);
 
     // exr
     exr(out / "exr/corpus/small.exr", 4, 4);

@@ -26,10 +26,14 @@
 #pragma GCC diagnostic pop
 #endif
 
+#include <jerror.h>
+#include <jpeglib.h>
+
 #include <algorithm>
 #include <array>
 #include <climits>
 #include <cmath>
+#include <csetjmp>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -1148,6 +1152,75 @@ std::vector<uint16_t> decode_rgba16(const CheckedImage& c, const std::string& na
 
 } // namespace
 
+namespace
+{
+// libjpeg's errors end the decode by a jump back to it (decode_jpeg_rgba); its warnings (corrupt entropy
+// data, a premature end) are kept, so that a damaged file is refused rather than decoded into garbage.
+struct JpegErrors
+{
+    jpeg_error_mgr mgr;
+    std::jmp_buf jump;
+    char message[JMSG_LENGTH_MAX];
+    bool warned;
+};
+
+[[noreturn]] void jpeg_error_exit(j_common_ptr cinfo)
+{
+    JpegErrors* e = reinterpret_cast<JpegErrors*>(cinfo->err);
+    (*cinfo->err->format_message)(cinfo, e->message);
+    std::longjmp(e->jump, 1);
+}
+
+void jpeg_emit_message(j_common_ptr cinfo, int level)
+{
+    JpegErrors* e = reinterpret_cast<JpegErrors*>(cinfo->err);
+    // Level -1 is a warning. Stray bytes before a marker (some cameras' files) leave the image intact.
+    if (level < 0 && cinfo->err->msg_code != JWRN_EXTRANEOUS_DATA && !e->warned)
+    {
+        (*cinfo->err->format_message)(cinfo, e->message);
+        e->warned = true;
+    }
+}
+
+// Decodes a JPEG into RGBA (libjpeg-turbo, Debian's libjpeg62-turbo). `pixels` holds width x height x 4
+// bytes for the size the header gave. Returns libjpeg's message when it fails or warns, else an empty
+// string. No object with a destructor lives in this frame across the jump.
+std::string decode_jpeg_rgba(const uint8_t* data, size_t size, uint32_t width, uint32_t height,
+                             uint8_t* pixels)
+{
+    jpeg_decompress_struct cinfo;
+    JpegErrors errors;
+    cinfo.err = jpeg_std_error(&errors.mgr);
+    errors.mgr.error_exit = jpeg_error_exit;
+    errors.mgr.emit_message = jpeg_emit_message;
+    errors.message[0] = 0;
+    errors.warned = false;
+    if (setjmp(errors.jump))
+    {
+        jpeg_destroy_decompress(&cinfo);
+        return errors.message[0] ? errors.message : "libjpeg failed";
+    }
+    jpeg_create_decompress(&cinfo);
+    jpeg_mem_src(&cinfo, data, static_cast<unsigned long>(size));
+    jpeg_read_header(&cinfo, TRUE);
+    cinfo.out_color_space = JCS_EXT_RGBA;
+    jpeg_start_decompress(&cinfo);
+    if (cinfo.output_width != width || cinfo.output_height != height || cinfo.output_components != 4)
+    {
+        jpeg_destroy_decompress(&cinfo);
+        return "its frame is not the size its header gave";
+    }
+    while (cinfo.output_scanline < cinfo.output_height)
+    {
+        JSAMPROW row = pixels + size_t(cinfo.output_scanline) * width * 4;
+        jpeg_read_scanlines(&cinfo, &row, 1);
+    }
+    jpeg_finish_decompress(&cinfo);
+    jpeg_destroy_decompress(&cinfo);
+    return errors.warned ? errors.message : "";
+}
+} // namespace
+
 ImageRgba8 decode_image(const EncodedImage& image)
 {
     const std::string name = image.name.empty() ? std::string("unnamed image") : image.name;
@@ -1164,6 +1237,16 @@ ImageRgba8 decode_image(const EncodedImage& image)
         const std::vector<uint16_t> wide = decode_rgba16(c, name, bits);
         for (size_t i = 0; i < out.pixels.size(); ++i)
             out.pixels[i] = uint8_t((uint32_t(wide[i]) * 255u + 32767u) / 65535u);
+        return out;
+    }
+    if (c.mime == "image/jpeg")
+    {
+        // libjpeg-turbo, not stb_image: a damaged entropy-coded segment made stb_image shift by more than
+        // 31 bits (undefined behaviour, found by tests/fuzz/fuzz_image); libjpeg reports it.
+        const std::string problem =
+            decode_jpeg_rgba(data.data(), data.size(), out.width, out.height, out.pixels.data());
+        if (!problem.empty())
+            throw FormatError(name + ": corrupt or unsupported jpeg (libjpeg: " + problem + ")");
         return out;
     }
     unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, 4);
