@@ -1,4 +1,5 @@
 #include <hemi/bake/checkpoint.h>
+#include <hemi/bake/distribution.h>
 
 #include <hemi/io/asset.h>
 #include <hemi/io/atomic_file.h>
@@ -75,6 +76,22 @@ std::optional<SlicePosition> SliceCheckpoint::resume()
     // Reading a large checkpoint takes time of its own: the interval is one of baking.
     last_save_ = std::chrono::steady_clock::now();
     return found;
+}
+
+std::optional<SlicePosition> SliceCheckpoint::resume(Distribution& distribution)
+{
+    std::optional<SlicePosition> found = distribution.leader() ? resume() : std::nullopt;
+    if (distribution.ranks() == 1)
+        return found;
+    uint8_t resumed = found.has_value();
+    distribution.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
+    if (!resumed)
+        return std::nullopt;
+    SlicePosition position = found.value_or(SlicePosition{});
+    distribution.broadcast(std::as_writable_bytes(std::span<SlicePosition>(&position, 1)));
+    for (const CheckpointSection& section : sections_)
+        distribution.broadcast(section.bytes);
+    return position;
 }
 
 std::optional<SlicePosition> SliceCheckpoint::load()

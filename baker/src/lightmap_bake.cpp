@@ -583,31 +583,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                 {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}},
                                o.checkpoint_seconds);
     SlicePosition state;
-    if (const std::optional<SlicePosition> resumed = checkpoint.resume())
+    if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
     {
         state = *resumed;
         out.resumed = true;
-    }
-    if (dist.ranks() > 1)
-    {
-        // Every rank goes on from where the leader's checkpoint left the bake.
-        uint8_t resumed = out.resumed;
-        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
-        out.resumed = resumed != 0;
-        if (out.resumed)
-        {
-            dist.broadcast(std::as_writable_bytes(std::span<SlicePosition>(&state, 1)));
-            for (const std::span<std::byte> bytes :
-                 {std::as_writable_bytes(std::span<ShArray>(out.irradiance)),
-                  std::as_writable_bytes(std::span<ShArray>(pass_sh)),
-                  std::as_writable_bytes(std::span<DirectArray>(out.direct)),
-                  std::as_writable_bytes(std::span<DirectArray>(pass_direct)),
-                  std::as_writable_bytes(std::span<LightmapSh::Half>(out.half)),
-                  std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half)),
-                  std::as_writable_bytes(std::span<glm::vec3>(previous)),
-                  std::as_writable_bytes(std::span<uint8_t>(out.valid))})
-                dist.broadcast(bytes);
-        }
     }
     const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
                                     (lights.sun ? uint64_t(o.sun_rays) : 0) +

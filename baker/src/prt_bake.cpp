@@ -148,27 +148,12 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
                                 {"bounce", std::as_writable_bytes(std::span<float>(bounce_irradiance))}},
                                o.checkpoint_seconds);
     SlicePosition state;
-    if (const std::optional<SlicePosition> resumed = checkpoint.resume())
+    if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
     {
         state = *resumed;
         out.resumed = true;
         out.resumed_pass = int(state.pass);
         out.resumed_vertex = state.next_item;
-    }
-    if (dist.ranks() > 1)
-    {
-        // Every rank goes on from where the leader's checkpoint left the bake.
-        uint8_t resumed = out.resumed;
-        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
-        if (resumed)
-        {
-            dist.broadcast(std::as_writable_bytes(std::span<SlicePosition>(&state, 1)));
-            for (std::vector<float>* v : {&out.radiance, &out.irradiance, &exitant, &bounce_irradiance})
-                dist.broadcast(std::as_writable_bytes(std::span<float>(*v)));
-            out.resumed = true;
-            out.resumed_pass = int(state.pass);
-            out.resumed_vertex = state.next_item;
-        }
     }
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
     const uint32_t slice = std::max<uint32_t>(

@@ -561,22 +561,10 @@ SsbumpMap bake_ssbump(const HeightField& input, const SsbumpOptions& o,
         dist.leader() ? o.checkpoint : std::filesystem::path(), key, 1, uint32_t(field.height),
         {{"occlusion", std::as_writable_bytes(std::span<glm::vec3>(out.occlusion))}}, o.checkpoint_seconds);
     uint32_t row = 0;
-    if (const std::optional<SlicePosition> resumed = checkpoint.resume())
+    if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
     {
         row = resumed->next_item;
         out.resumed = true;
-    }
-    if (dist.ranks() > 1)
-    {
-        // Every rank goes on from where the leader's checkpoint left the bake.
-        uint8_t resumed = out.resumed;
-        dist.broadcast(std::as_writable_bytes(std::span<uint8_t>(&resumed, 1)));
-        out.resumed = resumed != 0;
-        if (out.resumed)
-        {
-            dist.broadcast(std::as_writable_bytes(std::span<uint32_t>(&row, 1)));
-            dist.broadcast(std::as_writable_bytes(std::span<glm::vec3>(out.occlusion)));
-        }
     }
     // Slices of about 2^22 rays: progress and checkpoints between them, on this thread.
     const uint32_t slice_rows = uint32_t(std::clamp<uint64_t>(

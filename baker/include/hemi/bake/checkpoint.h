@@ -31,6 +31,8 @@
 namespace hemi::bake
 {
 
+class Distribution;
+
 // Where a bake stands: passes before `pass` are complete, and so are items [0, next_item) of `pass`.
 struct SlicePosition
 {
@@ -87,6 +89,10 @@ class SliceCheckpoint
     // key, other section sizes or a position that save never writes (the very start or past the end). The
     // interval to the first save counts from here (or from construction when the bake does not resume).
     std::optional<SlicePosition> resume();
+    // resume() for the ranks of a job (distribution.h): the leader resumes from its file, and the other ranks
+    // (whose checkpoints are off) receive the position and every section it restored, so that all go on from
+    // the same state. Returns the same on every rank.
+    std::optional<SlicePosition> resume(Distribution& distribution);
 
     // Call between slices, with the bake's position: `pass` has finished items [0, next_item), next_item ==
     // items meaning the pass is complete. Saves when the checkpoint is on, the bake is not complete and
