@@ -10,6 +10,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace hemi::bake
 {
@@ -21,7 +22,8 @@ struct EmbreeScene::Impl
     // Embree's own copies (the geometry's buffers, alive as long as the scene): read by geometric_normal().
     const float* positions = nullptr;
     const uint32_t* indices = nullptr;
-    std::mutex error_mutex; // Embree may report from its worker threads
+    std::vector<glm::vec3> normals; // per triangle, cross(p1 - p0, p2 - p0): geometric_normal()
+    std::mutex error_mutex;         // Embree may report from its worker threads
     std::string error;
 
     ~Impl()
@@ -129,6 +131,15 @@ EmbreeScene::EmbreeScene(const io::Mesh& mesh) : impl_(std::make_unique<Impl>())
     s.positions = vb;
     s.indices = ib;
     triangle_count_ = uint32_t(mesh.indices.size() / 3);
+    s.normals.resize(triangle_count_);
+    for (uint32_t t = 0; t < triangle_count_; ++t)
+    {
+        const uint32_t* tri = &ib[size_t(t) * 3];
+        const glm::vec3 p0(vb[size_t(tri[0]) * 3], vb[size_t(tri[0]) * 3 + 1], vb[size_t(tri[0]) * 3 + 2]),
+            p1(vb[size_t(tri[1]) * 3], vb[size_t(tri[1]) * 3 + 1], vb[size_t(tri[1]) * 3 + 2]),
+            p2(vb[size_t(tri[2]) * 3], vb[size_t(tri[2]) * 3 + 1], vb[size_t(tri[2]) * 3 + 2]);
+        s.normals[t] = glm::cross(p1 - p0, p2 - p0);
+    }
 
     glm::vec3 lo(INFINITY), hi(-INFINITY);
     for (const glm::vec3& p : mesh.positions)
@@ -169,14 +180,85 @@ bool EmbreeScene::occluded(const glm::vec3& origin, const glm::vec3& direction, 
     return ray.tfar == -INFINITY; // Embree's mark of an occluded ray
 }
 
+namespace
+{
+
+constexpr size_t kPacket = 16;
+
+// Rays [first, first + count) of `rays` into a packet's lanes; the lanes past `count` are off.
+template <class Packet>
+void fill_packet(Packet& ray, int (&valid)[kPacket], std::span<const Ray> rays, size_t first, size_t count)
+{
+    for (size_t j = 0; j < kPacket; ++j)
+    {
+        valid[j] = j < count ? -1 : 0;
+        const Ray& r = rays[first + std::min(j, count - 1)];
+        ray.org_x[j] = r.origin.x;
+        ray.org_y[j] = r.origin.y;
+        ray.org_z[j] = r.origin.z;
+        ray.dir_x[j] = r.direction.x;
+        ray.dir_y[j] = r.direction.y;
+        ray.dir_z[j] = r.direction.z;
+        ray.tnear[j] = r.t_near;
+        ray.tfar[j] = r.t_far;
+        ray.mask[j] = 0xffffffffu;
+        ray.time[j] = 0.0f;
+        ray.flags[j] = 0;
+    }
+}
+
+} // namespace
+
+void EmbreeScene::intersect(std::span<const Ray> rays, std::span<std::optional<RayHit>> hits) const
+{
+    if (hits.size() != rays.size())
+        throw std::invalid_argument("hemi: EmbreeScene::intersect: " + std::to_string(rays.size()) +
+                                    " rays but room for " + std::to_string(hits.size()) + " hits");
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t first = 0; first < rays.size(); first += kPacket)
+    {
+        const size_t count = std::min(kPacket, rays.size() - first);
+        alignas(64) int valid[kPacket];
+        alignas(64) RTCRayHit16 packet;
+        fill_packet(packet.ray, valid, rays, first, count);
+        for (size_t j = 0; j < kPacket; ++j)
+        {
+            packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+            packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, impl_->scene, &context, &packet);
+        for (size_t j = 0; j < count; ++j)
+            if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID)
+                hits[first + j].reset();
+            else
+                hits[first + j] =
+                    RayHit{packet.hit.primID[j], packet.hit.u[j], packet.hit.v[j], packet.ray.tfar[j]};
+    }
+}
+
+void EmbreeScene::occluded(std::span<const Ray> rays, std::span<uint8_t> blocked) const
+{
+    if (blocked.size() != rays.size())
+        throw std::invalid_argument("hemi: EmbreeScene::occluded: " + std::to_string(rays.size()) +
+                                    " rays but room for " + std::to_string(blocked.size()) + " answers");
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t first = 0; first < rays.size(); first += kPacket)
+    {
+        const size_t count = std::min(kPacket, rays.size() - first);
+        alignas(64) int valid[kPacket];
+        alignas(64) RTCRay16 packet;
+        fill_packet(packet, valid, rays, first, count);
+        rtcOccluded16(valid, impl_->scene, &context, &packet);
+        for (size_t j = 0; j < count; ++j)
+            blocked[first + j] = packet.tfar[j] == -INFINITY;
+    }
+}
+
 glm::vec3 EmbreeScene::geometric_normal(uint32_t primitive) const
 {
-    const uint32_t* tri = &impl_->indices[size_t(primitive) * 3];
-    const float* p = impl_->positions;
-    const glm::vec3 p0(p[size_t(tri[0]) * 3], p[size_t(tri[0]) * 3 + 1], p[size_t(tri[0]) * 3 + 2]),
-        p1(p[size_t(tri[1]) * 3], p[size_t(tri[1]) * 3 + 1], p[size_t(tri[1]) * 3 + 2]),
-        p2(p[size_t(tri[2]) * 3], p[size_t(tri[2]) * 3 + 1], p[size_t(tri[2]) * 3 + 2]);
-    return glm::cross(p1 - p0, p2 - p0);
+    return impl_->normals[primitive];
 }
 
 int EmbreeScene::embree_version()

@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <glm/geometric.hpp>
@@ -292,13 +293,27 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> val
 }
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
 // (Embree's barycentrics): what a ray that lands there picks up.
-glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t triangle, float bu, float bv)
+glm::vec2 atlas_uv(const io::Mesh& mesh, uint32_t triangle, float bu, float bv)
 {
     const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
-    const glm::vec2 uv =
-        (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
-    return map.bilinear(0, uv);
+    return (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
 }
+glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t triangle, float bu, float bv)
+{
+    return map.bilinear(0, atlas_uv(mesh, triangle, bu, bv));
+}
+
+// A texel's rays, reused from texel to texel by each thread: directions, the rays traced, what they found.
+struct RayScratch
+{
+    std::vector<glm::vec3> directions;
+    std::vector<Ray> rays;
+    std::vector<int> index;     // the sample's index in its stream, per traced ray
+    std::vector<double> weight; // the environment rays' weights
+    std::vector<std::optional<RayHit>> hits;
+    std::vector<uint8_t> blocked;
+    std::vector<io::BlockMaps::Taps> taps; // the bounce rays' lookups
+};
 
 } // namespace
 
@@ -383,8 +398,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.valid.assign(n, 1);
     std::vector<uint8_t> pushed(n, 0);
     io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
-    auto lookup_previous = [&](uint32_t triangle, float bu, float bv)
-    { return atlas_lookup(mesh, previous_map, triangle, bu, bv); };
+    tbb::enumerable_thread_specific<RayScratch> scratch;
 
     // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
     // or under one, seen from the wall's back) is moved through that surface to its front, so it sees what
@@ -474,60 +488,114 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             for (size_t b = 0; b < 3; ++b)
                 direct_a[1 + b] += share * eb[b];
         };
-        // Each pass draws its own directions (seed per pass), so the passes' noise does not line up.
+        // Each pass draws its own directions (seed per pass), so the passes' noise does not line up. The
+        // texel's rays are traced together (EmbreeScene's packets), then their hits are shaded in ray order.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
-        for (int r = 0; r < o.rays; ++r)
+        RayScratch& s = scratch.local();
+        // The first pass always finds the closest hit: it counts the back faces a texel sees.
+        const bool needs_hit = pass == 0 || (surfaces && pass > 0);
+        s.rays.clear();
+        s.index.clear();
+        if (needs_hit)
         {
-            const glm::vec3 h = hemisphere_direction(seed, item, r, o.rays);
-            const glm::vec3 d = glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal);
-            if (glm::dot(d, t.geometric_normal) <= 0.0f)
-                continue; // into its own triangle
-            // The first pass always finds the closest hit: it counts the back faces a texel sees.
-            const bool needs_hit = pass == 0 || (surfaces && pass > 0);
-            if (!needs_hit)
+            s.directions.resize(size_t(o.rays));
+            hemisphere_directions(seed, item, s.directions);
+            for (int r = 0; r < o.rays; ++r)
+            {
+                const glm::vec3& h = s.directions[size_t(r)];
+                const glm::vec3 d = glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal);
+                if (glm::dot(d, t.geometric_normal) <= 0.0f)
+                    continue; // into its own triangle
+                s.rays.push_back({origin, 0.0f, d, INFINITY});
+                s.index.push_back(r);
+            }
+        }
+        s.hits.resize(s.rays.size());
+        scene.intersect(s.rays, s.hits);
+        // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
+        // A bounce ray's lookup of the previous pass: every lookup's texels are fetched before any is read.
+        const bool lookups = surfaces && pass > 0;
+        s.blocked.resize(s.rays.size()); // here: 1 for a ray that hit a back face
+        s.taps.resize(lookups ? s.rays.size() : 0);
+        for (size_t k = 0; k < s.rays.size(); ++k)
+        {
+            const std::optional<RayHit>& hit = s.hits[k];
+            s.blocked[k] = hit && is_back_face(hit->primitive, s.rays[k].direction);
+            if (!lookups || !hit || s.blocked[k])
                 continue;
-            const std::optional<RayHit> hit = scene.intersect(origin, d);
+            s.taps[k] = previous_map.taps(0, atlas_uv(mesh, hit->primitive, hit->u, hit->v));
+            for (const float* p : s.taps[k].texel)
+                if (p)
+                    __builtin_prefetch(p);
+        }
+        for (size_t k = 0; k < s.rays.size(); ++k)
+        {
+            const glm::vec3& d = s.rays[k].direction;
+            const std::optional<RayHit>& hit = s.hits[k];
+            const int r = s.index[k];
             if (!hit)
             {
                 if (pass == 0 && !image_env)
                     add(d, glm::dvec3(lights.environment_radiance(d)) * weight, r, o.rays);
                 continue;
             }
-            // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
-            if (is_back_face(hit->primitive, d))
+            if (s.blocked[k])
             {
                 ++back_faces;
                 continue;
             }
             if (!surfaces)
                 continue;
-            glm::vec3 radiance = pass == 0
-                                     ? surfaces->emission(hit->primitive, hit->u, hit->v)
-                                     : surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                                           lookup_previous(hit->primitive, hit->u, hit->v) / float(M_PI);
+            glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
+                                           : surfaces->albedo(hit->primitive, hit->u, hit->v) *
+                                                 io::BlockMaps::read(s.taps[k]) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight, r, o.rays);
         }
-        if (pass == 0 && image_env)
-            for (int r = 0; r < o.rays; ++r)
+        // Shadow rays, traced together and then added in order: `count` rays of a stream, ray(r, d, w)
+        // saying whether ray r is cast (its direction and weight).
+        auto shadow_rays = [&](int count, auto&& ray, auto&& radiance)
+        {
+            s.rays.clear();
+            s.index.clear();
+            s.weight.clear();
+            for (int r = 0; r < count; ++r)
             {
                 glm::vec3 d;
                 double w = 0.0;
-                if (!light.environment_ray(item, r, o.rays, d, w) ||
-                    glm::dot(d, t.geometric_normal) <= 0.0f || glm::dot(d, t.normal) <= 0.0f ||
-                    scene.occluded(origin, d))
-                    continue; // below the surface (the hemisphere of the frame, as the uniform rays see it)
-                add(d, glm::dvec3(lights.environment_radiance(d)) * w, r, o.rays);
-            }
-        if (lights.sun && pass == 0)
-            for (int r = 0; r < o.sun_rays; ++r)
-            {
-                const glm::vec3 d = light.sun_ray(item, r);
-                if (glm::dot(d, t.geometric_normal) <= 0.0f || scene.occluded(origin, d))
+                if (!ray(r, d, w))
                     continue;
-                // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
-                add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays), r, o.sun_rays);
+                s.rays.push_back({origin, 0.0f, d, INFINITY});
+                s.index.push_back(r);
+                s.weight.push_back(w);
             }
+            s.blocked.resize(s.rays.size());
+            scene.occluded(s.rays, s.blocked);
+            for (size_t k = 0; k < s.rays.size(); ++k)
+                if (!s.blocked[k])
+                    add(s.rays[k].direction, radiance(s.rays[k].direction, s.weight[k]), s.index[k], count);
+        };
+        if (pass == 0 && image_env)
+            shadow_rays(
+                o.rays,
+                [&](int r, glm::vec3& d, double& w)
+                {
+                    // Below the surface: the hemisphere of the frame, as the uniform rays see it.
+                    return light.environment_ray(item, r, o.rays, d, w) &&
+                           glm::dot(d, t.geometric_normal) > 0.0f && glm::dot(d, t.normal) > 0.0f;
+                },
+                [&](const glm::vec3& d, double w) { return glm::dvec3(lights.environment_radiance(d)) * w; });
+        if (lights.sun && pass == 0)
+            shadow_rays(
+                o.sun_rays,
+                [&](int r, glm::vec3& d, double&)
+                {
+                    d = light.sun_ray(item, r);
+                    return glm::dot(d, t.geometric_normal) > 0.0f;
+                },
+                // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
+                [&](const glm::vec3&, double)
+                { return glm::dvec3(lights.sun_irradiance) / double(o.sun_rays); });
         if (pass == 0)
             for (const io::PunctualLight& p : lights.punctual)
             {

@@ -12,6 +12,7 @@
 
 #include "hemi/shared/transfer.h"
 
+#include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -158,6 +159,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
     // Slices of rays_per_slice rays: progress and checkpoints happen between slices, on this thread.
     const uint32_t slice = std::max<uint32_t>(
         256, uint32_t(std::min<uint64_t>(n, o.rays_per_slice / uint64_t(o.rays))) / 256 * 256);
+    const auto trace_start = std::chrono::steady_clock::now();
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
         const bool resuming_mid_pass = pass == int(state.pass) && state.next_item > 0;
@@ -172,29 +174,34 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
         constexpr uint32_t kChunk = 256;
         auto work = [&](const tbb::blocked_range<uint32_t>& range)
         {
-            float y[36], x[36];
-            std::vector<float> m_acc(size_t(9) * L), t_acc(L);
+            // A vertex's rays, traced together (EmbreeScene's packets); then, per ray that counts, its SH
+            // y (a column of Y) and what it carries, x (a column of X; X = Y in the first pass) and its
+            // clamped cosine w; then M += sign Y_{0..8} X^T and t += sign X w as matrix products (Eigen's,
+            // blocked).
+            std::vector<glm::vec3> directions(size_t(o.rays));
+            std::vector<Ray> rays(size_t(o.rays));
+            std::vector<std::optional<RayHit>> hits(size_t(o.rays));
+            Eigen::MatrixXf Y(L, o.rays), X(L, pass == 0 ? 0 : o.rays);
+            Eigen::VectorXf w(o.rays);
             for (uint32_t v = range.begin(); v != range.end(); ++v)
             {
-                std::fill(m_acc.begin(), m_acc.end(), 0.0f);
-                std::fill(t_acc.begin(), t_acc.end(), 0.0f);
                 const glm::vec3 normal = glm::normalize(mesh.normals[v]);
                 const glm::vec3 origin = offset_ray_origin(mesh.positions[v], normal, offset);
-                for (int r = 0; r < o.rays; ++r)
+                sphere_directions(o.seed, v, directions);
+                for (size_t r = 0; r < rays.size(); ++r)
+                    rays[r] = {origin, 0.0f, directions[r], INFINITY};
+                embree.intersect(rays, hits);
+                Eigen::Index k = 0; // the rays that count so far
+                for (size_t r = 0; r < rays.size(); ++r)
                 {
-                    const glm::vec3 d = sphere_direction(o.seed, v, r, o.rays);
-                    const std::optional<RayHit> hit = embree.intersect(origin, d);
+                    const glm::vec3& d = directions[r];
+                    const std::optional<RayHit>& hit = hits[r];
                     if (!hit)
                         continue;
-                    math::sh_eval(o.order, d, std::span<float>(y, L));
                     const float cosine_weight = std::max(0.0f, glm::dot(normal, d));
-                    if (pass == 0)
-                    {
-                        // The blocked radiance: the receiver (y_i for M, the clamped cosine for t) times y_c.
-                        for (int c = 0; c < L; ++c)
-                            x[c] = y[c];
-                    }
-                    else
+                    // The first pass: the blocked radiance, the receiver (y_i for M, the clamped cosine for
+                    // t) times y_c.
+                    if (pass > 0)
                     {
                         // Bounced light arrives only from above the surface and leaves only the front of
                         // the surface it hit (counter-clockwise seen from outside): a ray below the tangent
@@ -204,24 +211,33 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
                             continue;
                         const uint32_t* tri = &mesh.indices[size_t(hit->primitive) * 3];
                         const float bu = hit->u, bv = hit->v, w0 = 1.0f - bu - bv;
+                        float* x = X.col(k).data();
                         for (int c = 0; c < L; ++c)
                             x[c] = w0 * exitant[size_t(tri[0]) * L + c] +
                                    bu * exitant[size_t(tri[1]) * L + c] +
                                    bv * exitant[size_t(tri[2]) * L + c];
                     }
-                    for (int i = 0; i < 9; ++i)
-                        for (int c = 0; c < L; ++c)
-                            m_acc[size_t(i) * L + c] += y[i] * x[c];
-                    for (int c = 0; c < L; ++c)
-                        t_acc[c] += cosine_weight * x[c];
+                    math::sh_eval(o.order, d, std::span<float>(Y.col(k).data(), size_t(L)));
+                    w[k] = cosine_weight;
+                    ++k;
                 }
                 const float sign = pass == 0 ? -weight : weight;
-                float* m = &out.radiance[size_t(v) * 9 * L];
-                for (size_t i = 0; i < m_acc.size(); ++i)
-                    m[i] += sign * m_acc[i];
-                float* t = pass == 0 ? &out.irradiance[size_t(v) * L] : &bounce_irradiance[size_t(v) * L];
-                for (int c = 0; c < L; ++c)
-                    t[c] += sign * t_acc[c];
+                Eigen::Map<Eigen::Matrix<float, 9, Eigen::Dynamic, Eigen::RowMajor>> m(
+                    &out.radiance[size_t(v) * 9 * L], 9, L);
+                Eigen::Map<Eigen::VectorXf> t(
+                    pass == 0 ? &out.irradiance[size_t(v) * L] : &bounce_irradiance[size_t(v) * L], L);
+                if (k == 0)
+                    continue;
+                if (pass == 0)
+                {
+                    m.noalias() += sign * (Y.topLeftCorner(9, k) * Y.leftCols(k).transpose());
+                    t.noalias() += sign * (Y.leftCols(k) * w.head(k));
+                }
+                else
+                {
+                    m.noalias() += sign * (Y.topLeftCorner(9, k) * X.leftCols(k).transpose());
+                    t.noalias() += sign * (X.leftCols(k) * w.head(k));
+                }
             }
         };
         const uint32_t first = resuming_mid_pass ? state.next_item : 0;
@@ -253,6 +269,7 @@ PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& o,
     }
     out.checkpoint_error = checkpoint.error();
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count();
     return out;
 }
 
@@ -262,22 +279,34 @@ uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& o, double& 
     const EmbreeScene embree(mesh);
     const float offset = embree.ray_offset(o.ray_offset);
     const uint32_t n = uint32_t(mesh.vertex_count());
+    // Every ray first (not timed), then only the tracing: the bake's queries, vertex by vertex.
+    const size_t per = size_t(o.rays);
+    std::vector<Ray> rays(size_t(n) * per);
+    tbb::parallel_for(uint32_t(0), n,
+                      [&](uint32_t v)
+                      {
+                          std::vector<glm::vec3> directions(per);
+                          sphere_directions(o.seed, v, directions);
+                          const glm::vec3 origin =
+                              offset_ray_origin(mesh.positions[v], glm::normalize(mesh.normals[v]), offset);
+                          for (size_t r = 0; r < per; ++r)
+                              rays[v * per + r] = {origin, 0.0f, directions[r], INFINITY};
+                      });
     std::atomic<uint64_t> hits{0};
     const auto t0 = std::chrono::steady_clock::now();
-    tbb::parallel_for(
-        tbb::blocked_range<uint32_t>(0, n, 256),
-        [&](const tbb::blocked_range<uint32_t>& range)
-        {
-            uint64_t local = 0;
-            for (uint32_t v = range.begin(); v != range.end(); ++v)
-            {
-                const glm::vec3 origin =
-                    offset_ray_origin(mesh.positions[v], glm::normalize(mesh.normals[v]), offset);
-                for (int r = 0; r < o.rays; ++r)
-                    local += embree.intersect(origin, sphere_direction(o.seed, v, r, o.rays)).has_value();
-            }
-            hits += local;
-        });
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 256),
+                      [&](const tbb::blocked_range<uint32_t>& range)
+                      {
+                          uint64_t local = 0;
+                          std::vector<std::optional<RayHit>> found(per);
+                          for (uint32_t v = range.begin(); v != range.end(); ++v)
+                          {
+                              embree.intersect(std::span<const Ray>(rays).subspan(v * per, per), found);
+                              for (const std::optional<RayHit>& hit : found)
+                                  local += hit.has_value();
+                          }
+                          hits += local;
+                      });
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return hits;
 }
@@ -390,7 +419,7 @@ io::PrtAsset make_prt_asset(const io::Mesh& mesh, const PrtAssetOptions& options
     summary.vertices = uint32_t(mesh.vertex_count());
     summary.triangles = uint32_t(mesh.indices.size() / 3);
     summary.rays = transfer.rays_traced;
-    summary.trace_seconds = transfer.seconds;
+    summary.trace_seconds = transfer.trace_seconds;
     summary.resumed = transfer.resumed;
     summary.resumed_pass = transfer.resumed_pass;
     summary.resumed_vertex = transfer.resumed_vertex;

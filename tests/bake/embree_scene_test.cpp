@@ -174,3 +174,57 @@ TEST(EmbreeScene, ConcurrentQueriesMatchSerialOnes)
     EXPECT_GT(hits, parallel.size() / 10);
     EXPECT_LT(hits, parallel.size());
 }
+
+// The packet queries (16 rays at a time) answer as the single-ray ones do: the same triangle hit or missed
+// and the same occlusion for every ray of the knot's vertices, hit points within float rounding, for batch
+// sizes that fill packets and that leave lanes off; the wrong output size is refused. Fails for a lane
+// answer put in another lane's place, for a batch's last, partial packet dropped, or for a packet's tfar read
+// as a hit.
+TEST(EmbreeScene, PacketQueriesAnswerAsSingleRaysDo)
+{
+    const hemi::io::Mesh knot = hemi::samples::make_prt_model(hemi::samples::PrtModel::Complex, 0.3f);
+    const EmbreeScene scene(knot);
+    const float offset = scene.ray_offset(1e-4f);
+    size_t hits = 0, total = 0, primitive_differs = 0;
+    for (const int batch : {16, 37, 5})
+        for (uint32_t v = 0; v < knot.vertex_count(); v += 7)
+        {
+            const glm::vec3 origin =
+                hemi::bake::offset_ray_origin(knot.positions[v], glm::normalize(knot.normals[v]), offset);
+            std::vector<glm::vec3> directions(static_cast<size_t>(batch));
+            hemi::bake::sphere_directions(5, v, directions);
+            std::vector<hemi::bake::Ray> rays;
+            for (const glm::vec3& d : directions)
+                rays.push_back({origin, 0.0f, d, v % 2 ? INFINITY : 0.5f});
+            std::vector<std::optional<RayHit>> found(rays.size());
+            std::vector<uint8_t> blocked(rays.size(), 7);
+            scene.intersect(rays, found);
+            scene.occluded(rays, blocked);
+            for (size_t r = 0; r < rays.size(); ++r)
+            {
+                const std::optional<RayHit> one =
+                    scene.intersect(origin, rays[r].direction, 0.0f, rays[r].t_far);
+                ASSERT_EQ(found[r].has_value(), one.has_value()) << v << " " << r;
+                ASSERT_EQ(blocked[r],
+                          uint8_t(scene.occluded(origin, rays[r].direction, 0.0f, rays[r].t_far)));
+                ++total;
+                if (!one)
+                    continue;
+                ++hits;
+                // Two triangles may meet the ray at one point (an edge): either is right.
+                primitive_differs += found[r]->primitive != one->primitive;
+                ASSERT_LT(glm::distance(hit_point(knot, *found[r]), hit_point(knot, *one)),
+                          1e-5f * scene.diagonal());
+                ASSERT_NEAR(found[r]->distance, one->distance, 1e-5f * scene.diagonal());
+            }
+        }
+    EXPECT_GT(hits, total / 10);
+    EXPECT_LT(hits, total);
+    EXPECT_LT(primitive_differs, total / 1000 + 1);
+    std::vector<hemi::bake::Ray> rays(3);
+    std::vector<std::optional<RayHit>> two(2);
+    std::vector<uint8_t> four(4);
+    EXPECT_THROW(scene.intersect(rays, two), std::invalid_argument);
+    EXPECT_THROW(scene.occluded(rays, four), std::invalid_argument);
+    scene.intersect(std::span<const hemi::bake::Ray>(), std::span<std::optional<RayHit>>()); // nothing to do
+}

@@ -194,6 +194,29 @@ TEST(RayGenerator, DrawsThePrtBakesDirections)
     EXPECT_EQ(hemi::bake::uniform01(1, 2, 3), 0.592672408f);
 }
 
+// The bakes draw a texel's or a vertex's whole set at once: bit for bit the directions drawn one by one, for
+// set sizes that are and are not multiples of anything. Fails if the batch hashed the item differently, or
+// used another stratum width.
+TEST(RayGenerator, WholeSetsAreTheRaysDrawnOneByOne)
+{
+    for (const int rays : {1, 7, 64, 257})
+        for (const uint64_t item : {uint64_t(0), uint64_t(12345), uint64_t(1) << 40})
+        {
+            std::vector<glm::vec3> sphere(static_cast<size_t>(rays)), hemisphere(static_cast<size_t>(rays));
+            hemi::bake::sphere_directions(9, item, sphere);
+            hemi::bake::hemisphere_directions(9, item, hemisphere);
+            for (int r = 0; r < rays; ++r)
+            {
+                const glm::vec3 s = sphere_direction(9, item, r, rays),
+                                h = hemisphere_direction(9, item, r, rays);
+                ASSERT_EQ(std::memcmp(&sphere[size_t(r)], &s, sizeof s), 0)
+                    << rays << " " << item << " " << r;
+                ASSERT_EQ(std::memcmp(&hemisphere[size_t(r)], &h, sizeof h), 0)
+                    << rays << " " << item << " " << r;
+            }
+        }
+}
+
 TEST(RayGenerator, UniformNumbersLieInZeroOne)
 {
     double sum = 0.0;

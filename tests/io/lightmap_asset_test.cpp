@@ -12,6 +12,7 @@
 #include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -330,6 +331,75 @@ TEST(BlockMaps, KeepExactlyTheBlocksThatHoldAValueAndReadBackEveryTexel)
     EXPECT_THROW(hemi::io::BlockGrid(w, h, {0, 6}), std::invalid_argument); // 6 blocks in the grid
     EXPECT_THROW(hemi::io::BlockGrid(0, h, {}), std::invalid_argument);     // no texels
     EXPECT_THROW(hemi::io::BlockMaps::from_dense(w, h, 3, dense), std::invalid_argument); // wrong K
+}
+
+// bilinear() (taps() then read()) against a bilinear lookup written out here from the dense array, at points
+// all over a 21 x 13 atlas whose values change from texel to texel: across block borders (one, two or four
+// blocks under a lookup), at the clamped edges and over blocks that are not kept. Fails for a tap taken from
+// the wrong block when the footprint straddles a border, for a kept neighbour read as 0, or for swapped
+// weights.
+TEST(BlockMaps, BilinearLookupsReadTheFourTexelsAroundThePoint)
+{
+    const uint32_t w = 21, h = 13;
+    std::vector<float> dense(size_t(w) * h * 3, 0.0f);
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x)
+            if (!(x >= 8 && x < 16 && y >= 8)) // block (1, 1) stays empty: it is not kept
+                for (int c = 0; c < 3; ++c)
+                    dense[(size_t(y) * w + x) * 3 + size_t(c)] = float(1 + x + 100 * y + 10000 * c);
+    const hemi::io::BlockMaps m = hemi::io::BlockMaps::from_dense(w, h, 1, dense);
+    ASSERT_EQ(m.grid.blocks().size(), 5u);
+    auto texel = [&](int64_t x, int64_t y, int c)
+    {
+        x = std::clamp<int64_t>(x, 0, w - 1);
+        y = std::clamp<int64_t>(y, 0, h - 1);
+        return double(dense[(size_t(y) * w + size_t(x)) * 3 + size_t(c)]);
+    };
+    for (int j = 0; j <= 60; ++j)
+        for (int i = 0; i <= 90; ++i)
+        {
+            const glm::vec2 uv(float(i) / 90.0f, float(j) / 60.0f);
+            const double fx = double(uv.x) * w - 0.5, fy = double(uv.y) * h - 0.5;
+            const int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
+            const double tx = fx - double(x0), ty = fy - double(y0);
+            const glm::vec3 got = m.bilinear(0, uv);
+            for (int c = 0; c < 3; ++c)
+            {
+                const double expected =
+                    (texel(x0, y0, c) * (1 - tx) + texel(x0 + 1, y0, c) * tx) * (1 - ty) +
+                    (texel(x0, y0 + 1, c) * (1 - tx) + texel(x0 + 1, y0 + 1, c) * tx) * ty;
+                ASSERT_NEAR(got[c], expected, 1e-6 * std::max(1.0, std::abs(expected)))
+                    << uv.x << " " << uv.y;
+            }
+        }
+}
+
+// A grid too large for the bitmap of kept blocks (over 2^28 blocks: slot() then searches the kept blocks of a
+// row) answers as a small one does: the same few blocks, placed alike, give each texel the slot its block's
+// rank says, and -1 around them. Fails when one of the two ways of finding a block is wrong.
+TEST(BlockMaps, LargeAndSmallGridsFindTheSameSlots)
+{
+    const uint32_t big = 131080, small = 64; // 16385^2 blocks (over 2^28) and 8^2
+    const std::vector<glm::uvec2> kept = {{0, 0}, {3, 0}, {1, 2}, {2, 2}, {7, 5}};
+    std::vector<uint32_t> big_blocks, small_blocks;
+    for (const glm::uvec2& b : kept)
+    {
+        big_blocks.push_back(b.y * ((big + 7) / 8) + b.x);
+        small_blocks.push_back(b.y * (small / 8) + b.x);
+    }
+    const hemi::io::BlockGrid a(big, big, big_blocks), b(small, small, small_blocks);
+    for (int64_t y = -1; y <= int64_t(small); ++y)
+        for (int64_t x = -1; x <= int64_t(small); ++x)
+        {
+            int64_t expected = -1;
+            for (size_t k = 0; k < kept.size(); ++k)
+                if (x >= 0 && y >= 0 && uint32_t(x / 8) == kept[k].x && uint32_t(y / 8) == kept[k].y)
+                    expected = int64_t(k) * 64 + (y % 8) * 8 + x % 8;
+            ASSERT_EQ(b.slot(x, y), x >= int64_t(small) || y >= int64_t(small) ? -1 : expected)
+                << x << " " << y;
+            if (x < int64_t(small) && y < int64_t(small))
+                ASSERT_EQ(a.slot(x, y), expected) << x << " " << y;
+        }
 }
 
 namespace

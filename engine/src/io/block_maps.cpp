@@ -2,6 +2,7 @@
 #include <hemi/io/block_maps.h>
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +27,14 @@ BlockGrid::BlockGrid(uint32_t width, uint32_t height, std::vector<uint32_t> bloc
     }
     for (size_t r = 1; r < row_begin_.size(); ++r)
         row_begin_[r] += row_begin_[r - 1];
+    if (grid > kMaxRankedBlocks)
+        return; // slot() searches
+    kept_.assign((grid + 63) / 64, 0);
+    for (const uint32_t b : blocks_)
+        kept_[b / 64] |= uint64_t(1) << (b % 64);
+    rank_.assign(kept_.size(), 0);
+    for (size_t w = 1; w < kept_.size(); ++w)
+        rank_[w] = rank_[w - 1] + uint32_t(std::popcount(kept_[w - 1]));
 }
 
 BlockMaps::BlockMaps(BlockGrid g, uint32_t maps)

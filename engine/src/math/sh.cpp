@@ -23,12 +23,21 @@ void check_order(int order)
                                     std::to_string(kMaxShOrder) + "]");
 }
 
-// K_lm * sqrt(2) (m != 0) or K_l0: the normalisation of the real SH, sqrt((2l+1)/(4pi) (l-|m|)!/(l+|m|)!).
+// K_lm * sqrt(2) (m != 0) or K_l0: the normalisation of the real SH, sqrt((2l+1)/(4pi) (l-|m|)!/(l+|m|)!),
+// and the Legendre recurrence's factors (2l - 1) / (l - m) and (l + m - 1) / (l - m) for l > m + 1: sh_eval
+// runs for every ray of a PRT bake, and a division costs as much as the rest of a step.
 struct ShNormalisation
 {
     double k[kMaxShOrder][kMaxShOrder];
+    double a[kMaxShOrder][kMaxShOrder] = {}, b[kMaxShOrder][kMaxShOrder] = {};
     ShNormalisation()
     {
+        for (int l = 0; l < kMaxShOrder; ++l)
+            for (int m = 0; m < l; ++m)
+            {
+                a[l][m] = (2.0 * l - 1.0) / double(l - m);
+                b[l][m] = (l + m - 1.0) / double(l - m);
+            }
         for (int l = 0; l < kMaxShOrder; ++l)
             for (int m = 0; m <= l; ++m)
             {
@@ -59,9 +68,8 @@ void sh_eval(int order, const glm::vec3& d, std::span<float> out)
         {
             if (l > m)
             {
-                double next = (l == m + 1)
-                                  ? z * (2.0 * m + 1.0) * pmm
-                                  : ((2.0 * l - 1.0) * z * p - (l + m - 1.0) * p_prev) / double(l - m);
+                double next =
+                    (l == m + 1) ? z * (2.0 * m + 1.0) * pmm : kNorm.a[l][m] * z * p - kNorm.b[l][m] * p_prev;
                 p_prev = p;
                 p = next;
             }

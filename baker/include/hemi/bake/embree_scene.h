@@ -14,8 +14,10 @@
 //
 // Thread safety: construction builds the BVH (on Embree's TBB threads); after that the scene is read-only
 // and every query may run from any number of threads at once (Embree's scenes are safe for concurrent
-// queries once committed). Each query is a single ray (rtcIntersect1 / rtcOccluded1): the PRT bake traces
-// incoherent rays one by one, and no bake uses Embree's packets or streams yet.
+// queries once committed). intersect() and occluded() trace one ray (rtcIntersect1 / rtcOccluded1); their
+// span overloads trace many in packets of 16 (rtcIntersect16 / rtcOccluded16), which is what the bakes use
+// for the rays of one texel or one vertex: rays that share an origin (or a direction, towards the sun) walk
+// the BVH's upper levels together, and Embree traces such a packet faster than its rays one by one.
 
 #include <hemi/io/mesh.h>
 
@@ -25,6 +27,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 
 namespace hemi::bake
 {
@@ -35,6 +38,15 @@ struct RayHit
     uint32_t primitive = 0;   // the triangle: mesh.indices[3 * primitive + 0..2]
     float u = 0.0f, v = 0.0f; // Embree's barycentrics: p = (1 - u - v) p0 + u p1 + v p2
     float distance = 0.0f;    // along the ray, in multiples of the direction's length
+};
+
+// One ray of a batch (EmbreeScene's span overloads).
+struct Ray
+{
+    glm::vec3 origin{0.0f};
+    float t_near = 0.0f;
+    glm::vec3 direction{0.0f, 0.0f, 1.0f};
+    float t_far = INFINITY;
 };
 
 class EmbreeScene
@@ -60,12 +72,18 @@ class EmbreeScene
     // (it stops at the first hit found, not the closest), and the same answer as intersect().has_value().
     bool occluded(const glm::vec3& origin, const glm::vec3& direction, float t_near = 0.0f,
                   float t_far = INFINITY) const;
+    // The same queries for every ray of `rays`, traced in packets of 16: hits[i] (blocked[i]: 1 or 0) is the
+    // answer for rays[i]. A packet's answers may differ from the single-ray queries' in the last bits of u,
+    // v and distance (Embree's packet and single-ray intersectors round differently), and are the same for
+    // the same rays every time. Throws std::invalid_argument when the output's size is not the rays'.
+    void intersect(std::span<const Ray> rays, std::span<std::optional<RayHit>> hits) const;
+    void occluded(std::span<const Ray> rays, std::span<uint8_t> blocked) const;
 
     // cross(p1 - p0, p2 - p0) of a triangle: not normalised (its length is twice the area, zero for a
     // degenerate triangle), pointing to its front. Computed from the scene's copy of the positions rather
     // than taken from Embree's hit record: the bits are then those of the same expression anywhere else
-    // (the PRT bake's front-face test must not flip with Embree's intersector), and only the hits that need
-    // it pay for it.
+    // (the PRT bake's front-face test must not flip with Embree's intersector). Computed once per triangle
+    // when the scene is built (12 bytes a triangle).
     glm::vec3 geometric_normal(uint32_t primitive) const;
 
     uint32_t triangle_count() const { return triangle_count_; }

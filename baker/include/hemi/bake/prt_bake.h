@@ -88,6 +88,7 @@ struct PrtTransfer
     std::vector<float> irradiance; // N x L: t per vertex
     uint64_t rays_traced = 0;      // rays traced by this call (not those of a resumed checkpoint)
     double seconds = 0.0;          // wall time of this call
+    double trace_seconds = 0.0;    // of which the ray passes (not the setup and the BVH build)
     bool resumed = false;          // true when a checkpoint supplied finished work
     int resumed_pass = 0;          // where it resumed: pass, and first vertex of that pass
     uint32_t resumed_vertex = 0;
@@ -102,9 +103,10 @@ struct PrtTransfer
 PrtTransfer bake_prt_transfer(const io::Mesh& mesh, const PrtBakeOptions& options,
                               const PrtProgressCallback& progress = {});
 
-// Traces exactly the rays of the bake's first pass (same origins, directions and Embree scene) and does
-// nothing else: Embree's own throughput on the bake's rays, what hemi-bench compares the bake's rays/s with.
-// Returns the number of rays that hit; `seconds` receives the tracing time.
+// Traces exactly the rays of the bake's first pass (same origins, directions, Embree scene and packets) and
+// does nothing else: Embree's own throughput on the bake's rays, what hemi-bench compares the bake's rays/s
+// with. The rays are made first; `seconds` receives the time of the tracing alone. Returns the number of
+// rays that hit. Holds every ray at once (32 bytes a ray): for benchmarks, not for production meshes.
 uint64_t trace_bake_rays(const io::Mesh& mesh, const PrtBakeOptions& options, double& seconds);
 
 // The K x L matrix of one technique for every vertex (N x K x L, row-major per vertex), in the vertex's

@@ -17,6 +17,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <span>
 
 namespace hemi::bake
 {
@@ -38,5 +39,11 @@ glm::vec3 sphere_direction(uint64_t seed, uint64_t item, int ray, int rays);
 // the hemisphere, each standing for 2 pi / rays steradians. Built like the sphere set, from the same random
 // numbers of (seed, item): a bake uses one of the two sets per item, not both.
 glm::vec3 hemisphere_direction(uint64_t seed, uint64_t item, int ray, int rays);
+
+// The whole set of out.size() rays of `item` at once: out[r] is sphere_direction(seed, item, r, out.size())
+// (hemisphere_direction(...)) bit for bit, with the item's part of the hashing done once, not per ray. What
+// the bakes call for the rays of one texel or vertex.
+void sphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out);
+void hemisphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out);
 
 } // namespace hemi::bake

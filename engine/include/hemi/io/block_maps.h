@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -40,18 +41,27 @@ class BlockGrid
     size_t slots() const { return blocks_.size() * kTexels; } // texels of the kept blocks
     bool empty() const { return blocks_.empty(); }
 
-    // The slot of texel (x, y), or -1 when the texel is outside the atlas or its block is not kept: a binary
-    // search among the kept blocks of the texel's block row.
+    // The slot of texel (x, y), or -1 when the texel is outside the atlas or its block is not kept: the
+    // block's rank in a bitmap of the kept blocks (a word and a population count), or for a grid of more than
+    // kMaxRankedBlocks blocks a binary search among the kept blocks of the texel's block row.
     int64_t slot(int64_t x, int64_t y) const
     {
         if (x < 0 || y < 0 || x >= int64_t(width_) || y >= int64_t(height_))
             return -1;
         const uint32_t row = uint32_t(y / kSize), block = row * blocks_x() + uint32_t(x / kSize);
+        const int64_t local = (y % kSize) * kSize + x % kSize;
+        if (!kept_.empty())
+        {
+            const uint64_t word = kept_[block / 64], bit = uint64_t(1) << (block % 64);
+            if (!(word & bit))
+                return -1;
+            return int64_t(rank_[block / 64] + uint32_t(std::popcount(word & (bit - 1)))) * kTexels + local;
+        }
         const auto first = blocks_.begin() + row_begin_[row], last = blocks_.begin() + row_begin_[row + 1];
         const auto it = std::lower_bound(first, last, block);
         if (it == last || *it != block)
             return -1;
-        return int64_t(it - blocks_.begin()) * kTexels + (y % kSize) * kSize + x % kSize;
+        return int64_t(it - blocks_.begin()) * kTexels + local;
     }
     // The texel of a slot (it may lie past the atlas in a block of the last column or row).
     glm::uvec2 texel(size_t slot) const
@@ -64,6 +74,11 @@ class BlockGrid
     uint32_t width_ = 0, height_ = 0;
     std::vector<uint32_t> blocks_;
     std::vector<uint32_t> row_begin_; // per block row, and one past the last: its first kept block's slot
+    // Per 64 blocks of the grid, a bit per kept block and the kept blocks before them: 12 bytes per 64 blocks
+    // (1.2 MiB for a 20000^2 atlas), kept for grids of up to kMaxRankedBlocks blocks (48 MiB).
+    static constexpr size_t kMaxRankedBlocks = size_t(1) << 28;
+    std::vector<uint64_t> kept_;
+    std::vector<uint32_t> rank_;
 };
 
 // What a bilinear lookup at `uv` ([0, 1]^2 over a width x height atlas, v down) reads, as the runtime's
@@ -123,11 +138,45 @@ struct BlockMaps
     }
     // Coefficient `map` at `uv` ([0, 1]^2 over the atlas, v down) as the runtime's sampler reads it: bilinear
     // between texel centres, clamped to the atlas's edge.
-    glm::vec3 bilinear(uint32_t map, glm::vec2 uv) const
+    glm::vec3 bilinear(uint32_t map, glm::vec2 uv) const { return read(taps(map, uv)); }
+
+    // bilinear() in two steps, for a caller with many lookups to make (the bounce rays of a texel): taps()
+    // finds the four texels, which the caller may prefetch for every lookup before read() reads any, so that
+    // the lookups' cache misses overlap instead of following one another.
+    struct Taps
+    {
+        const float* texel[4]; // (x0, y0), (x1, y0), (x0, y1), (x1, y1); nullptr where no block is kept
+        float tx, ty;
+    };
+    Taps taps(uint32_t map, glm::vec2 uv) const
     {
         const BilinearFootprint f = bilinear_footprint(uv, width(), height());
-        return (at(map, f.x0, f.y0) * (1.0f - f.tx) + at(map, f.x1, f.y0) * f.tx) * (1.0f - f.ty) +
-               (at(map, f.x0, f.y1) * (1.0f - f.tx) + at(map, f.x1, f.y1) * f.tx) * f.ty;
+        Taps t{{nullptr, nullptr, nullptr, nullptr}, f.tx, f.ty};
+        // The four texels lie in one, two or four blocks: find each block once.
+        const int64_t xs[2] = {f.x0, f.x1}, ys[2] = {f.y0, f.y1};
+        int64_t found_block = -1, found_slot = -1; // the last block looked up and its slot (or -1)
+        for (int j = 0; j < 2; ++j)
+            for (int i = 0; i < 2; ++i)
+            {
+                const int64_t x = xs[i], y = ys[j], B = BlockGrid::kSize;
+                const int64_t block = (y / B) * grid.blocks_x() + x / B;
+                if (block != found_block)
+                {
+                    const int64_t s = grid.slot(x, y);
+                    found_block = block;
+                    found_slot = s < 0 ? -1 : s - s % BlockGrid::kTexels;
+                }
+                if (found_slot >= 0)
+                    t.texel[j * 2 + i] = &values[index(map, size_t(found_slot + (y % B) * B + x % B))];
+            }
+        return t;
+    }
+    static glm::vec3 read(const Taps& t)
+    {
+        auto at = [&](int i)
+        { return t.texel[i] ? glm::vec3(t.texel[i][0], t.texel[i][1], t.texel[i][2]) : glm::vec3(0.0f); };
+        return (at(0) * (1.0f - t.tx) + at(1) * t.tx) * (1.0f - t.ty) +
+               (at(2) * (1.0f - t.tx) + at(3) * t.tx) * t.ty;
     }
 };
 
