@@ -37,6 +37,9 @@
 //   lightmap/bake/level/...           the lightmap bake of the sample's level (1280^2, 2 bounces): time,
 //                                     rays/s, peak memory, and embree_ratio = the bake's time over the time
 //                                     Embree takes for the same rays with the same queries.
+//   lightmap/bake/large/...           the same for a level of 8 x 5 rooms and corridors (4096^2, 11.9 M
+//                                     covered texels; samples::make_large_level). --write-large-level=FILE
+//                                     writes that level as a .glb and exits (for bench/level_scaling.sh).
 //
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device. A benchmark that throws is
 // reported as an error (the others still run) and makes the exit status 1.
@@ -134,9 +137,12 @@ struct Sizes
     Table1Row overhead = {"complex", hemi::samples::PrtModel::Complex, 1.0f, false};
     uint32_t relief = 1024;        // the SSBump benchmarks' height field, relief x relief
     uint32_t lightmap_atlas = 512; // the level that lightmap/material draws
-    uint32_t bake_atlas = 1280;    // the level that lightmap/bake bakes
-    uint32_t prefilter = 512;      // the parabolic maps' level 0 that prefilter/ filters (hemi-bake envmap's)
-    float unwrap_detail = 4.18f;   // the knot that lightmap/unwrap unwraps: about a million triangles
+    uint32_t bake_atlas = 1280;    // the level that lightmap/bake/level bakes
+    // The many-room level that lightmap/bake/large bakes (samples::make_large_level): rooms along x and z,
+    // atlas side. 8 x 5 rooms at 4096^2: 11.9 M covered texels, 3,682 triangles.
+    uint32_t large_rooms_x = 8, large_rooms_z = 5, large_atlas = 4096;
+    uint32_t prefilter = 512;    // the parabolic maps' level 0 that prefilter/ filters (hemi-bake envmap's)
+    float unwrap_detail = 4.18f; // the knot that lightmap/unwrap unwraps: about a million triangles
 };
 
 Sizes smoke_sizes()
@@ -152,6 +158,8 @@ Sizes smoke_sizes()
     s.relief = 64;
     s.lightmap_atlas = 64; // make_level's smallest
     s.bake_atlas = 64;
+    s.large_rooms_x = s.large_rooms_z = 2;
+    s.large_atlas = 256;
     s.prefilter = 64;
     s.unwrap_detail = 0.3f;
     return s;
@@ -829,14 +837,11 @@ double peak_rss_mib()
     return kib / 1024.0;
 }
 
-// Issue 12's bake benchmark: the sample's level (a room with openings and pillars, 1280^2 atlas, over 1M
-// covered texels) under a uniform sky and a sun, 2 bounces, 64 rays per texel and pass; its time, rays/s,
-// texels/s and peak memory. Then Embree's own throughput on the same rays with the same queries (below), and
-// the ratio.
-void lightmap_level(benchmark::State& state)
+// A lightmap bake benchmark (issue 12's, issue 23's): `scene` baked into a size x size atlas under a uniform
+// sky and a sun, 2 bounces, 64 rays per texel and pass; its time, rays/s, texels/s and peak memory. Then
+// Embree's own throughput on the same rays with the same queries (below), and the ratio.
+void lightmap_bake(benchmark::State& state, const hemi::io::GltfScene& scene, uint32_t size)
 {
-    const uint32_t size = g_sizes.bake_atlas;
-    const hemi::io::GltfScene scene = hemi::samples::make_level(size);
     hemi::bake::LightmapUvReport report;
     const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
     const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
@@ -932,6 +937,22 @@ void lightmap_level(benchmark::State& state)
     state.counters["embree_single_rays_per_s"] = double(hemisphere.size()) / single_s;
     state.counters["embree_ratio"] = sh.trace_seconds / embree_s;
     state.counters["blocked_fraction"] = double(blocked) / double(hemisphere.size());
+}
+
+// The sample's level (a room with openings and pillars, 1280^2 atlas, over 1M covered texels).
+void lightmap_level(benchmark::State& state)
+{
+    lightmap_bake(state, hemi::samples::make_level(g_sizes.bake_atlas), g_sizes.bake_atlas);
+}
+
+// Issue 23's level-sized bake: samples::make_large_level (8 x 5 rooms, corridors, doors, windows, pillars,
+// normal-mapped) in a 4096^2 atlas, over 10 M covered texels.
+void lightmap_large(benchmark::State& state)
+{
+    const hemi::io::GltfScene scene =
+        hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z, g_sizes.large_atlas);
+    state.counters["triangles"] = double(scene.mesh.indices.size() / 3);
+    lightmap_bake(state, scene, g_sizes.large_atlas);
 }
 
 // hemi-bake lightmap --unwrap on a curved mesh of a million triangles (issue 25's goal: under 60 s on 2
@@ -1263,15 +1284,36 @@ int main(int argc, char** argv)
     if (const char* env = std::getenv("HEMI_BENCH_SMOKE"))
         smoke = *env != '\0' && std::strcmp(env, "0") != 0;
     int kept = 1;
+    const char* write_level = nullptr;
     for (int i = 1; i < argc; ++i)
         if (std::strcmp(argv[i], "--smoke") == 0)
             smoke = true;
+        else if (std::strncmp(argv[i], "--write-large-level=", 20) == 0)
+            write_level = argv[i] + 20;
         else
             argv[kept++] = argv[i];
     argc = kept;
     argv[argc] = nullptr;
     if (smoke)
         g_sizes = smoke_sizes();
+    if (write_level)
+    {
+        // The level of lightmap/bake/large as a .glb, for bakes with hemi-bake (bench/level_scaling.sh).
+        try
+        {
+            hemi::io::write_gltf(write_level,
+                                 hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z,
+                                                                 g_sizes.large_atlas));
+        }
+        catch (const std::exception& e)
+        {
+            std::fprintf(stderr, "hemi-bench: %s\n", e.what());
+            return 1;
+        }
+        std::printf("wrote %s (%u x %u rooms, lightmap UVs for %u^2)\n", write_level, g_sizes.large_rooms_x,
+                    g_sizes.large_rooms_z, g_sizes.large_atlas);
+        return 0;
+    }
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
         return 1;
@@ -1333,6 +1375,13 @@ int main(int argc, char** argv)
                       3.0);
     const std::string atlas = std::to_string(g_sizes.bake_atlas) + "x" + std::to_string(g_sizes.bake_atlas);
     full_iterations(add("lightmap/bake/level/" + atlas + "/bounces:2/rays:64", lightmap_level)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    const std::string large = std::to_string(g_sizes.large_rooms_x) + "x" +
+                              std::to_string(g_sizes.large_rooms_z) + "/" +
+                              std::to_string(g_sizes.large_atlas) + "x" + std::to_string(g_sizes.large_atlas);
+    full_iterations(add("lightmap/bake/large/" + large + "/bounces:2/rays:64", lightmap_large)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);

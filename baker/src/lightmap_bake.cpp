@@ -303,9 +303,23 @@ glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t 
     return map.bilinear(0, atlas_uv(mesh, triangle, bu, bv));
 }
 
-// A texel's rays, reused from texel to texel by each thread: directions, the rays traced, what they found.
+// A texel's rays, reused from texel to texel by each thread: directions, the rays traced, what they found
+// (sized once for the largest stream; a texel uses the first so many of each).
 struct RayScratch
 {
+    void reserve(size_t n)
+    {
+        if (rays.size() >= n)
+            return;
+        directions.resize(n);
+        rays.resize(n);
+        index.resize(n);
+        weight.resize(n);
+        hits.resize(n);
+        blocked.resize(n);
+        taps.resize(n);
+    }
+
     std::vector<glm::vec3> directions;
     std::vector<Ray> rays;
     std::vector<int> index;     // the sample's index in its stream, per traced ray
@@ -492,32 +506,30 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         // texel's rays are traced together (EmbreeScene's packets), then their hits are shaded in ray order.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
         RayScratch& s = scratch.local();
+        s.reserve(size_t(std::max(o.rays, o.sun_rays)));
         // The first pass always finds the closest hit: it counts the back faces a texel sees.
         const bool needs_hit = pass == 0 || (surfaces && pass > 0);
-        s.rays.clear();
-        s.index.clear();
+        size_t m = 0; // the rays traced
         if (needs_hit)
         {
-            s.directions.resize(size_t(o.rays));
-            hemisphere_directions(seed, item, s.directions);
+            const std::span<glm::vec3> directions(s.directions.data(), size_t(o.rays));
+            hemisphere_directions(seed, item, directions);
             for (int r = 0; r < o.rays; ++r)
             {
-                const glm::vec3& h = s.directions[size_t(r)];
+                const glm::vec3& h = directions[size_t(r)];
                 const glm::vec3 d = glm::normalize(h.x * t.tangent + h.y * t.bitangent + h.z * t.normal);
                 if (glm::dot(d, t.geometric_normal) <= 0.0f)
                     continue; // into its own triangle
-                s.rays.push_back({origin, 0.0f, d, INFINITY});
-                s.index.push_back(r);
+                s.rays[m] = {origin, 0.0f, d, INFINITY};
+                s.index[m++] = r;
             }
         }
-        s.hits.resize(s.rays.size());
-        scene.intersect(s.rays, s.hits);
+        scene.intersect(std::span<const Ray>(s.rays.data(), m), std::span(s.hits.data(), m));
         // Light leaves a surface from its front (counter-clockwise) side, or both of a double-sided one.
         // A bounce ray's lookup of the previous pass: every lookup's texels are fetched before any is read.
         const bool lookups = surfaces && pass > 0;
-        s.blocked.resize(s.rays.size()); // here: 1 for a ray that hit a back face
-        s.taps.resize(lookups ? s.rays.size() : 0);
-        for (size_t k = 0; k < s.rays.size(); ++k)
+        // s.blocked: here 1 for a ray that hit a back face.
+        for (size_t k = 0; k < m; ++k)
         {
             const std::optional<RayHit>& hit = s.hits[k];
             s.blocked[k] = hit && is_back_face(hit->primitive, s.rays[k].direction);
@@ -528,7 +540,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (p)
                     __builtin_prefetch(p);
         }
-        for (size_t k = 0; k < s.rays.size(); ++k)
+        for (size_t k = 0; k < m; ++k)
         {
             const glm::vec3& d = s.rays[k].direction;
             const std::optional<RayHit>& hit = s.hits[k];
@@ -556,22 +568,19 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         // saying whether ray r is cast (its direction and weight).
         auto shadow_rays = [&](int count, auto&& ray, auto&& radiance)
         {
-            s.rays.clear();
-            s.index.clear();
-            s.weight.clear();
+            size_t cast = 0;
             for (int r = 0; r < count; ++r)
             {
                 glm::vec3 d;
                 double w = 0.0;
                 if (!ray(r, d, w))
                     continue;
-                s.rays.push_back({origin, 0.0f, d, INFINITY});
-                s.index.push_back(r);
-                s.weight.push_back(w);
+                s.rays[cast] = {origin, 0.0f, d, INFINITY};
+                s.index[cast] = r;
+                s.weight[cast++] = w;
             }
-            s.blocked.resize(s.rays.size());
-            scene.occluded(s.rays, s.blocked);
-            for (size_t k = 0; k < s.rays.size(); ++k)
+            scene.occluded(std::span<const Ray>(s.rays.data(), cast), std::span(s.blocked.data(), cast));
+            for (size_t k = 0; k < cast; ++k)
                 if (!s.blocked[k])
                     add(s.rays[k].direction, radiance(s.rays[k].direction, s.weight[k]), s.index[k], count);
         };

@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -70,39 +71,11 @@ float fract(float x)
     return x - std::floor(x);
 }
 
-} // namespace
-
-io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
+// The level made of `quads`: each quad its own lightmap chart, packed shelf by shelf into the atlas at one
+// texel density (about 70% of the atlas), with the materials, maps and primitives of make_level.
+io::GltfScene scene_from_quads(const std::vector<Quad>& quads, uint32_t atlas, LevelMaps maps,
+                               const char* who)
 {
-    if (atlas < 64)
-        throw std::invalid_argument("make_level: atlas " + std::to_string(atlas) + " is smaller than 64");
-    // glTF space: y up. The room spans x, z in [-4, 4], y in [0, 3]; the walls face inwards.
-    std::vector<Quad> quads;
-    const float h = 3.0f, s = 4.0f;
-    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0}); // floor, facing +y
-    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0}); // ceiling, facing -y
-    // Wall at z = -s (facing +z) in full; wall at z = +s (facing -z) with a window from x -1 to 1, y 1 to 2.
-    quads.push_back({{-s, 0, -s}, {2 * s, 0, 0}, {0, h, 0}, 1});
-    quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});  // right of the window
-    quads.push_back({{-1, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1}); // left of the window
-    quads.push_back({{1, 0, s}, {-2, 0, 0}, {0, 1, 0}, 1});        // below it
-    quads.push_back({{1, 2, s}, {-2, 0, 0}, {0, h - 2, 0}, 1});    // above it
-    // Wall at x = -s (facing +x) with a wide opening from z -2 to 2 up to y 2.2; wall at x = +s (facing -x).
-    quads.push_back({{-s, 0, s}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
-    quads.push_back({{-s, 0, -2}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
-    quads.push_back({{-s, 2.2f, 2}, {0, 0, -4}, {0, h - 2.2f, 0}, 2});
-    quads.push_back({{s, 0, -s}, {0, 0, 2 * s}, {0, h, 0}, 3});
-    // Four pillars, 0.6 wide, facing out.
-    for (float px : {-2.0f, 2.0f})
-        for (float pz : {-2.0f, 2.0f})
-        {
-            const float r = 0.3f;
-            quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, h, 0}, 0});  // +z
-            quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, h, 0}, 0}); // -z
-            quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, h, 0}, 0}); // +x
-            quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, h, 0}, 0});  // -x
-        }
-
     // Pack the charts: each quad's size in texels at the density that fills about 70% of the atlas, shelf by
     // shelf (tallest first), with a gap of 2 texels.
     double area = 0.0;
@@ -139,7 +112,7 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
             break;
         density *= 0.95;
         if (attempt > 60)
-            throw std::runtime_error("make_level: the charts do not fit");
+            throw std::runtime_error(std::string(who) + ": the charts do not fit");
     }
 
     io::GltfScene scene;
@@ -216,6 +189,163 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
         scene.primitives.push_back({first, uint32_t(m.indices.size()) - first, material});
     }
     return scene;
+}
+
+} // namespace
+
+io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
+{
+    if (atlas < 64)
+        throw std::invalid_argument("make_level: atlas " + std::to_string(atlas) + " is smaller than 64");
+    // glTF space: y up. The room spans x, z in [-4, 4], y in [0, 3]; the walls face inwards.
+    std::vector<Quad> quads;
+    const float h = 3.0f, s = 4.0f;
+    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0}); // floor, facing +y
+    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0}); // ceiling, facing -y
+    // Wall at z = -s (facing +z) in full; wall at z = +s (facing -z) with a window from x -1 to 1, y 1 to 2.
+    quads.push_back({{-s, 0, -s}, {2 * s, 0, 0}, {0, h, 0}, 1});
+    quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});  // right of the window
+    quads.push_back({{-1, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1}); // left of the window
+    quads.push_back({{1, 0, s}, {-2, 0, 0}, {0, 1, 0}, 1});        // below it
+    quads.push_back({{1, 2, s}, {-2, 0, 0}, {0, h - 2, 0}, 1});    // above it
+    // Wall at x = -s (facing +x) with a wide opening from z -2 to 2 up to y 2.2; wall at x = +s (facing -x).
+    quads.push_back({{-s, 0, s}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
+    quads.push_back({{-s, 0, -2}, {0, 0, -(s - 2)}, {0, h, 0}, 2});
+    quads.push_back({{-s, 2.2f, 2}, {0, 0, -4}, {0, h - 2.2f, 0}, 2});
+    quads.push_back({{s, 0, -s}, {0, 0, 2 * s}, {0, h, 0}, 3});
+    // Four pillars, 0.6 wide, facing out.
+    for (float px : {-2.0f, 2.0f})
+        for (float pz : {-2.0f, 2.0f})
+        {
+            const float r = 0.3f;
+            quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, h, 0}, 0});  // +z
+            quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, h, 0}, 0}); // -z
+            quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, h, 0}, 0}); // +x
+            quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, h, 0}, 0});  // -x
+        }
+    return scene_from_quads(quads, atlas, maps, "make_level");
+}
+
+namespace
+{
+
+// An opening in a wall: [a, b] along it, [y0, y1] up, and whether its reveals (the faces of the wall's
+// thickness around it) belong to this wall (a doorway between two spaces has one set, not two).
+struct Opening
+{
+    float a, b, y0, y1;
+    bool reveals;
+};
+
+// One inward-facing wall of a space: from `p0` (its bottom corner on the left, seen from inside) along `u`
+// (unit) for `length`, `height` up, with openings; the wall is `thickness` thick behind it.
+void wall(std::vector<Quad>& quads, glm::vec3 p0, glm::vec3 u, float length, float height, float thickness,
+          std::vector<Opening> openings, uint32_t material)
+{
+    const glm::vec3 up(0, 1, 0), in = glm::cross(u, up), back = -thickness * in;
+    std::sort(openings.begin(), openings.end(), [](const Opening& x, const Opening& y) { return x.a < y.a; });
+    // A quad over [a0, a1] x [y0, y1] of the wall's plane, facing in.
+    auto face = [&](float a0, float a1, float y0, float y1)
+    {
+        if (a1 - a0 > 1e-4f && y1 - y0 > 1e-4f)
+            quads.push_back({p0 + a0 * u + y0 * up, (a1 - a0) * u, (y1 - y0) * up, material});
+    };
+    // A quad p + s e1 + t e2 facing `facing` (e1 and e2 swapped when they turn the other way).
+    auto facing = [&](glm::vec3 p, glm::vec3 e1, glm::vec3 e2, glm::vec3 f)
+    {
+        if (glm::dot(glm::cross(e1, e2), f) < 0.0f)
+            std::swap(e1, e2);
+        quads.push_back({p, e1, e2, material});
+    };
+    float at = 0.0f;
+    for (const Opening& o : openings)
+    {
+        face(at, o.a, 0.0f, height);
+        face(o.a, o.b, 0.0f, o.y0);
+        face(o.a, o.b, o.y1, height);
+        at = o.b;
+        if (!o.reveals)
+            continue;
+        const glm::vec3 left = p0 + o.a * u, right = p0 + o.b * u;
+        facing(left + o.y0 * up, back, (o.y1 - o.y0) * up, u);   // left reveal, facing right
+        facing(right + o.y0 * up, back, (o.y1 - o.y0) * up, -u); // right reveal, facing left
+        facing(left + o.y1 * up, back, (o.b - o.a) * u, -up);    // head, facing down
+        facing(left + o.y0 * up, back, (o.b - o.a) * u, up);     // sill (a door's threshold), facing up
+    }
+    face(at, length, 0.0f, height);
+}
+
+// The inside of an axis-aligned box [x0, x1] x [0, height] x [z0, z1]: floor, ceiling and four walls, each
+// wall with its openings (-z, +x, +z, -x side: openings[0..3], along each wall as wall() measures it).
+void space(std::vector<Quad>& quads, float x0, float z0, float x1, float z1, float height, float thickness,
+           const std::array<std::vector<Opening>, 4>& openings, uint32_t floor_material,
+           uint32_t wall_material)
+{
+    quads.push_back({{x0, 0, z1}, {x1 - x0, 0, 0}, {0, 0, z0 - z1}, floor_material});      // floor, +y
+    quads.push_back({{x0, height, z0}, {x1 - x0, 0, 0}, {0, 0, z1 - z0}, floor_material}); // ceiling, -y
+    wall(quads, {x0, 0, z0}, {1, 0, 0}, x1 - x0, height, thickness, openings[0], wall_material);  // at z0, +z
+    wall(quads, {x1, 0, z0}, {0, 0, 1}, z1 - z0, height, thickness, openings[1], wall_material);  // at x1, -x
+    wall(quads, {x1, 0, z1}, {-1, 0, 0}, x1 - x0, height, thickness, openings[2], wall_material); // at z1, -z
+    wall(quads, {x0, 0, z1}, {0, 0, -1}, z1 - z0, height, thickness, openings[3], wall_material); // at x0, +x
+}
+
+} // namespace
+
+io::GltfScene make_large_level(uint32_t rooms_x, uint32_t rooms_z, uint32_t atlas, LevelMaps maps)
+{
+    if (rooms_x < 1 || rooms_z < 1 || rooms_x > 64 || rooms_z > 64)
+        throw std::invalid_argument("make_large_level: " + std::to_string(rooms_x) + " x " +
+                                    std::to_string(rooms_z) + " rooms is not in [1, 64] per side");
+    if (atlas < 64)
+        throw std::invalid_argument("make_large_level: atlas " + std::to_string(atlas) +
+                                    " is smaller than 64");
+    // Rooms of 8 x 8 x 3 (x, z, y) in rows along x, walls 0.3 thick; between two rows a corridor 3 wide.
+    const float W = 8.0f, H = 3.0f, T = 0.3f, C = 3.0f;
+    const Opening door{W / 2 - 0.6f, W / 2 + 0.6f, 0.0f, 2.2f, false};
+    const Opening door_reveals{door.a, door.b, door.y0, door.y1, true};
+    const Opening window{W / 2 - 1.2f, W / 2 + 1.2f, 0.9f, 2.1f, true};
+    const float length = float(rooms_x) * (W + T) - T; // of the rows and the corridors
+    std::vector<Quad> quads;
+    for (uint32_t j = 0; j < rooms_z; ++j)
+    {
+        const float z0 = float(j) * (W + 2 * T + C), z1 = z0 + W;
+        for (uint32_t i = 0; i < rooms_x; ++i)
+        {
+            const float x0 = float(i) * (W + T), x1 = x0 + W;
+            std::array<std::vector<Opening>, 4> o;
+            o[0].push_back(j == 0 ? window : door);                   // -z: outside, or the corridor before
+            o[2].push_back(j + 1 == rooms_z ? window : door_reveals); // +z: outside, or the corridor after
+            o[3].push_back(i == 0 ? window : door);                   // -x: outside, or the room before
+            o[1].push_back(i + 1 == rooms_x ? window : door_reveals); // +x: outside, or the room after
+            space(quads, x0, z0, x1, z1, H, T, o, 0, 1 + (i + j) % 3);
+            // Four pillars, 0.5 wide, facing out.
+            for (const float px : {x0 + W / 4, x1 - W / 4})
+                for (const float pz : {z0 + W / 4, z1 - W / 4})
+                {
+                    const float r = 0.25f;
+                    quads.push_back({{px - r, 0, pz + r}, {2 * r, 0, 0}, {0, H, 0}, 0});  // +z
+                    quads.push_back({{px + r, 0, pz - r}, {-2 * r, 0, 0}, {0, H, 0}, 0}); // -z
+                    quads.push_back({{px + r, 0, pz + r}, {0, 0, -2 * r}, {0, H, 0}, 0}); // +x
+                    quads.push_back({{px - r, 0, pz - r}, {0, 0, 2 * r}, {0, H, 0}, 0});  // -x
+                }
+        }
+        if (j + 1 == rooms_z)
+            break;
+        // The corridor after row j: a door to every room on either side (the reveals towards row j are its
+        // rooms', those towards row j + 1 the corridor's), a window at each end.
+        const float c0 = z1 + T, c1 = c0 + C;
+        std::array<std::vector<Opening>, 4> o;
+        for (uint32_t i = 0; i < rooms_x; ++i)
+        {
+            const float centre = float(i) * (W + T) + W / 2;
+            o[0].push_back({centre - 0.6f, centre + 0.6f, 0.0f, 2.2f, false});                  // row j
+            o[2].push_back({length - centre - 0.6f, length - centre + 0.6f, 0.0f, 2.2f, true}); // row j + 1
+        }
+        o[1].push_back({C / 2 - 0.8f, C / 2 + 0.8f, 0.9f, 2.1f, true});
+        o[3].push_back({C / 2 - 0.8f, C / 2 + 0.8f, 0.9f, 2.1f, true});
+        space(quads, 0.0f, c0, length, c1, H, T, o, 0, 0);
+    }
+    return scene_from_quads(quads, atlas, maps, "make_large_level");
 }
 
 } // namespace hemi::samples

@@ -29,4 +29,14 @@ enum class LevelMaps
 
 io::GltfScene make_level(uint32_t atlas = 512, LevelMaps maps = LevelMaps::Normal);
 
+// A level of many rooms, for bakes at a real level's scale (hemi-bench's lightmap/bake/large): rooms_x x
+// rooms_z rooms of 8 x 8 x 3 units in rows along x, walls 0.3 thick, a corridor 3 wide between two rows;
+// doors between neighbouring rooms and from every room to the corridors beside it (with reveals: the faces
+// of the wall's thickness), windows in the outer walls and at the corridors' ends, four pillars a room; the
+// materials and maps of make_level (the walls' colour alternating from room to room). Every quad is its own
+// lightmap chart, packed into `atlas` at one texel density. Throws std::invalid_argument for no rooms, more
+// than 64 a side or an atlas under 64.
+io::GltfScene make_large_level(uint32_t rooms_x, uint32_t rooms_z, uint32_t atlas,
+                               LevelMaps maps = LevelMaps::Normal);
+
 } // namespace hemi::samples
