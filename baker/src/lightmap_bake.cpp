@@ -423,41 +423,60 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         return glm::dot(scene.geometric_normal(primitive), d) > 0.0f &&
                !(surfaces && surfaces->double_sided(primitive));
     };
+    // Shared among the ranks like a pass (each texel's origin depends on the scene alone), once the ranks
+    // agree on what they bake.
+    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    const uint64_t key = key_of(mesh, atlas, lights, o, surfaces,
+                                surfaces ? std::span<const io::Material>(surfaces->materials())
+                                         : std::span<const io::Material>());
+    dist.check_same(key, "baked a lightmap whose scene, atlas, lights or options");
     std::vector<glm::vec3> origins(n);
-    tbb::parallel_for(uint32_t(0), n,
-                      [&](uint32_t i)
-                      {
-                          const LightmapTexel& t = atlas.texels[i];
-                          glm::vec3 p = inside_triangle(mesh, t, 2.0f * offset);
-                          const glm::vec3 g = t.geometric_normal;
-                          glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
-                          if (glm::length(u) < 1e-6f)
-                              u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0))
-                                                       : glm::cross(g, glm::vec3(0, 1, 0));
-                          u = glm::normalize(u);
-                          const glm::vec3 v = glm::cross(g, u);
-                          const float reach = 0.5f * float(M_SQRT2) * t.world_size;
-                          const glm::vec3 from = offset_ray_origin(p, g, offset);
-                          float nearest = INFINITY;
-                          glm::vec3 along(0.0f);
-                          for (int k = 0; k < 8; ++k)
-                          {
-                              const float a = float(k) * float(M_PI) / 4.0f;
-                              const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
-                              const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
-                              if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
+    auto find_origin = [&](uint32_t i)
+    {
+        const LightmapTexel& t = atlas.texels[i];
+        glm::vec3 p = inside_triangle(mesh, t, 2.0f * offset);
+        const glm::vec3 g = t.geometric_normal;
+        glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
+        if (glm::length(u) < 1e-6f)
+            u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0)) : glm::cross(g, glm::vec3(0, 1, 0));
+        u = glm::normalize(u);
+        const glm::vec3 v = glm::cross(g, u);
+        const float reach = 0.5f * float(M_SQRT2) * t.world_size;
+        const glm::vec3 from = offset_ray_origin(p, g, offset);
+        float nearest = INFINITY;
+        glm::vec3 along(0.0f);
+        for (int k = 0; k < 8; ++k)
+        {
+            const float a = float(k) * float(M_PI) / 4.0f;
+            const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
+            const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
+            if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
+            {
+                nearest = hit->distance;
+                along = d;
+            }
+        }
+        if (std::isfinite(nearest))
+        {
+            p = p + along * (nearest + 4.0f * offset);
+            pushed[i] = 1;
+        }
+        origins[i] = offset_ray_origin(p, g, offset);
+    };
+    const ItemArray origin_arrays[2] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
+                                        {reinterpret_cast<std::byte*>(pushed.data()), 1}};
+    dist.run(
+        0, n, std::clamp<uint32_t>(uint32_t(1) << 18, 256, n), origin_arrays,
+        [&](uint32_t begin, uint32_t end)
+        {
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
+                              [&](const tbb::blocked_range<uint32_t>& r)
                               {
-                                  nearest = hit->distance;
-                                  along = d;
-                              }
-                          }
-                          if (std::isfinite(nearest))
-                          {
-                              p = p + along * (nearest + 4.0f * offset);
-                              pushed[i] = 1;
-                          }
-                          origins[i] = offset_ray_origin(p, g, offset);
-                      });
+                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                      find_origin(i);
+                              });
+        },
+        [](uint32_t) {});
 
     auto texel = [&](uint32_t i, int pass)
     {
@@ -643,11 +662,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 
     using ShArray = std::array<glm::vec3, 9>;
     using DirectArray = std::array<glm::vec3, 4>;
-    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
-    const uint64_t key = key_of(mesh, atlas, lights, o, surfaces,
-                                surfaces ? std::span<const io::Material>(surfaces->materials())
-                                         : std::span<const io::Material>());
-    dist.check_same(key, "baked a lightmap whose scene, atlas, lights or options");
     SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
                                n,
                                {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},

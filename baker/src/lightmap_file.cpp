@@ -572,7 +572,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;
     j["resumed"] = s.resumed;
     j["ranks"] = s.texels_by_rank.size();
-    j["texels_by_rank"] = s.texels_by_rank; // over all passes: how the ranks shared the work
+    j["texels_by_rank"] = s.texels_by_rank; // the origin search and all passes: who did what
     j["tangents_generated"] = s.tangents_generated;
     j["warnings"] = s.warnings;
     j["texel_size"] = {{"min", s.uv_report.min_texel_size}, {"max", s.uv_report.max_texel_size}};

@@ -398,7 +398,9 @@ TEST(BlockMaps, LargeAndSmallGridsFindTheSameSlots)
             ASSERT_EQ(b.slot(x, y), x >= int64_t(small) || y >= int64_t(small) ? -1 : expected)
                 << x << " " << y;
             if (x < int64_t(small) && y < int64_t(small))
+            {
                 ASSERT_EQ(a.slot(x, y), expected) << x << " " << y;
+            }
         }
 }
 

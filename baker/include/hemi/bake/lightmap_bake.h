@@ -284,7 +284,8 @@ struct LightmapBakeSummary
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
     bool resumed = false, tangents_generated = false;
-    // The ranks that shared the bake and the texels (over all passes) each computed; {n} on one process.
+    // The ranks that shared the bake and the texels each computed, over the origin search and all passes;
+    // {n * (2 + bounces)} on one process.
     std::vector<uint64_t> texels_by_rank;
     std::string checkpoint_error;
     std::vector<std::filesystem::path> exr_files;
