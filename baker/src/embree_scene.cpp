@@ -207,53 +207,56 @@ void fill_packet(Packet& ray, int (&valid)[kPacket], std::span<const Ray> rays, 
     }
 }
 
+// The packets of a batch of `rays` rays whose answers go to `room` places: trace(context, first, count) for
+// each run of up to 16. Throws std::invalid_argument when room is not rays.
+template <class Trace> void for_each_packet(const char* query, size_t rays, size_t room, Trace&& trace)
+{
+    if (room != rays)
+        throw std::invalid_argument(std::string("hemi: EmbreeScene::") + query + ": " + std::to_string(rays) +
+                                    " rays but room for " + std::to_string(room) + " answers");
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t first = 0; first < rays; first += kPacket)
+        trace(context, first, std::min(kPacket, rays - first));
+}
+
 } // namespace
 
 void EmbreeScene::intersect(std::span<const Ray> rays, std::span<std::optional<RayHit>> hits) const
 {
-    if (hits.size() != rays.size())
-        throw std::invalid_argument("hemi: EmbreeScene::intersect: " + std::to_string(rays.size()) +
-                                    " rays but room for " + std::to_string(hits.size()) + " hits");
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    for (size_t first = 0; first < rays.size(); first += kPacket)
-    {
-        const size_t count = std::min(kPacket, rays.size() - first);
-        alignas(64) int valid[kPacket];
-        alignas(64) RTCRayHit16 packet;
-        fill_packet(packet.ray, valid, rays, first, count);
-        for (size_t j = 0; j < kPacket; ++j)
-        {
-            packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
-            packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, impl_->scene, &context, &packet);
-        for (size_t j = 0; j < count; ++j)
-            if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID)
-                hits[first + j].reset();
-            else
-                hits[first + j] =
-                    RayHit{packet.hit.primID[j], packet.hit.u[j], packet.hit.v[j], packet.ray.tfar[j]};
-    }
+    for_each_packet("intersect", rays.size(), hits.size(),
+                    [&](RTCIntersectContext& context, size_t first, size_t count)
+                    {
+                        alignas(64) int valid[kPacket];
+                        alignas(64) RTCRayHit16 packet;
+                        fill_packet(packet.ray, valid, rays, first, count);
+                        for (size_t j = 0; j < kPacket; ++j)
+                        {
+                            packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+                            packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+                        }
+                        rtcIntersect16(valid, impl_->scene, &context, &packet);
+                        for (size_t j = 0; j < count; ++j)
+                            if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID)
+                                hits[first + j].reset();
+                            else
+                                hits[first + j] = RayHit{packet.hit.primID[j], packet.hit.u[j],
+                                                         packet.hit.v[j], packet.ray.tfar[j]};
+                    });
 }
 
 void EmbreeScene::occluded(std::span<const Ray> rays, std::span<uint8_t> blocked) const
 {
-    if (blocked.size() != rays.size())
-        throw std::invalid_argument("hemi: EmbreeScene::occluded: " + std::to_string(rays.size()) +
-                                    " rays but room for " + std::to_string(blocked.size()) + " answers");
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    for (size_t first = 0; first < rays.size(); first += kPacket)
-    {
-        const size_t count = std::min(kPacket, rays.size() - first);
-        alignas(64) int valid[kPacket];
-        alignas(64) RTCRay16 packet;
-        fill_packet(packet, valid, rays, first, count);
-        rtcOccluded16(valid, impl_->scene, &context, &packet);
-        for (size_t j = 0; j < count; ++j)
-            blocked[first + j] = packet.tfar[j] == -INFINITY;
-    }
+    for_each_packet("occluded", rays.size(), blocked.size(),
+                    [&](RTCIntersectContext& context, size_t first, size_t count)
+                    {
+                        alignas(64) int valid[kPacket];
+                        alignas(64) RTCRay16 packet;
+                        fill_packet(packet, valid, rays, first, count);
+                        rtcOccluded16(valid, impl_->scene, &context, &packet);
+                        for (size_t j = 0; j < count; ++j)
+                            blocked[first + j] = packet.tfar[j] == -INFINITY;
+                    });
 }
 
 glm::vec3 EmbreeScene::geometric_normal(uint32_t primitive) const
