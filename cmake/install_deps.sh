@@ -31,6 +31,8 @@ packages=(
     libopenmpi-dev openmpi-bin
     # tests and benchmarks; clang's libFuzzer and sanitizer runtimes for the fuzz preset
     libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
+    # GNU time: bench/level_scaling.sh reads each rank's peak memory with /usr/bin/time
+    time
     # a real game level for the lightmap tests: OpenArena 0.8.1's Quake III maps (pak1-maps.pk3, 40 MB;
     # openarena-data would also pull in the game's textures, models and sounds, 350 MB)
     openarena-081-maps
