@@ -10,10 +10,13 @@
 #include <hemi/render/transfer.h>
 #include <hemi/render/view/offscreen.h>
 
+#include <dlfcn.h>
+
 #include <functional>
+#include <map>
 #include <stdexcept>
 #include <string>
-
+#include <type_traits>
 #include <vector>
 
 namespace
@@ -145,7 +148,7 @@ TEST_F(Allocator, RequestsBeyondTheDevicesLimitsAreRefusedNamingTheLimit)
     const VkDeviceSize heap = dev.heap_size(type);
     why = refused(
         [&] {
-            dev.allocator().allocate({heap + 1, 256, ~0u}, hemi::gpu::MemoryUsage::GpuOnly, false);
+            dev.allocator().allocate({{heap + 1, 256, ~0u}, hemi::gpu::MemoryUsage::GpuOnly, false});
         });
     EXPECT_NE(why.find("exceeds its memory heap"), std::string::npos) << why;
     // Every limit exceeded is named: lavapipe's heap and maxMemoryAllocationSize are both 2 GiB.
@@ -159,8 +162,8 @@ TEST_F(Allocator, RequestsBeyondTheDevicesLimitsAreRefusedNamingTheLimit)
         why = refused(
             [&]
             {
-                dev.allocator().allocate({dev.max_allocation_size() + 1, 256, ~0u},
-                                         hemi::gpu::MemoryUsage::GpuOnly, false);
+                dev.allocator().allocate(
+                    {{dev.max_allocation_size() + 1, 256, ~0u}, hemi::gpu::MemoryUsage::GpuOnly, false});
             });
         EXPECT_NE(why.find("maxMemoryAllocationSize"), std::string::npos) << why;
         EXPECT_EQ(why.find("heap"), std::string::npos) << why;
@@ -182,8 +185,10 @@ struct EngineMemory final : hemi::gpu::MemoryProvider
     {
         vkGetPhysicalDeviceMemoryProperties(host.pd, &props);
     }
-    Range allocate(const VkMemoryRequirements& req, hemi::gpu::MemoryUsage usage, bool) override
+    Range allocate(const hemi::gpu::MemoryRequest& request) override
     {
+        const VkMemoryRequirements& req = request.requirements;
+        const hemi::gpu::MemoryUsage usage = request.usage;
         const VkMemoryPropertyFlags host =
             VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
         const VkMemoryPropertyFlags need = usage == hemi::gpu::MemoryUsage::GpuOnly ? 0 : host;
@@ -289,4 +294,223 @@ TEST_F(Allocator, ABudgetRefusesTheBlockBeyondIt)
     const hemi::gpu::Buffer unbounded =
         hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     EXPECT_EQ(dev.allocator().stats().blocks, 2u);
+}
+
+namespace
+{
+// A driver that asks for dedicated allocations and reports heap budgets, as desktop drivers do and lavapipe
+// does not: hemi gets its entry points through `fake_driver_proc_addr`, whose wrappers of
+// vkGet{Buffer,Image}MemoryRequirements2 set prefersDedicatedAllocation for resources of at least
+// `prefer_dedicated_from` bytes, whose vkAllocateMemory records which allocations name their resource
+// (VkMemoryDedicatedAllocateInfo) and the bytes alive, and whose vkGetPhysicalDeviceMemoryProperties2
+// reports VK_EXT_memory_budget's numbers (heapBudget = `heap_budget`, heapUsage = the bytes alive). The
+// calls still reach lavapipe through the validation layer, so a malformed dedicated allocation (its size
+// not the resource's) is reported.
+struct FakeDriver
+{
+    VkDeviceSize prefer_dedicated_from = 0; // 0: never
+    VkDeviceSize heap_budget = 0;
+    VkDeviceSize live_bytes = 0;
+    std::map<VkDeviceMemory, VkDeviceSize> sizes;
+    std::vector<VkImage> dedicated_images;
+    std::vector<VkBuffer> dedicated_buffers;
+    PFN_vkGetInstanceProcAddr gipa = nullptr;
+    PFN_vkGetBufferMemoryRequirements2 buffer_requirements = nullptr;
+    PFN_vkGetImageMemoryRequirements2 image_requirements = nullptr;
+    PFN_vkAllocateMemory allocate = nullptr;
+    PFN_vkFreeMemory free = nullptr;
+    PFN_vkGetPhysicalDeviceMemoryProperties2 memory_properties = nullptr;
+};
+FakeDriver& fake_driver()
+{
+    static FakeDriver driver;
+    return driver;
+}
+
+void ask_for_dedicated(VkMemoryRequirements2* requirements)
+{
+    for (auto* s = static_cast<VkBaseOutStructure*>(requirements->pNext); s; s = s->pNext)
+        if (s->sType == VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS &&
+            fake_driver().prefer_dedicated_from &&
+            requirements->memoryRequirements.size >= fake_driver().prefer_dedicated_from)
+            reinterpret_cast<VkMemoryDedicatedRequirements*>(s)->prefersDedicatedAllocation = VK_TRUE;
+}
+
+VKAPI_ATTR void VKAPI_CALL fake_buffer_requirements(VkDevice d, const VkBufferMemoryRequirementsInfo2* info,
+                                                    VkMemoryRequirements2* requirements)
+{
+    fake_driver().buffer_requirements(d, info, requirements);
+    ask_for_dedicated(requirements);
+}
+
+VKAPI_ATTR void VKAPI_CALL fake_image_requirements(VkDevice d, const VkImageMemoryRequirementsInfo2* info,
+                                                   VkMemoryRequirements2* requirements)
+{
+    fake_driver().image_requirements(d, info, requirements);
+    ask_for_dedicated(requirements);
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL fake_allocate(VkDevice d, const VkMemoryAllocateInfo* info,
+                                             const VkAllocationCallbacks* callbacks, VkDeviceMemory* memory)
+{
+    FakeDriver& f = fake_driver();
+    const VkResult r = f.allocate(d, info, callbacks, memory);
+    if (r != VK_SUCCESS)
+        return r;
+    f.sizes[*memory] = info->allocationSize;
+    f.live_bytes += info->allocationSize;
+    for (auto* s = static_cast<const VkBaseInStructure*>(info->pNext); s; s = s->pNext)
+        if (s->sType == VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO)
+        {
+            const auto* dedicated = reinterpret_cast<const VkMemoryDedicatedAllocateInfo*>(s);
+            if (dedicated->image)
+                f.dedicated_images.push_back(dedicated->image);
+            if (dedicated->buffer)
+                f.dedicated_buffers.push_back(dedicated->buffer);
+        }
+    return r;
+}
+
+VKAPI_ATTR void VKAPI_CALL fake_free(VkDevice d, VkDeviceMemory memory,
+                                     const VkAllocationCallbacks* callbacks)
+{
+    FakeDriver& f = fake_driver();
+    if (auto it = f.sizes.find(memory); it != f.sizes.end())
+    {
+        f.live_bytes -= it->second;
+        f.sizes.erase(it);
+    }
+    f.free(d, memory, callbacks);
+}
+
+VKAPI_ATTR void VKAPI_CALL fake_memory_properties(VkPhysicalDevice pd, VkPhysicalDeviceMemoryProperties2* p)
+{
+    // The budget structure is the fake's to fill: lavapipe (and the validation layer) do not know it.
+    VkPhysicalDeviceMemoryBudgetPropertiesEXT* budget = nullptr;
+    if (p->pNext && static_cast<VkBaseOutStructure*>(p->pNext)->sType ==
+                        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MEMORY_BUDGET_PROPERTIES_EXT)
+    {
+        budget = static_cast<VkPhysicalDeviceMemoryBudgetPropertiesEXT*>(p->pNext);
+        p->pNext = budget->pNext;
+    }
+    fake_driver().memory_properties(pd, p);
+    if (budget)
+    {
+        p->pNext = budget;
+        for (uint32_t h = 0; h < p->memoryProperties.memoryHeapCount; ++h)
+        {
+            budget->heapBudget[h] = fake_driver().heap_budget;
+            budget->heapUsage[h] = fake_driver().live_bytes;
+        }
+    }
+}
+
+VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL fake_driver_proc_addr(VkInstance instance, const char* name)
+{
+    FakeDriver& f = fake_driver();
+    if (!f.gipa)
+    {
+        void* library = dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
+        f.gipa = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(library, "vkGetInstanceProcAddr"));
+    }
+    const PFN_vkVoidFunction real = f.gipa(instance, name);
+    auto hook = [&](auto& slot, auto wrapper)
+    {
+        slot = reinterpret_cast<std::remove_reference_t<decltype(slot)>>(real);
+        return real ? reinterpret_cast<PFN_vkVoidFunction>(wrapper) : nullptr;
+    };
+    const std::string n = name;
+    if (n == "vkGetBufferMemoryRequirements2")
+        return hook(f.buffer_requirements, &fake_buffer_requirements);
+    if (n == "vkGetImageMemoryRequirements2")
+        return hook(f.image_requirements, &fake_image_requirements);
+    if (n == "vkAllocateMemory")
+        return hook(f.allocate, &fake_allocate);
+    if (n == "vkFreeMemory")
+        return hook(f.free, &fake_free);
+    if (n == "vkGetPhysicalDeviceMemoryProperties2")
+        return hook(f.memory_properties, &fake_memory_properties);
+    return real;
+}
+} // namespace
+
+// A resource the driver asks to have its own memory (VkMemoryDedicatedRequirements) gets a VkDeviceMemory of
+// its own, allocated with VkMemoryDedicatedAllocateInfo naming it, and given back with it; small resources
+// the driver does not ask about still share blocks. (An allocator that ignores the request sub-allocates the
+// 4 MiB image from a 64 MiB block, and the fake driver sees no allocation naming it.)
+TEST_F(Allocator, AResourceTheDriverAsksToHaveItsOwnMemoryGetsADedicatedAllocation)
+{
+    hemi::test::HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    FakeDriver& fake = fake_driver();
+    fake.prefer_dedicated_from = VkDeviceSize(1) << 20;
+    fake.dedicated_images.clear();
+    fake.dedicated_buffers.clear();
+    {
+        hemi::gpu::Device dev(host.external(&fake_driver_proc_addr));
+        const hemi::gpu::Image small = hemi::gpu::create_image(dev, {64, 64, VK_FORMAT_R8G8B8A8_UNORM});
+        EXPECT_EQ(dev.allocator().stats().dedicated, 0u);
+        {
+            const hemi::gpu::Image large = hemi::gpu::create_image(
+                dev, {1024, 1024, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT});
+            const hemi::gpu::Buffer buffer =
+                hemi::gpu::create_buffer(dev, {2u << 20, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+            EXPECT_EQ(dev.allocator().stats().dedicated, 2u);
+            ASSERT_EQ(fake.dedicated_images.size(), 1u);
+            EXPECT_EQ(fake.dedicated_images[0], large.handle());
+            ASSERT_EQ(fake.dedicated_buffers.size(), 1u);
+            EXPECT_EQ(fake.dedicated_buffers[0], buffer.handle());
+            // Both are usable: the buffer round-trips (the validation layer checks the bindings).
+            const uint32_t v = 0x600dcafe;
+            hemi::gpu::write_buffer(dev, buffer, &v, 4, (2u << 20) - 4);
+            uint32_t back = 0;
+            hemi::gpu::read_buffer(dev, buffer, &back, 4, (2u << 20) - 4);
+            EXPECT_EQ(back, v);
+        }
+        EXPECT_EQ(dev.allocator().stats().dedicated, 0u) << "a dedicated block outlived its resource";
+        EXPECT_EQ(dev.allocator().stats().allocations, 1u);
+    }
+    fake.prefer_dedicated_from = 0;
+    EXPECT_EQ(fake.live_bytes, 0u) << "memory not given back to the driver";
+}
+
+// Where the device has VK_EXT_memory_budget (ExternalDevice::memory_budget), a new block that would take its
+// heap past the budget the driver reports is refused with an error naming the extension and the figures;
+// once memory is given back, the same request succeeds. (An allocator that ignores the budget takes the
+// third 40 MiB block under a budget of 100 MiB.)
+TEST_F(Allocator, KeepsWithinTheHeapBudgetTheDriverReports)
+{
+    hemi::test::HostVulkan host;
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    FakeDriver& fake = fake_driver();
+    const VkDeviceSize mib = VkDeviceSize(1) << 20;
+    fake.heap_budget = 100 * mib;
+    hemi::gpu::ExternalDevice external = host.external(&fake_driver_proc_addr);
+    external.memory_budget = true;
+    {
+        hemi::gpu::Device dev(external);
+        const uint32_t type = dev.memory_type(~0u, hemi::gpu::MemoryUsage::GpuOnly);
+        ASSERT_TRUE(dev.heap_budget(type).has_value());
+        EXPECT_EQ(dev.heap_budget(type)->budget, 100 * mib);
+        std::vector<hemi::gpu::Buffer> buffers;
+        for (int i = 0; i < 2; ++i)
+            buffers.push_back(hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT}));
+        EXPECT_EQ(dev.heap_budget(type)->usage, 80 * mib);
+        try
+        {
+            (void)hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+            ADD_FAILURE() << "120 MiB taken from a heap whose budget is 100 MiB";
+        }
+        catch (const std::runtime_error& e)
+        {
+            const std::string why = e.what();
+            EXPECT_NE(why.find("VK_EXT_memory_budget"), std::string::npos) << why;
+            EXPECT_NE(why.find("budget of 100 MiB"), std::string::npos) << why;
+            EXPECT_NE(why.find("80 MiB in use"), std::string::npos) << why;
+        }
+        buffers.pop_back();
+        buffers.push_back(hemi::gpu::create_buffer(dev, {40 * mib, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT}));
+        EXPECT_EQ(dev.allocator().stats().blocks, 2u);
+    }
+    fake.heap_budget = 0;
 }

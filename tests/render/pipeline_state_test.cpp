@@ -159,9 +159,7 @@ TEST_F(PipelineState, MultisampledTargetsResolveTheSameInteriorAndSmoothEdges)
     std::vector<VkImageView> views;
     for (VkImage img : {ms_color, ms_depth})
     {
-        VkMemoryRequirements req;
-        vkGetImageMemoryRequirements(d, img, &req);
-        memory.push_back(hemi::gpu::allocate(dev, req, hemi::gpu::MemoryUsage::GpuOnly, false));
+        memory.push_back(hemi::gpu::allocate(dev, hemi::gpu::memory_request(dev, img)));
         ASSERT_EQ(vkBindImageMemory(d, img, memory.back().memory(), memory.back().offset()), VK_SUCCESS);
         VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
         v.image = img;

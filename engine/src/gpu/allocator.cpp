@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -63,16 +64,51 @@ void Allocation::release()
     range_ = {};
 }
 
-Allocation allocate(const Device& device, const VkMemoryRequirements& requirements, MemoryUsage usage,
-                    bool linear)
+Allocation allocate(const Device& device, const MemoryRequest& request)
 {
     MemoryProvider& provider = device.memory();
-    Allocation a(provider, provider.allocate(requirements, usage, linear), requirements, usage);
+    Allocation a(provider, provider.allocate(request), request.requirements, request.usage);
     // hemi never flushes or invalidates: a host pointer into non-coherent memory would lose writes.
     if (a.mapped() && !device.memory_is_host_coherent(a.memory_type()))
         throw std::runtime_error("hemi: the memory provider returned a host pointer into memory type " +
                                  std::to_string(a.memory_type()) + ", which is not host-coherent");
     return a;
+}
+
+MemoryRequest memory_request(const Device& device, VkBuffer buffer, MemoryUsage usage)
+{
+    VkBufferMemoryRequirementsInfo2 info{VK_STRUCTURE_TYPE_BUFFER_MEMORY_REQUIREMENTS_INFO_2};
+    info.buffer = buffer;
+    VkMemoryDedicatedRequirements dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS};
+    VkMemoryRequirements2 requirements{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
+    requirements.pNext = &dedicated;
+    vkGetBufferMemoryRequirements2(device.device(), &info, &requirements);
+    MemoryRequest r;
+    r.requirements = requirements.memoryRequirements;
+    r.usage = usage;
+    r.linear = true;
+    r.prefers_dedicated = dedicated.prefersDedicatedAllocation;
+    r.requires_dedicated = dedicated.requiresDedicatedAllocation;
+    r.buffer = buffer;
+    return r;
+}
+
+MemoryRequest memory_request(const Device& device, VkImage image)
+{
+    VkImageMemoryRequirementsInfo2 info{VK_STRUCTURE_TYPE_IMAGE_MEMORY_REQUIREMENTS_INFO_2};
+    info.image = image;
+    VkMemoryDedicatedRequirements dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS};
+    VkMemoryRequirements2 requirements{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
+    requirements.pNext = &dedicated;
+    vkGetImageMemoryRequirements2(device.device(), &info, &requirements);
+    MemoryRequest r;
+    r.requirements = requirements.memoryRequirements;
+    r.usage = MemoryUsage::GpuOnly;
+    r.linear = false;
+    r.prefers_dedicated = dedicated.prefersDedicatedAllocation;
+    r.requires_dedicated = dedicated.requiresDedicatedAllocation;
+    r.image = image;
+    return r;
 }
 
 MemoryAllocator::MemoryAllocator(const Device& device, VkDeviceSize block_size)
@@ -94,24 +130,38 @@ MemoryAllocator::~MemoryAllocator()
 }
 
 MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, VkDeviceSize size,
-                                                   bool dedicated)
+                                                   const MemoryRequest* request)
 {
+    auto mib = [](VkDeviceSize b) { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20); };
     if (budget_)
     {
         VkDeviceSize held = 0;
         for (const auto& b : blocks_)
             held += b->size;
         if (held + size > budget_)
-        {
-            auto mib = [](VkDeviceSize b) { return std::to_string((b + (VkDeviceSize(1) << 20) - 1) >> 20); };
             throw std::runtime_error("hemi: a memory block of " + mib(size) +
                                      " MiB would exceed the budget of " + mib(budget_) + " MiB (" +
                                      mib(held) + " MiB held)");
-        }
     }
+    // The driver's budget for the heap (VK_EXT_memory_budget), which counts every allocation of the process:
+    // beyond it the driver may still allocate, but pages memory out or fails later, somewhere less clear.
+    if (const std::optional<Device::HeapBudget> heap = device_->heap_budget(type);
+        heap && heap->usage + size > heap->budget)
+        throw std::runtime_error("hemi: a memory block of " + mib(size) + " MiB would exceed the budget of " +
+                                 mib(heap->budget) + " MiB that the driver reports for memory type " +
+                                 std::to_string(type) + "'s heap (VK_EXT_memory_budget; " + mib(heap->usage) +
+                                 " MiB in use by this process)");
+    const bool dedicated = request && (request->prefers_dedicated || request->requires_dedicated);
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = size;
     info.memoryTypeIndex = type;
+    VkMemoryDedicatedAllocateInfo dedicated_info{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO};
+    if (dedicated)
+    {
+        dedicated_info.buffer = request->buffer;
+        dedicated_info.image = request->image;
+        info.pNext = &dedicated_info;
+    }
     VkDeviceMemory memory;
     HEMI_VK_CHECK(vkAllocateMemory(device_->device(), &info, nullptr, &memory));
     auto block = std::make_unique<Block>();
@@ -119,6 +169,7 @@ MemoryAllocator::Block* MemoryAllocator::new_block(uint32_t type, bool linear, V
     block->size = size;
     block->type = type;
     block->linear = linear;
+    block->single = request != nullptr;
     block->dedicated = dedicated;
     block->free[0] = size;
     // Only coherent memory is mapped: hemi never flushes or invalidates ranges.
@@ -141,9 +192,11 @@ void MemoryAllocator::set_budget(VkDeviceSize bytes)
     budget_ = bytes;
 }
 
-MemoryProvider::Range MemoryAllocator::allocate(const VkMemoryRequirements& req, MemoryUsage usage,
-                                                bool linear)
+MemoryProvider::Range MemoryAllocator::allocate(const MemoryRequest& request)
 {
+    const VkMemoryRequirements& req = request.requirements;
+    const MemoryUsage usage = request.usage;
+    const bool linear = request.linear;
     const uint32_t type = device_->memory_type(req.memoryTypeBits, usage);
     const VkDeviceSize align = std::max<VkDeviceSize>(1, req.alignment);
     // Refuse what the device cannot hold before asking it (a raw VK_ERROR_OUT_OF_DEVICE_MEMORY from deep in
@@ -164,14 +217,14 @@ MemoryProvider::Range MemoryAllocator::allocate(const VkMemoryRequirements& req,
     std::lock_guard<std::mutex> lock(mutex_);
     Block* chosen = nullptr;
     VkDeviceSize offset = 0;
-    if (req.size > block_size_ / 2)
-        chosen = new_block(type, linear, req.size, true);
+    if (req.size > block_size_ / 2 || request.prefers_dedicated || request.requires_dedicated)
+        chosen = new_block(type, linear, req.size, &request);
     else
     {
         // First fit over the blocks of this type and kind.
         for (const auto& b : blocks_)
         {
-            if (b->dedicated || b->type != type || b->linear != linear)
+            if (b->single || b->type != type || b->linear != linear)
                 continue;
             for (const auto& [start, length] : b->free)
             {
@@ -187,7 +240,7 @@ MemoryProvider::Range MemoryAllocator::allocate(const VkMemoryRequirements& req,
                 break;
         }
         if (!chosen)
-            chosen = new_block(type, linear, block_size_, false);
+            chosen = new_block(type, linear, block_size_, nullptr);
     }
     // Carve [offset, offset + size) out of the free range holding it.
     auto it = std::prev(chosen->free.upper_bound(offset));
@@ -215,7 +268,7 @@ void MemoryAllocator::free(const Range& range) noexcept
     std::lock_guard<std::mutex> lock(mutex_);
     --block->live;
     // An empty block goes back to the driver at once: a level unloaded leaves no memory behind.
-    if (block->dedicated || block->live == 0)
+    if (block->single || block->live == 0)
     {
         vkFreeMemory(device_->device(), block->memory, nullptr);
         blocks_.erase(
@@ -246,6 +299,7 @@ MemoryAllocator::Stats MemoryAllocator::stats() const
     {
         ++s.blocks;
         s.allocations += b->live;
+        s.dedicated += b->dedicated;
         s.block_bytes += b->size;
         VkDeviceSize free_bytes = 0;
         for (const auto& [start, length] : b->free)

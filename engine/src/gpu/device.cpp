@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -315,6 +316,21 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         enabled.independentBlend = supported.independentBlend;
         independent_blend_ = supported.independentBlend;
         device_info.pEnabledFeatures = &enabled;
+        // VK_EXT_memory_budget where the device has it: the allocator then keeps within each heap's budget.
+        uint32_t extension_count = 0;
+        vkEnumerateDeviceExtensionProperties(physical_device_, nullptr, &extension_count, nullptr);
+        std::vector<VkExtensionProperties> device_extensions(extension_count);
+        vkEnumerateDeviceExtensionProperties(physical_device_, nullptr, &extension_count,
+                                             device_extensions.data());
+        const char* budget_extension = VK_EXT_MEMORY_BUDGET_EXTENSION_NAME;
+        for (const VkExtensionProperties& e : device_extensions)
+            if (std::strcmp(e.extensionName, budget_extension) == 0)
+                memory_budget_ = true;
+        if (memory_budget_)
+        {
+            device_info.enabledExtensionCount = 1;
+            device_info.ppEnabledExtensionNames = &budget_extension;
+        }
         device_info.queueCreateInfoCount = 1;
         device_info.pQueueCreateInfos = &queue_info;
         HEMI_VK_CHECK(vkCreateDevice(physical_device_, &device_info, nullptr, &device_));
@@ -341,7 +357,7 @@ Device::Device(const ExternalDevice& external)
     : instance_(external.instance), physical_device_(external.physical_device), device_(external.device),
       queue_(external.queue), queue_family_(external.queue_family), owns_(false),
       dynamic_rendering_(external.dynamic_rendering), independent_blend_(external.independent_blend),
-      log_(external.log), memory_provider_(external.memory)
+      memory_budget_(external.memory_budget), log_(external.log), memory_provider_(external.memory)
 {
 #if defined(__SANITIZE_ADDRESS__)
     pin_vulkan_libraries(); // the host's instance loaded them; keep them for LeakSanitizer's report
@@ -476,6 +492,19 @@ uint32_t Device::memory_type(uint32_t type_bits, MemoryUsage usage) const
 VkDeviceSize Device::heap_size(uint32_t memory_type) const
 {
     return memory_.memoryHeaps[memory_.memoryTypes[memory_type].heapIndex].size;
+}
+
+std::optional<Device::HeapBudget> Device::heap_budget(uint32_t memory_type) const
+{
+    if (!memory_budget_ || memory_type >= memory_.memoryTypeCount)
+        return std::nullopt;
+    VkPhysicalDeviceMemoryBudgetPropertiesEXT budget{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MEMORY_BUDGET_PROPERTIES_EXT};
+    VkPhysicalDeviceMemoryProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MEMORY_PROPERTIES_2};
+    properties.pNext = &budget;
+    vkGetPhysicalDeviceMemoryProperties2(physical_device_, &properties);
+    const uint32_t heap = memory_.memoryTypes[memory_type].heapIndex;
+    return HeapBudget{budget.heapBudget[heap], budget.heapUsage[heap]};
 }
 
 bool Device::memory_is_host_visible(uint32_t memory_type) const

@@ -23,9 +23,7 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc)
     HEMI_VK_CHECK(vkCreateBuffer(d, &info, nullptr, &buffer));
     b.buffer_ = VkBufferHandle(d, buffer);
 
-    VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(d, buffer, &req);
-    b.memory_ = allocate(device, req, desc.memory, true);
+    b.memory_ = allocate(device, memory_request(device, buffer, desc.memory));
     HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, b.memory_.memory(), b.memory_.offset()));
     b.mapped_ = b.memory_.mapped(); // coherent memory only: hemi never flushes or invalidates ranges
     b.size_ = desc.size;
@@ -96,6 +94,7 @@ uint32_t format_size(VkFormat format)
     case VK_FORMAT_B8G8R8A8_UNORM:
     case VK_FORMAT_R32_SFLOAT:
     case VK_FORMAT_D32_SFLOAT:
+    case VK_FORMAT_E5B9G9R9_UFLOAT_PACK32:
         return 4;
     case VK_FORMAT_R16G16B16A16_SFLOAT:
     case VK_FORMAT_R32G32_SFLOAT:
@@ -146,9 +145,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
     HEMI_VK_CHECK(vkCreateImage(d, &info, nullptr, &image));
     img.image_ = VkImageHandle(d, image);
 
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(d, image, &req);
-    img.memory_ = allocate(device, req, MemoryUsage::GpuOnly, false);
+    img.memory_ = allocate(device, memory_request(device, image));
     HEMI_VK_CHECK(vkBindImageMemory(d, image, img.memory_.memory(), img.memory_.offset()));
 
     VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};

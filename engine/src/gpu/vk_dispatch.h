@@ -80,15 +80,17 @@
     X(vkDeviceWaitIdle)                                                                                      \
     X(vkEndCommandBuffer)                                                                                    \
     X(vkEnumeratePhysicalDevices)                                                                            \
+    X(vkEnumerateDeviceExtensionProperties)                                                                  \
     X(vkFreeDescriptorSets)                                                                                  \
     X(vkFreeMemory)                                                                                          \
-    X(vkGetBufferMemoryRequirements)                                                                         \
+    X(vkGetBufferMemoryRequirements2)                                                                        \
     X(vkGetDeviceQueue)                                                                                      \
-    X(vkGetImageMemoryRequirements)                                                                          \
+    X(vkGetImageMemoryRequirements2)                                                                         \
     X(vkGetPhysicalDeviceFeatures)                                                                           \
     X(vkGetPhysicalDeviceFeatures2)                                                                          \
     X(vkGetPhysicalDeviceFormatProperties)                                                                   \
     X(vkGetPhysicalDeviceMemoryProperties)                                                                   \
+    X(vkGetPhysicalDeviceMemoryProperties2)                                                                  \
     X(vkGetPhysicalDeviceProperties)                                                                         \
     X(vkGetPhysicalDeviceProperties2)                                                                        \
     X(vkGetPhysicalDeviceQueueFamilyProperties)                                                              \

@@ -5,9 +5,12 @@
 // unless the engine hands hemi a MemoryProvider of its own (ExternalDevice::memory).
 //
 // Blocks are per memory type and per kind (linear: buffers; optimal: images), so bufferImageGranularity never
-// applies inside a block. A request larger than half a block gets a block of its own. A block whose last
-// resource is freed goes back to the driver at once (stats().blocks counts only blocks in use). Host-visible
-// coherent blocks are mapped once, persistently. Thread-safe.
+// applies inside a block. A request larger than half a block gets a block of its own, and so does a resource
+// the driver asks to have its own memory (VkMemoryDedicatedRequirements: allocated with
+// VkMemoryDedicatedAllocateInfo naming it). A block whose last resource is freed goes back to the driver at
+// once (stats().blocks counts only blocks in use). Host-visible coherent blocks are mapped once,
+// persistently. Two budgets bound the blocks: the engine's (set_budget) and, where the device has
+// VK_EXT_memory_budget, the heap budget the driver reports. Thread-safe.
 
 #include <hemi/gpu/device.h>
 
@@ -24,6 +27,19 @@ namespace hemi::gpu
 // Where hemi's buffers and images get their memory. hemi's MemoryAllocator is one; an engine with an
 // allocator of its own (its VMA instance, its heaps) implements this interface and hands it to hemi
 // (ExternalDevice::memory), so that every byte hemi binds comes from the engine's budget and statistics.
+// What a buffer or image needs of its memory.
+struct MemoryRequest
+{
+    VkMemoryRequirements requirements{};
+    MemoryUsage usage = MemoryUsage::GpuOnly;
+    bool linear = true; // a buffer; false: an optimally tiled image
+    // VkMemoryDedicatedRequirements: the driver prefers (or requires) that the resource have a VkDeviceMemory
+    // of its own, allocated with VkMemoryDedicatedAllocateInfo naming it (`buffer` or `image`).
+    bool prefers_dedicated = false, requires_dedicated = false;
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkImage image = VK_NULL_HANDLE;
+};
+
 class MemoryProvider
 {
   public:
@@ -40,10 +56,11 @@ class MemoryProvider
         void* user = nullptr; // the provider's own handle for free() (a VmaAllocation, a block)
     };
     virtual ~MemoryProvider() = default;
-    // Memory for a buffer (`linear`) or an optimally tiled image with `requirements`, of a memory type in
-    // requirements.memoryTypeBits with the properties `usage` needs (Device::memory_type(bits, usage) is
-    // hemi's choice). Throws when there is none (hemi passes the exception on to its caller).
-    virtual Range allocate(const VkMemoryRequirements& requirements, MemoryUsage usage, bool linear) = 0;
+    // Memory for a buffer (`linear`) or an optimally tiled image with `request.requirements`, of a memory
+    // type in requirements.memoryTypeBits with the properties `request.usage` needs
+    // (Device::memory_type(bits, usage) is hemi's choice); a memory of its own where the request requires
+    // one. Throws when there is none (hemi passes the exception on to its caller).
+    virtual Range allocate(const MemoryRequest& request) = 0;
     // The buffer or image bound to `range` is destroyed: the engine destroys hemi's objects once the GPU no
     // longer uses them, so the memory may be reused at once.
     virtual void free(const Range& range) noexcept = 0;
@@ -78,9 +95,11 @@ class Allocation
     MemoryProvider::Range range_;
 };
 
-// Memory for `requirements` from the device's provider (Device::memory()).
-Allocation allocate(const Device& device, const VkMemoryRequirements& requirements, MemoryUsage usage,
-                    bool linear);
+// Memory for `request` from the device's provider (Device::memory()).
+Allocation allocate(const Device& device, const MemoryRequest& request);
+// The request for `buffer` or `image` (vkGet*MemoryRequirements2, with its dedicated requirements).
+MemoryRequest memory_request(const Device& device, VkBuffer buffer, MemoryUsage usage);
+MemoryRequest memory_request(const Device& device, VkImage image);
 
 class MemoryAllocator final : public MemoryProvider
 {
@@ -91,10 +110,10 @@ class MemoryAllocator final : public MemoryProvider
     MemoryAllocator(const MemoryAllocator&) = delete;
     MemoryAllocator& operator=(const MemoryAllocator&) = delete;
 
-    // Memory for `requirements` with the properties `usage` needs; `linear` for buffers, false for optimally
-    // tiled images. Throws VulkanError when the driver refuses a new block (VK_ERROR_OUT_OF_DEVICE_MEMORY),
-    // std::runtime_error when a new block would exceed the budget.
-    Range allocate(const VkMemoryRequirements& requirements, MemoryUsage usage, bool linear) override;
+    // Memory for `request` with the properties its usage needs. Throws VulkanError when the driver refuses a
+    // new block (VK_ERROR_OUT_OF_DEVICE_MEMORY), std::runtime_error when a new block would exceed the
+    // engine's budget or the heap's (VK_EXT_memory_budget).
+    Range allocate(const MemoryRequest& request) override;
     void free(const Range& range) noexcept override;
 
     // At most `bytes` of blocks alive at once (0: no limit, the default): a request that needs a new block
@@ -107,6 +126,7 @@ class MemoryAllocator final : public MemoryProvider
         size_t allocations = 0;       // live sub-allocations
         VkDeviceSize block_bytes = 0; // bytes of all blocks
         VkDeviceSize used_bytes = 0;  // bytes of live sub-allocations (after alignment)
+        size_t dedicated = 0;         // blocks allocated for one resource the driver asked to have its own
     };
     Stats stats() const;
 
@@ -116,12 +136,15 @@ class MemoryAllocator final : public MemoryProvider
         VkDeviceMemory memory = VK_NULL_HANDLE;
         VkDeviceSize size = 0;
         uint32_t type = 0;
-        bool linear = true, dedicated = false;
+        bool linear = true;
+        bool single = false;    // holds one resource (too large for a shared block, or dedicated)
+        bool dedicated = false; // allocated with VkMemoryDedicatedAllocateInfo
         void* mapped = nullptr;
         std::map<VkDeviceSize, VkDeviceSize> free; // offset -> size, coalesced
         size_t live = 0;
     };
-    Block* new_block(uint32_t type, bool linear, VkDeviceSize size, bool dedicated);
+    // `request` non-null: a block of its own for that resource (dedicated when the driver asks).
+    Block* new_block(uint32_t type, bool linear, VkDeviceSize size, const MemoryRequest* request);
 
     const Device* device_;
     VkDeviceSize block_size_;

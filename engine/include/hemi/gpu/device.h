@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -77,6 +78,9 @@ struct ExternalDevice
     // makes on this device; it must outlive the Device and everything made with it. Null: hemi's own
     // MemoryAllocator (Device::allocator()).
     MemoryProvider* memory = nullptr;
+    // True when `device` was created with VK_EXT_memory_budget enabled: then hemi's allocator refuses a new
+    // block that would take its heap past the budget the driver reports (Device::heap_budget).
+    bool memory_budget = false;
 };
 
 // Whether a debug-utils message comes from the Vulkan loader (e.g. "Layer ... forced enabled due to env var
@@ -120,6 +124,15 @@ class Device
     // The largest single VkDeviceMemory allocation (maxMemoryAllocationSize) and a memory type's heap size.
     VkDeviceSize max_allocation_size() const { return max_allocation_size_; }
     VkDeviceSize heap_size(uint32_t memory_type) const;
+    // VK_EXT_memory_budget's report for a memory type's heap: how much this process may use of it and how
+    // much it uses now (every allocation of the process, hemi's and the engine's). nullopt without the
+    // extension (hemi enables it on devices it creates where the device has it; an engine says so in
+    // ExternalDevice::memory_budget).
+    struct HeapBudget
+    {
+        VkDeviceSize budget = 0, usage = 0;
+    };
+    std::optional<HeapBudget> heap_budget(uint32_t memory_type) const;
     // Lanes of a subgroup (8 on lavapipe with AVX2, 32 on NVIDIA, 32/64 on AMD).
     uint32_t subgroup_size() const { return subgroup_size_; }
     // Whether pipelines may draw with dynamic rendering (Vulkan 1.3 dynamicRendering enabled: hemi enables
@@ -176,6 +189,7 @@ class Device
     bool owns_ = false;
     bool dynamic_rendering_ = false;
     bool independent_blend_ = false;
+    bool memory_budget_ = false;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memory_{};
     uint32_t subgroup_size_ = 1;
