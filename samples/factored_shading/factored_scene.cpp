@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace hemi::samples
@@ -151,7 +152,9 @@ io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& vie
     }
     render::TextureSet textures(device, images, std::span<const io::Material>(&material, 1), upload);
     render::MaterialInstance instance(system, textures, material, upload);
-    render::EnvironmentLighting lighting(system, *view.environment, view.brdf, view.material, upload);
+    render::EnvironmentLighting lighting(
+        system, std::make_shared<render::EnvironmentMaps>(device, *view.environment, upload, view.precision),
+        view.brdf, view.material, upload);
     render::FrameSet frame(system);
     render::MaterialKey key;
     key.technique = view.technique;

@@ -45,6 +45,7 @@ struct FactoredView
     glm::vec3 albedo{0.8f};
     render::Technique technique = render::Technique::EnvMirror;
     const io::EnvmapAsset* environment = nullptr;
+    render::MapPrecision precision = render::MapPrecision::Auto; // how the environment's maps are stored
     std::vector<math::BrdfTable> brdf; // the factored BRDF's tables (factored, banks)
     render::EnvironmentMaterial material;
     std::vector<render::DynamicLight> lights;

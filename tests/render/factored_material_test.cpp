@@ -10,10 +10,12 @@
 #include "scene.h"
 
 #include <hemi/bake/factored.h>
+#include <hemi/gpu/upload.h>
 #include <hemi/math/paraboloid.h>
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -367,4 +369,69 @@ TEST_F(FactoredMaterial, RotationFresnelRowAndGlossyIndexMatchCpu)
             "%s turned: %d of %d outside 1%% + 0.003; unturned rejected at %d, the first table/map at %d\n",
             mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected, first.rejected);
     }
+}
+
+// The environment's maps at each MapPrecision: the mirror reflection (kd = 0, so a pixel is F times one
+// filtered lookup) drawn from RGBA16F and E5B9G9R9 maps differs from the RGBA32F drawing by no more than the
+// formats' rounding: 2^-11 of each value for half floats, 2^-9 of the pixel's largest channel for the shared
+// exponent. (A packer with the channels in the wrong bits, an exponent off by one or truncation in place of
+// rounding exceeds them.) Auto stores this environment as half floats, and one with a sun beyond half's
+// range as floats, which Half and SharedExponent refuse by name.
+TEST_F(FactoredMaterial, MapPrecisionsKeepTheirStatedError)
+{
+    using hemi::render::MapPrecision;
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    hemi::samples::FactoredView view = sphere_view(scene, hemi::render::Technique::EnvMirror);
+    view.material.kd = 0.0f;
+    const uint32_t W = 200, H = 160;
+    view.precision = MapPrecision::Float;
+    hemi::io::ImageRgba aux;
+    const auto exact = hemi::samples::render_factored(hemi::test::device(), view, W, H, &aux);
+    for (MapPrecision p : {MapPrecision::Half, MapPrecision::SharedExponent})
+    {
+        view.precision = p;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, W, H);
+        int pixels = 0, outside = 0;
+        double largest = 0.0;
+        for (uint32_t y = 0; y < H; ++y)
+            for (uint32_t x = 0; x < W; ++x)
+            {
+                if (aux.at(x, y)[3] != 1.0f)
+                    continue;
+                ++pixels;
+                const float* e = exact.at(x, y);
+                const float top = std::max({e[0], e[1], e[2]});
+                for (int c = 0; c < 3; ++c)
+                {
+                    const double d = std::abs(double(color.at(x, y)[c]) - e[c]);
+                    const double bound =
+                        p == MapPrecision::Half ? std::ldexp(e[c], -11) : std::ldexp(top, -9);
+                    outside += d > bound * 1.001 + 1e-6;
+                    largest = std::max(largest, d / top);
+                }
+            }
+        EXPECT_GT(pixels, 5000);
+        EXPECT_EQ(outside, 0) << (p == MapPrecision::Half ? "RGBA16F" : "E5B9G9R9");
+        std::printf("%s maps: largest change %.5f%% of a pixel's largest channel over %d pixels\n",
+                    p == MapPrecision::Half ? "RGBA16F" : "E5B9G9R9", 100.0 * largest, pixels);
+    }
+
+    auto& dev = hemi::test::device();
+    hemi::gpu::UploadBatch upload(dev);
+    EXPECT_EQ(hemi::render::EnvironmentMaps(dev, smooth_environment(), upload).map_format(),
+              VK_FORMAT_R16G16B16A16_SFLOAT);
+    hemi::io::EnvmapAsset sunny = smooth_environment();
+    sunny.mirror[0].rgb[0] = 1.0e5f;
+    EXPECT_EQ(hemi::render::EnvironmentMaps(dev, sunny, upload).map_format(), VK_FORMAT_R32G32B32A32_SFLOAT);
+    for (MapPrecision p : {MapPrecision::Half, MapPrecision::SharedExponent})
+        try
+        {
+            hemi::render::EnvironmentMaps maps(dev, sunny, upload, p);
+            ADD_FAILURE() << "radiance of 1e5 stored in a format that ends at 65504";
+        }
+        catch (const std::invalid_argument& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("beyond"), std::string::npos) << e.what();
+        }
+    upload.clear();
 }

@@ -24,7 +24,26 @@ bool filters_linearly(const gpu::Device& device, VkFormat format)
     return (props.optimalTilingFeatures & need) == need;
 }
 
-// RGB floats into RGBA texels of `format` (RGBA32F, or RGBA16F clamped to half's range), alpha 1.
+// E5B9G9R9 of one RGB value, as the Vulkan specification converts to it ("Shared Exponent Format
+// Conversion"): 9-bit mantissas with a common exponent (bias 15), each channel rounded to the nearest.
+uint32_t pack_shared_exponent(const float* rgb)
+{
+    constexpr int N = 9, B = 15;
+    constexpr float max_value = float((1 << N) - 1) / float(1 << N) * float(1 << (31 - B)); // 65408
+    float c[3];
+    for (int i = 0; i < 3; ++i)
+        c[i] = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, max_value) : 0.0f;
+    const float max_c = std::max({c[0], c[1], c[2]});
+    int exponent = std::max(-B - 1, max_c > 0.0f ? int(std::floor(std::log2(max_c))) : -B - 1) + 1 + B;
+    if (std::floor(max_c / std::ldexp(1.0f, exponent - B - N) + 0.5f) >= float(1 << N))
+        ++exponent;
+    uint32_t packed = uint32_t(exponent) << 27;
+    for (int i = 0; i < 3; ++i)
+        packed |= uint32_t(std::floor(c[i] / std::ldexp(1.0f, exponent - B - N) + 0.5f)) << (9 * i);
+    return packed;
+}
+
+// RGB floats into texels of `format`: RGBA32F, RGBA16F (clamped to half's range; alpha 1) or E5B9G9R9.
 std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
 {
     const size_t texels = rgb.size() / 3;
@@ -36,6 +55,13 @@ std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
         for (size_t i = 0; i < texels; ++i)
             p[i * 4] = rgb[i * 3], p[i * 4 + 1] = rgb[i * 3 + 1], p[i * 4 + 2] = rgb[i * 3 + 2],
                   p[i * 4 + 3] = 1.0f;
+    }
+    else if (format == VK_FORMAT_E5B9G9R9_UFLOAT_PACK32)
+    {
+        out.resize(texels * 4);
+        uint32_t* p = reinterpret_cast<uint32_t*>(out.data());
+        for (size_t i = 0; i < texels; ++i)
+            p[i] = pack_shared_exponent(&rgb[i * 3]);
     }
     else
     {
@@ -49,33 +75,76 @@ std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
 }
 
 gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::ParabolicImage> levels,
-                           VkFormat format, gpu::UploadBatch& upload)
+                           VkFormat format, gpu::UploadBatch& upload, VkDeviceSize& bytes_total)
 {
     gpu::Image image =
         gpu::create_image(device, {levels[0].size, levels[0].size, format, VK_IMAGE_USAGE_SAMPLED_BIT,
                                    uint32_t(levels.size()), 2, true});
     std::vector<std::vector<std::byte>> bytes;
     for (const math::ParabolicImage& level : levels)
+    {
         bytes.push_back(pack(level.rgb, format));
+        bytes_total += bytes.back().size();
+    }
     upload.image_levels(image, bytes);
     return image;
+}
+
+// The format for `precision`: Auto takes Half where every value fits it. Explicit Half and SharedExponent
+// refuse radiance beyond their range (a sun clamped to 65504 would darken every glossy reflection of it).
+VkFormat choose_map_format(const gpu::Device& device, const io::EnvmapAsset& env, MapPrecision precision)
+{
+    float largest = 0.0f;
+    auto scan = [&](const math::ParabolicImage& m)
+    {
+        for (float v : m.rgb)
+            largest = std::max(largest, v);
+    };
+    for (const math::ParabolicImage& m : env.mirror)
+        scan(m);
+    for (const math::ParabolicImage& m : env.glossy)
+        scan(m);
+    scan(env.diffuse);
+    const VkFormat float4 = VK_FORMAT_R32G32B32A32_SFLOAT, half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
+    auto refuse_beyond = [&](float range, const char* name)
+    {
+        if (largest > range)
+            throw std::invalid_argument("hemi: the environment's radiance reaches " +
+                                        std::to_string(largest) + ", beyond " + name + "'s range (" +
+                                        std::to_string(range) + "): store it as MapPrecision::Float or Auto");
+    };
+    switch (precision)
+    {
+    case MapPrecision::Half:
+        refuse_beyond(65504.0f, "RGBA16F");
+        return half4;
+    case MapPrecision::SharedExponent:
+        refuse_beyond(65408.0f, "E5B9G9R9");
+        return VK_FORMAT_E5B9G9R9_UFLOAT_PACK32;
+    case MapPrecision::Auto:
+        if (largest <= 65504.0f)
+            return half4;
+        [[fallthrough]];
+    case MapPrecision::Float:
+        break;
+    }
+    return filters_linearly(device, float4) ? float4 : half4;
 }
 } // namespace
 
 EnvironmentMaps::EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& env,
-                                 gpu::UploadBatch& upload)
+                                 gpu::UploadBatch& upload, MapPrecision precision)
 {
     if (const std::string problem = io::envmap_problem(env); !problem.empty())
         throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
-    map_format_ = filters_linearly(device, VK_FORMAT_R32G32B32A32_SFLOAT) ? VK_FORMAT_R32G32B32A32_SFLOAT
-                                                                          : VK_FORMAT_R16G16B16A16_SFLOAT;
-    mirror_ = parabolic_image(device, env.mirror, map_format_, upload);
-    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload);
+    map_format_ = choose_map_format(device, env, precision);
+    mirror_ = parabolic_image(device, env.mirror, map_format_, upload, map_bytes_);
+    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload, map_bytes_);
     device.set_name(VK_OBJECT_TYPE_IMAGE, mirror_.handle(), "hemi environment mirror map");
     device.set_name(VK_OBJECT_TYPE_IMAGE, diffuse_.handle(), "hemi environment diffuse map");
     for (const math::ParabolicImage& g : env.glossy)
     {
-        glossy_.push_back(parabolic_image(device, {&g, 1}, map_format_, upload));
+        glossy_.push_back(parabolic_image(device, {&g, 1}, map_format_, upload, map_bytes_));
         glossy_extents_.push_back(float(g.extent));
         device.set_name(VK_OBJECT_TYPE_IMAGE, glossy_.back().handle(),
                         "hemi environment glossy map " + std::to_string(glossy_.size() - 1));

@@ -33,14 +33,32 @@ struct EnvironmentMaterial
     glm::mat3 world_to_env{1.0f}; // rotation from world space into the environment's (z up: identity)
 };
 
+// How an environment's parabolic maps are stored on the GPU. Radiance is never negative, and the maps are
+// sampled with the GPU's trilinear filter, so each choice is a filterable format:
+// - Float: RGBA32F, 16 bytes a texel, exact (where the device filters RGBA32F linearly, else as Half);
+// - Half: RGBA16F, 8 bytes, within 2^-11 of each value (relative) up to 65504;
+// - SharedExponent: E5B9G9R9, 4 bytes, each channel within 2^-9 of the texel's largest channel, up to
+//   65408 (a hue whose channels differ by 100x keeps 1% of its smallest);
+// - Auto (the default): Half where every value of the asset fits it, else Float (an unclamped sun).
+// Measured on a mirror sphere (tests/render/factored_material_test.cpp, docs/factored.md): against Float,
+// Half changes a rendered pixel by at most 0.043% of its largest channel, SharedExponent by 0.19%.
+enum class MapPrecision
+{
+    Auto,
+    Float,
+    Half,
+    SharedExponent,
+};
+
 // One environment asset's maps on the GPU (every map and table of the asset: the mirror chain, each glossy
-// map, the diffuse map, the Fresnel tables) and the trilinear sampler hemi reads them with. Maps are RGBA32F
-// where the device filters it linearly, else RGBA16F (radiance clamped to 65504). Throws
-// std::invalid_argument for an inconsistent asset (io::envmap_problem).
+// map, the diffuse map, the Fresnel tables) and the trilinear sampler hemi reads them with, stored as
+// `precision` says. Throws std::invalid_argument for an inconsistent asset (io::envmap_problem) and, for
+// Half or SharedExponent asked for explicitly, for radiance beyond the format's range (naming the value).
 class EnvironmentMaps
 {
   public:
-    EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& environment, gpu::UploadBatch& upload);
+    EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& environment, gpu::UploadBatch& upload,
+                    MapPrecision precision = MapPrecision::Auto);
 
     const gpu::Image& mirror_map() const { return mirror_; }
     // Glossy map `i` (std::out_of_range past glossy_count()); the diffuse map when the asset has none.
@@ -48,7 +66,10 @@ class EnvironmentMaps
     const gpu::Image& diffuse_map() const { return diffuse_; }
     const gpu::Image& fresnel_table() const { return fresnel_; }
     VkSampler sampler() const { return sampler_; }
+    // RGBA32F, RGBA16F or E5B9G9R9 (MapPrecision).
     VkFormat map_format() const { return map_format_; }
+    // Bytes of every map's texels on the GPU (all levels), for an engine's budget.
+    VkDeviceSize map_bytes() const { return map_bytes_; }
     uint32_t glossy_count() const { return uint32_t(glossy_.size()); }
     uint32_t fresnel_count() const { return fresnel_count_; } // the asset's tables (indices of refraction)
     uint32_t fresnel_rows() const { return fresnel_rows_; }   // of the table image: 1 without any
@@ -64,6 +85,7 @@ class EnvironmentMaps
     std::vector<float> glossy_extents_;
     gpu::Sampler sampler_;
     VkFormat map_format_ = VK_FORMAT_UNDEFINED;
+    VkDeviceSize map_bytes_ = 0;
     float mirror_extent_ = 1.0f, diffuse_extent_ = 1.0f;
     uint32_t fresnel_count_ = 0, fresnel_rows_ = 1, fresnel_samples_ = 2;
 };
