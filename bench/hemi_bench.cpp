@@ -1108,6 +1108,8 @@ void scale_materials(benchmark::State& state)
 // barriers and buffer updates in a frame's command buffer, pipeline and descriptor-set binds of the sorted
 // draws (and of the same packets unsorted, for comparison), CPU recording time per draw; and the adopted
 // device's own allocator: blocks per live MiB while the objects live, blocks left once they are destroyed.
+// Then the same objects once as instanced draws (ProbeObject::enqueue_instances): draws, instances and
+// recording time per instance-primitive.
 void scale_frame(benchmark::State& state)
 {
     hemi::gpu::Device& base = bench_device();
@@ -1119,7 +1121,9 @@ void scale_frame(benchmark::State& state)
     const uint32_t objects = 1000, primitives = 10, frames = 2;
     double record_seconds = 0.0, allocator_blocks = 0.0, live_mib = 0.0;
     uint64_t barriers = 0, updates = 0, pipeline_binds = 0, set_binds = 0, draws = 0, unsorted_binds = 0;
-    uint64_t lighting_barriers = 0, lighting_updates = 0;
+    uint64_t lighting_barriers = 0, lighting_updates = 0, instanced_draw_calls = 0;
+    hemi::render::DrawStats instanced_stats;
+    double instanced_seconds = 0.0;
     {
         hemi::render::OffscreenTarget target(device, 64, 64);
         hemi::render::MaterialSystem system(device, target.desc());
@@ -1135,7 +1139,7 @@ void scale_frame(benchmark::State& state)
             parts.push_back({first * 3, (last - first) * 3, p % 2});
         }
         hemi::render::ProbeObject spheres(system, mesh, {}, materials, parts, objects, upload, frames);
-        hemi::render::FrameSet frame_set(system, frames);
+        hemi::render::FrameSet frame_set(system, frames, objects);
         upload.submit_and_wait();
         const hemi::gpu::MemoryAllocator::Stats memory = device.allocator().stats();
         allocator_blocks = double(memory.blocks);
@@ -1203,6 +1207,30 @@ void scale_frame(benchmark::State& state)
                                 unsorted_binds = hemi::render::record_packets(cmd, unsorted).pipeline_binds;
                                 target.end(cmd);
                             });
+        // The same objects as instanced draws (one asset, 1,000 instances): each primitive drawn once, every
+        // object's placement and probe in its instance record.
+        std::vector<hemi::shared::DrawPush> records(objects);
+        for (uint32_t i = 0; i < objects; ++i)
+            records[i] = spheres.instance_record(
+                i, glm::translate(glm::mat4(1.0f),
+                                  glm::vec3(float(i % 40) - 20.0f, float(i / 40) - 12.0f, 0.0f)));
+        frame_set.write_instances(0, records);
+        hemi::render::DrawQueue instanced;
+        spheres.enqueue_instances(instanced, frame_set.set(0), {0, objects});
+        instanced.sort();
+        calls.reset();
+        hemi::gpu::one_shot(
+            device,
+            [&](VkCommandBuffer cmd)
+            {
+                target.begin(cmd);
+                const auto r0 = std::chrono::steady_clock::now();
+                instanced_stats = instanced.record(cmd);
+                instanced_seconds =
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+                target.end(cmd);
+            });
+        instanced_draw_calls = calls.draws;
     }
     state.counters["objects"] = objects;
     state.counters["draws"] = double(draws);
@@ -1215,6 +1243,11 @@ void scale_frame(benchmark::State& state)
     state.counters["descriptor_set_binds"] = double(set_binds);
     state.counters["record_us_per_draw"] =
         record_seconds / double(state.iterations()) / double(objects * primitives) * 1e6;
+    state.counters["instanced_draws"] = double(instanced_draw_calls);
+    state.counters["instanced_instances"] = double(instanced_stats.instances);
+    state.counters["instanced_pipeline_binds"] = double(instanced_stats.pipeline_binds);
+    state.counters["instanced_record_us_per_instance"] =
+        instanced_seconds / double(objects * primitives) * 1e6;
     state.counters["allocator_blocks"] = allocator_blocks;
     state.counters["blocks_per_live_mib"] = allocator_blocks / std::max(live_mib, 1e-9);
     state.counters["blocks_after_destroy"] = double(device.allocator().stats().blocks);

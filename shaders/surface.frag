@@ -38,17 +38,12 @@ layout(set = HEMI_SET_MATERIAL,
 layout(set = HEMI_SET_SOURCE,
        binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
-// Every probe of every frame in flight (render::ProbeBuffer); this draw's from vec4 draw.coefficient_offset.
+// Every probe of every frame in flight (render::ProbeBuffer); this draw's from vec4 in_ids.x.
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std430) readonly buffer Probes
 {
     vec4 probes[];
 };
 #endif
-
-layout(push_constant) uniform Push
-{
-    DrawPush draw;
-};
 
 layout(location = 0) in vec4 in_packed[7];
 layout(location = 7) in vec2 in_uv0;
@@ -56,6 +51,8 @@ layout(location = 8) in vec2 in_uv1;
 layout(location = 9) in vec3 in_normal;
 layout(location = 10) in vec4 in_tangent;
 layout(location = 11) in vec3 in_world;
+layout(location = 12) flat in uvec2 in_ids; // coefficient offset, draw id (the draw's or its instance's)
+layout(location = 13) flat in vec4 in_lightmap_scale_offset;
 
 layout(location = 0) out vec4 out_color;
 #if HEMI_AUX
@@ -93,14 +90,14 @@ void main()
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
     hemi_lightmap_coefficients(coefficient_maps,
-                               in_uv1 * draw.lightmap_scale_offset.xy + draw.lightmap_scale_offset.zw, K, c);
+                               in_uv1 * in_lightmap_scale_offset.xy + in_lightmap_scale_offset.zw, K, c);
 #else
     HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
     {
         c[k] = vec3(0.0);
 #if HEMI_SOURCE == HEMI_SOURCE_UNIFORM
         if (k < K)
-            c[k] = probes[draw.coefficient_offset + uint(k)].rgb;
+            c[k] = probes[in_ids.x + uint(k)].rgb;
 #endif
     }
 #endif
@@ -144,6 +141,6 @@ void main()
     s.specular_strength = frame.options.w;
     out_color = vec4(hemi_shade(kTechnique, s), kAlpha == HEMI_ALPHA_BLEND ? alpha : 1.0);
 #if HEMI_AUX
-    out_aux = vec4(in_uv0, float(draw.draw_id), 1.0);
+    out_aux = vec4(in_uv0, float(in_ids.y), 1.0);
 #endif
 }

@@ -18,6 +18,8 @@ layout(location = 8) in vec2 in_uv1;
 layout(location = 9) in vec3 in_normal;
 layout(location = 10) in vec4 in_tangent;
 layout(location = 11) in vec3 in_world;
+layout(location = 12) flat in uvec2 in_ids;
+layout(location = 13) flat in vec4 in_lightmap_scale_offset;
 
 void main()
 {

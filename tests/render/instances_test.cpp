@@ -19,6 +19,7 @@
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/sh.h>
 #include <hemi/render/material/frame_set.h>
+#include <hemi/render/scene/draw_queue.h>
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/view/prt_view.h>
 
@@ -98,19 +99,25 @@ std::vector<float> floats(const std::vector<std::byte>& bytes)
 }
 
 // Records both instances' transfer and frame update, then `draw_pass` records the caller's pass around
-// `draw`; checks both peaks.
-void check_two_instances(
+// `draw` (two draws, or with `instanced` one instanced draw of both); checks both peaks. Returns the colour
+// and aux images.
+std::vector<float> check_two_instances(
     hemi::render::MaterialSystem& system,
     const std::function<void(VkCommandBuffer, const std::function<void(VkCommandBuffer)>&)>& pass,
-    const hemi::gpu::Image& color, const hemi::gpu::Image& aux)
+    const hemi::gpu::Image& color, const hemi::gpu::Image& aux, bool instanced = false)
 {
     auto& dev = hemi::test::device();
     const hemi::io::PrtAsset asset = sphere_asset();
     hemi::gpu::UploadBatch upload(dev);
     hemi::render::PrtModel model(system, asset, {"gs", false, 2}, upload);
-    hemi::render::FrameSet frame(system);
+    hemi::render::FrameSet frame(system, 1, 2);
     const std::vector<glm::vec3> light = directional_light();
     const auto place = placements();
+    const hemi::shared::DrawPush records[2] = {model.instance_record(0, place[0].model),
+                                               model.instance_record(1, place[1].model)};
+    frame.write_instances(0, records);
+    hemi::render::DrawQueue queue;
+    model.enqueue_instances(queue, frame.set(), {0, 2});
     hemi::render::PrtInstance instances[2];
     for (int i = 0; i < 2; ++i)
         instances[i] = {place[i].model, light, 0.0f};
@@ -127,8 +134,11 @@ void check_two_instances(
                             pass(cmd,
                                  [&](VkCommandBuffer c)
                                  {
-                                     for (uint32_t i = 0; i < 2; ++i)
-                                         model.draw(c, frame.set(), i, place[i].model);
+                                     if (instanced)
+                                         EXPECT_EQ(queue.record(c).draws, 1u);
+                                     else
+                                         for (uint32_t i = 0; i < 2; ++i)
+                                             model.draw(c, frame.set(), i, place[i].model);
                                  });
                         });
     const auto c = floats(hemi::gpu::read_image(dev, color, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL));
@@ -142,6 +152,9 @@ void check_two_instances(
         ::testing::Test::RecordProperty("peak_error_degrees_" + std::to_string(i), std::to_string(degrees));
     }
     EXPECT_EQ(system.type_count(), 1u) << "both instances draw with one material type";
+    std::vector<float> both = c;
+    both.insert(both.end(), a.begin(), a.end());
+    return both;
 }
 
 hemi::gpu::Image attachment(VkFormat format, VkImageUsageFlags usage)
@@ -170,6 +183,32 @@ TEST_F(Instances, TwoInstancesInTheCallersRenderPassAreEachLitInTheirFrame)
             vkCmdEndRenderPass(cmd);
         },
         engine.colors[0], engine.colors[1]);
+}
+
+// Both instances in one instanced draw (PrtModel::enqueue_instances over the frame set's instance records):
+// each instance takes its own placement and its own lit coefficients from its record, and the pixels equal
+// the two separate draws' exactly (colour and aux). A shader that drew every instance with the push's values
+// or record 0's puts both spheres in one place, lit alike.
+TEST_F(Instances, OneInstancedDrawEqualsTheSeparateDraws)
+{
+    auto& dev = hemi::test::device();
+    const hemi::test::EnginePass engine(W, H, {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
+    hemi::render::RenderTargetDesc target;
+    target.render_pass = engine.render_pass;
+    target.color_attachments = 2;
+    target.aux_output = true;
+    hemi::render::MaterialSystem system(dev, target);
+    auto pass = [&](VkCommandBuffer cmd, const std::function<void(VkCommandBuffer)>& draw)
+    {
+        const float clear[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        engine.begin(cmd, clear);
+        draw(cmd);
+        vkCmdEndRenderPass(cmd);
+    };
+    const std::vector<float> separate = check_two_instances(system, pass, engine.colors[0], engine.colors[1]);
+    const std::vector<float> instanced =
+        check_two_instances(system, pass, engine.colors[0], engine.colors[1], true);
+    EXPECT_TRUE(separate == instanced) << "the instanced draw's pixels differ from the separate draws'";
 }
 
 TEST_F(Instances, TwoInstancesWithDynamicRenderingAndReverseZAreEachLitInTheirFrame)

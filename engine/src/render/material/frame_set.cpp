@@ -26,7 +26,8 @@ void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, const
                         read_access);
 }
 
-FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight)
+FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight, uint32_t max_instances)
+    : max_instances_(max_instances)
 {
     const gpu::Device& device = system.device();
     if (frames_in_flight == 0)
@@ -36,15 +37,26 @@ FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight)
     uniforms_ = gpu::create_buffer(
         device, {stride_ * frames_in_flight, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
     device.set_name(VK_OBJECT_TYPE_BUFFER, uniforms_.handle(), "hemi frame uniforms");
+    // Instance records (one at least: the binding is always there, read only by instanced draws).
+    const VkDeviceSize storage_align =
+        std::max<VkDeviceSize>(1, device.limits().minStorageBufferOffsetAlignment);
+    const VkDeviceSize records = std::max<uint32_t>(1, max_instances) * sizeof(shared::DrawPush);
+    instance_stride_ = (records + storage_align - 1) / storage_align * storage_align;
+    instances_ = gpu::create_buffer(device, {instance_stride_ * frames_in_flight,
+                                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
+    device.set_name(VK_OBJECT_TYPE_BUFFER, instances_.handle(), "hemi frame instances");
     const auto bindings = MaterialSystem::frame_bindings();
     for (uint32_t slot = 0; slot < frames_in_flight; ++slot)
     {
         sets_.push_back(system.descriptors().allocate(system.frame_layout(), bindings));
-        gpu::DescriptorWrite write;
-        write.binding = HEMI_FRAME_BINDING_UNIFORMS;
-        write.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-        write.buffer = {uniforms_, slot * stride_, sizeof(shared::FrameUniforms)};
-        gpu::write_descriptors(device, sets_.back(), {&write, 1});
+        gpu::DescriptorWrite writes[2];
+        writes[0].binding = HEMI_FRAME_BINDING_UNIFORMS;
+        writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        writes[0].buffer = {uniforms_, slot * stride_, sizeof(shared::FrameUniforms)};
+        writes[1].binding = HEMI_FRAME_BINDING_INSTANCES;
+        writes[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[1].buffer = {instances_, slot * instance_stride_, records};
+        gpu::write_descriptors(device, sets_.back(), writes);
     }
 }
 
@@ -54,6 +66,20 @@ VkDeviceSize FrameSet::slot_offset(uint32_t slot) const
         throw std::invalid_argument("hemi: frame slot " + std::to_string(slot) + " of a frame set made for " +
                                     std::to_string(sets_.size()) + " frame(s) in flight");
     return slot * stride_;
+}
+
+void FrameSet::write_instances(uint32_t slot, std::span<const shared::DrawPush> records, uint32_t first)
+{
+    (void)slot_offset(slot);
+    if (uint64_t(first) + records.size() > max_instances_)
+        throw std::invalid_argument("hemi: instance records [" + std::to_string(first) + ", +" +
+                                    std::to_string(records.size()) + ") past a frame set made for " +
+                                    std::to_string(max_instances_) + " instances");
+    if (records.empty())
+        return;
+    std::memcpy(static_cast<std::byte*>(instances_.mapped()) + slot * instance_stride_ +
+                    first * sizeof(shared::DrawPush),
+                records.data(), records.size_bytes());
 }
 
 VkDescriptorSet FrameSet::set(uint32_t slot) const

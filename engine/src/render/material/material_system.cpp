@@ -75,7 +75,8 @@ const char* source_name(CoefficientSourceKind kind)
 std::vector<gpu::Binding> MaterialSystem::frame_bindings()
 {
     return {{HEMI_FRAME_BINDING_UNIFORMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
-             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT}};
+             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT},
+            {HEMI_FRAME_BINDING_INSTANCES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_VERTEX_BIT}};
 }
 
 std::vector<gpu::Binding> MaterialSystem::material_bindings()

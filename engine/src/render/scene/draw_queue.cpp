@@ -72,10 +72,20 @@ DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packet
             ++stats.mesh_binds;
             mesh = p.mesh;
         }
-        p.mesh->draw(cmd, p.first_index, p.index_count);
+        p.mesh->draw(cmd, p.first_index, p.index_count, p.instance_count, p.first_instance);
         ++stats.draws;
+        stats.instances += p.instance_count;
     }
     return stats;
+}
+
+void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count)
+{
+    if (count == 0)
+        throw std::invalid_argument("hemi: an instanced draw of 0 instances");
+    packet.push.instanced = 1;
+    packet.instance_count = count;
+    packet.first_instance = first;
 }
 
 void DrawQueue::sort()

@@ -58,13 +58,14 @@ void GpuMesh::bind(VkCommandBuffer cmd) const
     vkCmdBindIndexBuffer(cmd, indices_, 0, VK_INDEX_TYPE_UINT32);
 }
 
-void GpuMesh::draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_count) const
+void GpuMesh::draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_count, uint32_t instance_count,
+                   uint32_t first_instance) const
 {
     if (uint64_t(first_index) + index_count > index_count_)
         throw std::invalid_argument("hemi: draw of indices [" + std::to_string(first_index) + ", +" +
                                     std::to_string(index_count) + ") past the mesh's " +
                                     std::to_string(index_count_));
-    vkCmdDrawIndexed(cmd, index_count, 1, first_index, 0, 0);
+    vkCmdDrawIndexed(cmd, index_count, instance_count, first_index, 0, first_instance);
 }
 
 } // namespace hemi::render

@@ -163,6 +163,29 @@ void LightmapModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, const Light
     }
 }
 
+void LightmapModel::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+                                      InstanceRange instances, size_t pass, uint32_t layer, float depth) const
+{
+    DrawPacket p;
+    if (surfaces_->packet(p, frame, coefficients_.at(entry.variant)->set(), 0, glm::mat4(1.0f), entry.variant,
+                          pass, entry.primitive))
+    {
+        make_instanced(p, instances.first, instances.count);
+        p.key = draw_key(layer, *p.type, p.material, p.source, depth);
+        queue.add(p);
+    }
+}
+
+shared::DrawPush LightmapModel::instance_record(const glm::mat4& model,
+                                                const glm::vec4& lightmap_scale_offset, uint32_t draw_id)
+{
+    shared::DrawPush r{};
+    r.model = model;
+    r.draw_id = draw_id;
+    r.lightmap_scale_offset = lightmap_scale_offset;
+    return r;
+}
+
 void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
                          const glm::mat4& model, size_t pass) const
 {

@@ -53,4 +53,20 @@ void ProbeObject::enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t 
                       depth);
 }
 
+void ProbeObject::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
+                                    uint32_t layer, float depth) const
+{
+    if (instances.count == 0)
+        throw std::invalid_argument("hemi: an instanced draw of 0 instances");
+    surfaces_.enqueue(queue, frame_set, probes_.set(), 0, glm::mat4(1.0f), 0, 0, layer, depth, instances);
+}
+
+shared::DrawPush ProbeObject::instance_record(uint32_t instance, const glm::mat4& model, uint32_t frame) const
+{
+    shared::DrawPush r{};
+    r.model = model;
+    r.coefficient_offset = probes_.offset(frame, instance);
+    return r;
+}
+
 } // namespace hemi::render

@@ -145,4 +145,25 @@ void PrtModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instanc
                       pass, layer, depth);
 }
 
+void PrtModel::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, InstanceRange instances,
+                                 size_t pass, uint32_t layer, float depth) const
+{
+    if (instances.count == 0)
+        throw std::invalid_argument("hemi: an instanced draw of 0 instances");
+    surfaces_.enqueue(queue, frame, coefficient_set_->set(), 0, glm::mat4(1.0f), 0, pass, layer, depth,
+                      instances);
+}
+
+shared::DrawPush PrtModel::instance_record(uint32_t instance, const glm::mat4& model,
+                                           uint32_t frame_slot) const
+{
+    if (instance >= instances_)
+        throw std::invalid_argument("hemi: instance " + std::to_string(instance) + " of a model made for " +
+                                    std::to_string(instances_));
+    shared::DrawPush r{};
+    r.model = model;
+    r.coefficient_offset = uint32_t(source_->instance_offset(first_instance(frame_slot) + instance));
+    return r;
+}
+
 } // namespace hemi::render

@@ -88,12 +88,14 @@ void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
 
 void SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source,
                             uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
-                            uint32_t layer, float depth) const
+                            uint32_t layer, float depth, InstanceRange instances) const
 {
     DrawPacket p;
     for (size_t i = 0; i < draws_.size(); ++i)
         if (packet(p, frame, source, coefficient_offset, model, variant, pass, i))
         {
+            if (instances.count)
+                make_instanced(p, instances.first, instances.count);
             p.key = draw_key(layer, *p.type, p.material, p.source, depth);
             queue.add(p);
         }

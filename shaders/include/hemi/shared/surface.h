@@ -25,6 +25,7 @@ using uint = uint32_t;
 #define HEMI_SET_SOURCE 2
 
 #define HEMI_FRAME_BINDING_UNIFORMS 0
+#define HEMI_FRAME_BINDING_INSTANCES 1
 #define HEMI_MATERIAL_BINDING_UNIFORMS 0
 #define HEMI_MATERIAL_BINDING_BASE_COLOR 1
 #define HEMI_MATERIAL_BINDING_NORMAL 2
@@ -104,14 +105,19 @@ struct EnvironmentUniforms
     vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z: w unused)
 };
 
-// Per draw: the object's model matrix and where its coefficients start in the source's texel buffer.
+// Per draw: the object's model matrix and where its coefficients start in the source's texel buffer. The
+// same 96 bytes (std430) are an instance record of the frame's instance buffer (set 0, binding
+// HEMI_FRAME_BINDING_INSTANCES; render::FrameSet::write_instances): a draw whose push has `instanced` = 1
+// draws instanceCount instances, instance i with record firstInstance + i's model, coefficient_offset and
+// lightmap_scale_offset, and its draw_id where the record's is not 0 (else the push's).
 struct DrawPush
 {
     mat4 model; // object to world (normals through its inverse transpose: any scale, mirrors)
     uint
         coefficient_offset; // texels (vertex source) or vec4s (probe source) of this draw's first coefficient
     uint draw_id;           // written to the aux attachment's blue channel (0 = background): picking, tests
-    uint pad0, pad1;
+    uint instanced;         // push constants only: 1 = read each instance's values from the instance buffer
+    uint pad1;
     // Texel source: where this draw's lightmap lookup goes, TEXCOORD_1 * xy + zw, so that several objects
     // share one atlas, each in its own rectangle (default: (1, 1, 0, 0), the whole atlas).
 #ifdef __cplusplus

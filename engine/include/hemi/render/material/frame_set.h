@@ -9,6 +9,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <span>
 #include <vector>
 
 namespace hemi::render
@@ -37,7 +38,9 @@ struct FrameData
     float specular_strength = 0.0f;
 };
 
-// Per-frame data for `frames_in_flight` frames, each slot its own range of one buffer and its own set.
+// Per-frame data for `frames_in_flight` frames, each slot its own range of one buffer and its own set, and
+// room for `max_instances` instance records per frame (instanced draws, shared::DrawPush).
+//   write_instances(): the records of a slot's instanced draws, through the same mapped memory.
 //   write():         through persistently mapped memory (host-visible, device-local where the device has such
 //                    memory): no command, no barrier. Write slot `slot` only once the GPU has finished the
 //                    frame that last read it (the engine's per-frame fence); the queue submission that
@@ -48,16 +51,23 @@ struct FrameData
 class FrameSet
 {
   public:
-    explicit FrameSet(const MaterialSystem& system, uint32_t frames_in_flight = 1);
+    explicit FrameSet(const MaterialSystem& system, uint32_t frames_in_flight = 1,
+                      uint32_t max_instances = 0);
     void write(uint32_t slot, const FrameData& frame);
+    // Records [first, first + records.size()) of slot `slot`'s instance buffer, which instanced draws read
+    // (draw_queue.h: make_instanced; PrtModel::instance_record, LightmapModel::instance_record). Throws
+    // std::invalid_argument past max_instances. Write a slot only once the GPU is done with it, as write().
+    void write_instances(uint32_t slot, std::span<const shared::DrawPush> records, uint32_t first = 0);
+    uint32_t max_instances() const { return max_instances_; }
     void record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot = 0) const;
     VkDescriptorSet set(uint32_t slot = 0) const;
     uint32_t frames_in_flight() const { return uint32_t(sets_.size()); }
 
   private:
     VkDeviceSize slot_offset(uint32_t slot) const;
-    gpu::Buffer uniforms_;
-    VkDeviceSize stride_ = 0;
+    gpu::Buffer uniforms_, instances_;
+    VkDeviceSize stride_ = 0, instance_stride_ = 0;
+    uint32_t max_instances_ = 0;
     std::vector<gpu::DescriptorSet> sets_;
 };
 

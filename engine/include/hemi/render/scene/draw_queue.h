@@ -27,7 +27,20 @@ struct DrawPacket
     const GpuMesh* mesh = nullptr;
     uint32_t first_index = 0, index_count = 0;
     shared::DrawPush push{};
+    // Instanced: `instance_count` instances whose values are records [first_instance, first_instance +
+    // instance_count) of the frame set's instance buffer (push.instanced = 1; make_instanced()).
+    uint32_t instance_count = 1, first_instance = 0;
 };
+
+// Instances [first, first + count) of the frame set's instance records; count 0: not instanced.
+struct InstanceRange
+{
+    uint32_t first = 0, count = 0;
+};
+
+// Makes `packet` draw `count` instances with the values of the frame's instance records from `first` on
+// (FrameSet::write_instances): one draw for many instances of one asset.
+void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count);
 
 // `layer` < 256; `depth` in [0, 1] (clamped), e.g. the view depth of the draw's bounds' centre over the far
 // plane.
@@ -38,6 +51,7 @@ uint64_t draw_key(uint32_t layer, const MaterialType& type, VkDescriptorSet mate
 struct DrawStats
 {
     uint64_t draws = 0, pipeline_binds = 0, descriptor_set_binds = 0, mesh_binds = 0;
+    uint64_t instances = 0; // drawn by those draws (each instanced draw's count)
 };
 
 // Inside the caller's render pass: the packets in the order given, binding a pipeline, descriptor sets or a

@@ -28,7 +28,8 @@ class GpuMesh
 
     void bind(VkCommandBuffer cmd) const; // vertex and index buffers
     // Draws indices [first_index, first_index + index_count) (after bind()).
-    void draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_count) const;
+    void draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_count, uint32_t instance_count = 1,
+              uint32_t first_instance = 0) const;
     uint32_t vertex_count() const { return vertex_count_; }
     uint32_t index_count() const { return index_count_; }
 

@@ -85,6 +85,17 @@ class LightmapModel
                  size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f},
                  uint32_t layer = 0, float depth = 0.0f) const;
 
+    // Instanced: instances.count copies of the entry in one draw, copy i placed by the frame set's record
+    // instances.first + i (FrameSet::write_instances of instance_record()s): many instances of one asset.
+    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+                           InstanceRange instances, size_t pass = 0, uint32_t layer = 0,
+                           float depth = 0.0f) const;
+    // The record of one instance: its model matrix and lightmap rectangle (TEXCOORD_1 * xy + zw), and its
+    // draw id for the aux attachment (0: the primitive's).
+    static shared::DrawPush instance_record(const glm::mat4& model,
+                                            const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f},
+                                            uint32_t draw_id = 0);
+
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
     // index for draw(). Pass 0 is the system's default colour pass.
     size_t add_pass(const PassDesc& pass) { return surfaces_->add_pass(pass); }

@@ -48,6 +48,13 @@ class ProbeObject
     void enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
                  uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f) const;
 
+    // Instanced: instances.count copies in one draw per primitive, copy i with the frame set's record
+    // instances.first + i (FrameSet::write_instances of instance_record()s).
+    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
+                           uint32_t layer = 0, float depth = 0.0f) const;
+    // The record of instance `instance` under `model`, lit by its probe of slot `frame`.
+    shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model, uint32_t frame = 0) const;
+
     uint32_t instances() const { return probes_.probes(); }
     const ProbeBuffer& probes() const { return probes_; }
     const SceneSurfaces& surfaces() const { return surfaces_; }

@@ -95,6 +95,14 @@ class PrtModel
     // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
     void enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
                  size_t pass = 0, uint32_t frame_slot = 0, uint32_t layer = 0, float depth = 0.0f) const;
+    // Instanced: instances.count instances of the model in one draw per primitive, instance i with the
+    // frame set's record instances.first + i (FrameSet::write_instances of instance_record()s).
+    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, InstanceRange instances, size_t pass = 0,
+                           uint32_t layer = 0, float depth = 0.0f) const;
+    // The instance record of instance `instance` under `model`, lit by frame slot `frame_slot`'s
+    // coefficients: what an instanced draw reads where draw() would push.
+    shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model,
+                                     uint32_t frame_slot = 0) const;
     uint32_t frames_in_flight() const { return frames_; }
     uint32_t instances() const { return instances_; }
     // The coefficient buffer's range frame slot `frame` writes and draws read (bytes): what an engine's

@@ -65,9 +65,11 @@ class SceneSurfaces
 
     // Draw packets instead of draws (draw_queue.h): every primitive draw() would record, each keyed by
     // `layer`, its material type and sets, and `depth`; sorted and recorded with the rest of the frame's.
+    // With `instances` (count > 0): each packet draws those instances, whose records (FrameSet::
+    // write_instances) hold the model, coefficient offset and lightmap rectangle in place of these.
     void enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
                  const glm::mat4& model, size_t variant = 0, size_t pass = 0, uint32_t layer = 0,
-                 float depth = 0.0f) const;
+                 float depth = 0.0f, InstanceRange instances = {}) const;
     // The packet of one primitive; false for a primitive the pass does not draw (blended, in a depth pass).
     bool packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
                 const glm::mat4& model, size_t variant, size_t pass, size_t primitive,
