@@ -37,6 +37,7 @@ layout(set = HEMI_SET_MATERIAL,
 #if HEMI_SOURCE == HEMI_SOURCE_TEXEL
 layout(set = HEMI_SET_SOURCE,
        binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
+layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_PAGE_TABLE) uniform usampler2D page_table;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
 // Every probe of every frame in flight (render::ProbeBuffer); this draw's from vec4 in_ids.x.
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std430) readonly buffer Probes
@@ -89,7 +90,7 @@ void main()
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
-    hemi_lightmap_coefficients(coefficient_maps,
+    hemi_lightmap_coefficients(coefficient_maps, page_table,
                                in_uv1 * in_lightmap_scale_offset.xy + in_lightmap_scale_offset.zw, K, c);
 #else
     HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)

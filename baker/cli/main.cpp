@@ -465,7 +465,7 @@ int run_lightmap(LightmapCli& c)
     bake::LightmapFileOptions& o = c.options;
     o.outputs = hemi::tool::parse_names(c.bases, "--bases");
     if (!c.size.empty())
-        std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size");
+        std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size", hemi::io::kMaxAtlasSide);
     if (!c.probes.empty())
     {
         const std::vector<uint64_t> n = hemi::tool::parse_counts(

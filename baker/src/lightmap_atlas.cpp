@@ -129,9 +129,9 @@ std::string uv_text(const glm::vec2& uv)
 // The mesh rasterize_lightmap needs (throws std::invalid_argument naming what is wrong).
 void check_mesh(const io::Mesh& mesh, uint32_t width, uint32_t height)
 {
-    if (width == 0 || height == 0 || width > 16384 || height > 16384)
+    if (width == 0 || height == 0 || width > io::kMaxAtlasSide || height > io::kMaxAtlasSide)
         throw std::invalid_argument("lightmap size " + std::to_string(width) + "x" + std::to_string(height) +
-                                    " is not in [1, 16384] per side");
+                                    " is not in [1, " + std::to_string(io::kMaxAtlasSide) + "] per side");
     const size_t n = mesh.positions.size();
     if (n == 0 || mesh.indices.empty() || mesh.indices.size() % 3 != 0)
         throw std::invalid_argument("the mesh has no triangles");

@@ -200,6 +200,12 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             for (const std::string& name : o.outputs)
                 io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
     }
+    // An EXR holds the whole atlas as one image: read_exr's and most tools' limit.
+    if (!o.exr_dir.empty() && (o.width > 16384 || o.height > 16384))
+        throw std::invalid_argument("--exr-dir writes each output as one image of the whole atlas, at most "
+                                    "16384 a side; the atlas is " +
+                                    std::to_string(o.width) + "x" + std::to_string(o.height) +
+                                    " (the asset stores it in pages)");
 
     io::GltfScene scene = io::read_gltf(scene_path);
     LightmapBakeSummary summary;
@@ -345,16 +351,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                          std::to_string(atlas.texels.size()) + " covered texels");
     for (const std::string& warning : report.warnings)
         summary.warnings.push_back(warning);
-    // The bake and the asset follow the covered texels; a renderer's coefficient images still cover the
-    // whole atlas: say so when most of it is empty.
+    // The bake, the asset and hemi's runtime follow the covered texels; images for other renderers (hemi-bake
+    // export's) still cover the whole atlas: say so when most of it is empty.
     if (uint64_t(atlas.texels.size()) * 20 < uint64_t(w) * h && uint64_t(w) * h > (uint64_t(1) << 20))
-        summary.warnings.push_back(
-            std::to_string(atlas.texels.size()) + " of the " + atlas_text + "'s " +
-            std::to_string(uint64_t(w) * h) +
-            " texels are covered (under 5%): the bake and the asset store only the "
-            "8x8 blocks that hold texels, but a renderer's coefficient images cover "
-            "the whole atlas; a smaller --size or a larger --texel-size gives the same "
-            "density for less");
+        summary.warnings.push_back(std::to_string(atlas.texels.size()) + " of the " + atlas_text + "'s " +
+                                   std::to_string(uint64_t(w) * h) +
+                                   " texels are covered (under 5%): the bake and the asset store only the "
+                                   "8x8 blocks that hold texels and hemi's runtime only the 64x64 pages, but "
+                                   "images for other renderers (hemi-bake export) cover the whole atlas; a "
+                                   "smaller --size or a larger --texel-size gives the same density for less");
 
     o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already

@@ -412,8 +412,9 @@ struct Renderer::Impl
         const VkDescriptorType image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
         const std::vector<gpu::Binding> frame_bindings = {{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs},
                                                           {1, image, fs}};
-        const std::vector<gpu::Binding> level_bindings = {
-            {0, image, fs}, {1, image, fs}, {2, image, fs}, {3, image, fs}, {5, image, fs}};
+        const std::vector<gpu::Binding> level_bindings = {{0, image, fs}, {1, image, fs}, {2, image, fs},
+                                                          {3, image, fs}, {5, image, fs}, {8, image, fs},
+                                                          {9, image, fs}, {10, image, fs}};
         const std::vector<gpu::Binding> prt_bindings = {
             {0, image, fs}, {1, image, fs}, {4, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs}};
         const std::vector<gpu::Binding> env_bindings = {{6, image, fs}, {7, image, fs}};
@@ -424,7 +425,7 @@ struct Renderer::Impl
         env_layout = gpu::create_set_layout(device, env_bindings);
         post_layout = gpu::create_set_layout(device, post_bindings);
         std::vector<gpu::Binding> all = {{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs, 4},
-                                         {0, image, fs, 64},
+                                         {0, image, fs, 160},
                                          {0, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs, 4}};
         pool = gpu::create_descriptor_pool(device, all, 32);
 
@@ -451,9 +452,12 @@ struct Renderer::Impl
                             textures.image(m.base_color.image, true).view()),
                 image_write(1, textures.sampler(m.normal.sampler),
                             textures.image(m.normal.image, false).view()),
-                image_write(2, h6.sampler(), h6.maps().view()),
-                image_write(3, h4.sampler(), h4.maps().view()),
-                image_write(5, rnm.sampler(), rnm.maps().view())};
+                image_write(2, h6.sampler(), h6.pages().view()),
+                image_write(3, h4.sampler(), h4.pages().view()),
+                image_write(5, rnm.sampler(), rnm.pages().view()),
+                image_write(8, h6.table_sampler(), h6.page_table().view()),
+                image_write(9, h4.table_sampler(), h4.page_table().view()),
+                image_write(10, rnm.table_sampler(), rnm.page_table().view())};
             gpu::write_descriptors(device, set, writes);
             level_sets.push_back(set);
         }

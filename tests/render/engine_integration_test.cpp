@@ -354,7 +354,8 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
     switch (c.source)
     {
     case Source::Texel:
-        image_write(7, texel->sampler(), texel->maps());
+        image_write(7, texel->sampler(), texel->pages());
+        image_write(13, texel->table_sampler(), texel->page_table());
         fragment_shader = "engine_texel.frag";
         break;
     case Source::Vertex:

@@ -516,7 +516,7 @@ TEST_F(PrtMaterial, PackedTexelCoefficientMapsMatchCpuEvaluationForEveryBasis)
         hemi::test::SurfaceObject object(system, hemi::test::quad(), tilted, material,
                                          hemi::math::basis("sh9"), nullptr);
         hemi::render::TexelCoefficients coefficients(system, mw, mh, K, maps, object.upload);
-        EXPECT_EQ(coefficients.maps().layers(), (3 * K + 3) / 4);
+        EXPECT_EQ(coefficients.pages().layers(), (3 * K + 3) / 4);
         hemi::render::MaterialKey key;
         key.source = hemi::render::CoefficientSourceKind::Texel;
         key.basis = basis->id;

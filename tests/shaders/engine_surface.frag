@@ -25,6 +25,7 @@ layout(set = 1, binding = 3) uniform sampler2D albedo_map;
 layout(set = 1, binding = 5) uniform sampler2D normal_map;
 #if ENGINE_SOURCE == 1
 layout(set = 1, binding = 7) uniform sampler2DArray lightmap;
+layout(set = 1, binding = 13) uniform usampler2D lightmap_pages;
 #elif ENGINE_SOURCE == 2
 layout(set = 1, binding = 7, std140) uniform EngineProbe
 {
@@ -69,7 +70,7 @@ void main()
 #if ENGINE_SOURCE == 0
     hemi_unpack_coefficients(in_coefficients, K, c);
 #else
-    hemi_lightmap_coefficients(lightmap, in_uv1, K, c);
+    hemi_lightmap_coefficients(lightmap, lightmap_pages, in_uv1, K, c);
 #endif
     const vec3 lt = hemi_to_tangent(frame, l);
     if (kTechnique == 0)

@@ -2244,6 +2244,64 @@ TEST(HostileCli, LightmapMemoryAndAssetFollowTheCoveredTexels)
     }
 }
 
+// An atlas larger than the device's largest image (16384 on lavapipe): a floor whose lightmap UVs take a
+// 100 x 100-texel corner of a 20000 x 20000 atlas (across a page border) bakes into an asset of a few blocks,
+// and hemi-render draws it from the pages that hold texels (render::TexelCoefficients): under uniform
+// radiance 1 every drawn pixel of the white floor's plain lightmap is 1, as in the furnace above. (A runtime
+// that made one image of the whole atlas is refused by the device; a page table pointing at the wrong slot
+// draws black or the border.) --exr-dir and hemi-bake export, which write the whole atlas as one image, are
+// refused.
+TEST(HostileCli, AtlasesBeyondTheLargestImageBakeIntoPagesThatRenderDraws)
+{
+    const fs::path scene = edited_floor("far_corner_floor.gltf",
+                                        [](hemi::io::GltfScene& s)
+                                        {
+                                            for (glm::vec2& uv : s.mesh.uvs1)
+                                                uv = glm::vec2(0.9f, 0.6f) + uv / 200.0f;
+                                        });
+    const fs::path asset = dir() / "far_corner.hemi", json = dir() / "far_corner.json";
+    const Result b =
+        run(HEMI_BAKE_EXE, "lightmap " + q(scene) + " --size 20000 --rays 64 --bases plain,h4 --json " +
+                               q(json) + " -o " + q(asset));
+    ASSERT_EQ(b.status, 0) << b.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    // 100 x 100 texels, and a row and a column more where the chart's edges fall on texel borders in float.
+    EXPECT_GE(j["covered_texels"].get<uint64_t>(), 100u * 100u);
+    EXPECT_LE(j["covered_texels"].get<uint64_t>(), 101u * 101u);
+    EXPECT_LT(fs::file_size(asset), uint64_t(4) << 20);
+    EXPECT_EQ(hemi::io::read_lightmap_asset(asset).width, 20000u);
+    for (const char* technique : {"plain", "h4"})
+    {
+        const fs::path out = dir() / (std::string("far_corner_") + technique + ".exr");
+        const Result r = render(q(asset) + " --technique " + technique +
+                                " --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(out));
+        ASSERT_EQ(r.status, 0) << technique << ": " << r.err;
+        const hemi::io::ImageRgba img = hemi::io::read_exr(out);
+        size_t covered = 0;
+        for (uint32_t y = 0; y < img.height; ++y)
+            for (uint32_t x = 0; x < img.width; ++x)
+            {
+                const float* p = img.at(x, y);
+                if (p[3] < 1.0f)
+                    continue;
+                ++covered;
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(p[c], 1.0f, 0.01f) << technique << " pixel (" << x << ", " << y << ")";
+            }
+        EXPECT_GT(covered, 400u) << technique;
+    }
+    const Result exr = run(HEMI_BAKE_EXE, "lightmap " + q(scene) + " --size 20000 --rays 4 --exr-dir " +
+                                              q(dir() / "far_exrs") + " -o " + q(dir() / "far_exr.hemi"));
+    EXPECT_EQ(exr.status, 1);
+    EXPECT_NE(exr.err.find("at most 16384 a side"), std::string::npos) << exr.err;
+    EXPECT_FALSE(fs::exists(dir() / "far_exr.hemi"));
+    // hemi-bake export writes the plain lightmap as one image of the whole atlas too.
+    const Result exported = run(HEMI_BAKE_EXE, "export " + q(asset) + " -o " + q(dir() / "far_corner.glb"));
+    EXPECT_EQ(exported.status, 1);
+    EXPECT_NE(exported.err.find("at most 16384 a side"), std::string::npos) << exported.err;
+    EXPECT_FALSE(fs::exists(dir() / "far_corner.glb"));
+}
+
 // A checkpoint write killed before its rename leaves "<out>.partial.tmp<pid>.<n>"; a later bake that finishes
 // removes it with the checkpoint, for every bake that checkpoints.
 TEST(HostileCli, FinishedBakesLeaveNoCheckpointTemporaries)

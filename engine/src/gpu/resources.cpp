@@ -93,6 +93,7 @@ uint32_t format_size(VkFormat format)
     case VK_FORMAT_R8G8B8A8_SRGB:
     case VK_FORMAT_B8G8R8A8_UNORM:
     case VK_FORMAT_R32_SFLOAT:
+    case VK_FORMAT_R32_UINT:
     case VK_FORMAT_D32_SFLOAT:
     case VK_FORMAT_E5B9G9R9_UFLOAT_PACK32:
         return 4;

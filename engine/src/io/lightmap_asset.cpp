@@ -87,9 +87,9 @@ std::string problem(const LightmapAsset& a)
         return "the mesh has no lightmap UVs (mesh.uvs1)";
     if (std::string p = surface_problem(a.mesh, a.materials, a.images, a.primitives); !p.empty())
         return p;
-    if (a.width == 0 || a.height == 0 || a.width > 16384 || a.height > 16384)
-        return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) +
-               " is not in [1, 16384]";
+    if (a.width == 0 || a.height == 0 || a.width > kMaxAtlasSide || a.height > kMaxAtlasSide)
+        return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) + " is not in [1, " +
+               std::to_string(kMaxAtlasSide) + "]";
     if (a.outputs.empty())
         return "no outputs";
     if (std::string p = probes_problem(a.probes); !p.empty())
@@ -254,9 +254,9 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
         throw fail("lightmap layout version " + std::to_string(info.layout) +
                    " is not supported (this hemi reads 1 and " + std::to_string(kLightmapLayoutVersion) +
                    ")");
-    if (info.width == 0 || info.height == 0 || info.width > 16384 || info.height > 16384)
+    if (info.width == 0 || info.height == 0 || info.width > kMaxAtlasSide || info.height > kMaxAtlasSide)
         throw fail("lightmap.info: atlas size " + std::to_string(info.width) + "x" +
-                   std::to_string(info.height) + " is not in [1, 16384]");
+                   std::to_string(info.height) + " is not in [1, " + std::to_string(kMaxAtlasSide) + "]");
     LightmapAsset a;
     a.width = info.width;
     a.height = info.height;

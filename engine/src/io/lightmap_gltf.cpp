@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace hemi::io
 {
@@ -42,6 +43,12 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
                                              "made of (bake it with --bases including plain)");
 
     const uint32_t w = asset.width, h = asset.height;
+    // A glTF image is the whole atlas: viewers and engines load nothing larger than 16384 a side.
+    if (w > 16384 || h > 16384)
+        throw std::invalid_argument(cannot + "its lightmap atlas is " + std::to_string(w) + "x" +
+                                    std::to_string(h) +
+                                    ", and a glTF image of the whole atlas may be at most 16384 a side "
+                                    "(hemi draws it from pages; rebake with a smaller --size to export)");
     LightmapGltfSummary summary;
     float range = options.rgbm_range;
     if (range == 0.0f)

@@ -18,9 +18,13 @@ layout(set = 1, binding = 0) uniform sampler2D base_color; // sRGB
 layout(set = 1, binding = 1) uniform sampler2D normal_map; // or an SSBump map (technique 1)
 #endif
 #if ENGINE_SOURCE == 1
+// hemi's paged lightmaps: each output's pages and page table (render::TexelCoefficients).
 layout(set = 1, binding = 2) uniform sampler2DArray h6_maps;
 layout(set = 1, binding = 3) uniform sampler2DArray h4_maps;
 layout(set = 1, binding = 5) uniform sampler2DArray rnm_maps;
+layout(set = 1, binding = 8) uniform usampler2D h6_table;
+layout(set = 1, binding = 9) uniform usampler2D h4_table;
+layout(set = 1, binding = 10) uniform usampler2D rnm_table;
 #elif ENGINE_SOURCE == 4
 layout(set = 1, binding = 6) uniform sampler2DArray glossy_map;
 layout(set = 1, binding = 7) uniform sampler2DArray diffuse_map;
@@ -84,7 +88,7 @@ void main()
     if (kTechnique == 1)
     {
         // SSBump (Green 2007, Listing 2): the map's three weights over Valve's basis, light included.
-        hemi_lightmap_coefficients(rnm_maps, in_uv1, 3, c);
+        hemi_lightmap_coefficients(rnm_maps, rnm_table, in_uv1, 3, c);
         const vec3 e = hemi_ssbump_irradiance(bump, c[0], c[1], c[2]) + light * hemi_ssbump_light(bump, lt);
         color = albedo * e / kPi;
     }
@@ -97,12 +101,12 @@ void main()
         vec3 e;
         if (near)
         {
-            hemi_lightmap_coefficients(h6_maps, in_uv1, 6, c);
+            hemi_lightmap_coefficients(h6_maps, h6_table, in_uv1, 6, c);
             e = hemi_basis_irradiance(HEMI_BASIS_H6, 6, c, nt, sep4);
         }
         else
         {
-            hemi_lightmap_coefficients(h4_maps, in_uv1, 4, c);
+            hemi_lightmap_coefficients(h4_maps, h4_table, in_uv1, 4, c);
             e = hemi_basis_irradiance(HEMI_BASIS_H4, 4, c, nt, sep4);
         }
         color = albedo * (e + light * max(dot(nt, lt), 0.0)) / kPi;

@@ -21,6 +21,10 @@
 namespace hemi::io
 {
 
+// The largest side of a lightmap atlas hemi bakes, stores and draws: beyond the device's largest image
+// (16384 on most), since the runtime stores only the pages that hold texels (render::TexelCoefficients).
+inline constexpr uint32_t kMaxAtlasSide = 65536;
+
 class BlockGrid
 {
   public:

@@ -1,9 +1,11 @@
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
+#include <hemi/shared/bases.h>
 
 #include <glm/gtc/packing.hpp>
 #include <glm/vec4.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -13,7 +15,8 @@ namespace hemi::render
 {
 namespace
 {
-// Set 2 of `kind` with its one binding written, from the system's descriptor allocator.
+// Set 2 of `kind` with its bindings written (`writes`, the first to HEMI_SOURCE_BINDING_COEFFICIENTS
+// unless it names another), from the system's descriptor allocator.
 gpu::DescriptorSet make_source_set(const MaterialSystem& system, CoefficientSourceKind kind,
                                    gpu::DescriptorWrite write)
 {
@@ -22,6 +25,23 @@ gpu::DescriptorSet make_source_set(const MaterialSystem& system, CoefficientSour
     write.binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
     gpu::write_descriptors(system.device(), set, {&write, 1});
     return set;
+}
+
+void check_k(uint32_t k)
+{
+    if (k == 0 || k > HEMI_BASIS_MAX_SIZE)
+        throw std::invalid_argument("hemi: coefficient maps need 1 to " +
+                                    std::to_string(HEMI_BASIS_MAX_SIZE) + " layers, got " +
+                                    std::to_string(k));
+}
+
+void check_values(std::span<const float> values, bool full_precision)
+{
+    for (size_t i = 0; i < values.size(); ++i)
+        if (!std::isfinite(values[i]) || (!full_precision && std::abs(values[i]) > 65504.0f))
+            throw std::invalid_argument(
+                "hemi: coefficient map value " + std::to_string(i) +
+                (std::isfinite(values[i]) ? " exceeds the half-float range" : " is not finite"));
 }
 } // namespace
 
@@ -113,58 +133,148 @@ void ProbeBuffer::record_update(VkCommandBuffer cmd, uint32_t frame, uint32_t pr
 TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height,
                                      uint32_t k, std::span<const float> rgb, gpu::UploadBatch& upload,
                                      bool full_precision)
-    : k_(k)
+    : TexelCoefficients(
+          system,
+          [&]
+          {
+              check_k(k);
+              const size_t texels = size_t(width) * height * k;
+              if (width == 0 || height == 0 || rgb.size() != texels * 3)
+                  throw std::invalid_argument("hemi: coefficient maps of " + std::to_string(width) + "x" +
+                                              std::to_string(height) + "x" + std::to_string(k) + " need " +
+                                              std::to_string(texels * 3) + " floats, got " +
+                                              std::to_string(rgb.size()));
+              check_values(rgb, full_precision);
+              return io::BlockMaps::from_dense(width, height, k, rgb);
+          }(),
+          upload, full_precision)
+{
+}
+
+TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::BlockMaps& maps,
+                                     gpu::UploadBatch& upload, bool full_precision)
+    : k_(maps.k)
 {
     const gpu::Device& device = system.device();
-    if (k == 0 || k > HEMI_BASIS_MAX_SIZE)
-        throw std::invalid_argument("hemi: coefficient maps need 1 to " +
-                                    std::to_string(HEMI_BASIS_MAX_SIZE) + " layers, got " +
-                                    std::to_string(k));
-    const size_t texels = size_t(width) * height * k;
-    if (width == 0 || height == 0 || rgb.size() != texels * 3)
+    check_k(maps.k);
+    const io::BlockGrid& grid = maps.grid;
+    const uint32_t width = grid.width(), height = grid.height(), k = maps.k;
+    if (width == 0 || height == 0 || maps.values.size() != grid.slots() * k * 3)
         throw std::invalid_argument("hemi: coefficient maps of " + std::to_string(width) + "x" +
-                                    std::to_string(height) + "x" + std::to_string(k) + " need " +
-                                    std::to_string(texels * 3) + " floats, got " +
-                                    std::to_string(rgb.size()));
-    for (size_t i = 0; i < rgb.size(); ++i)
-        if (!std::isfinite(rgb[i]) || (!full_precision && std::abs(rgb[i]) > 65504.0f))
-            throw std::invalid_argument(
-                "hemi: coefficient map value " + std::to_string(i) +
-                (std::isfinite(rgb[i]) ? " exceeds the half-float range" : " is not finite"));
-    // Packed (hemi_lightmap_coefficients): float f = 3 k + c of texel t is channel f % 4 of layer f / 4.
-    const uint32_t layers = packed_layers(k);
-    const size_t plane = size_t(width) * height;
-    const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
-    maps_ = gpu::create_image(device, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
-    auto pack = [&](auto convert, auto& rgba)
+                                    std::to_string(height) + " hold " + std::to_string(maps.values.size()) +
+                                    " values for " + std::to_string(grid.slots()) + " texels of " +
+                                    std::to_string(k) + " coefficients");
+    check_values(maps.values, full_precision);
+
+    // The pages whose slot (the page and its border) holds a texel of a kept block, numbered row after row:
+    // the page table's entries (slot + 1). A page without a kept block of its own but beside one is stored
+    // too: a lookup within half a texel of its edge reads the neighbour's texels.
+    constexpr uint32_t P = HEMI_LIGHTMAP_PAGE, S = HEMI_LIGHTMAP_SLOT, E = io::BlockGrid::kSize;
+    const uint32_t pages_x = (width + P - 1) / P, pages_y = (height + P - 1) / P;
+    const uint32_t table_width = std::max(2u, pages_x);
+    std::vector<uint32_t> table(size_t(table_width) * (pages_y + 1), 0);
+    // Pages whose range widened by a texel on each side meets texels [t0, t0 + E).
+    auto pages_meeting = [&](uint32_t t0, uint32_t count)
+    { return std::pair<uint32_t, uint32_t>(t0 == 0 ? 0 : (t0 - 1) / P, std::min((t0 + E) / P, count - 1)); };
+    for (uint32_t b : grid.blocks())
+    {
+        const auto [x0, x1] = pages_meeting((b % grid.blocks_x()) * E, pages_x);
+        const auto [y0, y1] = pages_meeting((b / grid.blocks_x()) * E, pages_y);
+        for (uint32_t py = y0; py <= y1; ++py)
+            for (uint32_t px = x0; px <= x1; ++px)
+                table[size_t(py) * table_width + px] = 1;
+    }
+    std::vector<uint32_t> stored; // page index (y * table_width + x) of each slot
+    for (uint32_t p = 0; p < table_width * pages_y; ++p)
+        if (table[p])
+        {
+            stored.push_back(p);
+            table[p] = uint32_t(stored.size());
+        }
+    table[size_t(pages_y) * table_width] = width;
+    table[size_t(pages_y) * table_width + 1] = height;
+    stored_pages_ = uint32_t(stored.size());
+
+    // Slots row after row in one image no larger than the device's largest.
+    const uint32_t largest = device.limits().maxImageDimension2D;
+    const uint32_t most_per_row = std::max(1u, largest / S);
+    const uint32_t per_row = std::clamp<uint32_t>(stored_pages_, 1, most_per_row);
+    const uint32_t rows = std::max(1u, (stored_pages_ + per_row - 1) / per_row);
+    if (uint64_t(rows) * S > largest)
+        throw std::invalid_argument(
+            "hemi: a lightmap of " + std::to_string(width) + "x" + std::to_string(height) + " stores " +
+            std::to_string(stored_pages_) + " pages of " + std::to_string(P) + "^2 texels; one image of " +
+            std::to_string(largest) + "^2 holds " + std::to_string(uint64_t(most_per_row) * most_per_row));
+    if (table_width > largest || pages_y + 1 > largest)
+        throw std::invalid_argument("hemi: a lightmap of " + std::to_string(width) + "x" +
+                                    std::to_string(height) + " needs a page table larger than the device's " +
+                                    std::to_string(largest) + "^2 images");
+    const uint32_t pw = per_row * S, ph = rows * S, layers = packed_layers(k);
+    const size_t plane = size_t(pw) * ph;
+
+    // Packed (hemi_lightmap_coefficients): float f = 3 k + c of a texel is channel f % 4 of layer f / 4.
+    auto fill = [&](auto convert, auto& rgba)
     {
         rgba.assign(plane * layers * 4, convert(0.0f));
-        for (uint32_t c = 0; c < k; ++c)
-            for (size_t t = 0; t < plane; ++t)
-                for (uint32_t ch = 0; ch < 3; ++ch)
+        for (size_t s = 0; s < stored.size(); ++s)
+        {
+            const uint32_t px = uint32_t(stored[s] % table_width), py = uint32_t(stored[s] / table_width);
+            const size_t ox = (s % per_row) * S, oy = (s / per_row) * S;
+            for (uint32_t gy = 0; gy < S; ++gy)
+            {
+                const int64_t y = std::clamp<int64_t>(int64_t(py) * P + gy - 1, 0, height - 1);
+                for (uint32_t gx = 0; gx < S; ++gx)
                 {
-                    const uint32_t f = 3 * c + ch;
-                    rgba[((f / 4) * plane + t) * 4 + f % 4] = convert(rgb[(c * plane + t) * 3 + ch]);
+                    const int64_t x = std::clamp<int64_t>(int64_t(px) * P + gx - 1, 0, width - 1);
+                    const int64_t slot = grid.slot(x, y);
+                    if (slot < 0)
+                        continue;
+                    const size_t first =
+                        (size_t(slot) / io::BlockGrid::kTexels * k) * io::BlockGrid::kTexels +
+                        size_t(slot) % io::BlockGrid::kTexels;
+                    const size_t at = (oy + gy) * pw + ox + gx;
+                    for (uint32_t c = 0; c < k; ++c)
+                        for (uint32_t ch = 0; ch < 3; ++ch)
+                        {
+                            const uint32_t f = 3 * c + ch;
+                            rgba[((f / 4) * plane + at) * 4 + f % 4] =
+                                convert(maps.values[(first + size_t(c) * io::BlockGrid::kTexels) * 3 + ch]);
+                        }
                 }
-        upload.image(maps_, rgba.data(), rgba.size() * sizeof(rgba[0]));
+            }
+        }
     };
+    const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
+    pages_ = gpu::create_image(device, {pw, ph, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
     if (full_precision)
     {
         std::vector<float> rgba;
-        pack([](float v) { return v; }, rgba);
+        fill([](float v) { return v; }, rgba);
+        upload.image(pages_, rgba.data(), rgba.size() * sizeof(rgba[0]));
     }
     else
     {
         std::vector<uint16_t> rgba;
-        pack([](float v) { return uint16_t(glm::packHalf1x16(v)); }, rgba);
+        fill([](float v) { return uint16_t(glm::packHalf1x16(v)); }, rgba);
+        upload.image(pages_, rgba.data(), rgba.size() * sizeof(rgba[0]));
     }
-    // Bilinear, clamped: a lightmap's charts are padded, and nothing wraps across the atlas's border.
+    page_table_ = gpu::create_image(device, {table_width, pages_y + 1, VK_FORMAT_R32_UINT});
+    upload.image(page_table_, table.data(), table.size() * sizeof(uint32_t));
+    // Bilinear, clamped: a lightmap's charts are padded, and every slot has its border.
     sampler_ = gpu::create_sampler(device, {VK_FILTER_LINEAR, VK_SAMPLER_MIPMAP_MODE_NEAREST,
                                             VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0f});
-    gpu::DescriptorWrite write;
-    write.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    write.image = {sampler_, maps_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    set_ = make_source_set(system, CoefficientSourceKind::Texel, write);
+    table_sampler_ = gpu::create_sampler(device, {VK_FILTER_NEAREST, VK_SAMPLER_MIPMAP_MODE_NEAREST,
+                                                  VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0f});
+    set_ = system.descriptors().allocate(system.source_layout(CoefficientSourceKind::Texel),
+                                         MaterialSystem::source_bindings(CoefficientSourceKind::Texel));
+    gpu::DescriptorWrite writes[2];
+    writes[0].binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
+    writes[0].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    writes[0].image = {sampler_, pages_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    writes[1].binding = HEMI_SOURCE_BINDING_PAGE_TABLE;
+    writes[1].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    writes[1].image = {table_sampler_, page_table_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    gpu::write_descriptors(device, set_, writes);
 }
 
 } // namespace hemi::render

@@ -100,6 +100,8 @@ std::vector<gpu::Binding> MaterialSystem::source_bindings(CoefficientSourceKind 
                  VK_SHADER_STAGE_VERTEX_BIT}};
     case CoefficientSourceKind::Texel:
         return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                 VK_SHADER_STAGE_FRAGMENT_BIT},
+                {HEMI_SOURCE_BINDING_PAGE_TABLE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                  VK_SHADER_STAGE_FRAGMENT_BIT}};
     case CoefficientSourceKind::Uniform:
         return {{HEMI_SOURCE_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,

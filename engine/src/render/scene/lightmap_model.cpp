@@ -89,10 +89,11 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
             variants.push_back(
                 {baseline ? baseline_technique : Technique::Irradiance, lightmap_basis(source).id});
         names_.push_back(name);
-        coefficients_.push_back(std::make_unique<TexelCoefficients>(system, asset.width, asset.height,
-                                                                    output.k, output.maps.dense(), upload));
-        system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->maps().handle(),
+        coefficients_.push_back(std::make_unique<TexelCoefficients>(system, output.maps, upload));
+        system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->pages().handle(),
                                  "hemi lightmap '" + name + "'");
+        system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->page_table().handle(),
+                                 "hemi lightmap '" + name + "' page table");
     }
     surfaces_ =
         std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,

@@ -12,4 +12,10 @@
 // range of generated ids.
 #define HEMI_BASIS_VERTEX_IRRADIANCE 31
 
+// Paged lightmaps (render::TexelCoefficients, hemi_lightmap_coefficients in hemi/lib/coefficients.glsl): the
+// atlas's pages are HEMI_LIGHTMAP_PAGE^2 texels, each stored in a slot of HEMI_LIGHTMAP_SLOT^2 with a border
+// of one texel.
+#define HEMI_LIGHTMAP_PAGE 64
+#define HEMI_LIGHTMAP_SLOT (HEMI_LIGHTMAP_PAGE + 2)
+
 #endif

@@ -32,6 +32,7 @@ using uint = uint32_t;
 #define HEMI_MATERIAL_BINDING_EMISSIVE 3
 #define HEMI_MATERIAL_BINDING_OCCLUSION 4
 #define HEMI_SOURCE_BINDING_COEFFICIENTS 0
+#define HEMI_SOURCE_BINDING_PAGE_TABLE 1 // texel source: the paged lightmap's page table
 
 // Coefficient sources (a shader variant each: they bind different descriptor types).
 #define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)

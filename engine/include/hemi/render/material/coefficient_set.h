@@ -5,12 +5,15 @@
 //   ProbeBuffer:        one set of K RGB coefficients per object (an SH9 irradiance probe in world space,
 //                       say), many objects and frames in flight in one buffer, updated per frame.
 //   TexelCoefficients:  K coefficient maps sampled at TEXCOORD_1 (directional lightmaps), packed into the
-//                       RGBA layers of a ceil(3K / 4)-layer 2D array image, bilinear, clamped to the edge.
+//                       RGBA layers of a ceil(3K / 4)-layer 2D array image, bilinear, clamped to the edge;
+//                       paged: only the 64 x 64-texel pages that hold texels are stored.
 
 #include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/render/material/material_system.h>
+
+#include <hemi/io/block_maps.h>
 
 #include <glm/vec3.hpp>
 
@@ -71,6 +74,15 @@ class ProbeBuffer
 class TexelCoefficients
 {
   public:
+    // The maps of a lightmap asset's output (io::BlockMaps, the blocks that hold texels), paged as
+    // hemi_lightmap_coefficients(pages, page_table, ...) reads them (hemi/lib/coefficients.glsl): the atlas
+    // is cut into pages of HEMI_LIGHTMAP_PAGE^2 texels, each page that holds a kept block gets a slot of the
+    // packed maps with a one-texel border copied from its neighbours (the edge texels at the atlas's edge),
+    // and the page table maps pages to slots. Memory follows the covered texels, and an atlas may be larger
+    // than the device's largest image (up to 2^18 texels a side, BlockGrid's limit) as long as its stored
+    // pages fit one image of slots: std::invalid_argument says how many pages that is.
+    TexelCoefficients(const MaterialSystem& system, const io::BlockMaps& maps, gpu::UploadBatch& upload,
+                      bool full_precision = false);
     // `rgb` holds K maps of width x height RGB texels, map after map, rows from the top (v = 0), 3 floats a
     // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored packed, as
     // hemi_lightmap_coefficients reads them: the texel's 3K floats fill the RGBA channels of
@@ -85,15 +97,19 @@ class TexelCoefficients
     uint32_t k() const { return k_; }
     // The layers K packed coefficients take: ceil(3K / 4) (sh9: 7, h6: 5, h4: 3, hl2 and rnm: 3, plain: 1).
     static constexpr uint32_t packed_layers(uint32_t k) { return (3 * k + 3) / 4; }
-    // For an engine's own shaders (hemi_lightmap_coefficients, docs/glsl.md): the packed_layers(K)-layer
-    // image (a 2D_ARRAY view, SHADER_READ_ONLY_OPTIMAL once the upload is recorded) and its bilinear,
-    // edge-clamped sampler.
-    const gpu::Image& maps() const { return maps_; }
+    // For an engine's own shaders (hemi_lightmap_coefficients(pages, page_table, ...), docs/glsl.md): the
+    // packed_layers(K)-layer image of slots (a 2D_ARRAY view, SHADER_READ_ONLY_OPTIMAL once the upload is
+    // recorded) with its bilinear sampler, and the R32_UINT page table with its nearest sampler.
+    const gpu::Image& pages() const { return pages_; }
     VkSampler sampler() const { return sampler_; }
+    const gpu::Image& page_table() const { return page_table_; }
+    VkSampler table_sampler() const { return table_sampler_; }
+    uint32_t stored_pages() const { return stored_pages_; }
 
   private:
-    gpu::Image maps_;
-    gpu::Sampler sampler_;
+    gpu::Image pages_, page_table_;
+    gpu::Sampler sampler_, table_sampler_;
+    uint32_t stored_pages_ = 0;
     gpu::DescriptorSet set_;
     uint32_t k_ = 0;
 };
