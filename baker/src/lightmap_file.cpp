@@ -45,17 +45,21 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 
 // Peak memory of a bake, an upper estimate. The bake keeps only the 8 x 8 blocks of the atlas that triangles
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
-// slot of the outputs' blocks (the touched ones and their dilation) and per output coefficient, a float map,
-// its half copy and the asset's bytes; per covered texel (at most one per slot), the irradiance of every
-// pass, its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
-// covered floor with the default outputs (90 coefficients): 1,000 bytes per texel at 1024^2 and 955 at
-// 2048^2, against the 1,310 estimated here. --denoise adds the half of each texel's samples the bake keeps
-// apart, for the bake and for the pass (312 bytes), and the filter's working copies: both halves twice,
-// seven arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel). With
+// slot of the outputs' blocks (the touched ones and their dilation), every output coefficient's half floats
+// in the asset being written (with room to spare), and the float map and its half encoding of the one
+// output being made (the largest); per covered texel (at most one per slot), the irradiance of every pass,
+// its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
+// covered floor with the default outputs (90 coefficients) when every output was held in floats at once:
+// 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against 1,310 estimated then; made one at a time, the
+// sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peak at 2.08 GB instead of 3.29 GB. --denoise adds
+// the half of each texel's samples the bake keeps apart, for the bake and for the pass (312 bytes), and the
+// filter's working copies: both halves twice, seven arrays of four floats and a chart number
+// (kDenoiseBytesPerCoveredTexel). With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
 // atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
-constexpr uint64_t kLightmapBytesPerCoefficient = 10;
+constexpr uint64_t kLightmapBytesPerCoefficient = 4;        // every output's, in the asset
+constexpr uint64_t kLightmapBytesPerLargestCoefficient = 8; // the output being made, in floats and halves
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 4 * 156 + 7 * 16 + 4;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
@@ -315,7 +319,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         throw io::FormatError(scene_path.string() + ": " + e.what());
     }
     const uint64_t block_bytes =
-        slots * kLightmapBytesPerSlot + output_slots * coefficients * kLightmapBytesPerCoefficient;
+        slots * kLightmapBytesPerSlot + output_slots * (coefficients * kLightmapBytesPerCoefficient +
+                                                        largest_output * kLightmapBytesPerLargestCoefficient);
     const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
     io::check_memory(block_bytes + slots * per_texel + exr_bytes,
                      scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
@@ -399,15 +404,18 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     asset.bounces = uint32_t(o.bake.bounces);
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
-    for (const std::string& name : o.outputs)
+    if (o.probes != glm::uvec3(0))
     {
-        size_t adjusted = 0;
-        asset.outputs.push_back({name, uint32_t(lightmap_output_size(name)),
-                                 lightmap_maps(name, atlas, sh, o.dilate, o.non_negative, &adjusted)});
-        if (o.non_negative && name != "plain" && name != "rnm")
-            summary.non_negative[name] = adjusted;
+        if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
+            throw std::invalid_argument("--probes needs at least one probe along each axis");
+        asset.probes = probe_grid(scene.mesh, o.probes);
+        LightmapBakeOptions probe_options = o.bake;
+        probe_options.rays = o.probe_rays;
+        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
+        summary.probes = asset.probes.irradiance.size();
+        for (uint8_t v : asset.probes.valid)
+            summary.invalid_probes += !v;
     }
-    summary.blocks = asset.outputs.front().maps.grid.blocks().size();
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
     // seams whose two sides' frames agree (LightmapSeam::frames_agree).
     const std::vector<LightmapSeam> seams = find_lightmap_seams(asset.mesh);
@@ -419,22 +427,27 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.seams_across_frames = seams.size() - framed.size();
     const auto seams_of = [&](const std::string& name) -> const std::vector<LightmapSeam>&
     { return name == "plain" ? seams : framed; };
-    for (const io::LightmapOutput& output : asset.outputs)
+    // One output at a time: made, stitched, measured, encoded into the asset's half floats (and its EXR
+    // written), then freed, so that the bake holds one output's float maps, not all of them. One
+    // factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free lift runs
+    // again on the texels the stitch changed, since least squares does not keep a texel's function
+    // non-negative.
+    io::LightmapAssetWriter writer(asset);
+    std::optional<LightmapSeamStitch> all, along_frames;
+    for (const std::string& name : o.outputs)
     {
-        const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
-        summary.seam_difference[output.name] = {{m.mean, m.p95}, {m.mean, m.p95}};
-    }
-    if (o.stitch && !seams.empty())
-    {
-        // One factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free
-        // lift runs again on the texels the stitch changed, since least squares does not keep a texel's
-        // function non-negative.
-        std::optional<LightmapSeamStitch> all, along_frames;
-        for (io::LightmapOutput& output : asset.outputs)
+        size_t adjusted = 0;
+        io::LightmapOutput output{name, uint32_t(lightmap_output_size(name)),
+                                  lightmap_maps(name, atlas, sh, o.dilate, o.non_negative, &adjusted)};
+        if (o.non_negative && name != "plain" && name != "rnm")
+            summary.non_negative[name] = adjusted;
+        if (&name == &o.outputs.front())
+            summary.blocks = output.maps.grid.blocks().size();
+        const LightmapSeamMetric before = measure_lightmap_seams(seams_of(output.name), output.maps);
+        summary.seam_difference[output.name] = {{before.mean, before.p95}, {before.mean, before.p95}};
+        if (o.stitch && !seams.empty() && (output.name == "plain" || !framed.empty()))
         {
             const bool plain = output.name == "plain";
-            if (!plain && framed.empty())
-                continue;
             std::optional<LightmapSeamStitch>& stitch =
                 plain || framed.size() == seams.size() ? all : along_frames;
             if (!stitch)
@@ -479,23 +492,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
             summary.seam_difference[output.name].second = {m.mean, m.p95};
         }
-    }
-    if (o.probes != glm::uvec3(0))
-    {
-        if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
-            throw std::invalid_argument("--probes needs at least one probe along each axis");
-        asset.probes = probe_grid(scene.mesh, o.probes);
-        LightmapBakeOptions probe_options = o.bake;
-        probe_options.rays = o.probe_rays;
-        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
-        summary.probes = asset.probes.irradiance.size();
-        for (uint8_t v : asset.probes.valid)
-            summary.invalid_probes += !v;
-    }
-    io::write_lightmap_asset(asset_path, asset);
-    if (!o.exr_dir.empty())
-        for (const io::LightmapOutput& out : asset.outputs)
+        writer.add_output(output);
+        if (!o.exr_dir.empty())
         {
+            const io::LightmapOutput& out = output;
             // An EXR is a dense image: one output at a time is expanded to the whole atlas.
             const std::vector<float> dense = out.maps.dense();
             std::vector<io::ExrChannel> channels;
@@ -503,10 +503,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             for (uint32_t k = 0; k < out.k; ++k)
                 for (const char* c : {"R", "G", "B"})
                 {
-                    char name[32];
-                    std::snprintf(name, sizeof name, "c%u.%s", k, c);
+                    char channel_name[32];
+                    std::snprintf(channel_name, sizeof channel_name, "c%u.%s", k, c);
                     const size_t channel = size_t(c[0] == 'R' ? 0 : c[0] == 'G' ? 1 : 2);
-                    channels.push_back({name, dense.data() + k * plane + channel, 3, true});
+                    channels.push_back({channel_name, dense.data() + k * plane + channel, 3, true});
                 }
             const std::vector<std::pair<std::string, std::string>> attributes = {
                 {"hemi.output", out.name},
@@ -521,6 +521,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             io::write_exr_channels(file, w, h, channels, attributes);
             summary.exr_files.push_back(file);
         }
+    }
+    writer.write(asset_path);
     remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
     summary.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return summary;

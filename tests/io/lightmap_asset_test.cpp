@@ -108,6 +108,59 @@ TEST(LightmapAsset, RoundTripKeepsEveryValueToHalfPrecision)
 
 // An engine's pack file hands hemi the asset's bytes: read from memory, the asset is the one read from its
 // file, and a corrupted copy is refused naming the name the engine gave it.
+// The outputs of an asset added one at a time (io::LightmapAssetWriter, what hemi-bake lightmap does so as to
+// hold one output in floats): the file reads back with the outputs added, in their order, to half precision,
+// with the rest of the asset (probes included); the writer reads none of the asset's own outputs, and refuses
+// a file without outputs and an output that does not fit the atlas, naming them.
+TEST(LightmapAsset, OutputsAddedOneAtATimeReadBack)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    const std::vector<hemi::io::LightmapOutput> outputs = a.outputs;
+    a.outputs.resize(1); // the writer ignores them
+    const fs::path p = dir() / "streamed.hemi";
+    {
+        hemi::io::LightmapAssetWriter writer(a);
+        for (size_t i = outputs.size(); i-- > 0;)
+            writer.add_output(outputs[i]);
+        writer.write(p);
+    }
+    const hemi::io::LightmapAsset back = hemi::io::read_lightmap_asset(p);
+    ASSERT_EQ(back.outputs.size(), outputs.size());
+    for (const hemi::io::LightmapOutput& want : outputs)
+    {
+        const std::vector<float> got = back.output(want.name).maps.dense(), dense = want.maps.dense();
+        ASSERT_EQ(got.size(), dense.size());
+        for (size_t j = 0; j < got.size(); ++j)
+            EXPECT_NEAR(got[j], dense[j], 1e-3f * std::abs(dense[j]) + 1e-6f) << want.name << " value " << j;
+    }
+    EXPECT_EQ(back.mesh.uvs1, a.mesh.uvs1);
+    EXPECT_EQ(back.width, 5u);
+
+    hemi::io::LightmapAssetWriter empty(a);
+    try
+    {
+        empty.write(dir() / "no_outputs.hemi");
+        ADD_FAILURE() << "an asset without outputs was written";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("no outputs"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir() / "no_outputs.hemi"));
+    hemi::io::LightmapOutput wrong = outputs[0];
+    wrong.maps =
+        hemi::io::BlockMaps::from_dense(4, 3, wrong.k, std::vector<float>(size_t(wrong.k) * 12 * 3, 1.0f));
+    try
+    {
+        empty.add_output(wrong);
+        ADD_FAILURE() << "an output of another atlas size was taken";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("'" + wrong.name + "'"), std::string::npos) << e.what();
+    }
+}
+
 TEST(LightmapAsset, ReadsFromBytesInMemory)
 {
     const fs::path p = dir() / "in_memory.hemi";

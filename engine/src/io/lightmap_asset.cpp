@@ -79,7 +79,29 @@ std::string probes_problem(const LightProbes& p)
     return {};
 }
 
-std::string problem(const LightmapAsset& a)
+std::string output_problem(const LightmapOutput& o, uint32_t width, uint32_t height)
+{
+    const uint32_t k = expected_k(o.name);
+    if (k == 0)
+        return "unknown output '" + o.name + "'";
+    if (o.k != k)
+        return "output '" + o.name + "' has K = " + std::to_string(o.k) + ", it needs " + std::to_string(k);
+    if (o.maps.k != k || o.maps.width() != width || o.maps.height() != height)
+        return "output '" + o.name + "' holds " + std::to_string(o.maps.k) + " maps of " +
+               std::to_string(o.maps.width()) + "x" + std::to_string(o.maps.height()) + ", expected " +
+               std::to_string(k) + " of the atlas's " + std::to_string(width) + "x" + std::to_string(height);
+    const size_t expected = o.maps.grid.slots() * k * 3;
+    if (o.maps.values.size() != expected)
+        return "output '" + o.name + "' holds " + std::to_string(o.maps.values.size()) +
+               " values, its blocks need " + std::to_string(expected);
+    for (float v : o.maps.values)
+        if (!std::isfinite(v) || std::abs(v) > 65504.0f)
+            return "output '" + o.name + "' holds a value that is not finite or does not fit a half float";
+    return {};
+}
+
+// Everything but the outputs (LightmapAssetWriter's part), then the outputs when `outputs` says so.
+std::string problem(const LightmapAsset& a, bool outputs = true)
 {
     if (std::string p = mesh_problem(a.mesh, MeshNeeds::Frames); !p.empty())
         return p;
@@ -90,32 +112,14 @@ std::string problem(const LightmapAsset& a)
     if (a.width == 0 || a.height == 0 || a.width > kMaxAtlasSide || a.height > kMaxAtlasSide)
         return "atlas size " + std::to_string(a.width) + "x" + std::to_string(a.height) + " is not in [1, " +
                std::to_string(kMaxAtlasSide) + "]";
-    if (a.outputs.empty())
+    if (outputs && a.outputs.empty())
         return "no outputs";
     if (std::string p = probes_problem(a.probes); !p.empty())
         return p;
-    for (const LightmapOutput& o : a.outputs)
-    {
-        const uint32_t k = expected_k(o.name);
-        if (k == 0)
-            return "unknown output '" + o.name + "'";
-        if (o.k != k)
-            return "output '" + o.name + "' has K = " + std::to_string(o.k) + ", it needs " +
-                   std::to_string(k);
-        if (o.maps.k != k || o.maps.width() != a.width || o.maps.height() != a.height)
-            return "output '" + o.name + "' holds " + std::to_string(o.maps.k) + " maps of " +
-                   std::to_string(o.maps.width()) + "x" + std::to_string(o.maps.height()) + ", expected " +
-                   std::to_string(k) + " of the atlas's " + std::to_string(a.width) + "x" +
-                   std::to_string(a.height);
-        const size_t expected = o.maps.grid.slots() * k * 3;
-        if (o.maps.values.size() != expected)
-            return "output '" + o.name + "' holds " + std::to_string(o.maps.values.size()) +
-                   " values, its blocks need " + std::to_string(expected);
-        for (float v : o.maps.values)
-            if (!std::isfinite(v) || std::abs(v) > 65504.0f)
-                return "output '" + o.name +
-                       "' holds a value that is not finite or does not fit a half float";
-    }
+    if (outputs)
+        for (const LightmapOutput& o : a.outputs)
+            if (std::string p = output_problem(o, a.width, a.height); !p.empty())
+                return p;
     return {};
 }
 
@@ -197,32 +201,48 @@ const LightmapOutput& LightmapAsset::output(const std::string& name) const
     throw std::invalid_argument("the lightmap asset has no output '" + name + "' (it has: " + known + ")");
 }
 
-void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset& a)
+struct LightmapAssetWriter::Sections
 {
-    if (std::string p = problem(a); !p.empty())
-        throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
-    AssetWriter w;
+    AssetWriter writer;
+};
+
+LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a)
+    : asset_(&a), sections_(std::make_unique<Sections>())
+{
+    if (std::string p = problem(a, false); !p.empty())
+        throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
     const Info info{kLightmapLayoutVersion, a.width, a.height, a.rays, a.seed, a.bounces, a.covered_texels};
-    w.add("lightmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
-    write_scene_sections(w, a.mesh, a.materials, a.images, a.primitives);
-    for (const LightmapOutput& o : a.outputs)
+    sections_->writer.add("lightmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
+    write_scene_sections(sections_->writer, a.mesh, a.materials, a.images, a.primitives);
+}
+
+LightmapAssetWriter::~LightmapAssetWriter() = default;
+
+void LightmapAssetWriter::add_output(const LightmapOutput& o)
+{
+    if (std::string p = output_problem(o, asset_->width, asset_->height); !p.empty())
+        throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
+    // u32 K, u32 N, N u32 block indices, then the values as half floats.
+    const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
+    std::vector<uint16_t> halves(4 + blocks.size() * 2 + o.maps.values.size());
+    const uint32_t head[2] = {o.k, uint32_t(blocks.size())};
+    std::memcpy(halves.data(), head, 8);
+    if (!blocks.empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
+        std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
+    uint16_t* out = halves.data() + 4 + blocks.size() * 2;
+    for (size_t i = 0; i < o.maps.values.size(); ++i)
+        out[i] = glm::packHalf1x16(o.maps.values[i]);
+    sections_->writer.add("L." + o.name, std::as_bytes(std::span<const uint16_t>(halves)));
+    ++outputs_;
+}
+
+void LightmapAssetWriter::write(const std::filesystem::path& path)
+{
+    if (outputs_ == 0)
+        throw std::invalid_argument("hemi: cannot write " + path.string() + ": no outputs");
+    if (!asset_->probes.empty())
     {
-        // u32 K, u32 N, N u32 block indices, then the values as half floats.
-        const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
-        std::vector<uint16_t> halves(4 + blocks.size() * 2 + o.maps.values.size());
-        const uint32_t head[2] = {o.k, uint32_t(blocks.size())};
-        std::memcpy(halves.data(), head, 8);
-        if (!blocks
-                 .empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
-            std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
-        uint16_t* out = halves.data() + 4 + blocks.size() * 2;
-        for (size_t i = 0; i < o.maps.values.size(); ++i)
-            out[i] = glm::packHalf1x16(o.maps.values[i]);
-        w.add("L." + o.name, std::as_bytes(std::span<const uint16_t>(halves)));
-    }
-    if (!a.probes.empty())
-    {
-        const LightProbes& p = a.probes;
+        const LightProbes& p = asset_->probes;
         const ProbeHeader header{
             p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
         std::vector<std::byte> bytes(sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size());
@@ -230,9 +250,19 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
         std::memcpy(bytes.data() + sizeof header, p.irradiance.data(), p.irradiance.size() * 27 * 4);
         std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(),
                     p.valid.size());
-        w.add("lightmap.probes", bytes);
+        sections_->writer.add("lightmap.probes", bytes);
     }
-    w.write(path);
+    sections_->writer.write(path);
+}
+
+void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset& a)
+{
+    if (std::string p = problem(a); !p.empty())
+        throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
+    LightmapAssetWriter writer(a);
+    for (const LightmapOutput& o : a.outputs)
+        writer.add_output(o);
+    writer.write(path);
 }
 
 namespace

@@ -33,6 +33,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -94,6 +95,29 @@ struct LightmapAsset
 // Throws std::invalid_argument for an inconsistent asset (a value that does not fit a half float among
 // them), FormatError naming the file when it cannot be written.
 void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset& asset);
+
+// The same file with its outputs added one at a time, each encoded at once into its half-float section, so
+// that a bake can free an output's float maps before it makes the next (hemi-bake lightmap holds one output
+// in floats instead of all). `asset` is everything else (its outputs are not read; its probes must be
+// final); the writer keeps a reference to it until write(). The bytes are write_lightmap_asset's of the whole
+// asset. Throws as write_lightmap_asset does: the constructor for the rest of the asset, add_output for an
+// output, write() for no outputs or a file that cannot be written.
+class LightmapAssetWriter
+{
+  public:
+    explicit LightmapAssetWriter(const LightmapAsset& asset);
+    ~LightmapAssetWriter();
+    LightmapAssetWriter(const LightmapAssetWriter&) = delete;
+    LightmapAssetWriter& operator=(const LightmapAssetWriter&) = delete;
+    void add_output(const LightmapOutput& output);
+    void write(const std::filesystem::path& path);
+
+  private:
+    struct Sections;
+    const LightmapAsset* asset_;
+    std::unique_ptr<Sections> sections_;
+    size_t outputs_ = 0;
+};
 // Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset,
 // sizes that disagree, non-finite values).
 LightmapAsset read_lightmap_asset(const std::filesystem::path& path);
