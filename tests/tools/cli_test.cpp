@@ -729,6 +729,27 @@ TEST(BakeCli, LightmapRefusesScenesWithoutUsableLightmapUvs)
 // hemi-render reads the asset's kind from the file and draws a lightmap asset through the material system
 // with each basis: under uniform radiance 1 the lighting-only view (--white, E / pi) of the floor is 1 in
 // every covered pixel (1%: the bake's Monte Carlo noise), with the validation layer on.
+namespace
+{
+// A white furnace rendered by hemi-render --white: every drawn pixel 1 within 1%, and more than 400 drawn.
+void expect_white_furnace(const fs::path& exr, const std::string& technique)
+{
+    const hemi::io::ImageRgba img = hemi::io::read_exr(exr);
+    size_t covered = 0;
+    for (uint32_t y = 0; y < img.height; ++y)
+        for (uint32_t x = 0; x < img.width; ++x)
+        {
+            const float* p = img.at(x, y);
+            if (p[3] < 1.0f)
+                continue;
+            ++covered;
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(p[c], 1.0f, 0.01f) << technique << " pixel (" << x << ", " << y << ")";
+        }
+    EXPECT_GT(covered, 400u) << technique;
+}
+} // namespace
+
 TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
 {
     const fs::path scene = write_floor_gltf("furnace_floor.glb", 2);
@@ -742,19 +763,7 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
         const Result r = render(q(asset) + " --technique " + technique +
                                 " --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(out));
         ASSERT_EQ(r.status, 0) << technique << ": " << r.err;
-        const hemi::io::ImageRgba img = hemi::io::read_exr(out);
-        size_t covered = 0;
-        for (uint32_t y = 0; y < img.height; ++y)
-            for (uint32_t x = 0; x < img.width; ++x)
-            {
-                const float* p = img.at(x, y);
-                if (p[3] < 1.0f)
-                    continue;
-                ++covered;
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_NEAR(p[c], 1.0f, 0.01f) << technique << " pixel (" << x << ", " << y << ")";
-            }
-        EXPECT_GT(covered, 400u) << technique;
+        expect_white_furnace(out, technique);
     }
     // HL2 cannot hold a constant over the hemisphere (Habel & Wimmer): its furnace is off, as for PRT.
     const fs::path hl2 = dir() / "furnace_hl2.exr";
@@ -2276,19 +2285,7 @@ TEST(HostileCli, AtlasesBeyondTheLargestImageBakeIntoPagesThatRenderDraws)
         const Result r = render(q(asset) + " --technique " + technique +
                                 " --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(out));
         ASSERT_EQ(r.status, 0) << technique << ": " << r.err;
-        const hemi::io::ImageRgba img = hemi::io::read_exr(out);
-        size_t covered = 0;
-        for (uint32_t y = 0; y < img.height; ++y)
-            for (uint32_t x = 0; x < img.width; ++x)
-            {
-                const float* p = img.at(x, y);
-                if (p[3] < 1.0f)
-                    continue;
-                ++covered;
-                for (int c = 0; c < 3; ++c)
-                    ASSERT_NEAR(p[c], 1.0f, 0.01f) << technique << " pixel (" << x << ", " << y << ")";
-            }
-        EXPECT_GT(covered, 400u) << technique;
+        expect_white_furnace(out, technique);
     }
     const Result exr = run(HEMI_BAKE_EXE, "lightmap " + q(scene) + " --size 20000 --rays 4 --exr-dir " +
                                               q(dir() / "far_exrs") + " -o " + q(dir() / "far_exr.hemi"));

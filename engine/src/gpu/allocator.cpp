@@ -75,20 +75,33 @@ Allocation allocate(const Device& device, const MemoryRequest& request)
     return a;
 }
 
+namespace
+{
+// A request from vkGet*MemoryRequirements2's answer: `query` fills requirements with the dedicated ones
+// chained.
+template <class Query> MemoryRequest query_request(Query query, MemoryUsage usage, bool linear)
+{
+    VkMemoryDedicatedRequirements dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS};
+    VkMemoryRequirements2 requirements{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
+    requirements.pNext = &dedicated;
+    query(requirements);
+    MemoryRequest r;
+    r.requirements = requirements.memoryRequirements;
+    r.usage = usage;
+    r.linear = linear;
+    r.prefers_dedicated = dedicated.prefersDedicatedAllocation;
+    r.requires_dedicated = dedicated.requiresDedicatedAllocation;
+    return r;
+}
+} // namespace
+
 MemoryRequest memory_request(const Device& device, VkBuffer buffer, MemoryUsage usage)
 {
     VkBufferMemoryRequirementsInfo2 info{VK_STRUCTURE_TYPE_BUFFER_MEMORY_REQUIREMENTS_INFO_2};
     info.buffer = buffer;
-    VkMemoryDedicatedRequirements dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS};
-    VkMemoryRequirements2 requirements{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
-    requirements.pNext = &dedicated;
-    vkGetBufferMemoryRequirements2(device.device(), &info, &requirements);
-    MemoryRequest r;
-    r.requirements = requirements.memoryRequirements;
-    r.usage = usage;
-    r.linear = true;
-    r.prefers_dedicated = dedicated.prefersDedicatedAllocation;
-    r.requires_dedicated = dedicated.requiresDedicatedAllocation;
+    MemoryRequest r = query_request([&](VkMemoryRequirements2& q)
+                                    { vkGetBufferMemoryRequirements2(device.device(), &info, &q); },
+                                    usage, true);
     r.buffer = buffer;
     return r;
 }
@@ -97,16 +110,9 @@ MemoryRequest memory_request(const Device& device, VkImage image)
 {
     VkImageMemoryRequirementsInfo2 info{VK_STRUCTURE_TYPE_IMAGE_MEMORY_REQUIREMENTS_INFO_2};
     info.image = image;
-    VkMemoryDedicatedRequirements dedicated{VK_STRUCTURE_TYPE_MEMORY_DEDICATED_REQUIREMENTS};
-    VkMemoryRequirements2 requirements{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
-    requirements.pNext = &dedicated;
-    vkGetImageMemoryRequirements2(device.device(), &info, &requirements);
-    MemoryRequest r;
-    r.requirements = requirements.memoryRequirements;
-    r.usage = MemoryUsage::GpuOnly;
-    r.linear = false;
-    r.prefers_dedicated = dedicated.prefersDedicatedAllocation;
-    r.requires_dedicated = dedicated.requiresDedicatedAllocation;
+    MemoryRequest r = query_request([&](VkMemoryRequirements2& q)
+                                    { vkGetImageMemoryRequirements2(device.device(), &info, &q); },
+                                    MemoryUsage::GpuOnly, false);
     r.image = image;
     return r;
 }
