@@ -454,7 +454,8 @@ struct LightCli
 
 struct LightmapCli
 {
-    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes, uv_report;
+    std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes, uv_report,
+                              memory_budget;
     LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
@@ -475,6 +476,9 @@ int run_lightmap(LightmapCli& c)
         o.probes = glm::uvec3(uint32_t(n[0]), uint32_t(n[1]), uint32_t(n[2]));
     }
     o.exr_dir = c.exr_dir;
+    if (!c.memory_budget.empty() && !(o.memory_budget = hemi::io::parse_bytes(c.memory_budget)))
+        throw std::invalid_argument("--memory-budget " + c.memory_budget +
+                                    ": not a size (bytes, or a number with K, M, G or T: 8G, 1.5GiB)");
     // Every file before any work: the outputs writable, none of them an input.
     hemi::tool::Files files;
     files.scene("SCENE", c.scene);
@@ -482,6 +486,7 @@ int run_lightmap(LightmapCli& c)
         files.input("--env", c.light.env);
     files.output("-o", c.asset);
     files.output("its checkpoint", bake::checkpoint_path(c.asset));
+    files.output("its tiles", bake::lightmap_tile_path(c.asset));
     files.output("--json", c.json);
     files.output("--uv-report", c.uv_report);
     o.uv_report = c.uv_report;
@@ -539,6 +544,11 @@ int run_lightmap(LightmapCli& c)
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
             "their neighbours)\n",
             s.pushed, s.invalid);
+    if (s.tile_texels)
+        std::printf("memory: %u tiles of %u texels a pass, their sums on disk, to stay within %s "
+                    "(--memory-budget); peak %s\n",
+                    s.tiles, s.tile_texels, hemi::io::format_bytes(s.memory_budget).c_str(),
+                    hemi::io::format_bytes(hemi::io::peak_memory()).c_str());
     if (s.denoised_texels)
         std::printf("--denoise: %zu texels filtered (%d passes)\n", s.denoised_texels, o.denoise_passes);
     if (s.seams)
@@ -1151,6 +1161,11 @@ int main(int argc, char** argv)
     lightmap->add_option("--exr-dir", lm.exr_dir,
                          "also write each output as an EXR with named channels into DIR");
     lightmap->add_option("--json", lm.json, "write the bake summary as JSON to FILE");
+    lightmap->add_option("--memory-budget", lm.memory_budget,
+                         "the memory the bake may use (bytes, or 8G, 512M, 1.5GiB); when the whole atlas "
+                         "does not fit, it bakes in tiles, the sums of its passes in LEVEL.hemi.tiles on "
+                         "disk, with the same bytes (default: the memory the machine has free, lowered by "
+                         "HEMI_MEMORY_BUDGET)");
     lightmap
         ->add_option(
             "--checkpoint-interval", lm.options.bake.checkpoint_seconds,

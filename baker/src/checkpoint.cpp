@@ -130,11 +130,12 @@ std::optional<SlicePosition> SliceCheckpoint::load()
     }
 }
 
-bool SliceCheckpoint::slice_done(uint32_t pass, uint32_t next_item)
+bool SliceCheckpoint::slice_done(uint32_t pass, uint32_t next_item, bool now)
 {
     const bool complete = next_item >= items_ && pass + 1 >= passes_;
     if (!active_ || complete ||
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_save_).count() < interval_)
+        (!now &&
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - last_save_).count() < interval_))
         return false;
     const SlicePosition position =
         next_item < items_ ? SlicePosition{pass, next_item} : SlicePosition{pass + 1, 0};
@@ -160,8 +161,9 @@ void SliceCheckpoint::save(const SlicePosition& position) const
     io::AssetWriter w;
     w.add_array<uint64_t>("ckpt.key", std::span<const uint64_t>(&key_, 1));
     w.add("ckpt.state", std::as_bytes(std::span<const SlicePosition>(&position, 1)));
+    // The arrays are written from where they are: a checkpoint of a large bake makes no copy of its state.
     for (const CheckpointSection& section : sections_)
-        w.add(section_name(section.name), section.bytes);
+        w.add_view(section_name(section.name), section.bytes);
     w.write(path_);
 }
 

@@ -166,7 +166,7 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
 
 uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l,
                 const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
-                std::span<const io::Material> materials)
+                std::span<const io::Material> materials, bool tiled)
 {
     CheckpointKey key(kLightmapCheckpointVersion);
     key.add_array(std::span<const glm::vec3>(mesh.positions))
@@ -195,7 +195,8 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
         .add_value(o.seed)
         .add_value(o.ray_offset)
         .add_value(o.bounces)
-        .add_value(o.keep_halves);
+        .add_value(o.keep_halves)
+        .add_value(tiled); // the checkpoint's sections differ (the sums are in the tile file)
     key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
     for (const io::Material& m : materials)
         key.add_value(m.base_color_factor).add_value(m.emissive_factor).add_value(m.double_sided);
@@ -213,40 +214,56 @@ namespace
 // chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel. Only the
 // blocks that hold a covered texel or one within `dilate` texels of one are stored, so the maps' memory
 // follows the covered texels.
-io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
-                      std::span<const uint8_t> valid = {})
+// `produce(first, values)` gives the K values of texels [first, first + values.size() / K), asked for in
+// order, a chunk at a time: a map is filled without all of its texels' values in memory at once.
+// The texels are given by their places in a width x height atlas: place(i) is texel i's (x, y).
+using TexelValues = std::function<void(uint32_t first, std::span<glm::vec3> values)>;
+template <typename Place>
+io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& place, int k, int dilate,
+                      std::span<const uint8_t> valid, const TexelValues& produce)
 {
     dilate = std::max(dilate, 0);
-    const int64_t w = atlas.width, h = atlas.height, B = io::BlockGrid::kSize;
+    const int64_t w = width, h = height, B = io::BlockGrid::kSize;
     const int64_t bx = (w + B - 1) / B, by = (h + B - 1) / B;
     std::vector<uint8_t> keep(size_t(bx * by), 0);
-    for (const LightmapTexel& t : atlas.texels)
+    for (uint32_t texel = 0; texel < n; ++texel)
+    {
+        const glm::uvec2 t = place(texel);
         for (int64_t j = std::max<int64_t>(0, int64_t(t.y) - dilate) / B;
              j <= std::min<int64_t>(h - 1, int64_t(t.y) + dilate) / B; ++j)
             for (int64_t i = std::max<int64_t>(0, int64_t(t.x) - dilate) / B;
                  i <= std::min<int64_t>(w - 1, int64_t(t.x) + dilate) / B; ++i)
                 keep[size_t(j * bx + i)] = 1;
+    }
     std::vector<uint32_t> blocks;
     for (size_t i = 0; i < keep.size(); ++i)
         if (keep[i])
             blocks.push_back(uint32_t(i));
-    io::BlockMaps maps(io::BlockGrid(atlas.width, atlas.height, std::move(blocks)), uint32_t(k));
+    io::BlockMaps maps(io::BlockGrid(width, height, std::move(blocks)), uint32_t(k));
     const io::BlockGrid& grid = maps.grid;
     auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
     std::vector<uint8_t> filled(grid.slots(), 0);
-    for (size_t i = 0; i < atlas.texels.size(); ++i)
+    constexpr uint32_t kChunk = 1u << 16;
+    std::vector<glm::vec3> values(size_t(std::min(n, kChunk)) * size_t(k));
+    for (uint32_t first = 0; first < n; first += kChunk)
     {
-        if (!valid.empty() && !valid[i])
-            continue; // inside geometry: filled from its valid neighbours like an empty texel
-        const size_t slot = size_t(grid.slot(atlas.texels[i].x, atlas.texels[i].y));
-        filled[slot] = 1;
-        for (int j = 0; j < k; ++j)
+        const uint32_t count = std::min(kChunk, n - first);
+        produce(first, std::span<glm::vec3>(values.data(), size_t(count) * size_t(k)));
+        for (uint32_t i = first; i < first + count; ++i)
         {
-            const glm::vec3& v = values[i * size_t(k) + size_t(j)];
-            float* out = at(j, slot);
-            out[0] = v.x;
-            out[1] = v.y;
-            out[2] = v.z;
+            if (!valid.empty() && !valid[i])
+                continue; // inside geometry: filled from its valid neighbours like an empty texel
+            const glm::uvec2 t = place(i);
+            const size_t slot = size_t(grid.slot(t.x, t.y));
+            filled[slot] = 1;
+            for (int j = 0; j < k; ++j)
+            {
+                const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
+                float* out = at(j, slot);
+                out[0] = v.x;
+                out[1] = v.y;
+                out[2] = v.z;
+            }
         }
     }
     std::vector<glm::dvec3> sum(static_cast<size_t>(k));
@@ -258,7 +275,7 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> val
             if (filled[slot])
                 continue;
             const glm::uvec2 xy = grid.texel(slot);
-            if (xy.x >= atlas.width || xy.y >= atlas.height)
+            if (xy.x >= width || xy.y >= height)
                 continue; // past the atlas in a block of its last column or row
             int count = 0;
             std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
@@ -291,6 +308,24 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> val
     }
     return maps;
 }
+io::BlockMaps dilated(const LightmapAtlas& atlas, int k, int dilate, std::span<const uint8_t> valid,
+                      const TexelValues& produce)
+{
+    return dilated(
+        atlas.width, atlas.height, uint32_t(atlas.texels.size()),
+        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, k, dilate, valid,
+        produce);
+}
+
+// The same from every texel's values in memory.
+io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
+                      std::span<const uint8_t> valid = {})
+{
+    return dilated(atlas, k, dilate, valid,
+                   [&](uint32_t first, std::span<glm::vec3> out)
+                   { std::copy_n(values.begin() + ptrdiff_t(first) * k, out.size(), out.begin()); });
+}
+
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
 // (Embree's barycentrics): what a ray that lands there picks up.
 glm::vec2 atlas_uv(const io::Mesh& mesh, uint32_t triangle, float bu, float bv)
@@ -383,7 +418,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.width = atlas.width;
     out.height = atlas.height;
     const uint32_t n = uint32_t(atlas.texels.size());
-    out.irradiance.assign(n, {});
     if (n == 0)
         return out;
     const EmbreeScene scene(mesh);
@@ -397,11 +431,28 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 
     // The finished work: the SH of the completed passes, the pass being gathered, and the irradiance at each
     // texel's normal that the previous pass left (what a bounce ray picks up where it lands).
-    std::vector<std::array<glm::vec3, 9>> pass_sh(n);
-    std::vector<std::array<glm::vec3, 4>> pass_direct(n);
-    std::vector<LightmapSh::Half> pass_half(o.keep_halves ? n : 0);
-    out.direct.assign(n, {});
-    out.half.assign(o.keep_halves ? n : 0, {});
+    // Who computes the texels (shared among the ranks of a job like a pass, once they agree on what they
+    // bake), and in tiles of how many: every rank runs the leader's tiles.
+    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    uint32_t tile_texels = o.tile_texels;
+    dist.broadcast(std::as_writable_bytes(std::span<uint32_t>(&tile_texels, 1)));
+    const bool tiled = tile_texels > 0 && tile_texels < n;
+    if (tiled && o.tile_file.empty())
+        throw std::invalid_argument("a lightmap bake in tiles needs a file for them (tile_file)");
+    // A pass's texels are computed into pass_* (a tile of them, or all), and added to the sums of the passes
+    // before: out's arrays, or with tiles the tile file's, a tile at a time through sum_*.
+    const uint32_t tile = tiled ? tile_texels : n;
+    using ShArray = std::array<glm::vec3, 9>;
+    using DirectArray = std::array<glm::vec3, 4>;
+    std::vector<ShArray> pass_sh(tile);
+    std::vector<DirectArray> pass_direct(tile);
+    std::vector<LightmapSh::Half> pass_half(o.keep_halves ? tile : 0);
+    std::vector<ShArray> sum_sh(tiled ? tile : 0);
+    std::vector<DirectArray> sum_direct(tiled ? tile : 0);
+    std::vector<LightmapSh::Half> sum_half(tiled && o.keep_halves ? tile : 0);
+    out.irradiance.assign(tiled ? 0 : n, {});
+    out.direct.assign(tiled ? 0 : n, {});
+    out.half.assign(o.keep_halves && !tiled ? n : 0, {});
     // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
     // over the hemisphere (lightmap_bake.h).
     const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
@@ -409,6 +460,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     for (size_t b = 0; b < 3; ++b)
         rnm_scale[b] = 2.0 / (1.0 + double(rnm[b].z));
     std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
+    std::vector<glm::vec3> next_previous(tiled ? n : 0,
+                                         glm::vec3(0.0f)); // with tiles: the pass's, as it goes
     out.valid.assign(n, 1);
     std::vector<uint8_t> pushed(n, 0);
     io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
@@ -423,12 +476,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         return glm::dot(scene.geometric_normal(primitive), d) > 0.0f &&
                !(surfaces && surfaces->double_sided(primitive));
     };
-    // Shared among the ranks like a pass (each texel's origin depends on the scene alone), once the ranks
-    // agree on what they bake.
-    Distribution& dist = o.distribution ? *o.distribution : local_distribution();
+    // Shared among the ranks like a pass (each texel's origin depends on the scene alone).
     const uint64_t key = key_of(mesh, atlas, lights, o, surfaces,
                                 surfaces ? std::span<const io::Material>(surfaces->materials())
-                                         : std::span<const io::Material>());
+                                         : std::span<const io::Material>(),
+                                tiled);
     dist.check_same(key, "baked a lightmap whose scene, atlas, lights or options");
     std::vector<glm::vec3> origins(n);
     auto find_origin = [&](uint32_t i)
@@ -478,6 +530,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         },
         [](uint32_t) {});
 
+    uint32_t base = 0; // the texel that pass_*[0] holds: the tile's first
     auto texel = [&](uint32_t i, int pass)
     {
         const LightmapTexel& t = atlas.texels[i];
@@ -645,45 +698,63 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         math::Sh9Rgb radiance;
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
-        pass_sh[i] = math::convolve_cosine(radiance);
+        pass_sh[i - base] = math::convolve_cosine(radiance);
         for (size_t b = 0; b < 4; ++b)
-            pass_direct[i][b] = glm::vec3(direct[b]);
+            pass_direct[i - base][b] = glm::vec3(direct[b]);
         if (o.keep_halves)
         {
             for (int j = 0; j < 9; ++j)
                 radiance[size_t(j)] = glm::vec3(acc_a[size_t(j)]);
             const math::Sh9Rgb half_sh = math::convolve_cosine(radiance);
             for (size_t j = 0; j < 9; ++j)
-                pass_half[i][j] = half_sh[j];
+                pass_half[i - base][j] = half_sh[j];
             for (size_t b = 0; b < 4; ++b)
-                pass_half[i][9 + b] = glm::vec3(direct_a[b]);
+                pass_half[i - base][9 + b] = glm::vec3(direct_a[b]);
         }
     };
 
-    using ShArray = std::array<glm::vec3, 9>;
-    using DirectArray = std::array<glm::vec3, 4>;
+    // What the checkpoint saves: without tiles, the sums and the pass so far; with tiles, the irradiance at
+    // the normals of the pass before and of this one so far (the sums are in the tile file, synced before the
+    // checkpoint counts a tile as done).
+    std::vector<CheckpointSection> sections;
+    if (!tiled)
+        sections = {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
+                    {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
+                    {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
+                    {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
+                    {"half", std::as_writable_bytes(std::span<LightmapSh::Half>(out.half))},
+                    {"pass_half", std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half))},
+                    {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
+                    {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
+    else
+        sections = {{"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
+                    {"next_previous", std::as_writable_bytes(std::span<glm::vec3>(next_previous))},
+                    {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
     SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
-                               n,
-                               {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
-                                {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
-                                {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
-                                {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
-                                {"half", std::as_writable_bytes(std::span<LightmapSh::Half>(out.half))},
-                                {"pass_half", std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half))},
-                                {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
-                                {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}},
-                               o.checkpoint_seconds);
+                               n, std::move(sections), o.checkpoint_seconds);
     SlicePosition state;
     if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
     {
         state = *resumed;
         out.resumed = true;
     }
+    // The tile file: on the leader, which alone keeps the sums. Kept while a checkpoint may need it.
+    std::shared_ptr<TexelFile> tiles;
+    if (tiled && dist.leader())
+    {
+        std::vector<uint32_t> fields = {uint32_t(sizeof(ShArray)), uint32_t(sizeof(DirectArray))};
+        if (o.keep_halves)
+            fields.push_back(uint32_t(sizeof(LightmapSh::Half)));
+        tiles = std::make_shared<TexelFile>(o.tile_file, key, n, std::move(fields), out.resumed);
+        if (checkpoint.active())
+            tiles->keep();
+    }
     const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
                                     (lights.sun ? uint64_t(o.sun_rays) : 0) +
                                     uint64_t(lights.punctual.size());
-    const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, n));
+    const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, tile));
     const auto t0 = std::chrono::steady_clock::now();
+    uint32_t tiles_count = 0;
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
         const uint32_t first = pass == int(state.pass) ? state.next_item : 0;
@@ -693,48 +764,122 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             previous_map = dilated(atlas, previous, 1, 2, out.valid);
         if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
-        // What a texel's work writes, which every rank gathers (valid only in the first pass).
-        std::vector<ItemArray> arrays = {
-            {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
-            {reinterpret_cast<std::byte*>(pass_direct.data()), sizeof(DirectArray)}};
-        if (o.keep_halves)
-            arrays.push_back({reinterpret_cast<std::byte*>(pass_half.data()), sizeof(LightmapSh::Half)});
-        if (pass == 0)
-            arrays.push_back({reinterpret_cast<std::byte*>(out.valid.data()), 1});
-        dist.run(
-            first, n, slice, arrays,
-            [&](uint32_t begin, uint32_t end)
-            {
-                tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
-                                  [&](const tbb::blocked_range<uint32_t>& r)
-                                  {
-                                      for (uint32_t i = r.begin(); i != r.end(); ++i)
-                                          texel(i, pass);
-                                  });
-            },
-            [&](uint32_t next)
-            {
-                checkpoint.slice_done(uint32_t(pass), next);
-                if (progress)
-                    progress({pass, passes, next, n, checkpoint.error()});
-            });
-        out.rays += uint64_t(n - first) * (pass == 0 ? rays_per_texel : uint64_t(o.rays));
-        // The pass is complete: add it, and keep its irradiance at each normal for the next bounce.
-        for (uint32_t i = 0; i < n; ++i)
+        tiles_count = 0;
+        // Without tiles, one run over the whole pass; with tiles, one per tile, each added to the tile file
+        // before the next.
+        for (uint32_t begin = first; begin < n; begin = tiled ? std::min(n, begin + tile) : n, ++tiles_count)
         {
-            for (int j = 0; j < 9; ++j)
-                out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
-            for (size_t b = 0; b < 4; ++b)
-                out.direct[i][b] += pass_direct[i][b];
+            const uint32_t end = tiled ? std::min(n, begin + tile) : n;
+            base = tiled ? begin : 0;
+            // What a texel's work writes, which every rank gathers (valid only in the first pass).
+            std::vector<ItemArray> arrays = {
+                {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
+                {reinterpret_cast<std::byte*>(pass_direct.data()), sizeof(DirectArray)}};
             if (o.keep_halves)
-                for (size_t c = 0; c < out.half[i].size(); ++c)
-                    out.half[i][c] += pass_half[i][c];
-            previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
+                arrays.push_back({reinterpret_cast<std::byte*>(pass_half.data()), sizeof(LightmapSh::Half)});
+            if (pass == 0)
+                arrays.push_back({reinterpret_cast<std::byte*>(out.valid.data() + base), 1});
+            dist.run(
+                begin - base, end - base, tiled ? std::min(slice, end - begin) : slice, arrays,
+                [&](uint32_t b, uint32_t e)
+                {
+                    tbb::parallel_for(tbb::blocked_range<uint32_t>(base + b, base + e, 64),
+                                      [&](const tbb::blocked_range<uint32_t>& r)
+                                      {
+                                          for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                              texel(i, pass);
+                                      });
+                },
+                [&](uint32_t next)
+                {
+                    if (!tiled)
+                        checkpoint.slice_done(uint32_t(pass), next);
+                    if (progress)
+                        progress({pass, passes, base + next, n, checkpoint.error()});
+                });
+            if (!tiled)
+                continue;
+            // The tile is complete: its sums of the passes before (copy (pass - 1) % 2) plus this pass, to
+            // copy pass % 2 (texel_file.h: a tile written twice gives the same bytes).
+            const uint32_t count = end - begin;
+            if (tiles)
+            {
+                auto io_tile = [&](bool write, int copy, size_t field, auto& v)
+                {
+                    const auto bytes = std::as_writable_bytes(std::span(v.data(), count));
+                    if (write)
+                        tiles->write(copy, field, begin, bytes);
+                    else
+                        tiles->read(copy, field, begin, bytes);
+                };
+                if (pass > 0)
+                {
+                    io_tile(false, (pass - 1) % 2, 0, sum_sh);
+                    io_tile(false, (pass - 1) % 2, 1, sum_direct);
+                    if (o.keep_halves)
+                        io_tile(false, (pass - 1) % 2, 2, sum_half);
+                }
+                else
+                {
+                    std::fill_n(sum_sh.begin(), count, ShArray{});
+                    std::fill_n(sum_direct.begin(), count, DirectArray{});
+                    if (o.keep_halves)
+                        std::fill_n(sum_half.begin(), count, LightmapSh::Half{});
+                }
+                for (uint32_t i = 0; i < count; ++i)
+                {
+                    for (int j = 0; j < 9; ++j)
+                        sum_sh[i][size_t(j)] += pass_sh[i][size_t(j)];
+                    for (size_t b = 0; b < 4; ++b)
+                        sum_direct[i][b] += pass_direct[i][b];
+                    if (o.keep_halves)
+                        for (size_t c = 0; c < sum_half[i].size(); ++c)
+                            sum_half[i][c] += pass_half[i][c];
+                }
+                io_tile(true, pass % 2, 0, sum_sh);
+                io_tile(true, pass % 2, 1, sum_direct);
+                if (o.keep_halves)
+                    io_tile(true, pass % 2, 2, sum_half);
+                if (checkpoint.active())
+                    tiles->sync();
+            }
+            for (uint32_t i = 0; i < count; ++i)
+                next_previous[begin + i] = pass_direct[i][0];
+            if (end < n)
+                checkpoint.slice_done(uint32_t(pass), end);
+            if (progress && dist.leader())
+                progress({pass, passes, end, n, checkpoint.error()});
         }
-        checkpoint.slice_done(uint32_t(pass), n);
+        out.rays += uint64_t(n - first) * (pass == 0 ? rays_per_texel : uint64_t(o.rays));
+        // The pass is complete: add it (without tiles), and keep its irradiance at each normal for the next
+        // bounce.
+        if (!tiled)
+            for (uint32_t i = 0; i < n; ++i)
+            {
+                for (int j = 0; j < 9; ++j)
+                    out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
+                for (size_t b = 0; b < 4; ++b)
+                    out.direct[i][b] += pass_direct[i][b];
+                if (o.keep_halves)
+                    for (size_t c = 0; c < out.half[i].size(); ++c)
+                        out.half[i][c] += pass_half[i][c];
+                previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
+            }
+        else
+            std::copy(next_previous.begin(), next_previous.end(), previous.begin());
+        // With tiles, a save at the end of every pass: the next pass overwrites the copy of the tile file
+        // that a resume from a save in this pass would read (texel_file.h).
+        checkpoint.slice_done(uint32_t(pass), n, tiled);
         if (progress && dist.leader())
             progress({pass, passes, n, n, checkpoint.error()});
     }
+    if (tiles)
+    {
+        out.tiles = tiles;
+        out.tiles_copy = (passes - 1) % 2;
+        out.tiles_halves = o.keep_halves;
+    }
+    out.tiles_count = tiles_count;
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();
     for (uint32_t i = 0; i < n; ++i)
@@ -774,19 +919,34 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     if (!(probes.lo.x <= probes.hi.x && probes.lo.y <= probes.hi.y && probes.lo.z <= probes.hi.z) ||
         !std::isfinite(probes.lo.x + probes.lo.y + probes.lo.z + probes.hi.x + probes.hi.y + probes.hi.z))
         throw std::invalid_argument("the probe grid's corners must be finite and ordered");
-    if (sh.irradiance.size() != atlas.texels.size())
+    if (sh.texels() != atlas.texels.size())
         throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
     if (surfaces && mesh.uvs1.size() != mesh.positions.size())
         throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
     const EmbreeScene scene(mesh);
     const detail::LightSampler light(lights, o.seed);
     // What a ray that lands on a surface picks up: the lightmap's irradiance at the surface normal.
-    std::vector<glm::vec3> irradiance(atlas.texels.size());
-    for (size_t i = 0; i < atlas.texels.size(); ++i)
-        irradiance[i] = sh.direct.size() == atlas.texels.size()
-                            ? sh.direct[i][0]
-                            : math::sh9_eval_rgb(sh.irradiance[i], glm::vec3(0.0f, 0.0f, 1.0f));
-    const io::BlockMaps map = dilated(atlas, irradiance, 1, 2, sh.valid);
+    const bool direct = sh.has_direct();
+    std::vector<std::array<glm::vec3, 9>> sh9;
+    std::vector<std::array<glm::vec3, 4>> directs;
+    const io::BlockMaps map = dilated(atlas, 1, 2, sh.valid,
+                                      [&](uint32_t first, std::span<glm::vec3> out)
+                                      {
+                                          const uint32_t count = uint32_t(out.size());
+                                          if (direct)
+                                          {
+                                              directs.resize(count);
+                                              sh.read(first, count, nullptr, directs.data());
+                                              for (uint32_t i = 0; i < count; ++i)
+                                                  out[i] = directs[i][0];
+                                              return;
+                                          }
+                                          sh9.resize(count);
+                                          sh.read(first, count, sh9.data());
+                                          for (uint32_t i = 0; i < count; ++i)
+                                              out[i] =
+                                                  math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                                      });
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
@@ -1096,26 +1256,102 @@ bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
     return changed;
 }
 
-io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
-                            int dilate, bool non_negative, size_t* adjusted)
+namespace
+{
+template <typename Place>
+io::BlockMaps maps_at(std::string_view name, uint32_t width, uint32_t height, const Place& place,
+                      const LightmapSh& sh, int dilate, bool non_negative, size_t* adjusted)
 {
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel
-    std::vector<glm::vec3> values(atlas.texels.size() * size_t(k));
     // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
-    const bool direct = (name == "plain" || name == "rnm") && sh.direct.size() == atlas.texels.size();
-    for (size_t i = 0; i < atlas.texels.size(); ++i)
-        if (direct)
-            for (int j = 0; j < k; ++j)
-                values[i * size_t(k) + size_t(j)] = sh.direct[i][name == "plain" ? 0 : size_t(1 + j)];
-        else
-        {
-            apply(m, sh.irradiance[i], &values[i * size_t(k)]);
-            if (non_negative && name != "plain" && name != "rnm" &&
-                make_non_negative(name, std::span<glm::vec3>(&values[i * size_t(k)], size_t(k))) && adjusted)
-                ++*adjusted;
-        }
-    return dilated(atlas, values, k, dilate, sh.valid);
+    const bool direct = (name == "plain" || name == "rnm") && sh.has_direct();
+    std::vector<std::array<glm::vec3, 9>> sh9;
+    std::vector<std::array<glm::vec3, 4>> directs;
+    return dilated(width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
+                   [&](uint32_t first, std::span<glm::vec3> values)
+                   {
+                       const uint32_t count = uint32_t(values.size() / size_t(k));
+                       if (direct)
+                       {
+                           directs.resize(count);
+                           sh.read(first, count, nullptr, directs.data());
+                           for (uint32_t i = 0; i < count; ++i)
+                               for (int j = 0; j < k; ++j)
+                                   values[i * size_t(k) + size_t(j)] =
+                                       directs[i][name == "plain" ? 0 : size_t(1 + j)];
+                           return;
+                       }
+                       sh9.resize(count);
+                       sh.read(first, count, sh9.data());
+                       for (uint32_t i = 0; i < count; ++i)
+                       {
+                           glm::vec3* v = &values[i * size_t(k)];
+                           apply(m, sh9[i], v);
+                           if (non_negative && name != "plain" && name != "rnm" &&
+                               make_non_negative(name, std::span<glm::vec3>(v, size_t(k))) && adjusted)
+                               ++*adjusted;
+                       }
+                   });
+}
+} // namespace
+
+io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
+                            int dilate, bool non_negative, size_t* adjusted)
+{
+    if (sh.texels() != atlas.texels.size())
+        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
+    return maps_at(
+        name, atlas.width, atlas.height,
+        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, sh, dilate,
+        non_negative, adjusted);
+}
+
+io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
+                            std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
+                            bool non_negative, size_t* adjusted)
+{
+    if (sh.texels() != places.size())
+        throw std::invalid_argument("the lightmap's irradiance does not match its texels' places");
+    return maps_at(
+        name, width, height, [&](uint32_t i) { return places[i]; }, sh, dilate, non_negative, adjusted);
+}
+
+void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irr,
+                      std::array<glm::vec3, 4>* dir, Half* halves) const
+{
+    if (uint64_t(first) + count > texels())
+        throw std::out_of_range("LightmapSh::read: texels past the lightmap's");
+    if ((dir && !has_direct()) || (halves && !has_halves()))
+        throw std::invalid_argument("LightmapSh::read: the bake made no direct values or halves");
+    if (tiles)
+    {
+        if (irr)
+            tiles->read(tiles_copy, 0, first, std::as_writable_bytes(std::span(irr, count)));
+        if (dir)
+            tiles->read(tiles_copy, 1, first, std::as_writable_bytes(std::span(dir, count)));
+        if (halves)
+            tiles->read(tiles_copy, 2, first, std::as_writable_bytes(std::span(halves, count)));
+        return;
+    }
+    if (irr)
+        std::copy_n(irradiance.begin() + first, count, irr);
+    if (dir)
+        std::copy_n(direct.begin() + first, count, dir);
+    if (halves)
+        std::copy_n(half.begin() + first, count, halves);
+}
+
+void LightmapSh::load()
+{
+    if (!tiles)
+        return;
+    const uint32_t n = uint32_t(texels());
+    irradiance.resize(n);
+    direct.resize(n);
+    half.resize(has_halves() ? n : 0);
+    read(0, n, irradiance.data(), direct.data(), half.empty() ? nullptr : half.data());
+    tiles.reset();
 }
 
 } // namespace hemi::bake

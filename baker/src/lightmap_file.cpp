@@ -31,6 +31,11 @@ std::filesystem::path lightmap_exr_path(const std::filesystem::path& dir, const 
     return dir / (asset.stem().string() + "." + output + ".exr");
 }
 
+std::filesystem::path lightmap_tile_path(const std::filesystem::path& asset)
+{
+    return asset.string() + ".tiles";
+}
+
 namespace
 {
 
@@ -44,25 +49,32 @@ namespace
 constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 
 // Peak memory of a bake, an upper estimate. The bake keeps only the 8 x 8 blocks of the atlas that triangles
-// touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables; per
-// slot of the outputs' blocks (the touched ones and their dilation), every output coefficient's half floats
-// in the asset being written (with room to spare), and the float map and its half encoding of the one
-// output being made (the largest); per covered texel (at most one per slot), the irradiance of every pass,
-// its directly integrated plain and rnm values, the sample and the texel's record. Measured on a fully
-// covered floor with the default outputs (90 coefficients) when every output was held in floats at once:
-// 1,000 bytes per texel at 1024^2 and 955 at 2048^2, against 1,310 estimated then; made one at a time, the
-// sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peak at 2.08 GB instead of 3.29 GB. --denoise adds
-// the half of each texel's samples the bake keeps apart, for the bake and for the pass (312 bytes), and the
-// filter's working copies: both halves twice, seven arrays of four floats and a chart number
-// (kDenoiseBytesPerCoveredTexel). With
-// --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per
-// atlas texel and coefficient of the largest output, and OpenEXR's half copy of it.
+// touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables and
+// the bounces' lookup map; per slot of the outputs' blocks (the touched ones and their dilation), the float
+// map of the one output being made (the largest; the asset's writer spools each finished output's half
+// floats to disk, io::AssetWriter); per covered texel (at most one per slot), the texel's record and sample
+// point, and either every sum of the passes and the pass being gathered (kLightmapBytesPerCoveredTexel,
+// in memory) or, in tiles under a memory budget, only the irradiance at the normals the bounces read
+// (kTiledBytesPerCoveredTexel) plus one tile's sums and pass (kTileBytesPerTexel per texel of a tile; the
+// sums of the passes are in the tile file, texel_file.h). Measured (docs/lightmaps.md#memory-and-asset-size):
+// the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
+// floats at once, 2.08 GB with one at a time. --denoise adds the half of each texel's samples the bake keeps
+// apart, for the bake and for the pass (312 bytes), and the filter's working copies: both halves twice,
+// seven arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); the filter needs the whole
+// atlas in memory, tiles or not. With --exr-dir, one output at a time is expanded to the whole atlas (an EXR
+// is a dense image): 4 bytes per atlas texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
-constexpr uint64_t kLightmapBytesPerCoefficient = 4;        // every output's, in the asset
-constexpr uint64_t kLightmapBytesPerLargestCoefficient = 8; // the output being made, in floats and halves
+constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
+constexpr uint64_t kTiledBytesPerCoveredTexel = 136;
+constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atlas: each texel's (x, y)
+constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
+constexpr uint64_t kTileHalvesBytesPerTexel = 2 * 156;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 4 * 156 + 7 * 16 + 4;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
+// The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
+// would be too small to keep the cores busy.
+constexpr uint32_t kMinTileTexels = 4096;
 
 // The blocks around the touched ones that dilating the outputs by `dilate` texels may fill too.
 uint64_t dilated_slots(const io::BlockGrid& grid, int dilate)
@@ -177,6 +189,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                        const std::function<void(const LightmapProgress&)>& progress)
 {
     const auto t0 = std::chrono::steady_clock::now();
+    // Where the time goes, stage by stage (the JSON's "stage_seconds").
+    std::vector<std::pair<std::string, double>> stages;
+    auto stage_start = t0;
+    auto stage_done = [&](const char* stage)
+    {
+        const auto now = std::chrono::steady_clock::now();
+        stages.emplace_back(stage, std::chrono::duration<double>(now - stage_start).count());
+        stage_start = now;
+    };
     LightmapFileOptions o = options;
     if (o.outputs.empty())
         throw std::invalid_argument("no lightmap outputs asked for");
@@ -198,6 +219,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         io::check_writable(asset_path);
         io::check_writable(o.bake.checkpoint);
+        io::check_writable(
+            lightmap_tile_path(asset_path)); // a bake in tiles, and the asset's spool beside it
         if (!o.uv_report.empty())
             io::check_writable(o.uv_report);
         if (!o.exr_dir.empty())
@@ -253,6 +276,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         throw io::FormatError(scene_path.string() + ": " + e.what());
     }
+    stage_done("scene"); // read, unwrapped, its textures decoded
     summary.triangles = scene.mesh.indices.size() / 3;
     summary.materials = scene.materials.size();
     summary.primitives = scene.primitives.size();
@@ -304,6 +328,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         coefficients += uint64_t(lightmap_output_size(name)) * 3;
         largest_output = std::max<uint64_t>(largest_output, uint64_t(lightmap_output_size(name)) * 3);
     }
+    // The budget: --memory-budget, else what the machine has free (io::available_memory, which
+    // HEMI_MEMORY_BUDGET and the process's limits lower); 0 when neither is known.
+    const uint64_t budget = o.memory_budget ? o.memory_budget : io::available_memory();
+    summary.memory_budget = budget;
     const std::string atlas_text = std::to_string(w) + "x" + std::to_string(h) + " lightmap";
     const uint64_t exr_bytes =
         o.exr_dir.empty() ? 0 : uint64_t(w) * h * largest_output * kExrBytesPerCoefficient;
@@ -318,18 +346,47 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         throw io::FormatError(scene_path.string() + ": " + e.what());
     }
-    const uint64_t block_bytes =
-        slots * kLightmapBytesPerSlot + output_slots * (coefficients * kLightmapBytesPerCoefficient +
-                                                        largest_output * kLightmapBytesPerLargestCoefficient);
+    // The peak is the larger of two stages': the passes (the atlas's records, the bounces' map, the sums and
+    // the pass in memory, or in tiles one tile of them; --denoise's filter on the whole atlas after them) and
+    // the outputs (the texels' places, the float map of the output being made, the sums when in memory).
     const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
-    io::check_memory(block_bytes + slots * per_texel + exr_bytes,
-                     scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
-                         std::to_string(slots / io::BlockGrid::kTexels) + " blocks of 8x8 texels, with " +
-                         std::to_string(coefficients) +
-                         " coefficients per texel (--size, --texel-size, --bases" +
-                         (exr_bytes ? ", --exr-dir" : "") + ")");
+    const uint64_t per_tile_texel = kTileBytesPerTexel + (o.denoise ? kTileHalvesBytesPerTexel : 0);
+    const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileHalvesBytesPerTexel / 2 : 0);
+    const uint64_t output_map_bytes =
+        output_slots * largest_output * kLightmapBytesPerLargestCoefficient + exr_bytes;
+    const auto whole_bytes = [&](uint64_t texels)
+    {
+        return std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
+                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
+    };
+    const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
+    {
+        const uint64_t passes =
+            slots * kLightmapBytesPerSlot + texels * kTiledBytesPerCoveredTexel +
+            (o.denoise ? texels * (sums_per_texel + kDenoiseBytesPerCoveredTexel) : tile * per_tile_texel);
+        return std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
+    };
+    const auto check_fits = [&](uint64_t texels, const std::string& what)
+    {
+        const uint64_t whole = whole_bytes(texels);
+        if (budget == 0 || whole <= budget)
+            return;
+        const uint64_t least = tiled_bytes(texels, std::min<uint64_t>(texels, kMinTileTexels));
+        if (least > budget)
+            throw io::FormatError(what + ": needs about " + io::format_bytes(whole) + " of memory (" +
+                                  io::format_bytes(least) + " in tiles of " + std::to_string(kMinTileTexels) +
+                                  " texels" + (o.denoise ? ", with --denoise's whole atlas" : "") +
+                                  "), but " + (o.memory_budget ? "--memory-budget is " : "only ") +
+                                  io::format_bytes(budget) + (o.memory_budget ? "" : " is available"));
+    };
+    check_fits(slots, scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
+                          std::to_string(slots / io::BlockGrid::kTexels) + " blocks of 8x8 texels, with " +
+                          std::to_string(coefficients) +
+                          " coefficients per texel (--size, --texel-size, --bases" +
+                          (exr_bytes ? ", --exr-dir" : "") + ")");
     LightmapUvReport report;
-    const LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
+    LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
+    stage_done("atlas");
     summary.uv_report = report;
     if (!o.uv_report.empty() && leader)
         write_uv_report(o.uv_report, atlas, report);
@@ -351,9 +408,19 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             std::to_string(report.zero_area) +
             " of zero area in space); the lightmap would be empty: lay out TEXCOORD_1 inside [0, 1] "
             "or bake with --unwrap");
-    io::check_memory(block_bytes + atlas.texels.size() * per_texel + exr_bytes,
-                     scene_path.string() + ": a " + atlas_text + " with " +
-                         std::to_string(atlas.texels.size()) + " covered texels");
+    const uint64_t covered = atlas.texels.size();
+    check_fits(covered, scene_path.string() + ": a " + atlas_text + " with " + std::to_string(covered) +
+                            " covered texels");
+    // In tiles when the whole atlas does not fit: the largest tile the budget leaves room for (check_fits has
+    // made sure that one of kMinTileTexels does).
+    uint32_t tile_texels = 0;
+    if (budget != 0 && whole_bytes(covered) > budget)
+    {
+        const uint64_t fixed = tiled_bytes(covered, 0);
+        tile_texels = uint32_t(std::clamp<uint64_t>(fixed < budget ? (budget - fixed) / per_tile_texel : 0,
+                                                    std::min<uint64_t>(covered, kMinTileTexels), covered));
+    }
+    summary.tile_texels = tile_texels;
     for (const std::string& warning : report.warnings)
         summary.warnings.push_back(warning);
     // The bake, the asset and hemi's runtime follow the covered texels; images for other renderers (hemi-bake
@@ -372,6 +439,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     check_lightmap_range(o.lights, scene.materials, scene_path);
     LightmapBakeOptions bake_options = o.bake;
     bake_options.keep_halves = o.denoise;
+    bake_options.tile_texels = tile_texels;
+    bake_options.tile_file = lightmap_tile_path(asset_path);
     Distribution& dist = o.bake.distribution ? *o.bake.distribution : local_distribution();
     const std::vector<uint64_t> items_before = dist.items_by_rank();
     LightmapSh sh = bake_lightmap_sh(scene.mesh, atlas, o.lights, bake_options, &*surfaces, progress);
@@ -380,12 +449,17 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         summary.texels_by_rank[r] -= items_before[r];
     if (!leader)
         return summary; // the texels are on rank 0: its outputs, its probes
+    stage_done("bake"); // the sample points' search and every pass
+    summary.tiles = sh.tiles_count;
     if (o.denoise)
     {
+        sh.load(); // the filter works on the whole atlas (counted in the budget above)
         LightmapDenoiseOptions d;
         d.iterations = o.denoise_passes;
         summary.denoised_texels = denoise_lightmap(scene.mesh, atlas, sh, d).texels;
     }
+    if (o.denoise)
+        stage_done("denoise");
     summary.rays = sh.rays;
     summary.pushed = sh.pushed;
     summary.invalid = sh.invalid;
@@ -416,6 +490,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         for (uint8_t v : asset.probes.valid)
             summary.invalid_probes += !v;
     }
+    if (!asset.probes.empty())
+        stage_done("probes");
+    // The passes and the probes are done: the outputs need only each texel's place in the atlas (8 bytes,
+    // not its 92-byte record).
+    std::vector<glm::uvec2> places(atlas.texels.size());
+    for (size_t i = 0; i < places.size(); ++i)
+        places[i] = glm::uvec2(atlas.texels[i].x, atlas.texels[i].y);
+    atlas = LightmapAtlas{};
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
     // seams whose two sides' frames agree (LightmapSeam::frames_agree).
     const std::vector<LightmapSeam> seams = find_lightmap_seams(asset.mesh);
@@ -432,13 +514,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free lift runs
     // again on the texels the stitch changed, since least squares does not keep a texel's function
     // non-negative.
-    io::LightmapAssetWriter writer(asset);
+    // Each output's half floats go to a spool file beside the asset as they are made, not to memory.
+    io::LightmapAssetWriter writer(asset, asset_path.string() + ".spool");
     std::optional<LightmapSeamStitch> all, along_frames;
     for (const std::string& name : o.outputs)
     {
         size_t adjusted = 0;
         io::LightmapOutput output{name, uint32_t(lightmap_output_size(name)),
-                                  lightmap_maps(name, atlas, sh, o.dilate, o.non_negative, &adjusted)};
+                                  lightmap_maps(name, w, h, places, sh, o.dilate, o.non_negative, &adjusted)};
         if (o.non_negative && name != "plain" && name != "rnm")
             summary.non_negative[name] = adjusted;
         if (&name == &o.outputs.front())
@@ -523,7 +606,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         }
     }
     writer.write(asset_path);
-    remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now
+    stage_done("outputs"); // made, stitched, encoded, written (and the EXRs)
+    summary.stage_seconds = std::move(stages);
+    remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now, and the tiles with it
+    std::error_code ignored;
+    std::filesystem::remove(bake_options.tile_file, ignored);
     summary.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return summary;
 }
@@ -538,6 +625,9 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["overlapping_texels"] = s.uv_report.overlapping_texels;
     j["stored_blocks"] = s.blocks; // 8x8 blocks of the atlas the asset stores per output
     j["peak_memory_bytes"] = io::peak_memory();
+    j["memory_budget_bytes"] = s.memory_budget;
+    j["tile_texels"] = s.tile_texels; // 0: the whole atlas in memory
+    j["tiles_per_pass"] = s.tiles;
     j["triangles"] = s.triangles;
     j["materials"] = s.materials;
     j["primitives"] = s.primitives;
@@ -576,6 +666,10 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
                        {"rays_per_probe", o.probe_rays}};
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
+    nlohmann::json stage_seconds = nlohmann::json::object();
+    for (const auto& [stage, seconds] : s.stage_seconds)
+        stage_seconds[stage] = seconds;
+    j["stage_seconds"] = stage_seconds;
     j["rays_per_second"] = s.trace_seconds > 0.0 ? double(s.rays) / s.trace_seconds : 0.0;
     j["resumed"] = s.resumed;
     j["ranks"] = s.texels_by_rank.size();

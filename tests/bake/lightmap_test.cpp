@@ -646,6 +646,104 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
     EXPECT_EQ(maps[(0 * 16 + 0) * 3], 0.0f) << "beyond the dilation";
 }
 
+// A bake in tiles (LightmapBakeOptions::tile_texels: --memory-budget) keeps the sums of its passes in a file
+// and one tile of them in memory: inside the closed furnace box with 2 bounces and the denoiser's halves,
+// tiles of 97 texels (not a divisor of anything) give the bytes of the bake in memory, in the sums, in every
+// output map and in the light probes that read them. A tile added to the wrong texels, a pass read from the
+// wrong copy or a tile added twice differs. Killed in the third pass after writing four of its tiles, with
+// no checkpoint since the end of the second (a save is forced there), the bake resumes from that and
+// rewrites those tiles from the untouched copy: the same bytes again (summing in place would count them
+// twice).
+TEST(LightmapBake, TilesOnDiskGiveTheSameBytesAndResume)
+{
+    const Mesh m = hemi::test::unit_box(true);
+    std::vector<hemi::io::Material> materials(1);
+    materials[0].base_color_factor = glm::vec4(0.5f, 0.4f, 0.3f, 1.0f);
+    materials[0].emissive_factor = glm::vec3(1.0f);
+    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
+    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
+    ASSERT_TRUE(report.ok());
+    const uint32_t n = uint32_t(a.texels.size());
+    LightmapLights lights;
+    lights.uniform = glm::vec3(0.0f);
+    LightmapBakeOptions o;
+    o.rays = 64;
+    o.bounces = 2;
+    o.keep_halves = true;
+    const LightmapSh whole = bake_lightmap_sh(m, a, lights, o, &surfaces);
+    ASSERT_EQ(whole.irradiance.size(), n);
+    const auto same = [&](const LightmapSh& tiled, const char* what)
+    {
+        std::vector<std::array<glm::vec3, 9>> irradiance(n);
+        std::vector<std::array<glm::vec3, 4>> direct(n);
+        std::vector<LightmapSh::Half> half(n);
+        tiled.read(0, n, irradiance.data(), direct.data(), half.data());
+        EXPECT_EQ(0, std::memcmp(irradiance.data(), whole.irradiance.data(), n * sizeof(irradiance[0])))
+            << what;
+        EXPECT_EQ(0, std::memcmp(direct.data(), whole.direct.data(), n * sizeof(direct[0]))) << what;
+        EXPECT_EQ(0, std::memcmp(half.data(), whole.half.data(), n * sizeof(half[0]))) << what;
+        EXPECT_EQ(tiled.valid, whole.valid) << what;
+    };
+    const std::filesystem::path folder = hemi::test::temp_dir("lightmap_test");
+    o.tile_texels = 97;
+    o.tile_file = folder / "box.tiles";
+    {
+        const LightmapSh tiled = bake_lightmap_sh(m, a, lights, o, &surfaces);
+        ASSERT_TRUE(tiled.tiles);
+        EXPECT_TRUE(tiled.irradiance.empty() && tiled.direct.empty() && tiled.half.empty())
+            << "the sums are on disk, not in memory";
+        EXPECT_EQ(tiled.tiles_count, (n + 96) / 97);
+        EXPECT_EQ(tiled.rays, whole.rays);
+        EXPECT_TRUE(std::filesystem::exists(o.tile_file));
+        same(tiled, "tiles");
+        for (const char* name : {"h4", "plain", "rnm"})
+            EXPECT_EQ(lightmap_maps(name, a, tiled, 2).values, lightmap_maps(name, a, whole, 2).values)
+                << name;
+        hemi::io::LightProbes p = probe_grid(m, glm::uvec3(2)), q = p;
+        LightmapBakeOptions po = o;
+        po.rays = 32;
+        bake_light_probes(p, m, a, tiled, lights, po, &surfaces);
+        bake_light_probes(q, m, a, whole, lights, po, &surfaces);
+        EXPECT_EQ(0, std::memcmp(p.irradiance.data(), q.irradiance.data(),
+                                 p.irradiance.size() * sizeof(p.irradiance[0])));
+        LightmapSh loaded = tiled;
+        loaded.load();
+        EXPECT_FALSE(loaded.tiles);
+        same(loaded, "loaded");
+    }
+    EXPECT_FALSE(std::filesystem::exists(o.tile_file)) << "without a checkpoint the tiles go with the result";
+
+    o.checkpoint = folder / "box.partial";
+    remove_checkpoint(o.checkpoint);
+    o.checkpoint_seconds = 1e9; // only the saves forced at the end of each pass
+    EXPECT_THROW(bake_lightmap_sh(m, a, lights, o, &surfaces,
+                                  [](const LightmapProgress& p)
+                                  {
+                                      if (p.pass == 2 && p.texels_done >= 4 * 97)
+                                          throw std::runtime_error("killed");
+                                  }),
+                 std::runtime_error);
+    EXPECT_TRUE(std::filesystem::exists(o.tile_file)) << "kept for the checkpoint";
+    const LightmapSh again = bake_lightmap_sh(m, a, lights, o, &surfaces);
+    EXPECT_TRUE(again.resumed);
+    EXPECT_EQ(again.rays, uint64_t(n) * 64) << "only the third pass is traced again";
+    same(again, "resumed");
+    // A checkpoint whose tiles are gone cannot resume: it says so, naming the file.
+    std::filesystem::remove(o.tile_file);
+    try
+    {
+        bake_lightmap_sh(m, a, lights, o, &surfaces);
+        ADD_FAILURE() << "resumed without its tiles";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("box.tiles"), std::string::npos) << e.what();
+    }
+    remove_checkpoint(o.checkpoint);
+}
+
 // The sun's disc: a roof z = 1 over x < 0 hides a sun straight above from the floor's left half. A sun of
 // diameter D lights a texel at x a fraction of the open floor's irradiance that is the part of its disc on
 // the open side of the roof's edge, seen at the angle a = atan(x / 1) from the disc's centre: for a disc of

@@ -22,21 +22,6 @@ constexpr size_t kNameBytes = 32;
 constexpr size_t kHeaderBytes = 16;
 constexpr size_t kEntryBytes = kNameBytes + 16;
 
-// resize + memcpy rather than insert: GCC 12 warns falsely (-Wstringop-overflow) on inserting into an
-// empty vector of std::byte.
-void put_bytes(std::vector<std::byte>& out, const void* p, size_t n)
-{
-    const size_t at = out.size();
-    out.resize(at + n);
-    if (n)
-        std::memcpy(out.data() + at, p, n);
-}
-
-template <typename T> void put(std::vector<std::byte>& out, T v)
-{
-    put_bytes(out, &v, sizeof(T));
-}
-
 template <typename T> T get(const std::vector<std::byte>& in, size_t at)
 {
     T v;
@@ -45,46 +30,184 @@ template <typename T> T get(const std::vector<std::byte>& in, size_t at)
 }
 } // namespace
 
-void AssetWriter::add(const std::string& name, std::span<const std::byte> bytes)
+struct AssetWriter::Section
+{
+    std::string name;
+    std::vector<std::byte> owned;     // add()'s copy, without a spool
+    std::span<const std::byte> bytes; // what write() writes: owned, or add_view()'s; empty when spooled
+    bool spooled = false;
+    uint64_t spool_offset = 0, size = 0;
+};
+
+struct AssetWriter::Spool
+{
+    std::filesystem::path path;
+    std::fstream file;
+    uint64_t size = 0;
+
+    [[noreturn]] void fail(const std::string& what) const
+    {
+        throw FormatError(path.string() + ": " + what + " (the asset writer's spool): " +
+                          (errno ? std::strerror(errno) : "unknown I/O error"));
+    }
+};
+
+AssetWriter::AssetWriter() = default;
+
+AssetWriter::AssetWriter(const std::filesystem::path& spool) : spool_(std::make_unique<Spool>())
+{
+    spool_->path = spool;
+    errno = 0;
+    spool_->file.open(spool, std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
+    if (!spool_->file)
+        spool_->fail("cannot create it");
+}
+
+AssetWriter::~AssetWriter()
+{
+    if (spool_)
+    {
+        spool_->file.close();
+        std::error_code ignored;
+        std::filesystem::remove(spool_->path, ignored);
+    }
+}
+
+void AssetWriter::check_name(const std::string& name) const
 {
     if (name.empty() || name.size() >= kNameBytes)
         throw std::invalid_argument("hemi: asset section name '" + name + "' must have 1 to 31 bytes");
-    for (const auto& s : sections_)
-        if (s.first == name)
+    for (const Section& s : sections_)
+        if (s.name == name)
             throw std::invalid_argument("hemi: asset section '" + name + "' added twice");
-    sections_.emplace_back(name, std::vector<std::byte>(bytes.begin(), bytes.end()));
+}
+
+void AssetWriter::add(const std::string& name, std::span<const std::byte> bytes)
+{
+    add_generated(name, bytes.size(),
+                  [&](uint64_t offset, std::span<std::byte> out)
+                  {
+                      if (!out.empty())
+                          std::memcpy(out.data(), bytes.data() + offset, out.size());
+                  });
+}
+
+void AssetWriter::add_generated(const std::string& name, uint64_t size,
+                                const std::function<void(uint64_t, std::span<std::byte>)>& fill)
+{
+    check_name(name);
+    Section s;
+    s.name = name;
+    s.size = size;
+    if (!spool_)
+    {
+        s.owned.resize(size_t(size));
+        fill(0, s.owned);
+        sections_.push_back(std::move(s));
+        sections_.back().bytes = sections_.back().owned;
+        return;
+    }
+    s.spooled = true;
+    s.spool_offset = spool_->size;
+    constexpr uint64_t kPiece = uint64_t(1) << 20;
+    std::vector<std::byte> piece(size_t(std::min(size, kPiece)));
+    spool_->file.seekp(std::streamoff(spool_->size));
+    for (uint64_t at = 0; at < size; at += kPiece)
+    {
+        const std::span<std::byte> out(piece.data(), size_t(std::min(kPiece, size - at)));
+        fill(at, out);
+        errno = 0;
+        spool_->file.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
+        if (!spool_->file)
+            spool_->fail("writing section " + name + " failed");
+    }
+    spool_->size += size;
+    sections_.push_back(std::move(s));
+}
+
+void AssetWriter::add_view(const std::string& name, std::span<const std::byte> bytes)
+{
+    check_name(name);
+    Section s;
+    s.name = name;
+    s.bytes = bytes;
+    s.size = bytes.size();
+    sections_.push_back(std::move(s));
 }
 
 void AssetWriter::write(const std::filesystem::path& path) const
 {
-    std::vector<std::byte> out;
-    put_bytes(out, kMagic, 8);
-    put<uint32_t>(out, kAssetVersion);
-    put<uint32_t>(out, uint32_t(sections_.size()));
-    uint64_t offset = kHeaderBytes + kEntryBytes * sections_.size();
-    for (const auto& [name, bytes] : sections_)
+    if (spool_)
     {
-        char padded[kNameBytes] = {};
-        std::memcpy(padded, name.data(), name.size());
-        put_bytes(out, padded, kNameBytes);
-        put<uint64_t>(out, offset);
-        put<uint64_t>(out, bytes.size());
-        offset += bytes.size();
+        spool_->file.flush();
+        if (!spool_->file)
+            spool_->fail("flushing it failed");
     }
-    for (const auto& s : sections_)
-        put_bytes(out, s.second.data(), s.second.size());
-    put<uint64_t>(out, XXH64(out.data(), out.size(), 0));
-    write_atomically(path,
-                     [&](const std::filesystem::path& tmp)
-                     {
-                         std::ofstream f(tmp, std::ios::binary);
-                         errno = 0;
-                         f.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
-                         f.close();
-                         if (f.fail())
-                             throw FormatError(path.string() + ": writing the asset failed: " +
-                                               (errno ? std::strerror(errno) : "unknown I/O error"));
-                     });
+    write_atomically(
+        path,
+        [&](const std::filesystem::path& tmp)
+        {
+            std::ofstream f(tmp, std::ios::binary);
+            errno = 0;
+            XXH64_state_t hash;
+            XXH64_reset(&hash, 0);
+            auto emit = [&](const void* p, size_t n)
+            {
+                if (n == 0)
+                    return;
+                XXH64_update(&hash, p, n);
+                f.write(static_cast<const char*>(p), std::streamsize(n));
+            };
+            // The header and the table, gathered first (one hash update rather than many small ones).
+            std::vector<std::byte> head(kHeaderBytes + kEntryBytes * sections_.size());
+            std::byte* at = head.data();
+            auto put = [&](const void* p, size_t n)
+            {
+                std::memcpy(at, p, n);
+                at += n;
+            };
+            const uint32_t version = kAssetVersion, count = uint32_t(sections_.size());
+            put(kMagic, 8);
+            put(&version, 4);
+            put(&count, 4);
+            uint64_t offset = head.size();
+            for (const Section& s : sections_)
+            {
+                char padded[kNameBytes] = {};
+                std::memcpy(padded, s.name.data(), s.name.size());
+                put(padded, kNameBytes);
+                put(&offset, 8);
+                put(&s.size, 8);
+                offset += s.size;
+            }
+            emit(head.data(), head.size());
+            std::vector<std::byte> piece;
+            for (const Section& s : sections_)
+            {
+                if (!s.spooled)
+                {
+                    emit(s.bytes.data(), s.bytes.size());
+                    continue;
+                }
+                constexpr uint64_t kPiece = uint64_t(1) << 20;
+                piece.resize(size_t(std::min(s.size, kPiece)));
+                spool_->file.seekg(std::streamoff(s.spool_offset));
+                for (uint64_t done = 0; done < s.size; done += kPiece)
+                {
+                    const size_t n = size_t(std::min(kPiece, s.size - done));
+                    errno = 0;
+                    if (!spool_->file.read(reinterpret_cast<char*>(piece.data()), std::streamsize(n)))
+                        spool_->fail("reading section " + s.name + " back failed");
+                    emit(piece.data(), n);
+                }
+            }
+            const uint64_t digest = XXH64_digest(&hash);
+            f.write(reinterpret_cast<const char*>(&digest), sizeof digest);
+            f.close();
+            if (f.fail())
+                throw FormatError(path.string() + ": writing the asset failed: " +
+                                  (errno ? std::strerror(errno) : "unknown I/O error"));
+        });
 }
 
 AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string())

@@ -203,11 +203,13 @@ const LightmapOutput& LightmapAsset::output(const std::string& name) const
 
 struct LightmapAssetWriter::Sections
 {
+    explicit Sections(const std::filesystem::path& spool) : writer(spool) {}
+    Sections() = default;
     AssetWriter writer;
 };
 
-LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a)
-    : asset_(&a), sections_(std::make_unique<Sections>())
+LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a, const std::filesystem::path& spool)
+    : asset_(&a), sections_(spool.empty() ? std::make_unique<Sections>() : std::make_unique<Sections>(spool))
 {
     if (std::string p = problem(a, false); !p.empty())
         throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
@@ -222,17 +224,32 @@ void LightmapAssetWriter::add_output(const LightmapOutput& o)
 {
     if (std::string p = output_problem(o, asset_->width, asset_->height); !p.empty())
         throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
-    // u32 K, u32 N, N u32 block indices, then the values as half floats.
+    // u32 K, u32 N, N u32 block indices, then the values as half floats: encoded piece by piece as the
+    // container asks for them (straight into its spool when it has one).
     const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
-    std::vector<uint16_t> halves(4 + blocks.size() * 2 + o.maps.values.size());
-    const uint32_t head[2] = {o.k, uint32_t(blocks.size())};
-    std::memcpy(halves.data(), head, 8);
+    std::vector<uint32_t> head(2 + blocks.size());
+    head[0] = o.k;
+    head[1] = uint32_t(blocks.size());
     if (!blocks.empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
-        std::memcpy(halves.data() + 4, blocks.data(), blocks.size() * 4);
-    uint16_t* out = halves.data() + 4 + blocks.size() * 2;
-    for (size_t i = 0; i < o.maps.values.size(); ++i)
-        out[i] = glm::packHalf1x16(o.maps.values[i]);
-    sections_->writer.add("L." + o.name, std::as_bytes(std::span<const uint16_t>(halves)));
+        std::memcpy(head.data() + 2, blocks.data(), blocks.size() * 4);
+    const uint64_t head_bytes = head.size() * 4;
+    sections_->writer.add_generated(
+        "L." + o.name, head_bytes + o.maps.values.size() * 2,
+        [&](uint64_t offset, std::span<std::byte> out)
+        {
+            size_t at = 0;
+            if (offset < head_bytes)
+            {
+                at = size_t(std::min<uint64_t>(head_bytes - offset, out.size()));
+                std::memcpy(out.data(), reinterpret_cast<const std::byte*>(head.data()) + offset, at);
+            }
+            // The head and every piece have an even size: values start on a whole half float.
+            for (size_t v = size_t((offset + at - head_bytes) / 2); at < out.size(); at += 2, ++v)
+            {
+                const uint16_t h = glm::packHalf1x16(o.maps.values[v]);
+                std::memcpy(out.data() + at, &h, 2);
+            }
+        });
     ++outputs_;
 }
 

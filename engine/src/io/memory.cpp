@@ -27,14 +27,15 @@ uint64_t proc_field(const char* file, const std::string& key)
     return 0;
 }
 
-// HEMI_MEMORY_BUDGET: bytes, or a number with K, M, G or T (binary units); 0 when unset or malformed.
-uint64_t budget_from_environment()
+} // namespace
+
+uint64_t parse_bytes(std::string_view view)
 {
-    const char* text = std::getenv("HEMI_MEMORY_BUDGET");
-    if (!text || !*text)
+    const std::string text(view);
+    if (text.empty())
         return 0;
     char* end = nullptr;
-    const double v = std::strtod(text, &end);
+    const double v = std::strtod(text.c_str(), &end);
     double scale = 1.0;
     switch (*end)
     {
@@ -65,16 +66,16 @@ uint64_t budget_from_environment()
         ++end;
     if (*end == 'B')
         ++end;
-    if (*end != '\0' || !(v > 0.0) || !(v * scale < 1.8e19))
+    if (*end != '\0' || !(v > 0.0) || !(v * scale < 1.8e19) || v * scale < 1.0)
         return 0;
     return uint64_t(v * scale);
 }
-} // namespace
 
 uint64_t available_memory()
 {
     uint64_t available = proc_field("/proc/meminfo", "MemAvailable");
-    if (const uint64_t budget = budget_from_environment())
+    const char* environment = std::getenv("HEMI_MEMORY_BUDGET");
+    if (const uint64_t budget = environment ? parse_bytes(environment) : 0)
         available = available ? std::min(available, budget) : budget;
     auto lower = [&](int resource, const char* used_key)
     {

@@ -98,8 +98,9 @@ class SliceCheckpoint
     // items meaning the pass is complete. Saves when the checkpoint is on, the bake is not complete and
     // `interval_seconds` have passed since the last save (or resume). A failed save turns checkpointing off
     // and error() says why: a checkpoint is insurance, not the result, and the bake goes on without it.
-    // Returns whether it saved.
-    bool slice_done(uint32_t pass, uint32_t next_item);
+    // Returns whether it saved. `now` saves whatever the interval (a bake whose state outside the sections
+    // must not run more than a pass ahead of its checkpoint: the tile file of texel_file.h).
+    bool slice_done(uint32_t pass, uint32_t next_item, bool now = false);
 
     // Saves the sections and `position` now (atomically: temporary file, then rename). Throws
     // io::FormatError naming the file when writing fails; the previous checkpoint is then left as it was.

@@ -14,12 +14,14 @@
 
 #include <hemi/bake/distribution.h>
 #include <hemi/bake/lightmap_atlas.h>
+#include <hemi/bake/texel_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/mesh.h>
 
 #include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -27,6 +29,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -117,6 +120,15 @@ struct LightmapBakeOptions
     // bake_lightmap_sh with the same arguments and all return the same result. Only the leader resumes and
     // saves the checkpoint and reports progress.
     Distribution* distribution = nullptr;
+    // Bounded memory (hemi-bake lightmap --memory-budget): 0 keeps every texel's sums in memory; else the
+    // bake runs each pass in tiles of this many texels and keeps the sums of the passes in `tile_file` on
+    // disk (texel_file.h), one tile of them in memory at a time: per texel, 156 bytes of sums (312 more with
+    // keep_halves) leave memory for 24 on disk (twice as many) and 12 more in memory for the bounces. The
+    // same bytes as a bake without tiles, for any tile size. The leader's value counts on every rank. With a
+    // checkpoint, the file is its companion (kept when the bake stops early, needed to resume); without, it
+    // is removed with the result.
+    uint32_t tile_texels = 0;
+    std::filesystem::path tile_file;
 };
 
 struct LightmapProgress
@@ -156,6 +168,24 @@ struct LightmapSh
     double trace_seconds = 0.0;
     bool resumed = false;
     std::string checkpoint_error;
+    // A bake in tiles (LightmapBakeOptions::tile_texels) leaves irradiance, direct and half empty: their
+    // values are in `tiles` (copy `tiles_copy`: fields irradiance, direct, half), read back by read(). On
+    // the leader only; the other ranks of a job return without them. Null otherwise.
+    std::shared_ptr<TexelFile> tiles;
+    int tiles_copy = 0;
+    uint32_t tiles_count = 0; // tiles in the last pass (1 without tiles)
+    bool tiles_halves = false;
+
+    size_t texels() const { return tiles ? tiles->items() : irradiance.size(); }
+    bool has_direct() const { return tiles || !direct.empty(); }
+    bool has_halves() const { return tiles ? tiles_halves : !half.empty(); }
+    // Texels [first, first + count) from memory or from `tiles`, into each array that is not null: their
+    // SH9 irradiance, direct values (has_direct()) and halves (has_halves()).
+    void read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irradiance,
+              std::array<glm::vec3, 4>* direct = nullptr, Half* half = nullptr) const;
+    // Reads every texel into irradiance, direct and half, and lets the tiles go (the denoiser works on the
+    // whole atlas in memory).
+    void load();
 };
 
 // Throws std::invalid_argument for bad options or lights (non-finite values, a sun direction of zero length,
@@ -188,6 +218,12 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
 // given, counts the texels it changed.
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                             int dilate = 2, bool non_negative = false, size_t* adjusted = nullptr);
+// The same from the texels' places alone: places[i] the (x, y) of atlas.texels[i] in a width x height atlas
+// (what a bake keeps of its atlas once the passes and probes are done, 8 bytes a texel instead of the
+// texel's record).
+io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
+                            std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate = 2,
+                            bool non_negative = false, size_t* adjusted = nullptr);
 
 // Ringing-free coefficients (hemi-bake lightmap --non-negative): a basis fitted to SH9 irradiance rings where
 // the light is concentrated (a low sun's delta lobe gives negative irradiance at normals facing away from
@@ -256,6 +292,11 @@ struct LightmapFileOptions
     // them, with denoise_passes a-trous passes; off by default.
     bool denoise = false;
     int denoise_passes = 3;
+    // The memory the bake may use, in bytes (--memory-budget); 0: what the machine has free
+    // (io::available_memory). A bake whose estimate exceeds it runs in tiles (LightmapBakeOptions::
+    // tile_texels) as large as the budget leaves room for, its sums in lightmap_tile_path(asset); one that
+    // cannot fit even in tiles of 4096 texels is refused before it starts, naming both.
+    uint64_t memory_budget = 0;
 };
 
 struct LightmapBakeSummary
@@ -283,13 +324,22 @@ struct LightmapBakeSummary
     size_t unwrapped_charts = 0; // with unwrap
     float unwrap_texel_size = 0.0f;
     double trace_seconds = 0.0, total_seconds = 0.0;
+    // Wall time per stage, in order: scene (read, textures decoded), atlas (rasterised), bake (sample points
+    // and passes), denoise, probes, outputs (made, stitched, encoded and written).
+    std::vector<std::pair<std::string, double>> stage_seconds;
     bool resumed = false, tangents_generated = false;
+    uint64_t memory_budget = 0; // the budget the bake kept to (0: none known)
+    uint32_t tile_texels = 0;   // texels per tile; 0: the whole atlas in memory
+    uint32_t tiles = 0;         // tiles per pass (the last pass's; 1 without tiles)
     // The ranks that shared the bake and the texels each computed, over the origin search and all passes;
     // {n * (2 + bounces)} on one process.
     std::vector<uint64_t> texels_by_rank;
     std::string checkpoint_error;
     std::vector<std::filesystem::path> exr_files;
 };
+
+// Where a bake in tiles keeps the sums of its passes: ASSET.tiles (removed once the asset is written).
+std::filesystem::path lightmap_tile_path(const std::filesystem::path& asset);
 
 // Where --exr-dir DIR puts an output of the asset ASSET: DIR/<ASSET's stem>.<output>.exr.
 std::filesystem::path lightmap_exr_path(const std::filesystem::path& dir, const std::filesystem::path& asset,

@@ -14,7 +14,9 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,17 +29,39 @@ constexpr uint32_t kAssetVersion = 1;
 class AssetWriter
 {
   public:
+    AssetWriter();
+    // Sections added from here on go to the file `spool` as they are added, not to memory, and write()
+    // copies them from there: the writer then holds no section's bytes (a bake's outputs, written one at a
+    // time). The spool is created (or truncated) here and removed when the writer is destroyed. Throws
+    // FormatError naming the spool when it cannot be created.
+    explicit AssetWriter(const std::filesystem::path& spool);
+    ~AssetWriter();
+    AssetWriter(const AssetWriter&) = delete;
+    AssetWriter& operator=(const AssetWriter&) = delete;
+
     // Throws std::invalid_argument for an empty or too long (> 31 bytes) name, or a duplicate.
     void add(const std::string& name, std::span<const std::byte> bytes);
     template <typename T> void add_array(const std::string& name, std::span<const T> values)
     {
         add(name, std::as_bytes(values));
     }
-    // Atomic (temporary file + rename). Throws FormatError naming the file on I/O failure.
+    // A section of `size` bytes that `fill(offset, out)` writes out.size() bytes of at a time (in pieces of
+    // at most 1 MiB when spooling, so that its bytes never exist whole in memory; else in one piece).
+    void add_generated(const std::string& name, uint64_t size,
+                       const std::function<void(uint64_t offset, std::span<std::byte> out)>& fill);
+    // A section whose bytes are not copied: the caller keeps them, unchanged, until write() returns (a
+    // checkpoint's arrays).
+    void add_view(const std::string& name, std::span<const std::byte> bytes);
+    // Atomic (temporary file + rename), streamed: no copy of the file is made in memory. Throws FormatError
+    // naming the file on I/O failure.
     void write(const std::filesystem::path& path) const;
 
   private:
-    std::vector<std::pair<std::string, std::vector<std::byte>>> sections_;
+    struct Section;
+    struct Spool;
+    void check_name(const std::string& name) const;
+    std::vector<Section> sections_;
+    std::unique_ptr<Spool> spool_;
 };
 
 class AssetReader

@@ -100,12 +100,15 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
 // that a bake can free an output's float maps before it makes the next (hemi-bake lightmap holds one output
 // in floats instead of all). `asset` is everything else (its outputs are not read; its probes must be
 // final); the writer keeps a reference to it until write(). The bytes are write_lightmap_asset's of the whole
-// asset. Throws as write_lightmap_asset does: the constructor for the rest of the asset, add_output for an
-// output, write() for no outputs or a file that cannot be written.
+// asset. With a `spool` file (AssetWriter's), each output's half floats go to disk as they are encoded and
+// the writer holds none of them: a bake's memory then holds one output at a time, in floats, and nothing
+// else of its outputs. Throws as write_lightmap_asset does: the constructor for the rest of the asset (or a
+// spool it cannot create), add_output for an output, write() for no outputs or a file that cannot be
+// written.
 class LightmapAssetWriter
 {
   public:
-    explicit LightmapAssetWriter(const LightmapAsset& asset);
+    explicit LightmapAssetWriter(const LightmapAsset& asset, const std::filesystem::path& spool = {});
     ~LightmapAssetWriter();
     LightmapAssetWriter(const LightmapAssetWriter&) = delete;
     LightmapAssetWriter& operator=(const LightmapAssetWriter&) = delete;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace hemi::io
 {
@@ -17,6 +18,10 @@ uint64_t available_memory();
 
 // The most resident memory this process has held so far (getrusage's ru_maxrss), in bytes; 0 when unknown.
 uint64_t peak_memory();
+
+// A size in bytes as a person writes it: a number of bytes, or one with K, M, G or T (binary units,
+// optionally followed by "iB" or "B": "8G", "1.5GiB", "512M"); 0 when `text` is not one, or not positive.
+uint64_t parse_bytes(std::string_view text);
 
 // "1.50 GiB", "12.0 MiB", "512 B".
 std::string format_bytes(uint64_t bytes);

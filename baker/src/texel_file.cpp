@@ -1,0 +1,171 @@
+#include <hemi/bake/texel_file.h>
+#include <hemi/io/image.h> // io::FormatError
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace hemi::bake
+{
+namespace
+{
+constexpr char kMagic[8] = {'H', 'E', 'M', 'I', 'T', 'I', 'L', 'E'};
+constexpr uint32_t kVersion = 1;
+constexpr uint64_t kHeaderBytes = 64;
+constexpr size_t kMaxFields = 8;
+constexpr int kCopies = 2;
+
+struct Header
+{
+    char magic[8];
+    uint32_t version, items;
+    uint64_t key;
+    uint32_t fields, copies;
+    uint32_t field_bytes[kMaxFields];
+};
+static_assert(sizeof(Header) == kHeaderBytes);
+
+std::string errno_text()
+{
+    return errno ? std::strerror(errno) : "unknown I/O error";
+}
+} // namespace
+
+TexelFile::TexelFile(std::filesystem::path path, uint64_t key, uint32_t items,
+                     std::vector<uint32_t> field_bytes, bool resume)
+    : path_(std::move(path)), items_(items), field_bytes_(std::move(field_bytes))
+{
+    if (field_bytes_.empty() || field_bytes_.size() > kMaxFields)
+        throw std::invalid_argument("a texel file holds 1 to 8 arrays");
+    Header header{};
+    std::memcpy(header.magic, kMagic, 8);
+    header.version = kVersion;
+    header.items = items;
+    header.key = key;
+    header.fields = uint32_t(field_bytes_.size());
+    header.copies = kCopies;
+    for (size_t f = 0; f < field_bytes_.size(); ++f)
+        header.field_bytes[f] = field_bytes_[f];
+    errno = 0;
+    if (resume)
+    {
+        fd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC);
+        Header found{};
+        if (fd_ < 0 || ::pread(fd_, &found, sizeof found, 0) != ssize_t(sizeof found) ||
+            std::memcmp(&found, &header, sizeof header) != 0 || bytes() > uint64_t(lseek(fd_, 0, SEEK_END)))
+        {
+            const std::string why =
+                fd_ < 0 ? "missing (" + errno_text() + ")" : "from another bake or cut short";
+            if (fd_ >= 0)
+                ::close(fd_);
+            fd_ = -1;
+            keep_ = true;
+            throw io::FormatError(path_.string() + ": the checkpoint's tiles are " + why +
+                                  "; remove the checkpoint (ASSET.partial) to bake afresh");
+        }
+        return;
+    }
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0)
+    {
+        keep_ = true; // nothing of ours to remove
+        throw io::FormatError(path_.string() + ": cannot create the bake's tile file: " + errno_text());
+    }
+    if (::pwrite(fd_, &header, sizeof header, 0) != ssize_t(sizeof header) ||
+        ::ftruncate(fd_, off_t(bytes())) != 0)
+    {
+        const std::string why = errno_text();
+        ::close(fd_);
+        fd_ = -1;
+        std::error_code ignored;
+        std::filesystem::remove(path_, ignored);
+        keep_ = true;
+        throw io::FormatError(path_.string() + ": cannot size the bake's tile file: " + why);
+    }
+}
+
+TexelFile::~TexelFile()
+{
+    if (fd_ >= 0)
+        ::close(fd_);
+    if (!keep_)
+    {
+        std::error_code ignored;
+        std::filesystem::remove(path_, ignored);
+    }
+}
+
+uint64_t TexelFile::bytes() const
+{
+    uint64_t per_item = 0;
+    for (uint32_t b : field_bytes_)
+        per_item += b;
+    return kHeaderBytes + kCopies * per_item * items_;
+}
+
+uint64_t TexelFile::offset(int copy, size_t field, uint32_t first, size_t count) const
+{
+    if (copy < 0 || copy >= kCopies || field >= field_bytes_.size() || uint64_t(first) + count > items_)
+        throw std::out_of_range(path_.string() + ": items out of the tile file's range");
+    uint64_t per_item = 0, before = 0;
+    for (size_t f = 0; f < field_bytes_.size(); ++f)
+    {
+        per_item += field_bytes_[f];
+        if (f < field)
+            before += field_bytes_[f];
+    }
+    return kHeaderBytes + uint64_t(copy) * per_item * items_ + before * items_ +
+           uint64_t(first) * field_bytes_[field];
+}
+
+void TexelFile::write(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes)
+{
+    const size_t count = bytes.size() / field_bytes_.at(field);
+    uint64_t at = offset(copy, field, first, count);
+    for (size_t done = 0; done < bytes.size();)
+    {
+        errno = 0;
+        const ssize_t n = ::pwrite(fd_, bytes.data() + done, bytes.size() - done, off_t(at));
+        if (n <= 0)
+        {
+            if (n < 0 && errno == EINTR)
+                continue;
+            throw io::FormatError(path_.string() + ": writing the bake's tiles failed: " + errno_text());
+        }
+        done += size_t(n);
+        at += uint64_t(n);
+    }
+}
+
+void TexelFile::read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const
+{
+    const size_t count = bytes.size() / field_bytes_.at(field);
+    uint64_t at = offset(copy, field, first, count);
+    for (size_t done = 0; done < bytes.size();)
+    {
+        errno = 0;
+        const ssize_t n = ::pread(fd_, bytes.data() + done, bytes.size() - done, off_t(at));
+        if (n <= 0)
+        {
+            if (n < 0 && errno == EINTR)
+                continue;
+            throw io::FormatError(path_.string() + ": reading the bake's tiles back failed: " +
+                                  (n == 0 ? std::string("the file is cut short") : errno_text()));
+        }
+        done += size_t(n);
+        at += uint64_t(n);
+    }
+}
+
+void TexelFile::sync()
+{
+    errno = 0;
+    if (::fdatasync(fd_) != 0)
+        throw io::FormatError(path_.string() + ": syncing the bake's tiles to disk failed: " + errno_text());
+}
+
+} // namespace hemi::bake
