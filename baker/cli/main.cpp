@@ -487,6 +487,7 @@ int run_lightmap(LightmapCli& c)
     files.output("-o", c.asset);
     files.output("its checkpoint", bake::checkpoint_path(c.asset));
     files.output("its tiles", bake::lightmap_tile_path(c.asset));
+    files.output("its spool", c.asset + ".spool");
     files.output("--json", c.json);
     files.output("--uv-report", c.uv_report);
     o.uv_report = c.uv_report;

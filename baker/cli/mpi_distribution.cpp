@@ -22,6 +22,7 @@ namespace
 constexpr int kAssign = 1; // leader -> worker: int64 slice index, or -1: no more in this pass
 constexpr int kResult = 2; // worker -> leader: u32 slice index, then the slice's items of every array
 constexpr int kInHand = 3; // slices assigned to a worker ahead of its results
+constexpr int kJob = 4;    // worker -> leader: u64 size, then a job's result in pieces of at most 1 GiB
 
 void check(int code, const char* what)
 {
@@ -99,6 +100,42 @@ class Job final : public MpiJob
         // Every rank gets the whole pass.
         for (const bake::ItemArray& a : arrays)
             broadcast({a.data + size_t(first) * a.item_bytes, size_t(items - first) * a.item_bytes});
+    }
+
+    void run_jobs(uint32_t count, const std::function<std::vector<std::byte>(uint32_t)>& job,
+                  const std::function<void(uint32_t, std::vector<std::byte>&&)>& take) override
+    {
+        // In order of i on every rank: a worker's blocking sends of its jobs meet the leader's receives one
+        // by one, and while the leader makes its own job the workers make theirs.
+        constexpr size_t kPiece = size_t(1) << 30;
+        for (uint32_t i = 0; i < count; ++i)
+        {
+            const int owner = int(i % ranks_);
+            if (rank_ == 0 && owner == 0)
+                take(i, job(i));
+            else if (rank_ == 0)
+            {
+                uint64_t size = 0;
+                check(MPI_Recv(&size, 1, MPI_UINT64_T, owner, kJob, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                      "MPI_Recv");
+                std::vector<std::byte> bytes(static_cast<size_t>(size));
+                for (size_t at = 0; at < bytes.size(); at += kPiece)
+                    check(MPI_Recv(bytes.data() + at, int(std::min(kPiece, bytes.size() - at)), MPI_BYTE,
+                                   owner, kJob, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                          "MPI_Recv");
+                take(i, std::move(bytes));
+            }
+            else if (int(rank_) == owner)
+            {
+                const std::vector<std::byte> bytes = job(i);
+                const uint64_t size = bytes.size();
+                check(MPI_Send(&size, 1, MPI_UINT64_T, 0, kJob, MPI_COMM_WORLD), "MPI_Send");
+                for (size_t at = 0; at < bytes.size(); at += kPiece)
+                    check(MPI_Send(bytes.data() + at, int(std::min(kPiece, bytes.size() - at)), MPI_BYTE, 0,
+                                   kJob, MPI_COMM_WORLD),
+                          "MPI_Send");
+            }
+        }
     }
 
   private:

@@ -518,7 +518,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     const ItemArray origin_arrays[2] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
                                         {reinterpret_cast<std::byte*>(pushed.data()), 1}};
     dist.run(
-        0, n, std::clamp<uint32_t>(uint32_t(1) << 18, 256, n), origin_arrays,
+        0, n, std::min<uint32_t>(uint32_t(1) << 18, n), origin_arrays,
         [&](uint32_t begin, uint32_t end)
         {
             tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
@@ -752,9 +752,20 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
                                     (lights.sun ? uint64_t(o.sun_rays) : 0) +
                                     uint64_t(lights.punctual.size());
-    const uint32_t slice = uint32_t(std::clamp<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256, tile));
+    // At least 256 texels a slice, at most a tile (std::clamp would be undefined for a tile under 256).
+    const uint32_t slice =
+        uint32_t(std::min<uint64_t>(std::max<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256), tile));
+    // With tiles, a checkpoint that could not be saved must not stay behind: the next pass overwrites the
+    // copy of the tile file that a resume from the last good one would read. So it goes, and the tiles with
+    // it.
+    const auto forget_failed_checkpoint = [&]
+    {
+        if (!tiles || checkpoint.active() || o.checkpoint.empty())
+            return;
+        remove_checkpoint(o.checkpoint);
+        tiles->keep(false);
+    };
     const auto t0 = std::chrono::steady_clock::now();
-    uint32_t tiles_count = 0;
     for (int pass = int(state.pass); pass < passes; ++pass)
     {
         const uint32_t first = pass == int(state.pass) ? state.next_item : 0;
@@ -764,10 +775,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             previous_map = dilated(atlas, previous, 1, 2, out.valid);
         if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
-        tiles_count = 0;
         // Without tiles, one run over the whole pass; with tiles, one per tile, each added to the tile file
         // before the next.
-        for (uint32_t begin = first; begin < n; begin = tiled ? std::min(n, begin + tile) : n, ++tiles_count)
+        for (uint32_t begin = first; begin < n; begin = tiled ? std::min(n, begin + tile) : n)
         {
             const uint32_t end = tiled ? std::min(n, begin + tile) : n;
             base = tiled ? begin : 0;
@@ -847,6 +857,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 next_previous[begin + i] = pass_direct[i][0];
             if (end < n)
                 checkpoint.slice_done(uint32_t(pass), end);
+            forget_failed_checkpoint();
             if (progress && dist.leader())
                 progress({pass, passes, end, n, checkpoint.error()});
         }
@@ -870,6 +881,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         // With tiles, a save at the end of every pass: the next pass overwrites the copy of the tile file
         // that a resume from a save in this pass would read (texel_file.h).
         checkpoint.slice_done(uint32_t(pass), n, tiled);
+        forget_failed_checkpoint();
         if (progress && dist.leader())
             progress({pass, passes, n, n, checkpoint.error()});
     }
@@ -879,7 +891,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         out.tiles_copy = (passes - 1) % 2;
         out.tiles_halves = o.keep_halves;
     }
-    out.tiles_count = tiles_count;
+    out.tiles_count = tiled ? (n + tile - 1) / tile : 1;
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();
     for (uint32_t i = 0; i < n; ++i)

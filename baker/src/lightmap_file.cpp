@@ -219,8 +219,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         io::check_writable(asset_path);
         io::check_writable(o.bake.checkpoint);
-        io::check_writable(
-            lightmap_tile_path(asset_path)); // a bake in tiles, and the asset's spool beside it
+        io::check_writable(lightmap_tile_path(asset_path)); // a bake in tiles
+        io::check_writable(asset_path.string() + ".spool"); // the asset's outputs as they are made
         if (!o.uv_report.empty())
             io::check_writable(o.uv_report);
         if (!o.exr_dir.empty())
@@ -413,12 +413,16 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                             " covered texels");
     // In tiles when the whole atlas does not fit: the largest tile the budget leaves room for (check_fits has
     // made sure that one of kMinTileTexels does).
+    // At most covered - 1: a tile of every texel would keep the sums in memory. A bake in tiles that was
+    // stopped resumes in tiles, whatever memory is free now (its checkpoint holds no sums).
     uint32_t tile_texels = 0;
-    if (budget != 0 && whole_bytes(covered) > budget)
+    const bool tiles_to_resume =
+        std::filesystem::exists(o.bake.checkpoint) && std::filesystem::exists(lightmap_tile_path(asset_path));
+    if (covered > 1 && ((budget != 0 && whole_bytes(covered) > budget) || tiles_to_resume))
     {
         const uint64_t fixed = tiled_bytes(covered, 0);
-        tile_texels = uint32_t(std::clamp<uint64_t>(fixed < budget ? (budget - fixed) / per_tile_texel : 0,
-                                                    std::min<uint64_t>(covered, kMinTileTexels), covered));
+        const uint64_t room = budget == 0 ? covered : fixed < budget ? (budget - fixed) / per_tile_texel : 0;
+        tile_texels = uint32_t(std::min<uint64_t>(std::max<uint64_t>(room, kMinTileTexels), covered - 1));
     }
     summary.tile_texels = tile_texels;
     for (const std::string& warning : report.warnings)
@@ -447,7 +451,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.texels_by_rank = dist.items_by_rank();
     for (size_t r = 0; r < summary.texels_by_rank.size() && r < items_before.size(); ++r)
         summary.texels_by_rank[r] -= items_before[r];
-    if (!leader)
+    // The outputs are shared among the ranks when every rank holds the bake's sums (not in tiles: those are
+    // on rank 0's disk) and nothing else needs them whole on rank 0 (--exr-dir writes there; --denoise
+    // filters there): each rank makes every ranks()-th output and sends it to rank 0, which writes the asset.
+    const bool share_outputs = dist.ranks() > 1 && !sh.irradiance.empty() && o.exr_dir.empty() && !o.denoise;
+    if (!leader && !share_outputs)
         return summary; // the texels are on rank 0: its outputs, its probes
     stage_done("bake"); // the sample points' search and every pass
     summary.tiles = sh.tiles_count;
@@ -478,7 +486,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     asset.bounces = uint32_t(o.bake.bounces);
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
-    if (o.probes != glm::uvec3(0))
+    if (o.probes != glm::uvec3(0) && leader)
     {
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
             throw std::invalid_argument("--probes needs at least one probe along each axis");
@@ -500,7 +508,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     atlas = LightmapAtlas{};
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
     // seams whose two sides' frames agree (LightmapSeam::frames_agree).
-    const std::vector<LightmapSeam> seams = find_lightmap_seams(asset.mesh);
+    const std::vector<LightmapSeam> seams = find_lightmap_seams(scene.mesh);
     std::vector<LightmapSeam> framed;
     for (const LightmapSeam& seam : seams)
         if (seam.frames_agree)
@@ -514,20 +522,24 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free lift runs
     // again on the texels the stitch changed, since least squares does not keep a texel's function
     // non-negative.
-    // Each output's half floats go to a spool file beside the asset as they are made, not to memory.
-    io::LightmapAssetWriter writer(asset, asset_path.string() + ".spool");
     std::optional<LightmapSeamStitch> all, along_frames;
-    for (const std::string& name : o.outputs)
+    // What the summary says of one output (sent to rank 0 with it when the ranks share the outputs).
+    struct OutputReport
+    {
+        uint64_t adjusted = 0, blocks = 0, stitched_texels = 0, clamped = 0;
+        double before_mean = 0.0, before_p95 = 0.0, after_mean = 0.0, after_p95 = 0.0;
+        uint8_t stitched = 0, has_clamped = 0;
+    };
+    const auto make_output = [&](const std::string& name, OutputReport& made)
     {
         size_t adjusted = 0;
         io::LightmapOutput output{name, uint32_t(lightmap_output_size(name)),
                                   lightmap_maps(name, w, h, places, sh, o.dilate, o.non_negative, &adjusted)};
-        if (o.non_negative && name != "plain" && name != "rnm")
-            summary.non_negative[name] = adjusted;
-        if (&name == &o.outputs.front())
-            summary.blocks = output.maps.grid.blocks().size();
+        made.adjusted = adjusted;
+        made.blocks = output.maps.grid.blocks().size();
         const LightmapSeamMetric before = measure_lightmap_seams(seams_of(output.name), output.maps);
-        summary.seam_difference[output.name] = {{before.mean, before.p95}, {before.mean, before.p95}};
+        made.before_mean = made.after_mean = before.mean;
+        made.before_p95 = made.after_p95 = before.p95;
         if (o.stitch && !seams.empty() && (output.name == "plain" || !framed.empty()))
         {
             const bool plain = output.name == "plain";
@@ -535,7 +547,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 plain || framed.size() == seams.size() ? all : along_frames;
             if (!stitch)
                 stitch.emplace(seams_of(output.name), output.maps.grid, o.stitch_closeness);
-            summary.stitched_texels = std::max(summary.stitched_texels, stitch->slots().size());
+            made.stitched = 1;
+            made.stitched_texels = stitch->slots().size();
             stitch->apply(output.maps);
             if (plain || output.name == "rnm")
             {
@@ -556,7 +569,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                             }
                         clamped += any;
                     }
-                summary.stitch_clamped[output.name] = clamped;
+                made.has_clamped = 1;
+                made.clamped = clamped;
             }
             else if (o.non_negative)
             {
@@ -573,17 +587,73 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 }
             }
             const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
-            summary.seam_difference[output.name].second = {m.mean, m.p95};
+            made.after_mean = m.mean;
+            made.after_p95 = m.p95;
         }
-        writer.add_output(output);
-        if (!o.exr_dir.empty())
+        return output;
+    };
+    const auto take_report = [&](const std::string& name, const OutputReport& made)
+    {
+        if (o.non_negative && name != "plain" && name != "rnm")
+            summary.non_negative[name] = size_t(made.adjusted);
+        if (&name == &o.outputs.front())
+            summary.blocks = size_t(made.blocks);
+        summary.seam_difference[name] = {{made.before_mean, made.before_p95},
+                                         {made.after_mean, made.after_p95}};
+        if (made.stitched)
+            summary.stitched_texels = std::max(summary.stitched_texels, size_t(made.stitched_texels));
+        if (made.has_clamped)
+            summary.stitch_clamped[name] = size_t(made.clamped);
+    };
+    if (share_outputs)
+    {
+        // Each rank makes its outputs and sends rank 0 the made and the encoded section; rank 0 adds them in
+        // order (the same bytes as one process's).
+        std::optional<io::LightmapAssetWriter> writer;
+        if (leader)
+            writer.emplace(asset, asset_path.string() + ".spool");
+        dist.run_jobs(
+            uint32_t(o.outputs.size()),
+            [&](uint32_t i)
+            {
+                OutputReport made;
+                const io::LightmapOutput output = make_output(o.outputs[i], made);
+                std::vector<std::byte> bytes = io::LightmapAssetWriter::encode_output(output, w, h);
+                bytes.insert(bytes.begin(), reinterpret_cast<const std::byte*>(&made),
+                             reinterpret_cast<const std::byte*>(&made) + sizeof made);
+                return bytes;
+            },
+            [&](uint32_t i, std::vector<std::byte>&& bytes)
+            {
+                if (bytes.size() < sizeof(OutputReport))
+                    throw std::runtime_error("a rank sent output " + o.outputs[i] + " cut short");
+                OutputReport made;
+                std::memcpy(&made, bytes.data(), sizeof made);
+                take_report(o.outputs[i], made);
+                writer->add_encoded_output(o.outputs[i],
+                                           std::span<const std::byte>(bytes).subspan(sizeof made));
+            });
+        if (!leader)
+            return summary;
+        writer->write(asset_path);
+    }
+    else
+    {
+        // Each output's half floats go to a spool file beside the asset as they are made, not to memory.
+        io::LightmapAssetWriter writer(asset, asset_path.string() + ".spool");
+        for (const std::string& name : o.outputs)
         {
-            const io::LightmapOutput& out = output;
+            OutputReport made;
+            const io::LightmapOutput output = make_output(name, made);
+            take_report(name, made);
+            writer.add_output(output);
+            if (o.exr_dir.empty())
+                continue;
             // An EXR is a dense image: one output at a time is expanded to the whole atlas.
-            const std::vector<float> dense = out.maps.dense();
+            const std::vector<float> dense = output.maps.dense();
             std::vector<io::ExrChannel> channels;
             const size_t plane = size_t(w) * h * 3;
-            for (uint32_t k = 0; k < out.k; ++k)
+            for (uint32_t k = 0; k < output.k; ++k)
                 for (const char* c : {"R", "G", "B"})
                 {
                     char channel_name[32];
@@ -592,20 +662,20 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                     channels.push_back({channel_name, dense.data() + k * plane + channel, 3, true});
                 }
             const std::vector<std::pair<std::string, std::string>> attributes = {
-                {"hemi.output", out.name},
-                {"hemi.k", std::to_string(out.k)},
+                {"hemi.output", output.name},
+                {"hemi.k", std::to_string(output.k)},
                 {"hemi.layout",
                  "coefficient k of a texel in channels c<k>.R, c<k>.G, c<k>.B; rows from the top "
                  "(v = 0) of the TEXCOORD_1 atlas"},
                 {"hemi.frame",
                  "irradiance in each texel's tangent frame of the normal-map UV set (TEXCOORD_0): "
                  "E(n) = sum_k c_k b_k(n), n the tangent-space normal-map normal"}};
-            const std::filesystem::path file = lightmap_exr_path(o.exr_dir, asset_path, out.name);
+            const std::filesystem::path file = lightmap_exr_path(o.exr_dir, asset_path, output.name);
             io::write_exr_channels(file, w, h, channels, attributes);
             summary.exr_files.push_back(file);
         }
+        writer.write(asset_path);
     }
-    writer.write(asset_path);
     stage_done("outputs"); // made, stitched, encoded, written (and the EXRs)
     summary.stage_seconds = std::move(stages);
     remove_checkpoint(o.bake.checkpoint); // the finished work is in the asset now, and the tiles with it

@@ -75,16 +75,18 @@ TexelFile::TexelFile(std::filesystem::path path, uint64_t key, uint32_t items,
         keep_ = true; // nothing of ours to remove
         throw io::FormatError(path_.string() + ": cannot create the bake's tile file: " + errno_text());
     }
+    int allocated = 0;
     if (::pwrite(fd_, &header, sizeof header, 0) != ssize_t(sizeof header) ||
-        ::ftruncate(fd_, off_t(bytes())) != 0)
+        (allocated = ::posix_fallocate(fd_, 0, off_t(bytes()))) != 0)
     {
-        const std::string why = errno_text();
+        const std::string why = allocated ? std::strerror(allocated) : errno_text();
         ::close(fd_);
         fd_ = -1;
         std::error_code ignored;
         std::filesystem::remove(path_, ignored);
         keep_ = true;
-        throw io::FormatError(path_.string() + ": cannot size the bake's tile file: " + why);
+        throw io::FormatError(path_.string() + ": cannot make room for the bake's tiles (" +
+                              std::to_string(bytes() >> 20) + " MiB): " + why);
     }
 }
 

@@ -74,6 +74,7 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
     ASSERT_EQ(s.status, 0) << s.err;
     const std::string expected = hemi::test::slurp(single);
     ASSERT_FALSE(expected.empty());
+    const nlohmann::json single_json = nlohmann::json::parse(hemi::test::slurp(dir() / "single.json"));
     for (int ranks : {1, 2, 3})
     {
         const fs::path asset = dir() / ("ranks" + std::to_string(ranks) + ".hemi"),
@@ -85,6 +86,10 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
         ASSERT_EQ(r.status, 0) << r.err << r.out;
         EXPECT_TRUE(hemi::test::slurp(asset) == expected) << ranks << " rank(s): the asset's bytes differ";
         const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(json));
+        // Three ranks in memory share the outputs (each makes every third and sends it to rank 0): the
+        // asset's bytes above, and the seams' report of every output the same as one process's.
+        EXPECT_EQ(j["seams"], single_json["seams"]) << ranks << " rank(s)";
+        EXPECT_EQ(j["stored_blocks"], single_json["stored_blocks"]) << ranks << " rank(s)";
         if (ranks == 2)
         {
             EXPECT_GT(j["tiles_per_pass"].get<uint32_t>(), 1u) << "a budget that leaves the bake in memory";

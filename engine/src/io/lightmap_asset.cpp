@@ -220,36 +220,67 @@ LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a, const std::file
 
 LightmapAssetWriter::~LightmapAssetWriter() = default;
 
+namespace
+{
+// An output's section: u32 K, u32 N, N u32 block indices, then the values as half floats, encoded piece by
+// piece as the container asks for them (straight into its spool when it has one).
+struct OutputSection
+{
+    explicit OutputSection(const LightmapOutput& o, uint32_t width, uint32_t height) : output(o)
+    {
+        if (std::string p = output_problem(o, width, height); !p.empty())
+            throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
+        const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
+        head.resize(2 + blocks.size());
+        head[0] = o.k;
+        head[1] = uint32_t(blocks.size());
+        if (!blocks
+                 .empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
+            std::memcpy(head.data() + 2, blocks.data(), blocks.size() * 4);
+    }
+    uint64_t head_bytes() const { return head.size() * 4; }
+    uint64_t size() const { return head_bytes() + output.maps.values.size() * 2; }
+    void fill(uint64_t offset, std::span<std::byte> out) const
+    {
+        size_t at = 0;
+        if (offset < head_bytes())
+        {
+            at = size_t(std::min<uint64_t>(head_bytes() - offset, out.size()));
+            std::memcpy(out.data(), reinterpret_cast<const std::byte*>(head.data()) + offset, at);
+        }
+        // The head and every piece have an even size: values start on a whole half float.
+        for (size_t v = size_t((offset + at - head_bytes()) / 2); at < out.size(); at += 2, ++v)
+        {
+            const uint16_t h = glm::packHalf1x16(output.maps.values[v]);
+            std::memcpy(out.data() + at, &h, 2);
+        }
+    }
+    const LightmapOutput& output;
+    std::vector<uint32_t> head;
+};
+} // namespace
+
 void LightmapAssetWriter::add_output(const LightmapOutput& o)
 {
-    if (std::string p = output_problem(o, asset_->width, asset_->height); !p.empty())
-        throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
-    // u32 K, u32 N, N u32 block indices, then the values as half floats: encoded piece by piece as the
-    // container asks for them (straight into its spool when it has one).
-    const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
-    std::vector<uint32_t> head(2 + blocks.size());
-    head[0] = o.k;
-    head[1] = uint32_t(blocks.size());
-    if (!blocks.empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
-        std::memcpy(head.data() + 2, blocks.data(), blocks.size() * 4);
-    const uint64_t head_bytes = head.size() * 4;
-    sections_->writer.add_generated(
-        "L." + o.name, head_bytes + o.maps.values.size() * 2,
-        [&](uint64_t offset, std::span<std::byte> out)
-        {
-            size_t at = 0;
-            if (offset < head_bytes)
-            {
-                at = size_t(std::min<uint64_t>(head_bytes - offset, out.size()));
-                std::memcpy(out.data(), reinterpret_cast<const std::byte*>(head.data()) + offset, at);
-            }
-            // The head and every piece have an even size: values start on a whole half float.
-            for (size_t v = size_t((offset + at - head_bytes) / 2); at < out.size(); at += 2, ++v)
-            {
-                const uint16_t h = glm::packHalf1x16(o.maps.values[v]);
-                std::memcpy(out.data() + at, &h, 2);
-            }
-        });
+    const OutputSection section(o, asset_->width, asset_->height);
+    sections_->writer.add_generated("L." + o.name, section.size(),
+                                    [&](uint64_t offset, std::span<std::byte> out)
+                                    { section.fill(offset, out); });
+    ++outputs_;
+}
+
+std::vector<std::byte> LightmapAssetWriter::encode_output(const LightmapOutput& o, uint32_t width,
+                                                          uint32_t height)
+{
+    const OutputSection section(o, width, height);
+    std::vector<std::byte> bytes(size_t(section.size()));
+    section.fill(0, bytes);
+    return bytes;
+}
+
+void LightmapAssetWriter::add_encoded_output(const std::string& name, std::span<const std::byte> bytes)
+{
+    sections_->writer.add("L." + name, bytes);
     ++outputs_;
 }
 

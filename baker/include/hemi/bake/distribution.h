@@ -51,6 +51,16 @@ class Distribution
 
     // The leader's bytes, to every rank (a resumed checkpoint's state). The same size on every rank.
     virtual void broadcast(std::span<std::byte> bytes) = 0;
+    // Jobs whose results are bytes of any size (a lightmap's outputs, each made, stitched and encoded):
+    // job(i) for i in [0, count) runs on rank i % ranks(), and the leader takes every result in the order of
+    // i, through take(i, bytes): its own as it makes them, the others' as they arrive. take is called on the
+    // leader only. The same count on every rank. This process alone (the default): take(i, job(i)) in turn.
+    virtual void run_jobs(uint32_t count, const std::function<std::vector<std::byte>(uint32_t)>& job,
+                          const std::function<void(uint32_t, std::vector<std::byte>&&)>& take)
+    {
+        for (uint32_t i = 0; i < count; ++i)
+            take(i, job(i));
+    }
 
     // Throws std::runtime_error on a rank whose `value` (a bake's checkpoint key: a hash of its inputs and
     // options) differs from the leader's: ranks that would bake different scenes must not share slices.

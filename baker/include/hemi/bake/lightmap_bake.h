@@ -122,11 +122,13 @@ struct LightmapBakeOptions
     Distribution* distribution = nullptr;
     // Bounded memory (hemi-bake lightmap --memory-budget): 0 keeps every texel's sums in memory; else the
     // bake runs each pass in tiles of this many texels and keeps the sums of the passes in `tile_file` on
-    // disk (texel_file.h), one tile of them in memory at a time: per texel, 156 bytes of sums (312 more with
-    // keep_halves) leave memory for 24 on disk (twice as many) and 12 more in memory for the bounces. The
-    // same bytes as a bake without tiles, for any tile size. The leader's value counts on every rank. With a
-    // checkpoint, the file is its companion (kept when the bake stops early, needed to resume); without, it
-    // is removed with the result.
+    // disk (texel_file.h), one tile of them in memory at a time. Per texel, the sums and the pass being
+    // gathered (156 bytes each, 312 each with keep_halves) leave memory for a tile's worth; the file holds
+    // two copies of the sums (312 bytes a texel, 624 with keep_halves), and memory keeps 12 bytes more for
+    // the bounces. The same bytes as a bake without tiles, for any tile size. The leader's value counts on
+    // every rank. With a checkpoint, the file is its companion and stays (the caller removes both once the
+    // result is written: bake_lightmap_file does); a checkpoint is then saved at the end of a tile, not of a
+    // slice. Without one, the file goes with the LightmapSh that holds it.
     uint32_t tile_texels = 0;
     std::filesystem::path tile_file;
 };

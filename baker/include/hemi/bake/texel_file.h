@@ -11,8 +11,9 @@
 // uninterrupted bake.
 //
 // The file: a 64-byte header ("HEMITILE", format version, the bake's key, items, fields, copies, each
-// field's bytes per item), then copy after copy, in each the fields' arrays one after the other. I/O by
-// pread / pwrite; a failure (a full disk) throws io::FormatError naming the file.
+// field's bytes per item), then copy after copy, in each the fields' arrays one after the other. Its blocks
+// are allocated when it is created (posix_fallocate: a disk without room for it fails then, not halfway
+// through a bake); I/O by pread / pwrite; a failure throws io::FormatError naming the file.
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -40,8 +41,8 @@ class TexelFile
     void read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const;
     // Every write so far on disk (fdatasync): before a checkpoint says the tiles written are done.
     void sync();
-    // Leave the file when this object goes (a checkpoint needs it to resume).
-    void keep() { keep_ = true; }
+    // Leave the file when this object goes (a checkpoint needs it to resume), or not.
+    void keep(bool keep = true) { keep_ = keep; }
 
     const std::filesystem::path& path() const { return path_; }
     uint32_t items() const { return items_; }

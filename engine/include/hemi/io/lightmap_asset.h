@@ -113,6 +113,11 @@ class LightmapAssetWriter
     LightmapAssetWriter(const LightmapAssetWriter&) = delete;
     LightmapAssetWriter& operator=(const LightmapAssetWriter&) = delete;
     void add_output(const LightmapOutput& output);
+    // The same in two steps, for an output made elsewhere (another rank of a distributed bake): its section's
+    // bytes for an asset of width x height, then those bytes added under its name.
+    static std::vector<std::byte> encode_output(const LightmapOutput& output, uint32_t width,
+                                                uint32_t height);
+    void add_encoded_output(const std::string& name, std::span<const std::byte> bytes);
     void write(const std::filesystem::path& path);
 
   private:
