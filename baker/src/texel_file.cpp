@@ -124,43 +124,41 @@ uint64_t TexelFile::offset(int copy, size_t field, uint32_t first, size_t count)
            uint64_t(first) * field_bytes_[field];
 }
 
-void TexelFile::write(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes)
+namespace
 {
-    const size_t count = bytes.size() / field_bytes_.at(field);
-    uint64_t at = offset(copy, field, first, count);
-    for (size_t done = 0; done < bytes.size();)
+// All `size` bytes at `at` through pread or pwrite (`move`), again after a signal or a short transfer; a
+// failure, or the end of the file, throws naming `path` and `what` was done.
+template <typename Move, typename Byte>
+void transfer(int fd, Byte* data, size_t size, uint64_t at, Move move, const std::filesystem::path& path,
+              const char* what)
+{
+    for (size_t done = 0; done < size;)
     {
         errno = 0;
-        const ssize_t n = ::pwrite(fd_, bytes.data() + done, bytes.size() - done, off_t(at));
+        const ssize_t n = move(fd, data + done, size - done, off_t(at));
         if (n <= 0)
         {
             if (n < 0 && errno == EINTR)
                 continue;
-            throw io::FormatError(path_.string() + ": writing the bake's tiles failed: " + errno_text());
-        }
-        done += size_t(n);
-        at += uint64_t(n);
-    }
-}
-
-void TexelFile::read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const
-{
-    const size_t count = bytes.size() / field_bytes_.at(field);
-    uint64_t at = offset(copy, field, first, count);
-    for (size_t done = 0; done < bytes.size();)
-    {
-        errno = 0;
-        const ssize_t n = ::pread(fd_, bytes.data() + done, bytes.size() - done, off_t(at));
-        if (n <= 0)
-        {
-            if (n < 0 && errno == EINTR)
-                continue;
-            throw io::FormatError(path_.string() + ": reading the bake's tiles back failed: " +
+            throw io::FormatError(path.string() + ": " + what + " failed: " +
                                   (n == 0 ? std::string("the file is cut short") : errno_text()));
         }
         done += size_t(n);
         at += uint64_t(n);
     }
+}
+} // namespace
+
+void TexelFile::write(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes)
+{
+    const uint64_t at = offset(copy, field, first, bytes.size() / field_bytes_.at(field));
+    transfer(fd_, bytes.data(), bytes.size(), at, ::pwrite, path_, "writing the bake's tiles");
+}
+
+void TexelFile::read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const
+{
+    const uint64_t at = offset(copy, field, first, bytes.size() / field_bytes_.at(field));
+    transfer(fd_, bytes.data(), bytes.size(), at, ::pread, path_, "reading the bake's tiles back");
 }
 
 void TexelFile::sync()
