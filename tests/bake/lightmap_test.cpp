@@ -13,8 +13,10 @@
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/bake/ray_generator.h>
+#include <hemi/io/image.h>
 #include <hemi/io/material.h>
 #include <hemi/math/basis.h>
+#include <hemi/math/camera.h>
 #include <hemi/math/sh.h>
 
 #include <gtest/gtest.h>
@@ -2195,12 +2197,15 @@ TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
 
 // The denoiser against a 4096-ray bake: a floor with a wall standing on it, a sky of 1 and a sun of 10 at 45
 // degrees whose shadow the wall casts on the floor. Baked at 32 rays and denoised, the irradiance at the
-// normal (plain) and the SH9 irradiance come 2.4x closer to the 4096-ray bake (RMSE over every texel: at
-// most 0.45 of the undenoised 32-ray bake's; measured 0.38 and 0.41), the mean stays within 0.5% (0.04%),
-// and the sun's shadow edge on the floor keeps its width: the 10-90% rise across it, per texel row, within
-// one texel of the 4096-ray bake's (0.85 texels both). A 128-ray bake is printed beside it: on this scene,
-// whose wall is a chart 10 texels high with the sky's occlusion curving along all of it, 32 denoised rays
-// stay 13-30% short of 128 rays (docs/lightmaps.md has the sample level, where they reach it).
+// normal (plain) and the SH9 irradiance come about 3x closer to the 4096-ray bake (RMSE over every texel: at
+// most 0.36 of the undenoised 32-ray bake's; measured 0.32 and 0.33) and as close as a 128-ray bake (issue
+// 25's bar: plain no further than 128 rays, measured 0.97 of it; SH9 within 8% of it, measured 1.056 with
+// these seeds and 0.98-1.06, mean 1.02, over five: its constant term curves at the wall's foot, where the
+// fit's window is one-sided). Every chart keeps its light (the mean of plain equal to the undenoised bake's
+// to 1e-5; a filter that only normalises each texel's weights moves 0.04% here and 1-3% of a real level's
+// light into its dim parts), so the mean stays within 0.5% of the 4096-ray bake's (0.02%), and the sun's
+// shadow edge on the floor keeps its width: the 10-90% rise across it, per texel row, within one texel of the
+// 4096-ray bake's (0.85 texels both).
 TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
 {
     Mesh m;
@@ -2265,9 +2270,13 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
     {
         std::printf("%s RMSE against 4096 rays: 32 rays %.4f, denoised %.4f; 128 rays %.4f\n",
                     plain ? "plain" : "sh9", rmse(noisy, plain), rmse(denoised, plain), rmse(more, plain));
-        EXPECT_LE(rmse(denoised, plain), 0.45 * rmse(noisy, plain)) << (plain ? "plain" : "sh9");
+        EXPECT_LE(rmse(denoised, plain), 0.36 * rmse(noisy, plain)) << (plain ? "plain" : "sh9");
+        EXPECT_LE(rmse(denoised, plain), (plain ? 1.0 : 1.08) * rmse(more, plain))
+            << (plain ? "plain" : "sh9");
     }
-    std::printf("mean: 4096 rays %.4f, 32 denoised %.4f\n", mean(reference), mean(denoised));
+    std::printf("mean: 4096 rays %.4f, 32 rays %.4f, 32 denoised %.4f\n", mean(reference), mean(noisy),
+                mean(denoised));
+    EXPECT_NEAR(mean(denoised) / mean(noisy), 1.0, 1e-5);
     EXPECT_NEAR(mean(denoised) / mean(reference), 1.0, 0.005);
 
     // The shadow edge, per texel row of the floor: where plain rises from 10% to 90% of the way from the
@@ -2318,6 +2327,76 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
     std::printf("shadow edge, 10-90%% rise: 4096 rays %.2f texels, 32 denoised %.2f texels\n",
                 reference_width, denoised_width);
     EXPECT_LE(std::abs(denoised_width - reference_width), 1.0);
+}
+
+// The denoiser on a real level under a real sky (issue 25's bar): the sample level (make_level) unwrapped
+// into a 96 x 96 atlas (about 5,300 texels, a texel per 30 cm: small charts, much of them border), Blender's
+// courtyard HDRI (Debian's blender-data), a sun through the window and one bounce. Baked at 32 rays and
+// denoised, plain and SH9 come closer to a 4096-ray bake than an undenoised 128-ray bake does (RMSE over
+// every texel; measured 0.85 and 0.83 of it), and the level keeps its light: the mean of plain equal to the
+// 32-ray bake's to 1e-5 (each chart is given back its own total).
+TEST(LightmapDenoise, RealLevelUnderARealSkyAt32RaysComesCloserThan128Rays)
+{
+    const std::string hdri = "/usr/share/blender/datafiles/studiolights/world/courtyard.exr";
+    hemi::io::GltfScene level = hemi::samples::make_level(128);
+    UnwrapOptions u;
+    u.width = u.height = 96;
+    const UnwrapResult unwrapped = unwrap_lightmap(level.mesh, u);
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(level.mesh, unwrapped.width, unwrapped.height, report);
+    ASSERT_TRUE(report.ok());
+    LightmapLights lights;
+    lights.environment = hemi::io::read_exr(hdri);
+    hemi::io::clamp_negative_radiance(lights.environment, hdri);
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.3f, -0.5f, 0.4f));
+    lights.sun_irradiance = glm::vec3(8.0f, 7.5f, 7.0f);
+    lights.scene_to_world = glm::mat3(hemi::math::gltf_to_world());
+    lights.punctual = level.lights;
+    const LightmapSurfaces surfaces(level.mesh, level.materials, level.images, level.primitives);
+    const auto bake = [&](int rays, uint64_t seed)
+    {
+        LightmapBakeOptions o;
+        o.rays = rays;
+        o.seed = seed;
+        o.bounces = 1;
+        o.keep_halves = rays == 32;
+        return bake_lightmap_sh(level.mesh, a, lights, o, &surfaces);
+    };
+    const LightmapSh reference = bake(4096, 3), more = bake(128, 2), noisy = bake(32, 1);
+    LightmapSh denoised = noisy;
+    denoise_lightmap(level.mesh, a, denoised);
+    EXPECT_TRUE(denoised.half.empty()); // measured and released
+    // RMSE of plain and of SH9's nine coefficients over every texel and channel.
+    const auto rmse = [&](const LightmapSh& sh, bool plain)
+    {
+        double sum = 0.0;
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            for (size_t k = 0; k < (plain ? 1u : 9u); ++k)
+            {
+                const glm::vec3 d = plain ? sh.direct[i][0] - reference.direct[i][0]
+                                          : sh.irradiance[i][k] - reference.irradiance[i][k];
+                sum += double(glm::dot(d, d));
+            }
+        return std::sqrt(sum / double(a.texels.size() * (plain ? 3 : 27)));
+    };
+    for (const bool plain : {true, false})
+    {
+        std::printf("real level, %s RMSE against 4096 rays: 32 rays %.4f, denoised %.4f; 128 rays %.4f\n",
+                    plain ? "plain" : "sh9", rmse(noisy, plain), rmse(denoised, plain), rmse(more, plain));
+        EXPECT_LE(rmse(denoised, plain), rmse(more, plain)) << (plain ? "plain" : "sh9");
+    }
+    const auto mean = [&](const LightmapSh& sh)
+    {
+        glm::dvec3 sum(0.0);
+        for (size_t i = 0; i < a.texels.size(); ++i)
+            sum += glm::dvec3(sh.direct[i][0]);
+        return sum / double(a.texels.size());
+    };
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(mean(denoised)[c] / mean(noisy)[c], 1.0, 1e-5) << "channel " << c;
+    std::printf("real level, mean of plain: 4096 rays %.4f, 32 rays %.4f, denoised %.4f\n", mean(reference).x,
+                mean(noisy).x, mean(denoised).x);
 }
 
 // The denoiser's two halves of the samples (LightmapSh::half): under exact light only (a point light) half A

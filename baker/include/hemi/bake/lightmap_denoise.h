@@ -1,15 +1,15 @@
 #pragma once
 // A chart-aware denoiser for baked lightmaps (hemi-bake lightmap --denoise): an edge-avoiding a-trous wavelet
-// filter (Dammertz, Sewtz, Hanika and Lensch 2010) over the atlas's covered texels, with edge-stopping
-// functions in the manner of SVGF (Schied et al. 2017), cross-filtering the two halves of the bake's
-// samples (LightmapSh::half; the dual buffers of Rousselle, Manzi and Zwicker 2013), and a first-order fit
-// in place of the weighted mean.
+// filter (Dammertz, Sewtz, Hanika and Lensch 2010) over the atlas's covered texels, with the non-local-means
+// distance of Monte Carlo denoisers (Rousselle, Knaus and Zwicker 2012) in units of the bake's own noise, a
+// first-order fit in place of the weighted mean, and each chart given back the light it was baked with.
 //
-// Why two halves: a weight taken from the same noise as the value it weighs is biased wherever the noise is
-// skewed (an importance-sampled sky through a window: most samples dim, a few bright). It keeps a dim texel
-// from its brighter neighbours and lets a bright one take its dimmer ones, and the mean darkens (a
-// single-buffer version of this filter lost 4% of a real level's light). Here half A is filtered with
-// weights computed from half B and B with weights from A, and the result is A + B.
+// The noise: the bake keeps half A of each texel's samples apart (LightmapSh::half; B is the whole less A,
+// and the two halves take one of every two neighbouring strata each), so (A - B)^2, per guide, is the
+// paired-strata estimate of the whole's variance (a little above the true one). The guides are the luminance
+// of the irradiance at the normal (plain) and of SH9's three band-1 coefficients (the light's direction). A
+// single texel's guides and variance are single draws: both are prefiltered over its 3 x 3 neighbours in its
+// chart, weights (1, 2, 1) x (1, 2, 1) / 16 (the variance with the weights squared).
 //
 // Pass k (k = 0 .. iterations - 1) looks at the 5 x 5 texels 2^k apart in the atlas, weighted by the B3
 // spline (1, 4, 6, 4, 1) / 16 along each axis times
@@ -18,16 +18,12 @@
 //     sample point than 1.5x the texel spacing times the texels' world size, plus one world size), else
 //     exp(-|(p_j - p_i) . g_i| / (sigma_plane * world size)) (g_i the centre's geometric normal: a step out
 //     of its plane), times max(0, n_i . n_j)^sigma_normal (a crease: the shading normals turn);
-//   - the light: exp(-max_c |g_jc - g_ic| / (sigma_luminance * sd_ijc)) over four guides c of the weighing
-//     half, the luminance of the irradiance at the normal and of SH9's three band-1 coefficients (the
-//     light's direction); sd_ijc^2 is the mean of the two texels' variances of that guide, each averaged
-//     over its 3 x 3 neighbours in the chart (one texel's estimate is a single draw: (A - B)^2 / 2 to begin
-//     with, then what the previous passes left of it, sum l_j^2 v_j). Where the weighing half's variance of
-//     a guide is 0 at the centre (its halves agreed, like all of a sealed room's: no light), only texels with
-//     exactly its value of that guide in the weighing half weigh anything: where every texel in reach saw no
-//     light in either half (a sealed room), the result is exactly 0. (A texel black only by chance, where the
-//     light is dim, must still take its neighbours' light: requiring them black in both halves kept 16% of a
-//     dim level's light out.)
+//   - the light: exp(-max(0, D)), D the mean over the four guides c of
+//         ((g_jc - g_ic)^2 - (v_ic + min(v_ic, v_jc))) / (sigma_light^2 (v_ic + v_jc)),
+//     v the guides' variances averaged over each texel's 3 x 3 neighbours: about 0 (weight 1) for a
+//     neighbour whose light differs from the centre's by noise alone, growing with the square of a real
+//     difference. Where the centre's variance of a guide is 0 (its halves agreed: in a sealed room, no sample
+//     saw light), only texels with exactly its value of that guide weigh anything, so a sealed room stays 0.
 // With those weights the texel fits v ~ b0 + b1 dx + b2 dy over the window (dx, dy its offsets; the slopes
 // damped by a ridge of 1% of the total weight, so that a window without the spread to fit them gives the
 // weighted mean) and takes b0 = sum l_j v_j: exact, but for the ridge's small pull, for light that changes
@@ -35,11 +31,17 @@
 // weighted mean would be pulled towards the side that has neighbours. Where the centre's noise is known, the
 // light's term is then taken again against the guides' fitted planes rather than the centre's values, and the
 // fit repeated: a neighbour off the plane by more than the noise (across an edge, or where the light curves)
-// weighs less, one along the gradient does not. sum l_j = 1, so a constant stays constant (to rounding).
-// Every value of a texel (its SH9 irradiance, and plain's and rnm's directly integrated values) goes through
-// the same l_j, so the outputs stay consistent with each other; plain's and rnm's are kept >= 0. Texels
-// inside geometry (LightmapSh::valid 0) are neither filtered nor used. Deterministic on any thread count
-// (every texel reads only the previous pass).
+// weighs less, one along the gradient does not. Every value of a texel (its SH9 irradiance, plain's and rnm's
+// directly integrated values) and its guides go through the same l_j, the guides' variances through l_j^2.
+// sum l_j = 1, so a constant stays constant (to rounding).
+//
+// Each chart keeps its light: a texel's weights sum to 1 but its neighbours' weights on it need not (a flat,
+// dim region takes more from a bright feature than the feature takes back), which moves light from features
+// into the regions around them (1-3% of a real level's under a bright sky). So at the end plain and rnm are
+// kept >= 0 and each chart is scaled, per colour channel, until its plain sums to what the bake's did (the
+// unbiased estimate of its light); every value of its texels by the same factor, a chart without light as it
+// is. Texels inside geometry (LightmapSh::valid 0) are neither filtered nor used. Deterministic on any thread
+// count (every texel reads only the previous pass).
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/io/mesh.h>
@@ -51,10 +53,10 @@ namespace hemi::bake
 
 struct LightmapDenoiseOptions
 {
-    int iterations = 3;           // a-trous passes: a reach of 2 (2^iterations - 1) texels
-    float sigma_luminance = 1.0f; // standard deviations of noise a neighbour's guides may differ by
-    float sigma_normal = 128.0f;  // exponent on the shading normals' cosine
-    float sigma_plane = 1.0f;     // distance off the centre's plane, in the centre texel's world sizes
+    int iterations = 3;          // a-trous passes: a reach of 2 (2^iterations - 1) texels
+    float sigma_light = 1.25f;   // how far past its noise a neighbour's light may differ (the distance's k)
+    float sigma_normal = 128.0f; // exponent on the shading normals' cosine
+    float sigma_plane = 1.0f;    // distance off the centre's plane, in the centre texel's world sizes
 };
 
 struct LightmapDenoiseReport
@@ -64,7 +66,7 @@ struct LightmapDenoiseReport
 };
 
 // Denoises `sh` (from bake_lightmap_sh on this mesh and atlas, with LightmapBakeOptions::keep_halves) in
-// place (its halves too). Throws
+// place, and releases its halves (they measured the noise). Throws
 // std::invalid_argument when `sh` lacks the halves or the directly integrated values, or its sizes do not
 // match the atlas, or for options out of range (iterations in [0, 10], sigmas > 0).
 LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,
