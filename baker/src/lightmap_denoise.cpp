@@ -78,38 +78,26 @@ Guide guides_of(const float* v)
     return {math::luminance(glm::vec3(v[27], v[28], v[29])), math::luminance(glm::vec3(v[3], v[4], v[5])),
             math::luminance(glm::vec3(v[6], v[7], v[8])), math::luminance(glm::vec3(v[9], v[10], v[11]))};
 }
-} // namespace
 
-LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,
-                                       const LightmapDenoiseOptions& o)
+// Filters texels [first, first + n) of the atlas, in place in `value` (39 floats each, the whole of their
+// samples), with `halves` their half A (released once measured); texels outside the range count as absent.
+// Plain and rnm come out >= 0; each chart's light is restored by the caller.
+void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
+                  const std::vector<uint8_t>& valid, size_t first, size_t n, std::vector<float>& value,
+                  std::vector<LightmapSh::Half>& halves, const LightmapDenoiseOptions& o)
 {
-    const size_t n = atlas.texels.size();
-    if (sh.irradiance.size() != n || sh.direct.size() != n || sh.half.size() != n || sh.valid.size() != n)
-        throw std::invalid_argument(
-            "denoising needs a bake's irradiance, direct values, half-sample values and "
-            "validity for each of the atlas's " +
-            std::to_string(n) + " texels");
-    if (o.iterations < 0 || o.iterations > 10 || !(o.sigma_light > 0.0f) || !(o.sigma_normal > 0.0f) ||
-        !(o.sigma_plane > 0.0f))
-        throw std::invalid_argument("denoising needs 0 to 10 iterations and positive sigmas");
-    LightmapDenoiseReport report;
-    const std::vector<uint32_t> chart_of_triangle = lightmap_charts(mesh, &report.charts);
-    std::vector<uint32_t> chart(n);
-    for (size_t i = 0; i < n; ++i)
-    {
-        chart[i] = chart_of_triangle[atlas.texels[i].triangle];
-        report.texels += sh.valid[i] != 0;
-    }
-    // Calls f(j, dx, dy) for each texel j of i's chart at (dx, dy) texels of `step` from it, valid or not.
+    // Calls f(j, dx, dy) for each valid texel j of i's chart in the range at (dx, dy) texels of `step` from
+    // it (i and j: indices in the range).
     const auto each_in_chart = [&](size_t i, int radius, int step, auto&& f)
     {
-        const LightmapTexel& t = atlas.texels[i];
+        const LightmapTexel& t = atlas.texels[first + i];
         for (int dy = -radius; dy <= radius; ++dy)
             for (int dx = -radius; dx <= radius; ++dx)
             {
-                const int32_t j = atlas.texel_of(int64_t(t.x) + dx * step, int64_t(t.y) + dy * step);
-                if (j >= 0 && sh.valid[size_t(j)] && chart[size_t(j)] == chart[i])
-                    f(size_t(j), dx, dy);
+                const int64_t j = atlas.texel_of(int64_t(t.x) + dx * step, int64_t(t.y) + dy * step);
+                if (j >= int64_t(first) && j < int64_t(first + n) && valid[size_t(j)] &&
+                    chart[size_t(j)] == chart[first + i])
+                    f(size_t(j) - first, dx, dy);
             }
     };
 
@@ -117,14 +105,11 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     // variance of the whole's estimate, (A - B)^2 with A and B the guides of the two halves (each half takes
     // one of every two neighbouring strata, so this is the paired-strata estimate of a stratified sum's
     // variance: a little above the true one, never below it on average).
-    std::vector<float> value(n * kValues);
     std::vector<Guide> guide(n), variance(n);
     for (size_t i = 0; i < n; ++i)
     {
-        float* v = &value[i * kValues];
-        std::memcpy(v, sh.irradiance[i].data(), 27 * sizeof(float));
-        std::memcpy(v + 27, sh.direct[i].data(), 12 * sizeof(float));
-        const float* a = &sh.half[i][0].x; // the half's 39 values, in the same order
+        const float* v = &value[i * kValues];
+        const float* a = &halves[i][0].x; // the half's 39 values, in the same order
         float b[kValues];
         for (size_t c = 0; c < kValues; ++c)
             b[c] = v[c] - a[c];
@@ -133,7 +118,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         for (size_t c = 0; c < 4; ++c)
             variance[i][c] = (ga[c] - gb[c]) * (ga[c] - gb[c]);
     }
-    sh.half = {}; // measured: the halves are done with (and their memory with them)
+    halves = {}; // measured: the halves are done with (and their memory with them)
     // One texel's noise is a single draw, and so are its guides: both are prefiltered over the texel's 3 x 3
     // neighbours in its chart with weights (1, 2, 1) x (1, 2, 1) (the variance with the weights squared), so
     // that the weights below compare light, not the noise of single texels.
@@ -161,7 +146,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         tbb::parallel_for(size_t(0), n,
                           [&](size_t i)
                           {
-                              if (sh.valid[i])
+                              if (valid[first + i])
                               {
                                   g[i] = binomial(guide, i, 1);
                                   v[i] = binomial(variance, i, 2);
@@ -180,20 +165,21 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         const int step = 1 << pass;
         // The variance the light's term divides by: each texel's, averaged over its 3 x 3 neighbours.
         tbb::parallel_for(size_t(0), n,
-                          [&](size_t i) { smooth[i] = sh.valid[i] ? binomial(variance, i, 1) : Guide{}; });
+                          [&](size_t i)
+                          { smooth[i] = valid[first + i] ? binomial(variance, i, 1) : Guide{}; });
         tbb::parallel_for(
             size_t(0), n,
             [&](size_t i)
             {
                 float* out = &next[i * kValues];
-                if (!sh.valid[i])
+                if (!valid[first + i])
                 {
                     std::memcpy(out, &value[i * kValues], kValues * sizeof(float));
                     next_guide[i] = guide[i];
                     next_variance[i] = variance[i];
                     return;
                 }
-                const LightmapTexel& t = atlas.texels[i];
+                const LightmapTexel& t = atlas.texels[first + i];
                 const float size = std::max(t.world_size, 1e-30f);
                 // The light's term for neighbour j whose guides differ by `difference` (from the centre's, or
                 // from the fitted planes): exp(-max(0, D)) with D the mean over the guides of the squared
@@ -232,7 +218,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                     i, 2, step,
                     [&](size_t j, int dx, int dy)
                     {
-                        const LightmapTexel& u = atlas.texels[j];
+                        const LightmapTexel& u = atlas.texels[first + j];
                         double weight = double(kSpline[dx + 2] * kSpline[dy + 2]), base = weight;
                         if (j != i)
                         {
@@ -345,38 +331,149 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     }
 
     // Irradiance integrated directly (plain, rnm) is never negative; an extrapolating fit could make it so.
-    // Then each chart keeps the light it was baked with: the filter moves light within a chart (a texel's
-    // weights sum to 1, its neighbours' weights on it need not: a flat, dim region takes more from a bright
-    // feature than the feature takes from it), so the filtered chart is scaled, per colour channel, until its
-    // plain sums to what the bake's did (an unbiased estimate of the chart's light; a chart with none stays
-    // as it is).
-    std::vector<std::array<double, 6>> sums(report.charts);
     for (size_t i = 0; i < n; ++i)
-    {
-        float* v = &value[i * kValues];
         for (size_t c = 27; c < kValues; ++c)
-            v[c] = std::max(v[c], 0.0f);
-        if (!sh.valid[i])
-            continue;
-        for (int c = 0; c < 3; ++c)
-        {
-            sums[chart[i]][size_t(c)] += double(sh.direct[i][0][c]);
-            sums[chart[i]][size_t(3 + c)] += double(v[27 + c]);
-        }
-    }
+            value[i * kValues + c] = std::max(value[i * kValues + c], 0.0f);
+}
+
+} // namespace
+
+LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,
+                                       const LightmapDenoiseOptions& o)
+{
+    const size_t n = atlas.texels.size();
+    if (sh.texels() != n || !sh.has_direct() || !sh.has_halves() || sh.valid.size() != n)
+        throw std::invalid_argument(
+            "denoising needs a bake's irradiance, direct values, half-sample values and "
+            "validity for each of the atlas's " +
+            std::to_string(n) + " texels");
+    if (o.iterations < 0 || o.iterations > 10 || !(o.sigma_light > 0.0f) || !(o.sigma_normal > 0.0f) ||
+        !(o.sigma_plane > 0.0f))
+        throw std::invalid_argument("denoising needs 0 to 10 iterations and positive sigmas");
+    LightmapDenoiseReport report;
+    const std::vector<uint32_t> chart_of_triangle = lightmap_charts(mesh, &report.charts);
+    std::vector<uint32_t> chart(n);
     for (size_t i = 0; i < n; ++i)
     {
-        float* v = &value[i * kValues];
-        if (sh.valid[i])
-            for (size_t c = 0; c < 3; ++c)
-            {
-                const std::array<double, 6>& s = sums[chart[i]];
-                const float scale = s[3 + c] > 0.0 && s[c] > 0.0 ? float(s[c] / s[3 + c]) : 1.0f;
-                for (size_t k = c; k < kValues; k += 3)
-                    v[k] *= scale;
-            }
-        std::memcpy(sh.irradiance[i].data(), v, 27 * sizeof(float));
-        std::memcpy(sh.direct[i].data(), v + 27, 12 * sizeof(float));
+        chart[i] = chart_of_triangle[atlas.texels[i].triangle];
+        report.texels += sh.valid[i] != 0;
+    }
+    // Each chart keeps the light it was baked with: the filter moves light within a chart (a texel's weights
+    // sum to 1, its neighbours' weights on it need not: a flat, dim region takes more from a bright feature
+    // than the feature takes from it), so the filtered chart is scaled, per colour channel, until its plain
+    // sums to what the bake's did (an unbiased estimate of the chart's light; a chart with none stays as it
+    // is). sums: per chart, plain as baked (0..2) and as filtered (3..5), added in texel order.
+    std::vector<std::array<double, 6>> sums(report.charts);
+    const auto add = [&](size_t i, const glm::vec3& baked, const float* filtered)
+    {
+        if (!sh.valid[i])
+            return;
+        for (size_t c = 0; c < 3; ++c)
+        {
+            sums[chart[i]][c] += double(baked[int(c)]);
+            sums[chart[i]][3 + c] += double(filtered[27 + c]);
+        }
+    };
+    const auto scale = [&](size_t i, float* v)
+    {
+        if (!sh.valid[i])
+            return;
+        for (size_t c = 0; c < 3; ++c)
+        {
+            const std::array<double, 6>& s = sums[chart[i]];
+            const float factor = s[3 + c] > 0.0 && s[c] > 0.0 ? float(s[c] / s[3 + c]) : 1.0f;
+            for (size_t k = c; k < kValues; k += 3)
+                v[k] *= factor;
+        }
+    };
+    const auto pack =
+        [](const std::array<glm::vec3, 9>& irradiance, const std::array<glm::vec3, 4>& direct, float* v)
+    {
+        std::memcpy(v, irradiance.data(), 27 * sizeof(float));
+        std::memcpy(v + 27, direct.data(), 12 * sizeof(float));
+    };
+    const auto unpack =
+        [](const float* v, std::array<glm::vec3, 9>& irradiance, std::array<glm::vec3, 4>& direct)
+    {
+        std::memcpy(irradiance.data(), v, 27 * sizeof(float));
+        std::memcpy(direct.data(), v + 27, 12 * sizeof(float));
+    };
+
+    if (!sh.tiles)
+    {
+        std::vector<float> value(n * kValues);
+        for (size_t i = 0; i < n; ++i)
+            pack(sh.irradiance[i], sh.direct[i], &value[i * kValues]);
+        filter_range(atlas, chart, sh.valid, 0, n, value, sh.half, o);
+        for (size_t i = 0; i < n; ++i)
+            add(i, sh.direct[i][0], &value[i * kValues]);
+        for (size_t i = 0; i < n; ++i)
+        {
+            scale(i, &value[i * kValues]);
+            unpack(&value[i * kValues], sh.irradiance[i], sh.direct[i]);
+        }
+        return report;
+    }
+
+    // A bake in tiles (its sums and halves in sh.tiles, copy sh.tiles_copy): the atlas in bands of rows, each
+    // read with `halo` rows above and below it, as far as a texel's result depends on others (the guides'
+    // prefilter, and each pass's variance average and its 5 x 5 window 2^k apart), so that each band's rows
+    // come out as the whole atlas's would; they are written to the file's other copy, then scaled there.
+    const int64_t halo = 1 + 2 * ((int64_t(1) << o.iterations) - 1) + o.iterations;
+    const size_t band_texels = o.tile_texels ? o.tile_texels : size_t(1) << 20;
+    // The first texel at row y or below it (texels are in row-major order), n past the last row.
+    const auto row_start = [&](int64_t y)
+    {
+        return size_t(std::partition_point(atlas.texels.begin(), atlas.texels.end(),
+                                           [&](const LightmapTexel& t) { return int64_t(t.y) < y; }) -
+                      atlas.texels.begin());
+    };
+    const int from = sh.tiles_copy, to = 1 - from;
+    std::vector<std::array<glm::vec3, 9>> irradiance;
+    std::vector<std::array<glm::vec3, 4>> direct;
+    for (size_t out_first = 0; out_first < n;)
+    {
+        const int64_t y0 = atlas.texels[out_first].y;
+        int64_t y1 = y0 + 1; // rows [y0, y1) come out of this band: as many as fit, at least one
+        while (row_start(y1) < n && row_start(y1 + 1 + halo) - row_start(y0 - halo) <= band_texels)
+            ++y1;
+        const size_t out_end = row_start(y1), in_first = row_start(y0 - halo),
+                     count = row_start(y1 + halo) - in_first;
+        irradiance.resize(count);
+        direct.resize(count);
+        std::vector<LightmapSh::Half> halves(count);
+        sh.read(uint32_t(in_first), uint32_t(count), irradiance.data(), direct.data(), halves.data());
+        std::vector<float> value(count * kValues);
+        for (size_t i = 0; i < count; ++i)
+            pack(irradiance[i], direct[i], &value[i * kValues]);
+        filter_range(atlas, chart, sh.valid, in_first, count, value, halves, o);
+        for (size_t i = out_first; i < out_end; ++i)
+        {
+            add(i, direct[i - in_first][0], &value[(i - in_first) * kValues]);
+            unpack(&value[(i - in_first) * kValues], irradiance[i - in_first], direct[i - in_first]);
+        }
+        const size_t skip = out_first - in_first, rows = out_end - out_first;
+        sh.tiles->write(to, 0, uint32_t(out_first), std::as_bytes(std::span(irradiance).subspan(skip, rows)));
+        sh.tiles->write(to, 1, uint32_t(out_first), std::as_bytes(std::span(direct).subspan(skip, rows)));
+        out_first = out_end;
+    }
+    sh.tiles_copy = to;
+    sh.tiles_halves = false; // the halves are done with
+    for (size_t first = 0; first < n; first += band_texels)
+    {
+        const size_t count = std::min(band_texels, n - first);
+        irradiance.resize(count);
+        direct.resize(count);
+        sh.read(uint32_t(first), uint32_t(count), irradiance.data(), direct.data(), nullptr);
+        for (size_t i = 0; i < count; ++i)
+        {
+            float v[kValues];
+            pack(irradiance[i], direct[i], v);
+            scale(first + i, v);
+            unpack(v, irradiance[i], direct[i]);
+        }
+        sh.tiles->write(to, 0, uint32_t(first), std::as_bytes(std::span(irradiance)));
+        sh.tiles->write(to, 1, uint32_t(first), std::as_bytes(std::span(direct)));
     }
     return report;
 }

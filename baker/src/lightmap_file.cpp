@@ -60,9 +60,11 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds the half of each texel's samples the bake keeps
 // apart, for the bake and for the pass (312 bytes), and the filter's working copies: the values twice, five
-// arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); the filter needs the whole
-// atlas in memory, tiles or not. With --exr-dir, one output at a time is expanded to the whole atlas (an EXR
-// is a dense image): 4 bytes per atlas texel and coefficient of the largest output, and OpenEXR's half copy.
+// arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in bands
+// of rows with the rows around them it depends on, each texel of a band read (sums and halves) and filtered
+// (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With --exr-dir, one output at a
+// time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas texel and coefficient of
+// the largest output, and OpenEXR's half copy.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
@@ -71,6 +73,7 @@ constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atla
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
 constexpr uint64_t kTileHalvesBytesPerTexel = 2 * 156;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 2 * 156 + 5 * 16 + 4;
+constexpr uint64_t kDenoiseBandBytesPerTexel = 4 * 156 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.
@@ -347,10 +350,18 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         throw io::FormatError(scene_path.string() + ": " + e.what());
     }
     // The peak is the larger of two stages': the passes (the atlas's records, the bounces' map, the sums and
-    // the pass in memory, or in tiles one tile of them; --denoise's filter on the whole atlas after them) and
-    // the outputs (the texels' places, the float map of the output being made, the sums when in memory).
+    // the pass in memory, or in tiles one tile of them; --denoise's filter after them, on the whole atlas or
+    // in bands of rows) and the outputs (the texels' places, the float map of the output being made, the sums
+    // when in memory).
     const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
-    const uint64_t per_tile_texel = kTileBytesPerTexel + (o.denoise ? kTileHalvesBytesPerTexel : 0);
+    const uint64_t per_tile_texel =
+        o.denoise ? std::max(kTileBytesPerTexel + kTileHalvesBytesPerTexel, kDenoiseBandBytesPerTexel)
+                  : kTileBytesPerTexel;
+    // --denoise in tiles: a band holds at least one row and the rows its result depends on either side.
+    const uint64_t least_band =
+        o.denoise
+            ? uint64_t(w) * uint64_t(3 + 4 * ((int64_t(1) << o.denoise_passes) - 1) + 2 * o.denoise_passes)
+            : 0;
     const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileHalvesBytesPerTexel / 2 : 0);
     const uint64_t output_map_bytes =
         output_slots * largest_output * kLightmapBytesPerLargestCoefficient + exr_bytes;
@@ -361,9 +372,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
-        const uint64_t passes =
-            slots * kLightmapBytesPerSlot + texels * kTiledBytesPerCoveredTexel +
-            (o.denoise ? texels * (sums_per_texel + kDenoiseBytesPerCoveredTexel) : tile * per_tile_texel);
+        const uint64_t passes = slots * kLightmapBytesPerSlot +
+                                texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
+                                std::max(tile, std::min(texels, least_band)) * per_tile_texel;
         return std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
@@ -375,7 +386,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         if (least > budget)
             throw io::FormatError(what + ": needs about " + io::format_bytes(whole) + " of memory (" +
                                   io::format_bytes(least) + " in tiles of " + std::to_string(kMinTileTexels) +
-                                  " texels" + (o.denoise ? ", with --denoise's whole atlas" : "") +
+                                  " texels" + (o.denoise ? ", --denoise's filter in bands of rows" : "") +
                                   "), but " + (o.memory_budget ? "--memory-budget is " : "only ") +
                                   io::format_bytes(budget) + (o.memory_budget ? "" : " is available"));
     };
@@ -461,9 +472,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.tiles = sh.tiles_count;
     if (o.denoise)
     {
-        sh.load(); // the filter works on the whole atlas (counted in the budget above)
+        // In memory, or in tiles band by band in the tile file (counted in the budget above).
         LightmapDenoiseOptions d;
         d.iterations = o.denoise_passes;
+        d.tile_texels = tile_texels;
         summary.denoised_texels = denoise_lightmap(scene.mesh, atlas, sh, d).texels;
     }
     if (o.denoise)

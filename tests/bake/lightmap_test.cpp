@@ -2329,6 +2329,55 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
     EXPECT_LE(std::abs(denoised_width - reference_width), 1.0);
 }
 
+// The denoiser on a bake in tiles (--denoise under --memory-budget): the floor-and-wall scene baked in tiles
+// of 300 texels with its halves on disk, then filtered in bands of rows read from the tile file with the 18
+// rows around them that 3 passes depend on, gives the bytes of the whole atlas filtered in memory, with bands
+// as small as they go (one row each) and larger; the result is in the tile file's other copy and the halves
+// are released.
+TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
+{
+    Mesh m;
+    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f});
+    add_quad(m, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
+             {0.66f, 0.62f, 0.81f, 0.02f});
+    add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
+             {0.83f, 0.62f, 0.98f, 0.02f});
+    LightmapUvReport report;
+    const LightmapAtlas a = rasterize_lightmap(m, 64, 64, report);
+    ASSERT_TRUE(report.ok());
+    const uint32_t n = uint32_t(a.texels.size());
+    LightmapLights lights;
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(-1.0f, 0.0f, 1.0f));
+    lights.sun_irradiance = glm::vec3(10.0f, 8.0f, 6.0f);
+    LightmapBakeOptions o;
+    o.rays = 16;
+    o.keep_halves = true;
+    LightmapSh whole = bake_lightmap_sh(m, a, lights, o);
+    denoise_lightmap(m, a, whole);
+    const std::filesystem::path folder = hemi::test::temp_dir("lightmap_denoise_tiles");
+    o.tile_texels = 300;
+    o.tile_file = folder / "floor.tiles";
+    for (const size_t band : {size_t(1), size_t(1500), size_t(4000)})
+    {
+        LightmapSh tiled = bake_lightmap_sh(m, a, lights, o);
+        ASSERT_TRUE(tiled.tiles);
+        const int copy = tiled.tiles_copy;
+        LightmapDenoiseOptions d;
+        d.tile_texels = band;
+        denoise_lightmap(m, a, tiled, d);
+        EXPECT_EQ(tiled.tiles_copy, 1 - copy) << "band " << band;
+        EXPECT_FALSE(tiled.has_halves()) << "band " << band;
+        std::vector<std::array<glm::vec3, 9>> irradiance(n);
+        std::vector<std::array<glm::vec3, 4>> direct(n);
+        tiled.read(0, n, irradiance.data(), direct.data(), nullptr);
+        EXPECT_EQ(0, std::memcmp(irradiance.data(), whole.irradiance.data(), n * sizeof(irradiance[0])))
+            << "band " << band;
+        EXPECT_EQ(0, std::memcmp(direct.data(), whole.direct.data(), n * sizeof(direct[0])))
+            << "band " << band;
+    }
+}
+
 // The denoiser on a real level under a real sky (issue 25's bar): the sample level (make_level) unwrapped
 // into a 96 x 96 atlas (about 5,300 texels, a texel per 30 cm: small charts, much of them border), Blender's
 // courtyard HDRI (Debian's blender-data), a sun through the window and one bounce. Baked at 32 rays and

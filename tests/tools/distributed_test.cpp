@@ -107,10 +107,11 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
     }
 }
 
-// Denoising on a shared bake (issue 25: the filter must give the same bytes for any rank count): --denoise by
-// one process and by 2 and 3 ranks (the halves of the samples computed by every rank, gathered on rank 0,
-// which filters the whole atlas) writes the same asset, every covered texel filtered. (Not in tiles: the
-// filter holds the whole atlas, so a budget the whole bake does not fit refuses --denoise; README.)
+// Denoising on a shared bake (issue 25: the filter must give the same bytes for any rank count, in tiles or
+// not): --denoise by one process, by 2 ranks under a memory budget (the bake in tiles with its halves in the
+// tile file, then filtered by rank 0 in bands of rows read from it) and by 3 ranks in memory (the halves
+// computed by every rank and gathered on rank 0, which filters the whole atlas) writes the same asset, every
+// covered texel filtered.
 TEST(DistributedBake, DenoisedLightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
 {
     const fs::path scene = dir() / "post_denoise.glb";
@@ -130,14 +131,21 @@ TEST(DistributedBake, DenoisedLightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
     for (const int ranks : {2, 3})
     {
         const fs::path asset = dir() / "denoised_ranks.hemi", json = dir() / "denoised_ranks.json";
+        // Two ranks under a budget the whole bake (17.4 MiB) does not fit: the bake in tiles, then the
+        // filter in bands of rows from the tile file on rank 0.
+        const std::string budget = ranks == 2 ? " --memory-budget 8M" : "";
         const Result r =
-            mpirun(ranks, "lightmap " + q(scene) + " -o " + q(asset) + " --json " + q(json) + args);
+            mpirun(ranks, "lightmap " + q(scene) + " -o " + q(asset) + " --json " + q(json) + args + budget);
         ASSERT_EQ(r.status, 0) << r.err << r.out;
         EXPECT_TRUE(hemi::test::slurp(asset) == expected) << ranks << " ranks: the asset's bytes differ";
         const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(json));
         EXPECT_EQ(j["ranks"], ranks);
         EXPECT_EQ(j["denoised_texels"], single_json["denoised_texels"]) << ranks << " ranks";
         EXPECT_EQ(j["seams"], single_json["seams"]) << ranks << " ranks";
+        if (ranks == 2)
+        {
+            EXPECT_GT(j["tiles_per_pass"].get<uint32_t>(), 1u) << "a budget that leaves the bake in memory";
+        }
     }
 }
 

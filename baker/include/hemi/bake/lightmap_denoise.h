@@ -57,6 +57,11 @@ struct LightmapDenoiseOptions
     float sigma_light = 1.25f;   // how far past its noise a neighbour's light may differ (the distance's k)
     float sigma_normal = 128.0f; // exponent on the shading normals' cosine
     float sigma_plane = 1.0f;    // distance off the centre's plane, in the centre texel's world sizes
+    // A bake in tiles (LightmapSh::tiles) is filtered in bands of atlas rows, each read from the tile file
+    // with the rows its result depends on around it (1 + 2 (2^iterations - 1) + iterations above and below)
+    // and written to the file's other copy: at most this many texels a band with those rows (but at least
+    // one row), 0 for 2^20. The same bytes as the whole atlas filtered in memory.
+    size_t tile_texels = 0;
 };
 
 struct LightmapDenoiseReport
@@ -66,7 +71,9 @@ struct LightmapDenoiseReport
 };
 
 // Denoises `sh` (from bake_lightmap_sh on this mesh and atlas, with LightmapBakeOptions::keep_halves) in
-// place, and releases its halves (they measured the noise). Throws
+// place, and releases its halves (they measured the noise); a bake in tiles in its tile file, in bands
+// (LightmapDenoiseOptions::tile_texels), whose other copy then holds the result (LightmapSh::tiles_copy).
+// Throws
 // std::invalid_argument when `sh` lacks the halves or the directly integrated values, or its sizes do not
 // match the atlas, or for options out of range (iterations in [0, 10], sigmas > 0).
 LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,
