@@ -2200,12 +2200,12 @@ TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
 // normal (plain) and the SH9 irradiance come about 3x closer to the 4096-ray bake (RMSE over every texel: at
 // most 0.36 of the undenoised 32-ray bake's; measured 0.32 and 0.33) and as close as a 128-ray bake (issue
 // 25's bar: plain no further than 128 rays, measured 0.97 of it; SH9 within 8% of it, measured 1.056 with
-// these seeds and 0.98-1.06, mean 1.02, over five: its constant term curves at the wall's foot, where the
-// fit's window is one-sided). Every chart keeps its light (the mean of plain equal to the undenoised bake's
-// to 1e-5; a filter that only normalises each texel's weights moves 0.04% here and 1-3% of a real level's
-// light into its dim parts), so the mean stays within 0.5% of the 4096-ray bake's (0.02%), and the sun's
-// shadow edge on the floor keeps its width: the 10-90% rise across it, per texel row, within one texel of the
-// 4096-ray bake's (0.85 texels both).
+// these seeds and 0.98-1.06, mean 1.02, over five: at the wall's ends, where it meets the floor's border,
+// SH9's constant term curves more steeply than the guides show). Every chart keeps its light (the mean of
+// plain equal to the undenoised bake's to 1e-5; a filter that only normalises each texel's weights moves
+// 0.04% here and 1-3% of a real level's light into its dim parts), so the mean stays within 0.5% of the
+// 4096-ray bake's (0.02%), and the sun's shadow edge on the floor keeps its width: the 10-90% rise across it,
+// per texel row, within one texel of the 4096-ray bake's (0.85 texels both).
 TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
 {
     Mesh m;
