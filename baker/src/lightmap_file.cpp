@@ -208,6 +208,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         lightmap_output_size(name); // throws for an unknown name, listing the known ones
     if (o.texel_size < 0.0f || !std::isfinite(o.texel_size))
         throw std::invalid_argument("the texel size must be positive (world units)");
+    if (o.denoise && (o.denoise_passes < 1 || o.denoise_passes > 10))
+        throw std::invalid_argument("--denoise-passes must be 1 to 10, not " +
+                                    std::to_string(o.denoise_passes));
     if (o.probes != glm::uvec3(0) && (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0))
         throw std::invalid_argument("--probes needs at least one probe along each axis");
     if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
@@ -475,7 +478,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         // In memory, or in tiles band by band in the tile file (counted in the budget above).
         LightmapDenoiseOptions d;
         d.iterations = o.denoise_passes;
-        d.tile_texels = tile_texels;
+        // A band as large as the budget left room for: a tile, or one row and the rows around it it depends
+        // on, whichever is larger (both counted above).
+        d.tile_texels = size_t(std::max<uint64_t>(tile_texels, least_band));
         summary.denoised_texels = denoise_lightmap(scene.mesh, atlas, sh, d).texels;
     }
     if (o.denoise)

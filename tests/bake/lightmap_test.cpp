@@ -2278,6 +2278,20 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
                 mean(denoised));
     EXPECT_NEAR(mean(denoised) / mean(noisy), 1.0, 1e-5);
     EXPECT_NEAR(mean(denoised) / mean(reference), 1.0, 0.005);
+    // Each chart's own light, not only the atlas's (a factor for the whole atlas, or charts mixed up, fails).
+    size_t charts = 0;
+    const std::vector<uint32_t> chart = lightmap_charts(m, &charts);
+    ASSERT_EQ(charts, 3u);
+    std::vector<glm::dvec3> before(charts), after(charts);
+    for (size_t i = 0; i < a.texels.size(); ++i)
+        if (noisy.valid[i])
+        {
+            before[chart[a.texels[i].triangle]] += glm::dvec3(noisy.direct[i][0]);
+            after[chart[a.texels[i].triangle]] += glm::dvec3(denoised.direct[i][0]);
+        }
+    for (size_t c = 0; c < charts; ++c)
+        for (int k = 0; k < 3; ++k)
+            EXPECT_NEAR(after[c][k] / before[c][k], 1.0, 1e-5) << "chart " << c << " channel " << k;
 
     // The shadow edge, per texel row of the floor: where plain rises from 10% to 90% of the way from the
     // shadow's level (x in [0, 0.2]) to the lit floor's (x in [0.4, 0.8]), by linear interpolation between
@@ -2329,11 +2343,13 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
     EXPECT_LE(std::abs(denoised_width - reference_width), 1.0);
 }
 
-// The denoiser on a bake in tiles (--denoise under --memory-budget): the floor-and-wall scene baked in tiles
-// of 300 texels with its halves on disk, then filtered in bands of rows read from the tile file with the 18
-// rows around them that 3 passes depend on, gives the bytes of the whole atlas filtered in memory, with bands
-// as small as they go (one row each) and larger; the result is in the tile file's other copy and the halves
-// are released.
+// The denoiser on a bake in tiles (--denoise under --memory-budget): the floor-and-wall scene, with a lid
+// above it in a chart of its own across a gap of empty atlas rows, baked in tiles of 300 texels with its
+// halves on disk, then filtered in bands of rows read from the tile file with the 1 + 2 (2^N - 1) + N rows
+// around them that N passes depend on, gives the bytes of the whole atlas filtered in memory: for N = 1, 2,
+// 3 and 5 with bands of one row (the strictest), and for 3 passes with larger bands too. The result is in
+// the tile file's other copy, the copy the bake left is untouched (a resume reads it), and the halves are
+// released. (With a halo one row short it fails.)
 TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
 {
     Mesh m;
@@ -2342,6 +2358,8 @@ TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
              {0.66f, 0.62f, 0.81f, 0.02f});
     add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
              {0.83f, 0.62f, 0.98f, 0.02f});
+    add_quad(m, {0.3f, -0.5f, 0.8f}, {0.3f, 0.5f, 0.8f}, {0.8f, 0.5f, 0.8f}, {0.8f, -0.5f, 0.8f},
+             {0.1f, 0.95f, 0.4f, 0.8f}); // the lid, facing down: rows 40 to 50 hold no texel
     LightmapUvReport report;
     const LightmapAtlas a = rasterize_lightmap(m, 64, 64, report);
     ASSERT_TRUE(report.ok());
@@ -2352,30 +2370,40 @@ TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
     lights.sun_irradiance = glm::vec3(10.0f, 8.0f, 6.0f);
     LightmapBakeOptions o;
     o.rays = 16;
+    o.bounces = 1;
     o.keep_halves = true;
-    LightmapSh whole = bake_lightmap_sh(m, a, lights, o);
-    denoise_lightmap(m, a, whole);
+    const std::vector<hemi::io::Material> materials(1);
+    const LightmapSurfaces surfaces(m, materials, {}, {{0, uint32_t(m.indices.size()), 0}});
+    const LightmapSh baked = bake_lightmap_sh(m, a, lights, o, &surfaces);
     const std::filesystem::path folder = hemi::test::temp_dir("lightmap_denoise_tiles");
     o.tile_texels = 300;
     o.tile_file = folder / "floor.tiles";
-    for (const size_t band : {size_t(1), size_t(1500), size_t(4000)})
-    {
-        LightmapSh tiled = bake_lightmap_sh(m, a, lights, o);
-        ASSERT_TRUE(tiled.tiles);
-        const int copy = tiled.tiles_copy;
-        LightmapDenoiseOptions d;
-        d.tile_texels = band;
-        denoise_lightmap(m, a, tiled, d);
-        EXPECT_EQ(tiled.tiles_copy, 1 - copy) << "band " << band;
-        EXPECT_FALSE(tiled.has_halves()) << "band " << band;
-        std::vector<std::array<glm::vec3, 9>> irradiance(n);
-        std::vector<std::array<glm::vec3, 4>> direct(n);
-        tiled.read(0, n, irradiance.data(), direct.data(), nullptr);
-        EXPECT_EQ(0, std::memcmp(irradiance.data(), whole.irradiance.data(), n * sizeof(irradiance[0])))
-            << "band " << band;
-        EXPECT_EQ(0, std::memcmp(direct.data(), whole.direct.data(), n * sizeof(direct[0])))
-            << "band " << band;
-    }
+    for (const int passes : {1, 2, 3, 5})
+        for (const size_t band : passes == 3 ? std::vector<size_t>{1, 1500, 4000} : std::vector<size_t>{1})
+        {
+            const std::string what = std::to_string(passes) + " passes, bands of " + std::to_string(band);
+            LightmapDenoiseOptions d;
+            d.iterations = passes;
+            LightmapSh whole = baked;
+            denoise_lightmap(m, a, whole, d);
+            LightmapSh tiled = bake_lightmap_sh(m, a, lights, o, &surfaces);
+            ASSERT_TRUE(tiled.tiles);
+            const int copy = tiled.tiles_copy;
+            d.tile_texels = band;
+            denoise_lightmap(m, a, tiled, d);
+            EXPECT_EQ(tiled.tiles_copy, 1 - copy) << what;
+            EXPECT_FALSE(tiled.has_halves()) << what;
+            std::vector<std::array<glm::vec3, 9>> irradiance(n);
+            std::vector<std::array<glm::vec3, 4>> direct(n);
+            tiled.read(0, n, irradiance.data(), direct.data(), nullptr);
+            EXPECT_EQ(0, std::memcmp(irradiance.data(), whole.irradiance.data(), n * sizeof(irradiance[0])))
+                << what;
+            EXPECT_EQ(0, std::memcmp(direct.data(), whole.direct.data(), n * sizeof(direct[0]))) << what;
+            tiled.tiles_copy = copy; // what the bake left
+            tiled.read(0, n, irradiance.data(), direct.data(), nullptr);
+            EXPECT_EQ(0, std::memcmp(irradiance.data(), baked.irradiance.data(), n * sizeof(irradiance[0])))
+                << what;
+        }
 }
 
 // The denoiser on a real level under a real sky (issue 25's bar): the sample level (make_level) unwrapped
