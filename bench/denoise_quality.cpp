@@ -144,11 +144,7 @@ Scene floor_and_wall()
 {
     Scene s;
     s.name = "floor, wall and sun";
-    test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f});
-    test::add_quad(s.mesh, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
-                   {0.66f, 0.62f, 0.81f, 0.02f});
-    test::add_quad(s.mesh, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
-                   {0.83f, 0.62f, 0.98f, 0.02f});
+    test::add_floor_and_wall(s.mesh);
     LightmapUvReport report;
     s.atlas = rasterize_lightmap(s.mesh, 64, 64, report);
     s.lights.uniform = glm::vec3(1.0f);

@@ -2209,12 +2209,8 @@ TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
 TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
 {
     Mesh m;
-    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f}); // the floor
     // The wall x = -0.2, 0.5 high, both sides; the sun comes from -x, so its shadow reaches x = 0.3.
-    add_quad(m, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
-             {0.66f, 0.62f, 0.81f, 0.02f});
-    add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
-             {0.83f, 0.62f, 0.98f, 0.02f});
+    hemi::test::add_floor_and_wall(m);
     LightmapUvReport report;
     const LightmapAtlas a = rasterize_lightmap(m, 64, 64, report);
     ASSERT_TRUE(report.ok());
@@ -2353,11 +2349,7 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
 TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
 {
     Mesh m;
-    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f});
-    add_quad(m, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
-             {0.66f, 0.62f, 0.81f, 0.02f});
-    add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
-             {0.83f, 0.62f, 0.98f, 0.02f});
+    hemi::test::add_floor_and_wall(m);
     add_quad(m, {0.3f, -0.5f, 0.8f}, {0.3f, 0.5f, 0.8f}, {0.8f, 0.5f, 0.8f}, {0.8f, -0.5f, 0.8f},
              {0.1f, 0.95f, 0.4f, 0.8f}); // the lid, facing down: rows 40 to 50 hold no texel
     LightmapUvReport report;

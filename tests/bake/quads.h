@@ -36,6 +36,18 @@ inline void add_quad(io::Mesh& m, glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm:
     m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
 }
 
+// The denoiser's floor-and-wall scene: a 2 x 2 floor (z = 0) with a wall 0.5 high standing on it at x = -0.2,
+// both its sides, each quad a chart of its own in a 64 x 64 atlas (the floor's 38 texels a side, the wall's
+// 10 high).
+inline void add_floor_and_wall(io::Mesh& m)
+{
+    add_quad(m, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {0.02f, 0.62f, 0.62f, 0.02f}); // the floor
+    add_quad(m, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
+             {0.66f, 0.62f, 0.81f, 0.02f});
+    add_quad(m, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
+             {0.83f, 0.62f, 0.98f, 0.02f});
+}
+
 // The plane z = 0 over [-1, 1]^2 as `cells` x `cells` quads, lightmap UVs over [0, 1]^2 (v down the image:
 // v = 0 at y = +1).
 inline io::Mesh plane(int cells)
