@@ -40,6 +40,10 @@
 //   lightmap/bake/large/...           the same for a level of 8 x 5 rooms and corridors (4096^2, 11.9 M
 //                                     covered texels; samples::make_large_level). --write-large-level=FILE
 //                                     writes that level as a .glb and exits (for bench/level_scaling.sh).
+//   lightmap/denoise/large/...        hemi-bake lightmap --denoise's filter on that level at 1024^2 (777,900
+//                                     covered texels), baked with 32 rays, a sun and a bounce: time, and
+//                                     filter_over_bake = the filter's time over that bake's (both wall
+//                                     clock, all cores).
 //
 // Run with --benchmark_filter=... to pick; HEMI_DEVICE chooses the Vulkan device. A benchmark that throws is
 // reported as an error (the others still run) and makes the exit status 1.
@@ -58,6 +62,7 @@
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/ray_generator.h>
@@ -955,6 +960,47 @@ void lightmap_large(benchmark::State& state)
     lightmap_bake(state, scene, g_sizes.large_atlas);
 }
 
+// The denoiser (bake::denoise_lightmap, what --denoise runs) on the many-room level at 1024^2 (at most the
+// large level's atlas), baked once with what it needs (32 rays, the halves, a sun, a bounce); each iteration
+// filters a copy of that bake. The bake's own wall time is the ratio's denominator: the share of a 32-ray
+// --denoise bake that the filter adds.
+void lightmap_denoise(benchmark::State& state)
+{
+    const uint32_t size = std::min<uint32_t>(g_sizes.large_atlas, 1024);
+    const hemi::io::GltfScene scene =
+        hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z, size);
+    hemi::bake::LightmapUvReport report;
+    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
+    const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
+    hemi::bake::LightmapLights lights;
+    lights.sun = true;
+    lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f)); // the mesh's y-up space
+    lights.sun_irradiance = glm::vec3(6.0f);
+    hemi::bake::LightmapBakeOptions o;
+    o.rays = 32;
+    o.bounces = 1;
+    o.keep_halves = true;
+    auto t0 = std::chrono::steady_clock::now();
+    const hemi::bake::LightmapSh baked =
+        hemi::bake::bake_lightmap_sh(scene.mesh, atlas, lights, o, &surfaces);
+    const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double filter_s = 0.0;
+    int64_t runs = 0;
+    for (auto _ : state)
+    {
+        hemi::bake::LightmapSh sh = baked;
+        t0 = std::chrono::steady_clock::now();
+        hemi::bake::denoise_lightmap(scene.mesh, atlas, sh);
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        state.SetIterationTime(s);
+        filter_s += s;
+        ++runs;
+    }
+    state.counters["texels"] = double(atlas.texels.size());
+    state.counters["bake_s"] = bake_s;
+    state.counters["filter_over_bake"] = filter_s / double(std::max<int64_t>(runs, 1)) / bake_s;
+}
+
 // hemi-bake lightmap --unwrap on a curved mesh of a million triangles (issue 25's goal: under 60 s on 2
 // cores): the sample's knot at a finer tessellation, unwrapped into a 4096 x 4096 atlas at the largest texel
 // size that fits. Counters: the triangles, the charts, and the packing efficiency, the charts' surface in
@@ -1418,6 +1464,13 @@ int main(int argc, char** argv)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);
+    full_iterations(add("lightmap/denoise/large/" + std::to_string(g_sizes.large_rooms_x) + "x" +
+                            std::to_string(g_sizes.large_rooms_z) + "/" +
+                            std::to_string(std::min<uint32_t>(g_sizes.large_atlas, 1024)) + "^2/rays:32",
+                        lightmap_denoise)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    3);
     full_iterations(
         add("lightmap/unwrap/knot", lightmap_unwrap)->Unit(benchmark::kMillisecond)->UseManualTime(), 1);
     const std::string parabolic = std::to_string(g_sizes.prefilter);

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <map>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -79,12 +80,15 @@ Guide guides_of(const float* v)
             math::luminance(glm::vec3(v[6], v[7], v[8])), math::luminance(glm::vec3(v[9], v[10], v[11]))};
 }
 
-// Filters texels [first, first + n) of the atlas, in place in `value` (39 floats each, the whole of their
-// samples), with `halves` their half A (released once measured); texels outside the range count as absent.
-// Plain and rnm come out >= 0; each chart's light is restored by the caller.
-void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
-                  const std::vector<uint8_t>& valid, size_t first, size_t n, std::vector<float>& value,
-                  std::vector<LightmapSh::Half>& halves, const LightmapDenoiseOptions& o)
+// Filters texels [first, first + n) of the atlas, `value` (39 floats each, the whole of their samples), with
+// `halves` their half A; texels outside the range count as absent. Once the halves have measured the noise
+// their memory holds the passes' other copy (a half has 39 floats too), so the result is in `value`'s storage
+// or in the halves': the returned pointer says which. Plain and rnm come out >= 0; each chart's light is
+// restored by the caller.
+static_assert(sizeof(LightmapSh::Half) == kValues * sizeof(float));
+float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
+                    const std::vector<uint8_t>& valid, size_t first, size_t n, std::vector<float>& value,
+                    std::vector<LightmapSh::Half>& halves, const LightmapDenoiseOptions& o)
 {
     // Calls f(j, dx, dy) for each valid texel j of i's chart in the range at (dx, dy) texels of `step` from
     // it (i and j: indices in the range).
@@ -118,7 +122,8 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
         for (size_t c = 0; c < 4; ++c)
             variance[i][c] = (ga[c] - gb[c]) * (ga[c] - gb[c]);
     }
-    halves = {}; // measured: the halves are done with (and their memory with them)
+    // Measured: the halves' memory becomes the passes' other copy.
+    std::span<float> current(value), other(n ? &halves[0][0].x : nullptr, n * kValues);
     // One texel's noise is a single draw, and so are its guides: both are prefiltered over the texel's 3 x 3
     // neighbours in its chart with weights (1, 2, 1) x (1, 2, 1) (the variance with the weights squared), so
     // that the weights below compare light, not the noise of single texels.
@@ -156,7 +161,6 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
         variance.swap(v);
     }
 
-    std::vector<float> next(n * kValues);
     std::vector<Guide> next_guide(n), next_variance(n), smooth(n);
     static constexpr float kSpline[5] = {1.0f / 16, 4.0f / 16, 6.0f / 16, 4.0f / 16, 1.0f / 16};
     const double k2 = double(o.sigma_light) * double(o.sigma_light);
@@ -171,10 +175,10 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
             size_t(0), n,
             [&](size_t i)
             {
-                float* out = &next[i * kValues];
+                float* out = &other[i * kValues];
                 if (!valid[first + i])
                 {
-                    std::memcpy(out, &value[i * kValues], kValues * sizeof(float));
+                    std::memcpy(out, &current[i * kValues], kValues * sizeof(float));
                     next_guide[i] = guide[i];
                     next_variance[i] = variance[i];
                     return;
@@ -204,7 +208,7 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                         else if (guide[j][c] != guide[i][c])
                             return 0.0;
                     }
-                    return counted ? std::exp(-std::max(0.0, distance / counted)) : 1.0;
+                    return counted && distance > 0.0 ? std::exp(-distance / counted) : 1.0;
                 };
                 // The neighbours that weigh anything, with their offsets (in texels of this pass's spacing).
                 struct Neighbour
@@ -228,9 +232,11 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                                                 size;
                             if (glm::dot(d, d) > reach * reach)
                                 return;
-                            weight *=
-                                std::exp(-std::abs(glm::dot(d, t.geometric_normal)) / (o.sigma_plane * size));
-                            weight *= std::pow(std::max(0.0f, glm::dot(t.normal, u.normal)), o.sigma_normal);
+                            // (Each factor is exactly 1 on a flat chart: no exp or pow for it.)
+                            if (const float off = std::abs(glm::dot(d, t.geometric_normal)); off > 0.0f)
+                                weight *= std::exp(-off / (o.sigma_plane * size));
+                            if (const float turn = glm::dot(t.normal, u.normal); turn < 1.0f)
+                                weight *= std::pow(std::max(0.0f, turn), o.sigma_normal);
                             base = weight;
                             std::array<double, 4> difference;
                             for (size_t c = 0; c < 4; ++c)
@@ -304,28 +310,29 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                 }
                 // The values, the guides and what is left of their variance (sum l_j^2 v_j) go through the
                 // same l_j.
-                std::array<double, kValues> sum{};
+                // (The values in float: 4 to a vector, and every texel's sums in the same order.)
+                std::array<float, kValues> sum{};
                 std::array<double, 4> g{}, v{};
                 for (size_t k = 0; k < count; ++k)
                 {
-                    const float* x = &value[used[k].j * kValues];
+                    const float* x = &current[used[k].j * kValues];
+                    const float lk = float(l[k]);
                     for (size_t c = 0; c < kValues; ++c)
-                        sum[c] += l[k] * double(x[c]);
+                        sum[c] += lk * x[c];
                     for (size_t c = 0; c < 4; ++c)
                     {
                         g[c] += l[k] * double(guide[used[k].j][c]);
                         v[c] += l[k] * l[k] * double(variance[used[k].j][c]);
                     }
                 }
-                for (size_t c = 0; c < kValues; ++c)
-                    out[c] = float(sum[c]);
+                std::memcpy(out, sum.data(), sizeof sum);
                 for (size_t c = 0; c < 4; ++c)
                 {
                     next_guide[i][c] = float(g[c]);
                     next_variance[i][c] = float(v[c]);
                 }
             });
-        value.swap(next);
+        std::swap(current, other);
         guide.swap(next_guide);
         variance.swap(next_variance);
     }
@@ -333,7 +340,8 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
     // Irradiance integrated directly (plain, rnm) is never negative; an extrapolating fit could make it so.
     for (size_t i = 0; i < n; ++i)
         for (size_t c = 27; c < kValues; ++c)
-            value[i * kValues + c] = std::max(value[i * kValues + c], 0.0f);
+            current[i * kValues + c] = std::max(current[i * kValues + c], 0.0f);
+    return current.data();
 }
 
 } // namespace
@@ -404,14 +412,15 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         std::vector<float> value(n * kValues);
         for (size_t i = 0; i < n; ++i)
             pack(sh.irradiance[i], sh.direct[i], &value[i * kValues]);
-        filter_range(atlas, chart, sh.valid, 0, n, value, sh.half, o);
+        float* result = filter_range(atlas, chart, sh.valid, 0, n, value, sh.half, o);
         for (size_t i = 0; i < n; ++i)
-            add(i, sh.direct[i][0], &value[i * kValues]);
+            add(i, sh.direct[i][0], &result[i * kValues]);
         for (size_t i = 0; i < n; ++i)
         {
-            scale(i, &value[i * kValues]);
-            unpack(&value[i * kValues], sh.irradiance[i], sh.direct[i]);
+            scale(i, &result[i * kValues]);
+            unpack(&result[i * kValues], sh.irradiance[i], sh.direct[i]);
         }
+        sh.half = {}; // the halves are done with (and their memory with them)
         return report;
     }
 
@@ -446,11 +455,11 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         std::vector<float> value(count * kValues);
         for (size_t i = 0; i < count; ++i)
             pack(irradiance[i], direct[i], &value[i * kValues]);
-        filter_range(atlas, chart, sh.valid, in_first, count, value, halves, o);
+        const float* result = filter_range(atlas, chart, sh.valid, in_first, count, value, halves, o);
         for (size_t i = out_first; i < out_end; ++i)
         {
-            add(i, direct[i - in_first][0], &value[(i - in_first) * kValues]);
-            unpack(&value[(i - in_first) * kValues], irradiance[i - in_first], direct[i - in_first]);
+            add(i, direct[i - in_first][0], &result[(i - in_first) * kValues]);
+            unpack(&result[(i - in_first) * kValues], irradiance[i - in_first], direct[i - in_first]);
         }
         const size_t skip = out_first - in_first, rows = out_end - out_first;
         sh.tiles->write(to, 0, uint32_t(out_first), std::as_bytes(std::span(irradiance).subspan(skip, rows)));

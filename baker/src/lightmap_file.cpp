@@ -59,8 +59,9 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // sums of the passes are in the tile file, texel_file.h). Measured (docs/lightmaps.md#memory-and-asset-size):
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds the half of each texel's samples the bake keeps
-// apart, for the bake and for the pass (312 bytes), and the filter's working copies: the values twice, five
-// arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in bands
+// apart, for the bake and for the pass (312 bytes), and the filter's working copies: the values once more
+// (the halves hold the other copy once they have measured the noise), five arrays of four floats and a chart
+// number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in bands
 // of rows with the rows around them it depends on, each texel of a band read (sums and halves) and filtered
 // (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With --exr-dir, one output at a
 // time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas texel and coefficient of
@@ -72,8 +73,8 @@ constexpr uint64_t kTiledBytesPerCoveredTexel = 136;
 constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atlas: each texel's (x, y)
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
 constexpr uint64_t kTileHalvesBytesPerTexel = 2 * 156;
-constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 2 * 156 + 5 * 16 + 4;
-constexpr uint64_t kDenoiseBandBytesPerTexel = 4 * 156 + 5 * 16;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 156 + 5 * 16 + 4;
+constexpr uint64_t kDenoiseBandBytesPerTexel = 3 * 156 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.

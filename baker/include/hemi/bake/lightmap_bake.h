@@ -154,11 +154,12 @@ struct LightmapSh
     // Per texel, half A of its samples: `irradiance` (0..8) and `direct` (9..12) from rays 0, 3, 4, 7, 8, ...
     // of each stream of samples (hemisphere rays, environment rays, sun rays; every other pair, so that the
     // two halves take neighbouring strata alternately) and half of each exact one (punctual lights); half B
-    // is the whole less A. Two independent estimates of half the light: their difference measures the
-    // noise, and lightmap_denoise.h filters each half with weights taken from the other. Bounce samples read
-    // the previous pass's whole map in both halves, so its noise is common to A and B: the difference
-    // measures a bounce pass's own noise, not what it inherits. Empty unless the bake kept them
-    // (LightmapBakeOptions::keep_halves), and in a LightmapSh made by hand.
+    // is the whole less A. Two estimates of half the light whose difference A - B measures the whole's noise
+    // (lightmap_denoise.h weighs neighbours by it), from above: the halves split one stratified set, so their
+    // errors partly cancel in the whole and add in the difference (hemi-denoise-quality prints the ratio:
+    // about 3x in RMS). Bounce samples read the previous pass's whole map in both halves, so its noise is
+    // common to A and B: the difference measures a bounce pass's own noise, not what it inherits. Empty
+    // unless the bake kept them (LightmapBakeOptions::keep_halves), and in a LightmapSh made by hand.
     using Half = std::array<glm::vec3, 13>;
     std::vector<Half> half;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
