@@ -1466,7 +1466,8 @@ int main(int argc, char** argv)
                     1);
     full_iterations(add("lightmap/denoise/large/" + std::to_string(g_sizes.large_rooms_x) + "x" +
                             std::to_string(g_sizes.large_rooms_z) + "/" +
-                            std::to_string(std::min<uint32_t>(g_sizes.large_atlas, 1024)) + "^2/rays:32",
+                            std::to_string(std::min<uint32_t>(g_sizes.large_atlas, 1024)) + "x" +
+                            std::to_string(std::min<uint32_t>(g_sizes.large_atlas, 1024)) + "/rays:32",
                         lightmap_denoise)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
