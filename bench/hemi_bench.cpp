@@ -842,18 +842,36 @@ double peak_rss_mib()
     return kib / 1024.0;
 }
 
+// What the lightmap bake benchmarks bake: `scene`'s size x size atlas, its surfaces, and a uniform sky of 1
+// with a sun of 6 from (0.4, 1, 0.35) in the mesh's y-up space. Not copyable (the surfaces point at the
+// mesh).
+struct LightmapBench
+{
+    hemi::bake::LightmapAtlas atlas;
+    hemi::bake::LightmapSurfaces surfaces;
+    hemi::bake::LightmapLights lights;
+    LightmapBench(const hemi::io::GltfScene& scene, uint32_t size)
+        : surfaces(scene.mesh, scene.materials, scene.images, scene.primitives)
+    {
+        hemi::bake::LightmapUvReport report;
+        atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
+        lights.sun = true;
+        lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f));
+        lights.sun_irradiance = glm::vec3(6.0f);
+    }
+    LightmapBench(const LightmapBench&) = delete;
+    LightmapBench& operator=(const LightmapBench&) = delete;
+};
+
 // A lightmap bake benchmark (issue 12's, issue 23's): `scene` baked into a size x size atlas under a uniform
 // sky and a sun, 2 bounces, 64 rays per texel and pass; its time, rays/s, texels/s and peak memory. Then
 // Embree's own throughput on the same rays with the same queries (below), and the ratio.
 void lightmap_bake(benchmark::State& state, const hemi::io::GltfScene& scene, uint32_t size)
 {
-    hemi::bake::LightmapUvReport report;
-    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
-    const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
-    hemi::bake::LightmapLights lights;
-    lights.sun = true;
-    lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f)); // the mesh's y-up space
-    lights.sun_irradiance = glm::vec3(6.0f);
+    const LightmapBench bench(scene, size);
+    const hemi::bake::LightmapAtlas& atlas = bench.atlas;
+    const hemi::bake::LightmapSurfaces& surfaces = bench.surfaces;
+    const hemi::bake::LightmapLights& lights = bench.lights;
     hemi::bake::LightmapBakeOptions o;
     o.rays = 64;
     o.bounces = 2;
@@ -969,20 +987,14 @@ void lightmap_denoise(benchmark::State& state)
     const uint32_t size = std::min<uint32_t>(g_sizes.large_atlas, 1024);
     const hemi::io::GltfScene scene =
         hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z, size);
-    hemi::bake::LightmapUvReport report;
-    const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(scene.mesh, size, size, report);
-    const hemi::bake::LightmapSurfaces surfaces(scene.mesh, scene.materials, scene.images, scene.primitives);
-    hemi::bake::LightmapLights lights;
-    lights.sun = true;
-    lights.sun_direction = glm::normalize(glm::vec3(0.4f, 1.0f, 0.35f)); // the mesh's y-up space
-    lights.sun_irradiance = glm::vec3(6.0f);
+    const LightmapBench bench(scene, size);
     hemi::bake::LightmapBakeOptions o;
     o.rays = 32;
     o.bounces = 1;
     o.keep_halves = true;
     auto t0 = std::chrono::steady_clock::now();
     const hemi::bake::LightmapSh baked =
-        hemi::bake::bake_lightmap_sh(scene.mesh, atlas, lights, o, &surfaces);
+        hemi::bake::bake_lightmap_sh(scene.mesh, bench.atlas, bench.lights, o, &bench.surfaces);
     const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     double filter_s = 0.0;
     int64_t runs = 0;
@@ -990,13 +1002,13 @@ void lightmap_denoise(benchmark::State& state)
     {
         hemi::bake::LightmapSh sh = baked;
         t0 = std::chrono::steady_clock::now();
-        hemi::bake::denoise_lightmap(scene.mesh, atlas, sh);
+        hemi::bake::denoise_lightmap(scene.mesh, bench.atlas, sh);
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         state.SetIterationTime(s);
         filter_s += s;
         ++runs;
     }
-    state.counters["texels"] = double(atlas.texels.size());
+    state.counters["texels"] = double(bench.atlas.texels.size());
     state.counters["bake_s"] = bake_s;
     state.counters["filter_over_bake"] = filter_s / double(std::max<int64_t>(runs, 1)) / bake_s;
 }
