@@ -2,6 +2,7 @@
 // call them: dense sampling of UV triangles, analytic furnace and single-light cases with SH typed here, and
 // a least-squares projection by this file's own quadrature.
 #include "../temp_dir.h"
+#include "furnace.h"
 #include "level.h"
 #include "quads.h"
 
@@ -658,18 +659,12 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
 // twice).
 TEST(LightmapBake, TilesOnDiskGiveTheSameBytesAndResume)
 {
-    const Mesh m = hemi::test::unit_box(true);
-    std::vector<hemi::io::Material> materials(1);
-    materials[0].base_color_factor = glm::vec4(0.5f, 0.4f, 0.3f, 1.0f);
-    materials[0].emissive_factor = glm::vec3(1.0f);
-    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
-    const LightmapSurfaces surfaces(m, materials, {}, primitives);
-    LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
-    ASSERT_TRUE(report.ok());
+    const hemi::test::FurnaceBox box(glm::vec3(0.5f, 0.4f, 0.3f));
+    const Mesh& m = box.mesh;
+    const LightmapSurfaces& surfaces = box.surfaces;
+    const LightmapAtlas& a = box.atlas;
     const uint32_t n = uint32_t(a.texels.size());
-    LightmapLights lights;
-    lights.uniform = glm::vec3(0.0f);
+    const LightmapLights& lights = box.dark;
     LightmapBakeOptions o;
     o.rays = 64;
     o.bounces = 2;
@@ -818,17 +813,12 @@ TEST(LightmapBake, SunDiameterSetsThePenumbra)
 // bake resumed in its last bounce gives the same bytes.
 TEST(LightmapBake, ClosedRoomFurnaceAddsEachBounce)
 {
-    const Mesh m = hemi::test::unit_box(true); // every face looks into the box
-    std::vector<hemi::io::Material> materials(1);
-    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
-    materials[0].emissive_factor = glm::vec3(1.0f);
-    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
-    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    const hemi::test::FurnaceBox box; // every face looks into the box
+    const Mesh& m = box.mesh;
+    const LightmapSurfaces& surfaces = box.surfaces;
+    const LightmapAtlas& a = box.atlas;
+    const LightmapLights& lights = box.dark; // nothing comes from outside (and nothing gets out)
     LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
-    ASSERT_TRUE(report.ok()) << report.problems[0];
-    LightmapLights lights;
-    lights.uniform = glm::vec3(0.0f); // nothing comes from outside (and nothing gets out)
     for (int bounces : {0, 1, 3})
     {
         LightmapBakeOptions o;
@@ -1351,16 +1341,12 @@ TEST(LightmapBake, TexelsLeftInsideGeometryTakeTheirValidNeighboursValues)
 // inside a closed box of single-sided outward faces is flagged invalid.
 TEST(LightmapBake, LightProbesSeeTheLevelsLightAndBounces)
 {
-    const Mesh m = hemi::test::unit_box(true);
-    std::vector<hemi::io::Material> materials(1);
-    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
-    materials[0].emissive_factor = glm::vec3(1.0f);
-    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(m.indices.size()), 0}};
-    const LightmapSurfaces surfaces(m, materials, {}, primitives);
+    const hemi::test::FurnaceBox box;
+    const Mesh& m = box.mesh;
+    const LightmapSurfaces& surfaces = box.surfaces;
+    const LightmapAtlas& a = box.atlas;
+    const LightmapLights& dark = box.dark;
     LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(m, 48, 32, report);
-    LightmapLights dark;
-    dark.uniform = glm::vec3(0.0f);
     LightmapBakeOptions o;
     o.rays = 256;
     o.bounces = 1;
@@ -1608,18 +1594,11 @@ TEST(LightmapUnwrap, PlanarChartsAtOneTexelDensity)
     bu.height = 32;
     const hemi::bake::UnwrapResult br = hemi::bake::unwrap_lightmap(box, bu);
     EXPECT_EQ(br.charts, 6u);
-    const LightmapAtlas ba = rasterize_lightmap(box, br.width, br.height, report);
-    ASSERT_TRUE(report.ok()) << report.problems[0];
-    std::vector<hemi::io::Material> materials(1);
-    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
-    materials[0].emissive_factor = glm::vec3(1.0f);
-    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(box.indices.size()), 0}};
-    const LightmapSurfaces surfaces(box, materials, {}, primitives);
-    LightmapLights dark;
-    dark.uniform = glm::vec3(0.0f);
+    const hemi::test::FurnaceBox furnace(glm::vec3(0.5f), box, br.width, br.height);
+    const LightmapAtlas& ba = furnace.atlas;
     LightmapBakeOptions o;
     o.bounces = 1;
-    const LightmapSh sh = bake_lightmap_sh(box, ba, dark, o, &surfaces);
+    const LightmapSh sh = bake_lightmap_sh(furnace.mesh, ba, furnace.dark, o, &furnace.surfaces);
     for (size_t i = 0; i < ba.texels.size(); ++i)
         ASSERT_NEAR(lightmap_coefficients("plain", sh.irradiance[i])[0].x, 1.5 * M_PI, 0.002 * 1.5 * M_PI)
             << "texel " << i << " (" << ba.texels[i].x << ", " << ba.texels[i].y << ") at "
@@ -2128,16 +2107,12 @@ TEST(LightmapSeams, StitchingClosesTheStepAndChangesOnlyTexelsAlongTheSeam)
 // walls' outsides in the same atlas are bright and noisy.
 TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
 {
-    const Mesh box = hemi::test::unit_box(true);
-    std::vector<hemi::io::Material> materials(1);
-    materials[0].base_color_factor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
-    materials[0].emissive_factor = glm::vec3(1.0f);
-    const std::vector<hemi::io::Primitive> primitives = {{0, uint32_t(box.indices.size()), 0}};
-    const LightmapSurfaces surfaces(box, materials, {}, primitives);
+    const hemi::test::FurnaceBox furnace_box;
+    const Mesh& box = furnace_box.mesh;
+    const LightmapSurfaces& surfaces = furnace_box.surfaces;
+    const LightmapAtlas& a = furnace_box.atlas;
+    const LightmapLights& dark = furnace_box.dark;
     LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(box, 48, 32, report);
-    LightmapLights dark;
-    dark.uniform = glm::vec3(0.0f);
     LightmapBakeOptions o;
     o.rays = 64;
     o.bounces = 3;
