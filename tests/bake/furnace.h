@@ -26,8 +26,8 @@ struct FurnaceBox
     bake::LightmapAtlas atlas;
     bake::LightmapLights dark;
 
-    explicit FurnaceBox(glm::vec3 albedo = glm::vec3(0.5f), io::Mesh box = unit_box(true), uint32_t width = 48,
-                        uint32_t height = 32)
+    explicit FurnaceBox(glm::vec3 albedo = glm::vec3(0.5f), io::Mesh box = unit_box(true),
+                        uint32_t width = 48, uint32_t height = 32)
         : mesh(std::move(box)), materials{emitter(albedo)}, primitives{{0, uint32_t(mesh.indices.size()), 0}},
           surfaces(mesh, materials, {}, primitives)
     {
