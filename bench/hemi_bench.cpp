@@ -40,7 +40,7 @@
 //   lightmap/bake/large/...           the same for a level of 8 x 5 rooms and corridors (4096^2, 11.9 M
 //                                     covered texels; samples::make_large_level). --write-large-level=FILE
 //                                     writes that level as a .glb and exits (for bench/level_scaling.sh).
-//   lightmap/denoise/large/...        hemi-bake lightmap --denoise's filter on that level at 1024^2 (777,900
+//   lightmap/denoise/large/...        hemi-bake lightmap --denoise's filter on that level at 1024^2 (760,546
 //                                     covered texels), baked with 32 rays, a sun and a bounce: time, and
 //                                     filter_over_bake = the filter's time over that bake's (both wall
 //                                     clock, all cores).
