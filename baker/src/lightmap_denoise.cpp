@@ -350,7 +350,8 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                                        const LightmapDenoiseOptions& o)
 {
     const size_t n = atlas.texels.size();
-    if (sh.texels() != n || !sh.has_direct() || !sh.has_halves() || sh.valid.size() != n)
+    if (sh.texels() != n || !sh.has_direct() || !sh.has_halves() || sh.valid.size() != n ||
+        (!sh.tiles && (sh.direct.size() != n || sh.half.size() != n)))
         throw std::invalid_argument(
             "denoising needs a bake's irradiance, direct values, half-sample values and "
             "validity for each of the atlas's " +

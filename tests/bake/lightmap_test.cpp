@@ -2118,6 +2118,24 @@ TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
     o.bounces = 3;
     o.keep_halves = true;
     LightmapSh furnace = bake_lightmap_sh(box, a, dark, o, &surfaces);
+    // A bake that lacks what the filter reads, in part or whole, or options out of range: an error, not a
+    // read past the end.
+    for (int broken = 0; broken < 5; ++broken)
+    {
+        LightmapSh bad = furnace;
+        LightmapDenoiseOptions d;
+        if (broken == 0)
+            bad.half.pop_back();
+        else if (broken == 1)
+            bad.direct.pop_back();
+        else if (broken == 2)
+            bad.half.clear();
+        else if (broken == 3)
+            bad.valid.pop_back();
+        else
+            d.iterations = 11;
+        EXPECT_THROW(denoise_lightmap(box, a, bad, d), std::invalid_argument) << "case " << broken;
+    }
     const LightmapDenoiseReport r = denoise_lightmap(box, a, furnace);
     EXPECT_EQ(r.charts, 6u);
     EXPECT_EQ(r.texels, a.texels.size());
