@@ -14,8 +14,8 @@
 //   hemi-denoise-quality [SEEDS [SCENE]]   SEEDS: 1 to 100 (default 3: seeds 1, 11, 21, ...); SCENE: only
 //                                          the scenes whose name contains it ("wall", "96x96", "no bounce")
 //
-// Under each scene it also prints how the noise the denoiser estimates (the two halves' difference, in plain)
-// compares with the 32-ray bake's actual error, as root mean squares over the texels.
+// Under each scene it also prints how the noise the bake estimates for the denoiser (LightmapSh::noise, of
+// plain's luminance) compares with the 32-ray bake's actual error, as root mean squares over the texels.
 //
 // About 4 minutes on 2 cores at 3 seeds. Not a benchmark of speed: it times nothing but the sample level's
 // 32-ray bake and filter against its 128-ray bake, which the documentation quotes beside the table.
@@ -28,6 +28,7 @@
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/image.h>
 #include <hemi/math/camera.h>
+#include <hemi/math/luminance.h>
 
 #include <glm/geometric.hpp>
 
@@ -76,7 +77,7 @@ void measure(const Scene& s, int seeds)
         o.rays = rays;
         o.seed = seed;
         o.bounces = s.bounces;
-        o.keep_halves = rays == 32;
+        o.keep_noise = rays == 32;
         return bake_lightmap_sh(s.mesh, s.atlas, s.lights, o, s.surfaces ? &*s.surfaces : nullptr);
     };
     const LightmapSh reference = bake(4096, 3);
@@ -110,11 +111,10 @@ void measure(const Scene& s, int seeds)
         const LightmapSh more = bake(128, seed + 1), noisy = bake(32, seed);
         for (size_t i = 0; i < n; ++i)
         {
-            // Half A's plain is at 9; B is the whole less A; A - B estimates the whole's error.
-            const glm::vec3 a = noisy.half[i][9], d = a - (noisy.direct[i][0] - a),
-                            e = noisy.direct[i][0] - reference.direct[i][0];
-            estimated += double(glm::dot(d, d)) / double(n * 3 * size_t(seeds));
-            actual += double(glm::dot(e, e)) / double(n * 3 * size_t(seeds));
+            // The estimated variance of plain's luminance, and its actual error.
+            const double e = math::luminance(noisy.direct[i][0] - reference.direct[i][0]);
+            estimated += double(noisy.noise[i][0]) / double(n * size_t(seeds));
+            actual += e * e / double(n * size_t(seeds));
         }
         LightmapSh denoised = noisy;
         denoise_lightmap(s.mesh, s.atlas, denoised);
@@ -131,7 +131,7 @@ void measure(const Scene& s, int seeds)
     }
     std::printf("| %s: mean over %d seeds of denoised / 128 rays | | | | | plain %.2f, sh9 %.2f |\n",
                 s.name.c_str(), seeds, ratio[0], ratio[1]);
-    std::printf("| %s: the halves' estimate of plain's noise at 32 rays %.4f, its actual error %.4f (%.1fx) "
+    std::printf("| %s: the bake's estimate of plain's noise at 32 rays %.4f, its actual error %.4f (%.1fx) "
                 "| | | | | |\n",
                 s.name.c_str(), std::sqrt(estimated), std::sqrt(actual), std::sqrt(estimated / actual));
     std::fflush(stdout);
@@ -197,7 +197,7 @@ int main(int argc, char** argv)
             LightmapBakeOptions o;
             o.bounces = 1;
             o.rays = 32;
-            o.keep_halves = true;
+            o.keep_noise = true;
             auto start = std::chrono::steady_clock::now();
             LightmapSh sh = bake_lightmap_sh(s.mesh, s.atlas, s.lights, o, &*s.surfaces);
             const double bake32 = seconds_since(start);
@@ -205,7 +205,7 @@ int main(int argc, char** argv)
             denoise_lightmap(s.mesh, s.atlas, sh);
             const double filter = seconds_since(start);
             o.rays = 128;
-            o.keep_halves = false;
+            o.keep_noise = false;
             start = std::chrono::steady_clock::now();
             bake_lightmap_sh(s.mesh, s.atlas, s.lights, o, &*s.surfaces);
             std::fprintf(stderr, "sample level, 1 bounce: 32 rays %.2f s + filter %.2f s; 128 rays %.2f s\n",

@@ -979,8 +979,9 @@ void lightmap_large(benchmark::State& state)
 }
 
 // The denoiser (bake::denoise_lightmap, what --denoise runs) on the many-room level at 1024^2 (at most the
-// large level's atlas), baked once with what it needs (32 rays, the halves, a sun, a bounce); each iteration
-// filters a copy of that bake. The bake's own wall time is the ratio's denominator: the share of a 32-ray
+// large level's atlas), baked once with what it needs (32 rays, the noise estimate, a sun, a bounce); each
+// iteration filters a copy of that bake. The bake's own wall time is the ratio's denominator: the share of a
+// 32-ray
 // --denoise bake that the filter adds.
 void lightmap_denoise(benchmark::State& state)
 {
@@ -991,7 +992,7 @@ void lightmap_denoise(benchmark::State& state)
     hemi::bake::LightmapBakeOptions o;
     o.rays = 32;
     o.bounces = 1;
-    o.keep_halves = true;
+    o.keep_noise = true;
     auto t0 = std::chrono::steady_clock::now();
     const hemi::bake::LightmapSh baked =
         hemi::bake::bake_lightmap_sh(scene.mesh, bench.atlas, bench.lights, o, &bench.surfaces);

@@ -195,7 +195,8 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
         .add_value(o.seed)
         .add_value(o.ray_offset)
         .add_value(o.bounces)
-        .add_value(o.keep_halves)
+        .add_value(o.keep_noise)
+        .add_value(2)      // the denoiser's noise: 2, estimated from neighbouring samples (1: two halves)
         .add_value(tiled); // the checkpoint's sections differ (the sums are in the tile file)
     key.add_value(EmbreeScene::embree_version()).add_value(surfaces != nullptr);
     for (const io::Material& m : materials)
@@ -353,6 +354,8 @@ struct RayScratch
         hits.resize(n);
         blocked.resize(n);
         taps.resize(n);
+        for (auto& s : shares)
+            s.resize(n);
     }
 
     std::vector<glm::vec3> directions;
@@ -362,7 +365,48 @@ struct RayScratch
     std::vector<std::optional<RayHit>> hits;
     std::vector<uint8_t> blocked;
     std::vector<io::BlockMaps::Taps> taps; // the bounce rays' lookups
+    // Per stream of samples (hemisphere, environment, sun) and sample, its share of the denoiser's four
+    // guides (LightmapSh::noise).
+    std::array<std::vector<std::array<double, 4>>, 3> shares;
 };
+
+// The variance of the sum of a stream's shares (`share[r]`, sample r's part of four values), estimated from
+// the stream itself (LightmapSh::noise), added to `variance`: each sample against the mean of its k
+// neighbours, sum_r (share_r - mean)^2 / (1 + 1 / k); for independent samples the same with every other as a
+// neighbour, count / (count - 1) sum_r (share_r - mean of all)^2.
+void add_variance(const std::vector<std::array<double, 4>>& share, const SampleNeighbours& neighbours,
+                  std::array<double, 4>& variance)
+{
+    const size_t count = size_t(neighbours.count);
+    if (count < 2)
+        return; // one sample says nothing of its spread
+    if (neighbours.independent)
+    {
+        std::array<double, 4> mean{}, sum{};
+        for (size_t r = 0; r < count; ++r)
+            for (size_t c = 0; c < 4; ++c)
+                mean[c] += share[r][c] / double(count);
+        for (size_t r = 0; r < count; ++r)
+            for (size_t c = 0; c < 4; ++c)
+                sum[c] += (share[r][c] - mean[c]) * (share[r][c] - mean[c]);
+        for (size_t c = 0; c < 4; ++c)
+            variance[c] += sum[c] * double(count) / double(count - 1);
+        return;
+    }
+    const size_t k = size_t(neighbours.k);
+    for (size_t r = 0; r < count; ++r)
+    {
+        std::array<double, 4> mean{};
+        for (size_t q = 0; q < k; ++q)
+            for (size_t c = 0; c < 4; ++c)
+                mean[c] += share[neighbours.index[r * k + q]][c];
+        for (size_t c = 0; c < 4; ++c)
+        {
+            const double d = share[r][c] - mean[c] / double(k);
+            variance[c] += d * d / (1.0 + 1.0 / double(k));
+        }
+    }
+}
 
 } // namespace
 
@@ -446,13 +490,13 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     using DirectArray = std::array<glm::vec3, 4>;
     std::vector<ShArray> pass_sh(tile);
     std::vector<DirectArray> pass_direct(tile);
-    std::vector<LightmapSh::Half> pass_half(o.keep_halves ? tile : 0);
+    std::vector<LightmapSh::Noise> pass_noise(o.keep_noise ? tile : 0);
     std::vector<ShArray> sum_sh(tiled ? tile : 0);
     std::vector<DirectArray> sum_direct(tiled ? tile : 0);
-    std::vector<LightmapSh::Half> sum_half(tiled && o.keep_halves ? tile : 0);
+    std::vector<LightmapSh::Noise> sum_noise(tiled && o.keep_noise ? tile : 0);
     out.irradiance.assign(tiled ? 0 : n, {});
     out.direct.assign(tiled ? 0 : n, {});
-    out.half.assign(o.keep_halves && !tiled ? n : 0, {});
+    out.noise.assign(o.keep_noise && !tiled ? n : 0, {});
     // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
     // over the hemisphere (lightmap_bake.h).
     const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
@@ -530,6 +574,22 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         },
         [](uint32_t) {});
 
+    // The noise estimate's patterns (LightmapSh::noise): each sample is compared with its six nearest in its
+    // stream's. The sun's rays are drawn independently.
+    const SampleNeighbours hemisphere_pattern =
+                               o.keep_noise ? hemisphere_neighbours(o.rays, 6) : SampleNeighbours{},
+                           environment_pattern =
+                               o.keep_noise && image_env ? lattice_neighbours(o.rays, 6) : SampleNeighbours{};
+    SampleNeighbours sun_pattern;
+    sun_pattern.count = o.sun_rays;
+    sun_pattern.independent = true;
+    // Band 1's factor in the cosine's convolution (a guide's share is the luminance times it).
+    const double band1 = []
+    {
+        math::Sh9Rgb unit{};
+        unit[1] = glm::vec3(1.0f);
+        return double(math::convolve_cosine(unit)[1].x);
+    }();
     uint32_t base = 0; // the texel that pass_*[0] holds: the tile's first
     auto texel = [&](uint32_t i, int pass)
     {
@@ -539,46 +599,37 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
         std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
-        // Half A of the samples (LightmapSh::half): rays 0, 3, 4, 7, 8, ... of each stream of `count` rays
-        // (every other pair, so that A and B each take one of two neighbouring strata, alternately the lower
-        // and the upper), half of each of the last count % 4 (which no such pairs balance), and half of every
-        // exact sample.
-        std::array<glm::dvec3, 9> acc_a{};
-        std::array<glm::dvec3, 4> direct_a{};
-        // `ray`: the sample's index in its stream of `count`, or -1 for an exact one (a punctual light).
-        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int ray, int count)
+        RayScratch& s = scratch.local();
+        s.reserve(size_t(std::max(o.rays, o.sun_rays)));
+        if (o.keep_noise)
+            for (auto& share : s.shares)
+                std::fill(share.begin(), share.end(), std::array<double, 4>{});
+        // `stream`: 0 the hemisphere rays, 1 the environment's, 2 the sun's, -1 an exact sample (a punctual
+        // light); `ray`: the sample's index in its stream.
+        auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int stream, int ray)
         {
             const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
                                   glm::dot(world, t.normal));
             const math::Sh9 y = math::sh9_eval(local);
-            // The sample's share in half A (0 when the bake keeps no halves: nothing to add).
-            const double share = !o.keep_halves                        ? 0.0
-                                 : ray < 0 || ray >= count - count % 4 ? 0.5
-                                 : (((ray + 1) >> 1) & 1) == 0         ? 1.0
-                                                                       : 0.0;
+            if (o.keep_noise && stream >= 0)
+            {
+                // Its share of the guides: luminance times the clamped cosine, and times band 1's
+                // functions as the cosine's convolution scales them.
+                const double l = double(math::luminance(glm::vec3(radiance)));
+                std::array<double, 4>& share = s.shares[size_t(stream)][size_t(ray)];
+                share[0] += l * double(std::max(local.z, 0.0f));
+                for (size_t b = 0; b < 3; ++b)
+                    share[1 + b] += l * double(y[1 + b]) * band1;
+            }
             for (int j = 0; j < 9; ++j)
                 acc[size_t(j)] += radiance * double(y[size_t(j)]);
-            const glm::dvec3 e = radiance * double(std::max(local.z, 0.0f));
-            direct[0] += e;
-            std::array<glm::dvec3, 3> eb;
+            direct[0] += radiance * double(std::max(local.z, 0.0f));
             for (size_t b = 0; b < 3; ++b)
-            {
-                eb[b] = radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
-                direct[1 + b] += eb[b];
-            }
-            if (share == 0.0)
-                return;
-            for (int j = 0; j < 9; ++j)
-                acc_a[size_t(j)] += share * radiance * double(y[size_t(j)]);
-            direct_a[0] += share * e;
-            for (size_t b = 0; b < 3; ++b)
-                direct_a[1 + b] += share * eb[b];
+                direct[1 + b] += radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
         };
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up. The
         // texel's rays are traced together (EmbreeScene's packets), then their hits are shaded in ray order.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
-        RayScratch& s = scratch.local();
-        s.reserve(size_t(std::max(o.rays, o.sun_rays)));
         // The first pass always finds the closest hit: it counts the back faces a texel sees.
         const bool needs_hit = pass == 0 || (surfaces && pass > 0);
         size_t m = 0; // the rays traced
@@ -620,7 +671,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (!hit)
             {
                 if (pass == 0 && !image_env)
-                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight, r, o.rays);
+                    add(d, glm::dvec3(lights.environment_radiance(d)) * weight, 0, r);
                 continue;
             }
             if (s.blocked[k])
@@ -634,11 +685,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                            : surfaces->albedo(hit->primitive, hit->u, hit->v) *
                                                  io::BlockMaps::read(s.taps[k]) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
-                add(d, glm::dvec3(radiance) * weight, r, o.rays);
+                add(d, glm::dvec3(radiance) * weight, 0, r);
         }
         // Shadow rays, traced together and then added in order: `count` rays of a stream, ray(r, d, w)
         // saying whether ray r is cast (its direction and weight).
-        auto shadow_rays = [&](int count, auto&& ray, auto&& radiance)
+        auto shadow_rays = [&](int stream, int count, auto&& ray, auto&& radiance)
         {
             size_t cast = 0;
             for (int r = 0; r < count; ++r)
@@ -654,11 +705,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             scene.occluded(std::span<const Ray>(s.rays.data(), cast), std::span(s.blocked.data(), cast));
             for (size_t k = 0; k < cast; ++k)
                 if (!s.blocked[k])
-                    add(s.rays[k].direction, radiance(s.rays[k].direction, s.weight[k]), s.index[k], count);
+                    add(s.rays[k].direction, radiance(s.rays[k].direction, s.weight[k]), stream, s.index[k]);
         };
         if (pass == 0 && image_env)
             shadow_rays(
-                o.rays,
+                1, o.rays,
                 [&](int r, glm::vec3& d, double& w)
                 {
                     // Below the surface: the hemisphere of the frame, as the uniform rays see it.
@@ -668,7 +719,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 [&](const glm::vec3& d, double w) { return glm::dvec3(lights.environment_radiance(d)) * w; });
         if (lights.sun && pass == 0)
             shadow_rays(
-                o.sun_rays,
+                2, o.sun_rays,
                 [&](int r, glm::vec3& d, double&)
                 {
                     d = light.sun_ray(item, r);
@@ -701,15 +752,16 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         pass_sh[i - base] = math::convolve_cosine(radiance);
         for (size_t b = 0; b < 4; ++b)
             pass_direct[i - base][b] = glm::vec3(direct[b]);
-        if (o.keep_halves)
+        if (o.keep_noise)
         {
-            for (int j = 0; j < 9; ++j)
-                radiance[size_t(j)] = glm::vec3(acc_a[size_t(j)]);
-            const math::Sh9Rgb half_sh = math::convolve_cosine(radiance);
-            for (size_t j = 0; j < 9; ++j)
-                pass_half[i - base][j] = half_sh[j];
-            for (size_t b = 0; b < 4; ++b)
-                pass_half[i - base][9 + b] = glm::vec3(direct_a[b]);
+            std::array<double, 4> variance{};
+            add_variance(s.shares[0], hemisphere_pattern, variance);
+            if (pass == 0 && image_env)
+                add_variance(s.shares[1], environment_pattern, variance);
+            if (pass == 0 && lights.sun)
+                add_variance(s.shares[2], sun_pattern, variance);
+            for (size_t c = 0; c < 4; ++c)
+                pass_noise[i - base][c] = float(variance[c]);
         }
     };
 
@@ -722,8 +774,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
                     {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
                     {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
-                    {"half", std::as_writable_bytes(std::span<LightmapSh::Half>(out.half))},
-                    {"pass_half", std::as_writable_bytes(std::span<LightmapSh::Half>(pass_half))},
+                    {"noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(out.noise))},
+                    {"pass_noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(pass_noise))},
                     {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
                     {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
     else
@@ -743,8 +795,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     if (tiled && dist.leader())
     {
         std::vector<uint32_t> fields = {uint32_t(sizeof(ShArray)), uint32_t(sizeof(DirectArray))};
-        if (o.keep_halves)
-            fields.push_back(uint32_t(sizeof(LightmapSh::Half)));
+        if (o.keep_noise)
+            fields.push_back(uint32_t(sizeof(LightmapSh::Noise)));
         tiles = std::make_shared<TexelFile>(o.tile_file, key, n, std::move(fields), out.resumed);
         if (checkpoint.active())
             tiles->keep();
@@ -785,8 +837,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             std::vector<ItemArray> arrays = {
                 {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
                 {reinterpret_cast<std::byte*>(pass_direct.data()), sizeof(DirectArray)}};
-            if (o.keep_halves)
-                arrays.push_back({reinterpret_cast<std::byte*>(pass_half.data()), sizeof(LightmapSh::Half)});
+            if (o.keep_noise)
+                arrays.push_back(
+                    {reinterpret_cast<std::byte*>(pass_noise.data()), sizeof(LightmapSh::Noise)});
             if (pass == 0)
                 arrays.push_back({reinterpret_cast<std::byte*>(out.valid.data() + base), 1});
             dist.run(
@@ -826,15 +879,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 {
                     io_tile(false, (pass - 1) % 2, 0, sum_sh);
                     io_tile(false, (pass - 1) % 2, 1, sum_direct);
-                    if (o.keep_halves)
-                        io_tile(false, (pass - 1) % 2, 2, sum_half);
+                    if (o.keep_noise)
+                        io_tile(false, (pass - 1) % 2, 2, sum_noise);
                 }
                 else
                 {
                     std::fill_n(sum_sh.begin(), count, ShArray{});
                     std::fill_n(sum_direct.begin(), count, DirectArray{});
-                    if (o.keep_halves)
-                        std::fill_n(sum_half.begin(), count, LightmapSh::Half{});
+                    if (o.keep_noise)
+                        std::fill_n(sum_noise.begin(), count, LightmapSh::Noise{});
                 }
                 for (uint32_t i = 0; i < count; ++i)
                 {
@@ -842,14 +895,14 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                         sum_sh[i][size_t(j)] += pass_sh[i][size_t(j)];
                     for (size_t b = 0; b < 4; ++b)
                         sum_direct[i][b] += pass_direct[i][b];
-                    if (o.keep_halves)
-                        for (size_t c = 0; c < sum_half[i].size(); ++c)
-                            sum_half[i][c] += pass_half[i][c];
+                    if (o.keep_noise)
+                        for (size_t c = 0; c < 4; ++c)
+                            sum_noise[i][c] += pass_noise[i][c];
                 }
                 io_tile(true, pass % 2, 0, sum_sh);
                 io_tile(true, pass % 2, 1, sum_direct);
-                if (o.keep_halves)
-                    io_tile(true, pass % 2, 2, sum_half);
+                if (o.keep_noise)
+                    io_tile(true, pass % 2, 2, sum_noise);
                 if (checkpoint.active())
                     tiles->sync();
             }
@@ -871,9 +924,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     out.irradiance[i][size_t(j)] += pass_sh[i][size_t(j)];
                 for (size_t b = 0; b < 4; ++b)
                     out.direct[i][b] += pass_direct[i][b];
-                if (o.keep_halves)
-                    for (size_t c = 0; c < out.half[i].size(); ++c)
-                        out.half[i][c] += pass_half[i][c];
+                if (o.keep_noise)
+                    for (size_t c = 0; c < 4; ++c)
+                        out.noise[i][c] += pass_noise[i][c];
                 previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
             }
         else
@@ -889,7 +942,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     {
         out.tiles = tiles;
         out.tiles_copy = (passes - 1) % 2;
-        out.tiles_halves = o.keep_halves;
+        out.tiles_noise = o.keep_noise;
     }
     out.tiles_count = tiled ? (n + tile - 1) / tile : 1;
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -1330,28 +1383,28 @@ io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t heig
 }
 
 void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irr,
-                      std::array<glm::vec3, 4>* dir, Half* halves) const
+                      std::array<glm::vec3, 4>* dir, Noise* noise_out) const
 {
     if (uint64_t(first) + count > texels())
         throw std::out_of_range("LightmapSh::read: texels past the lightmap's");
-    if ((dir && !has_direct()) || (halves && !has_halves()))
-        throw std::invalid_argument("LightmapSh::read: the bake made no direct values or halves");
+    if ((dir && !has_direct()) || (noise_out && !has_noise()))
+        throw std::invalid_argument("LightmapSh::read: the bake made no direct values or noise estimate");
     if (tiles)
     {
         if (irr)
             tiles->read(tiles_copy, 0, first, std::as_writable_bytes(std::span(irr, count)));
         if (dir)
             tiles->read(tiles_copy, 1, first, std::as_writable_bytes(std::span(dir, count)));
-        if (halves)
-            tiles->read(tiles_copy, 2, first, std::as_writable_bytes(std::span(halves, count)));
+        if (noise_out)
+            tiles->read(tiles_copy, 2, first, std::as_writable_bytes(std::span(noise_out, count)));
         return;
     }
     if (irr)
         std::copy_n(irradiance.begin() + first, count, irr);
     if (dir)
         std::copy_n(direct.begin() + first, count, dir);
-    if (halves)
-        std::copy_n(half.begin() + first, count, halves);
+    if (noise_out)
+        std::copy_n(noise.begin() + first, count, noise_out);
 }
 
 void LightmapSh::load()
@@ -1361,8 +1414,8 @@ void LightmapSh::load()
     const uint32_t n = uint32_t(texels());
     irradiance.resize(n);
     direct.resize(n);
-    half.resize(has_halves() ? n : 0);
-    read(0, n, irradiance.data(), direct.data(), half.empty() ? nullptr : half.data());
+    noise.resize(has_noise() ? n : 0);
+    read(0, n, irradiance.data(), direct.data(), noise.empty() ? nullptr : noise.data());
     tiles.reset();
 }
 

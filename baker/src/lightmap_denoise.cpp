@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -71,7 +72,8 @@ std::vector<uint32_t> lightmap_charts(const io::Mesh& mesh, size_t* count)
 namespace
 {
 // The guides a neighbour's light is compared by: the luminance of the irradiance at the normal (plain) and of
-// SH9's three band-1 coefficients (the light's direction), from a texel's 39 values.
+// SH9's three band-1 coefficients (the light's direction), from a texel's 39 values; LightmapSh::noise holds
+// the variance of each.
 constexpr size_t kValues = 39; // SH9 (27 floats), then plain's and rnm's (12)
 using Guide = std::array<float, 4>;
 Guide guides_of(const float* v)
@@ -80,15 +82,14 @@ Guide guides_of(const float* v)
             math::luminance(glm::vec3(v[6], v[7], v[8])), math::luminance(glm::vec3(v[9], v[10], v[11]))};
 }
 
-// Filters texels [first, first + n) of the atlas, `value` (39 floats each, the whole of their samples), with
-// `halves` their half A; texels outside the range count as absent. Once the halves have measured the noise
-// their memory holds the passes' other copy (a half has 39 floats too), so the result is in `value`'s storage
-// or in the halves': the returned pointer says which. Plain and rnm come out >= 0; each chart's light is
-// restored by the caller.
-static_assert(sizeof(LightmapSh::Half) == kValues * sizeof(float));
+// Filters texels [first, first + n) of the atlas, `value` (39 floats each), with `noise` the variance of
+// each texel's guides (LightmapSh::noise); texels outside the range count as absent. The passes alternate
+// between `value` and `other` (as large): the returned pointer says which holds the result. Plain and rnm
+// come out >= 0; each chart's light is restored by the caller.
 float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
-                    const std::vector<uint8_t>& valid, size_t first, size_t n, std::vector<float>& value,
-                    std::vector<LightmapSh::Half>& halves, const LightmapDenoiseOptions& o)
+                    const std::vector<uint8_t>& valid, size_t first, size_t n, std::span<float> value,
+                    std::span<float> other_values, const LightmapSh::Noise* noise,
+                    const LightmapDenoiseOptions& o)
 {
     // Calls f(j, dx, dy) for each valid texel j of i's chart in the range at (dx, dy) texels of `step` from
     // it (i and j: indices in the range).
@@ -105,30 +106,19 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
             }
     };
 
-    // Every value of each texel in one row, the whole of its samples; the guides, and their noise: the
-    // variance of the whole's estimate, (A - B)^2 with A and B the guides of the two halves (each half takes
-    // one of every two neighbouring strata, so this is the paired-strata estimate of a stratified sum's
-    // variance: a little above the true one, never below it on average).
+    // Each texel's guides, and their noise: the variance of the bake's estimate of each.
     std::vector<Guide> guide(n), variance(n);
     for (size_t i = 0; i < n; ++i)
     {
-        const float* v = &value[i * kValues];
-        const float* a = &halves[i][0].x; // the half's 39 values, in the same order
-        float b[kValues];
-        for (size_t c = 0; c < kValues; ++c)
-            b[c] = v[c] - a[c];
-        guide[i] = guides_of(v);
-        const Guide ga = guides_of(a), gb = guides_of(b);
-        for (size_t c = 0; c < 4; ++c)
-            variance[i][c] = (ga[c] - gb[c]) * (ga[c] - gb[c]);
+        guide[i] = guides_of(&value[i * kValues]);
+        variance[i] = noise[i];
     }
-    // Measured: the halves' memory becomes the passes' other copy.
-    std::span<float> current(value), other(n ? &halves[0][0].x : nullptr, n * kValues);
-    // One texel's noise is a single draw, and so are its guides: both are prefiltered over the texel's 3 x 3
-    // neighbours in its chart with weights (1, 2, 1) x (1, 2, 1) (the variance with the weights squared), so
-    // that the weights below compare light, not the noise of single texels.
-    // x over texel i's 3 x 3 neighbours in its chart, weighted by (1, 2, 1) x (1, 2, 1) normalised (power 1),
-    // or by their squares over the squared sum (power 2: the variance of such a mean).
+    std::span<float> current(value), other(other_values);
+    // One texel's guides are single draws: they are prefiltered over the texel's 3 x 3 neighbours in its
+    // chart with weights (1, 2, 1) x (1, 2, 1), and their variance with them (the weights squared), so that
+    // the weights below compare light, not the noise of single texels. x over texel i's 3 x 3 neighbours in
+    // its chart, weighted by (1, 2, 1) x (1, 2, 1) normalised (power 1), or by their squares over the squared
+    // sum (power 2: the variance of such a mean).
     const auto binomial = [&](const std::vector<Guide>& x, size_t i, int power)
     {
         std::array<double, 4> sum{};
@@ -190,8 +180,8 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
                 // difference less what the two texels' noise explains, in units of that noise (the
                 // non-local means distance of Rousselle, Knaus and Zwicker 2012): about 0 for a neighbour
                 // whose light differs from the centre's by noise only, growing with the square of a real
-                // difference. A guide without variance at the centre (its halves agreed, as in a sealed room
-                // where no sample saw light) admits only neighbours with exactly its value.
+                // difference. A guide without variance at the centre (its samples agreed, as in a sealed room
+                // where none saw light) admits only neighbours with exactly its value.
                 const auto light_weight = [&](size_t j, const std::array<double, 4>& difference)
                 {
                     double distance = 0.0;
@@ -350,12 +340,11 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                                        const LightmapDenoiseOptions& o)
 {
     const size_t n = atlas.texels.size();
-    if (sh.texels() != n || !sh.has_direct() || !sh.has_halves() || sh.valid.size() != n ||
-        (!sh.tiles && (sh.direct.size() != n || sh.half.size() != n)))
-        throw std::invalid_argument(
-            "denoising needs a bake's irradiance, direct values, half-sample values and "
-            "validity for each of the atlas's " +
-            std::to_string(n) + " texels");
+    if (sh.texels() != n || !sh.has_direct() || !sh.has_noise() || sh.valid.size() != n ||
+        (!sh.tiles && (sh.direct.size() != n || sh.noise.size() != n)))
+        throw std::invalid_argument("denoising needs a bake's irradiance, direct values, noise estimate and "
+                                    "validity for each of the atlas's " +
+                                    std::to_string(n) + " texels");
     if (o.iterations < 0 || o.iterations > 10 || !(o.sigma_light > 0.0f) || !(o.sigma_normal > 0.0f) ||
         !(o.sigma_plane > 0.0f))
         throw std::invalid_argument("denoising needs 0 to 10 iterations and positive sigmas");
@@ -373,15 +362,15 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     // sums to what the bake's did (an unbiased estimate of the chart's light; a chart with none stays as it
     // is). sums: per chart, plain as baked (0..2) and as filtered (3..5), added in texel order.
     std::vector<std::array<double, 6>> sums(report.charts);
-    const auto add = [&](size_t i, const glm::vec3& baked, const float* filtered)
+    const auto add_baked = [&](size_t i, const glm::vec3& baked)
     {
-        if (!sh.valid[i])
-            return;
-        for (size_t c = 0; c < 3; ++c)
-        {
+        for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
             sums[chart[i]][c] += double(baked[int(c)]);
+    };
+    const auto add_filtered = [&](size_t i, const float* filtered)
+    {
+        for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
             sums[chart[i]][3 + c] += double(filtered[27 + c]);
-        }
     };
     const auto scale = [&](size_t i, float* v)
     {
@@ -410,22 +399,37 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
 
     if (!sh.tiles)
     {
+        // The values packed, and the bake's arrays let go while the filter's two copies are about.
         std::vector<float> value(n * kValues);
         for (size_t i = 0; i < n; ++i)
+        {
+            add_baked(i, sh.direct[i][0]);
             pack(sh.irradiance[i], sh.direct[i], &value[i * kValues]);
-        float* result = filter_range(atlas, chart, sh.valid, 0, n, value, sh.half, o);
+        }
+        sh.irradiance = {};
+        sh.direct = {};
+        // (Left uninitialised: the first pass writes every value of it.)
+        std::unique_ptr<float[]> other(new float[n * kValues]);
+        float* result =
+            filter_range(atlas, chart, sh.valid, 0, n, value, {other.get(), n * kValues}, sh.noise.data(), o);
+        if (result == value.data())
+            other.reset();
+        else
+            value = {};
         for (size_t i = 0; i < n; ++i)
-            add(i, sh.direct[i][0], &result[i * kValues]);
+            add_filtered(i, &result[i * kValues]);
+        sh.irradiance.resize(n);
+        sh.direct.resize(n);
         for (size_t i = 0; i < n; ++i)
         {
             scale(i, &result[i * kValues]);
             unpack(&result[i * kValues], sh.irradiance[i], sh.direct[i]);
         }
-        sh.half = {}; // the halves are done with (and their memory with them)
+        sh.noise = {}; // the estimate is done with
         return report;
     }
 
-    // A bake in tiles (its sums and halves in sh.tiles, copy sh.tiles_copy): the atlas in bands of rows, each
+    // A bake in tiles (its sums and noise in sh.tiles, copy sh.tiles_copy): the atlas in bands of rows, each
     // read with `halo` rows above and below it, as far as a texel's result depends on others (the guides'
     // prefilter, and each pass's variance average and its 5 x 5 window 2^k apart), so that each band's rows
     // come out as the whole atlas's would; they are written to the file's other copy, then scaled there.
@@ -451,15 +455,18 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                      count = row_start(y1 + halo) - in_first;
         irradiance.resize(count);
         direct.resize(count);
-        std::vector<LightmapSh::Half> halves(count);
-        sh.read(uint32_t(in_first), uint32_t(count), irradiance.data(), direct.data(), halves.data());
+        std::vector<LightmapSh::Noise> noise(count);
+        sh.read(uint32_t(in_first), uint32_t(count), irradiance.data(), direct.data(), noise.data());
         std::vector<float> value(count * kValues);
+        std::unique_ptr<float[]> other(new float[count * kValues]);
         for (size_t i = 0; i < count; ++i)
             pack(irradiance[i], direct[i], &value[i * kValues]);
-        const float* result = filter_range(atlas, chart, sh.valid, in_first, count, value, halves, o);
+        const float* result = filter_range(atlas, chart, sh.valid, in_first, count, value,
+                                           {other.get(), count * kValues}, noise.data(), o);
         for (size_t i = out_first; i < out_end; ++i)
         {
-            add(i, direct[i - in_first][0], &result[(i - in_first) * kValues]);
+            add_baked(i, direct[i - in_first][0]);
+            add_filtered(i, &result[(i - in_first) * kValues]);
             unpack(&result[(i - in_first) * kValues], irradiance[i - in_first], direct[i - in_first]);
         }
         const size_t skip = out_first - in_first, rows = out_end - out_first;
@@ -468,7 +475,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         out_first = out_end;
     }
     sh.tiles_copy = to;
-    sh.tiles_halves = false; // the halves are done with
+    sh.tiles_noise = false; // the estimate is done with
     for (size_t first = 0; first < n; first += band_texels)
     {
         const size_t count = std::min(band_texels, n - first);

@@ -58,23 +58,22 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // (kTiledBytesPerCoveredTexel) plus one tile's sums and pass (kTileBytesPerTexel per texel of a tile; the
 // sums of the passes are in the tile file, texel_file.h). Measured (docs/lightmaps.md#memory-and-asset-size):
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
-// floats at once, 2.08 GB with one at a time. --denoise adds the half of each texel's samples the bake keeps
-// apart, for the bake and for the pass (312 bytes), and the filter's working copies: the values once more
-// (the halves hold the other copy once they have measured the noise), five arrays of four floats and a chart
-// number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in bands
-// of rows with the rows around them it depends on, each texel of a band read (sums and halves) and filtered
-// (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With --exr-dir, one output at a
-// time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas texel and coefficient of
-// the largest output, and OpenEXR's half copy.
+// floats at once, 2.08 GB with one at a time. --denoise adds each texel's noise estimate, for the bake and
+// for the pass (32 bytes), and the filter's working copies: the values twice (the bake's sums are let go
+// meanwhile, so once more), five arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in
+// tiles the filter works in bands of rows with the rows around them it depends on, each texel of a band read
+// (sums and noise) and filtered (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
+// --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
+// texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
 constexpr uint64_t kTiledBytesPerCoveredTexel = 136;
 constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atlas: each texel's (x, y)
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
-constexpr uint64_t kTileHalvesBytesPerTexel = 2 * 156;
-constexpr uint64_t kDenoiseBytesPerCoveredTexel = 312 + 156 + 5 * 16 + 4;
-constexpr uint64_t kDenoiseBandBytesPerTexel = 3 * 156 + 5 * 16;
+constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
+constexpr uint64_t kDenoiseBandBytesPerTexel = 3 * 156 + 16 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.
@@ -359,14 +358,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // when in memory).
     const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
     const uint64_t per_tile_texel =
-        o.denoise ? std::max(kTileBytesPerTexel + kTileHalvesBytesPerTexel, kDenoiseBandBytesPerTexel)
+        o.denoise ? std::max(kTileBytesPerTexel + kTileNoiseBytesPerTexel, kDenoiseBandBytesPerTexel)
                   : kTileBytesPerTexel;
     // --denoise in tiles: a band holds at least one row and the rows its result depends on either side.
     const uint64_t least_band =
         o.denoise
             ? uint64_t(w) * uint64_t(3 + 4 * ((int64_t(1) << o.denoise_passes) - 1) + 2 * o.denoise_passes)
             : 0;
-    const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileHalvesBytesPerTexel / 2 : 0);
+    const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileNoiseBytesPerTexel / 2 : 0);
     const uint64_t output_map_bytes =
         output_slots * largest_output * kLightmapBytesPerLargestCoefficient + exr_bytes;
     const auto whole_bytes = [&](uint64_t texels)
@@ -457,7 +456,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.lights = scene.lights.size();
     check_lightmap_range(o.lights, scene.materials, scene_path);
     LightmapBakeOptions bake_options = o.bake;
-    bake_options.keep_halves = o.denoise;
+    bake_options.keep_noise = o.denoise;
     bake_options.tile_texels = tile_texels;
     bake_options.tile_file = lightmap_tile_path(asset_path);
     Distribution& dist = o.bake.distribution ? *o.bake.distribution : local_distribution();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace hemi::bake
 {
@@ -76,6 +77,105 @@ void hemisphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> ou
     const float offset = draw(h, 0), rays = float(out.size());
     for (size_t r = 0; r < out.size(); ++r)
         out[r] = spiral(offset, int(r), 1.0f - (float(int(r)) + draw(h, uint64_t(r) + 1)) / rays);
+}
+
+namespace
+{
+// Every other sample as a neighbour (too few samples for k of them): as if independent.
+SampleNeighbours all_others(int count)
+{
+    SampleNeighbours n;
+    n.count = count;
+    n.k = std::max(count - 1, 0);
+    n.independent = true;
+    return n;
+}
+} // namespace
+
+namespace
+{
+// The k nearest of each of `count` samples by `distance2(r, q)` (squared), searched outwards in index: two
+// samples d apart in index (on a ring of indices with `ring`, else on a line) are at least d / count apart,
+// so once that exceeds the k-th nearest found, none further can be nearer. About count^1.5 distances.
+template <class Distance2> SampleNeighbours nearest(int count, int k, bool ring, Distance2&& distance2)
+{
+    SampleNeighbours n;
+    n.count = count;
+    n.k = k;
+    n.index.resize(size_t(count) * size_t(k));
+    std::vector<std::pair<double, uint32_t>> best; // the k nearest so far, nearest first (ties by index)
+    const int reach = ring ? count / 2 : count - 1;
+    for (int r = 0; r < count; ++r)
+    {
+        best.clear();
+        for (int d = 1; d <= reach; ++d)
+        {
+            const double gap = double(d) / double(count) - 1e-9;
+            if (int(best.size()) == k && gap > 0.0 && gap * gap > best.back().first)
+                break;
+            for (const int sign : {-1, 1})
+            {
+                if (ring && 2 * d == count && sign < 0)
+                    continue; // half way round the ring, r - d and r + d are one sample
+                int q = r + sign * d;
+                if (ring)
+                    q = (q + count) % count;
+                else if (q < 0 || q >= count)
+                    continue;
+                const std::pair<double, uint32_t> candidate(distance2(r, q), uint32_t(q));
+                if (int(best.size()) == k && !(candidate < best.back()))
+                    continue;
+                if (int(best.size()) == k)
+                    best.pop_back();
+                best.insert(std::upper_bound(best.begin(), best.end(), candidate), candidate);
+            }
+        }
+        for (int q = 0; q < k; ++q)
+            n.index[size_t(r) * size_t(k) + size_t(q)] = best[size_t(q)].second;
+    }
+    return n;
+}
+} // namespace
+
+SampleNeighbours hemisphere_neighbours(int rays, int k)
+{
+    if (rays <= k + 1)
+        return all_others(rays);
+    // The middles of the strata, turned by 0 (spiral's arithmetic in double).
+    std::vector<glm::dvec3> middle(static_cast<size_t>(rays));
+    for (int r = 0; r < rays; ++r)
+    {
+        const double z = 1.0 - (double(r) + 0.5) / double(rays), s = std::sqrt(1.0 - z * z);
+        double frac = double(r) * 0.6180339887498949;
+        frac -= std::floor(frac);
+        middle[size_t(r)] = {s * std::cos(2.0 * M_PI * frac), s * std::sin(2.0 * M_PI * frac), z};
+    }
+    return nearest(rays, k, false,
+                   [&](int r, int q)
+                   {
+                       const glm::dvec3 v = middle[size_t(q)] - middle[size_t(r)];
+                       return v.x * v.x + v.y * v.y + v.z * v.z;
+                   });
+}
+
+SampleNeighbours lattice_neighbours(int count, int k)
+{
+    if (count <= k + 1)
+        return all_others(count);
+    // Distance along one axis of the unit torus.
+    const auto around = [](double a)
+    {
+        a = std::abs(a - std::floor(a));
+        return std::min(a, 1.0 - a);
+    };
+    return nearest(count, k, true,
+                   [&](int r, int q)
+                   {
+                       const double x = around(double(q - r) / double(count)),
+                                    y = around(double(q) * 0.6180339887498949 -
+                                               double(r) * 0.6180339887498949);
+                       return x * x + y * y;
+                   });
 }
 
 } // namespace hemi::bake

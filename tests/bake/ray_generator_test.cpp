@@ -10,6 +10,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -229,4 +230,93 @@ TEST(RayGenerator, UniformNumbersLieInZeroOne)
         sum += u;
     }
     EXPECT_NEAR(sum / n, 0.5, 0.005);
+}
+
+// The noise estimate's neighbour tables (SampleNeighbours), against brute force over every pair, computed
+// here from the patterns as ray_generator.h and LightSampler define them:
+//  - the hemisphere set's: each ray's k = 6 neighbours are the 6 nearest middles of strata (z = 1 - (r + 0.5)
+//    / R, phi = 2 pi frac(r (sqrt 5 - 1) / 2)), by their distances within 1e-6 (ties may be listed either
+//    way), for sizes up to 4096 (the table's search stops early; one that stopped too early fails);
+//  - the environment's lattice (r / N, frac(r (sqrt 5 - 1) / 2)) on the unit torus: each sample's 6 listed
+//    are distinct, not itself, and no farther than any sample not listed (also across the ends of the
+//    index range, where r + d wraps to r + d - N and no longer lies d golden steps on);
+//  - at most k + 1 samples: every other is a neighbour (independent).
+TEST(RayGenerator, NeighbourTablesListTheNearestSamples)
+{
+    const int k = 6;
+    for (const int rays : {8, 13, 32, 33, 100, 1000, 4096})
+    {
+        const hemi::bake::SampleNeighbours n = hemi::bake::hemisphere_neighbours(rays, k);
+        ASSERT_EQ(n.count, rays);
+        ASSERT_EQ(n.k, k);
+        ASSERT_FALSE(n.independent);
+        ASSERT_EQ(n.index.size(), size_t(rays) * k);
+        std::vector<glm::dvec3> middle(static_cast<size_t>(rays));
+        for (int r = 0; r < rays; ++r)
+        {
+            const double z = 1.0 - (r + 0.5) / rays,
+                         phi = 2.0 * M_PI * std::fmod(r * 0.6180339887498949, 1.0),
+                         s = std::sqrt(1.0 - z * z);
+            middle[size_t(r)] = {s * std::cos(phi), s * std::sin(phi), z};
+        }
+        for (int r = 0; r < rays; ++r)
+        {
+            std::vector<double> all;
+            for (int q = 0; q < rays; ++q)
+                if (q != r)
+                    all.push_back(glm::distance(middle[size_t(q)], middle[size_t(r)]));
+            std::sort(all.begin(), all.end());
+            std::vector<double> listed;
+            for (int q = 0; q < k; ++q)
+            {
+                const uint32_t j = n.index[size_t(r) * k + size_t(q)];
+                ASSERT_LT(j, uint32_t(rays));
+                ASSERT_NE(j, uint32_t(r));
+                listed.push_back(glm::distance(middle[j], middle[size_t(r)]));
+            }
+            std::sort(listed.begin(), listed.end());
+            for (int q = 0; q < k; ++q)
+                ASSERT_NEAR(listed[size_t(q)], all[size_t(q)], 1e-6) << rays << " rays, ray " << r;
+        }
+    }
+    // Squared distance on the unit torus between samples a and b of the lattice.
+    const auto torus = [](int count, int a, int b)
+    {
+        const auto frac = [](double v) { return v - std::floor(v); };
+        double x = std::abs(double(a - b)) / count,
+               y = std::abs(frac(a * 0.6180339887498949) - frac(b * 0.6180339887498949));
+        x = std::min(x, 1.0 - x);
+        y = std::min(y, 1.0 - y);
+        return x * x + y * y;
+    };
+    for (const int count : {8, 9, 32, 33, 256})
+    {
+        const hemi::bake::SampleNeighbours n = hemi::bake::lattice_neighbours(count, k);
+        ASSERT_FALSE(n.independent);
+        ASSERT_EQ(n.index.size(), size_t(count) * k);
+        for (int r = 0; r < count; ++r)
+        {
+            std::vector<bool> listed(static_cast<size_t>(count));
+            double farthest = 0.0;
+            for (int q = 0; q < k; ++q)
+            {
+                const uint32_t j = n.index[size_t(r) * k + size_t(q)];
+                ASSERT_NE(j, uint32_t(r));
+                ASSERT_FALSE(listed[j]) << count << " samples, sample " << r << " lists " << j << " twice";
+                listed[j] = true;
+                farthest = std::max(farthest, torus(count, r, int(j)));
+            }
+            for (int q = 0; q < count; ++q)
+            {
+                if (q == r || listed[size_t(q)])
+                    continue;
+                ASSERT_GE(torus(count, r, q), farthest - 1e-12) << count << " samples, sample " << r;
+            }
+        }
+    }
+    for (const int few : {1, 2, 7})
+    {
+        EXPECT_TRUE(hemi::bake::hemisphere_neighbours(few, k).independent) << few;
+        EXPECT_TRUE(hemi::bake::lattice_neighbours(few, k).independent) << few;
+    }
 }

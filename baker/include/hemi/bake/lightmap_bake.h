@@ -113,9 +113,9 @@ struct LightmapBakeOptions
     int bounces = 0;
     std::filesystem::path checkpoint; // empty: none
     double checkpoint_seconds = 30.0;
-    // Keep half of each texel's samples apart (LightmapSh::half), for the denoiser: 312 bytes more per
-    // texel, in the bake and its checkpoint.
-    bool keep_halves = false;
+    // Estimate each texel's noise (LightmapSh::noise), for the denoiser: 32 bytes more per texel, in the
+    // bake and its checkpoint.
+    bool keep_noise = false;
     // Who computes the texels (distribution.h): null, this process; else the ranks of a job, which all call
     // bake_lightmap_sh with the same arguments and all return the same result. Only the leader resumes and
     // saves the checkpoint and reports progress.
@@ -123,8 +123,8 @@ struct LightmapBakeOptions
     // Bounded memory (hemi-bake lightmap --memory-budget): 0 keeps every texel's sums in memory; else the
     // bake runs each pass in tiles of this many texels and keeps the sums of the passes in `tile_file` on
     // disk (texel_file.h), one tile of them in memory at a time. Per texel, the sums and the pass being
-    // gathered (156 bytes each, 312 each with keep_halves) leave memory for a tile's worth; the file holds
-    // two copies of the sums (312 bytes a texel, 624 with keep_halves), and memory keeps 12 bytes more for
+    // gathered (156 bytes each, 172 each with keep_noise) leave memory for a tile's worth; the file holds
+    // two copies of the sums (312 bytes a texel, 344 with keep_noise), and memory keeps 12 bytes more for
     // the bounces. The same bytes as a bake without tiles, for any tile size. The leader's value counts on
     // every rank. With a checkpoint, the file is its companion and stays (the caller removes both once the
     // result is written: bake_lightmap_file does); a checkpoint is then saved at the end of a tile, not of a
@@ -151,17 +151,21 @@ struct LightmapSh
     // the normal, then E(B_i) * 2 / (1 + B_i.z) for rnm's three. The bounces take E at the normal from it.
     // Empty in a LightmapSh made by hand: the outputs then project the SH9.
     std::vector<std::array<glm::vec3, 4>> direct;
-    // Per texel, half A of its samples: `irradiance` (0..8) and `direct` (9..12) from rays 0, 3, 4, 7, 8, ...
-    // of each stream of samples (hemisphere rays, environment rays, sun rays; every other pair, so that the
-    // two halves take neighbouring strata alternately) and half of each exact one (punctual lights); half B
-    // is the whole less A. Two estimates of half the light whose difference A - B measures the whole's noise
-    // (lightmap_denoise.h weighs neighbours by it), from above: the halves split one stratified set, so their
-    // errors partly cancel in the whole and add in the difference (hemi-denoise-quality prints the ratio:
-    // about 3x in RMS). Bounce samples read the previous pass's whole map in both halves, so its noise is
-    // common to A and B: the difference measures a bounce pass's own noise, not what it inherits. Empty
-    // unless the bake kept them (LightmapBakeOptions::keep_halves), and in a LightmapSh made by hand.
-    using Half = std::array<glm::vec3, 13>;
-    std::vector<Half> half;
+    // Per texel, the variance of the bake's estimate of four of its values, the denoiser's guides
+    // (lightmap_denoise.h): the luminance of plain (direct[0], E at the normal) and of SH9's three band-1
+    // coefficients (irradiance[1..3], the light's direction). Each stream of samples (the hemisphere rays,
+    // the environment's rays, the sun's rays; punctual lights are exact) adds, per value, the sum over its
+    // samples of (the sample's share - the mean share of its k = 6 nearest in the stream's pattern)^2 /
+    // (1 + 1 / k) (ray_generator.h, SampleNeighbours): unbiased for independent samples (the sun's), and for
+    // the stratified sets the bake draws it sees how the light changes from one stratum to the next, not the
+    // slow change across the set that stratification integrates away. It still runs above the actual
+    // error, by a factor that depends on the light (hemi-denoise-quality prints it: in RMS 1.4x on the sample
+    // level, 2.6x on a floor and wall under a uniform sky): a stratified set's own samples cannot tell how
+    // well the set integrates. Each pass adds its own (its rays are drawn anew); a bounce ray's share is what
+    // it reads of the previous pass's map, whose noise shows as spread between neighbouring rays. Empty
+    // unless the bake estimated it (LightmapBakeOptions::keep_noise), and in a LightmapSh made by hand.
+    using Noise = std::array<float, 4>;
+    std::vector<Noise> noise;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
     // of single-sided surfaces, after the push below): its outputs come from its valid neighbours.
     std::vector<uint8_t> valid;
@@ -171,22 +175,22 @@ struct LightmapSh
     double trace_seconds = 0.0;
     bool resumed = false;
     std::string checkpoint_error;
-    // A bake in tiles (LightmapBakeOptions::tile_texels) leaves irradiance, direct and half empty: their
-    // values are in `tiles` (copy `tiles_copy`: fields irradiance, direct, half), read back by read(). On
+    // A bake in tiles (LightmapBakeOptions::tile_texels) leaves irradiance, direct and noise empty: their
+    // values are in `tiles` (copy `tiles_copy`: fields irradiance, direct, noise), read back by read(). On
     // the leader only; the other ranks of a job return without them. Null otherwise.
     std::shared_ptr<TexelFile> tiles;
     int tiles_copy = 0;
     uint32_t tiles_count = 0; // tiles in the last pass (1 without tiles)
-    bool tiles_halves = false;
+    bool tiles_noise = false;
 
     size_t texels() const { return tiles ? tiles->items() : irradiance.size(); }
     bool has_direct() const { return tiles || !direct.empty(); }
-    bool has_halves() const { return tiles ? tiles_halves : !half.empty(); }
+    bool has_noise() const { return tiles ? tiles_noise : !noise.empty(); }
     // Texels [first, first + count) from memory or from `tiles`, into each array that is not null: their
-    // SH9 irradiance, direct values (has_direct()) and halves (has_halves()).
+    // SH9 irradiance, direct values (has_direct()) and noise (has_noise()).
     void read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irradiance,
-              std::array<glm::vec3, 4>* direct = nullptr, Half* half = nullptr) const;
-    // Reads every texel into irradiance, direct and half, and lets the tiles go (the denoiser works on the
+              std::array<glm::vec3, 4>* direct = nullptr, Noise* noise = nullptr) const;
+    // Reads every texel into irradiance, direct and noise, and lets the tiles go (the denoiser works on the
     // whole atlas in memory).
     void load();
 };

@@ -4,16 +4,13 @@
 // distance of Monte Carlo denoisers (Rousselle, Knaus and Zwicker 2012) in units of the bake's own noise, a
 // first-order fit in place of the weighted mean, and each chart given back the light it was baked with.
 //
-// The noise: the bake keeps half A of each texel's samples apart (LightmapSh::half; B is the whole less A,
-// and the two halves take one of every two neighbouring strata each), so (A - B)^2, per guide, is the
-// paired-strata estimate of the whole's variance. It runs above the true one, by a factor that depends on
-// the light (about 3x in RMS on hemi-denoise-quality's scenes: the halves split one stratified set, so their
-// errors partly cancel in the whole), and sigma_light was chosen with it; given the actual error instead,
-// the table improves by about 5% (measured: the wall scene's SH9 from 1.02 to 0.96 of 128 rays' error at
-// sigma_light 3 to 4), not enough to pay for halves drawn independently. The guides are the luminance
-// of the irradiance at the normal (plain) and of SH9's three band-1 coefficients (the light's direction). A
-// single texel's guides and variance are single draws: both are prefiltered over its 3 x 3 neighbours in its
-// chart, weights (1, 2, 1) x (1, 2, 1) / 16 (the variance with the weights squared).
+// The noise: the bake estimates, per texel, the variance of each guide (LightmapSh::noise: each sample
+// against its nearest in its stream's pattern). It runs above the actual error by a factor that depends on
+// the light (1.4x in RMS on the sample level, 2.8x on a floor and wall under a uniform sky: a stratified
+// set's own samples cannot tell how well the set integrates), and sigma_light was chosen with it. The guides
+// are the luminance of the irradiance at the normal (plain) and of SH9's three band-1 coefficients (the
+// light's direction). A single texel's guides are single draws: they are prefiltered over its 3 x 3
+// neighbours in its chart, weights (1, 2, 1) x (1, 2, 1) / 16, and their variance with the weights squared.
 //
 // Pass k (k = 0 .. iterations - 1) looks at the 5 x 5 texels 2^k apart in the atlas, weighted by the B3
 // spline (1, 4, 6, 4, 1) / 16 along each axis times
@@ -26,7 +23,7 @@
 //         ((g_jc - g_ic)^2 - (v_ic + min(v_ic, v_jc))) / (sigma_light^2 (v_ic + v_jc)),
 //     v the guides' variances averaged over each texel's 3 x 3 neighbours: about 0 (weight 1) for a
 //     neighbour whose light differs from the centre's by noise alone, growing with the square of a real
-//     difference. Where the centre's variance of a guide is 0 (its halves agreed: in a sealed room, no sample
+//     difference. Where the centre's variance of a guide is 0 (its samples agreed: in a sealed room, none
 //     saw light), only texels with exactly its value of that guide weigh anything, so a sealed room stays 0.
 // With those weights the texel fits v ~ b0 + b1 dx + b2 dy over the window (dx, dy its offsets; the slopes
 // damped by a ridge of 1% of the total weight, so that a window without the spread to fit them gives the
@@ -74,12 +71,12 @@ struct LightmapDenoiseReport
     size_t charts = 0; // charts of the atlas (connected in lightmap UV space)
 };
 
-// Denoises `sh` (from bake_lightmap_sh on this mesh and atlas, with LightmapBakeOptions::keep_halves) in
-// place, and releases its halves (they measured the noise); a bake in tiles in its tile file, in bands
+// Denoises `sh` (from bake_lightmap_sh on this mesh and atlas, with LightmapBakeOptions::keep_noise) in
+// place, and releases its noise estimate; a bake in tiles in its tile file, in bands
 // (LightmapDenoiseOptions::tile_texels), whose other copy then holds the result (LightmapSh::tiles_copy).
 // Throws
-// std::invalid_argument when `sh` lacks the halves or the directly integrated values, or its sizes do not
-// match the atlas, or for options out of range (iterations in [0, 10], sigmas > 0).
+// std::invalid_argument when `sh` lacks the noise estimate or the directly integrated values, or its sizes do
+// not match the atlas, or for options out of range (iterations in [0, 10], sigmas > 0).
 LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas& atlas, LightmapSh& sh,
                                        const LightmapDenoiseOptions& options = {});
 

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace hemi::bake
 {
@@ -45,5 +46,24 @@ glm::vec3 hemisphere_direction(uint64_t seed, uint64_t item, int ray, int rays);
 // the bakes call for the rays of one texel or vertex.
 void sphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out);
 void hemisphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out);
+
+// Which samples of a set lie next to which in the set's pattern, for estimating a set's noise from the set
+// itself (the lightmap bake's LightmapSh::noise): for each of `count` samples, the indices of its k nearest
+// (index[r * k .. r * k + k)), the same for every seed and item (a rotation, or an offset on a torus, moves
+// every sample alike, and the jitter is left out). `independent` (index empty): every other sample is a
+// neighbour, as for samples drawn independently of each other.
+struct SampleNeighbours
+{
+    int count = 0, k = 0;
+    bool independent = false;
+    std::vector<uint32_t> index;
+};
+// The hemisphere set of `rays` directions: the k nearest on the sphere to each, taken at the middles of
+// their strata (rays <= k + 1: independent). About rays^1.5 work, once per bake.
+SampleNeighbours hemisphere_neighbours(int rays, int k);
+// The rank-1 lattice (r / count, frac(r * golden ratio)) on the unit torus, which LightSampler's
+// environment rays follow: the k nearest to each (k even: k / 2 offsets d, the samples r + d and r - d),
+// (count <= k + 1: independent).
+SampleNeighbours lattice_neighbours(int count, int k);
 
 } // namespace hemi::bake
