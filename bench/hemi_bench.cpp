@@ -980,9 +980,8 @@ void lightmap_large(benchmark::State& state)
 
 // The denoiser (bake::denoise_lightmap, what --denoise runs) on the many-room level at 1024^2 (at most the
 // large level's atlas), baked once with what it needs (32 rays, the noise estimate, a sun, a bounce); each
-// iteration filters a copy of that bake. The bake's own wall time is the ratio's denominator: the share of a
-// 32-ray
-// --denoise bake that the filter adds.
+// iteration filters a copy of that bake. The bake's own wall time is the ratio's denominator: the share of
+// a 32-ray bake with --denoise that the filter adds.
 void lightmap_denoise(benchmark::State& state)
 {
     const uint32_t size = std::min<uint32_t>(g_sizes.large_atlas, 1024);

@@ -164,7 +164,7 @@ bool LightSampler::environment_ray(uint64_t item, int r, int count, glm::vec3& d
     // Stratified along the distribution's CDF (turned by a random offset per item): the split between a
     // bright sun and the rest of the sky is then nearly exact for every item.
     double stratum = (double(r) + double(uniform01(env_seed_, item, uint64_t(4 * r)))) / double(count) +
-                     double(uniform01(env_seed_, item, uint64_t(4 * count)));
+                     environment_offset(item, count);
     stratum -= std::floor(stratum);
     // The second dimension on a golden-ratio lattice against the first: low discrepancy in both.
     double across =
@@ -178,6 +178,11 @@ bool LightSampler::environment_ray(uint64_t item, int r, int count, glm::vec3& d
     direction = glm::normalize(glm::transpose(lights_->scene_to_world) * glm::vec3(world));
     weight = 1.0 / (pdf * double(count));
     return true;
+}
+
+double LightSampler::environment_offset(uint64_t item, int count) const
+{
+    return double(uniform01(env_seed_, item, uint64_t(4 * count)));
 }
 
 glm::vec3 LightSampler::sun_ray(uint64_t item, int r) const

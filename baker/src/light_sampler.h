@@ -52,6 +52,9 @@ class LightSampler
     // luminance CDF: its direction and its weight 1 / (pdf * count) (radiance times weight sums to the
     // integral). False when there is no image environment or the sample has no density.
     bool environment_ray(uint64_t item, int r, int count, glm::vec3& direction, double& weight) const;
+    // Where along the CDF `item`'s environment rays start: ray r's stratum is frac((r + its jitter) / count
+    // + this), so the pattern wraps from the last rows of the map to the first between two of its rays.
+    double environment_offset(uint64_t item, int count) const;
     // Ray r of `item`'s rays towards the sun's disc, uniform in its solid angle.
     glm::vec3 sun_ray(uint64_t item, int r) const;
     // What punctual light `light` gives point `p` (mesh space): the direction towards it, the distance to it

@@ -356,6 +356,7 @@ struct RayScratch
         taps.resize(n);
         for (auto& s : shares)
             s.resize(n);
+        stratum.resize(n);
     }
 
     std::vector<glm::vec3> directions;
@@ -368,14 +369,17 @@ struct RayScratch
     // Per stream of samples (hemisphere, environment, sun) and sample, its share of the denoiser's four
     // guides (LightmapSh::noise).
     std::array<std::vector<std::array<double, 4>>, 3> shares;
+    std::vector<float> stratum; // the environment rays' places along the CDF, without their jitter
 };
 
 // The variance of the sum of a stream's shares (`share[r]`, sample r's part of four values), estimated from
 // the stream itself (LightmapSh::noise), added to `variance`: each sample against the mean of its k
 // neighbours, sum_r (share_r - mean)^2 / (1 + 1 / k); for independent samples the same with every other as a
-// neighbour, count / (count - 1) sum_r (share_r - mean of all)^2.
+// neighbour, count / (count - 1) sum_r (share_r - mean of all)^2. With `stratum` (a pattern that is a ring
+// in its first coordinate, cut at a place of the item's own), neighbours more than half the ring away in it
+// lie across the cut and are left out (k then the number left).
 void add_variance(const std::vector<std::array<double, 4>>& share, const SampleNeighbours& neighbours,
-                  std::array<double, 4>& variance)
+                  std::array<double, 4>& variance, const float* stratum = nullptr)
 {
     const size_t count = size_t(neighbours.count);
     if (count < 2)
@@ -397,13 +401,20 @@ void add_variance(const std::vector<std::array<double, 4>>& share, const SampleN
     for (size_t r = 0; r < count; ++r)
     {
         std::array<double, 4> mean{};
+        size_t used = 0;
         for (size_t q = 0; q < k; ++q)
-            for (size_t c = 0; c < 4; ++c)
-                mean[c] += share[neighbours.index[r * k + q]][c];
-        for (size_t c = 0; c < 4; ++c)
         {
-            const double d = share[r][c] - mean[c] / double(k);
-            variance[c] += d * d / (1.0 + 1.0 / double(k));
+            const uint32_t j = neighbours.index[r * k + q];
+            if (stratum && std::abs(stratum[r] - stratum[j]) > 0.5f)
+                continue;
+            for (size_t c = 0; c < 4; ++c)
+                mean[c] += share[j][c];
+            ++used;
+        }
+        for (size_t c = 0; c < 4 && used; ++c)
+        {
+            const double d = share[r][c] - mean[c] / double(used);
+            variance[c] += d * d / (1.0 + 1.0 / double(used));
         }
     }
 }
@@ -602,8 +613,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         RayScratch& s = scratch.local();
         s.reserve(size_t(std::max(o.rays, o.sun_rays)));
         if (o.keep_noise)
-            for (auto& share : s.shares)
-                std::fill(share.begin(), share.end(), std::array<double, 4>{});
+            for (size_t stream = 0; stream < 3; ++stream)
+                std::fill_n(s.shares[stream].begin(), stream == 2 ? o.sun_rays : o.rays,
+                            std::array<double, 4>{});
         // `stream`: 0 the hemisphere rays, 1 the environment's, 2 the sun's, -1 an exact sample (a punctual
         // light); `ray`: the sample's index in its stream.
         auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int stream, int ray)
@@ -757,7 +769,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             std::array<double, 4> variance{};
             add_variance(s.shares[0], hemisphere_pattern, variance);
             if (pass == 0 && image_env)
-                add_variance(s.shares[1], environment_pattern, variance);
+            {
+                const double start = light.environment_offset(item, o.rays);
+                for (int r = 0; r < o.rays; ++r)
+                {
+                    const double x = double(r) / double(o.rays) + start;
+                    s.stratum[size_t(r)] = float(x - std::floor(x));
+                }
+                add_variance(s.shares[1], environment_pattern, variance, s.stratum.data());
+            }
             if (pass == 0 && lights.sun)
                 add_variance(s.shares[2], sun_pattern, variance);
             for (size_t c = 0; c < 4; ++c)

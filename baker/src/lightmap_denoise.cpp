@@ -11,7 +11,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
-#include <memory>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -71,25 +70,38 @@ std::vector<uint32_t> lightmap_charts(const io::Mesh& mesh, size_t* count)
 
 namespace
 {
-// The guides a neighbour's light is compared by: the luminance of the irradiance at the normal (plain) and of
-// SH9's three band-1 coefficients (the light's direction), from a texel's 39 values; LightmapSh::noise holds
-// the variance of each.
-constexpr size_t kValues = 39; // SH9 (27 floats), then plain's and rnm's (12)
-using Guide = std::array<float, 4>;
-Guide guides_of(const float* v)
+// Lets a vector's memory go (assigning {} would keep its capacity).
+template <class T> void release(std::vector<T>& v)
 {
-    return {math::luminance(glm::vec3(v[27], v[28], v[29])), math::luminance(glm::vec3(v[3], v[4], v[5])),
-            math::luminance(glm::vec3(v[6], v[7], v[8])), math::luminance(glm::vec3(v[9], v[10], v[11]))};
+    std::vector<T>().swap(v);
 }
 
-// Filters texels [first, first + n) of the atlas, `value` (39 floats each), with `noise` the variance of
-// each texel's guides (LightmapSh::noise); texels outside the range count as absent. The passes alternate
-// between `value` and `other` (as large): the returned pointer says which holds the result. Plain and rnm
-// come out >= 0; each chart's light is restored by the caller.
-float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
-                    const std::vector<uint8_t>& valid, size_t first, size_t n, std::span<float> value,
-                    std::span<float> other_values, const LightmapSh::Noise* noise,
-                    const LightmapDenoiseOptions& o)
+// A range of texels' values, laid out as LightmapSh holds them: SH9 (27 floats) and plain's and rnm's (12).
+using ShArray = std::array<glm::vec3, 9>;
+using DirectArray = std::array<glm::vec3, 4>;
+struct Values
+{
+    std::vector<ShArray> irradiance;
+    std::vector<DirectArray> direct;
+};
+
+// The guides a neighbour's light is compared by: the luminance of the irradiance at the normal (plain) and of
+// SH9's three band-1 coefficients (the light's direction); LightmapSh::noise holds the variance of each.
+using Guide = std::array<float, 4>;
+Guide guides_of(const ShArray& irradiance, const DirectArray& direct)
+{
+    return {math::luminance(direct[0]), math::luminance(irradiance[1]), math::luminance(irradiance[2]),
+            math::luminance(irradiance[3])};
+}
+
+// Filters texels [first, first + n) of the atlas, `values`, in place, with `noise` the variance of each
+// texel's guides (LightmapSh::noise); texels outside the range count as absent. The passes alternate between
+// `values` and a second copy of them; everything is allocated before `values` is written, so that on a
+// failure to allocate it is as it was. Plain and rnm come out >= 0; each chart's light is restored by the
+// caller.
+void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
+                  const std::vector<uint8_t>& valid, size_t first, size_t n, Values& values,
+                  const LightmapSh::Noise* noise, const LightmapDenoiseOptions& o)
 {
     // Calls f(j, dx, dy) for each valid texel j of i's chart in the range at (dx, dy) texels of `step` from
     // it (i and j: indices in the range).
@@ -108,12 +120,13 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
 
     // Each texel's guides, and their noise: the variance of the bake's estimate of each.
     std::vector<Guide> guide(n), variance(n);
+    Values second{std::vector<ShArray>(n), std::vector<DirectArray>(n)};
+    Values *current = &values, *other = &second;
     for (size_t i = 0; i < n; ++i)
     {
-        guide[i] = guides_of(&value[i * kValues]);
+        guide[i] = guides_of(values.irradiance[i], values.direct[i]);
         variance[i] = noise[i];
     }
-    std::span<float> current(value), other(other_values);
     // One texel's guides are single draws: they are prefiltered over the texel's 3 x 3 neighbours in its
     // chart with weights (1, 2, 1) x (1, 2, 1), and their variance with them (the weights squared), so that
     // the weights below compare light, not the noise of single texels. x over texel i's 3 x 3 neighbours in
@@ -165,10 +178,10 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
             size_t(0), n,
             [&](size_t i)
             {
-                float* out = &other[i * kValues];
                 if (!valid[first + i])
                 {
-                    std::memcpy(out, &current[i * kValues], kValues * sizeof(float));
+                    other->irradiance[i] = current->irradiance[i];
+                    other->direct[i] = current->direct[i];
                     next_guide[i] = guide[i];
                     next_variance[i] = variance[i];
                     return;
@@ -301,21 +314,26 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
                 // The values, the guides and what is left of their variance (sum l_j^2 v_j) go through the
                 // same l_j.
                 // (The values in float: 4 to a vector, and every texel's sums in the same order.)
-                std::array<float, kValues> sum{};
+                std::array<float, 27> sum_sh{};
+                std::array<float, 12> sum_direct{};
                 std::array<double, 4> g{}, v{};
                 for (size_t k = 0; k < count; ++k)
                 {
-                    const float* x = &current[used[k].j * kValues];
+                    const float* x = &current->irradiance[used[k].j][0].x;
+                    const float* y = &current->direct[used[k].j][0].x;
                     const float lk = float(l[k]);
-                    for (size_t c = 0; c < kValues; ++c)
-                        sum[c] += lk * x[c];
+                    for (size_t c = 0; c < 27; ++c)
+                        sum_sh[c] += lk * x[c];
+                    for (size_t c = 0; c < 12; ++c)
+                        sum_direct[c] += lk * y[c];
                     for (size_t c = 0; c < 4; ++c)
                     {
                         g[c] += l[k] * double(guide[used[k].j][c]);
                         v[c] += l[k] * l[k] * double(variance[used[k].j][c]);
                     }
                 }
-                std::memcpy(out, sum.data(), sizeof sum);
+                std::memcpy(&other->irradiance[i][0].x, sum_sh.data(), sizeof sum_sh);
+                std::memcpy(&other->direct[i][0].x, sum_direct.data(), sizeof sum_direct);
                 for (size_t c = 0; c < 4; ++c)
                 {
                     next_guide[i][c] = float(g[c]);
@@ -329,9 +347,13 @@ float* filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& cha
 
     // Irradiance integrated directly (plain, rnm) is never negative; an extrapolating fit could make it so.
     for (size_t i = 0; i < n; ++i)
-        for (size_t c = 27; c < kValues; ++c)
-            current[i * kValues + c] = std::max(current[i * kValues + c], 0.0f);
-    return current.data();
+        for (glm::vec3& e : current->direct[i])
+            e = glm::max(e, glm::vec3(0.0f));
+    if (current != &values)
+    {
+        values.irradiance.swap(current->irradiance);
+        values.direct.swap(current->direct);
+    }
 }
 
 } // namespace
@@ -367,65 +389,52 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
             sums[chart[i]][c] += double(baked[int(c)]);
     };
-    const auto add_filtered = [&](size_t i, const float* filtered)
+    const auto add_filtered = [&](size_t i, const glm::vec3& filtered)
     {
         for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
-            sums[chart[i]][3 + c] += double(filtered[27 + c]);
+            sums[chart[i]][3 + c] += double(filtered[int(c)]);
     };
-    const auto scale = [&](size_t i, float* v)
+    // Every value of texel i times its chart's factors, channel by channel.
+    const auto scale = [&](size_t i, ShArray& irradiance, DirectArray& direct)
     {
         if (!sh.valid[i])
             return;
-        for (size_t c = 0; c < 3; ++c)
-        {
-            const std::array<double, 6>& s = sums[chart[i]];
-            const float factor = s[3 + c] > 0.0 && s[c] > 0.0 ? float(s[c] / s[3 + c]) : 1.0f;
-            for (size_t k = c; k < kValues; k += 3)
-                v[k] *= factor;
-        }
-    };
-    const auto pack =
-        [](const std::array<glm::vec3, 9>& irradiance, const std::array<glm::vec3, 4>& direct, float* v)
-    {
-        std::memcpy(v, irradiance.data(), 27 * sizeof(float));
-        std::memcpy(v + 27, direct.data(), 12 * sizeof(float));
-    };
-    const auto unpack =
-        [](const float* v, std::array<glm::vec3, 9>& irradiance, std::array<glm::vec3, 4>& direct)
-    {
-        std::memcpy(irradiance.data(), v, 27 * sizeof(float));
-        std::memcpy(direct.data(), v + 27, 12 * sizeof(float));
+        const std::array<double, 6>& s = sums[chart[i]];
+        glm::vec3 factor(1.0f);
+        for (int c = 0; c < 3; ++c)
+            if (s[size_t(3 + c)] > 0.0 && s[size_t(c)] > 0.0)
+                factor[c] = float(s[size_t(c)] / s[size_t(3 + c)]);
+        for (glm::vec3& x : irradiance)
+            x *= factor;
+        for (glm::vec3& x : direct)
+            x *= factor;
     };
 
     if (!sh.tiles)
     {
-        // The values packed, and the bake's arrays let go while the filter's two copies are about.
-        std::vector<float> value(n * kValues);
+        // Filtered in the bake's own arrays (and a second copy the filter holds while it runs).
         for (size_t i = 0; i < n; ++i)
-        {
             add_baked(i, sh.direct[i][0]);
-            pack(sh.irradiance[i], sh.direct[i], &value[i * kValues]);
-        }
-        sh.irradiance = {};
-        sh.direct = {};
-        // (Left uninitialised: the first pass writes every value of it.)
-        std::unique_ptr<float[]> other(new float[n * kValues]);
-        float* result =
-            filter_range(atlas, chart, sh.valid, 0, n, value, {other.get(), n * kValues}, sh.noise.data(), o);
-        if (result == value.data())
-            other.reset();
-        else
-            value = {};
-        for (size_t i = 0; i < n; ++i)
-            add_filtered(i, &result[i * kValues]);
-        sh.irradiance.resize(n);
-        sh.direct.resize(n);
-        for (size_t i = 0; i < n; ++i)
+        Values values;
+        values.irradiance.swap(sh.irradiance);
+        values.direct.swap(sh.direct);
+        try
         {
-            scale(i, &result[i * kValues]);
-            unpack(&result[i * kValues], sh.irradiance[i], sh.direct[i]);
+            filter_range(atlas, chart, sh.valid, 0, n, values, sh.noise.data(), o);
         }
-        sh.noise = {}; // the estimate is done with
+        catch (...)
+        {
+            sh.irradiance.swap(values.irradiance); // (only a failure to allocate: nothing was written)
+            sh.direct.swap(values.direct);
+            throw;
+        }
+        sh.irradiance.swap(values.irradiance);
+        sh.direct.swap(values.direct);
+        for (size_t i = 0; i < n; ++i)
+            add_filtered(i, sh.direct[i][0]);
+        for (size_t i = 0; i < n; ++i)
+            scale(i, sh.irradiance[i], sh.direct[i]);
+        release(sh.noise); // the estimate is done with
         return report;
     }
 
@@ -443,8 +452,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
                       atlas.texels.begin());
     };
     const int from = sh.tiles_copy, to = 1 - from;
-    std::vector<std::array<glm::vec3, 9>> irradiance;
-    std::vector<std::array<glm::vec3, 4>> direct;
+    Values band;
     for (size_t out_first = 0; out_first < n;)
     {
         const int64_t y0 = atlas.texels[out_first].y;
@@ -453,25 +461,21 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
             ++y1;
         const size_t out_end = row_start(y1), in_first = row_start(y0 - halo),
                      count = row_start(y1 + halo) - in_first;
-        irradiance.resize(count);
-        direct.resize(count);
+        band.irradiance.resize(count);
+        band.direct.resize(count);
         std::vector<LightmapSh::Noise> noise(count);
-        sh.read(uint32_t(in_first), uint32_t(count), irradiance.data(), direct.data(), noise.data());
-        std::vector<float> value(count * kValues);
-        std::unique_ptr<float[]> other(new float[count * kValues]);
-        for (size_t i = 0; i < count; ++i)
-            pack(irradiance[i], direct[i], &value[i * kValues]);
-        const float* result = filter_range(atlas, chart, sh.valid, in_first, count, value,
-                                           {other.get(), count * kValues}, noise.data(), o);
+        sh.read(uint32_t(in_first), uint32_t(count), band.irradiance.data(), band.direct.data(),
+                noise.data());
         for (size_t i = out_first; i < out_end; ++i)
-        {
-            add_baked(i, direct[i - in_first][0]);
-            add_filtered(i, &result[(i - in_first) * kValues]);
-            unpack(&result[(i - in_first) * kValues], irradiance[i - in_first], direct[i - in_first]);
-        }
+            add_baked(i, band.direct[i - in_first][0]);
+        filter_range(atlas, chart, sh.valid, in_first, count, band, noise.data(), o);
+        for (size_t i = out_first; i < out_end; ++i)
+            add_filtered(i, band.direct[i - in_first][0]);
         const size_t skip = out_first - in_first, rows = out_end - out_first;
-        sh.tiles->write(to, 0, uint32_t(out_first), std::as_bytes(std::span(irradiance).subspan(skip, rows)));
-        sh.tiles->write(to, 1, uint32_t(out_first), std::as_bytes(std::span(direct).subspan(skip, rows)));
+        sh.tiles->write(to, 0, uint32_t(out_first),
+                        std::as_bytes(std::span(band.irradiance).subspan(skip, rows)));
+        sh.tiles->write(to, 1, uint32_t(out_first),
+                        std::as_bytes(std::span(band.direct).subspan(skip, rows)));
         out_first = out_end;
     }
     sh.tiles_copy = to;
@@ -479,18 +483,13 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     for (size_t first = 0; first < n; first += band_texels)
     {
         const size_t count = std::min(band_texels, n - first);
-        irradiance.resize(count);
-        direct.resize(count);
-        sh.read(uint32_t(first), uint32_t(count), irradiance.data(), direct.data(), nullptr);
+        band.irradiance.resize(count);
+        band.direct.resize(count);
+        sh.read(uint32_t(first), uint32_t(count), band.irradiance.data(), band.direct.data(), nullptr);
         for (size_t i = 0; i < count; ++i)
-        {
-            float v[kValues];
-            pack(irradiance[i], direct[i], v);
-            scale(first + i, v);
-            unpack(v, irradiance[i], direct[i]);
-        }
-        sh.tiles->write(to, 0, uint32_t(first), std::as_bytes(std::span(irradiance)));
-        sh.tiles->write(to, 1, uint32_t(first), std::as_bytes(std::span(direct)));
+            scale(first + i, band.irradiance[i], band.direct[i]);
+        sh.tiles->write(to, 0, uint32_t(first), std::as_bytes(std::span(band.irradiance)));
+        sh.tiles->write(to, 1, uint32_t(first), std::as_bytes(std::span(band.direct)));
     }
     return report;
 }

@@ -59,10 +59,10 @@ constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 // sums of the passes are in the tile file, texel_file.h). Measured (docs/lightmaps.md#memory-and-asset-size):
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds each texel's noise estimate, for the bake and
-// for the pass (32 bytes), and the filter's working copies: the values twice (the bake's sums are let go
-// meanwhile, so once more), five arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in
-// tiles the filter works in bands of rows with the rows around them it depends on, each texel of a band read
-// (sums and noise) and filtered (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
+// for the pass (32 bytes), and what the filter holds beside the bake's sums: a second copy of the values,
+// five arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in
+// bands of rows with the rows around them it depends on, each texel of a band read (sums and noise) and
+// filtered in two copies (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
 // texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
@@ -73,7 +73,7 @@ constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atla
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
-constexpr uint64_t kDenoiseBandBytesPerTexel = 3 * 156 + 16 + 5 * 16;
+constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.

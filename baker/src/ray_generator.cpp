@@ -1,5 +1,8 @@
 #include <hemi/bake/ray_generator.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -103,36 +106,43 @@ template <class Distance2> SampleNeighbours nearest(int count, int k, bool ring,
     n.count = count;
     n.k = k;
     n.index.resize(size_t(count) * size_t(k));
-    std::vector<std::pair<double, uint32_t>> best; // the k nearest so far, nearest first (ties by index)
     const int reach = ring ? count / 2 : count - 1;
-    for (int r = 0; r < count; ++r)
-    {
-        best.clear();
-        for (int d = 1; d <= reach; ++d)
+    // Each sample's on its own: the same table on any number of threads.
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, count, 256),
+        [&](const tbb::blocked_range<int>& samples)
         {
-            const double gap = double(d) / double(count) - 1e-9;
-            if (int(best.size()) == k && gap > 0.0 && gap * gap > best.back().first)
-                break;
-            for (const int sign : {-1, 1})
+            // The k nearest so far, nearest first (ties by index).
+            std::vector<std::pair<double, uint32_t>> best;
+            for (int r = samples.begin(); r != samples.end(); ++r)
             {
-                if (ring && 2 * d == count && sign < 0)
-                    continue; // half way round the ring, r - d and r + d are one sample
-                int q = r + sign * d;
-                if (ring)
-                    q = (q + count) % count;
-                else if (q < 0 || q >= count)
-                    continue;
-                const std::pair<double, uint32_t> candidate(distance2(r, q), uint32_t(q));
-                if (int(best.size()) == k && !(candidate < best.back()))
-                    continue;
-                if (int(best.size()) == k)
-                    best.pop_back();
-                best.insert(std::upper_bound(best.begin(), best.end(), candidate), candidate);
+                best.clear();
+                for (int d = 1; d <= reach; ++d)
+                {
+                    const double gap = double(d) / double(count) - 1e-9;
+                    if (int(best.size()) == k && gap > 0.0 && gap * gap > best.back().first)
+                        break;
+                    for (const int sign : {-1, 1})
+                    {
+                        if (ring && 2 * d == count && sign < 0)
+                            continue; // half way round the ring, r - d and r + d are one sample
+                        int q = r + sign * d;
+                        if (ring)
+                            q = (q + count) % count;
+                        else if (q < 0 || q >= count)
+                            continue;
+                        const std::pair<double, uint32_t> candidate(distance2(r, q), uint32_t(q));
+                        if (int(best.size()) == k && !(candidate < best.back()))
+                            continue;
+                        if (int(best.size()) == k)
+                            best.pop_back();
+                        best.insert(std::upper_bound(best.begin(), best.end(), candidate), candidate);
+                    }
+                }
+                for (int q = 0; q < k; ++q)
+                    n.index[size_t(r) * size_t(k) + size_t(q)] = best[size_t(q)].second;
             }
-        }
-        for (int q = 0; q < k; ++q)
-            n.index[size_t(r) * size_t(k) + size_t(q)] = best[size_t(q)].second;
-    }
+        });
     return n;
 }
 } // namespace

@@ -2210,9 +2210,9 @@ TEST(LightmapDenoise, FurnaceStaysExactAndSealedRoomsStayBlack)
 // degrees whose shadow the wall casts on the floor. Baked at 32 rays and denoised, the irradiance at the
 // normal (plain) and the SH9 irradiance come about 3x closer to the 4096-ray bake (RMSE over every texel: at
 // most 0.36 of the undenoised 32-ray bake's; measured 0.31 and 0.31) and as close as a 128-ray bake (issue
-// 25's bar: no further than 128 rays; measured 0.92 and 0.99 of it with these seeds, 0.92 and 0.96 over
-// five in hemi-denoise-quality; the SH9 error left is at the wall's ends, where it meets the floor's border
-// and SH9's constant term curves more steeply than the guides show). Every chart keeps its light (the mean of
+// 25's bar: no further than 128 rays, on average over three seeds; measured 0.94 and 0.97 of it, seed by seed
+// 0.92-0.99 and 0.93-1.00; the SH9 error left is at the wall's ends, where it meets the floor's border and
+// SH9's constant term curves more steeply than the guides show). Every chart keeps its light (the mean of
 // plain equal to the undenoised bake's to 1e-5; a filter that only normalises each texel's weights moves
 // 0.04% here and 1-3% of a real level's light into its dim parts), so the mean stays within 0.5% of the
 // 4096-ray bake's (0.02%), and the sun's shadow edge on the floor keeps its width: the 10-90% rise across it,
@@ -2278,8 +2278,21 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
         std::printf("%s RMSE against 4096 rays: 32 rays %.4f, denoised %.4f; 128 rays %.4f\n",
                     plain ? "plain" : "sh9", rmse(noisy, plain), rmse(denoised, plain), rmse(more, plain));
         EXPECT_LE(rmse(denoised, plain), 0.36 * rmse(noisy, plain)) << (plain ? "plain" : "sh9");
-        EXPECT_LE(rmse(denoised, plain), rmse(more, plain)) << (plain ? "plain" : "sh9");
     }
+    // The bar, over three seeds (32 rays at seed s, 128 at s + 1): one seed's ratio varies by about 4%.
+    std::array<double, 2> ratio{};
+    for (const uint64_t seed : {1, 11, 21})
+    {
+        LightmapSh d = seed == 1 ? denoised : bake(32, seed);
+        if (seed != 1)
+            denoise_lightmap(m, a, d);
+        const LightmapSh& m128 = seed == 1 ? more : bake(128, seed + 1);
+        for (const bool plain : {true, false})
+            ratio[plain] += rmse(d, plain) / rmse(m128, plain) / 3.0;
+    }
+    std::printf("denoised 32 rays / 128 rays over three seeds: plain %.3f, sh9 %.3f\n", ratio[1], ratio[0]);
+    EXPECT_LE(ratio[1], 1.0) << "plain";
+    EXPECT_LE(ratio[0], 1.0) << "sh9";
     std::printf("mean: 4096 rays %.4f, 32 rays %.4f, 32 denoised %.4f\n", mean(reference), mean(noisy),
                 mean(denoised));
     EXPECT_NEAR(mean(denoised) / mean(noisy), 1.0, 1e-5);
@@ -2481,15 +2494,19 @@ TEST(LightmapDenoise, RealLevelUnderARealSkyAt32RaysComesCloserThan128Rays)
 // The denoiser's noise estimate (LightmapSh::noise: the variance of the luminance of plain and of SH9's
 // band-1 coefficients):
 //  - exact light only (a point light): exactly 0 in each, at every texel;
-//  - the sun's rays, drawn independently: under a roof's edge (SunDiameterSetsThePenumbra's scene and
-//    formula), each of a texel's N rays sees the sun with the probability p = 1 - s(a / R), so plain (the sun
-//    gives 1 in luminance) has the variance p (1 - p) / N. The estimate's mean over 128 seeds on the
-//    penumbra's two columns of texels is within 4% of that (measured: 0.2%; the sample variance without
-//    N / (N - 1) is 14% low at N = 8);
-//  - the hemisphere's stratified rays under a uniform sky, on the floor beside a wall: summed over the
-//  floor's
-//    texels, the estimate is at least the variance plain actually has across 64 seeds and at most 16 times
-//    it (in RMS 4x; measured 1.0 <= ... printed);
+//  - the sun's rays, drawn independently: under a roof's edge (FloorUnderRoofEdge, the sun straight above,
+//    1 in luminance), each of a texel's N rays sees past the edge or not, so its share of plain is
+//    v d.z / N and of SH9's band 1 (Y_1m = sqrt(3 / 4 pi) times a direction's coordinates, times 2 pi / 3 in
+//    the cosine's convolution) v d sqrt(pi / 3) / N, v the ray's visibility: the variance of their sums
+//    follows from v's moments over the disc, integrated here on a 200 x 200 grid. The estimates' means over
+//    128 seeds on the penumbra's two columns of texels are within 4% of those (measured 0.4%; the sample
+//    variance without N / (N - 1) is 12.5% low at N = 8);
+//  - stratified rays beside a wall (the floor and wall under a uniform sky through the hemisphere's rays,
+//    and under a sky image brighter towards the zenith through the environment's rays): summed over the
+//    floor's texels, the estimate of plain is at least the variance plain actually has across 64 seeds and
+//    at most 16 times it through the hemisphere's rays (measured 10) and 3 times through the environment's
+//    (measured 2.2; with its pattern taken as a ring across its cut, from the map's last rows to its first,
+//    3.4);
 //  - without keep_noise no estimate is kept.
 TEST(LightmapBake, NoiseEstimateIsExactForIndependentRaysAndAboveTheErrorForStratifiedOnes)
 {
@@ -2522,7 +2539,7 @@ TEST(LightmapBake, NoiseEstimateIsExactForIndependentRaysAndAboveTheErrorForStra
         o.rays = 4;
         o.sun_rays = 8;
         const double radius = 5.0 * M_PI / 180.0;
-        double estimated = 0.0, expected = 0.0;
+        double estimated = 0.0, band1 = 0.0, expected = 0.0, expected_band1 = 0.0;
         int penumbra = 0;
         for (uint64_t seed = 1; seed <= 128; ++seed)
         {
@@ -2533,51 +2550,91 @@ TEST(LightmapBake, NoiseEstimateIsExactForIndependentRaysAndAboveTheErrorForStra
                 const double x = a.texels[i].position.x;
                 if (std::abs(std::atan(x)) >= radius || a.texels[i].position.z != 0.0f)
                     continue;
-                const double p = FloorUnderRoofEdge::visible_share(x, radius);
-                expected += p * (1.0 - p) / o.sun_rays;
+                // Over the disc, uniform in solid angle: a ray d from the texel passes the roof's edge
+                // where x + d.x / d.z > 0. A ray's share of plain is v d.z / N, of band 1's three
+                // v d c / N (c = sqrt(3 / 4 pi) 2 pi / 3, c^2 = pi / 3): their variances from the disc's
+                // moments.
+                double v = 0.0, vz = 0.0, vz2 = 0.0;
+                glm::dvec3 vd(0.0);
+                const int steps = 200;
+                for (int zi = 0; zi < steps; ++zi)
+                    for (int ai = 0; ai < steps; ++ai)
+                    {
+                        const double z = 1.0 - (1.0 - std::cos(radius)) * (zi + 0.5) / steps,
+                                     phi = 2.0 * M_PI * (ai + 0.5) / steps, r = std::sqrt(1.0 - z * z);
+                        const glm::dvec3 d(r * std::cos(phi), r * std::sin(phi), z);
+                        if (x + d.x / d.z <= 0.0)
+                            continue;
+                        const double w = 1.0 / (steps * steps);
+                        v += w;
+                        vz += w * z;
+                        vz2 += w * z * z;
+                        vd += w * d;
+                    }
+                expected += (vz2 - vz * vz) / o.sun_rays;
+                expected_band1 += (v - glm::dot(vd, vd)) * M_PI / 3.0 / o.sun_rays;
                 estimated += double(sh.noise[i][0]);
+                band1 += double(sh.noise[i][1] + sh.noise[i][2] + sh.noise[i][3]);
                 penumbra += seed == 1;
             }
         }
-        std::printf("independent rays: %d texels of penumbra, estimated variance %.4f of the expected\n",
-                    penumbra, estimated / expected);
+        std::printf("independent rays: %d texels of penumbra, estimated variance %.4f (plain) and %.4f (band "
+                    "1) of the expected\n",
+                    penumbra, estimated / expected, band1 / expected_band1);
         EXPECT_EQ(penumbra, 32);
         EXPECT_NEAR(estimated / expected, 1.0, 0.04);
+        EXPECT_NEAR(band1 / expected_band1, 1.0, 0.04);
     }
     {
         Mesh m;
         hemi::test::add_floor_and_wall(m);
         LightmapUvReport report;
         const LightmapAtlas a = rasterize_lightmap(m, 64, 64, report);
-        LightmapLights sky;
-        sky.uniform = glm::vec3(1.0f);
         o.rays = 32;
         const size_t n = a.texels.size();
-        std::vector<double> sum(n), squares(n), estimated(n);
-        const int seeds = 64;
-        for (int seed = 1; seed <= seeds; ++seed)
+        for (const bool image : {false, true})
         {
-            o.seed = uint64_t(seed);
-            const LightmapSh sh = bake_lightmap_sh(m, a, sky, o);
+            LightmapLights sky;
+            sky.uniform = glm::vec3(1.0f);
+            if (image)
+            {
+                // Rows from the zenith (top) to the nadir: 3 at the zenith, 0.2 below the horizon.
+                const uint32_t w = 16, h = 8;
+                sky.environment = {w, h, std::vector<float>(size_t(w) * h * 4, 1.0f)};
+                for (uint32_t y = 0; y < h; ++y)
+                    for (uint32_t x = 0; x < w; ++x)
+                    {
+                        const float z = std::cos(float(M_PI) * (float(y) + 0.5f) / float(h));
+                        float* p = &sky.environment.pixels[(size_t(y) * w + x) * 4];
+                        p[0] = p[1] = p[2] = 0.2f + 2.8f * std::max(z, 0.0f);
+                    }
+            }
+            std::vector<double> sum(n), squares(n), estimated(n);
+            const int seeds = 64;
+            for (int seed = 1; seed <= seeds; ++seed)
+            {
+                o.seed = uint64_t(seed);
+                const LightmapSh sh = bake_lightmap_sh(m, a, sky, o);
+                for (size_t i = 0; i < n; ++i)
+                {
+                    const double e = hemi::math::luminance(sh.direct[i][0]);
+                    sum[i] += e;
+                    squares[i] += e * e;
+                    estimated[i] += double(sh.noise[i][0]) / seeds;
+                }
+            }
+            double actual = 0.0, estimate = 0.0;
             for (size_t i = 0; i < n; ++i)
-            {
-                const double e = hemi::math::luminance(sh.direct[i][0]);
-                sum[i] += e;
-                squares[i] += e * e;
-                estimated[i] += double(sh.noise[i][0]) / seeds;
-            }
+                if (a.texels[i].triangle < 2) // the floor
+                {
+                    actual += (squares[i] - sum[i] * sum[i] / seeds) / (seeds - 1);
+                    estimate += estimated[i];
+                }
+            std::printf("stratified rays beside a wall, %s: estimated variance %.2f times the actual\n",
+                        image ? "the environment's" : "the hemisphere's", estimate / actual);
+            EXPECT_GE(estimate, actual) << image;
+            EXPECT_LE(estimate, (image ? 3.0 : 16.0) * actual) << image;
         }
-        double actual = 0.0, estimate = 0.0;
-        for (size_t i = 0; i < n; ++i)
-            if (a.texels[i].triangle < 2) // the floor
-            {
-                actual += (squares[i] - sum[i] * sum[i] / seeds) / (seeds - 1);
-                estimate += estimated[i];
-            }
-        std::printf("stratified rays beside a wall: estimated variance %.2f times the actual\n",
-                    estimate / actual);
-        EXPECT_GE(estimate, actual);
-        EXPECT_LE(estimate, 16.0 * actual);
     }
 }
 

@@ -156,11 +156,12 @@ struct LightmapSh
     // coefficients (irradiance[1..3], the light's direction). Each stream of samples (the hemisphere rays,
     // the environment's rays, the sun's rays; punctual lights are exact) adds, per value, the sum over its
     // samples of (the sample's share - the mean share of its k = 6 nearest in the stream's pattern)^2 /
-    // (1 + 1 / k) (ray_generator.h, SampleNeighbours): unbiased for independent samples (the sun's), and for
-    // the stratified sets the bake draws it sees how the light changes from one stratum to the next, not the
-    // slow change across the set that stratification integrates away. It still runs above the actual
+    // (1 + 1 / k) (ray_generator.h, SampleNeighbours; the environment's pattern is a ring cut at a place of
+    // each texel's own, and no pair across the cut counts): unbiased for independent samples (the sun's), and
+    // for the stratified sets the bake draws it sees how the light changes from one stratum to the next, not
+    // the slow change across the set that stratification integrates away. It still runs above the actual
     // error, by a factor that depends on the light (hemi-denoise-quality prints it: in RMS 1.4x on the sample
-    // level, 2.6x on a floor and wall under a uniform sky): a stratified set's own samples cannot tell how
+    // level, 2.8x on a floor and wall under a sky and a sun): a stratified set's own samples cannot tell how
     // well the set integrates. Each pass adds its own (its rays are drawn anew); a bounce ray's share is what
     // it reads of the previous pass's map, whose noise shows as spread between neighbouring rays. Empty
     // unless the bake estimated it (LightmapBakeOptions::keep_noise), and in a LightmapSh made by hand.

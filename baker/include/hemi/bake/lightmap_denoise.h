@@ -6,7 +6,7 @@
 //
 // The noise: the bake estimates, per texel, the variance of each guide (LightmapSh::noise: each sample
 // against its nearest in its stream's pattern). It runs above the actual error by a factor that depends on
-// the light (1.4x in RMS on the sample level, 2.8x on a floor and wall under a uniform sky: a stratified
+// the light (1.4x in RMS on the sample level, 2.8x on a floor and wall under a sky and a sun: a stratified
 // set's own samples cannot tell how well the set integrates), and sigma_light was chosen with it. The guides
 // are the luminance of the irradiance at the normal (plain) and of SH9's three band-1 coefficients (the
 // light's direction). A single texel's guides are single draws: they are prefiltered over its 3 x 3

@@ -61,9 +61,10 @@ struct SampleNeighbours
 // The hemisphere set of `rays` directions: the k nearest on the sphere to each, taken at the middles of
 // their strata (rays <= k + 1: independent). About rays^1.5 work, once per bake.
 SampleNeighbours hemisphere_neighbours(int rays, int k);
-// The rank-1 lattice (r / count, frac(r * golden ratio)) on the unit torus, which LightSampler's
-// environment rays follow: the k nearest to each (k even: k / 2 offsets d, the samples r + d and r - d),
-// (count <= k + 1: independent).
+// The points (r / count, frac(r * golden ratio)) on the unit torus, the pattern LightSampler's environment
+// rays follow (its first coordinate turned by an offset of each item's own, and cut there: the caller leaves
+// out pairs across the cut): the k nearest to each by their distance on the torus (count <= k + 1:
+// independent). About count^1.5 work, once per bake.
 SampleNeighbours lattice_neighbours(int count, int k);
 
 } // namespace hemi::bake
