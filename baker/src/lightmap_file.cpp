@@ -1,11 +1,13 @@
 // hemi-bake lightmap's job from a glTF file to a lightmap asset, EXRs and a JSON report (lightmap_bake.h).
 #include <hemi/bake/checkpoint.h>
+#include <hemi/bake/light_bound.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
+#include <hemi/io/half_scale.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/memory.h>
@@ -38,15 +40,6 @@ std::filesystem::path lightmap_tile_path(const std::filesystem::path& asset)
 
 namespace
 {
-
-// The lightmap's outputs are half floats (at most 65504). A basis coefficient reaches about the irradiance
-// itself (SH9's largest, for a single direction, is 1.02 E) and bounces add to it (a closed room of albedo
-// 0.75 sums to 4 E), so the lights' irradiance on a surface must stay within 65504 / 4. What can be known
-// before the bake is checked here: the directional lights' irradiance, summed, plus pi times the largest
-// radiance of the environment and the emissive surfaces (which share one hemisphere, so that is the most
-// they can give a point together). Point and spot lights depend on their
-// distance to the surfaces; the asset's writer refuses what they make out of range.
-constexpr double kMaxLightmapIrradiance = 65504.0 / 4.0;
 
 // Peak memory of a bake, an upper estimate. The bake keeps only the 8 x 8 blocks of the atlas that triangles
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables and
@@ -121,67 +114,31 @@ void write_uv_report(const std::filesystem::path& path, const LightmapAtlas& atl
     io::write_png(path, image);
 }
 
-void check_lightmap_range(const LightmapLights& l, const std::vector<io::Material>& materials,
-                          const std::filesystem::path& scene)
+// Light beyond any physical value is refused before the work, naming the light; anything below it is stored
+// (the asset's halves carry a scale, io/half_scale.h). The bound is reported.
+LightBound check_light_bound(const LightmapLights& l, const std::vector<io::Material>& materials,
+                             const io::Mesh& mesh, const std::filesystem::path& scene)
 {
-    struct Source
+    LightBound bound;
+    try
     {
-        std::string name;
-        double irradiance;
-    };
-    // Delta lights (the sun, directional lights) add up; the environment and emissive surfaces share one
-    // hemisphere, so together they give a point at most pi times the largest radiance among them.
-    std::vector<Source> delta, area;
-    auto max3 = [](const glm::vec3& v) { return double(std::max({v.x, v.y, v.z})); };
-    if (l.sun)
-        delta.push_back({"the sun (--sun)", max3(l.sun_irradiance)});
-    for (const io::PunctualLight& p : l.punctual)
-        if (p.type == io::PunctualLight::Type::Directional)
-            delta.push_back(
-                {"the glTF directional light '" + p.name + "' (lux)", double(p.intensity) * max3(p.color)});
-    if (l.environment.pixels.empty())
-        area.push_back({"the environment (--env uniform, --env-scale)", M_PI * max3(l.uniform)});
-    else
-    {
-        double most = 0.0;
-        for (size_t i = 0; i < l.environment.pixels.size(); ++i)
-            if (i % 4 != 3)
-                most = std::max(most, double(l.environment.pixels[i]));
-        area.push_back({"the environment image " + l.environment_name + " (--env, --env-scale)",
-                        M_PI * most * l.environment_scale});
+        bound = lightmap_light_bound(l, materials, mesh);
     }
-    for (const io::Material& m : materials)
-        if (max3(m.emissive_factor) > 0.0)
-            area.push_back({"the emissive material '" + m.name + "'", M_PI * max3(m.emissive_factor)});
-    double total = 0.0;
-    const Source* largest = nullptr;
-    for (const Source& s : delta)
+    catch (const std::invalid_argument& e)
     {
-        total += s.irradiance;
-        if (!largest || s.irradiance > largest->irradiance)
-            largest = &s;
+        throw io::FormatError(scene.string() + ": " + e.what());
     }
-    const Source* brightest_area = nullptr;
-    for (const Source& s : area)
-        if (!brightest_area || s.irradiance > brightest_area->irradiance)
-            brightest_area = &s;
-    if (brightest_area)
-    {
-        total += brightest_area->irradiance;
-        if (!largest || brightest_area->irradiance > largest->irradiance)
-            largest = brightest_area;
-    }
-    if (largest && total > kMaxLightmapIrradiance)
+    const LightBoundSource* largest = bound.largest();
+    if (largest && !(bound.total <= kMaxPlausibleIrradiance))
     {
         char text[400];
         std::snprintf(text, sizeof text,
-                      ": the lights give an irradiance of up to %.4g (%s: %.4g), above the %.4g that the "
-                      "lightmap's half floats hold with room for the bases and bounces; scale every light "
-                      "by one factor (e.g. 1e-3 or 1e-4 for daylight in lux) and undo it with the renderer's "
-                      "exposure",
-                      total, largest->name.c_str(), largest->irradiance, kMaxLightmapIrradiance);
+                      ": the lights give an irradiance of up to %.4g (%s: %.4g), beyond any physical light "
+                      "(%.0e W/m^2 or lux, 10^5 times direct sunlight); check the light's units",
+                      bound.total, largest->name.c_str(), largest->irradiance, kMaxPlausibleIrradiance);
         throw io::FormatError(scene.string() + text);
     }
+    return bound;
 }
 
 } // namespace
@@ -454,7 +411,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
-    check_lightmap_range(o.lights, scene.materials, scene_path);
+    summary.irradiance_bound = check_light_bound(o.lights, scene.materials, scene.mesh, scene_path).total;
     LightmapBakeOptions bake_options = o.bake;
     bake_options.keep_noise = o.denoise;
     bake_options.tile_texels = tile_texels;
@@ -546,6 +503,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         uint64_t adjusted = 0, blocks = 0, stitched_texels = 0, clamped = 0;
         double before_mean = 0.0, before_p95 = 0.0, after_mean = 0.0, after_p95 = 0.0;
         uint8_t stitched = 0, has_clamped = 0;
+        int32_t scale_exponent = 0; // the power of two the output's halves are times (io/half_scale.h)
     };
     const auto make_output = [&](const std::string& name, OutputReport& made)
     {
@@ -607,6 +565,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             made.after_mean = m.mean;
             made.after_p95 = m.p95;
         }
+        made.scale_exponent = io::half_scale_exponent(io::largest_magnitude(output.maps.values));
         return output;
     };
     const auto take_report = [&](const std::string& name, const OutputReport& made)
@@ -621,6 +580,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             summary.stitched_texels = std::max(summary.stitched_texels, size_t(made.stitched_texels));
         if (made.has_clamped)
             summary.stitch_clamped[name] = size_t(made.clamped);
+        summary.output_scales[name] = std::ldexp(1.0, made.scale_exponent);
     };
     if (share_outputs)
     {
@@ -668,6 +628,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 continue;
             // An EXR is a dense image: one output at a time is expanded to the whole atlas.
             const std::vector<float> dense = output.maps.dense();
+            // Half floats where the values fit them (what the asset stores), floats for brighter light.
+            const bool half = io::largest_magnitude(output.maps.values) <= 65504.0f;
             std::vector<io::ExrChannel> channels;
             const size_t plane = size_t(w) * h * 3;
             for (uint32_t k = 0; k < output.k; ++k)
@@ -676,7 +638,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                     char channel_name[32];
                     std::snprintf(channel_name, sizeof channel_name, "c%u.%s", k, c);
                     const size_t channel = size_t(c[0] == 'R' ? 0 : c[0] == 'G' ? 1 : 2);
-                    channels.push_back({channel_name, dense.data() + k * plane + channel, 3, true});
+                    channels.push_back({channel_name, dense.data() + k * plane + channel, 3, half});
                 }
             const std::vector<std::pair<std::string, std::string>> attributes = {
                 {"hemi.output", output.name},
@@ -716,6 +678,10 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["tile_texels"] = s.tile_texels; // 0: the whole atlas in memory
     j["tiles_per_pass"] = s.tiles;
     j["triangles"] = s.triangles;
+    // The most direct irradiance the lights can give a point (light_bound.h), and the power of two each
+    // output's half floats are times (io/half_scale.h: 1 for light in the ordinary range).
+    j["irradiance_bound"] = s.irradiance_bound;
+    j["output_scales"] = s.output_scales;
     j["materials"] = s.materials;
     j["primitives"] = s.primitives;
     j["images"] = s.images;

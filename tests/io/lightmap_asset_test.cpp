@@ -6,6 +6,7 @@
 
 #include <hemi/io/asset.h>
 #include <hemi/io/block_maps.h>
+#include <hemi/io/half_scale.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 
@@ -228,10 +229,10 @@ TEST(LightmapAsset, WriterRefusesInconsistentAssets)
     refused(a, "values, its blocks need");
     a = small_asset();
     a.outputs[0].maps.values[3] = NAN;
-    refused(a, "half float");
+    refused(a, "not finite");
     a = small_asset();
-    a.outputs[0].maps.values[3] = 1e6f;
-    refused(a, "half float");
+    a.outputs[0].maps.values[3] = INFINITY;
+    refused(a, "not finite");
     a = small_asset();
     a.outputs[0].name = "h7";
     refused(a, "unknown output 'h7'");
@@ -479,8 +480,9 @@ hemi::io::LightmapAsset one_texel_asset(const glm::vec3& plain)
 } // namespace
 
 // A 4096^2 lightmap with one covered texel is a few kilobytes (the dense layout stored 100 MB), and its
-// section holds what lightmap_asset.h documents, parsed here from the bytes: K, N, the block indices, then
-// the halves, coefficient k of local texel (x, y) of block b at ((b * K + k) * 64 + y * 8 + x) * 3 + c.
+// section holds what lightmap_asset.h documents, parsed here from the bytes: K, N, the scale's exponent e,
+// the block indices, then the halves, coefficient k of local texel (x, y) of block b at
+// ((b * K + k) * 64 + y * 8 + x) * 3 + c, each the value / 2^e (e = 0 for these ordinary values).
 TEST(LightmapAsset, StoresOnlyTheBlocksThatHoldTexelsInTheDocumentedLayout)
 {
     const fs::path p = dir() / "one_texel.hemi";
@@ -488,17 +490,18 @@ TEST(LightmapAsset, StoresOnlyTheBlocksThatHoldTexelsInTheDocumentedLayout)
     EXPECT_LT(fs::file_size(p), 16384u);
     const hemi::io::AssetReader r(p);
     const std::span<const std::byte> b = r.section("L.plain");
-    ASSERT_EQ(b.size(), 4u + 4u + 4u + 64u * 3u * 2u);
-    uint32_t head[3];
-    std::memcpy(head, b.data(), 12);
+    ASSERT_EQ(b.size(), 4u + 4u + 4u + 4u + 64u * 3u * 2u);
+    uint32_t head[4];
+    std::memcpy(head, b.data(), 16);
     EXPECT_EQ(head[0], 1u);                                  // K
     EXPECT_EQ(head[1], 1u);                                  // N
-    EXPECT_EQ(head[2], uint32_t(2345 / 8 * 512 + 1234 / 8)); // by * ceil(W / 8) + bx
+    EXPECT_EQ(head[2], 0u);                                  // e
+    EXPECT_EQ(head[3], uint32_t(2345 / 8 * 512 + 1234 / 8)); // by * ceil(W / 8) + bx
     const size_t local = size_t(2345 % 8) * 8 + 1234 % 8;
     for (size_t i = 0; i < 64 * 3; ++i)
     {
         uint16_t half;
-        std::memcpy(&half, b.data() + 12 + 2 * i, 2);
+        std::memcpy(&half, b.data() + 16 + 2 * i, 2);
         const float expected = i / 3 == local ? std::array<float, 3>{1.0f, 2.5f, -0.75f}[i % 3] : 0.0f;
         EXPECT_EQ(glm::unpackHalf1x16(half), expected) << i;
     }
@@ -586,11 +589,11 @@ TEST(LightmapAsset, RefusesBadBlockLists)
                              if (section != "L.plain")
                                  return;
                              const uint32_t n = uint32_t(blocks.size());
-                             std::vector<std::byte> out(8 + n * 4 + size_t(n) * 64 * 3 * 2);
+                             std::vector<std::byte> out(12 + n * 4 + size_t(n) * 64 * 3 * 2);
                              std::memcpy(out.data(), bytes.data(), 4); // K = 1
-                             std::memcpy(out.data() + 4, &n, 4);
+                             std::memcpy(out.data() + 4, &n, 4);       // and e = 0
                              if (n > 0) // memcpy from an empty vector's null data() is undefined
-                                 std::memcpy(out.data() + 8, blocks.data(), n * 4);
+                                 std::memcpy(out.data() + 12, blocks.data(), n * 4);
                              bytes = out;
                          });
     };
@@ -613,4 +616,78 @@ TEST(LightmapAsset, RefusesBadBlockLists)
         EXPECT_NE(e.find("L.plain"), std::string::npos) << e;
         EXPECT_NE(e.find(what), std::string::npos) << e;
     }
+}
+
+// Light of any magnitude (io/half_scale.h): the exponent of the scale for the values' largest magnitude is 0
+// from 2^-6 to 2^15 (bytes as before) and otherwise brings the largest into (2^13, 2^14]; an output of a
+// 100,000-lux sun (1.2e5) or a moonlit 1e-5 round-trips to the halves' relative precision (2^-11), where
+// scale 1 would overflow to infinity (refused) or flush to 0, and its section stores the exponent.
+TEST(LightmapAsset, LightOfAnyMagnitudeRoundTripsWithItsScale)
+{
+    EXPECT_EQ(hemi::io::half_scale_exponent(0.0f), 0);
+    EXPECT_EQ(hemi::io::half_scale_exponent(1.0f), 0);
+    EXPECT_EQ(hemi::io::half_scale_exponent(0x1p15f), 0);
+    EXPECT_EQ(hemi::io::half_scale_exponent(0x1p-6f), 0);
+    EXPECT_EQ(hemi::io::half_scale_exponent(0x1.0002p15f), 2); // (2^15, 2^16] / 2^2 is in (2^13, 2^14]
+    EXPECT_EQ(hemi::io::half_scale_exponent(1.2e5f), 3);       // 1.2e5 / 8 = 15000
+    EXPECT_EQ(hemi::io::half_scale_exponent(0x1p16f), 2);      // exactly 2^14 after
+    EXPECT_EQ(hemi::io::half_scale_exponent(1e-5f), -30);      // 1e-5 * 2^30 = 10737
+    EXPECT_EQ(hemi::io::half_scale_exponent(3e38f), hemi::io::kMaxHalfScaleExponent);
+    for (const float largest : {1.2e5f, 3.5e9f, 1e-5f, 2e-9f})
+    {
+        hemi::io::LightmapAsset a = small_asset();
+        for (hemi::io::LightmapOutput& o : a.outputs)
+            for (size_t i = 0; i < o.maps.values.size(); ++i) // values from -largest to largest and near 0
+                o.maps.values[i] = largest * std::sin(float(i) * 0.7f) * (i % 5 == 0 ? 1e-3f : 1.0f);
+        const fs::path p = dir() / "bright.hemi";
+        hemi::io::write_lightmap_asset(p, a);
+        const int e = hemi::io::half_scale_exponent(hemi::io::largest_magnitude(a.outputs[0].maps.values));
+        const hemi::io::AssetReader r(p);
+        int32_t stored = 0;
+        std::memcpy(&stored, r.section("L." + a.outputs[0].name).data() + 8, 4);
+        EXPECT_EQ(stored, e) << largest;
+        EXPECT_NE(e, 0) << largest;
+        const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(p);
+        for (size_t k = 0; k < a.outputs.size(); ++k)
+            for (size_t i = 0; i < a.outputs[k].maps.values.size(); ++i)
+            {
+                const float v = a.outputs[k].maps.values[i], w = b.output(a.outputs[k].name).maps.values[i];
+                ASSERT_LE(std::abs(w - v), std::abs(v) * 0x1p-11f) << largest << " " << k << " " << i;
+            }
+    }
+}
+
+// An asset of layout 2 (blocks without the scale's exponent, what hemi wrote before) still reads, to the
+// same values; made from a layout-3 asset by taking the exponent out of its sections.
+TEST(LightmapAsset, ReadsLayoutTwoWithoutAScale)
+{
+    const hemi::io::LightmapAsset a = small_asset();
+    const fs::path good = dir() / "layout3.hemi";
+    hemi::io::write_lightmap_asset(good, a);
+    const fs::path old = rewritten(good, "layout2.hemi",
+                                   [&](const std::string& section, std::vector<std::byte>& bytes)
+                                   {
+                                       if (section == "lightmap.info")
+                                       {
+                                           const uint32_t two = 2;
+                                           std::memcpy(bytes.data(), &two, 4);
+                                       }
+                                       if (section.rfind("L.", 0) == 0)
+                                           bytes.erase(bytes.begin() + 8, bytes.begin() + 12);
+                                   });
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(old);
+    ASSERT_EQ(b.outputs.size(), a.outputs.size());
+    for (const hemi::io::LightmapOutput& o : a.outputs)
+        EXPECT_EQ(b.output(o.name).maps.values,
+                  hemi::io::read_lightmap_asset(good).output(o.name).maps.values);
+    // A layout-3 section whose exponent is out of range is refused naming it.
+    const fs::path bad = rewritten(good, "bad_scale.hemi",
+                                   [&](const std::string& section, std::vector<std::byte>& bytes)
+                                   {
+                                       const int32_t e = 200;
+                                       if (section == "L.plain")
+                                           std::memcpy(bytes.data() + 8, &e, 4);
+                                   });
+    const std::string e = error_of(bad);
+    EXPECT_NE(e.find("L.plain: scale 2^200"), std::string::npos) << e;
 }

@@ -2174,35 +2174,104 @@ TEST(HostileCli, LightmapsRefuseEmptyAtlasesAndLightTheyCannotHold)
             << r.err;
         EXPECT_FALSE(fs::exists(out)) << name;
     }
-    // Daylight in lux: 100,000 is beyond the half floats, named, before any pass; a rerun says the same.
+    // Light beyond any physical value (a sun of 1e11 lux, 10^6 times daylight), named, before any pass; a
+    // rerun says the same. Daylight itself (100,000 lux) bakes (tests/tools/light_range_test.cpp).
     for (int attempt = 0; attempt < 2; ++attempt)
     {
-        const Result r = lightmap(q(floor_scene()) + " --size 16 --sun 0,0,1,1e5,1e5,1e5 -o " + q(out));
+        const Result r = lightmap(q(floor_scene()) + " --size 16 --sun 0,0,1,1e11,1e11,1e11 -o " + q(out));
         EXPECT_EQ(r.status, 1) << r.err;
-        EXPECT_NE(r.err.find("the sun (--sun)"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("the sun (--sun): 1e+11"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("beyond any physical light"), std::string::npos) << r.err;
         EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(out.string() + ".partial"));
     }
-    nlohmann::json j = nlohmann::json::parse(slurp(floor_scene()));
-    j["extensionsUsed"].push_back("KHR_lights_punctual");
-    j["extensions"]["KHR_lights_punctual"]["lights"] = {
-        {{"type", "directional"}, {"intensity", 100000.0}, {"name", "Daylight"}}};
-    j["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
-    j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
-    const fs::path daylight_scene = dir() / "daylight.gltf";
-    std::ofstream(daylight_scene) << j.dump();
-    Result r = lightmap(q(daylight_scene) + " --size 16 -o " + q(out));
-    EXPECT_EQ(r.status, 1) << r.err;
-    EXPECT_NE(r.err.find("'Daylight'"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("daylight.gltf"), std::string::npos) << r.err;
-    // The same light scaled by 1e-3, as the message says, bakes.
-    r = lightmap(q(floor_scene()) + " --size 16 --rays 8 --bases plain --sun 0,0,1,100,100,100 -o " + q(out));
-    EXPECT_EQ(r.status, 0) << r.err;
+    // Each kind of light at the edge: a glTF directional light, a point light by its distance to the floor
+    // (1.2 cd at 1e-5 m above it: 1.2e10 lux there), an environment image, an emissive material and a sun
+    // with a sky whose sum is over (each alone is under): refused just above the limit (1e10), naming the
+    // light, and baked just below it.
+    auto with_lights = [&](const std::string& name, const nlohmann::json& lights, const glm::vec3& at,
+                           double emissive_strength = 0.0)
+    {
+        nlohmann::json j = nlohmann::json::parse(slurp(floor_scene()));
+        if (!lights.empty())
+        {
+            j["extensionsUsed"].push_back("KHR_lights_punctual");
+            j["extensions"]["KHR_lights_punctual"]["lights"] = lights;
+        }
+        for (int i = 0; i < int(lights.size()); ++i)
+        {
+            j["nodes"].push_back({{"translation", {at.x, at.y, at.z}},
+                                  {"extensions", {{"KHR_lights_punctual", {{"light", i}}}}}});
+            j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+        }
+        if (emissive_strength > 0.0)
+        {
+            j["extensionsUsed"].push_back("KHR_materials_emissive_strength");
+            j["materials"] = {
+                {{"name", "Lamp"},
+                 {"emissiveFactor", {1.0, 1.0, 1.0}},
+                 {"extensions",
+                  {{"KHR_materials_emissive_strength", {{"emissiveStrength", emissive_strength}}}}}}};
+            for (auto& mesh : j["meshes"])
+                for (auto& primitive : mesh["primitives"])
+                    primitive["material"] = 0;
+        }
+        const fs::path p = dir() / name;
+        std::ofstream(p) << j.dump();
+        return p;
+    };
+    const fs::path sun_over =
+        with_lights("sun_over.gltf", {{{"type", "directional"}, {"intensity", 1.2e10}, {"name", "Sun"}}},
+                    glm::vec3(0.0f));
+    const fs::path sun_under =
+        with_lights("sun_under.gltf", {{{"type", "directional"}, {"intensity", 0.9e10}, {"name", "Sun"}}},
+                    glm::vec3(0.0f));
+    const fs::path bulb_over =
+        with_lights("bulb_over.gltf", {{{"type", "point"}, {"intensity", 1.2}, {"name", "Bulb"}}},
+                    glm::vec3(0.0f, 1e-5f, 0.0f));
+    const fs::path bulb_under =
+        with_lights("bulb_under.gltf", {{{"type", "point"}, {"intensity", 0.8}, {"name", "Bulb"}}},
+                    glm::vec3(0.0f, 1e-5f, 0.0f));
+    const fs::path lamp_over =
+        with_lights("lamp_over.gltf", nlohmann::json::array(), glm::vec3(0.0f), 1.2e10 / M_PI);
+    const fs::path lamp_under =
+        with_lights("lamp_under.gltf", nlohmann::json::array(), glm::vec3(0.0f), 0.8e10 / M_PI);
+    const fs::path sky_over = env_exr("sky_over.exr", 16, 8, float(1.2e10 / M_PI));
+    const fs::path sky_under = env_exr("sky_under.exr", 16, 8, float(0.8e10 / M_PI));
+    // A sun plus a uniform sky: their sum counts (each alone is below the limit).
+    const std::vector<std::tuple<std::string, std::string, std::string>> over = {
+        {q(sun_over), "", "the glTF directional light 'Sun' (lux): 1.2e+10"},
+        {q(bulb_over), "", "the glTF point light 'Bulb' (candela), 1e-05 from the nearest surface: 1.2e+10"},
+        {q(floor_scene()), " --env " + q(sky_over), "sky_over.exr"},
+        {q(lamp_over), " --env-scale 0", "the emissive material 'Lamp': 1.2e+10"},
+        {q(floor_scene()), " --sun 0,0,1,0.6e10,0.6e10,0.6e10 --env-scale " + std::to_string(0.6e10 / M_PI),
+         "1.2e+10"},
+    };
+    for (const auto& [scene, more, named] : over)
+    {
+        const Result r = lightmap(scene + more + " --size 16 --rays 1 --bases plain -o " + q(out));
+        EXPECT_EQ(r.status, 1) << scene << more << ": " << r.err;
+        EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("beyond any physical light"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
+    const std::vector<std::string> under = {
+        q(sun_under), q(bulb_under), q(floor_scene()) + " --env " + q(sky_under),
+        q(lamp_under) + " --env-scale 0",
+        q(floor_scene()) + " --sun 0,0,1,0.4e10,0.4e10,0.4e10 --env-scale " + std::to_string(0.4e10 / M_PI)};
+    for (const std::string& args : under)
+    {
+        const Result r = lightmap(args + " --size 16 --rays 1 --bases plain -o " + q(out));
+        EXPECT_EQ(r.status, 0) << args << ": " << r.err;
+        EXPECT_TRUE(fs::exists(out)) << args;
+        fs::remove(out);
+    }
     // A sky of 3e38: no bake can sum it in floats.
     const fs::path blinding = env_exr("blinding_sky.exr", 16, 8, 3e38f);
     for (const std::string& sub : {std::string("lightmap"), std::string("reference")})
     {
-        r = run(HEMI_BAKE_EXE, sub + " " + q(floor_scene()) + " --env " + q(blinding) + " -o " +
+        const Result r =
+            run(HEMI_BAKE_EXE, sub + " " + q(floor_scene()) + " --env " + q(blinding) + " -o " +
                                    q(dir() / (sub == "reference" ? "blinding.exr" : "blinding.hemi")));
         EXPECT_EQ(r.status, 1) << sub << ": " << r.err;
         EXPECT_NE(r.err.find("blinding_sky.exr"), std::string::npos) << sub << ": " << r.err;

@@ -159,6 +159,8 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
         EXPECT_EQ(out.Get("name").Get<std::string>(), o.name);
         ASSERT_EQ(out.Get("coefficients").GetNumberAsInt(), int(o.k));
         EXPECT_EQ(out.Get("format").Get<std::string>(), "RGB16F");
+        const float scale = float(out.Get("scale").GetNumberAsDouble());
+        EXPECT_EQ(scale, 1.0f) << o.name << ": light in the ordinary range is stored as it is";
         const tinygltf::BufferView& v = m.bufferViews[size_t(out.Get("bufferView").GetNumberAsInt())];
         ASSERT_EQ(v.byteLength, size_t(o.k) * a.width * a.height * 6) << o.name;
         const uint8_t* bytes = m.buffers[0].data.data() + v.byteOffset;
@@ -170,7 +172,7 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
                     {
                         uint16_t h;
                         std::memcpy(&h, bytes + (((size_t(k) * a.height + y) * a.width + x) * 3 + c) * 2, 2);
-                        differ += glm::unpackHalf1x16(h) != o.maps.at(k, x, y)[c];
+                        differ += glm::unpackHalf1x16(h) * scale != o.maps.at(k, x, y)[c];
                     }
         EXPECT_EQ(differ, 0u) << o.name;
     }

@@ -1,5 +1,6 @@
 // The lightmap asset in the .hemi container (lightmap_asset.h).
 #include <hemi/io/asset.h>
+#include <hemi/io/half_scale.h>
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/math/basis.h>
@@ -19,9 +20,10 @@ namespace hemi::io
 namespace
 {
 
-// Layout 2 stores each output's kept 8 x 8 blocks (io/block_maps.h); layout 1 (read, not written) stored
-// the dense atlas.
-constexpr uint32_t kLightmapLayoutVersion = 2;
+// Layout 3 stores each output's kept 8 x 8 blocks (io/block_maps.h) as halves with a power-of-two scale
+// (io/half_scale.h); layout 2 (read, not written) the same blocks without a scale; layout 1 (read) the dense
+// atlas.
+constexpr uint32_t kLightmapLayoutVersion = 3;
 
 struct Info
 {
@@ -95,8 +97,8 @@ std::string output_problem(const LightmapOutput& o, uint32_t width, uint32_t hei
         return "output '" + o.name + "' holds " + std::to_string(o.maps.values.size()) +
                " values, its blocks need " + std::to_string(expected);
     for (float v : o.maps.values)
-        if (!std::isfinite(v) || std::abs(v) > 65504.0f)
-            return "output '" + o.name + "' holds a value that is not finite or does not fit a half float";
+        if (!std::isfinite(v))
+            return "output '" + o.name + "' holds a value that is not finite";
     return {};
 }
 
@@ -222,8 +224,8 @@ LightmapAssetWriter::~LightmapAssetWriter() = default;
 
 namespace
 {
-// An output's section: u32 K, u32 N, N u32 block indices, then the values as half floats, encoded piece by
-// piece as the container asks for them (straight into its spool when it has one).
+// An output's section: u32 K, u32 N, i32 e, N u32 block indices, then the values / 2^e as half floats,
+// encoded piece by piece as the container asks for them (straight into its spool when it has one).
 struct OutputSection
 {
     explicit OutputSection(const LightmapOutput& o, uint32_t width, uint32_t height) : output(o)
@@ -231,12 +233,14 @@ struct OutputSection
         if (std::string p = output_problem(o, width, height); !p.empty())
             throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
         const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
-        head.resize(2 + blocks.size());
+        exponent = half_scale_exponent(largest_magnitude(o.maps.values));
+        head.resize(3 + blocks.size());
         head[0] = o.k;
         head[1] = uint32_t(blocks.size());
+        std::memcpy(&head[2], &exponent, 4);
         if (!blocks
                  .empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
-            std::memcpy(head.data() + 2, blocks.data(), blocks.size() * 4);
+            std::memcpy(head.data() + 3, blocks.data(), blocks.size() * 4);
     }
     uint64_t head_bytes() const { return head.size() * 4; }
     uint64_t size() const { return head_bytes() + output.maps.values.size() * 2; }
@@ -251,11 +255,12 @@ struct OutputSection
         // The head and every piece have an even size: values start on a whole half float.
         for (size_t v = size_t((offset + at - head_bytes()) / 2); at < out.size(); at += 2, ++v)
         {
-            const uint16_t h = glm::packHalf1x16(output.maps.values[v]);
+            const uint16_t h = glm::packHalf1x16(std::ldexp(output.maps.values[v], -exponent));
             std::memcpy(out.data() + at, &h, 2);
         }
     }
     const LightmapOutput& output;
+    int32_t exponent = 0;
     std::vector<uint32_t> head;
 };
 } // namespace
@@ -328,10 +333,9 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
                    std::to_string(sizeof(Info)));
     Info info;
     std::memcpy(&info, info_bytes.data(), sizeof info);
-    if (info.layout != kLightmapLayoutVersion && info.layout != 1)
+    if (info.layout < 1 || info.layout > kLightmapLayoutVersion)
         throw fail("lightmap layout version " + std::to_string(info.layout) +
-                   " is not supported (this hemi reads 1 and " + std::to_string(kLightmapLayoutVersion) +
-                   ")");
+                   " is not supported (this hemi reads 1 to " + std::to_string(kLightmapLayoutVersion) + ")");
     if (info.width == 0 || info.height == 0 || info.width > kMaxAtlasSide || info.height > kMaxAtlasSide)
         throw fail("lightmap.info: atlas size " + std::to_string(info.width) + "x" +
                    std::to_string(info.height) + " is not in [1, " + std::to_string(kMaxAtlasSide) + "]");
@@ -380,13 +384,21 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
         }
         else
         {
-            // K, N, N block indices, N x K x 64 x 3 halves.
-            if (b.size() < 8)
+            // K, N, (layout 3) e, N block indices, N x K x 64 x 3 halves.
+            const uint64_t head = info.layout >= 3 ? 12 : 8;
+            if (b.size() < head)
                 throw fail(section + " is too short");
             uint32_t n = 0;
             std::memcpy(&n, b.data() + 4, 4);
+            int32_t exponent = 0;
+            if (info.layout >= 3)
+                std::memcpy(&exponent, b.data() + 8, 4);
+            if (exponent < kMinHalfScaleExponent || exponent > kMaxHalfScaleExponent)
+                throw fail(section + ": scale 2^" + std::to_string(exponent) + " is outside 2^" +
+                           std::to_string(kMinHalfScaleExponent) + " to 2^" +
+                           std::to_string(kMaxHalfScaleExponent));
             const uint64_t grid = uint64_t((a.width + 7) / 8) * ((a.height + 7) / 8);
-            const uint64_t expected = 8 + uint64_t(n) * 4 + uint64_t(n) * k * BlockGrid::kTexels * 3 * 2;
+            const uint64_t expected = head + uint64_t(n) * 4 + uint64_t(n) * k * BlockGrid::kTexels * 3 * 2;
             if (n > grid)
                 throw fail(section + " lists " + std::to_string(n) + " blocks, but a " +
                            std::to_string(a.width) + "x" + std::to_string(a.height) + " atlas has " +
@@ -396,7 +408,7 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
                            " blocks of K = " + std::to_string(k) + " need " + std::to_string(expected));
             std::vector<uint32_t> blocks(n);
             if (n > 0)
-                std::memcpy(blocks.data(), b.data() + 8, size_t(n) * 4);
+                std::memcpy(blocks.data(), b.data() + head, size_t(n) * 4);
             try
             {
                 o.maps = BlockMaps(BlockGrid(a.width, a.height, std::move(blocks)), k);
@@ -405,9 +417,9 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
             {
                 throw fail(section + ": " + e.what());
             }
-            const size_t base = 8 + size_t(n) * 4;
+            const size_t base = size_t(head) + size_t(n) * 4;
             for (size_t i = 0; i < o.maps.values.size(); ++i)
-                o.maps.values[i] = half(base + 2 * i);
+                o.maps.values[i] = std::ldexp(half(base + 2 * i), exponent);
         }
         a.outputs.push_back(std::move(o));
     }

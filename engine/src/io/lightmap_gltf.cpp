@@ -2,6 +2,8 @@
 
 #include "gltf_builder.h"
 
+#include <hemi/io/half_scale.h>
+
 #include <glm/gtc/packing.hpp>
 
 #include <algorithm>
@@ -145,6 +147,8 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
     Value::Array outputs;
     for (const LightmapOutput* o : stored)
     {
+        // Light of any magnitude: the halves are the values / scale, a power of two (io/half_scale.h).
+        const int exponent = half_scale_exponent(largest_magnitude(o->maps.values));
         std::vector<uint16_t> halves(size_t(w) * h * o->k * 3);
         size_t i = 0;
         for (uint32_t k = 0; k < o->k; ++k)
@@ -153,12 +157,13 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
                 {
                     const glm::vec3 v = o->maps.at(k, x, y);
                     for (int c = 0; c < 3; ++c)
-                        halves[i++] = glm::packHalf1x16(v[c]);
+                        halves[i++] = glm::packHalf1x16(std::ldexp(v[c], -exponent));
                 }
         Value::Object out;
         out["name"] = Value(o->name);
         out["coefficients"] = Value(int(o->k));
         out["format"] = Value(std::string("RGB16F"));
+        out["scale"] = number(std::ldexp(1.0, exponent));
         out["bufferView"] = Value(b.view(halves.data(), halves.size() * 2, 0));
         outputs.push_back(Value(out));
         summary.outputs.push_back(o->name);

@@ -316,8 +316,10 @@ struct LightmapBakeSummary
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     size_t probes = 0, invalid_probes = 0;
-    size_t blocks = 0; // 8x8 blocks of the atlas stored per output (covered texels and dilation)
-    std::map<std::string, size_t> non_negative; // with non_negative: per directional output, texels changed
+    size_t blocks = 0;             // 8x8 blocks of the atlas stored per output (covered texels and dilation)
+    double irradiance_bound = 0.0; // the lights' most direct irradiance at any point (light_bound.h)
+    std::map<std::string, double> output_scales; // per output, the power of two its halves are times
+    std::map<std::string, size_t> non_negative;  // with non_negative: per directional output, texels changed
     // Seams (lightmap_seams.h): the edges where the surface continues from one chart into another, and per
     // output how far the two sides' lookups differ there (relative mean and 95th percentile), before and
     // after stitching (the same without it), and the texels the stitch could change.

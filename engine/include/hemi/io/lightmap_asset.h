@@ -5,16 +5,19 @@
 // like a PRT asset.
 //
 // Sections (all little-endian; W x H atlas, K = the output's size):
-//   lightmap.info  u32 layout version (2), u32 W, u32 H, u32 rays per texel, u64 seed, u32 bounces,
+//   lightmap.info  u32 layout version (3), u32 W, u32 H, u32 rays per texel, u64 seed, u32 bounces,
 //                  u32 covered texels
 //   mesh.*, scene.*, image.<i>: the mesh (mesh.uvs1 required) and the scene's surfaces, exactly as a PRT
 //                  asset stores them (prt_asset.h)
-//   L.<output>     u32 K, u32 N, N u32 block indices (strictly ascending), then N x K x 64 x 3 f16 (IEEE
-//                  binary16): the 8 x 8 blocks of the atlas that hold a texel (io/block_maps.h: block
+//   L.<output>     u32 K, u32 N, i32 e, N u32 block indices (strictly ascending), then N x K x 64 x 3 f16
+//                  (IEEE binary16): the 8 x 8 blocks of the atlas that hold a texel (io/block_maps.h: block
 //                  by * ceil(W / 8) + bx; in a block, coefficient after coefficient, each 8 rows of 8 RGB
-//                  texels, rows from the top, v = 0); texels of the blocks not stored are 0. So the asset's
-//                  size follows the texels the scene covers (and their dilation), not the atlas. Layout 1
-//                  (still read) stored K x H x W x 3 f16 for the whole atlas. The coefficients are irradiance
+//                  texels, rows from the top, v = 0); texels of the blocks not stored are 0. A value is its
+//                  half times 2^e (io/half_scale.h: e = 0 unless the output's largest magnitude is outside
+//                  [2^-6, 2^15], so light of any magnitude keeps the halves' precision). So the asset's
+//                  size follows the texels the scene covers (and their dilation), not the atlas. Layout 2
+//                  (still read) had no e (e = 0); layout 1 (still read) stored K x H x W x 3 f16 for the
+//                  whole atlas. The coefficients are irradiance
 //                  in each texel's tangent frame (the normal-map UV set's), so sum_k c_k b_k(n) at the
 //                  normal-map normal n is E(n); "plain" is E at the surface normal, "rnm" E towards each
 //                  math::rnm_basis() direction (normalised to pi under uniform radiance).
@@ -45,7 +48,9 @@ struct LightmapOutput
 {
     std::string name; // "sh9", "hl2", "h4", "h6", "sal4", ... , "plain", "rnm"
     uint32_t k = 0;
-    BlockMaps maps; // K maps of the W x H atlas, the blocks that hold texels (stored as half floats)
+    // K maps of the W x H atlas, the blocks that hold texels: the values themselves (stored as half floats
+    // times a power-of-two scale, io/half_scale.h).
+    BlockMaps maps;
 };
 
 // Light probes for dynamic objects (hemi-bake lightmap --probes): the SH9 irradiance (hemi's SH order and
@@ -92,8 +97,8 @@ struct LightmapAsset
     const LightmapOutput& output(const std::string& name) const;
 };
 
-// Throws std::invalid_argument for an inconsistent asset (a value that does not fit a half float among
-// them), FormatError naming the file when it cannot be written.
+// Throws std::invalid_argument for an inconsistent asset (a value that is not finite among them),
+// FormatError naming the file when it cannot be written.
 void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset& asset);
 
 // The same file with its outputs added one at a time, each encoded at once into its half-float section, so

@@ -16,12 +16,13 @@
 //       "HEMI_lightmaps": {"width": W, "height": H, "texCoord": 1, "rays": N, "bounces": B,
 //                          "rgbm": {"index": T, "range": R},
 //                          "outputs": [{"name": "sh9", "coefficients": K, "format": "RGB16F",
-//                                       "bufferView": V}, ...],
+//                                       "scale": S, "bufferView": V}, ...],
 //                          "probes": {"count": [NX, NY, NZ], "min": [x, y, z], "max": [x, y, z],
 //                                     "irradiance": V1, "valid": V2}}
 //   ("outputs" is absent when none is stored.) Buffer view V holds K maps one after the other, each H rows
-//   from the top (v = 0) of W texels of three IEEE binary16 values (R, G, B), little-endian: the bytes of the
-//   .hemi asset's half floats, dense over the atlas (texels the scene does not cover are 0). The coefficients
+//   from the top (v = 0) of W texels of three IEEE binary16 values (R, G, B), little-endian: the .hemi
+//   asset's half floats, dense over the atlas (texels the scene does not cover are 0); a value is its half
+//   times S, a power of two (io/half_scale.h: 1 unless the light's magnitude needs another). The coefficients
 //   are the asset's (io/lightmap_asset.h): irradiance in each texel's TEXCOORD_0 tangent frame (the glTF's
 //   TANGENT attribute), so that sum_k c_k b_k(n) at the normal-map normal n is E(n). Probes (when the asset
 //   has them) as io::LightProbes: V1 holds NX * NY * NZ probes of 9 x 3 float32 (coefficient j, channel c at

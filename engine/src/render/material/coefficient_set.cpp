@@ -1,3 +1,4 @@
+#include <hemi/io/half_scale.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/shared/bases.h>
@@ -35,13 +36,12 @@ void check_k(uint32_t k)
                                     std::to_string(k));
 }
 
-void check_values(std::span<const float> values, bool full_precision)
+void check_values(std::span<const float> values)
 {
     for (size_t i = 0; i < values.size(); ++i)
-        if (!std::isfinite(values[i]) || (!full_precision && std::abs(values[i]) > 65504.0f))
-            throw std::invalid_argument(
-                "hemi: coefficient map value " + std::to_string(i) +
-                (std::isfinite(values[i]) ? " exceeds the half-float range" : " is not finite"));
+        if (!std::isfinite(values[i]))
+            throw std::invalid_argument("hemi: coefficient map value " + std::to_string(i) +
+                                        " is not finite");
 }
 } // namespace
 
@@ -144,7 +144,7 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
                                               std::to_string(height) + "x" + std::to_string(k) + " need " +
                                               std::to_string(texels * 3) + " floats, got " +
                                               std::to_string(rgb.size()));
-              check_values(rgb, full_precision);
+              check_values(rgb);
               return io::BlockMaps::from_dense(width, height, k, rgb);
           }(),
           upload, full_precision)
@@ -164,14 +164,14 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
                                     std::to_string(height) + " hold " + std::to_string(maps.values.size()) +
                                     " values for " + std::to_string(grid.slots()) + " texels of " +
                                     std::to_string(k) + " coefficients");
-    check_values(maps.values, full_precision);
+    check_values(maps.values);
 
     // The pages whose slot (the page and its border) holds a texel of a kept block, numbered row after row:
     // the page table's entries (slot + 1). A page without a kept block of its own but beside one is stored
     // too: a lookup within half a texel of its edge reads the neighbour's texels.
     constexpr uint32_t P = HEMI_LIGHTMAP_PAGE, S = HEMI_LIGHTMAP_SLOT, E = io::BlockGrid::kSize;
     const uint32_t pages_x = (width + P - 1) / P, pages_y = (height + P - 1) / P;
-    const uint32_t table_width = std::max(2u, pages_x);
+    const uint32_t table_width = std::max(3u, pages_x);
     std::vector<uint32_t> table(size_t(table_width) * (pages_y + 1), 0);
     // Pages whose range widened by a texel on each side meets texels [t0, t0 + E).
     auto pages_meeting = [&](uint32_t t0, uint32_t count)
@@ -193,6 +193,11 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
         }
     table[size_t(pages_y) * table_width] = width;
     table[size_t(pages_y) * table_width + 1] = height;
+    // Half floats hold light of any magnitude with a power-of-two scale (io/half_scale.h), which the lookup
+    // multiplies back: its float's bits in texel 2 of the last row.
+    const int exponent = full_precision ? 0 : io::half_scale_exponent(io::largest_magnitude(maps.values));
+    scale_ = std::ldexp(1.0f, exponent);
+    std::memcpy(&table[size_t(pages_y) * table_width + 2], &scale_, 4);
     stored_pages_ = uint32_t(stored.size());
 
     // Slots row after row in one image no larger than the device's largest.
@@ -255,7 +260,7 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
     else
     {
         std::vector<uint16_t> rgba;
-        fill([](float v) { return uint16_t(glm::packHalf1x16(v)); }, rgba);
+        fill([&](float v) { return uint16_t(glm::packHalf1x16(std::ldexp(v, -exponent))); }, rgba);
         upload.image(pages_, rgba.data(), rgba.size() * sizeof(rgba[0]));
     }
     page_table_ = gpu::create_image(device, {table_width, pages_y + 1, VK_FORMAT_R32_UINT});

@@ -80,8 +80,10 @@ void hemi_lightmap_coefficients(sampler2DArray maps, vec2 uv, int k, out vec3 c[
 // texels and only the pages that hold texels are stored, each in a slot of HEMI_LIGHTMAP_SLOT^2 texels of the
 // packed maps (`pages`, slots row after row) with a border of one texel copied from the neighbouring pages
 // (the atlas's edge texels at its edge), so a bilinear lookup anywhere in a page stays in its slot. The page
-// table (R32_UINT, max(2, ceil(W / PAGE)) x (ceil(H / PAGE) + 1)) holds each page's slot + 1, 0 for a page
-// that is not stored (it reads as 0), and in its last row the atlas's W and H (texels 0 and 1). The lookup is
+// table (R32_UINT, max(3, ceil(W / PAGE)) x (ceil(H / PAGE) + 1)) holds each page's slot + 1, 0 for a page
+// that is not stored (it reads as 0), and in its last row the atlas's W and H (texels 0 and 1) and the bits
+// of the float scale the stored values are multiplied by (texel 2: a power of two, 1 unless the light's
+// magnitude needed another to fit half floats, io/half_scale.h). The lookup is
 // the packed maps' bilinear lookup of the whole atlas with the edge clamped, from memory that follows the
 // covered texels, for atlases past the device's largest image.
 void hemi_lightmap_coefficients(sampler2DArray pages, usampler2D page_table, vec2 uv, int k,
@@ -94,6 +96,7 @@ void hemi_lightmap_coefficients(sampler2DArray pages, usampler2D page_table, vec
     const ivec2 page_count = (ivec2(atlas) + HEMI_LIGHTMAP_PAGE - 1) / HEMI_LIGHTMAP_PAGE;
     const ivec2 page = clamp(ivec2(floor(t / float(HEMI_LIGHTMAP_PAGE))), ivec2(0), page_count - 1);
     const int slot = int(texelFetch(page_table, page, 0).r) - 1;
+    const float scale = uintBitsToFloat(texelFetch(page_table, ivec2(2, table.y - 1), 0).r);
     const ivec3 size = textureSize(pages, 0);
     const int per_row = max(1, size.x / HEMI_LIGHTMAP_SLOT);
     const vec2 origin = vec2(ivec2(max(slot, 0) % per_row, max(slot, 0) / per_row) * HEMI_LIGHTMAP_SLOT + 1);
@@ -103,7 +106,7 @@ void hemi_lightmap_coefficients(sampler2DArray pages, usampler2D page_table, vec
     {
         packed[i] = vec4(0.0);
         if (i < hemi_lightmap_layers(k))
-            packed[i] = slot < 0 ? vec4(0.0) : textureLod(pages, vec3(at, float(i)), 0.0);
+            packed[i] = slot < 0 ? vec4(0.0) : textureLod(pages, vec3(at, float(i)), 0.0) * scale;
     }
     hemi_unpack_coefficients(packed, k, c);
 }

@@ -87,10 +87,11 @@ class TexelCoefficients
     // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored packed, as
     // hemi_lightmap_coefficients reads them: the texel's 3K floats fill the RGBA channels of
     // packed_layers(K) = ceil(3K / 4) layers in order (float f = 3 k + c is channel f % 4 of layer f / 4),
-    // as RGBA16F (half floats, as lightmaps usually are; `full_precision` stores RGBA32F), uploaded through
+    // as RGBA16F (half floats, as lightmaps usually are, divided by the power-of-two scale() that the lookup
+    // multiplies back, so light of any magnitude fits; `full_precision` stores RGBA32F), uploaded through
     // `upload`. Bilinear filtering is linear per channel, so packing changes no value.
     // Throws std::invalid_argument for K outside [1, HEMI_BASIS_MAX_SIZE], a size mismatch or a value that
-    // is not finite or does not fit a half float.
+    // is not finite.
     TexelCoefficients(const MaterialSystem& system, uint32_t width, uint32_t height, uint32_t k,
                       std::span<const float> rgb, gpu::UploadBatch& upload, bool full_precision = false);
     VkDescriptorSet set() const { return set_.get(); }
@@ -105,11 +106,16 @@ class TexelCoefficients
     const gpu::Image& page_table() const { return page_table_; }
     VkSampler table_sampler() const { return table_sampler_; }
     uint32_t stored_pages() const { return stored_pages_; }
+    // The power of two the stored halves are times (io/half_scale.h; 1 unless the values leave [2^-6, 2^15],
+    // always 1 at full precision). The page table holds it (texel 2 of its last row), so the paged lookup
+    // applies it; an engine that reads pages() with its own lookup multiplies by it.
+    float scale() const { return scale_; }
 
   private:
     gpu::Image pages_, page_table_;
     gpu::Sampler sampler_, table_sampler_;
     uint32_t stored_pages_ = 0;
+    float scale_ = 1.0f;
     gpu::DescriptorSet set_;
     uint32_t k_ = 0;
 };
