@@ -1140,7 +1140,7 @@ int main(int argc, char** argv)
         ->add_option("--stitch-closeness", lm.options.stitch_closeness,
                      "stitching's weight on keeping the baked texels against one texel of seam agreeing "
                      "(smaller stitches tighter)")
-        ->check(CLI::PositiveNumber)
+        ->check(hemi::tool::finite(1e-6, 1e6))
         ->capture_default_str();
     lightmap->add_flag("--denoise", lm.options.denoise,
                        "filter the baked texels' noise (an edge-avoiding a-trous filter inside each chart, "

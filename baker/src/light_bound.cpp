@@ -98,7 +98,8 @@ double environment_bound(const LightmapLights& l)
         {
             const double x = glm::dot(n, c.centre);
             const double f =
-                x >= c.cos_b ? 1.0 : std::max(0.0, x * c.cos_b + std::sqrt(std::max(0.0, 1.0 - x * x)) * c.sin_b);
+                x >= c.cos_b ? 1.0
+                             : std::max(0.0, x * c.cos_b + std::sqrt(std::max(0.0, 1.0 - x * x)) * c.sin_b);
             e += c.power * f;
         }
         most = std::max(most, max3(e));
@@ -181,11 +182,10 @@ LightBound lightmap_light_bound(const LightmapLights& l, const std::vector<io::M
                                      " light '" + p.name + "'" + at_distance,
                                  e});
     }
-    bound.sources.push_back(
-        {l.environment.pixels.empty()
-             ? std::string("the environment (--env uniform, --env-scale)")
-             : "the environment image " + l.environment_name + " (--env, --env-scale)",
-         environment_bound(l)});
+    bound.sources.push_back({l.environment.pixels.empty()
+                                 ? std::string("the environment (--env uniform, --env-scale)")
+                                 : "the environment image " + l.environment_name + " (--env, --env-scale)",
+                             environment_bound(l)});
     for (const io::Material& m : materials)
         if (max3(glm::dvec3(m.emissive_factor)) > 0.0)
             bound.sources.push_back(

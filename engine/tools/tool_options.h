@@ -16,6 +16,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -313,6 +314,9 @@ template <class F> auto naming_input(const std::filesystem::path& input, const F
 inline int run(CLI::App& app, int argc, char** argv, const std::string& tool,
                const std::function<int()>& body)
 {
+    // A write past the file-size limit (ulimit -f) fails with EFBIG and is reported as a full disk is,
+    // naming the file, instead of the process being killed by SIGXFSZ with its temporaries left behind.
+    std::signal(SIGXFSZ, SIG_IGN);
     try
     {
         app.parse(argc, argv);

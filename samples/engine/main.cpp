@@ -19,7 +19,9 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <optional>
 #include <string>
@@ -81,6 +83,22 @@ void on_resize(GLFWwindow* window, int, int)
     static_cast<Input*>(glfwGetWindowUserPointer(window))->resized = true;
 }
 
+// A number option's check: a finite value in [lo, hi] (CLI::Range lets NaN through).
+CLI::Validator finite_in(double lo, double hi)
+{
+    return CLI::Validator(
+        [lo, hi](std::string& value) -> std::string
+        {
+            char* end = nullptr;
+            const double v = std::strtod(value.c_str(), &end);
+            if (value.empty() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
+                return "'" + value + "' is not a finite number in [" + std::to_string(lo) + ", " +
+                       std::to_string(hi) + "]";
+            return {};
+        },
+        "finite number", "finite");
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -108,18 +126,25 @@ int main(int argc, char** argv)
         ->check(CLI::IsMember({"auto", "h6", "h4"}))
         ->capture_default_str();
     app.add_option("--exposure", settings.exposure, "exposure before the tonemap (--baked-only: 1)")
-        ->check(CLI::Range(1e-6f, 1e6f))
+        ->check(finite_in(1e-6, 1e6))
         ->capture_default_str();
     app.add_flag("--no-tonemap", no_tonemap, "clamp instead of the filmic tonemap");
     app.add_option("--fog", settings.fog, "fog density per unit of distance (0: none)")
-        ->check(CLI::Range(0.0f, 10.0f))
+        ->check(finite_in(0.0, 10.0))
         ->capture_default_str();
     app.add_option("--camera", camera,
                    "EYE,TARGET as x,y,z,x,y,z in world space (z up), as hemi-render's --camera takes it "
                    "(default -3.5,0.8,1.6,3,-0.6,0.9)");
     app.add_option("--resize-at", resize_at,
                    "resize the window to 3/4 of --size at this frame (tests resizing)");
-    CLI11_PARSE(app, argc, argv);
+    try
+    {
+        app.parse(argc, argv);
+    }
+    catch (const CLI::ParseError& e)
+    {
+        return app.exit(e) == 0 ? 0 : 1; // a usage error exits 1 (--help 0), as hemi's tools do
+    }
     settings.tonemap = !no_tonemap;
     settings.basis = basis == "auto" ? 0 : basis == "h6" ? 1 : 2;
 

@@ -20,8 +20,8 @@ namespace
 {
 
 using hemi::bake::LightBound;
-using hemi::bake::LightmapLights;
 using hemi::bake::lightmap_light_bound;
+using hemi::bake::LightmapLights;
 
 // A 2 x 2 floor at z = 0.
 hemi::io::Mesh floor_mesh()
@@ -77,8 +77,8 @@ double brute_force_largest_irradiance(const hemi::io::ImageRgba& env)
         if (const double e = irradiance(n); e > best)
             best = e, best_n = n;
     }
-    const glm::dvec3 t = glm::normalize(glm::cross(best_n, std::abs(best_n.z) < 0.9 ? glm::dvec3(0, 0, 1)
-                                                                                    : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 t = glm::normalize(
+        glm::cross(best_n, std::abs(best_n.z) < 0.9 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
     const glm::dvec3 b = glm::cross(best_n, t), centre = best_n;
     for (int i = 0; i < 20; ++i)
         for (int j = 0; j < 20; ++j)
@@ -162,7 +162,8 @@ TEST(LightBound, PunctualLightsAtTheirNearestReceiver)
                 1e-6);
     bulb.type = hemi::io::PunctualLight::Type::Spot;
     l.punctual = {bulb};
-    EXPECT_NE(lightmap_light_bound(l, {}, floor).largest()->name.find("spot light 'bulb'"), std::string::npos);
+    EXPECT_NE(lightmap_light_bound(l, {}, floor).largest()->name.find("spot light 'bulb'"),
+              std::string::npos);
 }
 
 // Blender's sunset.exr (a sun pixel of 6,520 in a 1024 x 512 world): pi times its brightest pixel is

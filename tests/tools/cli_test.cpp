@@ -1195,9 +1195,18 @@ TEST(BakeCli, MemoryBudgetBakesInTilesUnderItWithTheSameBytes)
     EXPECT_NE(r.err.find("in tiles of 4096 texels"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("--memory-budget is 1.0 MiB"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(refused));
-    r = lightmap(args + " --memory-budget lots -o " + q(refused));
+    for (const std::string bad : {"lots", "8GBB", "0x100000", "4Gb", "1e9"})
+    {
+        r = lightmap(args + " --memory-budget " + bad + " -o " + q(refused));
+        EXPECT_EQ(r.status, 1) << bad;
+        EXPECT_NE(r.err.find("--memory-budget " + bad + ": not a size"), std::string::npos) << r.err;
+    }
+    // The same sizes in the environment are refused, not ignored (the budget would be all there is).
+    r = run(HEMI_BAKE_EXE, "lightmap " + args + " -o " + q(refused), "HEMI_MEMORY_BUDGET=4Gb");
     EXPECT_EQ(r.status, 1);
-    EXPECT_NE(r.err.find("--memory-budget lots: not a size"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("HEMI_MEMORY_BUDGET=4Gb: not a size"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(refused));
 }
 
 TEST(BakeCli, DenoiseFiltersTheBakedTexels)
@@ -1832,6 +1841,9 @@ TEST(HostileCli, NumbersAreWholeFiniteAndInRangeInEveryOption)
         {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --sun 0,0,1,1,1,1,95", "--sun"},
         {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --env-scale -1", "--env-scale"},
         {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --env-scale nan", "--env-scale"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --stitch-closeness nan", "--stitch-closeness"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --stitch-closeness 1e-45", "--stitch-closeness"},
+        {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --stitch-closeness inf", "--stitch-closeness"},
         {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --probes 1,1,1x", "--probes"},
         {HEMI_BAKE_EXE, "lightmap " + floor + hemi_out + " --probes 1,-1,1", "--probes"},
         // Each count within 2^24, their product 1 modulo 2^64: a wrapping product baked one probe for a
@@ -2145,6 +2157,21 @@ TEST(HostileCli, ErrorsNameTheFileAndComeBeforeTheWork)
 
 // A lightmap that would be empty, and light the lightmap cannot store, are refused before the bake, naming
 // the scene and the light; so is light too strong to sum in floats, for the reference too.
+// Under a file-size limit (ulimit -f, 512 KB here), a bake whose asset passes it fails with exit 1 and a
+// message naming the file, as on a full disk, and leaves no temporary behind: SIGXFSZ is ignored, so the
+// write's EFBIG is an error the tool reports, not a signal that kills it mid-write.
+TEST(HostileCli, AFileSizeLimitIsAWriteErrorNotASignal)
+{
+    const fs::path out = dir() / "fsize.hemi";
+    const Result r =
+        run(HEMI_BAKE_EXE, "lightmap " + q(floor_scene()) + " --size 512 --rays 1 --bases sh9 -o " + q(out),
+            "ulimit -f 1000;");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("fsize.hemi"), std::string::npos) << r.err;
+    for (const char* temporary : {"", ".spool", ".tiles", ".partial"})
+        EXPECT_FALSE(fs::exists(out.string() + temporary)) << temporary;
+}
+
 TEST(HostileCli, LightmapsRefuseEmptyAtlasesAndLightTheyCannotHold)
 {
     const fs::path out = dir() / "refused.hemi";

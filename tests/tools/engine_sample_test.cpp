@@ -84,3 +84,19 @@ TEST(EngineSample, BakedLevelEqualsHemiRenderAtTheSameCamera)
 }
 
 } // namespace
+
+// Numbers on its command line are finite and in range, and a usage error exits 1 (CLI11's own codes were
+// 105 and 109), before any window or device is made.
+TEST(EngineSample, UsageErrorsExitOneBeforeAnyFrame)
+{
+    const fs::path dir = hemi::test::temp_dir("engine_sample_usage");
+    for (const std::string bad :
+         {"--exposure nan", "--exposure inf", "--fog nan", "--fog -1", "--frames x", "--no-such-option"})
+    {
+        const hemi::test::Result r =
+            hemi::test::run(dir, HEMI_ENGINE_SAMPLE_EXE, "--assets " + q(dir / "assets") + " " + bad);
+        EXPECT_EQ(r.status, 1) << bad << ": " << r.out << r.err;
+        EXPECT_EQ(r.out.find("frames at"), std::string::npos) << bad;
+    }
+    fs::remove_all(dir);
+}

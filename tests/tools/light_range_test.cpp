@@ -113,11 +113,11 @@ struct Worst
 {
     double relative = 0.0;
     std::string where;
-    size_t values = 0, over = 0; // compared, and beyond kTolerance
+    size_t compared = 0, over = 0; // values compared, and beyond kTolerance
     void add(double a, double b, double magnitude, const std::function<std::string()>& at)
     {
         const double d = std::abs(a - kFactor * b) / std::max(magnitude, 1e-30);
-        ++values;
+        ++compared;
         over += d > kTolerance;
         if (d > relative)
         {
@@ -135,7 +135,7 @@ struct Worst
 // one in a thousand, and those within 10%, far inside the noise of 16 rays.
 void expect_within(const Worst& worst, const std::string& what)
 {
-    EXPECT_LE(worst.over, worst.values / 1000) << what << ": values beyond " << kTolerance;
+    EXPECT_LE(worst.over, worst.compared / 1000) << what << ": values beyond " << kTolerance;
     EXPECT_LE(worst.relative, 0.1) << what << " at " << worst.where;
 }
 
@@ -169,12 +169,13 @@ void expect_scaled(const Bake& bright, const Bake& dim, const std::string& what)
             for (uint32_t k = 0; k < ma.k; ++k)
                 for (int c = 0; c < 3; ++c)
                     worst.add(ma.values[ma.index(k, s) + c], mb.values[mb.index(k, s) + c], magnitude,
-                              [&] { return "slot " + std::to_string(s) + " coefficient " + std::to_string(k); });
+                              [&]
+                              { return "slot " + std::to_string(s) + " coefficient " + std::to_string(k); });
         }
         std::printf("%s, %s: largest value %.4g, worst difference %.2e of the texel (%s), %zu of %zu values "
                     "beyond %.0e\n",
                     what.c_str(), a.outputs[i].name.c_str(), largest, worst.relative, worst.where.c_str(),
-                    worst.over, worst.values, kTolerance);
+                    worst.over, worst.compared, kTolerance);
         EXPECT_GT(largest, 0.0) << what;
         expect_within(worst, what + " " + a.outputs[i].name);
     }
@@ -186,13 +187,15 @@ void expect_scaled(const Bake& bright, const Bake& dim, const std::string& what)
     {
         double magnitude = 0.0;
         for (const glm::vec3& c : a.probes.irradiance[p])
-            magnitude = std::max({magnitude, double(std::abs(c.x)), double(std::abs(c.y)), double(std::abs(c.z))});
+            magnitude =
+                std::max({magnitude, double(std::abs(c.x)), double(std::abs(c.y)), double(std::abs(c.z))});
         for (int j = 0; j < 9; ++j)
             for (int c = 0; c < 3; ++c)
                 worst.add(a.probes.irradiance[p][j][c], b.probes.irradiance[p][j][c], magnitude,
                           [&] { return "probe " + std::to_string(p); });
     }
-    std::printf("%s, probes: worst difference %.2e (%s)\n", what.c_str(), worst.relative, worst.where.c_str());
+    std::printf("%s, probes: worst difference %.2e (%s)\n", what.c_str(), worst.relative,
+                worst.where.c_str());
     EXPECT_LE(worst.relative, 1e-4) << what << " probes at " << worst.where;
 }
 
@@ -288,7 +291,8 @@ void expect_renders_scaled(const Bake& bright, const Bake& dim, const std::strin
         }
         std::printf("%s, hemi-render %s: brightest %.4g, worst difference %.2e (%s)\n", what.c_str(),
                     technique.c_str(), largest, worst.relative, worst.where.c_str());
-        EXPECT_GT(lit, a.pixels.size() / 4 / 10) << what << " " << technique << ": the level is in view and lit";
+        EXPECT_GT(lit, a.pixels.size() / 4 / 10)
+            << what << " " << technique << ": the level is in view and lit";
         EXPECT_LE(worst.relative, 5e-3) << what << " " << technique << " at " << worst.where;
     }
 }
@@ -331,6 +335,7 @@ TEST(LightRange, AnEnvironmentWithA1e5PixelBakes)
 {
     const fs::path scene = post_scene("", 0.0);
     const Bake bright = bake("sun_pixel", scene, "--env " + q(sun_pixel_exr("sun_pixel.exr", 0.3f, 1e5f)));
-    const Bake dim = bake("sun_pixel_dim", scene, "--env " + q(sun_pixel_exr("sun_pixel_dim.exr", 0.3e-4f, 10.0f)));
+    const Bake dim =
+        bake("sun_pixel_dim", scene, "--env " + q(sun_pixel_exr("sun_pixel_dim.exr", 0.3e-4f, 10.0f)));
     expect_equal_to_scaled_down(bright, dim, "a 1e5 sun pixel", false);
 }

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <sys/resource.h>
 
 namespace hemi::io
@@ -29,44 +31,52 @@ uint64_t proc_field(const char* file, const std::string& key)
 
 } // namespace
 
-uint64_t parse_bytes(std::string_view view)
+uint64_t parse_bytes(std::string_view text)
 {
-    const std::string text(view);
-    if (text.empty())
-        return 0;
-    char* end = nullptr;
-    const double v = std::strtod(text.c_str(), &end);
-    double scale = 1.0;
-    switch (*end)
+    // Digits, an optional fraction, an optional unit K, M, G or T, then nothing, "B" or (after a unit) "iB":
+    // nothing else (no sign, space, exponent, hexadecimal, "inf" or "nan" that strtod would take).
+    size_t at = 0;
+    auto digits = [&]
     {
-    case 'K':
-    case 'k':
-        scale = 1024.0;
-        ++end;
-        break;
-    case 'M':
-    case 'm':
-        scale = 1024.0 * 1024.0;
-        ++end;
-        break;
-    case 'G':
-    case 'g':
-        scale = 1024.0 * 1024.0 * 1024.0;
-        ++end;
-        break;
-    case 'T':
-    case 't':
-        scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
-        ++end;
-        break;
-    default:
-        break;
-    }
-    if (*end == 'i' || *end == 'B')
-        ++end;
-    if (*end == 'B')
-        ++end;
-    if (*end != '\0' || !(v > 0.0) || !(v * scale < 1.8e19) || v * scale < 1.0)
+        const size_t from = at;
+        while (at < text.size() && text[at] >= '0' && text[at] <= '9')
+            ++at;
+        return at > from;
+    };
+    if (!digits())
+        return 0;
+    if (at < text.size() && text[at] == '.' && (++at, !digits()))
+        return 0;
+    const double v = std::strtod(std::string(text.substr(0, at)).c_str(), nullptr);
+    double scale = 1.0;
+    if (at < text.size())
+        switch (text[at])
+        {
+        case 'K':
+        case 'k':
+            scale = 1024.0;
+            break;
+        case 'M':
+        case 'm':
+            scale = 1024.0 * 1024.0;
+            break;
+        case 'G':
+        case 'g':
+            scale = 1024.0 * 1024.0 * 1024.0;
+            break;
+        case 'T':
+        case 't':
+            scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+            break;
+        default:
+            break;
+        }
+    if (scale > 1.0)
+        ++at;
+    const std::string_view rest = text.substr(at);
+    if (!(rest.empty() || rest == "B" || (scale > 1.0 && rest == "iB")))
+        return 0;
+    if (!(v > 0.0) || !(v * scale < 1.8e19) || v * scale < 1.0)
         return 0;
     return uint64_t(v * scale);
 }
@@ -74,9 +84,14 @@ uint64_t parse_bytes(std::string_view view)
 uint64_t available_memory()
 {
     uint64_t available = proc_field("/proc/meminfo", "MemAvailable");
-    const char* environment = std::getenv("HEMI_MEMORY_BUDGET");
-    if (const uint64_t budget = environment ? parse_bytes(environment) : 0)
+    if (const char* environment = std::getenv("HEMI_MEMORY_BUDGET"))
+    {
+        const uint64_t budget = parse_bytes(environment);
+        if (!budget) // a budget that is not one is not ignored: the job would take all the machine has
+            throw std::invalid_argument("HEMI_MEMORY_BUDGET=" + std::string(environment) +
+                                        ": not a size (bytes, or a number with K, M, G or T: 8G, 1.5GiB)");
         available = available ? std::min(available, budget) : budget;
+    }
     auto lower = [&](int resource, const char* used_key)
     {
         rlimit limit{};

@@ -13,14 +13,16 @@ namespace hemi::io
 // Bytes this process can still allocate: the kernel's MemAvailable (/proc/meminfo), lowered by the room
 // left under RLIMIT_AS or RLIMIT_DATA when one is set, and by the environment variable HEMI_MEMORY_BUDGET
 // when it is set (bytes, or a number with K, M, G or T: "8G"; a share of a machine that runs other jobs).
-// 0 when none of them can be read.
+// 0 when none of them can be read. Throws std::invalid_argument when HEMI_MEMORY_BUDGET is set to what
+// parse_bytes does not read as a size.
 uint64_t available_memory();
 
 // The most resident memory this process has held so far (getrusage's ru_maxrss), in bytes; 0 when unknown.
 uint64_t peak_memory();
 
-// A size in bytes as a person writes it: a number of bytes, or one with K, M, G or T (binary units,
-// optionally followed by "iB" or "B": "8G", "1.5GiB", "512M"); 0 when `text` is not one, or not positive.
+// A size in bytes as a person writes it: a number of bytes (digits, an optional fraction), or one with K, M,
+// G or T (binary units, optionally followed by "iB" or "B": "8G", "1.5GiB", "512M", "4096B"); 0 when `text`
+// is not one (a sign, a space, an exponent, hexadecimal, "8GBB", "4Gb"), or not at least one byte.
 uint64_t parse_bytes(std::string_view text);
 
 // "1.50 GiB", "12.0 MiB", "512 B".
