@@ -44,7 +44,8 @@ void run_gnuplot(const std::filesystem::path& png_path,
         throw std::runtime_error(png_path.string() +
                                  ": gnuplot failed (is gnuplot installed? cmake/install_deps.sh): " + msg);
     }
-    io::write_atomically(png_path, [&](const fs::path& tmp) { fs::copy_file(output, tmp); });
+    io::write_atomically(png_path, [&](const fs::path& tmp)
+                         { fs::copy_file(output, tmp, fs::copy_options::overwrite_existing); });
 }
 
 } // namespace hemi::bake

@@ -182,8 +182,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         io::check_writable(asset_path);
         io::check_writable(o.bake.checkpoint);
-        io::check_writable(lightmap_tile_path(asset_path)); // a bake in tiles
-        io::check_writable(asset_path.string() + ".spool"); // the asset's outputs as they are made
+        io::check_temporary(lightmap_tile_path(asset_path)); // a bake in tiles
+        io::check_temporary(asset_path.string() + ".spool"); // the asset's outputs as they are made
         if (!o.uv_report.empty())
             io::check_writable(o.uv_report);
         if (!o.exr_dir.empty())

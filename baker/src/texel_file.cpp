@@ -1,4 +1,5 @@
 #include <hemi/bake/texel_file.h>
+#include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h> // io::FormatError
 
 #include <fcntl.h>
@@ -53,13 +54,22 @@ TexelFile::TexelFile(std::filesystem::path path, uint64_t key, uint32_t items,
     errno = 0;
     if (resume)
     {
-        fd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC);
+        std::string open_error;
+        try
+        {
+            fd_ = io::open_existing_file(path_); // no link at its name followed
+        }
+        catch (const io::FormatError& e)
+        {
+            fd_ = -1;
+            open_error = e.what();
+        }
         Header found{};
         if (fd_ < 0 || ::pread(fd_, &found, sizeof found, 0) != ssize_t(sizeof found) ||
             std::memcmp(&found, &header, sizeof header) != 0 || bytes() > uint64_t(lseek(fd_, 0, SEEK_END)))
         {
-            const std::string why =
-                fd_ < 0 ? "missing (" + errno_text() + ")" : "from another bake or cut short";
+            const std::string why = fd_ < 0 ? "missing or not a regular file (" + open_error + ")"
+                                            : "from another bake or cut short";
             if (fd_ >= 0)
                 ::close(fd_);
             fd_ = -1;
@@ -69,11 +79,14 @@ TexelFile::TexelFile(std::filesystem::path path, uint64_t key, uint32_t items,
         }
         return;
     }
-    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd_ < 0)
+    try
+    {
+        fd_ = io::create_new_file(path_); // new and exclusive: no link planted at its name is followed
+    }
+    catch (const io::FormatError& e)
     {
         keep_ = true; // nothing of ours to remove
-        throw io::FormatError(path_.string() + ": cannot create the bake's tile file: " + errno_text());
+        throw io::FormatError(std::string(e.what()) + " (the bake's tile file)");
     }
     int allocated = 0;
     if (::pwrite(fd_, &header, sizeof header, 0) != ssize_t(sizeof header) ||

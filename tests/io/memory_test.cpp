@@ -20,8 +20,9 @@ TEST(Memory, SizesAreReadWholeOrNotAtAll)
     EXPECT_EQ(hemi::io::parse_bytes("512M"), uint64_t(512) << 20);
     EXPECT_EQ(hemi::io::parse_bytes("2T"), uint64_t(2) << 40);
     EXPECT_EQ(hemi::io::parse_bytes("64K"), uint64_t(64) << 10);
-    for (const char* bad : {"", "lots", "8GBB", "64MBB", "0x100000", " 8G", "8G ", "8 G", "-1", "+8G", "0",
-                            "0.5", "8e9", "inf", "nan", "4Gb", "8iB", "1.", ".5G", "8GiBB", "8X", "1e30"})
+    for (const char* bad :
+         {"",    "lots", "8GBB", "64MBB", "0x100000", " 8G", "8G ", "8 G", "-1",    "+8G", "0",
+          "0.5", "8e9",  "inf",  "nan",   "4Gb",      "8iB", "1.",  ".5G", "8GiBB", "8X",  "1e30"})
         EXPECT_EQ(hemi::io::parse_bytes(bad), 0u) << "'" << bad << "'";
 }
 

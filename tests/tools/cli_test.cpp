@@ -2172,6 +2172,38 @@ TEST(HostileCli, AFileSizeLimitIsAWriteErrorNotASignal)
         EXPECT_FALSE(fs::exists(out.string() + temporary)) << temporary;
 }
 
+// A symbolic link planted at a bake's temporaries (ASSET.tiles, ASSET.spool) is never followed: the bake
+// refuses it by name before any work, and the file it points to keeps its bytes. (The temporaries are
+// created new and exclusive, O_CREAT | O_EXCL | O_NOFOLLOW, io::create_new_file.) A stale regular file
+// there (a killed bake's) is replaced.
+TEST(HostileCli, TemporariesFollowNoLinkPlantedAtTheirName)
+{
+    const fs::path out = dir() / "linked.hemi", victim = dir() / "victim.txt";
+    const std::string args =
+        "lightmap " + q(floor_scene()) + " --size 128 --rays 1 --bases plain --memory-budget 5M -o " + q(out);
+    for (const char* temporary : {".tiles", ".spool"})
+    {
+        std::ofstream(victim) << "precious";
+        const fs::path link = out.string() + temporary;
+        fs::remove(link);
+        fs::create_symlink(victim, link);
+        const Result r = run(HEMI_BAKE_EXE, args);
+        EXPECT_EQ(r.status, 1) << temporary << ": " << r.err;
+        EXPECT_NE(r.err.find(link.string() + ": cannot write: it is a symbolic link"), std::string::npos)
+            << r.err;
+        EXPECT_EQ(r.err.find("pass 1"), std::string::npos) << r.err;
+        EXPECT_EQ(slurp(victim), "precious") << temporary;
+        EXPECT_FALSE(fs::exists(out));
+        fs::remove(link);
+        // A killed bake's regular file at the name is no obstacle.
+        std::ofstream(link) << "stale";
+        const Result again = run(HEMI_BAKE_EXE, args);
+        EXPECT_EQ(again.status, 0) << temporary << ": " << again.err;
+        EXPECT_FALSE(fs::exists(link)) << temporary;
+        fs::remove(out);
+    }
+}
+
 TEST(HostileCli, LightmapsRefuseEmptyAtlasesAndLightTheyCannotHold)
 {
     const fs::path out = dir() / "refused.hemi";

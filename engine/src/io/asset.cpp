@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
+#include <unistd.h>
 #include <vector>
 
 namespace hemi::io
@@ -42,8 +43,32 @@ struct AssetWriter::Section
 struct AssetWriter::Spool
 {
     std::filesystem::path path;
-    std::fstream file;
+    int fd = -1; // io::create_new_file's: made new, no link followed
     uint64_t size = 0;
+
+    // The whole of `bytes` at `offset`, or fail(what).
+    void write_at(uint64_t offset, std::span<const std::byte> bytes, const std::string& what) const
+    {
+        for (size_t done = 0; done < bytes.size();)
+        {
+            errno = 0;
+            const ssize_t n = ::pwrite(fd, bytes.data() + done, bytes.size() - done, off_t(offset + done));
+            if (n <= 0 && errno != EINTR)
+                fail(what);
+            done += n > 0 ? size_t(n) : 0;
+        }
+    }
+    void read_at(uint64_t offset, std::span<std::byte> bytes, const std::string& what) const
+    {
+        for (size_t done = 0; done < bytes.size();)
+        {
+            errno = 0;
+            const ssize_t n = ::pread(fd, bytes.data() + done, bytes.size() - done, off_t(offset + done));
+            if (n <= 0 && errno != EINTR)
+                fail(what);
+            done += n > 0 ? size_t(n) : 0;
+        }
+    }
 
     [[noreturn]] void fail(const std::string& what) const
     {
@@ -57,17 +82,14 @@ AssetWriter::AssetWriter() = default;
 AssetWriter::AssetWriter(const std::filesystem::path& spool) : spool_(std::make_unique<Spool>())
 {
     spool_->path = spool;
-    errno = 0;
-    spool_->file.open(spool, std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
-    if (!spool_->file)
-        spool_->fail("cannot create it");
+    spool_->fd = create_new_file(spool);
 }
 
 AssetWriter::~AssetWriter()
 {
     if (spool_)
     {
-        spool_->file.close();
+        ::close(spool_->fd);
         std::error_code ignored;
         std::filesystem::remove(spool_->path, ignored);
     }
@@ -111,15 +133,11 @@ void AssetWriter::add_generated(const std::string& name, uint64_t size,
     s.spool_offset = spool_->size;
     constexpr uint64_t kPiece = uint64_t(1) << 20;
     std::vector<std::byte> piece(size_t(std::min(size, kPiece)));
-    spool_->file.seekp(std::streamoff(spool_->size));
     for (uint64_t at = 0; at < size; at += kPiece)
     {
         const std::span<std::byte> out(piece.data(), size_t(std::min(kPiece, size - at)));
         fill(at, out);
-        errno = 0;
-        spool_->file.write(reinterpret_cast<const char*>(out.data()), std::streamsize(out.size()));
-        if (!spool_->file)
-            spool_->fail("writing section " + name + " failed");
+        spool_->write_at(spool_->size + at, out, "writing section " + name + " failed");
     }
     spool_->size += size;
     sections_.push_back(std::move(s));
@@ -137,77 +155,69 @@ void AssetWriter::add_view(const std::string& name, std::span<const std::byte> b
 
 void AssetWriter::write(const std::filesystem::path& path) const
 {
-    if (spool_)
-    {
-        spool_->file.flush();
-        if (!spool_->file)
-            spool_->fail("flushing it failed");
-    }
-    write_atomically(
-        path,
-        [&](const std::filesystem::path& tmp)
-        {
-            std::ofstream f(tmp, std::ios::binary);
-            errno = 0;
-            XXH64_state_t hash;
-            XXH64_reset(&hash, 0);
-            auto emit = [&](const void* p, size_t n)
-            {
-                if (n == 0)
-                    return;
-                XXH64_update(&hash, p, n);
-                f.write(static_cast<const char*>(p), std::streamsize(n));
-            };
-            // The header and the table, gathered first (one hash update rather than many small ones).
-            std::vector<std::byte> head(kHeaderBytes + kEntryBytes * sections_.size());
-            std::byte* at = head.data();
-            auto put = [&](const void* p, size_t n)
-            {
-                std::memcpy(at, p, n);
-                at += n;
-            };
-            const uint32_t version = kAssetVersion, count = uint32_t(sections_.size());
-            put(kMagic, 8);
-            put(&version, 4);
-            put(&count, 4);
-            uint64_t offset = head.size();
-            for (const Section& s : sections_)
-            {
-                char padded[kNameBytes] = {};
-                std::memcpy(padded, s.name.data(), s.name.size());
-                put(padded, kNameBytes);
-                put(&offset, 8);
-                put(&s.size, 8);
-                offset += s.size;
-            }
-            emit(head.data(), head.size());
-            std::vector<std::byte> piece;
-            for (const Section& s : sections_)
-            {
-                if (!s.spooled)
-                {
-                    emit(s.bytes.data(), s.bytes.size());
-                    continue;
-                }
-                constexpr uint64_t kPiece = uint64_t(1) << 20;
-                piece.resize(size_t(std::min(s.size, kPiece)));
-                spool_->file.seekg(std::streamoff(s.spool_offset));
-                for (uint64_t done = 0; done < s.size; done += kPiece)
-                {
-                    const size_t n = size_t(std::min(kPiece, s.size - done));
-                    errno = 0;
-                    if (!spool_->file.read(reinterpret_cast<char*>(piece.data()), std::streamsize(n)))
-                        spool_->fail("reading section " + s.name + " back failed");
-                    emit(piece.data(), n);
-                }
-            }
-            const uint64_t digest = XXH64_digest(&hash);
-            f.write(reinterpret_cast<const char*>(&digest), sizeof digest);
-            f.close();
-            if (f.fail())
-                throw FormatError(path.string() + ": writing the asset failed: " +
-                                  (errno ? std::strerror(errno) : "unknown I/O error"));
-        });
+    write_atomically(path,
+                     [&](const std::filesystem::path& tmp)
+                     {
+                         std::ofstream f(tmp, std::ios::binary);
+                         errno = 0;
+                         XXH64_state_t hash;
+                         XXH64_reset(&hash, 0);
+                         auto emit = [&](const void* p, size_t n)
+                         {
+                             if (n == 0)
+                                 return;
+                             XXH64_update(&hash, p, n);
+                             f.write(static_cast<const char*>(p), std::streamsize(n));
+                         };
+                         // The header and the table, gathered first (one hash update rather than many small
+                         // ones).
+                         std::vector<std::byte> head(kHeaderBytes + kEntryBytes * sections_.size());
+                         std::byte* at = head.data();
+                         auto put = [&](const void* p, size_t n)
+                         {
+                             std::memcpy(at, p, n);
+                             at += n;
+                         };
+                         const uint32_t version = kAssetVersion, count = uint32_t(sections_.size());
+                         put(kMagic, 8);
+                         put(&version, 4);
+                         put(&count, 4);
+                         uint64_t offset = head.size();
+                         for (const Section& s : sections_)
+                         {
+                             char padded[kNameBytes] = {};
+                             std::memcpy(padded, s.name.data(), s.name.size());
+                             put(padded, kNameBytes);
+                             put(&offset, 8);
+                             put(&s.size, 8);
+                             offset += s.size;
+                         }
+                         emit(head.data(), head.size());
+                         std::vector<std::byte> piece;
+                         for (const Section& s : sections_)
+                         {
+                             if (!s.spooled)
+                             {
+                                 emit(s.bytes.data(), s.bytes.size());
+                                 continue;
+                             }
+                             constexpr uint64_t kPiece = uint64_t(1) << 20;
+                             piece.resize(size_t(std::min(s.size, kPiece)));
+                             for (uint64_t done = 0; done < s.size; done += kPiece)
+                             {
+                                 const size_t n = size_t(std::min(kPiece, s.size - done));
+                                 spool_->read_at(s.spool_offset + done, std::span<std::byte>(piece.data(), n),
+                                                 "reading section " + s.name + " back failed");
+                                 emit(piece.data(), n);
+                             }
+                         }
+                         const uint64_t digest = XXH64_digest(&hash);
+                         f.write(reinterpret_cast<const char*>(&digest), sizeof digest);
+                         f.close();
+                         if (f.fail())
+                             throw FormatError(path.string() + ": writing the asset failed: " +
+                                               (errno ? std::strerror(errno) : "unknown I/O error"));
+                     });
 }
 
 AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string())

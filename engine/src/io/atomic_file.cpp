@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <system_error>
 #include <unistd.h>
@@ -45,6 +46,57 @@ void check_writable(const std::filesystem::path& path)
 {
     if (std::string problem = output_problem(path); !problem.empty())
         throw FormatError(path.string() + ": cannot write: " + problem);
+}
+
+int create_new_file(const std::filesystem::path& path)
+{
+    struct stat st
+    {
+    };
+    if (::lstat(path.c_str(), &st) == 0)
+    {
+        if (!S_ISREG(st.st_mode))
+            throw FormatError(path.string() +
+                              ": cannot create it: something that is not a regular file is in the way (" +
+                              (S_ISLNK(st.st_mode) ? "a symbolic link" : "a folder, FIFO, device or socket") +
+                              "); a temporary is made as a new file, never through a link: remove it");
+        ::unlink(path.c_str()); // a temporary left by a job that was killed
+    }
+    errno = 0;
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0)
+        throw FormatError(path.string() + ": cannot create it: " + std::strerror(errno));
+    return fd;
+}
+
+void check_temporary(const std::filesystem::path& path)
+{
+    check_writable(path);
+    struct stat st
+    {
+    };
+    if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+        throw FormatError(path.string() + ": cannot write: " +
+                          (S_ISLNK(st.st_mode) ? "it is a symbolic link" : "it is not a regular file") +
+                          ", where a temporary is made as a new file, never through a link: remove it");
+}
+
+int open_existing_file(const std::filesystem::path& path)
+{
+    errno = 0;
+    const int fd = ::open(path.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0)
+        throw FormatError(path.string() + ": cannot open it: " +
+                          (errno == ELOOP ? std::string("it is a symbolic link") : std::strerror(errno)));
+    struct stat st
+    {
+    };
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))
+    {
+        ::close(fd);
+        throw FormatError(path.string() + ": cannot open it: it is not a regular file");
+    }
+    return fd;
 }
 
 std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path& path)
@@ -101,6 +153,9 @@ void write_atomically(const std::filesystem::path& path,
     tmp += ".tmp" + std::to_string(::getpid()) + "." + std::to_string(counter++);
     try
     {
+        // Made new and exclusive first: the writer then truncates this process's own file, not whatever
+        // a link planted at the name would point to.
+        ::close(create_new_file(tmp));
         write(tmp);
     }
     catch (...)

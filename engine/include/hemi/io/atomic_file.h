@@ -30,6 +30,19 @@ std::string output_problem(const std::filesystem::path& path);
 // Throws FormatError("<path>: <output_problem>") when there is a problem.
 void check_writable(const std::filesystem::path& path);
 
+// A job's temporary file (a bake's tiles, an asset writer's spool, write_atomically's temporary) made new:
+// a regular file already at `path` (a killed job's) is removed, anything else there (a symbolic link, a
+// folder, a FIFO, a device) is refused, and the file is created with O_CREAT | O_EXCL | O_NOFOLLOW, so that
+// no link planted at its name is followed and nothing but this process's own new file is written. Returns
+// its descriptor (read and write, close-on-exec). Throws FormatError naming `path` and the cause.
+int create_new_file(const std::filesystem::path& path);
+// check_writable for a temporary that create_new_file will make: also refused when a symbolic link or
+// another file that is not a regular one is at its name. Throws FormatError naming `path`.
+void check_temporary(const std::filesystem::path& path);
+// An existing temporary opened again (a resumed bake's tiles), read and write, without following a link at
+// its name; refused, naming it, when it is not a regular file. Throws FormatError naming `path`.
+int open_existing_file(const std::filesystem::path& path);
+
 // The temporary files write_atomically uses for `path` ("<name>.tmp<pid>.<n>" beside it) whose process no
 // longer runs: what a write killed before its rename left. Removed by the next write of `path`.
 std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path& path);
