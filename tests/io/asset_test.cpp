@@ -4,6 +4,7 @@
 #include <hemi/io/asset.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+#include <hemi/io/memory.h>
 
 #define XXH_INLINE_ALL
 #include <xxhash.h>
@@ -187,6 +188,28 @@ TEST(Asset, ErrorsNameTheFileAndTheProblem)
     c[c.size() - 20] ^= 1;
     write_bytes(dir() / "c.hemi", c, c.size());
     expect(dir() / "c.hemi", "checksum mismatch");
+}
+
+// A large file that is no asset (2 GiB of zeros, sparse on disk) is refused from its head: the reader's
+// peak memory grows by far less than the file (it read every byte into memory before the magic check).
+TEST(Asset, AFileThatIsNoAssetIsRefusedBeforeItIsRead)
+{
+    const fs::path p = dir() / "zeros.hemi";
+    std::ofstream(p).close();
+    fs::resize_file(p, uint64_t(2) << 30);
+    const uint64_t before = hemi::io::peak_memory();
+    try
+    {
+        hemi::io::AssetReader r(p);
+        ADD_FAILURE() << "accepted " << p;
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("zeros.hemi: not a hemi asset (wrong magic)"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_LT(hemi::io::peak_memory(), before + (uint64_t(256) << 20));
+    fs::remove(p);
 }
 
 namespace

@@ -227,6 +227,12 @@ AssetReader::AssetReader(const std::filesystem::path& path) : file_(path.string(
     std::ifstream f(path, std::ios::binary);
     if (ec || !f)
         throw FormatError(file_ + ": no such file or not readable");
+    // The head first: a file that is no hemi asset (or of another version) is refused from its first 12
+    // bytes, before a byte more of it is read or held (a 6 GB file of zeros was read whole first).
+    std::byte head[12] = {};
+    f.read(reinterpret_cast<char*>(head), std::streamsize(std::min<uint64_t>(bytes, sizeof head)));
+    check_head(std::span<const std::byte>(head, size_t(f.gcount())));
+    f.seekg(0);
     data_.resize(size_t(bytes));
     f.read(reinterpret_cast<char*>(data_.data()), std::streamsize(bytes));
     if (size_t(f.gcount()) != data_.size())
@@ -240,16 +246,26 @@ AssetReader::AssetReader(std::span<const std::byte> bytes, std::string name)
     parse();
 }
 
+void AssetReader::check_head(std::span<const std::byte> head) const
+{
+    if (head.size() < 8 || std::memcmp(head.data(), kMagic, 8) != 0)
+        throw FormatError(file_ + ": not a hemi asset (wrong magic)");
+    if (head.size() >= 12)
+    {
+        uint32_t version = 0;
+        std::memcpy(&version, head.data() + 8, 4);
+        if (version != kAssetVersion)
+            throw FormatError(file_ + ": asset version " + std::to_string(version) +
+                              " is not supported (this hemi reads " + std::to_string(kAssetVersion) + ")");
+    }
+}
+
 void AssetReader::parse()
 {
-    if (data_.size() < 8 || std::memcmp(data_.data(), kMagic, 8) != 0)
-        throw FormatError(file_ + ": not a hemi asset (wrong magic)");
+    check_head(data_);
     if (data_.size() < kHeaderBytes + 8)
         throw FormatError(file_ + ": truncated (" + std::to_string(data_.size()) + " bytes)");
     version_ = get<uint32_t>(data_, 8);
-    if (version_ != kAssetVersion)
-        throw FormatError(file_ + ": asset version " + std::to_string(version_) +
-                          " is not supported (this hemi reads " + std::to_string(kAssetVersion) + ")");
     const uint64_t stored = get<uint64_t>(data_, data_.size() - 8);
     if (XXH64(data_.data(), data_.size() - 8, 0) != stored)
         throw FormatError(file_ + ": checksum mismatch: the file is truncated or corrupted");

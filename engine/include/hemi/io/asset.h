@@ -99,6 +99,8 @@ class AssetReader
     }
 
   private:
+    // Refuses a head that is not a hemi asset of this version (FormatError naming the file).
+    void check_head(std::span<const std::byte> head) const;
     void parse();
     void check_multiple(const std::string& name, size_t size, size_t element) const;
 
