@@ -36,6 +36,9 @@ packages=(
     # a real game level for the lightmap tests: OpenArena 0.8.1's Quake III maps (pak1-maps.pk3, 40 MB;
     # openarena-data would also pull in the game's textures, models and sounds, 350 MB)
     openarena-081-maps
+    # a second, sealed indoor level from OpenArena's community map pack (oacmpdm1; 36 MB, and the 0.8.8
+    # patch data it depends on, 73 MB)
+    openarena-oacmp1
     # real HDRIs for the lightmap tests: Blender's studio-light worlds (Poly Haven, CC0), 31 MB, data only
     blender-data
     # formatting check (.ci/format)

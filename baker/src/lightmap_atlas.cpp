@@ -1,8 +1,12 @@
 // Lightmap UV validation and conservative rasterisation (lightmap_atlas.h).
 #include <hemi/bake/lightmap_atlas.h>
 
+#include <hemi/bake/embree_scene.h>
+#include <hemi/bake/ray_generator.h>
+
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -178,9 +182,78 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
     return x_begin <= x_end && y_begin <= y_end;
 }
 
+// Rays per candidate of rule 0 below.
+constexpr int kOverlapRays = 32;
+
+// Per entry of `contested` (sorted), 1 when the texel centre's point on that triangle lies inside geometry
+// as the lightmap bake judges a texel (lightmap_bake.h, LightmapSh::valid): more than half of kOverlapRays
+// hemisphere rays about the triangle's front meet the back of a single-sided surface first. Deterministic
+// (the rays are the bake's counter-based hemisphere set of the texel) on any thread count.
+std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& grid,
+                                     const std::vector<std::pair<size_t, uint32_t>>& contested,
+                                     std::span<const uint8_t> double_sided)
+{
+    const EmbreeScene scene(mesh);
+    const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
+    const uint32_t width = grid.width(), height = grid.height();
+    std::vector<uint8_t> inside(contested.size(), 0);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, contested.size(), 64),
+        [&](const tbb::blocked_range<size_t>& r)
+        {
+            std::array<glm::vec3, kOverlapRays> directions;
+            for (size_t c = r.begin(); c != r.end(); ++c)
+            {
+                const auto [slot, t] = contested[c];
+                const glm::uvec2 xy = grid.texel(slot);
+                const glm::vec3 a = mesh.positions[mesh.indices[3 * size_t(t)]],
+                                b = mesh.positions[mesh.indices[3 * size_t(t) + 1]],
+                                d = mesh.positions[mesh.indices[3 * size_t(t) + 2]];
+                const glm::vec3 n = scene.geometric_normal(t);
+                if (glm::length(n) <= 0.0f)
+                    continue;
+                const glm::vec3 g = glm::normalize(n);
+                dvec2 uv[3];
+                for (int k = 0; k < 3; ++k)
+                {
+                    const glm::vec2 u = mesh.uvs1[mesh.indices[3 * size_t(t) + size_t(k)]];
+                    uv[k] = dvec2(double(u.x) * width, double(u.y) * height);
+                }
+                const double area2 = cross2(uv[1] - uv[0], uv[2] - uv[0]);
+                if (std::abs(area2) < 1e-12)
+                    continue;
+                // The centre lies in the triangle (the triangle claims it); the centroid's pull keeps the
+                // point off the triangle's edges, where a neighbour's back would count.
+                const glm::dvec3 w =
+                    0.9 * barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2) +
+                    glm::dvec3(0.1 / 3.0);
+                const glm::vec3 p = float(w.x) * a + float(w.y) * b + float(w.z) * d;
+                const glm::vec3 u = glm::normalize(std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0))
+                                                                        : glm::cross(g, glm::vec3(0, 1, 0)));
+                const glm::vec3 v = glm::cross(g, u);
+                const glm::vec3 origin = offset_ray_origin(p, g, offset);
+                hemisphere_directions(0x6F766572ull, uint64_t(xy.y) * width + xy.x, directions);
+                int back = 0;
+                for (const glm::vec3& h : directions)
+                {
+                    const glm::vec3 dir = h.x * u + h.y * v + h.z * g;
+                    const std::optional<RayHit> hit = scene.intersect(origin, dir);
+                    back += hit && glm::dot(scene.geometric_normal(hit->primitive), dir) > 0.0f &&
+                            !(hit->primitive < double_sided.size() && double_sided[hit->primitive]);
+                }
+                inside[c] = uint8_t(2 * back > kOverlapRays);
+            }
+        });
+    return inside;
+}
+
 // Overlapping lightmap UVs, as shipped levels have them (a face modelled twice back to back on one UV
-// rectangle, decals on walls), resolved deterministically: each texel centre that several triangles claim
-// goes to one of them, chosen by, in order,
+// rectangle, decals on walls, a face the level's compiler left inside a wall sharing a lightmap rectangle
+// with a visible one), resolved deterministically: each texel centre that several triangles claim goes to
+// one of them, chosen by, in order,
+//   0. the side a viewer can reach: a candidate whose point lies inside geometry as the bake judges it
+//      (inside_geometry) loses to one whose point does not (a texel given to a hidden face would be filled
+//      from its neighbours, and the visible face sharing it would go dark);
 //   1. the plane its chart continues in: the most of the texel's 8 neighbours whose centre only one triangle
 //      claims and whose triangle lies in the candidate's plane, facing its way;
 //   2. the side that faces into the scene: the largest cosine between the candidate's normal and the
@@ -192,11 +265,12 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
                       std::vector<std::pair<size_t, uint32_t>>& contested,
                       const std::vector<uint8_t>& inside_count, std::vector<int32_t>& best,
                       std::vector<double>& best_distance, std::vector<glm::dvec3>& best_bary,
-                      LightmapUvReport& report)
+                      std::span<const uint8_t> double_sided, LightmapUvReport& report)
 {
     if (contested.empty())
         return;
     std::sort(contested.begin(), contested.end());
+    const std::vector<uint8_t> hidden = inside_geometry(mesh, grid, contested, double_sided);
     auto corner = [&](uint32_t t, int k)
     { return glm::dvec3(mesh.positions[mesh.indices[size_t(t) * 3 + k]]); };
     // The scene's centre: the area-weighted centroid of its surfaces (a few faces far out, as levels have
@@ -234,7 +308,7 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
             ++last;
         const glm::uvec2 xy = grid.texel(slot);
         uint32_t winner = contested[first].second;
-        int winner_support = -1;
+        int winner_hidden = 2, winner_support = -1;
         double winner_facing = -2.0;
         for (size_t c = first; c < last; ++c)
         {
@@ -255,9 +329,13 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
             const double facing =
                 glm::length(to_centre) > tolerance ? glm::dot(normal(t), glm::normalize(to_centre)) : 0.0;
             // Candidates come in ascending triangle order, so a tie keeps the lower index.
-            if (support > winner_support || (support == winner_support && facing > winner_facing + 1e-9))
+            const int is_hidden = hidden[c];
+            if (is_hidden < winner_hidden ||
+                (is_hidden == winner_hidden &&
+                 (support > winner_support || (support == winner_support && facing > winner_facing + 1e-9))))
             {
                 winner = t;
+                winner_hidden = is_hidden;
                 winner_support = support;
                 winner_facing = facing;
             }
@@ -305,7 +383,8 @@ io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t hei
 }
 
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
-                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges)
+                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges,
+                                 std::span<const uint8_t> double_sided)
 {
     io::BlockGrid grid = lightmap_blocks(mesh, width, height); // checks the mesh
     report = {};
@@ -409,7 +488,8 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
             }
     }
 
-    resolve_overlaps(mesh, grid, contested, inside_count, best, best_distance, best_bary, report);
+    resolve_overlaps(mesh, grid, contested, inside_count, best, best_distance, best_bary, double_sided,
+                     report);
 
     LightmapAtlas atlas;
     atlas.width = width;
@@ -513,9 +593,9 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
             std::to_string(report.overlapping_texels) +
             " lightmap texel(s) lie inside two or more triangles (e.g. triangles " +
             std::to_string(report.overlap_example[0]) + " and " + std::to_string(report.overlap_example[1]) +
-            "): overlapping lightmap UVs (TEXCOORD_1); each such texel takes the light of one of them (the "
-            "one "
-            "its chart continues in, else the one facing into the scene), the others get none of their own; "
+            "): overlapping lightmap UVs (TEXCOORD_1); each such texel takes the light of one of them (one "
+            "a viewer can reach, not one inside geometry; then the one its chart continues in, else the one "
+            "facing into the scene), the others get none of their own; "
             "--uv-report shows where, --strict-uv refuses, and re-unwrapping (or --unwrap) fixes it");
     if (report.outside)
         report.warnings.push_back(

@@ -212,7 +212,10 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
 namespace
 {
 // Per texel values spread over the atlas: covered texels hold theirs, empty ones within `dilate` texels of a
-// chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. K values a texel. Only the
+// chart the mean of their filled 8-neighbours (one ring per pass), the rest 0. A texel inside geometry
+// (valid 0) is filled like an empty one from valid texels; where none reaches it within `dilate` rings it
+// keeps its own value, and the empty texels around it take that as they take a valid texel's (a face no
+// viewer reaches keeps the light it sees, as a reference renderer shows it). K values a texel. Only the
 // blocks that hold a covered texel or one within `dilate` texels of one are stored, so the maps' memory
 // follows the covered texels.
 // `produce(first, values)` gives the K values of texels [first, first + values.size() / K), asked for in
@@ -243,6 +246,9 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
     io::BlockMaps maps(io::BlockGrid(width, height, std::move(blocks)), uint32_t(k));
     const io::BlockGrid& grid = maps.grid;
     auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
+    // Per slot: 0 empty, kOwn a texel inside geometry holding its own value (or an empty one filled from
+    // such texels), kValid a valid texel's value (or one filled from those).
+    constexpr uint8_t kOwn = 1, kValid = 2;
     std::vector<uint8_t> filled(grid.slots(), 0);
     constexpr uint32_t kChunk = 1u << 16;
     std::vector<glm::vec3> values(size_t(std::min(n, kChunk)) * size_t(k));
@@ -252,11 +258,11 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
         produce(first, std::span<glm::vec3>(values.data(), size_t(count) * size_t(k)));
         for (uint32_t i = first; i < first + count; ++i)
         {
-            if (!valid.empty() && !valid[i])
-                continue; // inside geometry: filled from its valid neighbours like an empty texel
+            // Inside geometry: filled from its valid neighbours like an empty texel; where none reaches
+            // it (a face no viewer can reach, a chart that lies wholly in a wall) it keeps its own value.
             const glm::uvec2 t = place(i);
             const size_t slot = size_t(grid.slot(t.x, t.y));
-            filled[slot] = 1;
+            filled[slot] = !valid.empty() && !valid[i] ? kOwn : kValid;
             for (int j = 0; j < k; ++j)
             {
                 const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
@@ -270,41 +276,44 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
     std::vector<glm::dvec3> sum(static_cast<size_t>(k));
     for (int pass = 0; pass < dilate; ++pass)
     {
+        // First every texel that valid texels reach (from the values before the pass: those are never
+        // rewritten), then the empty ones that only texels holding their own reach (those that kept it).
         std::vector<uint8_t> next = filled;
-        for (size_t slot = 0; slot < grid.slots(); ++slot)
-        {
-            if (filled[slot])
-                continue;
-            const glm::uvec2 xy = grid.texel(slot);
-            if (xy.x >= width || xy.y >= height)
-                continue; // past the atlas in a block of its last column or row
-            int count = 0;
-            std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx)
-                {
-                    const int64_t from = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
-                    if (from < 0 || !filled[size_t(from)])
-                        continue;
-                    ++count;
-                    for (int j = 0; j < k; ++j)
-                    {
-                        const float* v = at(j, size_t(from));
-                        sum[size_t(j)] += glm::dvec3(v[0], v[1], v[2]);
-                    }
-                }
-            if (!count)
-                continue;
-            for (int j = 0; j < k; ++j)
+        for (const uint8_t source : {kValid, kOwn})
+            for (size_t slot = 0; slot < grid.slots(); ++slot)
             {
-                const glm::vec3 v(sum[size_t(j)] / double(count));
-                float* out = at(j, slot);
-                out[0] = v.x;
-                out[1] = v.y;
-                out[2] = v.z;
+                if (source == kValid ? filled[slot] == kValid : next[slot] != 0)
+                    continue;
+                const glm::uvec2 xy = grid.texel(slot);
+                if (xy.x >= width || xy.y >= height)
+                    continue; // past the atlas in a block of its last column or row
+                int count = 0;
+                std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx)
+                    {
+                        const int64_t from = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
+                        if (from < 0 || filled[size_t(from)] != source || next[size_t(from)] != source)
+                            continue;
+                        ++count;
+                        for (int j = 0; j < k; ++j)
+                        {
+                            const float* v = at(j, size_t(from));
+                            sum[size_t(j)] += glm::dvec3(v[0], v[1], v[2]);
+                        }
+                    }
+                if (!count)
+                    continue;
+                for (int j = 0; j < k; ++j)
+                {
+                    const glm::vec3 v(sum[size_t(j)] / double(count));
+                    float* out = at(j, slot);
+                    out[0] = v.x;
+                    out[1] = v.y;
+                    out[2] = v.z;
+                }
+                next[slot] = source;
             }
-            next[slot] = 1;
-        }
         filled.swap(next);
     }
     return maps;

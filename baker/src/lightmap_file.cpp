@@ -356,7 +356,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                           " coefficients per texel (--size, --texel-size, --bases" +
                           (exr_bytes ? ", --exr-dir" : "") + ")");
     LightmapUvReport report;
-    LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges);
+    // Overlapping UVs are resolved towards the faces a viewer can reach, with the bake's idea of a back.
+    std::vector<uint8_t> double_sided(summary.triangles, 0);
+    for (uint32_t t = 0; t < summary.triangles; ++t)
+        double_sided[t] = surfaces->double_sided(t);
+    LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided);
     stage_done("atlas");
     summary.uv_report = report;
     if (!o.uv_report.empty() && leader)

@@ -1675,52 +1675,68 @@ LightmapSh made_up_sh(const LightmapAtlas& a, const std::set<std::pair<uint32_t,
 }
 
 // The dilation the outputs document, over the whole dense atlas (what lightmap_maps computed before it kept
-// blocks): covered valid texels hold their coefficients; each pass, an empty texel with filled 8-neighbours
-// takes their mean (in double, neighbours in row order); the rest stay 0.
+// blocks), from the values before each pass (a copy): covered valid texels hold their coefficients, texels
+// inside geometry theirs too but as a lesser kind ("own"); each pass, a texel that is not valid-filled and
+// has valid-filled 8-neighbours takes their mean (in double, neighbours in row order) and becomes
+// valid-filled; an empty texel with none takes the mean of its own-kind neighbours and becomes own-kind; the
+// rest stay as they are (empty ones 0).
 std::vector<float> dense_dilation(const LightmapAtlas& a, const LightmapSh& sh, const std::string& name,
                                   int k, int dilate)
 {
     const size_t w = a.width, h = a.height, plane_size = w * h;
+    enum Kind : uint8_t
+    {
+        Empty,
+        Own,
+        Valid
+    };
     std::vector<glm::vec3> maps(size_t(k) * plane_size, glm::vec3(0.0f));
-    std::vector<uint8_t> filled(plane_size, 0);
+    std::vector<uint8_t> kind(plane_size, Empty);
     for (size_t i = 0; i < a.texels.size(); ++i)
-        if (sh.valid[i])
-        {
-            const size_t at = a.texels[i].y * w + a.texels[i].x;
-            filled[at] = 1;
-            const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
-            for (int j = 0; j < k; ++j)
-                maps[size_t(j) * plane_size + at] = c[size_t(j)];
-        }
+    {
+        const size_t at = a.texels[i].y * w + a.texels[i].x;
+        kind[at] = sh.valid[i] ? Valid : Own;
+        const std::vector<glm::vec3> c = lightmap_coefficients(name, sh.irradiance[i]);
+        for (int j = 0; j < k; ++j)
+            maps[size_t(j) * plane_size + at] = c[size_t(j)];
+    }
+    // The mean of (x, y)'s 8-neighbours of kind `from` in `values` (by `kinds`), into maps; false for none.
+    auto fill = [&](size_t x, size_t y, Kind from, const std::vector<glm::vec3>& values,
+                    const std::vector<uint8_t>& kinds)
+    {
+        int count = 0;
+        std::vector<glm::dvec3> sum(size_t(k), glm::dvec3(0.0));
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+            {
+                const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
+                if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h) ||
+                    kinds[size_t(sy) * w + size_t(sx)] != from)
+                    continue;
+                ++count;
+                for (int j = 0; j < k; ++j)
+                    sum[size_t(j)] +=
+                        glm::dvec3(values[size_t(j) * plane_size + size_t(sy) * w + size_t(sx)]);
+            }
+        for (int j = 0; count && j < k; ++j)
+            maps[size_t(j) * plane_size + y * w + x] = glm::vec3(sum[size_t(j)] / double(count));
+        return count > 0;
+    };
     for (int pass = 0; pass < dilate; ++pass)
     {
-        std::vector<uint8_t> next = filled;
+        // First every texel that valid ones reach, then the empty ones that only texels of their own (that
+        // stayed so) reach.
+        const std::vector<glm::vec3> before = maps;
+        const std::vector<uint8_t> kind_before = kind;
         for (size_t y = 0; y < h; ++y)
             for (size_t x = 0; x < w; ++x)
-            {
-                if (filled[y * w + x])
-                    continue;
-                int count = 0;
-                std::vector<glm::dvec3> sum(size_t(k), glm::dvec3(0.0));
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx)
-                    {
-                        const int64_t sx = int64_t(x) + dx, sy = int64_t(y) + dy;
-                        if (sx < 0 || sy < 0 || sx >= int64_t(w) || sy >= int64_t(h) ||
-                            !filled[size_t(sy) * w + size_t(sx)])
-                            continue;
-                        ++count;
-                        for (int j = 0; j < k; ++j)
-                            sum[size_t(j)] +=
-                                glm::dvec3(maps[size_t(j) * plane_size + size_t(sy) * w + size_t(sx)]);
-                    }
-                if (!count)
-                    continue;
-                for (int j = 0; j < k; ++j)
-                    maps[size_t(j) * plane_size + y * w + x] = glm::vec3(sum[size_t(j)] / double(count));
-                next[y * w + x] = 1;
-            }
-        filled.swap(next);
+                if (kind_before[y * w + x] != Valid && fill(x, y, Valid, before, kind_before))
+                    kind[y * w + x] = Valid;
+        const std::vector<uint8_t> kind_after_valid = kind;
+        for (size_t y = 0; y < h; ++y)
+            for (size_t x = 0; x < w; ++x)
+                if (kind_after_valid[y * w + x] == Empty && fill(x, y, Own, before, kind_after_valid))
+                    kind[y * w + x] = Own;
     }
     std::vector<float> out(maps.size() * 3);
     for (size_t i = 0; i < maps.size(); ++i)
@@ -1808,13 +1824,22 @@ TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
 
 // The outputs over the kept blocks equal the dense dilation of the same coefficients, value for value, for
 // the default 2 rings and for 11 (which reaches two blocks away): a texel that dilation fills is never in a
-// block that was not kept. Fails when the dilation blocks miss a ring, or when a texel inside geometry is
-// taken as filled.
+// block that was not kept. A texel inside geometry with valid neighbours (8, 8) takes theirs; the small
+// chart, wholly inside geometry (a face no viewer reaches), keeps its own values and the ring around it takes
+// those. Fails when the dilation blocks miss a ring, when a texel inside geometry is taken as filled, or
+// when a chart inside geometry is left black (as before issue 41: a reference renderer shows its light).
 TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
 {
     LightmapUvReport report;
     const LightmapAtlas a = rasterize_lightmap(three_charts(), kChartsWidth, kChartsHeight, report);
-    const LightmapSh sh = made_up_sh(a, {{8, 8}, {30, 20}});
+    const LightmapSh sh = made_up_sh(a, {{8, 8}, {30, 20}, {31, 20}, {30, 21}, {31, 21}});
+    {
+        const std::vector<float> plain = lightmap_maps("plain", a, sh).dense();
+        const glm::vec3 own = lightmap_coefficients("plain", sh.irradiance[size_t(a.texel_of(31, 21))])[0];
+        const size_t at = (21 * size_t(kChartsWidth) + 31) * 3;
+        EXPECT_EQ(glm::vec3(plain[at], plain[at + 1], plain[at + 2]), own)
+            << "the hidden chart keeps its own";
+    }
     for (const auto& [name, k] : {std::pair{std::string("plain"), 1}, std::pair{std::string("h4"), 4}})
         for (int dilate : {2, 11})
         {

@@ -21,6 +21,10 @@ namespace hemi::test
 
 // Where Debian's openarena-081-maps package (a dependency of openarena-data) puts OpenArena 0.8.1's maps.
 inline const std::filesystem::path kOpenArenaMaps = "/usr/share/games/openarena/baseoa/pak1-maps.pk3";
+// Where Debian's openarena-oacmp1 package puts the OpenArena Community Map Pack's first volume (its
+// maps/oacmpdm1.bsp is a sealed indoor level: no sky, pillars and walls that touch, faces left inside them).
+inline const std::filesystem::path kOpenArenaCommunityMaps =
+    "/usr/share/games/openarena/baseoa/z_oacmp-volume1-v3.pk3";
 
 // The bytes of the entry `name` (e.g. "maps/oa_dm3.bsp") of the zip archive `zip`: stored or deflated,
 // checked against the CRC-32 of the central directory. Throws std::runtime_error naming the archive (and the

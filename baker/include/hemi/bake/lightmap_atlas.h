@@ -34,6 +34,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -108,7 +109,14 @@ struct TriangleRange
 // Validates and rasterises in one pass. The mesh needs positions, normals, tangents and uvs1 (Throws
 // std::invalid_argument naming what is missing, or for a size of 0 or over 16384). `ranges` groups the
 // triangles for the density report (glTF primitives); empty is one group.
+//
+// A texel centre that several triangles claim (overlapping UVs) goes to one of them: first to one whose
+// point there does not lie inside geometry as the bake judges a texel (32 hemisphere rays, most of which
+// meet the backs of single-sided surfaces; `double_sided`, per triangle, marks those whose back counts as
+// a front; empty: none), then to the one whose chart continues there, then to the one facing the scene's
+// centre. Only meshes with overlaps pay for the rays (and an Embree scene of the mesh).
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
-                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {});
+                                 LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
+                                 std::span<const uint8_t> double_sided = {});
 
 } // namespace hemi::bake
