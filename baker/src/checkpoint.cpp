@@ -114,9 +114,11 @@ std::optional<SlicePosition> SliceCheckpoint::load()
             if (saved.back().size() != section.bytes.size())
                 return std::nullopt;
         }
-        // Only positions slice_done saves: inside the bake, never at its very start or past its end.
-        if (loaded.pass >= passes_ || loaded.next_item >= items_ ||
-            (loaded.pass == 0 && loaded.next_item == 0))
+        // Only positions slice_done saves: inside the bake, never at its very start or past its end, or the
+        // bake complete ({passes, 0}, saved with `now`).
+        const bool complete = loaded.pass == passes_ && loaded.next_item == 0;
+        if (!complete && (loaded.pass >= passes_ || loaded.next_item >= items_ ||
+                          (loaded.pass == 0 && loaded.next_item == 0)))
             return std::nullopt;
         // Everything checked: only now is the bake's state overwritten.
         for (size_t i = 0; i < sections_.size(); ++i)
@@ -133,7 +135,7 @@ std::optional<SlicePosition> SliceCheckpoint::load()
 bool SliceCheckpoint::slice_done(uint32_t pass, uint32_t next_item, bool now)
 {
     const bool complete = next_item >= items_ && pass + 1 >= passes_;
-    if (!active_ || complete ||
+    if (!active_ || (complete && !now) ||
         (!now &&
          std::chrono::duration<double>(std::chrono::steady_clock::now() - last_save_).count() < interval_))
         return false;

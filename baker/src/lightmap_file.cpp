@@ -157,6 +157,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         const auto now = std::chrono::steady_clock::now();
         stages.emplace_back(stage, std::chrono::duration<double>(now - stage_start).count());
         stage_start = now;
+        if (options.on_stage)
+            options.on_stage(stage);
     };
     LightmapFileOptions o = options;
     if (o.outputs.empty())

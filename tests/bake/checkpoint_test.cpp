@@ -207,13 +207,25 @@ TEST(Checkpoint, IgnoresOtherKeysLayoutsPositionsAndDamagedFiles)
     EXPECT_FALSE(resume(100, 2, 3, {{"a", bytes}})) << "item 3 of 3";
     EXPECT_TRUE(untouched());
 
-    // Positions no save writes: the very start, and past the end.
-    for (const SlicePosition p : {SlicePosition{0, 0}, SlicePosition{2, 0}, SlicePosition{0, 16}})
+    // Positions no save writes: the very start, and past the end (other than the bake complete).
+    for (const SlicePosition p :
+         {SlicePosition{0, 0}, SlicePosition{3, 0}, SlicePosition{2, 1}, SlicePosition{0, 16}})
     {
         writer.save(p);
         EXPECT_FALSE(resume(100, 2, 16, {{"a", bytes}})) << p.pass << " " << p.next_item;
     }
     EXPECT_TRUE(untouched());
+    // The bake complete, {passes, 0}: what slice_done(..., now) saves after the last pass (issue 41).
+    {
+        SliceCheckpoint complete(path, 100, 2, 16,
+                                 {{"a", std::as_writable_bytes(std::span<uint32_t>(saved))}}, 1e9);
+        EXPECT_FALSE(complete.slice_done(1, 16)) << "not forced: the result, not a checkpoint, is next";
+        EXPECT_TRUE(complete.slice_done(1, 16, true));
+        std::vector<uint32_t> copy(16, 0u);
+        EXPECT_EQ(resume(100, 2, 16, {{"a", std::as_writable_bytes(std::span<uint32_t>(copy))}}),
+                  (SlicePosition{2, 0}));
+        EXPECT_EQ(copy, saved);
+    }
 
     // Damaged: one byte changed, cut short, not a hemi container, or a container of something else.
     writer.save({1, 3});

@@ -2,6 +2,7 @@
 // call them: dense sampling of UV triangles, analytic furnace and single-light cases with SH typed here, and
 // a least-squares projection by this file's own quadrature.
 #include "../temp_dir.h"
+#include "../tools/post_scene.h"
 #include "furnace.h"
 #include "level.h"
 #include "quads.h"
@@ -32,6 +33,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <optional>
 #include <set>
 
@@ -648,6 +650,66 @@ TEST(LightmapBake, DeterministicResumableAndDilated)
     EXPECT_LT(s.texel_of(2, 2), 0);
     EXPECT_GT(maps[(2 * 16 + 2) * 3], 0.5f) << "two texels out from the chart";
     EXPECT_EQ(maps[(0 * 16 + 0) * 3], 0.0f) << "beyond the dilation";
+}
+
+// Issue 41, defect 1: a --denoise bake in tiles stopped after its passes (killed while it wrote the asset, or
+// the write failing on a full disk) and run again gave a wrong lightmap with exit 0 (plain's mean +24% on
+// oa_dm3): the bake's checkpoint still stood at the start of the last pass, the rerun traced that pass again
+// from the tile file's other copy, and the filter had written its result there. The bake now saves itself
+// complete before the filter. Stopped after each stage in turn (LightmapFileOptions::on_stage throwing, as a
+// kill would leave it: the checkpoint and the tiles stay) and run again, the asset has the uninterrupted
+// bake's bytes, and a rerun after the filter traces no ray.
+TEST(LightmapBake, ADenoisedBakeInTilesStoppedAfterItsPassesResumesToTheSameBytes)
+{
+    const std::filesystem::path dir = hemi::test::temp_dir("lightmap_test");
+    const std::filesystem::path scene = hemi::test::write_post_scene(dir / "stop_post.glb");
+    LightmapFileOptions o;
+    o.width = o.height = 128;
+    o.outputs = {"sh9", "plain"};
+    o.bake.rays = 8;
+    o.bake.bounces = 1;
+    o.lights.sun = true;
+    o.lights.sun_direction = glm::normalize(glm::vec3(0.4f, 0.3f, 1.0f));
+    o.lights.sun_irradiance = glm::vec3(4.0f, 3.6f, 3.0f);
+    o.denoise = true;
+    o.memory_budget = uint64_t(7) << 20; // in tiles (10.6 MiB whole, 4.9 MiB in the least tiles)
+    auto bake = [&](const std::string& name, const std::string& stop)
+    {
+        const std::filesystem::path asset = dir / (name + ".hemi");
+        LightmapFileOptions run = o;
+        run.bake.checkpoint = dir / (name + ".partial");
+        run.on_stage = [&](std::string_view stage)
+        {
+            if (stage == stop)
+                throw std::runtime_error("stopped after " + stop);
+        };
+        LightmapBakeSummary summary;
+        try
+        {
+            summary = bake_lightmap_file(scene, asset, run);
+        }
+        catch (const std::runtime_error& e)
+        {
+            EXPECT_EQ(std::string(e.what()), "stopped after " + stop);
+            EXPECT_TRUE(std::filesystem::exists(run.bake.checkpoint)) << stop;
+            EXPECT_TRUE(std::filesystem::exists(lightmap_tile_path(asset))) << stop;
+            run.on_stage = {};
+            summary = bake_lightmap_file(scene, asset, run);
+            EXPECT_TRUE(summary.resumed) << stop;
+            if (stop == "denoise" || stop == "outputs")
+                EXPECT_EQ(summary.rays, 0u) << stop << ": the bake was complete";
+        }
+        EXPECT_GT(summary.tile_texels, 0u) << "not in tiles";
+        EXPECT_GT(summary.denoised_texels, 0u);
+        EXPECT_FALSE(std::filesystem::exists(run.bake.checkpoint));
+        EXPECT_FALSE(std::filesystem::exists(lightmap_tile_path(asset)));
+        std::ifstream in(asset, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string whole = bake("stop_whole", "");
+    ASSERT_FALSE(whole.empty());
+    for (const std::string stop : {"bake", "denoise", "outputs"})
+        EXPECT_TRUE(bake("stop_" + stop, stop) == whole) << "stopped after " << stop << ", the bytes differ";
 }
 
 // A bake in tiles (LightmapBakeOptions::tile_texels: --memory-budget) keeps the sums of its passes in a file

@@ -86,7 +86,8 @@ class SliceCheckpoint
 
     // Restores the state saved for this key into the sections and returns where to go on from; std::nullopt,
     // with no section touched, when there is no file, or it is unreadable or damaged, or it holds another
-    // key, other section sizes or a position that save never writes (the very start or past the end). The
+    // key, other section sizes or a position that save never writes (the very start, or past the end other
+    // than {passes, 0}: the bake complete, which slice_done(..., now) saves). The
     // interval to the first save counts from here (or from construction when the bake does not resume).
     std::optional<SlicePosition> resume();
     // resume() for the ranks of a job (distribution.h): the leader resumes from its file, and the other ranks
@@ -98,8 +99,10 @@ class SliceCheckpoint
     // items meaning the pass is complete. Saves when the checkpoint is on, the bake is not complete and
     // `interval_seconds` have passed since the last save (or resume). A failed save turns checkpointing off
     // and error() says why: a checkpoint is insurance, not the result, and the bake goes on without it.
-    // Returns whether it saved. `now` saves whatever the interval (a bake whose state outside the sections
-    // must not run more than a pass ahead of its checkpoint: the tile file of texel_file.h).
+    // Returns whether it saved. `now` saves whatever the interval, and also when the bake is complete (as
+    // {passes, 0}): a bake whose state outside the sections must not run more than a pass ahead of its
+    // checkpoint (the tile file of texel_file.h), and whose work after the last pass overwrites what a
+    // resumed last pass would read (the denoiser's filter in the tile file's other copy).
     bool slice_done(uint32_t pass, uint32_t next_item, bool now = false);
 
     // Saves the sections and `position` now (atomically: temporary file, then rename). Throws

@@ -305,6 +305,11 @@ struct LightmapFileOptions
     // tile_texels) as large as the budget leaves room for, its sums in lightmap_tile_path(asset); one that
     // cannot fit even in tiles of 4096 texels is refused before it starts, naming both.
     uint64_t memory_budget = 0;
+    // Called after each stage of the job with its name, in order: "scene", "atlas", "bake", "denoise" (with
+    // denoise), then the outputs' and the asset's (LightmapBakeSummary::stage_seconds names them all). An
+    // exception thrown from it stops the job there as a kill would, leaving the checkpoint and the tiles for
+    // a rerun to resume from: what the tests use to stop a bake at a named point. Empty: none.
+    std::function<void(std::string_view stage)> on_stage;
 };
 
 struct LightmapBakeSummary
