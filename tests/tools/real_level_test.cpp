@@ -13,6 +13,7 @@
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/lightmap_unwrap.h>
 #include <hemi/io/gltf.h>
+#include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 
 #include <gtest/gtest.h>
@@ -23,6 +24,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -373,6 +375,235 @@ TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
             // 10 m, three.
             EXPECT_LE(double(s.on_invalid),
                       (c.pk3 == hemi::test::kOpenArenaMaps ? 3e-3 : 1e-3) * double(s.hits));
+        }
+    }
+}
+
+namespace
+{
+
+// A camera of the comparison below, in hemi's world (z up): at an open point, looking at a surface it sees.
+struct View
+{
+    glm::vec3 eye, target;
+    uint32_t triangle = 0; // the surface seen, and its TEXCOORD_1 at the target
+    glm::vec2 uv{0.0f};
+};
+
+// glTF's y-up scene space to hemi's z-up world (math::gltf_to_world()).
+glm::vec3 to_world(const glm::vec3& p)
+{
+    return {p.x, -p.z, p.y};
+}
+
+// `lights` open points of the level (as in sight() above) for point lights, and `count` views: each from an
+// open point within 8 units of a light, at a surface 1 to 10 units away facing it (cosine over 0.5), which
+// that light reaches within 10 units, unshadowed there and 0.5 units around it, of a triangle whose texels
+// are at most 0.5 units across at `size`^2 (the arena's own density; the terrain outside oa_dm3's arena has
+// texels of 10 units, which cannot hold a point light's falloff). Deterministic.
+void pick_views(const hemi::io::Mesh& mesh, uint32_t size, int lights, int count, std::vector<glm::vec3>& at,
+                std::vector<View>& views)
+{
+    const hemi::bake::EmbreeScene scene(mesh);
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    std::mt19937 rng(4141);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    auto open = [&](const glm::vec3& c)
+    {
+        constexpr int kProbe = 256;
+        int escape = 0;
+        for (int i = 0; i < kProbe; ++i)
+        {
+            const float z = 1.0f - 2.0f * (float(i) + 0.5f) / kProbe, r = std::sqrt(1.0f - z * z);
+            const glm::vec3 d(r * std::cos(2.39996323f * float(i)), r * std::sin(2.39996323f * float(i)), z);
+            const std::optional<hemi::bake::RayHit> h = scene.intersect(c, d);
+            if (h && glm::dot(scene.geometric_normal(h->primitive), d) > 0.0f)
+                return false;
+            escape += !h;
+        }
+        return 2 * escape <= kProbe;
+    };
+    auto texel_size = [&](uint32_t t)
+    {
+        const uint32_t* i = &mesh.indices[size_t(t) * 3];
+        const glm::vec2 a = mesh.uvs1[i[0]], b = mesh.uvs1[i[1]], c = mesh.uvs1[i[2]];
+        const double uv = 0.5 * std::abs(double((b - a).x * (c - a).y - (b - a).y * (c - a).x)) * size * size;
+        const double area = 0.5 * double(glm::length(scene.geometric_normal(t)));
+        return uv > 0.0 ? std::sqrt(area / uv) : INFINITY;
+    };
+    for (int attempt = 0; attempt < 1000000 && int(at.size()) < lights; ++attempt)
+    {
+        const glm::vec3 c = lo + (hi - lo) * glm::vec3(uniform(rng), uniform(rng), uniform(rng));
+        if (open(c))
+            at.push_back(c);
+    }
+    for (int attempt = 0; attempt < 1000000 && int(views.size()) < count && !at.empty(); ++attempt)
+    {
+        const glm::vec3& light = at[size_t(attempt) % at.size()];
+        const glm::vec3 eye = light + 16.0f * (glm::vec3(uniform(rng), uniform(rng), uniform(rng)) - 0.5f);
+        if (!open(eye))
+            continue;
+        for (int k = 0; k < 50; ++k)
+        {
+            const float z = 2.0f * uniform(rng) - 1.0f, r = std::sqrt(1.0f - z * z);
+            const float phi = 2.0f * float(M_PI) * uniform(rng);
+            const glm::vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+            const std::optional<hemi::bake::RayHit> h = scene.intersect(eye, d);
+            if (!h || h->distance < 1.0f || h->distance > 10.0f || texel_size(h->primitive) > 0.5)
+                continue;
+            const glm::vec3 g = glm::normalize(scene.geometric_normal(h->primitive));
+            const glm::vec3 target = eye + d * h->distance;
+            // Seen square on, and lit at more than a grazing angle (where E changes fastest across a texel).
+            if (glm::dot(g, -d) < 0.5f || glm::length(light - target) > 10.0f ||
+                glm::dot(g, glm::normalize(light - target)) < 0.2f)
+                continue;
+            // Lit at the target and at 8 points 0.5 units around it in its plane: no shadow's edge within
+            // a texel or two, where the lightmap's texels cannot follow it.
+            const glm::vec3 u = glm::normalize(glm::cross(g, std::abs(g.x) < 0.9f ? glm::vec3(1, 0, 0)
+                                                                                  : glm::vec3(0, 1, 0))),
+                            v = glm::cross(g, u);
+            bool lit = true;
+            for (int p = 0; p < 9 && lit; ++p)
+            {
+                const float a = float(p) * float(M_PI) / 4.0f, r = p == 8 ? 0.0f : 0.5f;
+                const glm::vec3 from = target + r * (std::cos(a) * u + std::sin(a) * v) + 1e-3f * g,
+                                to = light - from;
+                lit = glm::dot(to, g) > 0.0f &&
+                      !scene.occluded(from, glm::normalize(to), 0.0f, glm::length(to));
+            }
+            if (!lit)
+                continue;
+            const uint32_t* i = &mesh.indices[size_t(h->primitive) * 3];
+            views.push_back(
+                {to_world(eye), to_world(target), h->primitive,
+                 (1.0f - h->u - h->v) * mesh.uvs1[i[0]] + h->u * mesh.uvs1[i[1]] + h->v * mesh.uvs1[i[2]]});
+            break;
+        }
+    }
+}
+
+// The mean of the red channel over the 8 x 8 pixels at the centre of a 64 x 48 EXR.
+double centre(const fs::path& exr)
+{
+    const hemi::io::ImageRgba im = hemi::io::read_exr(exr);
+    double sum = 0.0;
+    for (uint32_t y = 20; y < 28; ++y)
+        for (uint32_t x = 28; x < 36; ++x)
+            sum += im.pixels[(size_t(y) * im.width + x) * 4];
+    return sum / 64.0;
+}
+
+} // namespace
+
+// Issue 41: the lightmap agrees with hemi's own path tracer (hemi-bake reference) from cameras in the
+// level's open space. Each level, lit by four point lights of 30 cd at open points (oacmpdm1 is sealed: no
+// sky light reaches its inside), is baked direct-only by hemi-bake lightmap on its own UVs and with
+// --unwrap, and 8 cameras near the lights look at surfaces those lights reach (no shadow edge within 0.5
+// units, not at a grazing angle: the lightmap holds E per texel of 0.2 to 0.4 units, the reference per
+// point). The 8 x 8 pixels at the centre of hemi-render --white (E / pi from the lightmap) agree with the
+// reference's (128 paths a pixel) within 10%: measured 26 of the 30 views compared within 2%, the others
+// +2.9%, +4.6%, -6.7% and +7.8%. On the own UVs, views whose texel q3map2 gave another face (lit alike under
+// Quake's lights, not under these) are printed, not compared (two on oacmpdm1: 0.0025 and 0.188 against
+// 0.062 and 0.082; the bake warns of it and --unwrap gives every face its own). Fails when the push moves
+// texels through front faces too (one view off by more than 10%), and for texels black where they are seen.
+TEST(RealLevel, TheLightmapAgreesWithTheReferenceFromOpenPoints)
+{
+    struct Case
+    {
+        std::filesystem::path pk3;
+        const char* map;
+    };
+    for (const Case& c : {Case{hemi::test::kOpenArenaCommunityMaps, "maps/oacmpdm1.bsp"},
+                          Case{hemi::test::kOpenArenaMaps, kMap}})
+    {
+        const std::string name = fs::path(c.map).stem().string();
+        const fs::path plain = dir() / (name + "_views.gltf");
+        hemi::io::write_gltf(plain, hemi::test::read_q3_level(c.pk3, c.map).scene);
+        std::vector<glm::vec3> lights;
+        std::vector<View> views;
+        const hemi::io::Mesh mesh = hemi::io::read_gltf(plain).mesh;
+        pick_views(mesh, 1024, 4, 8, lights, views);
+        ASSERT_EQ(views.size(), 8u) << name;
+        // On the level's own UVs, a view whose texel another triangle holds (q3map2 gave both faces one
+        // rectangle, lit alike under Quake's lights, not under these) shows the other face's light, as the
+        // bake's warning says; --unwrap gives every face its own.
+        hemi::bake::LightmapUvReport report;
+        const hemi::bake::LightmapAtlas atlas = hemi::bake::rasterize_lightmap(mesh, 1024, 1024, report);
+        std::vector<bool> shared;
+        for (const View& v : views)
+        {
+            const int32_t t = atlas.texel_of(int64_t(v.uv.x * 1024.0f), int64_t(v.uv.y * 1024.0f));
+            shared.push_back(t < 0 || atlas.texels[size_t(t)].triangle != v.triangle);
+        }
+        // The lights as KHR_lights_punctual nodes.
+        nlohmann::json j = nlohmann::json::parse(slurp(plain));
+        j["extensionsUsed"].push_back("KHR_lights_punctual");
+        for (size_t i = 0; i < lights.size(); ++i)
+        {
+            j["extensions"]["KHR_lights_punctual"]["lights"].push_back(
+                {{"type", "point"}, {"intensity", 30.0}, {"color", {1.0, 0.9, 0.8}}});
+            j["nodes"].push_back({{"translation", {lights[i].x, lights[i].y, lights[i].z}},
+                                  {"extensions", {{"KHR_lights_punctual", {{"light", int(i)}}}}}});
+            j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+        }
+        const fs::path scene = dir() / (name + "_lit.gltf");
+        std::ofstream(scene) << j.dump();
+        for (const glm::vec3& l : lights)
+        {
+            const glm::vec3 w = to_world(l);
+            std::printf("%s: a light at %.6g,%.6g,%.6g (world)\n", name.c_str(), w.x, w.y, w.z);
+        }
+        auto camera = [](const View& v)
+        {
+            char text[256];
+            std::snprintf(text, sizeof text, "%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", v.eye.x, v.eye.y, v.eye.z,
+                          v.target.x, v.target.y, v.target.z);
+            return std::string(text);
+        };
+        std::vector<double> reference;
+        for (size_t v = 0; v < views.size(); ++v)
+        {
+            const fs::path exr = dir() / (name + "_ref" + std::to_string(v) + ".exr");
+            const Result r =
+                hemi::test::run(dir(), HEMI_BAKE_EXE,
+                                "reference " + q(scene) + " -o " + q(exr) +
+                                    " --env uniform --env-scale 0 --white --size 64x48 --rays 128"
+                                    " --camera " +
+                                    camera(views[v]));
+            ASSERT_EQ(r.status, 0) << r.err;
+            reference.push_back(centre(exr));
+        }
+        for (const bool unwrap : {false, true})
+        {
+            const fs::path asset = dir() / (name + (unwrap ? "_unwrapped" : "") + "_lit.hemi");
+            const Result b = lightmap(q(scene) + " -o " + q(asset) +
+                                      " --size 1024 --rays 32 --bounces 0 --bases plain --env uniform "
+                                      "--env-scale 0" +
+                                      (unwrap ? " --unwrap" : ""));
+            ASSERT_EQ(b.status, 0) << b.err;
+            for (size_t v = 0; v < views.size(); ++v)
+            {
+                const fs::path exr = dir() / (name + "_lm" + std::to_string(v) + ".exr");
+                const Result r = hemi::test::run(dir(), HEMI_RENDER_EXE,
+                                                 q(asset) + " --technique plain --white --size 64x48 -o " +
+                                                     q(exr) + " --camera " + camera(views[v]),
+                                                 "HEMI_VALIDATION=1");
+                ASSERT_EQ(r.status, 0) << r.err;
+                const double lit = centre(exr);
+                std::printf("%s%s view %zu: reference %.4f, lightmap %.4f%s\n", name.c_str(),
+                            unwrap ? " unwrapped" : "", v, reference[v], lit,
+                            !unwrap && shared[v] ? " (a texel another triangle holds)" : "");
+                if (!unwrap && shared[v])
+                    continue;
+                EXPECT_NEAR(lit, reference[v], 0.1 * reference[v])
+                    << name << (unwrap ? " unwrapped" : "") << ", view " << v << " " << camera(views[v]);
+            }
+            fs::remove(asset);
         }
     }
 }
