@@ -296,6 +296,19 @@ TEST(LightmapBake, OpenPlaneUnderUniformRadianceBakesPi)
             ASSERT_NEAR(rnm.y, M_PI, 0.01 * M_PI);
     }
     EXPECT_LT(worst, 0.01);
+    // The outputs as stored: plain and rnm come from the bake's own integrals (sh.direct), not through SH9.
+    const hemi::io::BlockMaps plain = lightmap_maps("plain", a, sh), rnm = lightmap_maps("rnm", a, sh);
+    for (const LightmapTexel& t : a.texels)
+    {
+        const size_t slot = size_t(plain.grid.slot(t.x, t.y));
+        for (int c = 0; c < 3; ++c)
+        {
+            ASSERT_NEAR(plain.values[plain.index(0, slot) + size_t(c)], M_PI, 0.01 * M_PI) << "stored plain";
+            for (uint32_t i = 0; i < 3; ++i)
+                ASSERT_NEAR(rnm.values[rnm.index(i, slot) + size_t(c)], M_PI, 0.01 * M_PI)
+                    << "stored rnm " << i;
+        }
+    }
     EXPECT_EQ(sh.rays, 256u * 256u);
 }
 
@@ -449,6 +462,24 @@ TEST(LightmapBake, RnmColoursFollowTheSunPerDirection)
                 ASSERT_NEAR(rnm[size_t(i)][c], e * factor * cosine, 0.06 * e)
                     << "texel " << t << " direction " << i << " channel " << c;
             }
+        }
+    }
+    // The outputs as stored (lightmap_maps: rnm and plain from the bake's own integrals against their
+    // clamped cosines, not through SH9): exactly E max(0, B_i.l) times the factor, and E max(0, n.l) (a
+    // point sun, every sun ray the same). Fails when the direct integral swaps two directions.
+    const hemi::io::BlockMaps stored = lightmap_maps("rnm", a, sh), plain = lightmap_maps("plain", a, sh);
+    for (const LightmapTexel& t : a.texels)
+    {
+        const size_t slot = size_t(stored.grid.slot(t.x, t.y));
+        for (int c = 0; c < 3; ++c)
+        {
+            const double e = lights.sun_irradiance[c];
+            for (uint32_t i = 0; i < 3; ++i)
+                ASSERT_NEAR(stored.values[stored.index(i, slot) + size_t(c)],
+                            e * factor * std::max(0.0, glm::dot(b[i], l)), 1e-5 * e)
+                    << "stored rnm, texel " << t.x << ", " << t.y << " direction " << i << " channel " << c;
+            ASSERT_NEAR(plain.values[plain.index(0, slot) + size_t(c)], e * l.z, 1e-5 * e)
+                << "stored plain, texel " << t.x << ", " << t.y << " channel " << c;
         }
     }
 }
@@ -2097,10 +2128,10 @@ TEST(LightmapSeams, FindsTheEdgeTwoChartsShareAndMeasuresTheStepAcrossIt)
 }
 
 // Seam stitching on the two-chart floor above, every one of SH9's 9 coefficients with a step of its own
-// between the charts (some up, some down): the step closes at least 10x in every coefficient (issue 25's
-// goal; measured at the metric's points, a texel apart, not at the stitch's Gauss points), only texels within
-// the lookups' reach of the seam change (the rest keep their bits), and a field both charts already agree on
-// keeps its bits. A field linear in world x, baked at each chart's texel centres (so the dilation
+// between the charts (some up, some down): the step closes at least 100x in every coefficient (issue 25's
+// goal is 10x; measured at the metric's points, a texel apart, not at the stitch's Gauss points), only texels
+// within the lookups' reach of the seam change (the rest keep their bits), and a field both charts already
+// agree on keeps its bits. A field linear in world x, baked at each chart's texel centres (so the dilation
 // extrapolates it flat and each side's lookup is off at the seam in opposite directions), is stitched to
 // within a quarter of its unstitched error of the true value along the seam.
 TEST(LightmapSeams, StitchingClosesTheStepAndChangesOnlyTexelsAlongTheSeam)
@@ -2148,7 +2179,8 @@ TEST(LightmapSeams, StitchingClosesTheStepAndChangesOnlyTexelsAlongTheSeam)
         std::printf("coefficient %u: seam difference %.5f before, %.6f after (%.0fx)\n", k, before.mean,
                     after.mean, before.mean / after.mean);
         EXPECT_GT(before.mean, 0.01) << k;
-        EXPECT_LE(after.mean, before.mean / 10.0) << k;
+        // docs/lightmaps.md: 140x (issue 25's goal 10x); one Gauss point per seam piece closes it 38x.
+        EXPECT_LE(after.mean, before.mean / 100.0) << k;
     }
     // Only texels within reach of the seam's lookups changed: side A's edge is at texel x 14.4, B's at 17.6,
     // and a bilinear lookup reads the texels whose centres lie within one texel of the point.
@@ -2758,7 +2790,8 @@ TEST(LightmapSeams, StitchingClosesTheWholeEdgeAndFlagsFramesThatDiffer)
                                                 maps.bilinear(0, s.b0 + (s.b1 - s.b0) * t).x)));
     }
     std::printf("sides apart by at most %.2e along the stitched seam\n", worst);
-    EXPECT_LT(worst, 1e-4);
+    // docs/lightmaps.md: 5e-6; one Gauss point per seam piece leaves 8.3e-5.
+    EXPECT_LT(worst, 1e-5);
 
     Mesh turned = m;
     for (size_t v = 4; v < 8; ++v)

@@ -15,6 +15,7 @@
 
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/transfer_fold.h>
+#include <hemi/gpu/commands.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/camera.h>
@@ -28,6 +29,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -169,4 +171,91 @@ TEST_F(EnginePath, NoLibraryCallSubmitsOrWaits)
     EXPECT_EQ(calls.queue_work(), 0u) << "destroying hemi's objects submitted or waited";
     vkDestroyFence(host.vk_device, fence, nullptr);
     vkDestroyCommandPool(host.vk_device, pool, nullptr);
+}
+
+// The README's sorted frame (hemi-bench's scale/frame at the same scale): 1,000 probe-lit objects of 10
+// primitives alternating two material types (single- and double-sided), 10,000 draws, their lighting
+// written every frame through mapped memory. Counted by the adopted device's entry points
+// (tests/vulkan_calls.h), as a capture would show them: the sorted frame records 2 pipeline binds (the same
+// packets in the order they were made, 10,000), and neither the lighting writes nor the frame's command
+// buffer record a barrier or a buffer update. Fails when DrawQueue::sort() leaves the order as made, or when
+// the per-frame data goes through vkCmdUpdateBuffer or needs a barrier.
+TEST_F(EnginePath, ASortedFrameOfTenThousandDrawsBindsEachMaterialTypeOnce)
+{
+    using namespace hemi;
+    gpu::Device& base = test::device();
+    gpu::ExternalDevice adopt{base.instance(), base.physical_device(), base.device(),
+                              base.queue(),    base.queue_family(),    {}};
+    adopt.get_instance_proc_addr = test::counting_proc_addr;
+    gpu::Device dev(adopt);
+    test::VulkanCalls& calls = test::vulkan_calls();
+    constexpr uint32_t kObjects = 1000, kPrimitives = 10, kInFlight = 2;
+    render::OffscreenTarget target(dev, 16, 16);
+    render::MaterialSystem system(dev, target.desc());
+    gpu::UploadBatch upload(dev);
+    const io::Mesh mesh = io::make_uv_sphere(1.0f, 10, 5);
+    std::vector<io::Material> materials(2);
+    materials[1].double_sided = true;
+    std::vector<io::Primitive> parts;
+    const uint32_t triangles = uint32_t(mesh.indices.size() / 3);
+    for (uint32_t p = 0; p < kPrimitives; ++p)
+    {
+        const uint32_t first = triangles * p / kPrimitives, last = triangles * (p + 1) / kPrimitives;
+        parts.push_back({first * 3, (last - first) * 3, p % 2});
+    }
+    render::ProbeObject spheres(system, mesh, {}, materials, parts, kObjects, upload, kInFlight);
+    render::FrameSet frame_set(system, kInFlight, kObjects);
+    upload.submit_and_wait();
+
+    std::vector<glm::vec3> sh(9, glm::vec3(0.0f));
+    render::DrawQueue queue;
+    for (uint32_t frame = 0; frame < 2; ++frame)
+    {
+        const uint32_t slot = frame % kInFlight;
+        calls.reset();
+        render::FrameData f;
+        f.view_projection = glm::scale(glm::mat4(1.0f), glm::vec3(0.02f, 0.02f, 0.5f));
+        frame_set.write(slot, f);
+        for (uint32_t i = 0; i < kObjects; ++i)
+        {
+            sh[0] = glm::vec3(1.0f + 0.5f * std::sin(0.1f * float(frame + i)));
+            spheres.write_lighting(i, sh, slot);
+        }
+        EXPECT_EQ(calls.pipeline_barriers, 0u) << "the lighting writes";
+        EXPECT_EQ(calls.buffer_updates, 0u) << "the lighting writes";
+        queue.clear();
+        for (uint32_t i = 0; i < kObjects; ++i)
+            spheres.enqueue(queue, frame_set.set(slot), i,
+                            glm::translate(glm::mat4(1.0f),
+                                           glm::vec3(float(i % 40) - 20.0f, float(i / 40) - 12.0f, 0.0f)),
+                            slot, 0, float(i) / float(kObjects));
+        queue.sort();
+        render::DrawStats stats;
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          target.begin(cmd);
+                          calls.reset();
+                          stats = queue.record(cmd);
+                          EXPECT_EQ(calls.pipeline_binds, 2u) << "frame " << frame;
+                          EXPECT_EQ(calls.draws, uint64_t(kObjects) * kPrimitives);
+                          EXPECT_EQ(calls.pipeline_barriers, 0u);
+                          EXPECT_EQ(calls.buffer_updates, 0u);
+                          target.end(cmd);
+                      });
+        EXPECT_EQ(stats.pipeline_binds, 2u);
+    }
+    // The same draws in the order they were made (each object's primitives in turn): a bind per draw.
+    render::DrawQueue made;
+    for (uint32_t i = 0; i < kObjects; ++i)
+        spheres.enqueue(made, frame_set.set(0), i, glm::mat4(1.0f), 0);
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      target.begin(cmd);
+                      calls.reset();
+                      render::record_packets(cmd, made.packets());
+                      EXPECT_EQ(calls.pipeline_binds, uint64_t(kObjects) * kPrimitives);
+                      target.end(cmd);
+                  });
 }

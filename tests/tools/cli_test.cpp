@@ -1241,8 +1241,11 @@ TEST(BakeCli, DenoiseFiltersTheBakedTexels)
     const double worst_denoised = worst(denoised, mean_denoised), worst_noisy = worst(noisy, mean_noisy);
     std::printf("floor at 8 rays: worst texel off pi by %.4f, denoised %.4f; mean %.5f, denoised %.5f\n",
                 worst_noisy, worst_denoised, mean_noisy / M_PI, mean_denoised / M_PI);
+    // docs/lightmaps.md: within 1.7% of pi (6.6% without), and the filter keeps each chart's light: the
+    // mean is the undenoised one (to the halves' rounding, averaged over 256 texels).
+    EXPECT_LE(worst_denoised, 0.02);
     EXPECT_LE(worst_denoised, 0.5 * worst_noisy);
-    EXPECT_NEAR(mean_denoised / M_PI, 1.0, 0.005);
+    EXPECT_NEAR(mean_denoised, mean_noisy, 1e-4 * mean_noisy);
     const Result bad = lightmap(q(scene) + " -o " + q(dir() / "bad.hemi") +
                                 " --size 16 --rays 8 --denoise --denoise-passes 0");
     EXPECT_NE(bad.status, 0);
