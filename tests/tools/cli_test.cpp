@@ -23,14 +23,19 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -1963,23 +1968,55 @@ TEST(HostileCli, OutputsAreNeitherInputsNorEachOther)
     EXPECT_FALSE(fs::exists(s));
 }
 
-// Outputs are regular files: a FIFO (or a device) named as any output of any command is refused before the
-// work, and stays what it was.
+// Outputs are regular files: a FIFO, a socket or a device named as any output of any command is refused
+// before the work, and stays what it was. (The device is made with mknod, /dev/null's numbers; a user
+// without CAP_MKNOD runs the FIFO and the socket only, and the test says so.)
 TEST(HostileCli, OutputsThatAreNotRegularFilesAreRefused)
 {
-    for (const auto& c : every_command(dir() / "fifo_out"))
+    enum Kind
     {
-        const std::string ext =
-            c.second.substr(c.second.rfind('.'), c.second.size() - c.second.rfind('.') - 1);
-        const fs::path fifo = dir() / ("fifo_out" + ext);
-        fs::remove(fifo);
-        ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-        const Result r = run(c.first, c.second);
-        EXPECT_EQ(r.status, 1) << name_of(c) << "\n" << r.err;
-        EXPECT_NE(r.err.find("not a regular file"), std::string::npos) << name_of(c) << "\n" << r.err;
-        EXPECT_TRUE(fs::is_fifo(fifo)) << name_of(c) << ": the FIFO was replaced";
-        fs::remove(fifo);
-    }
+        Fifo,
+        Socket,
+        Device
+    };
+    for (const Kind kind : {Fifo, Socket, Device})
+        for (const auto& c : every_command(dir() / "special_out"))
+        {
+            const std::string ext =
+                c.second.substr(c.second.rfind('.'), c.second.size() - c.second.rfind('.') - 1);
+            const fs::path special = dir() / ("special_out" + ext);
+            fs::remove(special);
+            int socket = -1;
+            if (kind == Fifo)
+                ASSERT_EQ(::mkfifo(special.c_str(), 0600), 0);
+            else if (kind == Socket)
+            {
+                socket = ::socket(AF_UNIX, SOCK_STREAM, 0);
+                ASSERT_GE(socket, 0);
+                sockaddr_un address{};
+                address.sun_family = AF_UNIX;
+                ASSERT_LT(special.string().size(), sizeof(address.sun_path));
+                std::strcpy(address.sun_path, special.c_str());
+                ASSERT_EQ(::bind(socket, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+            }
+            else if (::mknod(special.c_str(), S_IFCHR | 0600, ::makedev(1, 3)) != 0)
+            {
+                ASSERT_EQ(errno, EPERM) << std::strerror(errno);
+                std::printf("the device case needs CAP_MKNOD: not run\n");
+                break;
+            }
+            const fs::file_status before = fs::symlink_status(special);
+            const Result r = run(c.first, c.second);
+            EXPECT_EQ(r.status, 1) << name_of(c) << " (kind " << kind << ")\n" << r.err;
+            EXPECT_NE(r.err.find("not a regular file"), std::string::npos)
+                << name_of(c) << " (kind " << kind << ")\n"
+                << r.err;
+            EXPECT_EQ(fs::symlink_status(special).type(), before.type())
+                << name_of(c) << " (kind " << kind << "): it was replaced";
+            if (socket >= 0)
+                ::close(socket);
+            fs::remove(special);
+        }
 }
 
 // Every command's outputs are checked before its work: a missing folder and a folder it may not write (a
@@ -2403,7 +2440,7 @@ TEST(HostileCli, WhatCannotFitIsRefusedWithTheEstimate)
 
 // A lightmap bake's memory and its asset follow the texels the scene covers, not the atlas: the floor laid
 // out in a square of one texel of a 4096^2 atlas (4 texels of a 16384^2 one) bakes under a 256 MiB budget,
-// with a peak (the process's own high-water mark, in its JSON) under it and an asset of a few kilobytes
+// with a peak (the process's own high-water mark, in its JSON) under 32 MiB and an asset under 64 KiB
 // (the dense layout took 12 GB and wrote 3 GB); the texel holds the open floor's pi, and every other texel
 // is 0 beyond the dilation.
 TEST(HostileCli, LightmapMemoryAndAssetFollowTheCoveredTexels)
@@ -2427,9 +2464,16 @@ TEST(HostileCli, LightmapMemoryAndAssetFollowTheCoveredTexels)
         const uint32_t texels = size / 4096; // along a side
         EXPECT_EQ(j["covered_texels"], texels * texels);
         EXPECT_LE(j["stored_blocks"].get<uint64_t>(), 4u);
+        // docs/lightmaps.md: peaks of 13 and 20 MB (the whole process), assets of 48 KB.
+        std::printf("%u^2: peak %.1f MiB, asset %.1f KiB\n", size,
+                    j["peak_memory_bytes"].get<double>() / 1048576.0, double(fs::file_size(asset)) / 1024.0);
         EXPECT_GT(j["peak_memory_bytes"].get<uint64_t>(), 0u);
-        EXPECT_LT(j["peak_memory_bytes"].get<uint64_t>(), uint64_t(256) << 20);
-        EXPECT_LT(fs::file_size(asset), uint64_t(1) << 20);
+#if defined(__SANITIZE_ADDRESS__)
+        EXPECT_LT(j["peak_memory_bytes"].get<uint64_t>(), uint64_t(256) << 20); // and the sanitizer's own
+#else
+        EXPECT_LT(j["peak_memory_bytes"].get<uint64_t>(), uint64_t(32) << 20);
+#endif
+        EXPECT_LT(fs::file_size(asset), uint64_t(64) << 10);
         const std::string warnings = j["warnings"].dump();
         EXPECT_NE(warnings.find("store only the 8x8 blocks"), std::string::npos) << warnings;
         const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
