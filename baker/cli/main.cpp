@@ -297,6 +297,9 @@ int run_ssbump(SsbumpCli& c)
     }
     bake::check_ssbump_options(o); // before the map is read: a bad option fails at once
     o.checkpoint = bake::checkpoint_path(c.output);
+    std::optional<hemi::io::OutputLock> lock; // one job per output (and its checkpoint): on the leader
+    if (leader)
+        lock.emplace(c.output);
     // The map's size from its header, so that one the machine cannot hold is refused before it is read.
     if (const uint64_t texels = hemi::io::image_pixels(c.input))
         hemi::io::check_memory(bake::ssbump_memory(texels, o),

@@ -192,6 +192,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             for (const std::string& name : o.outputs)
                 io::check_writable(lightmap_exr_path(o.exr_dir, asset_path, name));
     }
+    // One job per output: a second bake to the same asset (its checkpoint, tiles and spool are named after
+    // it) is refused, naming the first.
+    std::optional<io::OutputLock> lock;
+    if (leader)
+        lock.emplace(asset_path);
     // An EXR holds the whole atlas as one image: read_exr's and most tools' limit.
     if (!o.exr_dir.empty() && (o.width > 16384 || o.height > 16384))
         throw std::invalid_argument("--exr-dir writes each output as one image of the whole atlas, at most "

@@ -464,10 +464,13 @@ PrtBakeSummary bake_prt_file(const std::filesystem::path& scene_path, const std:
     // Under a distribution, the other ranks only compute: rank 0 checks and writes every output.
     const bool leader = !o.bake.distribution || o.bake.distribution->leader();
     // Fail fast: the outputs' folders are checked before the scene is even read.
+    // One job per output: a second bake to the same asset (and checkpoint) is refused, naming the first.
+    std::optional<io::OutputLock> lock;
     if (leader)
     {
         io::check_writable(asset_path);
         io::check_writable(o.bake.checkpoint);
+        lock.emplace(asset_path);
     }
     const io::GltfScene scene = io::read_gltf(scene_path);
     // The asset carries the scene's images: each is decoded once now, so a corrupt one stops the bake

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <system_error>
@@ -46,6 +47,66 @@ void check_writable(const std::filesystem::path& path)
 {
     if (std::string problem = output_problem(path); !problem.empty())
         throw FormatError(path.string() + ": cannot write: " + problem);
+}
+
+std::filesystem::path OutputLock::lock_path(const std::filesystem::path& output)
+{
+    return output.string() + ".lock";
+}
+
+OutputLock::OutputLock(const std::filesystem::path& output) : path_(lock_path(output))
+{
+    // Open (or make) the lock file, take it, and check that the name still leads to the file taken: a holder
+    // that finished removed its lock after another job opened it, and the taken file is then no one's.
+    for (int attempt = 0; attempt < 100; ++attempt)
+    {
+        errno = 0;
+        const int fd = ::open(path_.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+        if (fd < 0)
+            throw FormatError(path_.string() + ": cannot make the lock that keeps two jobs off " +
+                              output.string() + ": " + std::strerror(errno));
+        if (::flock(fd, LOCK_EX | LOCK_NB) != 0)
+        {
+            const int error = errno;
+            char text[32] = {};
+            const ssize_t got = ::pread(fd, text, sizeof text - 1, 0);
+            ::close(fd);
+            if (error != EWOULDBLOCK)
+                throw FormatError(path_.string() + ": cannot take the lock: " + std::strerror(error));
+            const std::string holder = got > 0 ? std::string(text, size_t(got)) : std::string("?");
+            throw FormatError(output.string() + ": is being written by process " +
+                              holder.substr(0, holder.find_first_of("\n ")) +
+                              " (another job with the same output, which holds " + path_.string() +
+                              "): wait for it, or give this job another output");
+        }
+        struct stat held
+        {
+        }, named{};
+        if (::fstat(fd, &held) == 0 && ::lstat(path_.c_str(), &named) == 0 && held.st_dev == named.st_dev &&
+            held.st_ino == named.st_ino)
+        {
+            const std::string pid = std::to_string(::getpid()) + "\n";
+            if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) != ssize_t(pid.size()))
+            {
+                const int error = errno;
+                ::unlink(path_.c_str());
+                ::close(fd);
+                throw FormatError(path_.string() + ": cannot write the lock: " + std::strerror(error));
+            }
+            fd_ = fd;
+            return;
+        }
+        ::close(fd); // removed or replaced under us: take the new one
+    }
+    throw FormatError(path_.string() + ": cannot take the lock: it keeps being replaced");
+}
+
+OutputLock::~OutputLock()
+{
+    if (fd_ < 0)
+        return;
+    ::unlink(path_.c_str()); // while still held, so that no other job takes the removed file
+    ::close(fd_);
 }
 
 int create_new_file(const std::filesystem::path& path)

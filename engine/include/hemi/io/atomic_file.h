@@ -43,6 +43,27 @@ void check_temporary(const std::filesystem::path& path);
 // its name; refused, naming it, when it is not a regular file. Throws FormatError naming `path`.
 int open_existing_file(const std::filesystem::path& path);
 
+// A job's hold on its output: while it lives, no other job (in this or another process) takes the same
+// output, nor its checkpoint, tiles and spool, which are named after it. The lock is "<output>.lock" beside
+// it, created without following a link, held with flock (so a killed job's lock goes with its process) and
+// holding the holder's process id; it is removed when the lock goes. Throws FormatError naming the output
+// and the process that holds it ("is being written by process N: ...") when another job has it, or naming
+// the lock file when it cannot be made.
+class OutputLock
+{
+  public:
+    explicit OutputLock(const std::filesystem::path& output);
+    ~OutputLock();
+    OutputLock(const OutputLock&) = delete;
+    OutputLock& operator=(const OutputLock&) = delete;
+
+    static std::filesystem::path lock_path(const std::filesystem::path& output);
+
+  private:
+    std::filesystem::path path_;
+    int fd_ = -1;
+};
+
 // The temporary files write_atomically uses for `path` ("<name>.tmp<pid>.<n>" beside it) whose process no
 // longer runs: what a write killed before its rename left. Removed by the next write of `path`.
 std::vector<std::filesystem::path> stale_temporaries(const std::filesystem::path& path);
