@@ -16,6 +16,8 @@
 #include "context.h"
 #include "renderer.h"
 
+#include <hemi/io/atomic_file.h>
+
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -23,6 +25,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -164,6 +167,22 @@ int main(int argc, char** argv)
         }
         if (!screenshot.empty() && frames == 0)
             throw std::invalid_argument("--screenshot needs --frames N (interactively, press P)");
+        // The screenshot follows the tools' output rules, checked before the assets or a frame: a PNG, in a
+        // folder it can be written to, and none of the assets (inputs) the sample reads from --assets.
+        if (!screenshot.empty())
+        {
+            const std::filesystem::path shot(screenshot);
+            if (shot.extension() != ".png")
+                throw std::invalid_argument("--screenshot must end in .png, got '" + screenshot + "'");
+            std::error_code ec;
+            if (shot.filename().string().rfind("engine_", 0) == 0 &&
+                std::filesystem::weakly_canonical(shot.parent_path().empty() ? "." : shot.parent_path(),
+                                                  ec) == std::filesystem::weakly_canonical(assets_dir, ec))
+                throw std::invalid_argument("--screenshot " + screenshot + " is in --assets " + assets_dir +
+                                            " under an asset's name (engine_*): the screenshot would "
+                                            "overwrite the sample's input");
+            hemi::io::check_writable(shot);
+        }
 
         const auto t0 = std::chrono::steady_clock::now();
         const hemi::samples::EngineAssets assets = hemi::samples::prepare_engine_assets(

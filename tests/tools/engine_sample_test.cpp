@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 
 namespace
@@ -85,8 +86,8 @@ TEST(EngineSample, BakedLevelEqualsHemiRenderAtTheSameCamera)
 
 } // namespace
 
-// Numbers on its command line are finite and in range, and a usage error exits 1 (CLI11's own codes were
-// 105 and 109), before any window or device is made.
+// Numbers on its command line are finite and in range, a usage error exits 1 (CLI11's own codes were 105
+// and 109), and the screenshot is checked as an output, all before any asset, window or device is made.
 TEST(EngineSample, UsageErrorsExitOneBeforeAnyFrame)
 {
     const fs::path dir = hemi::test::temp_dir("engine_sample_usage");
@@ -98,5 +99,26 @@ TEST(EngineSample, UsageErrorsExitOneBeforeAnyFrame)
         EXPECT_EQ(r.status, 1) << bad << ": " << r.out << r.err;
         EXPECT_EQ(r.out.find("frames at"), std::string::npos) << bad;
     }
+    // Issue 41, defects 11 and 12: the screenshot follows the tools' output rules before any asset is baked
+    // or frame drawn (it used to replace the level asset with a PNG, exit 0, and a missing folder failed
+    // after every frame): an asset's name in the assets folder, a missing folder, another extension.
+    fs::create_directories(dir / "assets");
+    const std::string level = (dir / "assets" / "engine_level.hemi").string();
+    std::ofstream(level) << "the level asset";
+    for (const auto& [shot, says] :
+         {std::pair{level, std::string("must end in .png")},
+          std::pair{(dir / "assets" / "engine_sky.png").string(),
+                    std::string("overwrite the sample's input")},
+          std::pair{(dir / "no_such_folder" / "s.png").string(), std::string("no_such_folder")},
+          std::pair{(dir / "s.jpg").string(), std::string("must end in .png")}})
+    {
+        const hemi::test::Result r =
+            hemi::test::run(dir, HEMI_ENGINE_SAMPLE_EXE,
+                            "--assets " + q(dir / "assets") + " --frames 100 --screenshot " + q(shot));
+        EXPECT_EQ(r.status, 1) << shot << ": " << r.out << r.err;
+        EXPECT_NE(r.err.find(says), std::string::npos) << shot << ": " << r.err;
+        EXPECT_EQ(r.err.find("baking"), std::string::npos) << shot << ": the assets were baked first";
+    }
+    EXPECT_EQ(hemi::test::slurp(level), "the level asset");
     fs::remove_all(dir);
 }
