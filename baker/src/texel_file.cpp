@@ -4,18 +4,23 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+// Header-only xxHash (Debian libxxhash-dev), as io/asset.cpp uses it: no link dependency.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace hemi::bake
 {
 namespace
 {
 constexpr char kMagic[8] = {'H', 'E', 'M', 'I', 'T', 'I', 'L', 'E'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2; // 2: a checksum per block of items
 constexpr uint64_t kHeaderBytes = 64;
 constexpr size_t kMaxFields = 8;
 constexpr int kCopies = 2;
@@ -114,12 +119,26 @@ TexelFile::~TexelFile()
     }
 }
 
+uint64_t TexelFile::blocks() const
+{
+    return (uint64_t(items_) + kBlockItems - 1) / kBlockItems;
+}
+
 uint64_t TexelFile::bytes() const
 {
     uint64_t per_item = 0;
     for (uint32_t b : field_bytes_)
         per_item += b;
-    return kHeaderBytes + kCopies * per_item * items_;
+    return kHeaderBytes + kCopies * per_item * items_ + kCopies * field_bytes_.size() * blocks() * 8;
+}
+
+uint64_t TexelFile::checksum_offset(int copy, size_t field, uint64_t block) const
+{
+    uint64_t per_item = 0;
+    for (uint32_t b : field_bytes_)
+        per_item += b;
+    return kHeaderBytes + kCopies * per_item * items_ +
+           ((uint64_t(copy) * field_bytes_.size() + field) * blocks() + block) * 8;
 }
 
 uint64_t TexelFile::offset(int copy, size_t field, uint32_t first, size_t count) const
@@ -162,16 +181,75 @@ void transfer(int fd, Byte* data, size_t size, uint64_t at, Move move, const std
 }
 } // namespace
 
+namespace
+{
+// A block's checksum as stored: 0 is kept for a block never written.
+uint64_t block_checksum(const std::byte* data, size_t size)
+{
+    const uint64_t h = XXH64(data, size, 0);
+    return h ? h : 1;
+}
+} // namespace
+
+// The checksums of the blocks that items [first, first + count) touch, in `out` (blocks first / kBlockItems
+// on): from `bytes` (those items' bytes) where a block lies inside them, else from the block read whole.
+void TexelFile::checksums(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes,
+                          std::vector<uint64_t>& out) const
+{
+    const size_t item_bytes = field_bytes_[field];
+    const uint64_t count = bytes.size() / item_bytes;
+    out.clear();
+    std::vector<std::byte> whole;
+    for (uint64_t b = first / kBlockItems; b * kBlockItems < uint64_t(first) + count; ++b)
+    {
+        const uint64_t lo = b * kBlockItems, hi = std::min<uint64_t>(lo + kBlockItems, items_);
+        if (lo >= first && hi <= uint64_t(first) + count)
+            out.push_back(block_checksum(bytes.data() + (lo - first) * item_bytes, (hi - lo) * item_bytes));
+        else
+        {
+            whole.resize((hi - lo) * item_bytes);
+            transfer(fd_, whole.data(), whole.size(), offset(copy, field, uint32_t(lo), hi - lo), ::pread,
+                     path_, "reading the bake's tiles back");
+            out.push_back(block_checksum(whole.data(), whole.size()));
+        }
+    }
+}
+
 void TexelFile::write(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes)
 {
     const uint64_t at = offset(copy, field, first, bytes.size() / field_bytes_.at(field));
     transfer(fd_, bytes.data(), bytes.size(), at, ::pwrite, path_, "writing the bake's tiles");
+    // Then the checksums of the blocks it touched (a block it covers in part is hashed whole, as written).
+    std::vector<uint64_t> sums;
+    checksums(copy, field, first, bytes, sums);
+    if (!sums.empty())
+        transfer(fd_, reinterpret_cast<const std::byte*>(sums.data()), sums.size() * 8,
+                 checksum_offset(copy, field, first / kBlockItems), ::pwrite, path_,
+                 "writing the bake's tiles");
 }
 
 void TexelFile::read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const
 {
     const uint64_t at = offset(copy, field, first, bytes.size() / field_bytes_.at(field));
     transfer(fd_, bytes.data(), bytes.size(), at, ::pread, path_, "reading the bake's tiles back");
+    std::vector<uint64_t> sums, stored;
+    checksums(copy, field, first, bytes, sums);
+    stored.resize(sums.size());
+    if (!sums.empty())
+        transfer(fd_, reinterpret_cast<std::byte*>(stored.data()), stored.size() * 8,
+                 checksum_offset(copy, field, first / kBlockItems), ::pread, path_,
+                 "reading the bake's tiles back");
+    for (size_t i = 0; i < sums.size(); ++i)
+        if (sums[i] != stored[i])
+        {
+            const uint64_t lo = (first / kBlockItems + i) * kBlockItems;
+            throw io::FormatError(path_.string() + ": the bake's tiles are damaged (copy " +
+                                  std::to_string(copy) + ", array " + std::to_string(field) + ", items " +
+                                  std::to_string(lo) + " to " +
+                                  std::to_string(std::min<uint64_t>(lo + kBlockItems, items_) - 1) +
+                                  (stored[i] ? " do not match their checksum" : " were never written") +
+                                  "); remove the checkpoint (ASSET.partial) and the tiles to bake afresh");
+        }
 }
 
 void TexelFile::sync()

@@ -743,6 +743,64 @@ TEST(LightmapBake, ADenoisedBakeInTilesStoppedAfterItsPassesResumesToTheSameByte
         EXPECT_TRUE(bake("stop_" + stop, stop) == whole) << "stopped after " << stop << ", the bytes differ";
 }
 
+// Issue 41, defect 3: a tile file altered between a kill and the rerun (2,000 floats times 1.5) resumed with
+// exit 0 and other bytes, and random bytes gave a half-float error naming the scene. Each block of 1024
+// items of the tile file carries a checksum, written with it and checked on every read: the rerun is refused,
+// naming the tile file and the items. Stopped after its passes (on_stage), the bake's tiles are altered in
+// one float of the last pass's copy, and the rerun throws; the unaltered file resumes.
+TEST(LightmapBake, ATileFileAlteredBeforeTheResumeIsRefusedNamingIt)
+{
+    const std::filesystem::path dir = hemi::test::temp_dir("lightmap_test");
+    const std::filesystem::path scene = hemi::test::write_post_scene(dir / "damaged_post.glb");
+    LightmapFileOptions o;
+    o.width = o.height = 128;
+    o.outputs = {"sh9", "plain"};
+    o.bake.rays = 4;
+    o.denoise = true;
+    o.memory_budget = uint64_t(7) << 20; // in tiles, as in the test above
+    const std::filesystem::path asset = dir / "damaged.hemi", tiles = lightmap_tile_path(asset);
+    o.bake.checkpoint = dir / "damaged.partial";
+    o.on_stage = [](std::string_view stage)
+    {
+        if (stage == "bake")
+            throw std::runtime_error("stopped");
+    };
+    EXPECT_THROW(bake_lightmap_file(scene, asset, o), std::runtime_error);
+    ASSERT_TRUE(std::filesystem::exists(tiles));
+    const std::string good = [&]
+    {
+        std::ifstream in(tiles, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    }();
+    {
+        // A float of the first array of copy 0 (the one pass), a few hundred texels in.
+        std::fstream f(tiles, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(64 + 4 * 1000);
+        float x = 0.0f;
+        f.read(reinterpret_cast<char*>(&x), 4);
+        x = x * 1.5f + 1.0f;
+        f.seekp(64 + 4 * 1000);
+        f.write(reinterpret_cast<const char*>(&x), 4);
+    }
+    o.on_stage = {};
+    try
+    {
+        bake_lightmap_file(scene, asset, o);
+        ADD_FAILURE() << "the altered tiles were resumed";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(tiles.string() + ": the bake's tiles are damaged"), std::string::npos) << what;
+        EXPECT_NE(what.find("do not match their checksum"), std::string::npos) << what;
+    }
+    EXPECT_FALSE(std::filesystem::exists(asset));
+    std::ofstream(tiles, std::ios::binary) << good; // as the bake left it
+    const LightmapBakeSummary resumed = bake_lightmap_file(scene, asset, o);
+    EXPECT_TRUE(resumed.resumed);
+    EXPECT_TRUE(std::filesystem::exists(asset));
+}
+
 // A bake in tiles (LightmapBakeOptions::tile_texels: --memory-budget) keeps the sums of its passes in a file
 // and one tile of them in memory: inside the closed furnace box with 2 bounces and the denoiser's noise,
 // tiles of 97 texels (not a divisor of anything) give the bytes of the bake in memory, in the sums, in every

@@ -11,7 +11,10 @@
 // uninterrupted bake.
 //
 // The file: a 64-byte header ("HEMITILE", format version, the bake's key, items, fields, copies, each
-// field's bytes per item), then copy after copy, in each the fields' arrays one after the other. Its blocks
+// field's bytes per item), then copy after copy, in each the fields' arrays one after the other, then a
+// checksum (XXH64) per copy, array and block of kBlockItems items, updated by every write and checked by
+// every read: a file altered between a kill and the resume (a disk's fault, another program) is refused,
+// naming it and the items, instead of resuming to other bytes. Its blocks
 // are allocated when it is created (posix_fallocate: a disk without room for it fails then, not halfway
 // through a bake); I/O by pread / pwrite; a failure throws io::FormatError naming the file.
 #include <cstddef>
@@ -36,7 +39,8 @@ class TexelFile
     TexelFile& operator=(const TexelFile&) = delete;
 
     // Items [first, first + count) of array `field` in `copy` (0 or 1), from or to `bytes`
-    // (count * field_bytes[field] bytes).
+    // (count * field_bytes[field] bytes). read() throws io::FormatError naming the file when a block it
+    // reads does not match its checksum, or was never written.
     void write(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes);
     void read(int copy, size_t field, uint32_t first, std::span<std::byte> bytes) const;
     // Every write so far on disk (fdatasync): before a checkpoint says the tiles written are done.
@@ -48,8 +52,14 @@ class TexelFile
     uint32_t items() const { return items_; }
     uint64_t bytes() const; // the file's size
 
+    static constexpr uint64_t kBlockItems = 1024; // items per checksum
+
   private:
     uint64_t offset(int copy, size_t field, uint32_t first, size_t count) const;
+    uint64_t blocks() const;
+    uint64_t checksum_offset(int copy, size_t field, uint64_t block) const;
+    void checksums(int copy, size_t field, uint32_t first, std::span<const std::byte> bytes,
+                   std::vector<uint64_t>& out) const;
     std::filesystem::path path_;
     uint32_t items_;
     std::vector<uint32_t> field_bytes_;
