@@ -8,6 +8,8 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <system_error>
@@ -146,6 +148,15 @@ bool SliceCheckpoint::slice_done(uint32_t pass, uint32_t next_item, bool now)
     {
         save(position);
         saved = true;
+        // For tests of a killed job (docs/testing.md): HEMI_TEST_KILL_AFTER_PASS=N kills this process, as a
+        // machine failure would, once a saved checkpoint stands in pass N or later.
+        if (const char* kill_after = std::getenv("HEMI_TEST_KILL_AFTER_PASS"))
+        {
+            char* end = nullptr;
+            const long n = std::strtol(kill_after, &end, 10);
+            if (end != kill_after && *end == '\0' && n >= 0 && position.pass >= uint64_t(n))
+                std::raise(SIGKILL);
+        }
     }
     catch (const std::exception& e)
     {
