@@ -2601,3 +2601,69 @@ TEST(HostileCli, ASecondJobWithTheSameOutputIsRefusedNamingTheFirst)
         EXPECT_FALSE(fs::exists(hemi::io::OutputLock::lock_path(output))) << name << ": the lock stayed";
     }
 }
+
+// Issue 41, claim 11: pages up to 65536^2 were drawn only under uniform light, where a wrong page mapping
+// does not show. The post scene (a floor and a post) under a point-like sun (diameter 0: every sun ray the
+// same, so the texels are exact and the same wherever they lie) casts the post's shadow; its whole atlas is
+// laid into a 100 x 100-texel square at an integer texel offset of a 128^2, a 20000^2 and a 65536^2 atlas
+// (the square's texel centres fall on the same points of the scene in all three). hemi-render draws the
+// three from one camera: the large atlases' images equal the small one's within 1% of its brightest pixel in
+// all but 0.1% of the values, and the image is not uniform (the shadow and the lit floor differ by more than
+// half). Measured: 20000^2 within 0.3% everywhere; 65536^2 two pixels (6 values of 16384) off by up to 6%, at
+// the post's foot: at 65536 a float UV near 1 moves the texel grid by up to 0.004 texel, enough to give a
+// texel the post's edge grazes to the other face. A wrong page mapping moves or blacks out whole pages.
+TEST(HostileCli, LargeAtlasesDrawTheSameLightAsASmallOne)
+{
+    hemi::io::GltfScene post = hemi::io::read_gltf(hemi::test::write_post_scene(dir() / "pages_post.glb"));
+    std::vector<std::vector<float>> images;
+    for (const uint32_t size : {128u, 20000u, 65536u})
+    {
+        hemi::io::GltfScene s = post;
+        const float offset = float(size - 100 - 14);
+        for (glm::vec2& uv : s.mesh.uvs1)
+            uv = (glm::vec2(offset) + 100.0f * uv) / float(size);
+        const std::string name = "pages_" + std::to_string(size);
+        const fs::path scene = dir() / (name + ".gltf"), asset = dir() / (name + ".hemi");
+        hemi::io::write_gltf(scene, s);
+        const Result b =
+            run(HEMI_BAKE_EXE, "lightmap " + q(scene) + " --size " + std::to_string(size) +
+                                   " --rays 4 --env-scale 0 --bounces 0 --sun 0.5,0.3,0.8,3,3,3,0"
+                                   " --bases plain,sh9 --no-stitch -o " +
+                                   q(asset));
+        ASSERT_EQ(b.status, 0) << size << ": " << b.err;
+        const fs::path out = dir() / (name + ".exr");
+        const Result r = render(
+            q(asset) + " --technique plain --white --size 64x64 --camera 2.5,-3,3,0,0,0.3 -o " + q(out));
+        ASSERT_EQ(r.status, 0) << size << ": " << r.err;
+        const hemi::io::ImageRgba img = hemi::io::read_exr(out);
+        images.push_back(img.pixels);
+        fs::remove(asset);
+    }
+    float brightest = 0.0f, darkest = INFINITY;
+    for (size_t i = 0; i < images[0].size(); i += 4)
+        if (images[0][i + 3] == 1.0f)
+        {
+            brightest = std::max(brightest, images[0][i]);
+            darkest = std::min(darkest, images[0][i]);
+        }
+    EXPECT_LT(darkest, 0.5f * brightest) << "a uniform image would not show a wrong page";
+    for (size_t k = 1; k < images.size(); ++k)
+    {
+        float worst = 0.0f;
+        size_t off = 0;
+        for (size_t i = 0; i < images[0].size(); ++i)
+        {
+            worst = std::max(worst, std::abs(images[k][i] - images[0][i]));
+            if (std::abs(images[k][i] - images[0][i]) > 0.01f * brightest)
+            {
+                ++off;
+                if (off < 6)
+                    std::printf("  pixel %zu,%zu channel %zu: %.4f against %.4f\n", (i / 4) % 64,
+                                (i / 4) / 64, i % 4, images[k][i], images[0][i]);
+            }
+        }
+        std::printf("atlas %zu: worst pixel off the 128^2 image by %.4f of %.4f, %zu values over 1%%\n", k,
+                    worst, brightest, off);
+        EXPECT_LE(off, images[0].size() / 1000) << "atlas " << k;
+    }
+}
