@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numeric>
 #include <stdexcept>
@@ -145,6 +146,10 @@ uint32_t pack(std::vector<Chart>& charts, float texel, uint32_t width, uint32_t 
     return uint32_t(top);
 }
 
+// The largest coordinate unwrap_lightmap charts: its square and a triangle's doubled area stay within a
+// float's range (3.4e38).
+constexpr float kMaxUnwrapCoordinate = 1e18f;
+
 } // namespace
 
 UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
@@ -158,6 +163,19 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
     if (o.padding > 64 || o.width > 16384 || o.height > 16384 || (o.width == 0) != (o.height == 0))
         throw std::invalid_argument(
             "the atlas must be W x H with both in [1, 16384] (or neither), padding <= 64");
+    // The charts' geometry is float: an edge's squared length (a normal's, an area's) must stay finite.
+    float largest = 0.0f;
+    for (const glm::vec3& p : mesh.positions)
+        largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    if (largest > kMaxUnwrapCoordinate)
+    {
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      "cannot unwrap the mesh: its positions reach %.3g units, beyond the %.0e that charting "
+                      "holds (squared lengths overflow a float); scale the scene down",
+                      double(largest), double(kMaxUnwrapCoordinate));
+        throw std::invalid_argument(text);
+    }
 
     const size_t triangles = mesh.indices.size() / 3;
     // Weld by position, so that seams of the normal-map UVs (split vertices) do not split charts.
@@ -334,6 +352,20 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
     float texel = o.texel_size;
     if (texel > 0.0f)
     {
+        // A chart wider than the largest atlas at this texel size (a texel size of 1e-30) fits no packing.
+        double widest_side = 0.0;
+        for (const Chart& c : charts)
+            widest_side =
+                std::max({widest_side, double(c.hi.x - c.lo.x) / texel, double(c.hi.y - c.lo.y) / texel});
+        if (!(widest_side + 1.0 + 2.0 * o.padding <= 16384.0))
+        {
+            char text[160];
+            std::snprintf(text, sizeof text,
+                          "a chart at texel size %g is %.3g texels across, more than a 16384 x 16384 atlas "
+                          "holds: choose a larger texel size",
+                          double(texel), widest_side);
+            throw std::invalid_argument(text);
+        }
         if (width == 0)
         {
             double texels = 0.0;
@@ -349,6 +381,17 @@ UnwrapResult unwrap_lightmap(io::Mesh& mesh, const UnwrapOptions& o)
             double widest = 0.0;
             for (const Chart& c : charts)
                 widest = std::max(widest, std::ceil(double(c.hi.x - c.lo.x) / texel + 1.0) + 2.0 * o.padding);
+            // Charts that cannot fit at this texel size however they are packed (a texel size of 1e-30).
+            if (!(widest <= 16384.0) || !(texels <= 16384.0 * 16384.0))
+            {
+                char text[160];
+                std::snprintf(
+                    text, sizeof text,
+                    "the charts at texel size %g need %.3g texels (%.3g across the widest), more than "
+                    "a 16384 x 16384 atlas holds: choose a larger texel size",
+                    double(texel), texels, widest);
+                throw std::invalid_argument(text);
+            }
             const double side = std::max(std::sqrt(texels), widest);
             for (double f = 1.0; f <= 2.0; f += 0.05)
             {

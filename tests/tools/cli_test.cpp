@@ -2142,6 +2142,15 @@ TEST(HostileCli, ErrorsNameTheFileAndComeBeforeTheWork)
     r = lightmap(q(far) + " --unwrap -o " + q(out.string() + ".hemi"));
     EXPECT_EQ(r.status, 1) << r.err;
     EXPECT_NE(r.err.find("far_floor.gltf"), std::string::npos) << r.err;
+    // Issue 41, defect 13: finite positions too large to chart are named as such, not "non-finite", and a
+    // texel size too small for any atlas says so rather than advising the --unwrap already given.
+    EXPECT_NE(r.err.find("positions reach 1e+30 units"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("non-finite"), std::string::npos) << r.err;
+    r = lightmap(q(floor_scene()) + " --unwrap --texel-size 1e-30 -o " + q(out.string() + ".hemi"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("choose a larger texel size"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("bake with --unwrap"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('%'), std::string::npos) << r.err;
     // ... and too far out to trace, for every bake that traces it.
     for (const std::string& sub : {std::string("prt"), std::string("lightmap"), std::string("reference")})
     {
