@@ -22,7 +22,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -123,9 +125,28 @@ int main(int argc, char** argv)
             const hemi::render::PrtCamera view_camera = chosen.value_or(hemi::render::PrtCamera{});
             hemi::io::ImageRgba image;
             std::unique_ptr<hemi::gpu::Device> device;
+            // The camera and the depth range square lengths in float: positions past 1e18 cannot be framed
+            // (issue 41: an asset at 3e38 got "the camera's eye or target is not finite", no file named).
+            const auto check_extent = [&](const hemi::io::Mesh& mesh)
+            {
+                float largest = 0.0f;
+                for (const glm::vec3& p : mesh.positions)
+                    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+                if (largest > 1e18f)
+                {
+                    char text[160];
+                    std::snprintf(
+                        text, sizeof text,
+                        ": its positions reach %.3g units, beyond the 1e18 that the camera and depth "
+                        "range hold (squared lengths overflow a float)",
+                        double(largest));
+                    throw std::invalid_argument(asset_path + text);
+                }
+            };
             if (lightmap)
             {
                 const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
+                check_extent(asset.mesh);
                 if (technique == "gs")
                     technique = "sh9";
                 try
@@ -153,6 +174,7 @@ int main(int argc, char** argv)
             else
             {
                 const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+                check_extent(asset.mesh);
                 device = std::make_unique<hemi::gpu::Device>(desc);
                 hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
                 hemi::render::PrtFrame frame;

@@ -2159,6 +2159,19 @@ TEST(HostileCli, ErrorsNameTheFileAndComeBeforeTheWork)
         EXPECT_EQ(r.status, 1) << sub << ": " << r.err;
         EXPECT_NE(r.err.find("far_floor.gltf"), std::string::npos) << sub << ": " << r.err;
     }
+    // An asset whose positions reach 3e38 (finite, but beyond what the camera's float math holds): named,
+    // with the reason, where it got "the camera's eye or target is not finite" (issue 41, defect 13).
+    {
+        hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(floor_asset());
+        a.mesh.positions[0] = glm::vec3(3e38f, 0.0f, 0.0f);
+        const fs::path far_asset = dir() / "far_positions.hemi";
+        hemi::io::write_lightmap_asset(far_asset, a);
+        r = render(q(far_asset) + " --technique plain --size 8x8 -o " + q(out.string() + ".png"));
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find("far_positions.hemi: its positions reach 3e+38 units"), std::string::npos)
+            << r.err;
+        EXPECT_FALSE(fs::exists(out.string() + ".png"));
+    }
     // An environment asset given to hemi-render: it says which kinds it draws.
     const fs::path env_asset = dir() / "an_envmap.hemi";
     ASSERT_EQ(
