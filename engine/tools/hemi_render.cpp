@@ -143,47 +143,63 @@ int main(int argc, char** argv)
                     throw std::invalid_argument(asset_path + text);
                 }
             };
-            if (lightmap)
+            // Whatever the asset holds that cannot be drawn (a corrupt embedded image: "tiles normal map:
+            // corrupt PNG") is named with the asset that holds it.
+            try
             {
-                const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
-                check_extent(asset.mesh);
-                if (technique == "gs")
-                    technique = "sh9";
-                try
+                if (lightmap)
                 {
-                    asset.output(technique == "ssbump" || technique == "rnm_ao" ? "rnm" : technique);
+                    const hemi::io::LightmapAsset asset = hemi::io::read_lightmap_asset(asset_path);
+                    check_extent(asset.mesh);
+                    if (technique == "gs")
+                        technique = "sh9";
+                    try
+                    {
+                        asset.output(technique == "ssbump" || technique == "rnm_ao" ? "rnm" : technique);
+                    }
+                    catch (const std::invalid_argument& e)
+                    {
+                        throw std::invalid_argument(asset_path + ": " + e.what());
+                    }
+                    device = std::make_unique<hemi::gpu::Device>(desc);
+                    hemi::render::LightmapView view(*device, asset, {technique}, w, h);
+                    hemi::render::LightmapFrame frame;
+                    frame.technique = technique;
+                    frame.white = white;
+                    frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect)
+                                               : view_camera;
+                    frame.spheres = sphere_list;
+                    if (!frame.spheres.empty() && asset.probes.empty())
+                        throw std::invalid_argument(
+                            asset_path + " has no light probes for --sphere (bake it with --probes)");
+                    image = view.render(frame);
+                    env = "baked";
                 }
-                catch (const std::invalid_argument& e)
+                else
                 {
-                    throw std::invalid_argument(asset_path + ": " + e.what());
+                    const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
+                    check_extent(asset.mesh);
+                    device = std::make_unique<hemi::gpu::Device>(desc);
+                    hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
+                    hemi::render::PrtFrame frame;
+                    frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
+                    frame.rotate_degrees = rotate;
+                    frame.white = white;
+                    frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect)
+                                               : view_camera;
+                    image = view.render(frame);
                 }
-                device = std::make_unique<hemi::gpu::Device>(desc);
-                hemi::render::LightmapView view(*device, asset, {technique}, w, h);
-                hemi::render::LightmapFrame frame;
-                frame.technique = technique;
-                frame.white = white;
-                frame.camera =
-                    auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
-                frame.spheres = sphere_list;
-                if (!frame.spheres.empty() && asset.probes.empty())
-                    throw std::invalid_argument(asset_path +
-                                                " has no light probes for --sphere (bake it with --probes)");
-                image = view.render(frame);
-                env = "baked";
             }
-            else
+            catch (const std::bad_alloc&)
             {
-                const hemi::io::PrtAsset asset = hemi::io::read_prt_asset(asset_path);
-                check_extent(asset.mesh);
-                device = std::make_unique<hemi::gpu::Device>(desc);
-                hemi::render::PrtView view(*device, asset, technique, cpca, w, h);
-                hemi::render::PrtFrame frame;
-                frame.world_lighting = hemi::render::environment_lighting(env, int(asset.order));
-                frame.rotate_degrees = rotate;
-                frame.white = white;
-                frame.camera =
-                    auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect) : view_camera;
-                image = view.render(frame);
+                throw;
+            }
+            catch (const std::exception& e)
+            {
+                const std::string what = e.what();
+                if (what.find(asset_path) != std::string::npos)
+                    throw;
+                throw std::runtime_error(asset_path + ": " + what);
             }
             if (ext == ".exr")
                 hemi::io::write_exr(output, image);

@@ -2172,6 +2172,23 @@ TEST(HostileCli, ErrorsNameTheFileAndComeBeforeTheWork)
             << r.err;
         EXPECT_FALSE(fs::exists(out.string() + ".png"));
     }
+    // An asset whose embedded image is corrupt: the message names the asset that holds it, not only the
+    // image (issue 41, defect 13).
+    {
+        hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(floor_asset());
+        hemi::io::EncodedImage png;
+        png.name = "tiles";
+        png.mime_type = "image/png";
+        png.bytes = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R', 1, 2, 3};
+        a.images.push_back(png);
+        a.materials.at(0).base_color.image = int(a.images.size() - 1);
+        const fs::path corrupt = dir() / "corrupt_image_asset.hemi";
+        hemi::io::write_lightmap_asset(corrupt, a);
+        r = render(q(corrupt) + " --technique plain --size 8x8 -o " + q(out.string() + ".png"));
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find("corrupt_image_asset.hemi: "), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out.string() + ".png"));
+    }
     // An environment asset given to hemi-render: it says which kinds it draws.
     const fs::path env_asset = dir() / "an_envmap.hemi";
     ASSERT_EQ(
