@@ -446,6 +446,45 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
     }
 }
 
+namespace
+{
+// An environment with what makes prefiltering hard, w x h: a small sun of radiance 2000 (`sun_radius`
+// radians), a sky gradient, a dark ground and bright panels across the parabolic seam (z = 0).
+std::vector<float> hard_environment(uint32_t w, uint32_t h, double sun_radius)
+{
+    const glm::dvec3 sun = glm::normalize(glm::dvec3(0.6, 0.5, 0.45));
+    return equirect(w, h,
+                    [&](const glm::dvec3& d)
+                    {
+                        if (glm::dot(d, sun) > std::cos(sun_radius))
+                            return glm::dvec3(2000.0, 1900.0, 1700.0);
+                        if (std::abs(d.z) < 0.15 && std::abs(d.x) > 0.8)
+                            return glm::dvec3(8.0, 2.0, 1.0);
+                        if (d.z < 0.0)
+                            return glm::dvec3(0.05, 0.04, 0.03);
+                        return glm::dvec3(0.3, 0.5, 1.0) * (1.0 + 2.0 * (1.0 - d.z));
+                    });
+}
+
+// The RMSE of `fast` against `exact` at the envmap report's 1024 directions (a Fibonacci sphere), relative
+// to the exact map's RMS.
+double prefilter_rmse(const hemi::math::ParabolicImage& fast, const hemi::math::ParabolicImage& exact)
+{
+    const uint32_t directions = 1024;
+    const double golden = kPi * (3.0 - std::sqrt(5.0));
+    double diff = 0.0, rms = 0.0;
+    for (uint32_t k = 0; k < directions; ++k)
+    {
+        const double z = 1.0 - (k + 0.5) * 2.0 / directions, r = std::sqrt(1.0 - z * z);
+        const glm::dvec3 d(r * std::cos(golden * k), r * std::sin(golden * k), z);
+        const glm::dvec3 f = fast.sample(d), x = exact.sample(d);
+        diff += glm::dot(f - x, f - x);
+        rms += glm::dot(x, x);
+    }
+    return std::sqrt(diff / rms);
+}
+} // namespace
+
 // prefilter_phong (the default) against prefilter_phong_exact (hemi-bake envmap --exact) on an environment
 // with what makes prefiltering hard: a small sun of radiance 2000 (a quarter of a texel at level 0), a sky
 // gradient, a dark ground and bright panels across the seam. At the envmap report's 1024 directions each map
@@ -457,37 +496,15 @@ TEST(Paraboloid, SingleBrightTexelGivesThePhongLobe)
 TEST(Paraboloid, FastPrefilterIsWithinHalfAPercentOfTheExactSum)
 {
     using namespace hemi::math;
-    const glm::dvec3 sun = glm::normalize(glm::dvec3(0.6, 0.5, 0.45));
-    const auto px = equirect(1024, 512,
-                             [&](const glm::dvec3& d)
-                             {
-                                 if (glm::dot(d, sun) > std::cos(0.012))
-                                     return glm::dvec3(2000.0, 1900.0, 1700.0);
-                                 if (std::abs(d.z) < 0.15 && std::abs(d.x) > 0.8)
-                                     return glm::dvec3(8.0, 2.0, 1.0); // panels on the seam (z = 0)
-                                 if (d.z < 0.0)
-                                     return glm::dvec3(0.05, 0.04, 0.03);
-                                 return glm::dvec3(0.3, 0.5, 1.0) * (1.0 + 2.0 * (1.0 - d.z));
-                             });
-    const auto chain = parabolic_mip_chain(parabolic_from_equirect(128, 1024, 512, px));
-    const uint32_t directions = 1024;
-    const double golden = kPi * (3.0 - std::sqrt(5.0));
+    const auto chain =
+        parabolic_mip_chain(parabolic_from_equirect(128, 1024, 512, hard_environment(1024, 512, 0.012)));
     for (double e : {1.0, 10.0, 60.0})
     {
         PrefilterStats fast_stats, exact_stats;
         const ParabolicImage fast = prefilter_phong(chain, e, &fast_stats);
         const ParabolicImage exact = prefilter_phong_exact(chain, e, &exact_stats);
         ASSERT_EQ(fast.size, exact.size);
-        double diff = 0.0, rms = 0.0;
-        for (uint32_t k = 0; k < directions; ++k)
-        {
-            const double z = 1.0 - (k + 0.5) * 2.0 / directions, r = std::sqrt(1.0 - z * z);
-            const glm::dvec3 d(r * std::cos(golden * k), r * std::sin(golden * k), z);
-            const glm::dvec3 f = fast.sample(d), x = exact.sample(d);
-            diff += glm::dot(f - x, f - x);
-            rms += glm::dot(x, x);
-        }
-        const double rmse = std::sqrt(diff / rms);
+        const double rmse = prefilter_rmse(fast, exact);
         std::printf("e = %g: %ux%u, RMSE %.3f%% of the exact map's RMS, %llu texel pairs against %llu\n", e,
                     fast.size, fast.size, 100.0 * rmse, (unsigned long long)fast_stats.texel_pairs,
                     (unsigned long long)exact_stats.texel_pairs);
@@ -506,35 +523,13 @@ TEST(Paraboloid, FastPrefilterIsWithinHalfAPercentOfTheExactSum)
 TEST(Paraboloid, TheReadmesGlossyMapsAreWithinItsStatedPrecisionOfTheExactSum)
 {
     using namespace hemi::math;
-    const glm::dvec3 sun = glm::normalize(glm::dvec3(0.6, 0.5, 0.45));
-    const auto px = equirect(2048, 1024,
-                             [&](const glm::dvec3& d)
-                             {
-                                 if (glm::dot(d, sun) > std::cos(0.006))
-                                     return glm::dvec3(2000.0, 1900.0, 1700.0);
-                                 if (std::abs(d.z) < 0.15 && std::abs(d.x) > 0.8)
-                                     return glm::dvec3(8.0, 2.0, 1.0);
-                                 if (d.z < 0.0)
-                                     return glm::dvec3(0.05, 0.04, 0.03);
-                                 return glm::dvec3(0.3, 0.5, 1.0) * (1.0 + 2.0 * (1.0 - d.z));
-                             });
-    const auto chain = parabolic_mip_chain(parabolic_from_equirect(512, 2048, 1024, px));
-    const uint32_t directions = 1024;
-    const double golden = kPi * (3.0 - std::sqrt(5.0));
+    const auto chain =
+        parabolic_mip_chain(parabolic_from_equirect(512, 2048, 1024, hard_environment(2048, 1024, 0.006)));
     for (double e : {10.0, 100.0, 1000.0})
     {
         const ParabolicImage fast = prefilter_phong(chain, e), exact = prefilter_phong_exact(chain, e);
         ASSERT_EQ(fast.size, exact.size);
-        double diff = 0.0, rms = 0.0;
-        for (uint32_t k = 0; k < directions; ++k)
-        {
-            const double z = 1.0 - (k + 0.5) * 2.0 / directions, r = std::sqrt(1.0 - z * z);
-            const glm::dvec3 d(r * std::cos(golden * k), r * std::sin(golden * k), z);
-            const glm::dvec3 f = fast.sample(d), x = exact.sample(d);
-            diff += glm::dot(f - x, f - x);
-            rms += glm::dot(x, x);
-        }
-        const double rmse = std::sqrt(diff / rms);
+        const double rmse = prefilter_rmse(fast, exact);
         std::printf("e = %g: 2 x %u^2, RMSE %.3f%% of the exact map's RMS\n", e, fast.size, 100.0 * rmse);
         EXPECT_LT(rmse, 0.003) << "exponent " << e;
     }

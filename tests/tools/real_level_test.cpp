@@ -25,6 +25,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -246,6 +247,34 @@ TEST(RealLevel, BadArchivesAndLevelsAreRefusedNamingTheFile)
 namespace
 {
 
+// A point of the level's open space: none of 256 rays over the sphere (a Fibonacci set) meets the back of a
+// surface (so it is not inside a wall, a pillar or the void outside the level) and at most half escape (it
+// is inside the level).
+bool open_point(const hemi::bake::EmbreeScene& scene, const glm::vec3& c)
+{
+    constexpr int kProbe = 256;
+    int escape = 0;
+    for (int i = 0; i < kProbe; ++i)
+    {
+        const float z = 1.0f - 2.0f * (float(i) + 0.5f) / kProbe, r = std::sqrt(1.0f - z * z);
+        const glm::vec3 d(r * std::cos(2.39996323f * float(i)), r * std::sin(2.39996323f * float(i)), z);
+        const std::optional<hemi::bake::RayHit> h = scene.intersect(c, d);
+        if (h && glm::dot(scene.geometric_normal(h->primitive), d) > 0.0f)
+            return false;
+        escape += !h;
+    }
+    return 2 * escape <= kProbe;
+}
+
+// The real levels of issue 41's tests: the community pack's sealed indoor level and the 0.8.1 arena.
+struct LevelCase
+{
+    std::filesystem::path pk3;
+    const char* map;
+};
+const std::array<LevelCase, 2> kLevels = {LevelCase{hemi::test::kOpenArenaCommunityMaps, "maps/oacmpdm1.bsp"},
+                                          LevelCase{hemi::test::kOpenArenaMaps, kMap}};
+
 // What a viewer standing in a level's open space sees of its lightmap (issue 41). Open points: points of the
 // level's bounding box from which none of 256 rays over the sphere meets the back of a surface (so the
 // point is not inside a wall, a pillar or the void outside the level) and at most half escape (it is inside
@@ -284,8 +313,6 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }
-    auto is_back = [&](const RayHit& h, const glm::vec3& d)
-    { return glm::dot(scene.geometric_normal(h.primitive), d) > 0.0f; };
     std::mt19937 rng(41);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
     auto random_direction = [&]
@@ -297,17 +324,7 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
     for (int attempt = 0; attempt < 1000000 && s.points < 300; ++attempt)
     {
         const glm::vec3 c = lo + (hi - lo) * glm::vec3(uniform(rng), uniform(rng), uniform(rng));
-        int back = 0, escape = 0;
-        constexpr int kProbe = 256;
-        for (int i = 0; i < kProbe && !back; ++i)
-        {
-            const float z = 1.0f - 2.0f * (float(i) + 0.5f) / kProbe, r = std::sqrt(1.0f - z * z);
-            const glm::vec3 d(r * std::cos(2.39996323f * float(i)), r * std::sin(2.39996323f * float(i)), z);
-            const std::optional<RayHit> h = scene.intersect(c, d);
-            escape += !h;
-            back += h && is_back(*h, d);
-        }
-        if (back || 2 * escape > kProbe)
+        if (!open_point(scene, c))
             continue;
         ++s.points;
         for (int i = 0; i < 200; ++i)
@@ -338,24 +355,19 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
 // pillar (a ceiling running on over the pillar's top) the same lightmap rectangle as a visible face, and
 // the overlap went to the hidden face, whose texels are inside geometry: the visible face read them dark.
 // Overlaps now go first to a face a viewer can reach (lightmap_atlas.h). From 300 open points of each level
-// (each 200 rays), on its own lightmap UVs and unwrapped at 1024 x 1024, at most 0.1% of what a viewer sees
-// lies on a texel inside geometry. Measured at 1024 x 1024 and 64 rays (texels / moved out of walls / inside
-// geometry; hits on such texels of 60,000, those on the hit triangle's own texel):
-//   oacmpdm1 own UVs 736,104 / 29,328 / 110,862; 21 (0); before the overlap rule 199 (0)
-//   oacmpdm1 unwrapped 511,718 / 25,565 / 80,119; 5 (1)
-//   oa_dm3 own UVs 626,922 / 17,930 / 58,559; ...
+// (each 200 rays), on its own lightmap UVs and unwrapped at 1024 x 1024, at most 0.1% (oacmpdm1) and 0.3%
+// (oa_dm3) of what a viewer sees lies on a texel inside geometry. Measured at 64 rays (texels / moved out of
+// walls / inside geometry; hits on such texels, of them on the hit triangle's own texel):
+//   oacmpdm1 own UVs   736,101 / 29,269 / 110,875; 35 of 60,000 (0); 262 without the overlap rule
+//   oacmpdm1 unwrapped 511,847 / 25,574 / 80,148; 0 of 60,000
+//   oa_dm3 own UVs     626,922 / 17,836 / 58,279; 97 of 44,562 (54); 148 without the rule
+//   oa_dm3 unwrapped   441,210 / 8,728 / 50,881; 63 of 44,562 (47)
 // The rest: texels that straddle a wall (their centre inside it, a corner outside), and oa_dm3's terrain
-// outside the arena, whose texels are 10 m across. The texels inside geometry are faces no viewer reaches:
-// oacmpdm1 is sealed (no sky), and of its 110,862 the open points see 21.
+// outside the arena, whose texels are 10 m across. The other texels inside geometry are faces no viewer
+// reaches (oacmpdm1 is sealed: no sky).
 TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
 {
-    struct Case
-    {
-        std::filesystem::path pk3;
-        const char* map;
-    };
-    for (const Case& c : {Case{hemi::test::kOpenArenaCommunityMaps, "maps/oacmpdm1.bsp"},
-                          Case{hemi::test::kOpenArenaMaps, kMap}})
+    for (const LevelCase& c : kLevels)
     {
         // Through glTF, as hemi-bake reads it (the reader makes the tangent frames).
         const fs::path gltf = dir() / (fs::path(c.map).stem().string() + "_sight.gltf");
@@ -413,21 +425,7 @@ void pick_views(const hemi::io::Mesh& mesh, uint32_t size, int lights, int count
     }
     std::mt19937 rng(4141);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    auto open = [&](const glm::vec3& c)
-    {
-        constexpr int kProbe = 256;
-        int escape = 0;
-        for (int i = 0; i < kProbe; ++i)
-        {
-            const float z = 1.0f - 2.0f * (float(i) + 0.5f) / kProbe, r = std::sqrt(1.0f - z * z);
-            const glm::vec3 d(r * std::cos(2.39996323f * float(i)), r * std::sin(2.39996323f * float(i)), z);
-            const std::optional<hemi::bake::RayHit> h = scene.intersect(c, d);
-            if (h && glm::dot(scene.geometric_normal(h->primitive), d) > 0.0f)
-                return false;
-            escape += !h;
-        }
-        return 2 * escape <= kProbe;
-    };
+    auto open = [&](const glm::vec3& c) { return open_point(scene, c); };
     auto texel_size = [&](uint32_t t)
     {
         const uint32_t* i = &mesh.indices[size_t(t) * 3];
@@ -513,13 +511,7 @@ double centre(const fs::path& exr)
 // texels through front faces too (one view off by more than 10%), and for texels black where they are seen.
 TEST(RealLevel, TheLightmapAgreesWithTheReferenceFromOpenPoints)
 {
-    struct Case
-    {
-        std::filesystem::path pk3;
-        const char* map;
-    };
-    for (const Case& c : {Case{hemi::test::kOpenArenaCommunityMaps, "maps/oacmpdm1.bsp"},
-                          Case{hemi::test::kOpenArenaMaps, kMap}})
+    for (const LevelCase& c : kLevels)
     {
         const std::string name = fs::path(c.map).stem().string();
         const fs::path plain = dir() / (name + "_views.gltf");
