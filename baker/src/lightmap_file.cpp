@@ -68,6 +68,11 @@ constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
 constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
+// Light probes (--probes) are held whole, beside the lightmap's sums while they bake and then written with
+// the asset: their SH9 irradiance and validity, the asset's copy and its spooled bytes. Measured 218-220
+// bytes a probe (64^3 and 128^3 probes at one ray each: +57.7 MB and +458 MB of peak); issue 41 found
+// 256^3 probes peaking at 3.5 GB under a budget of 100 MB.
+constexpr uint64_t kProbeBytes = 224;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.
 constexpr uint32_t kMinTileTexels = 4096;
@@ -332,17 +337,29 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileNoiseBytesPerTexel / 2 : 0);
     const uint64_t output_map_bytes =
         output_slots * largest_output * kLightmapBytesPerLargestCoefficient + exr_bytes;
+    // The probes cannot be tiled: they count in full against the budget, on top of either stage.
+    // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
+    const uint64_t probe_count =
+        uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40)));
+    const uint64_t probe_bytes = probe_count * kProbeBytes;
+    if (budget != 0 && probe_bytes > budget)
+        throw io::FormatError(scene_path.string() + ": --probes " + std::to_string(o.probes.x) + "," +
+                              std::to_string(o.probes.y) + "," + std::to_string(o.probes.z) + ": " +
+                              std::to_string(probe_count) + " light probes need about " +
+                              io::format_bytes(probe_bytes) + " of memory, held whole, but " +
+                              (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
+                              (o.memory_budget ? "" : " is available") + ": ask for fewer probes");
     const auto whole_bytes = [&](uint64_t texels)
     {
-        return std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
-                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
+        return probe_bytes + std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
+                                      output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
     };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
         const uint64_t passes = slots * kLightmapBytesPerSlot +
                                 texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
                                 std::max(tile, std::min(texels, least_band)) * per_tile_texel;
-        return std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
+        return probe_bytes + std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
