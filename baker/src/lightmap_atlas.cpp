@@ -182,8 +182,9 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
     return x_begin <= x_end && y_begin <= y_end;
 }
 
-// Rays per candidate of rule 0 below.
+// Rays per candidate of rule 0 below, and the most candidates a texel may have to be judged by it.
 constexpr int kOverlapRays = 32;
+constexpr size_t kMaxJudgedCandidates = 8;
 
 // Per entry of `contested` (sorted), 1 when the texel centre's point on that triangle lies inside geometry
 // as the lightmap bake judges a texel (lightmap_bake.h, LightmapSh::valid): more than half of kOverlapRays
@@ -193,10 +194,24 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
                                      const std::vector<std::pair<size_t, uint32_t>>& contested,
                                      std::span<const uint8_t> double_sided)
 {
+    std::vector<uint8_t> inside(contested.size(), 0);
+    // Texels that many triangles claim (a quad copied thousands of times over one UV square) are not judged:
+    // 32 rays per candidate would cost more than the bake, and such a pile is no level's hidden face.
+    std::vector<uint8_t> judged(contested.size(), 1);
+    for (size_t first = 0; first < contested.size();)
+    {
+        size_t last = first;
+        while (last < contested.size() && contested[last].first == contested[first].first)
+            ++last;
+        if (last - first > kMaxJudgedCandidates)
+            std::fill(judged.begin() + ptrdiff_t(first), judged.begin() + ptrdiff_t(last), 0);
+        first = last;
+    }
+    if (std::find(judged.begin(), judged.end(), 1) == judged.end())
+        return inside;
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
     const uint32_t width = grid.width(), height = grid.height();
-    std::vector<uint8_t> inside(contested.size(), 0);
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, contested.size(), 64),
         [&](const tbb::blocked_range<size_t>& r)
@@ -204,6 +219,8 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
             std::array<glm::vec3, kOverlapRays> directions;
             for (size_t c = r.begin(); c != r.end(); ++c)
             {
+                if (!judged[c])
+                    continue;
                 const auto [slot, t] = contested[c];
                 const glm::uvec2 xy = grid.texel(slot);
                 const glm::vec3 a = mesh.positions[mesh.indices[3 * size_t(t)]],
