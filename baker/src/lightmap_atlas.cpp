@@ -184,7 +184,7 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
 
 // Rays per candidate of rule 0 below, and the most candidates a texel may have to be judged by it.
 constexpr int kOverlapRays = 32;
-constexpr size_t kMaxJudgedCandidates = 8;
+constexpr size_t kMaxJudgedCandidates = 64;
 
 // Per entry of `contested` (sorted), 1 when the texel centre's point on that triangle lies inside geometry
 // as the lightmap bake judges a texel (lightmap_bake.h, LightmapSh::valid): more than half of kOverlapRays
@@ -195,20 +195,22 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
                                      std::span<const uint8_t> double_sided)
 {
     std::vector<uint8_t> inside(contested.size(), 0);
-    // Texels that many triangles claim (a quad copied thousands of times over one UV square) are not judged:
-    // 32 rays per candidate would cost more than the bake, and such a pile is no level's hidden face.
+    // A texel's first kMaxJudgedCandidates candidates are judged; the rest (a quad copied thousands of times
+    // over one UV square, where 32 rays each would cost more than the bake) count as inside geometry, so
+    // that a judged candidate a viewer can reach still wins.
     std::vector<uint8_t> judged(contested.size(), 1);
     for (size_t first = 0; first < contested.size();)
     {
         size_t last = first;
         while (last < contested.size() && contested[last].first == contested[first].first)
             ++last;
-        if (last - first > kMaxJudgedCandidates)
-            std::fill(judged.begin() + ptrdiff_t(first), judged.begin() + ptrdiff_t(last), 0);
+        for (size_t c = first + kMaxJudgedCandidates; c < last; ++c)
+        {
+            judged[c] = 0;
+            inside[c] = 1;
+        }
         first = last;
     }
-    if (std::find(judged.begin(), judged.end(), 1) == judged.end())
-        return inside;
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
     const uint32_t width = grid.width(), height = grid.height();

@@ -114,8 +114,9 @@ struct TriangleRange
 // point there does not lie inside geometry as the bake judges a texel (32 hemisphere rays, most of which
 // meet the backs of single-sided surfaces; `double_sided`, per triangle, marks those whose back counts as
 // a front; empty: none), then to the one whose chart continues there, then to the one facing the scene's
-// centre. Only meshes with overlaps pay for the rays (and an Embree scene of the mesh); a texel that more
-// than 8 triangles claim (a pile of copies over one UV square) skips the first rule.
+// centre. Only meshes with overlaps pay for the rays (and an Embree scene of the mesh); of a texel that more
+// than 64 triangles claim (a pile of copies over one UV square) the first 64 are judged, the rest count as
+// inside geometry.
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
                                  std::span<const uint8_t> double_sided = {});
