@@ -728,7 +728,9 @@ TEST(LightmapBake, ADenoisedBakeInTilesStoppedAfterItsPassesResumesToTheSameByte
             summary = bake_lightmap_file(scene, asset, run);
             EXPECT_TRUE(summary.resumed) << stop;
             if (stop == "denoise" || stop == "outputs")
+            {
                 EXPECT_EQ(summary.rays, 0u) << stop << ": the bake was complete";
+            }
         }
         EXPECT_GT(summary.tile_texels, 0u) << "not in tiles";
         EXPECT_GT(summary.denoised_texels, 0u);

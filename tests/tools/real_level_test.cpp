@@ -468,8 +468,8 @@ void pick_views(const hemi::io::Mesh& mesh, uint32_t size, int lights, int count
             bool lit = true;
             for (int p = 0; p < 9 && lit; ++p)
             {
-                const float a = float(p) * float(M_PI) / 4.0f, r = p == 8 ? 0.0f : 0.5f;
-                const glm::vec3 from = target + r * (std::cos(a) * u + std::sin(a) * v) + 1e-3f * g,
+                const float a = float(p) * float(M_PI) / 4.0f, radius = p == 8 ? 0.0f : 0.5f;
+                const glm::vec3 from = target + radius * (std::cos(a) * u + std::sin(a) * v) + 1e-3f * g,
                                 to = light - from;
                 lit = glm::dot(to, g) > 0.0f &&
                       !scene.occluded(from, glm::normalize(to), 0.0f, glm::length(to));
