@@ -31,6 +31,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <utility>
 
 namespace fs = std::filesystem;
 
@@ -247,6 +248,18 @@ TEST(RealLevel, BadArchivesAndLevelsAreRefusedNamingTheFile)
 namespace
 {
 
+// The mesh's axis-aligned bounding box, the region open points are drawn from.
+std::pair<glm::vec3, glm::vec3> bounds(const hemi::io::Mesh& mesh)
+{
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : mesh.positions)
+    {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    return {lo, hi};
+}
+
 // A point of the level's open space: none of 256 rays over the sphere (a Fibonacci set) meets the back of a
 // surface (so it is not inside a wall, a pillar or the void outside the level) and at most half escape (it
 // is inside the level).
@@ -307,12 +320,7 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
     s.invalid = sh.invalid;
 
     const EmbreeScene scene(mesh);
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
+    const auto [lo, hi] = bounds(mesh);
     std::mt19937 rng(41);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
     auto random_direction = [&]
@@ -417,12 +425,7 @@ void pick_views(const hemi::io::Mesh& mesh, uint32_t size, int lights, int count
                 std::vector<View>& views)
 {
     const hemi::bake::EmbreeScene scene(mesh);
-    glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const glm::vec3& p : mesh.positions)
-    {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
+    const auto [lo, hi] = bounds(mesh);
     std::mt19937 rng(4141);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
     auto open = [&](const glm::vec3& c) { return open_point(scene, c); };
