@@ -126,6 +126,7 @@ class ProgressLine
         if (!tty_ && decile == last_decile_ && !done)
             return;
         last_decile_ = decile;
+        hemi::tool::set_stage(what);
         std::fprintf(stderr, "%s%s: %s %5.1f%%%s%s", tty_ ? "\r" : "", tool_.c_str(), what.c_str(),
                      100.0 * fraction, eta, tty_ ? "      " : "\n");
         if (done && tty_)
@@ -479,6 +480,7 @@ int run_lightmap(LightmapCli& c)
         o.probes = glm::uvec3(uint32_t(n[0]), uint32_t(n[1]), uint32_t(n[2]));
     }
     o.exr_dir = c.exr_dir;
+    o.memory_held = hemi::io::resident_memory(); // --memory-budget is a ceiling on the whole process's peak
     if (!c.memory_budget.empty() && !(o.memory_budget = hemi::io::parse_bytes(c.memory_budget)))
         throw std::invalid_argument("--memory-budget " + c.memory_budget +
                                     ": not a size (bytes, or a number with K, M, G or T: 8G, 1.5GiB)");
@@ -506,6 +508,24 @@ int run_lightmap(LightmapCli& c)
         files.check();
     o.lights = c.light.lights(); // read_exr names the environment's file; check_lights names it too
     ProgressLine line("hemi-bake lightmap");
+    // What the job is doing, for an out-of-memory message: the stage after the one just done.
+    hemi::tool::set_stage("reading the scene");
+    hemi::tool::out_of_memory_advice() = "; a --memory-budget below what the machine (or ulimit -v) can give "
+                                         "bakes in tiles";
+    o.on_stage = [&o](std::string_view done)
+    {
+        const std::string probes = o.probes.x ? "baking the light probes" : "making and writing the outputs";
+        if (done == "scene")
+            hemi::tool::set_stage("laying out the lightmap atlas");
+        else if (done == "atlas")
+            hemi::tool::set_stage("baking");
+        else if (done == "bake")
+            hemi::tool::set_stage(o.denoise ? "denoising" : probes);
+        else if (done == "denoise")
+            hemi::tool::set_stage(probes);
+        else if (done == "probes")
+            hemi::tool::set_stage("making and writing the outputs");
+    };
     const bake::LightmapBakeSummary s = hemi::tool::naming_input(
         c.scene, files,
         [&]
@@ -550,8 +570,10 @@ int run_lightmap(LightmapCli& c)
             s.pushed, s.invalid);
     if (s.tile_texels)
         std::printf("memory: %u tiles of %u texels a pass, their sums on disk, to stay within %s "
-                    "(--memory-budget); peak %s\n",
+                    "(%s); peak %s\n",
                     s.tiles, s.tile_texels, hemi::io::format_bytes(s.memory_budget).c_str(),
+                    o.memory_budget ? "--memory-budget"
+                                    : "what is available: free memory, HEMI_MEMORY_BUDGET, ulimit -v",
                     hemi::io::format_bytes(hemi::io::peak_memory()).c_str());
     if (s.denoised_texels)
         std::printf("--denoise: %zu texels filtered (%d passes)\n", s.denoised_texels, o.denoise_passes);

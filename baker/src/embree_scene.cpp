@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@ struct EmbreeScene::Impl
     std::vector<glm::vec3> normals; // per triangle, cross(p1 - p0, p2 - p0): geometric_normal()
     std::mutex error_mutex;         // Embree may report from its worker threads
     std::string error;
+    bool out_of_memory = false; // Embree said RTC_ERROR_OUT_OF_MEMORY: thrown as std::bad_alloc
 
     ~Impl()
     {
@@ -38,6 +40,8 @@ struct EmbreeScene::Impl
     std::string failure(const std::string& what)
     {
         std::lock_guard<std::mutex> lock(error_mutex);
+        if (out_of_memory)
+            throw std::bad_alloc();
         return "hemi: Embree failed " + what + (error.empty() ? "" : ": " + error);
     }
 };
@@ -89,16 +93,19 @@ EmbreeScene::EmbreeScene(const io::Mesh& mesh) : impl_(std::make_unique<Impl>())
     Impl& s = *impl_;
     // On a throw below, impl_'s destructor releases whatever was created.
     s.device = rtcNewDevice(nullptr);
+    if (!s.device && rtcGetDeviceError(nullptr) == RTC_ERROR_OUT_OF_MEMORY)
+        throw std::bad_alloc(); // as any other allocation that fails: the tools say where and how much
     if (!s.device)
         throw std::runtime_error("hemi: Embree device creation failed (error " +
                                  std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
     rtcSetDeviceErrorFunction(
         s.device,
-        [](void* user, RTCError, const char* message)
+        [](void* user, RTCError code, const char* message)
         {
             auto* self = static_cast<Impl*>(user);
             std::lock_guard<std::mutex> lock(self->error_mutex);
             self->error = message ? message : "unknown Embree error";
+            self->out_of_memory = self->out_of_memory || code == RTC_ERROR_OUT_OF_MEMORY;
         },
         &s);
     s.scene = rtcNewScene(s.device);
@@ -127,7 +134,21 @@ EmbreeScene::EmbreeScene(const io::Mesh& mesh) : impl_(std::make_unique<Impl>())
         failed = !s.error.empty();
     }
     if (failed)
-        throw std::runtime_error(s.failure("building the scene"));
+    {
+        // A scene whose build failed (out of memory in Embree's TBB tasks) may call std::terminate when it is
+        // released (Embree 3.13 waits on the build's broken task group): it and its device are left to the
+        // process's exit, which the error is on its way to.
+        const std::string message = [&]
+        {
+            const std::lock_guard<std::mutex> lock(s.error_mutex);
+            return s.out_of_memory ? std::string() : "hemi: Embree failed building the scene: " + s.error;
+        }();
+        s.scene = nullptr;
+        s.device = nullptr;
+        if (message.empty())
+            throw std::bad_alloc();
+        throw std::runtime_error(message);
+    }
     s.positions = vb;
     s.indices = ib;
     triangle_count_ = uint32_t(mesh.indices.size() / 3);

@@ -73,6 +73,9 @@ constexpr uint64_t kExrBytesPerCoefficient = 6;
 // bytes a probe (64^3 and 128^3 probes at one ray each: +57.7 MB and +458 MB of peak); issue 41 found
 // 256^3 probes peaking at 3.5 GB under a budget of 100 MB.
 constexpr uint64_t kProbeBytes = 224;
+// The ray tracer's BVH over the scene (EmbreeScene: its copy of the positions and triangles, the BVH and what
+// its build holds): 160 bytes a triangle measured on oa_dm3's 22,188 triangles, rounded up.
+constexpr uint64_t kEmbreeBytesPerTriangle = 256;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.
 constexpr uint32_t kMinTileTexels = 4096;
@@ -154,6 +157,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                        const std::function<void(const LightmapProgress&)>& progress)
 {
     const auto t0 = std::chrono::steady_clock::now();
+    const uint64_t resident_at_start = io::resident_memory(); // what the scene adds is counted from here
     // Where the time goes, stage by stage (the JSON's "stage_seconds").
     std::vector<std::pair<std::string, double>> stages;
     auto stage_start = t0;
@@ -342,24 +346,37 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const uint64_t probe_count =
         uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40)));
     const uint64_t probe_bytes = probe_count * kProbeBytes;
-    if (budget != 0 && probe_bytes > budget)
+    // What the bake holds besides the stages counted below: the ray tracer's BVH and, under a budget, what
+    // the caller spent of it before (LightmapFileOptions::memory_held: hemi-bake's code and libraries) and
+    // the scene just read (io::resident_memory since the start; issue 41 found every --memory-budget's peak
+    // ~10 MiB over it without these). The memory the machine has free (io::available_memory) is what is left
+    // beside all the process holds.
+    const uint64_t resident_now = io::resident_memory();
+    const uint64_t held =
+        (o.memory_budget
+             ? o.memory_held + (resident_now > resident_at_start ? resident_now - resident_at_start : 0)
+             : 0) +
+        uint64_t(summary.triangles) * kEmbreeBytesPerTriangle;
+    if (budget != 0 && probe_bytes != 0 && held < budget && held + probe_bytes > budget)
         throw io::FormatError(scene_path.string() + ": --probes " + std::to_string(o.probes.x) + "," +
                               std::to_string(o.probes.y) + "," + std::to_string(o.probes.z) + ": " +
                               std::to_string(probe_count) + " light probes need about " +
-                              io::format_bytes(probe_bytes) + " of memory, held whole, but " +
+                              io::format_bytes(probe_bytes) + " of memory, held whole, beside the " +
+                              io::format_bytes(held) + " the process and the scene's ray tracer hold, but " +
                               (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
                               (o.memory_budget ? "" : " is available") + ": ask for fewer probes");
     const auto whole_bytes = [&](uint64_t texels)
     {
-        return probe_bytes + std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
-                                      output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
+        return held + probe_bytes +
+               std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
+                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
     };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
         const uint64_t passes = slots * kLightmapBytesPerSlot +
                                 texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
                                 std::max(tile, std::min(texels, least_band)) * per_tile_texel;
-        return probe_bytes + std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
+        return held + probe_bytes + std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
@@ -371,7 +388,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             throw io::FormatError(what + ": needs about " + io::format_bytes(whole) + " of memory (" +
                                   io::format_bytes(least) + " in tiles of " + std::to_string(kMinTileTexels) +
                                   " texels" + (o.denoise ? ", --denoise's filter in bands of rows" : "") +
-                                  "), but " + (o.memory_budget ? "--memory-budget is " : "only ") +
+                                  "; of either, " + io::format_bytes(held) +
+                                  " the process, the scene and its ray tracer hold), but " +
+                                  (o.memory_budget ? "--memory-budget is " : "only ") +
                                   io::format_bytes(budget) + (o.memory_budget ? "" : " is available"));
     };
     check_fits(slots, scene_path.string() + ": a " + atlas_text + " whose triangles touch " +

@@ -10,6 +10,7 @@
 //     every other error; --help exits 0.
 //   - An output must not be one of the command's inputs or another of its outputs.
 #include <hemi/io/atomic_file.h>
+#include <hemi/io/memory.h>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -22,10 +23,13 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <malloc.h>
+#include <mutex>
 #include <new>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <sys/resource.h>
 #include <utility>
 #include <vector>
 
@@ -285,8 +289,56 @@ inline void make_folder(const std::filesystem::path& dir, std::string_view optio
             (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
 }
 
+// What the tool is doing now ("pass 2/3 (bounce 1)", "writing the outputs"), for the message of a job that
+// runs out of memory; the progress lines set it as they go. Safe from any thread.
+inline std::mutex& stage_mutex()
+{
+    static std::mutex m;
+    return m;
+}
+inline std::string& stage_text()
+{
+    static std::string text;
+    return text;
+}
+inline void set_stage(std::string what)
+{
+    const std::lock_guard lock(stage_mutex());
+    stage_text() = std::move(what);
+}
+inline std::string stage()
+{
+    const std::lock_guard lock(stage_mutex());
+    return stage_text();
+}
+// What a user can do about it, appended to the out-of-memory message ("; a smaller --memory-budget ...").
+inline std::string& out_of_memory_advice()
+{
+    static std::string text;
+    return text;
+}
+
+// "<input>: out of memory while <stage>: the process held <peak> at its peak and <available> more was free":
+// what a job that the machine could not give memory says, instead of only that it ran out.
+inline std::string out_of_memory_message(const std::filesystem::path& input)
+{
+    const std::string what = stage();
+    const uint64_t available = io::available_memory();
+    return input.string() + ": out of memory" + (what.empty() ? std::string() : " while " + what) +
+           ": the process held " + io::format_bytes(io::peak_memory()) + " at its peak" +
+           (available ? " and " + io::format_bytes(available) + " more was free" : std::string()) +
+           out_of_memory_advice();
+}
+
+// Thrown in place of std::bad_alloc once the input and the stage are known (naming_input): run() prints it.
+struct OutOfMemory : std::runtime_error
+{
+    using std::runtime_error::runtime_error;
+};
+
 // Runs `work` on the data of `input`; an error whose message names none of the command's files is
-// re-thrown as "<input>: <message>", so that every error says which file it is about.
+// re-thrown as "<input>: <message>", so that every error says which file it is about; running out of memory
+// says which file, at which stage and at what size (out_of_memory_message).
 template <class F> auto naming_input(const std::filesystem::path& input, const Files& files, F&& work)
 {
     try
@@ -294,6 +346,10 @@ template <class F> auto naming_input(const std::filesystem::path& input, const F
         return work();
     }
     catch (const std::bad_alloc&)
+    {
+        throw OutOfMemory(out_of_memory_message(input));
+    }
+    catch (const OutOfMemory&)
     {
         throw;
     }
@@ -317,6 +373,11 @@ inline int run(CLI::App& app, int argc, char** argv, const std::string& tool,
     // A write past the file-size limit (ulimit -f) fails with EFBIG and is reported as a full disk is,
     // naming the file, instead of the process being killed by SIGXFSZ with its temporaries left behind.
     std::signal(SIGXFSZ, SIG_IGN);
+    // Under an address-space limit (ulimit -v), one malloc arena: glibc reserves 64 MiB of address space for
+    // each arena it adds for a thread, which the limit counts though nothing is used (io::available_memory
+    // counts the rest of what is reserved and not used).
+    if (rlimit as{}; getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
+        mallopt(M_ARENA_MAX, 1);
     try
     {
         app.parse(argc, argv);
@@ -335,8 +396,10 @@ inline int run(CLI::App& app, int argc, char** argv, const std::string& tool,
     }
     catch (const std::bad_alloc&)
     {
-        std::fprintf(stderr, "\n%s: out of memory: the machine could not give what this input needs\n",
-                     name.c_str());
+        const std::string what = stage();
+        std::fprintf(stderr, "\n%s: out of memory%s%s: the process held %s at its peak\n", name.c_str(),
+                     what.empty() ? "" : " while ", what.c_str(),
+                     io::format_bytes(io::peak_memory()).c_str());
     }
     catch (const std::exception& e)
     {

@@ -81,8 +81,12 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
                        json = dir() / ("ranks" + std::to_string(ranks) + ".json");
         // Two ranks under a memory budget that the whole atlas does not fit: in tiles, each shared among
         // the ranks like a pass, the sums on rank 0's disk.
-        const Result r =
-            mpirun(ranks, lightmap_args(scene, asset, json) + (ranks == 2 ? " --memory-budget 5M" : ""));
+        const Result r = mpirun(
+            ranks, lightmap_args(scene, asset, json) +
+                       (ranks == 2 ? hemi::test::tiling_budget(
+                                         [&](const std::string& extra)
+                                         { return mpirun(2, lightmap_args(scene, asset, json) + extra); })
+                                   : ""));
         ASSERT_EQ(r.status, 0) << r.err << r.out;
         EXPECT_TRUE(hemi::test::slurp(asset) == expected) << ranks << " rank(s): the asset's bytes differ";
         const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(json));
@@ -133,9 +137,11 @@ TEST(DistributedBake, DenoisedLightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
         const fs::path asset = dir() / "denoised_ranks.hemi", json = dir() / "denoised_ranks.json";
         // Two ranks under a budget the whole bake (17.4 MiB) does not fit: the bake in tiles, then the
         // filter in bands of rows from the tile file on rank 0.
-        const std::string budget = ranks == 2 ? " --memory-budget 8M" : "";
-        const Result r =
-            mpirun(ranks, "lightmap " + q(scene) + " -o " + q(asset) + " --json " + q(json) + args + budget);
+        const std::string bake = "lightmap " + q(scene) + " -o " + q(asset) + " --json " + q(json) + args;
+        const std::string budget = ranks == 2 ? hemi::test::tiling_budget([&](const std::string& extra)
+                                                                          { return mpirun(2, bake + extra); })
+                                              : "";
+        const Result r = mpirun(ranks, bake + budget);
         ASSERT_EQ(r.status, 0) << r.err << r.out;
         EXPECT_TRUE(hemi::test::slurp(asset) == expected) << ranks << " ranks: the asset's bytes differ";
         const nlohmann::json j = nlohmann::json::parse(hemi::test::slurp(json));

@@ -92,11 +92,13 @@ Bake bake(const std::string& name, const fs::path& scene, const std::string& lig
     Bake b{dir() / (name + ".hemi"), {}, {}};
     const fs::path json = dir() / (name + ".json");
     // Every option of the issue: a bounce, the denoiser, probes, --non-negative and the bake in tiles.
-    const Result r = run(HEMI_BAKE_EXE, "lightmap " + q(scene) + " " + lights +
-                                            " --size 128 --rays 16 --bounces 1 --denoise --probes 3,3,3 "
-                                            "--probe-rays 64 --non-negative --bases plain,rnm,sh9,h6 "
-                                            "--memory-budget 6M -o " +
-                                            q(b.asset) + " --json " + q(json));
+    const std::string command = "lightmap " + q(scene) + " " + lights +
+                                " --size 128 --rays 16 --bounces 1 --denoise --probes 3,3,3 --probe-rays 64 "
+                                "--non-negative --bases plain,rnm,sh9,h6 -o " +
+                                q(b.asset) + " --json " + q(json);
+    const Result r = run(
+        HEMI_BAKE_EXE, command + hemi::test::tiling_budget([&](const std::string& extra)
+                                                           { return run(HEMI_BAKE_EXE, command + extra); }));
     EXPECT_EQ(r.status, 0) << name << ": " << r.err;
     if (r.status != 0)
         return b;

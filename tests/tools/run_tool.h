@@ -4,9 +4,12 @@
 // (real_level_test.cpp).
 #include <sys/wait.h>
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 namespace hemi::test
@@ -41,6 +44,42 @@ inline Result run(const std::filesystem::path& dir, const std::string& exe, cons
     const std::string command = environment + " '" + exe + "' " + args + " > " + q(out) + " 2> " + q(err);
     const int raw = std::system(command.c_str());
     return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+// A --memory-budget (" --memory-budget <n>K") halfway between what a lightmap bake needs in memory and in
+// its least tiles, as hemi-bake estimates them: `bake(extra)` runs the bake with `extra` on its command line,
+// and its refusal of a budget of 1 MiB names both ("needs about 21.1 MiB of memory (15.4 MiB in tiles of
+// ..."). Both count what the process holds (its code, the scene), which differs under the sanitizers and
+// mpirun; the budget between them makes the bake run in tiles wherever it runs. "" (and a test failure) when
+// the refusal does not say so.
+inline std::string tiling_budget(const std::function<Result(const std::string&)>& bake)
+{
+    const Result r = bake(" --memory-budget 1M");
+    const auto size_after = [&](const std::string& label, size_t from, size_t& end) -> double
+    {
+        const size_t at = r.err.find(label, from);
+        if (at == std::string::npos)
+            return 0.0;
+        char* stop = nullptr;
+        const char* begin = r.err.c_str() + at + label.size();
+        const double value = std::strtod(begin, &stop);
+        end = size_t(stop - r.err.c_str());
+        const std::string unit = r.err.substr(end, 4);
+        const double scale = unit == " GiB"   ? 1024.0 * 1024.0
+                             : unit == " MiB" ? 1024.0
+                             : unit == " KiB" ? 1.0
+                                              : 0.0;
+        return value * scale; // KiB
+    };
+    size_t end = 0;
+    const double whole = size_after("needs about ", 0, end);
+    const double least = whole > 0.0 ? size_after("of memory (", end, end) : 0.0;
+    if (r.status != 1 || !(least > 0.0 && whole > least))
+    {
+        ADD_FAILURE() << "no estimate in the refusal of --memory-budget 1M: " << r.err;
+        return "";
+    }
+    return " --memory-budget " + std::to_string(uint64_t((whole + least) / 2.0)) + "K";
 }
 
 } // namespace hemi::test

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 #include <sys/resource.h>
+#include <thread>
 
 namespace hemi::io
 {
@@ -92,18 +93,34 @@ uint64_t available_memory()
                                         ": not a size (bytes, or a number with K, M, G or T: 8G, 1.5GiB)");
         available = available ? std::min(available, budget) : budget;
     }
-    auto lower = [&](int resource, const char* used_key)
+    auto lower = [&](int resource, const char* used_key, uint64_t reserved)
     {
         rlimit limit{};
         if (getrlimit(resource, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY)
             return;
-        const uint64_t used = proc_field("/proc/self/status", used_key);
+        const uint64_t used = proc_field("/proc/self/status", used_key) + reserved;
         const uint64_t room = uint64_t(limit.rlim_cur) > used ? uint64_t(limit.rlim_cur) - used : 0;
         available = available ? std::min(available, room) : room;
     };
-    lower(RLIMIT_AS, "VmSize");
-    lower(RLIMIT_DATA, "VmData");
+    lower(RLIMIT_AS, "VmSize", reserved_address_space());
+    lower(RLIMIT_DATA, "VmData", 0);
     return available;
+}
+
+uint64_t reserved_address_space()
+{
+    const uint64_t mib = uint64_t(1) << 20;
+    const uint64_t threads = std::max(1u, std::thread::hardware_concurrency());
+    rlimit stack{};
+    const uint64_t stack_bytes = getrlimit(RLIMIT_STACK, &stack) == 0 && stack.rlim_cur != RLIM_INFINITY
+                                     ? std::min<uint64_t>(stack.rlim_cur, 64 * mib)
+                                     : 8 * mib;
+    return 128 * mib + threads * stack_bytes;
+}
+
+uint64_t resident_memory()
+{
+    return proc_field("/proc/self/status", "VmRSS");
 }
 
 uint64_t peak_memory()

@@ -305,6 +305,11 @@ struct LightmapFileOptions
     // tile_texels) as large as the budget leaves room for, its sums in lightmap_tile_path(asset); one that
     // cannot fit even in tiles of 4096 texels is refused before it starts, naming both.
     uint64_t memory_budget = 0;
+    // Bytes of memory_budget spent before the call, which the bake counts as held throughout: 0 when the
+    // budget is for the bake alone; hemi-bake, whose --memory-budget is a ceiling on its whole process's
+    // peak, passes what the process holds when it starts (io::resident_memory: its code and libraries).
+    // The scene the bake reads and the ray tracer's BVH are counted by the bake itself.
+    uint64_t memory_held = 0;
     // Called after each stage of the job with its name, in order: "scene", "atlas", "bake", "denoise" (with
     // denoise), then the outputs' and the asset's (LightmapBakeSummary::stage_seconds names them all). An
     // exception thrown from it stops the job there as a kill would, leaving the checkpoint and the tiles for
