@@ -248,10 +248,10 @@ int run_ssbump(SsbumpCli& c)
         std::vector<uint8_t> alpha;
         for (size_t i = 0; i < size_t(image.width) * image.height; ++i)
         {
-            const float* p = image.pixels.data() + i * 4;
-            m.normals.push_back(bake::ssbump_normal(glm::vec3(p[0], p[1], p[2]), convention));
+            m.normals.push_back(bake::ssbump_normal(
+                glm::vec3(image.rgba(i, 0), image.rgba(i, 1), image.rgba(i, 2)), convention));
             if (image.channels == 4)
-                alpha.push_back(uint8_t(std::lround(p[3] * 255.0f)));
+                alpha.push_back(uint8_t(std::lround(image.rgba(i, 3) * 255.0f)));
         }
         write_ssbump_png(c.output, m, alpha, true);
         std::printf("wrote %s: %ux%u tangent-space normals from %s weights\n", c.output.c_str(), m.width,

@@ -650,11 +650,11 @@ bool looks_like_normal_map(const io::DataImage& image)
     const size_t n = size_t(image.width) * image.height;
     for (size_t i = 0; i < n; ++i)
     {
-        const float* p = image.pixels.data() + i * 4;
-        const glm::vec3 v(2.0f * p[0] - 1.0f, 2.0f * p[1] - 1.0f, 2.0f * p[2] - 1.0f);
+        const glm::vec3 v(2.0f * image.rgba(i, 0) - 1.0f, 2.0f * image.rgba(i, 1) - 1.0f,
+                          2.0f * image.rgba(i, 2) - 1.0f);
         if (std::abs(glm::length(v) - 1.0f) < 0.1f && v.z > 0.2f)
             ++unit;
-        if (p[0] == p[1] && p[1] == p[2])
+        if (image.rgba(i, 0) == image.rgba(i, 1) && image.rgba(i, 1) == image.rgba(i, 2))
             ++grey;
     }
     return unit >= n * 9 / 10 && grey < n / 2;
@@ -673,8 +673,7 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
     bool rgb_equal = true;
     for (size_t i = 0; i < n && rgb_equal; ++i)
     {
-        const float* p = image.pixels.data() + i * 4;
-        rgb_equal = p[0] == p[1] && p[1] == p[2];
+        rgb_equal = image.rgba(i, 0) == image.rgba(i, 1) && image.rgba(i, 1) == image.rgba(i, 2);
     }
     int source = 0;
     switch (channel)
@@ -689,7 +688,7 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
                                       "`hemi-bake ssbump --from-normal`");
             bool single_r = exr;
             for (size_t i = 0; i < n && single_r; ++i)
-                single_r = image.pixels[i * 4 + 1] == 0.0f && image.pixels[i * 4 + 2] == 0.0f;
+                single_r = image.rgba(i, 1) == 0.0f && image.rgba(i, 2) == 0.0f;
             if (!single_r)
                 throw io::FormatError(name + ": a colour image, not a grey height map; choose the channel "
                                              "that holds the heights with --channel r|g|b|a");
@@ -721,7 +720,7 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
     float lo = std::numeric_limits<float>::infinity(), hi = -lo;
     for (size_t i = 0; i < n; ++i)
     {
-        const float v = image.pixels[i * 4 + size_t(source)];
+        const float v = image.rgba(i, source);
         if (!std::isfinite(v))
             throw io::FormatError(name + ": the height at (" + std::to_string(i % image.width) + ", " +
                                   std::to_string(i / image.width) + ") is not finite");
@@ -736,7 +735,7 @@ HeightMapFile read_height_map(const std::filesystem::path& path, HeightChannel c
     {
         out.alpha.resize(n);
         for (size_t i = 0; i < n; ++i)
-            out.alpha[i] = uint8_t(std::lround(std::clamp(image.pixels[i * 4 + 3], 0.0f, 1.0f) * 255.0f));
+            out.alpha[i] = uint8_t(std::lround(std::clamp(image.rgba(i, 3), 0.0f, 1.0f) * 255.0f));
     }
     return out;
 }
@@ -759,8 +758,8 @@ std::vector<glm::vec3> read_normal_map(const std::filesystem::path& path, uint32
     size_t zeros = 0;
     for (size_t i = 0; i < n; ++i)
     {
-        const float* p = image.pixels.data() + i * 4;
-        const glm::vec3 v(2.0f * p[0] - 1.0f, 2.0f * p[1] - 1.0f, 2.0f * p[2] - 1.0f);
+        const glm::vec3 v(2.0f * image.rgba(i, 0) - 1.0f, 2.0f * image.rgba(i, 1) - 1.0f,
+                          2.0f * image.rgba(i, 2) - 1.0f);
         const float len = glm::length(v);
         if (len < 1e-3f)
         {
@@ -775,7 +774,7 @@ std::vector<glm::vec3> read_normal_map(const std::filesystem::path& path, uint32
     {
         alpha.resize(n);
         for (size_t i = 0; i < n; ++i)
-            alpha[i] = uint8_t(std::lround(std::clamp(image.pixels[i * 4 + 3], 0.0f, 1.0f) * 255.0f));
+            alpha[i] = uint8_t(std::lround(std::clamp(image.rgba(i, 3), 0.0f, 1.0f) * 255.0f));
     }
     if (zero_normals)
         *zero_normals = zeros;

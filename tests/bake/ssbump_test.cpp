@@ -7,6 +7,7 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/ssbump.h>
 #include <hemi/io/image.h>
+#include <hemi/io/memory.h>
 
 #include <ImfRgbaFile.h>
 #include <gtest/gtest.h>
@@ -532,6 +533,49 @@ TEST(Ssbump, ReadsHeightMapsAtFullDepth)
     EXPECT_FLOAT_EQ(c.field.heights[5], 5.0f / 255.0f);
     ASSERT_EQ(c.alpha.size(), 24u);
     EXPECT_EQ(c.alpha[5], 50);
+}
+
+// Issue 41, defect 17: a data image is decoded at the channels its file has, not expanded to RGBA: a 4096^2
+// grey height map (16.8 M pixels, 8 bits) takes one float a pixel (67 MB) and stb's byte a pixel while it
+// decodes; expanded to 16-bit RGBA and then RGBA floats (the old way) it took 24 bytes a pixel, 400 MB. A
+// budget that cannot hold the decode (HEMI_MEMORY_BUDGET=32M) refuses it, naming the file and the size,
+// before decoding. Grey reads as grey in red, green and blue with alpha 1, as the callers read RGBA.
+TEST(Ssbump, AHeightMapIsDecodedAtItsOwnChannelsWithinTheMemoryBudget)
+{
+    const uint32_t side = 4096;
+    std::vector<uint16_t> grey(size_t(side) * side, 0);
+    for (uint32_t x = 0; x < side; ++x)
+        grey[x] = uint16_t(x & 255); // the top row a ramp
+    const fs::path path = dir() / "grey_4096.png";
+    write_bytes(path, hemi::test::encode_png_samples(side, side, 1, 8, grey));
+    grey = {};
+    {
+        const uint64_t before = hemi::io::peak_memory();
+        const hemi::io::DataImage image = hemi::io::read_data_image(path);
+        const uint64_t grew = hemi::io::peak_memory() - before;
+        std::printf("a %ux%u grey PNG decoded: %zu floats, peak grew %.1f MiB\n", side, side,
+                    image.pixels.size(), double(grew) / 1048576.0);
+        EXPECT_EQ(image.channels, 1);
+        EXPECT_EQ(image.pixels.size(), size_t(side) * side);
+        EXPECT_LT(grew, uint64_t(side) * side * (1 + 4) * 2);
+        EXPECT_FLOAT_EQ(image.rgba(7, 0), 7.0f / 255.0f);
+        EXPECT_FLOAT_EQ(image.rgba(7, 2), 7.0f / 255.0f);
+        EXPECT_FLOAT_EQ(image.rgba(7, 3), 1.0f);
+    }
+    ASSERT_EQ(setenv("HEMI_MEMORY_BUDGET", "32M", 1), 0);
+    try
+    {
+        hemi::io::read_data_image(path);
+        ADD_FAILURE() << "a decode the budget cannot hold was not refused";
+    }
+    catch (const hemi::io::FormatError& e)
+    {
+        const std::string message = e.what();
+        EXPECT_NE(message.find(path.string() + " (a 4096x4096 image): needs about 80.0 MiB"),
+                  std::string::npos)
+            << message;
+    }
+    unsetenv("HEMI_MEMORY_BUDGET");
 }
 
 // Done-when line 5: bad height maps give clear errors naming the file.

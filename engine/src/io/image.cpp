@@ -1,5 +1,6 @@
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/image.h>
+#include <hemi/io/memory.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -1290,10 +1291,32 @@ DataImage read_data_image(const std::filesystem::path& path)
     out.width = uint32_t(c.width);
     out.height = uint32_t(c.height);
     out.channels = c.channels;
-    const std::vector<uint16_t> samples = decode_rgba16(c, image.name, out.bits);
-    out.pixels.resize(samples.size());
-    for (size_t i = 0; i < samples.size(); ++i)
-        out.pixels[i] = float(samples[i]) / 65535.0f;
+    const std::vector<uint8_t>& data = c.data();
+    const int size = int(data.size());
+    out.bits = stbi_is_16_bit_from_memory(data.data(), size) ? 16 : 8;
+    // Decoded at the file's own channel count: stb's samples (1 or 2 bytes each) and the floats (4).
+    const size_t samples = size_t(c.width) * size_t(c.height) * size_t(c.channels);
+    check_memory(samples * (size_t(out.bits / 8) + sizeof(float)), path.string() + " (a " +
+                                                                       std::to_string(c.width) + "x" +
+                                                                       std::to_string(c.height) + " image)");
+    int w = 0, h = 0, channels = 0;
+    out.pixels.resize(samples);
+    if (out.bits == 16)
+    {
+        stbi_us* wide = stbi_load_16_from_memory(data.data(), size, &w, &h, &channels, c.channels);
+        if (!wide)
+            throw FormatError(image.name + ": corrupt PNG (" + std::string(stbi_failure_reason()) + ")");
+        std::unique_ptr<stbi_us, void (*)(void*)> owner(wide, stbi_image_free);
+        for (size_t i = 0; i < samples; ++i)
+            out.pixels[i] = float(wide[i]) / 65535.0f;
+        return out;
+    }
+    unsigned char* narrow = stbi_load_from_memory(data.data(), size, &w, &h, &channels, c.channels);
+    if (!narrow)
+        throw FormatError(image.name + ": corrupt PNG (" + std::string(stbi_failure_reason()) + ")");
+    std::unique_ptr<unsigned char, void (*)(void*)> owner(narrow, stbi_image_free);
+    for (size_t i = 0; i < samples; ++i)
+        out.pixels[i] = float(narrow[i]) / 255.0f;
     return out;
 }
 

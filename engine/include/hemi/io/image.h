@@ -129,13 +129,24 @@ struct DataImage
     uint32_t height = 0;
     int channels = 0; // what the file stores: PNG 1 (grey), 2 (grey + alpha), 3 (RGB), 4 (RGBA); EXR 4
     int bits = 0;     // PNG 8 or 16; EXR 32 (half and float both read as float)
-    std::vector<float> pixels; // width * height * 4, row-major from the top row
+    // width * height * channels, row-major from the top row: only the channels the file has (a 16384^2 grey
+    // height map is 1 GiB of floats, not the 4 GiB of RGBA; issue 41).
+    std::vector<float> pixels;
 
-    const float* at(uint32_t x, uint32_t y) const { return pixels.data() + (size_t(y) * width + x) * 4; }
+    // Channel c (0 red, 1 green, 2 blue, 3 alpha) of pixel i (y * width + x) as RGBA: grey in red, green and
+    // blue; alpha 1 where the file has none.
+    float rgba(size_t i, int c) const
+    {
+        const float* p = pixels.data() + i * size_t(channels);
+        if (channels >= 3)
+            return c < 3 ? p[c] : channels == 4 ? p[3] : 1.0f;
+        return c < 3 ? p[0] : channels == 2 ? p[1] : 1.0f;
+    }
 };
 // Reads a PNG (checked as decode_image checks it) or an OpenEXR file (read_exr) by its signature. Throws
 // FormatError naming `path` when it is missing, empty, a JPEG (lossy: not data), neither format, truncated or
-// corrupt.
+// corrupt, or when decoding it would need more memory than is available (io::check_memory, from the size its
+// header declares, before decoding).
 DataImage read_data_image(const std::filesystem::path& path);
 
 // Encodes 8-bit RGBA (stb_image_write): PNG losslessly; JPEG at `quality` in [1, 100], alpha dropped. Throws
