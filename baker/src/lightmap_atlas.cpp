@@ -3,6 +3,7 @@
 
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/ray_generator.h>
+#include <hemi/io/memory.h>
 
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -182,9 +183,11 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
     return x_begin <= x_end && y_begin <= y_end;
 }
 
-// Rays per candidate of rule 0 below, and the most candidates a texel may have to be judged by it.
+// Rays per candidate of rule 0 below, and the most candidates a texel keeps: of a texel that more triangles
+// claim (a quad copied thousands of times over one UV square, where 32 rays each would cost more than the
+// bake, and the candidates more memory than the lightmap) the first 64 by triangle index.
 constexpr int kOverlapRays = 32;
-constexpr size_t kMaxJudgedCandidates = 64;
+constexpr uint8_t kMaxCandidates = 64;
 
 // Per entry of `contested` (sorted), 1 when the texel centre's point on that triangle lies inside geometry
 // as the lightmap bake judges a texel (lightmap_bake.h, LightmapSh::valid): more than half of kOverlapRays
@@ -195,22 +198,6 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
                                      std::span<const uint8_t> double_sided)
 {
     std::vector<uint8_t> inside(contested.size(), 0);
-    // A texel's first kMaxJudgedCandidates candidates are judged; the rest (a quad copied thousands of times
-    // over one UV square, where 32 rays each would cost more than the bake) count as inside geometry, so
-    // that a judged candidate a viewer can reach still wins.
-    std::vector<uint8_t> judged(contested.size(), 1);
-    for (size_t first = 0; first < contested.size();)
-    {
-        size_t last = first;
-        while (last < contested.size() && contested[last].first == contested[first].first)
-            ++last;
-        for (size_t c = first + kMaxJudgedCandidates; c < last; ++c)
-        {
-            judged[c] = 0;
-            inside[c] = 1;
-        }
-        first = last;
-    }
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
     const uint32_t width = grid.width(), height = grid.height();
@@ -221,8 +208,6 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
             std::array<glm::vec3, kOverlapRays> directions;
             for (size_t c = r.begin(); c != r.end(); ++c)
             {
-                if (!judged[c])
-                    continue;
                 const auto [slot, t] = contested[c];
                 const glm::uvec2 xy = grid.texel(slot);
                 const glm::vec3 a = mesh.positions[mesh.indices[3 * size_t(t)]],
@@ -403,7 +388,7 @@ io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t hei
 
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges,
-                                 std::span<const uint8_t> double_sided)
+                                 std::span<const uint8_t> double_sided, uint64_t overlap_budget)
 {
     io::BlockGrid grid = lightmap_blocks(mesh, width, height); // checks the mesh
     report = {};
@@ -470,6 +455,21 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 double distance = 0.0;
                 if (claims(uv, area2, centre))
                 {
+                    // The candidates grow by doubling, within overlap_budget: refused before it is exceeded.
+                    if (inside_count[texel] >= 1 && contested.size() + 2 > contested.capacity())
+                    {
+                        const size_t grown = std::max<size_t>(2 * contested.capacity(), 1024);
+                        if (overlap_budget && grown * kOverlapCandidateBytes > overlap_budget)
+                            throw std::length_error(
+                                "at least " + std::to_string(report.overlapping_texels) +
+                                " lightmap texels lie inside two or more triangles (overlapping lightmap "
+                                "UVs, as "
+                                "a mesh instanced over one set of TEXCOORD_1 has them): resolving them needs "
+                                "more than " +
+                                io::format_bytes(grown * kOverlapCandidateBytes) +
+                                " of memory, and the budget leaves " + io::format_bytes(overlap_budget));
+                        contested.reserve(grown);
+                    }
                     if (inside_count[texel] == 0)
                         first_inside[texel] = int32_t(t);
                     else if (inside_count[texel] == 1)
@@ -483,7 +483,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                         contested.emplace_back(texel, uint32_t(first_inside[texel]));
                         contested.emplace_back(texel, uint32_t(t));
                     }
-                    else
+                    else if (inside_count[texel] < kMaxCandidates)
                         contested.emplace_back(texel, uint32_t(t));
                     inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
                 }

@@ -403,7 +403,21 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     std::vector<uint8_t> double_sided(summary.triangles, 0);
     for (uint32_t t = 0; t < summary.triangles; ++t)
         double_sided[t] = surfaces->double_sided(t);
-    LightmapAtlas atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided);
+    // Overlapping UVs' candidates may take what the budget leaves beside the rasteriser's tables.
+    const uint64_t raster_bytes = held + probe_bytes + slots * kLightmapBytesPerSlot;
+    const uint64_t overlap_budget = budget == 0 ? 0 : budget > raster_bytes ? budget - raster_bytes : 1;
+    LightmapAtlas atlas;
+    try
+    {
+        atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided, overlap_budget);
+    }
+    catch (const std::length_error& e)
+    {
+        throw io::FormatError(scene_path.string() + ": " + e.what() + " (" +
+                              (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
+                              (o.memory_budget ? "" : " is available") +
+                              "); give each instance its own lightmap UVs, or bake with --unwrap");
+    }
     stage_done("atlas");
     summary.uv_report = report;
     if (!o.uv_report.empty() && leader)

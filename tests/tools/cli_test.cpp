@@ -2783,6 +2783,46 @@ TEST(HostileCli, LightProbesCountAgainstTheMemoryBudget)
 #endif
 }
 
+// Issue 41, defect 5 (the overlaps): a mesh copied many times over one set of lightmap UVs (here 200 floors
+// stacked over the whole UV square, as an instanced mesh sharing its TEXCOORD_1 has them) once kept every
+// (texel, triangle) claim to resolve (20,000 copies of a quad at --size 64 took 2 GB and 22 s). A texel keeps
+// at most 64 candidates now, and what they take counts against the budget: at 256^2 (64 candidates for each
+// of 65,536 texels, 71 MB) under --memory-budget 60M the bake is refused before any ray, naming the overlap
+// and the budget; at 32^2 it bakes, reporting every texel as overlapped.
+TEST(HostileCli, OverlappingCopiesAreBoundedBeforeTheWork)
+{
+    hemi::io::GltfScene s;
+    hemi::io::Mesh& m = s.mesh;
+    for (uint32_t copy = 0; copy < 200; ++copy)
+    {
+        const uint32_t base = uint32_t(m.positions.size());
+        for (const glm::vec2 c : {glm::vec2(0, 0), glm::vec2(0, 1), glm::vec2(1, 1), glm::vec2(1, 0)})
+        {
+            m.positions.emplace_back(2.0f * c.x - 1.0f, 0.01f * float(copy), 2.0f * c.y - 1.0f);
+            m.normals.emplace_back(0, 1, 0);
+            m.tangents.emplace_back(1, 0, 0, 1);
+            m.uvs.push_back(c);
+            m.uvs1.push_back(c);
+        }
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+    s.materials.emplace_back();
+    s.primitives.push_back({0, uint32_t(m.indices.size()), 0});
+    const fs::path scene = dir() / "copies.gltf", asset = dir() / "copies.hemi", json = dir() / "copies.json";
+    hemi::io::write_gltf(scene, s);
+    Result r = lightmap(q(scene) + " --size 256 --rays 1 --bases plain --memory-budget 60M -o " + q(asset));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(scene.string() + ": at least "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("lie inside two or more triangles"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("resolving them needs more than"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--memory-budget is 60.0 MiB"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('%'), std::string::npos) << "the work started: " << r.err;
+    EXPECT_FALSE(fs::exists(asset));
+    r = lightmap(q(scene) + " --size 32 --rays 1 --bases plain -o " + q(asset) + " --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(json))["overlapping_texels"].get<int>(), 32 * 32);
+}
+
 // Issue 41, defect 9: a job the machine cannot give memory names the file, what it was doing and how much it
 // held, not only "out of memory: the machine could not give what this input needs". An address-space limit
 // of 150 MB (prlimit --as) is too small for Embree's device and threads (io::reserved_address_space). The

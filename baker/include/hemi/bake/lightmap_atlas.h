@@ -115,10 +115,15 @@ struct TriangleRange
 // meet the backs of single-sided surfaces; `double_sided`, per triangle, marks those whose back counts as
 // a front; empty: none), then to the one whose chart continues there, then to the one facing the scene's
 // centre. Only meshes with overlaps pay for the rays (and an Embree scene of the mesh); of a texel that more
-// than 64 triangles claim (a pile of copies over one UV square) the first 64 are judged, the rest count as
-// inside geometry.
+// than 64 triangles claim (a pile of copies over one UV square) only the first 64 are candidates.
+//
+// Each candidate takes kOverlapCandidateBytes while the overlaps are resolved. `overlap_budget` bounds them:
+// when the candidates would take more (a mesh instanced many times over one set of lightmap UVs), throws
+// std::length_error saying how many texels overlap and how much they need, as soon as they exceed it, before
+// any ray is traced. 0: no bound.
+constexpr uint64_t kOverlapCandidateBytes = 16 + 1; // (slot, triangle) and the judge's answer
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
-                                 std::span<const uint8_t> double_sided = {});
+                                 std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0);
 
 } // namespace hemi::bake
