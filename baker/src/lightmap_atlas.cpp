@@ -2,6 +2,7 @@
 #include <hemi/bake/lightmap_atlas.h>
 
 #include <hemi/bake/embree_scene.h>
+#include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/ray_generator.h>
 #include <hemi/io/memory.h>
 
@@ -510,6 +511,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     resolve_overlaps(mesh, grid, contested, inside_count, best, best_distance, best_bary, double_sided,
                      report);
 
+    const std::vector<uint32_t> chart_of = lightmap_charts(mesh);
     LightmapAtlas atlas;
     atlas.width = width;
     atlas.height = height;
@@ -569,6 +571,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         out.tangent = glm::vec3(tan);
         out.bitangent = glm::vec3(glm::cross(nrm, tan) * w);
         out.world_size = float(std::sqrt(world_area[t] / uv_area[t]));
+        out.chart = chart_of[t];
         atlas.slot_texel[texel] = int32_t(atlas.texels.size());
         atlas.texels.push_back(out);
     }

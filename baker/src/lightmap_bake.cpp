@@ -222,9 +222,15 @@ namespace
 // order, a chunk at a time: a map is filled without all of its texels' values in memory at once.
 // The texels are given by their places in a width x height atlas: place(i) is texel i's (x, y).
 using TexelValues = std::function<void(uint32_t first, std::span<glm::vec3> values)>;
+// An invalid texel (inside geometry, `valid`) is filled only from valid texels of its own chart (`charts`,
+// per texel; empty: any): a texel that the 32-ray test judged inside geometry though a viewer sees it (a
+// ceiling of a sealed level, whose rays meet many backs) keeps its own value beside another face's
+// rectangle in an unpadded page, instead of taking that face's light (issue 41: oacmpdm1's ceiling at
+// Quake (619, -551, 384), 0 against the reference's 0.117).
 template <typename Place>
 io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& place, int k, int dilate,
-                      std::span<const uint8_t> valid, const TexelValues& produce)
+                      std::span<const uint8_t> valid, const TexelValues& produce,
+                      std::span<const uint32_t> charts = {})
 {
     dilate = std::max(dilate, 0);
     const int64_t w = width, h = height, B = io::BlockGrid::kSize;
@@ -250,6 +256,8 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
     // such texels), kValid a valid texel's value (or one filled from those).
     constexpr uint8_t kOwn = 1, kValid = 2;
     std::vector<uint8_t> filled(grid.slots(), 0);
+    constexpr uint32_t kAnyChart = ~0u;
+    std::vector<uint32_t> slot_chart(charts.empty() ? 0 : grid.slots(), kAnyChart);
     constexpr uint32_t kChunk = 1u << 16;
     std::vector<glm::vec3> values(size_t(std::min(n, kChunk)) * size_t(k));
     for (uint32_t first = 0; first < n; first += kChunk)
@@ -263,6 +271,8 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
             const glm::uvec2 t = place(i);
             const size_t slot = size_t(grid.slot(t.x, t.y));
             filled[slot] = !valid.empty() && !valid[i] ? kOwn : kValid;
+            if (!charts.empty())
+                slot_chart[slot] = charts[i];
             for (int j = 0; j < k; ++j)
             {
                 const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
@@ -295,6 +305,10 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
                         const int64_t from = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
                         if (from < 0 || filled[size_t(from)] != source || next[size_t(from)] != source)
                             continue;
+                        // An invalid texel takes only its own chart's light.
+                        if (!slot_chart.empty() && filled[slot] == kOwn && slot_chart[slot] != kAnyChart &&
+                            slot_chart[size_t(from)] != slot_chart[slot])
+                            continue;
                         ++count;
                         for (int j = 0; j < k; ++j)
                         {
@@ -318,13 +332,22 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
     }
     return maps;
 }
+// Each texel's chart, as dilated() takes them.
+std::vector<uint32_t> texel_charts(const LightmapAtlas& atlas)
+{
+    std::vector<uint32_t> charts(atlas.texels.size());
+    for (size_t i = 0; i < charts.size(); ++i)
+        charts[i] = atlas.texels[i].chart;
+    return charts;
+}
+
 io::BlockMaps dilated(const LightmapAtlas& atlas, int k, int dilate, std::span<const uint8_t> valid,
                       const TexelValues& produce)
 {
     return dilated(
         atlas.width, atlas.height, uint32_t(atlas.texels.size()),
         [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, k, dilate, valid,
-        produce);
+        produce, texel_charts(atlas));
 }
 
 // The same from every texel's values in memory.
@@ -1354,7 +1377,8 @@ namespace
 {
 template <typename Place>
 io::BlockMaps maps_at(std::string_view name, uint32_t width, uint32_t height, const Place& place,
-                      const LightmapSh& sh, int dilate, bool non_negative, size_t* adjusted)
+                      std::span<const uint32_t> charts, const LightmapSh& sh, int dilate, bool non_negative,
+                      size_t* adjusted)
 {
     const int k = lightmap_output_size(name);
     const std::vector<double>& m = output_matrix(name); // once, not per texel
@@ -1362,31 +1386,32 @@ io::BlockMaps maps_at(std::string_view name, uint32_t width, uint32_t height, co
     const bool direct = (name == "plain" || name == "rnm") && sh.has_direct();
     std::vector<std::array<glm::vec3, 9>> sh9;
     std::vector<std::array<glm::vec3, 4>> directs;
-    return dilated(width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
-                   [&](uint32_t first, std::span<glm::vec3> values)
-                   {
-                       const uint32_t count = uint32_t(values.size() / size_t(k));
-                       if (direct)
-                       {
-                           directs.resize(count);
-                           sh.read(first, count, nullptr, directs.data());
-                           for (uint32_t i = 0; i < count; ++i)
-                               for (int j = 0; j < k; ++j)
-                                   values[i * size_t(k) + size_t(j)] =
-                                       directs[i][name == "plain" ? 0 : size_t(1 + j)];
-                           return;
-                       }
-                       sh9.resize(count);
-                       sh.read(first, count, sh9.data());
-                       for (uint32_t i = 0; i < count; ++i)
-                       {
-                           glm::vec3* v = &values[i * size_t(k)];
-                           apply(m, sh9[i], v);
-                           if (non_negative && name != "plain" && name != "rnm" &&
-                               make_non_negative(name, std::span<glm::vec3>(v, size_t(k))) && adjusted)
-                               ++*adjusted;
-                       }
-                   });
+    return dilated(
+        width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
+        [&](uint32_t first, std::span<glm::vec3> values)
+        {
+            const uint32_t count = uint32_t(values.size() / size_t(k));
+            if (direct)
+            {
+                directs.resize(count);
+                sh.read(first, count, nullptr, directs.data());
+                for (uint32_t i = 0; i < count; ++i)
+                    for (int j = 0; j < k; ++j)
+                        values[i * size_t(k) + size_t(j)] = directs[i][name == "plain" ? 0 : size_t(1 + j)];
+                return;
+            }
+            sh9.resize(count);
+            sh.read(first, count, sh9.data());
+            for (uint32_t i = 0; i < count; ++i)
+            {
+                glm::vec3* v = &values[i * size_t(k)];
+                apply(m, sh9[i], v);
+                if (non_negative && name != "plain" && name != "rnm" &&
+                    make_non_negative(name, std::span<glm::vec3>(v, size_t(k))) && adjusted)
+                    ++*adjusted;
+            }
+        },
+        charts);
 }
 } // namespace
 
@@ -1397,18 +1422,19 @@ io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, c
         throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
     return maps_at(
         name, atlas.width, atlas.height,
-        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, sh, dilate,
-        non_negative, adjusted);
+        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, texel_charts(atlas), sh,
+        dilate, non_negative, adjusted);
 }
 
 io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
                             std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
-                            bool non_negative, size_t* adjusted)
+                            bool non_negative, size_t* adjusted, std::span<const uint32_t> charts)
 {
-    if (sh.texels() != places.size())
+    if (sh.texels() != places.size() || (!charts.empty() && charts.size() != places.size()))
         throw std::invalid_argument("the lightmap's irradiance does not match its texels' places");
     return maps_at(
-        name, width, height, [&](uint32_t i) { return places[i]; }, sh, dilate, non_negative, adjusted);
+        name, width, height, [&](uint32_t i) { return places[i]; }, charts, sh, dilate, non_negative,
+        adjusted);
 }
 
 void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irr,

@@ -62,7 +62,8 @@ constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
 constexpr uint64_t kTiledBytesPerCoveredTexel = 136;
-constexpr uint64_t kPlaceBytesPerTexel = 8; // what the outputs keep of the atlas: each texel's (x, y)
+constexpr uint64_t kDilationBytesPerSlot = 2 + 4; // the dilation's state (two passes') and chart per slot
+constexpr uint64_t kPlaceBytesPerTexel = 12; // what the outputs keep of the atlas: each texel's (x, y), chart
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
@@ -340,7 +341,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             : 0;
     const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileNoiseBytesPerTexel / 2 : 0);
     const uint64_t output_map_bytes =
-        output_slots * largest_output * kLightmapBytesPerLargestCoefficient + exr_bytes;
+        output_slots * (largest_output * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot) +
+        exr_bytes;
     // The probes cannot be tiled: they count in full against the budget, on top of either stage.
     // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
     const uint64_t probe_count =
@@ -535,11 +537,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     if (!asset.probes.empty())
         stage_done("probes");
-    // The passes and the probes are done: the outputs need only each texel's place in the atlas (8 bytes,
-    // not its 92-byte record).
+    // The passes and the probes are done: the outputs need only each texel's place in the atlas and its
+    // chart (12 bytes, not its 96-byte record).
     std::vector<glm::uvec2> places(atlas.texels.size());
+    std::vector<uint32_t> charts(atlas.texels.size());
     for (size_t i = 0; i < places.size(); ++i)
+    {
         places[i] = glm::uvec2(atlas.texels[i].x, atlas.texels[i].y);
+        charts[i] = atlas.texels[i].chart;
+    }
     atlas = LightmapAtlas{};
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
     // seams whose two sides' frames agree (LightmapSeam::frames_agree).
@@ -569,8 +575,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const auto make_output = [&](const std::string& name, OutputReport& made)
     {
         size_t adjusted = 0;
-        io::LightmapOutput output{name, uint32_t(lightmap_output_size(name)),
-                                  lightmap_maps(name, w, h, places, sh, o.dilate, o.non_negative, &adjusted)};
+        io::LightmapOutput output{
+            name, uint32_t(lightmap_output_size(name)),
+            lightmap_maps(name, w, h, places, sh, o.dilate, o.non_negative, &adjusted, charts)};
         made.adjusted = adjusted;
         made.blocks = output.maps.grid.blocks().size();
         const LightmapSeamMetric before = measure_lightmap_seams(seams_of(output.name), output.maps);

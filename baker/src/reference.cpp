@@ -210,7 +210,7 @@ ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& su
     ReferenceImage out;
     const float aspect = float(o.width) / float(o.height);
     out.camera = o.auto_camera ? math::auto_camera(mesh, o.model, aspect) : o.camera;
-    const glm::mat4 inverse = glm::inverse(math::camera_matrix(out.camera, mesh, o.model, aspect));
+    const glm::mat4 inverse = glm::inverse(math::camera_ray_matrix(out.camera, aspect));
     const glm::mat4 to_mesh = glm::inverse(o.model);
     const glm::vec3 eye = glm::vec3(to_mesh * glm::vec4(out.camera.eye, 1.0f));
     const Tracer tracer(mesh, surfaces, lights, o);

@@ -2823,6 +2823,21 @@ TEST(HostileCli, OverlappingCopiesAreBoundedBeforeTheWork)
     EXPECT_EQ(nlohmann::json::parse(slurp(json))["overlapping_texels"].get<int>(), 32 * 32);
 }
 
+// A reference camera whose scene lies wholly behind it (looking up, away from the floor) renders an image
+// of nothing (hemi-bake reference draws what the rays miss as the background, 0, as hemi-render clears):
+// the planes that camera_matrix fits to the scene collapse there, and their inverse gave NaN rays, which
+// Embree's assertion turned into an abort (found with issue 41's cameras on a level at the wrong scale).
+TEST(HostileCli, AReferenceCameraFacingAwayFromTheSceneRendersTheBackground)
+{
+    const fs::path exr = dir() / "away.exr";
+    const Result r = run(HEMI_BAKE_EXE, "reference " + q(floor_scene()) + " -o " + q(exr) +
+                                            " --size 16x12 --rays 4 --env uniform --camera 0,0,10,0,0,11");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const hemi::io::ImageRgba image = hemi::io::read_exr(exr);
+    for (size_t i = 0; i < image.pixels.size(); i += 4)
+        ASSERT_EQ(image.pixels[i], 0.0f) << "pixel " << i / 4;
+}
+
 // Issue 41, defect 9: a job the machine cannot give memory names the file, what it was doing and how much it
 // held, not only "out of memory: the machine could not give what this input needs". An address-space limit
 // of 150 MB (prlimit --as) is too small for Embree's device and threads (io::reserved_address_space). The

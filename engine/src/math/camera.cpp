@@ -55,6 +55,28 @@ glm::mat4 camera_matrix(const Camera& camera, const io::Mesh& mesh, const glm::m
     return camera_matrix(camera, bounding_sphere(mesh, model), aspect);
 }
 
+namespace
+{
+// The view-projection of `camera` with the given planes (Vulkan clip space, y down).
+glm::mat4 view_projection(const Camera& camera, float aspect, float near_plane, float far_plane)
+{
+    const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
+    glm::vec3 up(0.0f, 0.0f, 1.0f);
+    if (glm::length(glm::cross(forward, up)) < 1e-3f)
+        up = glm::vec3(0.0f, 1.0f, 0.0f); // looking straight up or down
+    const glm::mat4 view = glm::lookAt(camera.eye, camera.target, up);
+    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(camera.fov_y_degrees), aspect, near_plane, far_plane);
+    proj[1][1] *= -1.0f; // Vulkan clip space: y down
+    return proj * view;
+}
+} // namespace
+
+glm::mat4 camera_ray_matrix(const Camera& camera, float aspect)
+{
+    camera_matrix(camera, BoundingSphere{camera.target, 1.0f}, aspect); // checks the camera
+    return view_projection(camera, aspect, 1.0f, 2.0f);
+}
+
 glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& s, float aspect)
 {
     const auto finite = [](const glm::vec3& v)
@@ -70,13 +92,7 @@ glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& s, float asp
     const float depth = glm::dot(s.centre - camera.eye, forward);
     const float far_plane = std::max(depth + s.radius * 1.01f, 1e-3f);
     const float near_plane = std::max(far_plane * 1e-4f, depth - s.radius * 1.01f);
-    glm::vec3 up(0.0f, 0.0f, 1.0f);
-    if (glm::length(glm::cross(forward, up)) < 1e-3f)
-        up = glm::vec3(0.0f, 1.0f, 0.0f); // looking straight up or down
-    const glm::mat4 view = glm::lookAt(camera.eye, camera.target, up);
-    glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(camera.fov_y_degrees), aspect, near_plane, far_plane);
-    proj[1][1] *= -1.0f; // Vulkan clip space: y down
-    return proj * view;
+    return view_projection(camera, aspect, near_plane, far_plane);
 }
 
 glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees, float aspect)

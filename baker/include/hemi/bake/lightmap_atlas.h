@@ -54,6 +54,7 @@ struct LightmapTexel
     glm::vec3 bitangent{0.0f, 1.0f, 0.0f}; // unit, the frame's y
     glm::vec3 geometric_normal{0.0f, 0.0f, 1.0f}; // unit normal of the triangle (counter-clockwise front)
     float world_size = 0.0f; // the texel's footprint on the surface: sqrt(world area / texel area)
+    uint32_t chart = 0;      // its triangle's chart (lightmap_charts): what may fill it when it is invalid
 };
 
 // The covered texels and where they are. Its memory follows the covered texels: only the 8 x 8 blocks of the

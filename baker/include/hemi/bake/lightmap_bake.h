@@ -219,7 +219,9 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
 // Every texel's coefficients as K maps (io::BlockMaps: only the blocks of the atlas that hold covered texels
 // or their dilation; BlockMaps::dense() gives render::TexelCoefficients' layout). Texels that no triangle
 // covers take the average of their covered neighbours within `dilate` texels (so bilinear filtering at a
-// chart's border does not pull in black), else 0.
+// chart's border does not pull in black), else 0. A texel the bake judged inside geometry (LightmapSh::valid)
+// takes the average of its covered valid neighbours of the same chart (LightmapTexel::chart) the same way,
+// else keeps its own value.
 // With `non_negative`, every texel's coefficients of a directional basis go through
 // make_non_negative first (plain and rnm, integrated directly where the bake filled LightmapSh::direct, are
 // integrals of radiance and never negative); `adjusted`, when
@@ -227,11 +229,12 @@ std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                             int dilate = 2, bool non_negative = false, size_t* adjusted = nullptr);
 // The same from the texels' places alone: places[i] the (x, y) of atlas.texels[i] in a width x height atlas
-// (what a bake keeps of its atlas once the passes and probes are done, 8 bytes a texel instead of the
-// texel's record).
+// and charts[i] its chart (what a bake keeps of its atlas once the passes and probes are done, 12 bytes a
+// texel instead of the texel's record; without charts, an invalid texel is filled from any valid one).
 io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
                             std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate = 2,
-                            bool non_negative = false, size_t* adjusted = nullptr);
+                            bool non_negative = false, size_t* adjusted = nullptr,
+                            std::span<const uint32_t> charts = {});
 
 // Ringing-free coefficients (hemi-bake lightmap --non-negative): a basis fitted to SH9 irradiance rings where
 // the light is concentrated (a low sun's delta lobe gives negative irradiance at normals facing away from

@@ -40,6 +40,10 @@ Camera auto_camera(const io::Mesh& mesh, const glm::mat4& model, float aspect);
 // - 1). Throws std::invalid_argument when the eye and the target coincide.
 glm::mat4 camera_matrix(const Camera& camera, const io::Mesh& mesh, const glm::mat4& model, float aspect);
 glm::mat4 camera_matrix(const Camera& camera, const BoundingSphere& bounds, float aspect);
+// The same view and field of view with fixed planes (1 and 2): what a ray tracer inverts for each pixel's
+// direction, which the planes do not change. camera_matrix's planes fit the model and collapse to a sliver
+// when it lies behind the eye, where their inverse is not finite (hemi-bake reference's rays were NaN there).
+glm::mat4 camera_ray_matrix(const Camera& camera, float aspect);
 // A view-projection matrix (Vulkan clip space, near 0.05, far 100) looking from `eye` at `target`, z up.
 glm::mat4 look_at_projection(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees,
                              float aspect);
