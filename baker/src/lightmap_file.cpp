@@ -60,8 +60,9 @@ namespace
 // texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kLightmapBytesPerSlot = 56;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
-constexpr uint64_t kLightmapBytesPerCoveredTexel = 352;
-constexpr uint64_t kTiledBytesPerCoveredTexel = 136;
+constexpr uint64_t kLightmapBytesPerCoveredTexel =
+    356; // the texel record with its chart (96 bytes) among them
+constexpr uint64_t kTiledBytesPerCoveredTexel = 140;
 constexpr uint64_t kDilationBytesPerSlot = 2 + 4; // the dilation's state (two passes') and chart per slot
 constexpr uint64_t kPlaceBytesPerTexel = 12; // what the outputs keep of the atlas: each texel's (x, y), chart
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
@@ -350,9 +351,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const uint64_t probe_bytes = probe_count * kProbeBytes;
     // What the bake holds besides the stages counted below: the ray tracer's BVH and, under a budget, what
     // the caller spent of it before (LightmapFileOptions::memory_held: hemi-bake's code and libraries) and
-    // the scene just read (io::resident_memory since the start; issue 41 found every --memory-budget's peak
-    // ~10 MiB over it without these). The memory the machine has free (io::available_memory) is what is left
-    // beside all the process holds.
+    // the scene just read (io::resident_memory since the start: the mesh, its textures and what reading
+    // them left resident; issue 41 found every --memory-budget's peak ~10 MiB over it without these). The
+    // memory the machine has free (io::available_memory) is what is left beside all the process holds.
     const uint64_t resident_now = io::resident_memory();
     const uint64_t held =
         (o.memory_budget

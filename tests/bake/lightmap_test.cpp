@@ -703,7 +703,9 @@ TEST(LightmapBake, ADenoisedBakeInTilesStoppedAfterItsPassesResumesToTheSameByte
     o.lights.sun_direction = glm::normalize(glm::vec3(0.4f, 0.3f, 1.0f));
     o.lights.sun_irradiance = glm::vec3(4.0f, 3.6f, 3.0f);
     o.denoise = true;
-    o.memory_budget = uint64_t(7) << 20; // in tiles (10.6 MiB whole, 4.9 MiB in the least tiles)
+    // In tiles: ~12 MiB whole, ~7 in the least tiles, the scene as read and its BVH included (a little more
+    // under AddressSanitizer, whose quarantine keeps what reading the scene freed).
+    o.memory_budget = uint64_t(9) << 20;
     auto bake = [&](const std::string& name, const std::string& stop)
     {
         const std::filesystem::path asset = dir / (name + ".hemi");
@@ -759,7 +761,7 @@ TEST(LightmapBake, ATileFileAlteredBeforeTheResumeIsRefusedNamingIt)
     o.outputs = {"sh9", "plain"};
     o.bake.rays = 4;
     o.denoise = true;
-    o.memory_budget = uint64_t(7) << 20; // in tiles, as in the test above
+    o.memory_budget = uint64_t(9) << 20; // in tiles, as in the test above
     const std::filesystem::path asset = dir / "damaged.hemi", tiles = lightmap_tile_path(asset);
     o.bake.checkpoint = dir / "damaged.partial";
     o.on_stage = [](std::string_view stage)
