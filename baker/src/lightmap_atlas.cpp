@@ -1,6 +1,8 @@
 // Lightmap UV validation and conservative rasterisation (lightmap_atlas.h).
 #include <hemi/bake/lightmap_atlas.h>
 
+#include "texel_origin.h"
+
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/ray_generator.h>
@@ -184,71 +186,69 @@ bool texel_bounds(const dvec2 uv[3], uint32_t width, uint32_t height, int64_t& x
     return x_begin <= x_end && y_begin <= y_end;
 }
 
-// Rays per candidate of rule 0 below, and the most candidates a texel keeps: of a texel that more triangles
-// claim (a quad copied thousands of times over one UV square, where 32 rays each would cost more than the
-// bake, and the candidates more memory than the lightmap) the first 64 by triangle index.
-constexpr int kOverlapRays = 32;
+// The most candidates a texel keeps: of a texel that more triangles claim (a quad copied thousands of times
+// over one UV square, where judging each would cost more than the bake, and the candidates more memory than
+// the lightmap) the first 64 by triangle index.
 constexpr uint8_t kMaxCandidates = 64;
 
-// Per entry of `contested` (sorted), 1 when the texel centre's point on that triangle lies inside geometry
-// as the lightmap bake judges a texel (lightmap_bake.h, LightmapSh::valid): more than half of kOverlapRays
-// hemisphere rays about the triangle's front meet the back of a single-sided surface first. Deterministic
-// (the rays are the bake's counter-based hemisphere set of the texel) on any thread count.
-std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& grid,
-                                     const std::vector<std::pair<size_t, uint32_t>>& contested,
-                                     std::span<const uint8_t> double_sided)
+// A texel's candidate: its slot, the triangle, and where on it the texel samples (the centre's barycentric
+// coordinates for a triangle that claims the centre, the centroid of its part of the square for one that
+// grazes it).
+struct Candidate
 {
-    std::vector<uint8_t> inside(contested.size(), 0);
+    size_t slot;
+    uint32_t triangle;
+    bool operator<(const Candidate& o) const
+    {
+        return slot != o.slot ? slot < o.slot : triangle < o.triangle;
+    }
+};
+
+glm::dvec3 sample_barycentric(const io::Mesh& mesh, const io::BlockGrid& grid, const Candidate& c,
+                              bool grazes, double* distance = nullptr)
+{
+    dvec2 uv[3];
+    double area2;
+    triangle_uvs(mesh, c.triangle, grid.width(), grid.height(), uv, area2);
+    const glm::uvec2 xy = grid.texel(c.slot);
+    const dvec2 centre(xy.x + 0.5, xy.y + 0.5);
+    dvec2 q = centre;
+    if (grazes && !clipped_centroid(uv, double(xy.x), double(xy.y), q))
+        q = centre;
+    glm::dvec3 b = glm::max(barycentric(q, uv[0], uv[1], uv[2], area2), glm::dvec3(0.0));
+    if (distance)
+        *distance = glm::length(q - centre);
+    return b / (b.x + b.y + b.z);
+}
+
+// Per candidate (`which`: indices into `candidates`, each sampled as sample_barycentric gives), 1 when the
+// texel lies inside geometry there as the lightmap bake judges a texel (detail::TexelOrigins, with its
+// footprint). Deterministic on any thread count.
+std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& grid,
+                                     const std::vector<Candidate>& candidates, bool grazes,
+                                     std::span<const size_t> which, std::span<const uint8_t> double_sided)
+{
+    std::vector<uint8_t> inside(which.size(), 0);
+    if (which.empty())
+        return inside;
     const EmbreeScene scene(mesh);
     const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
-    const uint32_t width = grid.width(), height = grid.height();
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, contested.size(), 64),
-        [&](const tbb::blocked_range<size_t>& r)
-        {
-            std::array<glm::vec3, kOverlapRays> directions;
-            for (size_t c = r.begin(); c != r.end(); ++c)
-            {
-                const auto [slot, t] = contested[c];
-                const glm::uvec2 xy = grid.texel(slot);
-                const glm::vec3 a = mesh.positions[mesh.indices[3 * size_t(t)]],
-                                b = mesh.positions[mesh.indices[3 * size_t(t) + 1]],
-                                d = mesh.positions[mesh.indices[3 * size_t(t) + 2]];
-                const glm::vec3 n = scene.geometric_normal(t);
-                if (glm::length(n) <= 0.0f)
-                    continue;
-                const glm::vec3 g = glm::normalize(n);
-                dvec2 uv[3];
-                for (int k = 0; k < 3; ++k)
-                {
-                    const glm::vec2 u = mesh.uvs1[mesh.indices[3 * size_t(t) + size_t(k)]];
-                    uv[k] = dvec2(double(u.x) * width, double(u.y) * height);
-                }
-                const double area2 = cross2(uv[1] - uv[0], uv[2] - uv[0]);
-                if (std::abs(area2) < 1e-12)
-                    continue;
-                // The centre lies in the triangle (the triangle claims it); the centroid's pull keeps the
-                // point off the triangle's edges, where a neighbour's back would count.
-                const glm::dvec3 w =
-                    0.9 * barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2) +
-                    glm::dvec3(0.1 / 3.0);
-                const glm::vec3 p = float(w.x) * a + float(w.y) * b + float(w.z) * d;
-                const glm::vec3 u = glm::normalize(std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0))
-                                                                        : glm::cross(g, glm::vec3(0, 1, 0)));
-                const glm::vec3 v = glm::cross(g, u);
-                const glm::vec3 origin = offset_ray_origin(p, g, offset);
-                hemisphere_directions(0x6F766572ull, uint64_t(xy.y) * width + xy.x, directions);
-                int back = 0;
-                for (const glm::vec3& h : directions)
-                {
-                    const glm::vec3 dir = h.x * u + h.y * v + h.z * g;
-                    const std::optional<RayHit> hit = scene.intersect(origin, dir);
-                    back += hit && glm::dot(scene.geometric_normal(hit->primitive), dir) > 0.0f &&
-                            !(hit->primitive < double_sided.size() && double_sided[hit->primitive]);
-                }
-                inside[c] = uint8_t(2 * back > kOverlapRays);
-            }
-        });
+    const detail::TexelOrigins origins(scene, mesh, grid.width(), grid.height(), offset,
+                                       [&](uint32_t t)
+                                       { return t < double_sided.size() && double_sided[t]; });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size(), 16),
+                      [&](const tbb::blocked_range<size_t>& r)
+                      {
+                          for (size_t k = r.begin(); k != r.end(); ++k)
+                          {
+                              const Candidate& c = candidates[which[k]];
+                              const glm::uvec2 xy = grid.texel(c.slot);
+                              inside[k] = origins
+                                              .find(c.triangle, xy.x, xy.y,
+                                                    glm::vec3(sample_barycentric(mesh, grid, c, grazes)))
+                                              .inside;
+                          }
+                      });
     return inside;
 }
 
@@ -265,17 +265,55 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
 //      direction from its centroid to the scene's centre (the area-weighted centroid of its surfaces; of a
 //      back-to-back pair, the face towards the level's inside, which is the one a player sees);
 //   3. the lower triangle index.
-// The chosen triangle samples the texel's centre.
-void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
-                      std::vector<std::pair<size_t, uint32_t>>& contested,
-                      const std::vector<uint8_t>& inside_count, std::vector<int32_t>& best,
+// The chosen triangle samples the texel's centre. Where every triangle that claims a texel's centre (one or
+// several) lies inside geometry there, and a triangle of another chart grazes the texel (its UVs cover part
+// of the square, not the centre: q3map2's lightmap pages put faces' rectangles side by side, unpadded), the
+// lowest-index grazing triangle that does not lie inside geometry takes the texel, sampled at the centroid of
+// its part of the square: a viewer sees that face there, and the texel would otherwise be filled from its
+// neighbours.
+void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vector<Candidate>& contested,
+                      std::vector<Candidate>& grazing, const std::vector<uint8_t>& inside_count,
+                      const std::vector<int32_t>& first_inside, std::vector<int32_t>& best,
                       std::vector<double>& best_distance, std::vector<glm::dvec3>& best_bary,
                       std::span<const uint8_t> double_sided, LightmapUvReport& report)
 {
+    std::sort(grazing.begin(), grazing.end());
+    grazing.erase(std::unique(grazing.begin(), grazing.end(),
+                              [](const Candidate& a, const Candidate& b)
+                              { return a.slot == b.slot && a.triangle == b.triangle; }),
+                  grazing.end());
+    // A texel that one triangle claims and another chart's grazes: its claimant is judged too.
+    for (size_t g = 0; g < grazing.size(); ++g)
+        if ((g == 0 || grazing[g - 1].slot != grazing[g].slot) && inside_count[grazing[g].slot] == 1)
+            contested.push_back({grazing[g].slot, uint32_t(first_inside[grazing[g].slot])});
     if (contested.empty())
         return;
     std::sort(contested.begin(), contested.end());
-    const std::vector<uint8_t> hidden = inside_geometry(mesh, grid, contested, double_sided);
+    std::vector<size_t> all(contested.size());
+    for (size_t c = 0; c < all.size(); ++c)
+        all[c] = c;
+    const std::vector<uint8_t> hidden = inside_geometry(mesh, grid, contested, false, all, double_sided);
+    // The grazing triangles of texels whose every claimant is hidden.
+    std::vector<size_t> judged;
+    {
+        size_t c = 0;
+        for (size_t g = 0; g < grazing.size(); ++g)
+        {
+            while (c < contested.size() && contested[c].slot < grazing[g].slot)
+                ++c;
+            bool every = c < contested.size() && contested[c].slot == grazing[g].slot;
+            for (size_t k = c; k < contested.size() && contested[k].slot == grazing[g].slot; ++k)
+                every = every && hidden[k];
+            if (every)
+                judged.push_back(g);
+        }
+    }
+    const std::vector<uint8_t> grazer_hidden =
+        inside_geometry(mesh, grid, grazing, true, judged, double_sided);
+    std::vector<uint8_t> grazer_visible(grazing.size(), 0);
+    for (size_t k = 0; k < judged.size(); ++k)
+        grazer_visible[judged[k]] = !grazer_hidden[k];
+    size_t next_grazer = 0;
     auto corner = [&](uint32_t t, int k)
     { return glm::dvec3(mesh.positions[mesh.indices[size_t(t) * 3 + k]]); };
     // The scene's centre: the area-weighted centroid of its surfaces (a few faces far out, as levels have
@@ -307,18 +345,18 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
     const uint32_t width = grid.width(), height = grid.height();
     for (size_t first = 0; first < contested.size();)
     {
-        const size_t slot = contested[first].first;
+        const size_t slot = contested[first].slot;
         size_t last = first;
-        while (last < contested.size() && contested[last].first == slot)
+        while (last < contested.size() && contested[last].slot == slot)
             ++last;
         const glm::uvec2 xy = grid.texel(slot);
-        uint32_t winner = contested[first].second;
+        uint32_t winner = contested[first].triangle;
         int winner_hidden = 2, winner_support = -1;
         double winner_facing = -2.0;
         for (size_t c = first; c < last; ++c)
         {
-            const uint32_t t = contested[c].second;
-            if (c > first && t == contested[c - 1].second)
+            const uint32_t t = contested[c].triangle;
+            if (c > first && t == contested[c - 1].triangle)
                 continue;
             int support = 0;
             for (int dy = -1; dy <= 1; ++dy)
@@ -351,7 +389,18 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid,
         best[slot] = int32_t(winner);
         best_distance[slot] = 0.0;
         best_bary[slot] = barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2);
-        report.overlaps.push_back(xy);
+        while (next_grazer < grazing.size() && grazing[next_grazer].slot < slot)
+            ++next_grazer;
+        for (size_t g = next_grazer; winner_hidden && g < grazing.size() && grazing[g].slot == slot; ++g)
+            if (grazer_visible[g])
+            {
+                best[slot] = int32_t(grazing[g].triangle);
+                best_bary[slot] = sample_barycentric(mesh, grid, grazing[g], true, &best_distance[slot]);
+                ++report.grazed_instead;
+                break;
+            }
+        if (inside_count[slot] >= 2)
+            report.overlaps.push_back(xy);
         first = last;
     }
 }
@@ -402,7 +451,26 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     std::vector<glm::dvec3> best_bary(texels);
     std::vector<uint8_t> inside_count(texels, 0);
     std::vector<int32_t> first_inside(texels, -1);
-    std::vector<std::pair<size_t, uint32_t>> contested; // (slot, triangle) for centres two triangles claim
+    std::vector<Candidate> contested; // (slot, triangle) for centres two triangles claim
+    std::vector<Candidate>
+        grazing; // (slot, triangle) for another chart's triangles that graze a claimed texel
+    const std::vector<uint32_t> chart_of = lightmap_charts(mesh);
+    // The candidates grow by doubling, within overlap_budget: refused before it is exceeded.
+    auto room_for = [&](std::vector<Candidate>& list)
+    {
+        if (list.size() + 2 <= list.capacity())
+            return;
+        const size_t grown = std::max<size_t>(2 * list.capacity(), 1024);
+        const size_t other = &list == &contested ? grazing.capacity() : contested.capacity();
+        if (overlap_budget && (grown + other) * kOverlapCandidateBytes > overlap_budget)
+            throw std::length_error(
+                "at least " + std::to_string(report.overlapping_texels) +
+                " lightmap texels lie inside two or more triangles (overlapping lightmap UVs, as a mesh "
+                "instanced over one set of TEXCOORD_1 has them): resolving them needs more than " +
+                io::format_bytes((grown + other) * kOverlapCandidateBytes) +
+                " of memory, and the budget leaves " + io::format_bytes(overlap_budget));
+        list.reserve(grown);
+    };
     size_t example_outside = SIZE_MAX, example_degenerate = SIZE_MAX;
     std::vector<double> world_area(triangles, 0.0), uv_area(triangles, 0.0);
 
@@ -456,21 +524,8 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 double distance = 0.0;
                 if (claims(uv, area2, centre))
                 {
-                    // The candidates grow by doubling, within overlap_budget: refused before it is exceeded.
-                    if (inside_count[texel] >= 1 && contested.size() + 2 > contested.capacity())
-                    {
-                        const size_t grown = std::max<size_t>(2 * contested.capacity(), 1024);
-                        if (overlap_budget && grown * kOverlapCandidateBytes > overlap_budget)
-                            throw std::length_error(
-                                "at least " + std::to_string(report.overlapping_texels) +
-                                " lightmap texels lie inside two or more triangles (overlapping lightmap "
-                                "UVs, as "
-                                "a mesh instanced over one set of TEXCOORD_1 has them): resolving them needs "
-                                "more than " +
-                                io::format_bytes(grown * kOverlapCandidateBytes) +
-                                " of memory, and the budget leaves " + io::format_bytes(overlap_budget));
-                        contested.reserve(grown);
-                    }
+                    if (inside_count[texel] >= 1)
+                        room_for(contested);
                     if (inside_count[texel] == 0)
                         first_inside[texel] = int32_t(t);
                     else if (inside_count[texel] == 1)
@@ -481,11 +536,11 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                             report.overlap_example[1] = uint32_t(t);
                         }
                         ++report.overlapping_texels;
-                        contested.emplace_back(texel, uint32_t(first_inside[texel]));
-                        contested.emplace_back(texel, uint32_t(t));
+                        contested.push_back({texel, uint32_t(first_inside[texel])});
+                        contested.push_back({texel, uint32_t(t)});
                     }
                     else if (inside_count[texel] < kMaxCandidates)
-                        contested.emplace_back(texel, uint32_t(t));
+                        contested.push_back({texel, uint32_t(t)});
                     inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
                 }
                 if (!(b.x >= 0 && b.y >= 0 && b.z >= 0))
@@ -508,10 +563,33 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
             }
     }
 
-    resolve_overlaps(mesh, grid, contested, inside_count, best, best_distance, best_bary, double_sided,
-                     report);
-
-    const std::vector<uint32_t> chart_of = lightmap_charts(mesh);
+    // Another chart's triangles that graze a texel whose centre a triangle claims (a second walk, once every
+    // texel's claimants are known).
+    for (size_t t = 0; t < triangles; ++t)
+    {
+        dvec2 uv[3];
+        double area2;
+        int64_t x_begin, x_end, y_begin, y_end;
+        if (world_area[t] <= 0.0 || !triangle_uvs(mesh, t, width, height, uv, area2) ||
+            std::abs(area2) < 1e-12 || !texel_bounds(uv, width, height, x_begin, x_end, y_begin, y_end))
+            continue;
+        for (int64_t y = y_begin; y <= y_end; ++y)
+            for (int64_t x = x_begin; x <= x_end; ++x)
+            {
+                const int64_t slot = grid.slot(x, y);
+                dvec2 q;
+                if (slot < 0 || inside_count[size_t(slot)] == 0 ||
+                    chart_of[t] == chart_of[size_t(first_inside[size_t(slot)])] ||
+                    claims(uv, area2, dvec2(double(x) + 0.5, double(y) + 0.5)) ||
+                    !overlaps_square(uv, double(x), double(y)) ||
+                    !clipped_centroid(uv, double(x), double(y), q))
+                    continue;
+                room_for(grazing);
+                grazing.push_back({size_t(slot), uint32_t(t)});
+            }
+    }
+    resolve_overlaps(mesh, grid, contested, grazing, inside_count, first_inside, best, best_distance,
+                     best_bary, double_sided, report);
     LightmapAtlas atlas;
     atlas.width = width;
     atlas.height = height;

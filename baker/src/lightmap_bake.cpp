@@ -1,5 +1,6 @@
 // The directional lightmap bake (lightmap_bake.h).
 #include "light_sampler.h"
+#include "texel_origin.h"
 
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/embree_scene.h>
@@ -453,45 +454,6 @@ void add_variance(const std::vector<std::array<double, 4>>& share, const SampleN
 
 } // namespace
 
-namespace
-{
-
-// A texel's sample point, kept at least `margin` inside its triangle (in the triangle's plane) from each
-// edge. Artist UVs can put a texel centre exactly on a triangle's edge or corner; where that edge is where a
-// floor meets a wall, the ray origin lifted off the floor lies in the wall's plane and rays from it pass the
-// wall's edge: light from outside a sealed room
-// (LightmapBake.SealedRoomsLeakNothingWhereSamplesLieOnEdgesAndCorners). A point already that far inside is
-// returned as it is; a triangle too small for the margin gives its centroid.
-glm::vec3 inside_triangle(const io::Mesh& mesh, const LightmapTexel& t, float margin)
-{
-    const glm::vec3 p[3] = {mesh.positions[mesh.indices[3 * size_t(t.triangle)]],
-                            mesh.positions[mesh.indices[3 * size_t(t.triangle) + 1]],
-                            mesh.positions[mesh.indices[3 * size_t(t.triangle) + 2]]};
-    const double area2 = double(glm::length(glm::cross(p[1] - p[0], p[2] - p[0])));
-    glm::dvec3 least(0.0); // per vertex k, the barycentric weight at `margin` from the edge opposite k
-    for (int k = 0; k < 3; ++k)
-    {
-        const double edge = double(glm::length(p[(k + 2) % 3] - p[(k + 1) % 3]));
-        least[k] = area2 > 0.0 ? double(margin) * edge / area2 : 1.0; // margin / the altitude from vertex k
-    }
-    const glm::dvec3 b(t.barycentric);
-    if (glm::all(glm::greaterThanEqual(b, least)))
-        return t.position; // already that far inside: untouched
-    glm::dvec3 out;
-    const double room = 1.0 - (least.x + least.y + least.z);
-    const glm::dvec3 excess = glm::max(b - least, glm::dvec3(0.0));
-    const double sum = excess.x + excess.y + excess.z;
-    if (room <= 0.0)
-        out = glm::dvec3(1.0 / 3.0);
-    else if (sum <= 0.0)
-        out = least + glm::dvec3(room / 3.0);
-    else
-        out = least + excess * (room / sum); // = b where b is at least `least` everywhere
-    return glm::vec3(out.x * glm::dvec3(p[0]) + out.y * glm::dvec3(p[1]) + out.z * glm::dvec3(p[2]));
-}
-
-} // namespace
-
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
                             const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
                             const std::function<void(const LightmapProgress&)>& progress)
@@ -554,15 +516,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     tbb::enumerable_thread_specific<RayScratch> scratch;
 
-    // Against light leaking: a texel whose footprint reaches behind a surface (its sample point inside a wall
-    // or under one, seen from the wall's back) is moved through that surface to its front, so it sees what
-    // the visible side of its footprint sees. Eight rays in the texel's plane, as long as half the
-    // footprint's diagonal, look for the nearest back face.
+    // Against light leaking, each texel's rays start where detail::TexelOrigins puts them: moved out of a
+    // wall its footprint reaches behind, or to the part of its footprint outside geometry; a texel inside
+    // geometry wherever its footprint was tried is invalid (its value comes from its valid neighbours, by
+    // the dilation, in the outputs and for the bounces).
+    const detail::TexelOrigins texel_origins(scene, mesh, atlas.width, atlas.height, offset,
+                                             [&](uint32_t t)
+                                             { return surfaces && surfaces->double_sided(t); });
     auto is_back_face = [&](uint32_t primitive, const glm::vec3& d)
-    {
-        return glm::dot(scene.geometric_normal(primitive), d) > 0.0f &&
-               !(surfaces && surfaces->double_sided(primitive));
-    };
+    { return texel_origins.back_face(primitive, d); };
     // Shared among the ranks like a pass (each texel's origin depends on the scene alone).
     const uint64_t key = key_of(mesh, atlas, lights, o, surfaces,
                                 surfaces ? std::span<const io::Material>(surfaces->materials())
@@ -573,37 +535,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     auto find_origin = [&](uint32_t i)
     {
         const LightmapTexel& t = atlas.texels[i];
-        glm::vec3 p = inside_triangle(mesh, t, 2.0f * offset);
-        const glm::vec3 g = t.geometric_normal;
-        glm::vec3 u = t.tangent - g * glm::dot(g, t.tangent);
-        if (glm::length(u) < 1e-6f)
-            u = std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0)) : glm::cross(g, glm::vec3(0, 1, 0));
-        u = glm::normalize(u);
-        const glm::vec3 v = glm::cross(g, u);
-        const float reach = 0.5f * float(M_SQRT2) * t.world_size;
-        const glm::vec3 from = offset_ray_origin(p, g, offset);
-        float nearest = INFINITY;
-        glm::vec3 along(0.0f);
-        for (int k = 0; k < 8; ++k)
-        {
-            const float a = float(k) * float(M_PI) / 4.0f;
-            const glm::vec3 d = std::cos(a) * u + std::sin(a) * v;
-            const std::optional<RayHit> hit = scene.intersect(from, d, 0.0f, reach);
-            if (hit && hit->distance < nearest && is_back_face(hit->primitive, d))
-            {
-                nearest = hit->distance;
-                along = d;
-            }
-        }
-        if (std::isfinite(nearest))
-        {
-            p = p + along * (nearest + 4.0f * offset);
-            pushed[i] = 1;
-        }
-        origins[i] = offset_ray_origin(p, g, offset);
+        const detail::TexelOrigins::Origin found =
+            texel_origins.find(t.triangle, t.x, t.y, t.barycentric, &t.tangent);
+        origins[i] = found.origin;
+        pushed[i] = found.moved;
+        out.valid[i] = !found.inside;
     };
-    const ItemArray origin_arrays[2] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
-                                        {reinterpret_cast<std::byte*>(pushed.data()), 1}};
+    const ItemArray origin_arrays[3] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
+                                        {reinterpret_cast<std::byte*>(pushed.data()), 1},
+                                        {reinterpret_cast<std::byte*>(out.valid.data()), 1}};
     dist.run(
         0, n, std::min<uint32_t>(uint32_t(1) << 18, n), origin_arrays,
         [&](uint32_t begin, uint32_t end)
@@ -639,7 +579,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
         const glm::vec3 origin = origins[i];
-        int back_faces = 0;
         std::array<glm::dvec3, 9> acc{};
         std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
         RayScratch& s = scratch.local();
@@ -674,8 +613,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up. The
         // texel's rays are traced together (EmbreeScene's packets), then their hits are shaded in ray order.
         const uint64_t seed = pass == 0 ? o.seed : mix64(o.seed + uint64_t(pass) * 0x9E3779B97F4A7C15ull);
-        // The first pass always finds the closest hit: it counts the back faces a texel sees.
-        const bool needs_hit = pass == 0 || (surfaces && pass > 0);
+        // The hemisphere rays gather a uniform environment and emission in the first pass, what the pass
+        // before left on the surfaces after it.
+        const bool needs_hit = pass == 0 ? !image_env || surfaces : surfaces != nullptr;
         size_t m = 0; // the rays traced
         if (needs_hit)
         {
@@ -719,10 +659,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 continue;
             }
             if (s.blocked[k])
-            {
-                ++back_faces;
                 continue;
-            }
             if (!surfaces)
                 continue;
             glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
@@ -777,7 +714,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             {
                 glm::vec3 d;
                 float distance = INFINITY;
-                const glm::vec3 e = light.punctual(p, t.position, d, distance);
+                // A texel moved out of a wall is lit where its rays start.
+                const glm::vec3 e = light.punctual(p, pushed[i] ? origin : t.position, d, distance);
                 if (e == glm::vec3(0.0f) || glm::dot(d, t.geometric_normal) <= 0.0f)
                     continue;
                 // The shadow ray stops short of the light (it must not hit geometry behind it).
@@ -786,10 +724,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     continue;
                 add(d, glm::dvec3(e), -1, 0);
             }
-        // Inside geometry even after the push: most of its hemisphere sees the backs of surfaces. Its value
-        // comes from its valid neighbours (dilation), in the outputs and for the bounces.
-        if (pass == 0)
-            out.valid[i] = uint8_t(2 * back_faces <= o.rays);
         math::Sh9Rgb radiance;
         for (int j = 0; j < 9; ++j)
             radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
@@ -885,15 +819,13 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         {
             const uint32_t end = tiled ? std::min(n, begin + tile) : n;
             base = tiled ? begin : 0;
-            // What a texel's work writes, which every rank gathers (valid only in the first pass).
+            // What a texel's work writes, which every rank gathers.
             std::vector<ItemArray> arrays = {
                 {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
                 {reinterpret_cast<std::byte*>(pass_direct.data()), sizeof(DirectArray)}};
             if (o.keep_noise)
                 arrays.push_back(
                     {reinterpret_cast<std::byte*>(pass_noise.data()), sizeof(LightmapSh::Noise)});
-            if (pass == 0)
-                arrays.push_back({reinterpret_cast<std::byte*>(out.valid.data() + base), 1});
             dist.run(
                 begin - base, end - base, tiled ? std::min(slice, end - begin) : slice, arrays,
                 [&](uint32_t b, uint32_t e)

@@ -88,6 +88,8 @@ struct LightmapUvReport
     size_t overlapping_texels = 0; // texel centres inside two or more triangles
     uint32_t overlap_example[2] = {0, 0}; // two triangles that overlap, when overlapping_texels > 0
     std::vector<glm::uvec2> overlaps;     // those texels, in row-major order of blocks
+    size_t grazed_instead = 0; // texels whose claimants lie inside geometry, given to another chart's
+                               // triangle that grazes them and does not (rasterize_lightmap)
     size_t covered_texels = 0;
     // Texel density: the world size of a texel, per primitive range of triangles (all triangles when the
     // caller passes none), min and max over those with UV area.
@@ -112,17 +114,21 @@ struct TriangleRange
 // triangles for the density report (glTF primitives); empty is one group.
 //
 // A texel centre that several triangles claim (overlapping UVs) goes to one of them: first to one whose
-// point there does not lie inside geometry as the bake judges a texel (32 hemisphere rays, most of which
+// point there does not lie inside geometry as the bake judges a texel (hemisphere rays, most of which
 // meet the backs of single-sided surfaces; `double_sided`, per triangle, marks those whose back counts as
 // a front; empty: none), then to the one whose chart continues there, then to the one facing the scene's
-// centre. Only meshes with overlaps pay for the rays (and an Embree scene of the mesh); of a texel that more
-// than 64 triangles claim (a pile of copies over one UV square) only the first 64 are candidates.
+// centre. Where every triangle claiming a centre lies inside geometry there, another chart's triangle that
+// grazes the texel (covers part of it, not its centre) and does not takes it (q3map2's unpadded lightmap
+// pages put faces side by side). Only meshes with overlaps or charts that share texels pay for the rays (and
+// an Embree scene of the mesh); of a texel that more than 64 triangles claim (a pile of copies over one UV
+// square) only the first 64 are candidates.
 //
 // Each candidate takes kOverlapCandidateBytes while the overlaps are resolved. `overlap_budget` bounds them:
 // when the candidates would take more (a mesh instanced many times over one set of lightmap UVs), throws
 // std::length_error saying how many texels overlap and how much they need, as soon as they exceed it, before
 // any ray is traced. 0: no bound.
-constexpr uint64_t kOverlapCandidateBytes = 16 + 1; // (slot, triangle) and the judge's answer
+constexpr uint64_t kOverlapCandidateBytes =
+    16 + 1; // (slot, triangle) and the judge's answer, claimant or grazer
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
                                  std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0);
