@@ -29,6 +29,7 @@ PositionKey key_of(const glm::vec3& p)
 struct EdgeSide
 {
     uint32_t first, second; // vertex indices, `first` at the edge key's smaller end
+    size_t triangle;        // its first index in mesh.indices
 };
 } // namespace
 
@@ -57,7 +58,7 @@ std::vector<LightmapSeam> find_lightmap_seams(const io::Mesh& mesh, float crease
             const auto [it, added] = index.emplace(std::pair{ki, kj}, edges.size());
             if (added)
                 edges.emplace_back();
-            edges[it->second].push_back({i, j});
+            edges[it->second].push_back({i, j, t});
         }
     std::vector<LightmapSeam> seams;
     for (const std::vector<EdgeSide>& sides : edges)
@@ -70,6 +71,15 @@ std::vector<LightmapSeam> find_lightmap_seams(const io::Mesh& mesh, float crease
                         b1 = mesh.uvs1[b.second];
         if (a0 == b0 && a1 == b1)
             continue; // one chart on both sides
+        auto facing = [&](size_t t)
+        {
+            const glm::vec3 p = mesh.positions[mesh.indices[t]];
+            return glm::cross(mesh.positions[mesh.indices[t + 1]] - p,
+                              mesh.positions[mesh.indices[t + 2]] - p);
+        };
+        if (!(glm::dot(facing(a.triangle), facing(b.triangle)) > 0.0f))
+            continue; // the two face opposite ways (a sliver folded back over its neighbour, as a patch's
+                      // tessellation leaves them; a face and its back): no surface continues across it
         if (normals && (glm::dot(glm::normalize(mesh.normals[a.first]),
                                  glm::normalize(mesh.normals[b.first])) < cos_crease ||
                         glm::dot(glm::normalize(mesh.normals[a.second]),

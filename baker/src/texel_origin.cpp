@@ -4,6 +4,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -39,20 +40,20 @@ Triangle triangle_of(const io::Mesh& mesh, uint32_t t)
 // meets a wall, the ray origin lifted off the floor lies in the wall's plane and rays from it pass the
 // wall's edge: light from outside a sealed room
 // (LightmapBake.SealedRoomsLeakNothingWhereSamplesLieOnEdgesAndCorners). A point already that far inside is
-// returned as it is; in a sliver too thin for the margin, the margins shrink to fill half its room (the point
-// stays near where it was along the sliver, not at the centroid, which can lie many texels away).
+// returned as it is. Each margin is at most 5% of its altitude: in a sliver too thin for the margin the point
+// moves a little across the sliver, not along it (to the centroid, or towards its far vertex, which can lie
+// many texels away from the texel); any margin above 0 keeps the origin out of a wall's plane.
 glm::vec3 inside_triangle(const Triangle& tri, glm::dvec3 b, float margin)
 {
+    constexpr double kMostMargin = 0.05;
     const double area2 = glm::length(glm::cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0]));
     glm::dvec3 least(0.0); // per vertex k, the barycentric weight at `margin` from the edge opposite k
     for (int k = 0; k < 3; ++k)
     {
         const double edge = glm::length(tri.p[(k + 2) % 3] - tri.p[(k + 1) % 3]);
-        least[k] = area2 > 0.0 ? double(margin) * edge / area2 : 1.0; // margin / the altitude from vertex k
+        // margin / the altitude from vertex k
+        least[k] = area2 > 0.0 ? std::min(double(margin) * edge / area2, kMostMargin) : 1.0 / 3.0;
     }
-    const double total = least.x + least.y + least.z;
-    if (total > 0.5)
-        least *= 0.5 / total;
     if (!glm::all(glm::greaterThanEqual(b, least)))
     {
         const double room = 1.0 - (least.x + least.y + least.z);

@@ -32,8 +32,10 @@ struct LightmapSeam
 
 // Every edge two triangles share in 3D (the same positions at both ends, bit for bit, as exporters write the
 // vertices they split at a UV seam) with lightmap UVs that differ on the two sides, where the surface is
-// continuous: the vertex normals at each end agree within `crease_degrees` (a crease keeps its step). An edge
-// of three or more triangles is no seam. Deterministic: in the order of the first triangle's edges.
+// continuous: the two triangles face the same side (not a sliver folded back over its neighbour, as a
+// patch's tessellation leaves them) and the vertex normals at each end agree within `crease_degrees` (a
+// crease keeps its step). An edge of three or more triangles is no seam. Deterministic: in the order of the
+// first triangle's edges.
 std::vector<LightmapSeam> find_lightmap_seams(const io::Mesh& mesh, float crease_degrees = 10.0f);
 
 // How far the two sides of the seams disagree in `maps` (every coefficient, every channel): along each seam,
