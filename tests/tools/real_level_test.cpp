@@ -299,6 +299,7 @@ struct Sight
     size_t texels = 0, pushed = 0, invalid = 0; // the bake's
     size_t points = 0, hits = 0, on_invalid = 0, on_own_invalid = 0;
     size_t on_backs = 0; // of on_invalid: hits on a point that itself sees backs over much of its hemisphere
+    size_t no_uv_area = 0; // hits on triangles with no lightmap UV area (no texel of their own), not counted
 };
 
 // The share of 256 rays over the hemisphere of a surface point (a Fibonacci set about its unit normal `g`)
@@ -366,6 +367,13 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
             const glm::vec2 uv = (1.0f - h->u - h->v) * mesh.uvs1[mesh.indices[3 * t]] +
                                  h->u * mesh.uvs1[mesh.indices[3 * t + 1]] +
                                  h->v * mesh.uvs1[mesh.indices[3 * t + 2]];
+            const glm::vec2 e1 = mesh.uvs1[mesh.indices[3 * t + 1]] - mesh.uvs1[mesh.indices[3 * t]],
+                            e2 = mesh.uvs1[mesh.indices[3 * t + 2]] - mesh.uvs1[mesh.indices[3 * t]];
+            if (std::abs(double(e1.x) * e2.y - double(e1.y) * e2.x) * size * size < 1e-6)
+            {
+                ++s.no_uv_area; // q3map2 gave the face a line or a point of its page (the bake warns)
+                continue;
+            }
             const int32_t texel = atlas.texel_of(int64_t(uv.x * float(size)), int64_t(uv.y * float(size)));
             ++s.hits;
             if (texel >= 0 && !sh.valid[size_t(texel)])
@@ -388,15 +396,18 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
 // Overlaps now go first to a face a viewer can reach, and a texel that straddles a wall samples the part of
 // its footprint outside it (detail::TexelOrigins). From 300 open points of each level (each 200 rays), on
 // its own lightmap UVs and unwrapped at 1024 x 1024, hits on texels inside geometry at points that see
-// backs over at most 30% of their hemisphere (the point is in the open by any measure): at most 5 in
-// 100,000. Those at points that see more (oa_dm3's outer walls, which face the backs of the arena's
-// single-sided walls: no hemisphere test tells them from the inside of a wall): at most 2 in 1,000. Measured
-// (texels / moved out of walls / inside geometry; hits on such texels: all, at points that see more backs):
-//   oacmpdm1 own UVs   736,101 / 39,614 / 99,830; 2 of 60,000 (0); 35 before the footprint and the
-//                      grazing faces, 262 before the overlap rule
+// backs over at most 30% of their hemisphere (the point is in the open by any measure): at most 1 in 40,000.
+// Those at points that see more (oa_dm3's outer walls, which face the backs of the arena's single-sided
+// walls: no hemisphere test tells them from the inside of a wall): at most 2 in 1,000. Hits on faces to
+// which q3map2 gave a line or a point of its page (no UV area, no texel of their own: the bake warns, and
+// --unwrap gives them texels) are counted apart. Measured (texels / moved out of walls / inside geometry;
+// hits on such texels: all, at points that see more backs; hits on faces with no UV area):
+//   oacmpdm1 own UVs   736,101 / 39,614 / 99,830; 0 of 59,964 (0); 36. Before the footprint and the
+//                      grazing faces 35 of 60,000, before the overlap rule 262
 //   oacmpdm1 unwrapped 511,847 / 37,574 / 67,094; 0 of 60,000
-//   oa_dm3 own UVs     626,922 / 23,914 / 58,999; 17 of 44,562 (17); 97 before
-//   oa_dm3 unwrapped   441,210 / 13,234 / 49,322; 60 of 44,562 (59); 63 before
+//   oa_dm3 own UVs     626,922 / 23,914 / 58,999; 17 of 44,394 (17); 168. Before: 97 of 44,562
+//   oa_dm3 unwrapped   441,210 / 13,234 / 49,322; 60 of 44,562 (59), the other at a point that sees
+//                      backs over 26%. Before: 63
 // The other texels inside geometry are faces no viewer reaches (oacmpdm1 is sealed: no sky).
 TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
 {
@@ -412,12 +423,12 @@ TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
             SCOPED_TRACE(std::string(c.map) + (unwrap ? " unwrapped" : " own UVs"));
             std::printf("%s%s: %zu texels, %zu moved out of walls, %zu inside geometry; %zu open points, %zu "
                         "hits, %zu on texels inside geometry (%zu the hit triangle's own, %zu on points that "
-                        "see backs over 30%% of their hemisphere)\n",
+                        "see backs over 30%% of their hemisphere); %zu hits on faces with no UV area\n",
                         c.map, unwrap ? " unwrapped" : "", s.texels, s.pushed, s.invalid, s.points, s.hits,
-                        s.on_invalid, s.on_own_invalid, s.on_backs);
+                        s.on_invalid, s.on_own_invalid, s.on_backs, s.no_uv_area);
             EXPECT_GT(s.points, 100u);
             EXPECT_GT(s.hits, 10000u);
-            EXPECT_LE(double(s.on_invalid - s.on_backs), 5e-5 * double(s.hits));
+            EXPECT_LE(double(s.on_invalid - s.on_backs), 2.5e-5 * double(s.hits));
             EXPECT_LE(double(s.on_backs), 2e-3 * double(s.hits));
         }
     }
