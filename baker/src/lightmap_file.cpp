@@ -741,7 +741,9 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["height"] = s.height;
     j["covered_texels"] = s.uv_report.covered_texels;
     j["overlapping_texels"] = s.uv_report.overlapping_texels;
-    j["stored_blocks"] = s.blocks; // 8x8 blocks of the atlas the asset stores per output
+    j["grazed_texels"] =
+        s.uv_report.grazed_instead; // given to a visible face grazing them (lightmap_atlas.h)
+    j["stored_blocks"] = s.blocks;  // 8x8 blocks of the atlas the asset stores per output
     j["peak_memory_bytes"] = io::peak_memory();
     j["memory_budget_bytes"] = s.memory_budget;
     j["tile_texels"] = s.tile_texels; // 0: the whole atlas in memory
