@@ -149,7 +149,7 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 5;
+constexpr uint64_t kLightmapCheckpointVersion = 6;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -556,6 +556,42 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                               });
         },
         [](uint32_t) {});
+    // A texel inside geometry that texels outside it see is outside all the same (TexelOrigins::seen): its
+    // rays start from its centre's origin, and those that meet the backs of walls bring no light.
+    std::vector<uint8_t> seen(n, 0);
+    const ItemArray seen_array[1] = {{reinterpret_cast<std::byte*>(seen.data()), 1}};
+    dist.run(
+        0, n, std::min<uint32_t>(uint32_t(1) << 18, n), seen_array,
+        [&](uint32_t begin, uint32_t end)
+        {
+            tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
+                              [&](const tbb::blocked_range<uint32_t>& r)
+                              {
+                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                  {
+                                      if (out.valid[i])
+                                          continue;
+                                      const LightmapTexel& t = atlas.texels[i];
+                                      // A point on a texel inside geometry (its own triangle's) is inside
+                                      // geometry.
+                                      auto may_be_outside = [&](const RayHit& hit)
+                                      {
+                                          const glm::vec2 uv = atlas_uv(mesh, hit.primitive, hit.u, hit.v);
+                                          const int32_t at =
+                                              atlas.texel_of(int64_t(std::floor(uv.x * float(atlas.width))),
+                                                             int64_t(std::floor(uv.y * float(atlas.height))));
+                                          return at < 0 || out.valid[size_t(at)] ||
+                                                 atlas.texels[size_t(at)].triangle != hit.primitive;
+                                      };
+                                      seen[i] = texel_origins.seen(origins[i], t.triangle,
+                                                                   uint64_t(t.y) * atlas.width + t.x,
+                                                                   may_be_outside);
+                                  }
+                              });
+        },
+        [](uint32_t) {});
+    for (uint32_t i = 0; i < n; ++i)
+        out.valid[i] |= seen[i];
 
     // The noise estimate's patterns (LightmapSh::noise): each sample is compared with its six nearest in its
     // stream's. The sun's rays are drawn independently.

@@ -22,6 +22,14 @@ struct Triangle
     glm::vec3 g, u, v; // unit normal (counter-clockwise front) and two directions of its plane
 };
 
+// Two unit directions of the plane normal to unit `g`, (u, v, g) right-handed.
+void plane_of(const glm::vec3& g, glm::vec3& u, glm::vec3& v)
+{
+    u = glm::normalize(std::abs(g.x) < 0.9f ? glm::cross(g, glm::vec3(1, 0, 0))
+                                            : glm::cross(g, glm::vec3(0, 1, 0)));
+    v = glm::cross(g, u);
+}
+
 Triangle triangle_of(const io::Mesh& mesh, uint32_t t)
 {
     Triangle r;
@@ -29,9 +37,7 @@ Triangle triangle_of(const io::Mesh& mesh, uint32_t t)
         r.p[k] = glm::dvec3(mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]]);
     const glm::dvec3 n = glm::cross(r.p[1] - r.p[0], r.p[2] - r.p[0]);
     r.g = glm::length(n) > 0.0 ? glm::vec3(glm::normalize(n)) : glm::vec3(0, 0, 1);
-    r.u = glm::normalize(std::abs(r.g.x) < 0.9f ? glm::cross(r.g, glm::vec3(1, 0, 0))
-                                                : glm::cross(r.g, glm::vec3(0, 1, 0)));
-    r.v = glm::cross(r.g, r.u);
+    plane_of(r.g, r.u, r.v);
     return r;
 }
 
@@ -89,7 +95,13 @@ bool TexelOrigins::back_face(uint32_t triangle, const glm::vec3& direction) cons
 
 bool TexelOrigins::inside(const glm::vec3& origin, uint32_t triangle, uint64_t item) const
 {
-    const Triangle tri = triangle_of(mesh_, triangle);
+    return inside_about(origin, triangle_of(mesh_, triangle).g, item);
+}
+
+bool TexelOrigins::inside_about(const glm::vec3& origin, const glm::vec3& g, uint64_t item) const
+{
+    glm::vec3 u, v;
+    plane_of(g, u, v);
     std::array<glm::vec3, kInsideRays> directions;
     hemisphere_directions(0x696E7369ull, item, directions);
     // Traced 8 at a time until the count decides: after k rays of which b meet backs, it stops once b is
@@ -105,7 +117,7 @@ bool TexelOrigins::inside(const glm::vec3& origin, uint32_t triangle, uint64_t i
         for (size_t k = 0; k < kPacket; ++k)
         {
             const glm::vec3& h = directions[first + k];
-            rays[k] = {origin, 0.0f, h.x * tri.u + h.y * tri.v + h.z * tri.g, INFINITY};
+            rays[k] = {origin, 0.0f, h.x * u + h.y * v + h.z * g, INFINITY};
         }
         scene_.intersect(std::span<const Ray>(rays), std::span(hits));
         for (size_t k = 0; k < kPacket; ++k)
@@ -115,6 +127,43 @@ bool TexelOrigins::inside(const glm::vec3& origin, uint32_t triangle, uint64_t i
             break;
     }
     return 2 * back > traced;
+}
+
+bool TexelOrigins::seen(const glm::vec3& origin, uint32_t triangle, uint64_t item,
+                        const std::function<bool(const RayHit&)>& may_be_outside) const
+{
+    const Triangle tri = triangle_of(mesh_, triangle);
+    std::array<glm::vec3, kSeenRays> directions;
+    hemisphere_directions(0x7365656Eull, item, directions);
+    constexpr size_t kPacket = 8;
+    std::array<Ray, kPacket> rays;
+    std::array<std::optional<RayHit>, kPacket> hits;
+    int count = 0;
+    for (size_t first = 0; first < directions.size(); first += kPacket)
+    {
+        for (size_t k = 0; k < kPacket; ++k)
+        {
+            const glm::vec3& h = directions[first + k];
+            rays[k] = {origin, 0.0f, h.x * tri.u + h.y * tri.v + h.z * tri.g, INFINITY};
+        }
+        scene_.intersect(std::span<const Ray>(rays), std::span(hits));
+        for (size_t k = 0; k < kPacket; ++k)
+        {
+            const std::optional<RayHit>& hit = hits[k];
+            if (!hit || back_face(hit->primitive, rays[k].direction) ||
+                (may_be_outside && !may_be_outside(*hit)))
+                continue;
+            // The point met, off its surface on the side the ray came from.
+            glm::vec3 g = glm::normalize(scene_.geometric_normal(hit->primitive));
+            if (glm::dot(g, rays[k].direction) > 0.0f)
+                g = -g; // a double-sided surface's back
+            const glm::vec3 p = offset_ray_origin(origin + rays[k].direction * hit->distance, g, offset_);
+            count += !inside_about(p, g, item ^ (uint64_t(first + k + 1) << 40));
+        }
+        if (count >= kSeenHits)
+            return true;
+    }
+    return false;
 }
 
 TexelOrigins::Origin TexelOrigins::find(uint32_t triangle, uint32_t x, uint32_t y,

@@ -52,7 +52,24 @@ class TexelOrigins
     static constexpr int kInsideRays = 128;
     bool inside(const glm::vec3& origin, uint32_t triangle, uint64_t item) const;
 
+    // Whether a texel judged inside geometry is seen from outside it all the same: of kSeenRays hemisphere
+    // rays from `origin` about the triangle's normal (others than inside()'s), at least kSeenHits meet the
+    // front of a surface (or either side of a double-sided one) at a point that is not inside geometry by
+    // inside()'s test about the side met. Lines of sight go both ways: such a point sees the texel. A wall
+    // facing the backs of single-sided walls (an outer wall behind an arena's, whose backs q3map2 drops)
+    // meets backs over most of its hemisphere, and yet a viewer in the arena sees it over their tops; a face
+    // inside a wall or a pillar meets only that geometry's insides, and the points it meets there are inside
+    // geometry too. Two points, not one, so that a ray through a crack between two brushes does not count.
+    // `may_be_outside(hit)`: false where the point met is known to be inside geometry (a texel judged inside
+    // wherever its footprint was tried), which saves its test.
+    static constexpr int kSeenRays = 64, kSeenHits = 2;
+    bool seen(const glm::vec3& origin, uint32_t triangle, uint64_t item,
+              const std::function<bool(const RayHit&)>& may_be_outside = {}) const;
+
   private:
+    // inside() about the unit normal `g`.
+    bool inside_about(const glm::vec3& origin, const glm::vec3& g, uint64_t item) const;
+
     const EmbreeScene& scene_;
     const io::Mesh& mesh_;
     uint32_t width_, height_;

@@ -102,8 +102,9 @@ TEST(DistributedBake, LightmapGivesTheSameBytesOnOneTwoAndThreeRanks)
         const std::vector<uint64_t> by_rank = j["texels_by_rank"];
         ASSERT_EQ(by_rank.size(), size_t(ranks));
         EXPECT_EQ(std::accumulate(by_rank.begin(), by_rank.end(), uint64_t(0)),
-                  uint64_t(j["covered_texels"]) * 4)
-            << "every texel of the origin search and of the three passes once";
+                  uint64_t(j["covered_texels"]) * 5)
+            << "every texel of the origin search, the test of those inside geometry and the three passes "
+               "once";
         for (int k = 0; k < ranks; ++k)
             EXPECT_GT(by_rank[size_t(k)], 0u) << "rank " << k << " computed nothing";
         // Only rank 0 reports: one summary line.

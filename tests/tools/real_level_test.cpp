@@ -396,22 +396,23 @@ Sight sight(hemi::io::Mesh mesh, uint32_t size, bool unwrap)
 // Issue 41: a shipped level's lightmap went dark where a viewer looks. q3map2 gives a face left inside a
 // pillar (a ceiling running on over the pillar's top) the same lightmap rectangle as a visible face, and
 // the overlap went to the hidden face, whose texels are inside geometry: the visible face read them dark.
-// Overlaps now go first to a face a viewer can reach, and a texel that straddles a wall samples the part of
-// its footprint outside it (detail::TexelOrigins). From 300 open points of each level (each 200 rays), on
-// its own lightmap UVs and unwrapped at 1024 x 1024, hits on texels inside geometry at points that see
+// Overlaps now go first to a face a viewer can reach, a texel that straddles a wall samples the part of its
+// footprint outside it, and a texel inside geometry that points outside geometry see is baked all the same
+// (detail::TexelOrigins::seen: oa_dm3's outer walls face the backs of the arena's single-sided walls, and a
+// viewer in the arena sees them over the walls' tops). From 300 open points of each level (each 200 rays),
+// on its own lightmap UVs and unwrapped at 1024 x 1024, hits on texels inside geometry at points that see
 // backs over at most 30% of their hemisphere (the point is in the open by any measure): at most 1 in 40,000.
-// Those at points that see more (oa_dm3's outer walls, which face the backs of the arena's single-sided
-// walls: no hemisphere test tells them from the inside of a wall): at most 2 in 1,000. Hits on faces to
-// which q3map2 gave a line or a point of its page (no UV area, no texel of their own: the bake warns, and
-// --unwrap gives them texels) are counted apart. Measured (texels / moved out of walls / inside geometry;
-// hits on such texels: all, at points that see more backs; hits on faces with no UV area):
-//   oacmpdm1 own UVs   736,101 / 39,614 / 99,830; 0 of 59,964 (0); 36. Before the footprint and the
+// Those at points that see more: at most 1 in 4,000. Hits on faces to which q3map2 gave a line or a point
+// of its page (no UV area, no texel of their own: the bake warns, and --unwrap gives them texels) are
+// counted apart. Measured (texels / moved out of walls / inside geometry; hits on such texels: all, at
+// points that see more backs; hits on faces with no UV area):
+//   oacmpdm1 own UVs   736,101 / 39,614 / 65,066; 0 of 59,964 (0); 36. Before the footprint and the
 //                      grazing faces 35 of 60,000, before the overlap rule 262
-//   oacmpdm1 unwrapped 511,847 / 37,574 / 67,094; 0 of 60,000
-//   oa_dm3 own UVs     626,922 / 23,914 / 58,999; 17 of 44,394 (17); 168. Before: 97 of 44,562
-//   oa_dm3 unwrapped   441,210 / 13,234 / 49,322; 60 of 44,562 (59), the other at a point that sees
-//                      backs over 26%. Before: 63
-// The other texels inside geometry are faces no viewer reaches (oacmpdm1 is sealed: no sky).
+//   oacmpdm1 unwrapped 511,847 / 37,574 / 43,537; 0 of 60,000
+//   oa_dm3 own UVs     626,922 / 23,914 / 33,011; 4 of 44,394 (4); 168. Before seen(): 17 (17), before
+//                      the footprint 97
+//   oa_dm3 unwrapped   441,210 / 13,234 / 25,768; 2 of 44,562 (2). Before seen(): 60 (59)
+// The other texels inside geometry are faces no viewer reaches (oacmpdm1 has no sky).
 TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
 {
     for (const LevelCase& c : kLevels)
@@ -432,7 +433,7 @@ TEST(RealLevel, WhatAViewerInTheLevelSeesIsBakedNotFilledFromNeighbours)
             EXPECT_GT(s.points, 100u);
             EXPECT_GT(s.hits, 10000u);
             EXPECT_LE(double(s.on_invalid - s.on_backs), 2.5e-5 * double(s.hits));
-            EXPECT_LE(double(s.on_backs), 2e-3 * double(s.hits));
+            EXPECT_LE(double(s.on_backs), 2.5e-4 * double(s.hits));
         }
     }
 }
