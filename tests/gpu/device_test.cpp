@@ -1,6 +1,7 @@
 // Device creation, selection, adoption of a host engine's device, and error reporting.
 #include "../gpu_fixture.h"
 #include "../host_vulkan.h"
+#include "../vulkan_calls.h"
 
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/resources.h>
@@ -111,6 +112,46 @@ TEST_F(DeviceTest, AdoptsAHostEngineDevice)
     }
     // Still alive and usable after hemi let go.
     EXPECT_EQ(vkDeviceWaitIdle(vk_device), VK_SUCCESS);
+}
+
+// Issue 42: a Device's calls go through its own entry points, as VmaVulkanFunctions are an allocator's. Two
+// Devices on two instances (an engine's, through a vkGetInstanceProcAddr that counts its calls, and a second
+// one, as a tool inside the editor would make, through the loader's own), with the test's headless Device
+// alive too: each reaches only its own instance, also after another one is made or destroyed. With process-
+// wide entry points the second Device re-pointed every call of the first to its own instance (0 counted).
+TEST_F(DeviceTest, TwoDevicesOnTwoInstancesEachReachOnlyTheirOwn)
+{
+    hemi::test::HostVulkan engine, tool;
+    ASSERT_NE(engine.queue, VK_NULL_HANDLE);
+    ASSERT_NE(tool.queue, VK_NULL_HANDLE);
+    hemi::test::VulkanCalls& calls = hemi::test::vulkan_calls();
+    auto nothing = [](VkCommandBuffer) {};
+    hemi::gpu::Device a(engine.external(hemi::test::counting_proc_addr));
+    {
+        hemi::gpu::Device b(tool.external());
+        calls.reset();
+        hemi::gpu::one_shot(a, nothing);
+        EXPECT_EQ(calls.submits, 1u)
+            << "the engine's Device submitted through another instance's entry points";
+        EXPECT_EQ(calls.fence_waits, 1u);
+        calls.reset();
+        hemi::gpu::one_shot(b, nothing);
+        hemi::gpu::one_shot(hemi::test::device(), nothing);
+        EXPECT_EQ(calls.submits, 0u) << "another Device's submit went through the engine's entry points";
+    }
+    calls.reset();
+    hemi::gpu::one_shot(a, nothing);
+    EXPECT_EQ(calls.submits, 1u) << "after the second Device was destroyed";
+    // A Device made later over the engine's own device takes its calls while it lives.
+    {
+        hemi::gpu::Device again(engine.external());
+        calls.reset();
+        hemi::gpu::one_shot(again, nothing);
+        EXPECT_EQ(calls.submits, 0u);
+    }
+    calls.reset();
+    hemi::gpu::one_shot(a, nothing);
+    EXPECT_EQ(calls.submits, 1u) << "after a second Device over the same VkDevice was destroyed";
 }
 
 // hemi names its Vulkan objects for debuggers (RenderDoc, the validation layer's messages) when the host's

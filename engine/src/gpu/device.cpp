@@ -29,12 +29,12 @@ std::string lower(std::string_view s)
     return out;
 }
 
-bool has_layer(const char* name)
+bool has_layer(const dispatch::Globals& vk, const char* name)
 {
     uint32_t count = 0;
-    HEMI_VK_CHECK(vkEnumerateInstanceLayerProperties(&count, nullptr));
+    HEMI_VK_CHECK(vk.vkEnumerateInstanceLayerProperties(&count, nullptr));
     std::vector<VkLayerProperties> layers(count);
-    HEMI_VK_CHECK(vkEnumerateInstanceLayerProperties(&count, layers.data()));
+    HEMI_VK_CHECK(vk.vkEnumerateInstanceLayerProperties(&count, layers.data()));
     return std::any_of(layers.begin(), layers.end(),
                        [&](const VkLayerProperties& l) { return std::string_view(l.layerName) == name; });
 }
@@ -74,12 +74,15 @@ bool find_queue_family(VkPhysicalDevice pd, uint32_t* family)
     return false;
 }
 
-VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& selector)
+VkPhysicalDevice choose_physical_device(VkInstance instance, const std::string& selector,
+                                        const dispatch::Table* table)
 {
     uint32_t count = 0;
     HEMI_VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
     std::vector<VkPhysicalDevice> devices(count);
     HEMI_VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, devices.data()));
+    for (VkPhysicalDevice pd : devices)
+        dispatch::bind(pd, table); // the loader gives them the instance's dispatch key; bound whatever it is
 
     std::vector<std::string> names;
     std::vector<VkPhysicalDevice> usable;
@@ -195,7 +198,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
 #if defined(__SANITIZE_ADDRESS__)
     pin_vulkan_libraries();
 #endif
-    dispatch::load_global(nullptr); // the loader, opened at run time
+    const dispatch::Globals globals = dispatch::load_global(nullptr); // the loader, opened at run time
     bool validation = desc.validation;
     if (const char* env = std::getenv("HEMI_VALIDATION"); env && *env)
         validation = std::string_view(env) != "0";
@@ -204,7 +207,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     std::vector<const char*> extensions;
     if (validation)
     {
-        if (!has_layer(kValidationLayer))
+        if (!has_layer(globals, kValidationLayer))
             throw std::runtime_error(
                 "hemi: validation requested but VK_LAYER_KHRONOS_validation is not installed "
                 "(Debian: vulkan-validationlayers)");
@@ -218,7 +221,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     // The highest version hemi uses (1.3 for dynamic rendering); it still runs on 1.1 devices.
     uint32_t loader_version = VK_API_VERSION_1_0;
     if (auto enumerate = reinterpret_cast<PFN_vkEnumerateInstanceVersion>(
-            vkGetInstanceProcAddr(nullptr, "vkEnumerateInstanceVersion")))
+            globals.vkGetInstanceProcAddr(nullptr, "vkEnumerateInstanceVersion")))
         enumerate(&loader_version);
     app.apiVersion = loader_version >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_1;
 
@@ -241,15 +244,19 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
     // Chained so that messages from vkCreateInstance/vkDestroyInstance themselves are caught too.
     if (validation)
         instance_info.pNext = &messenger_info;
-    HEMI_VK_CHECK(vkCreateInstance(&instance_info, nullptr, &instance_));
+    HEMI_VK_CHECK(globals.vkCreateInstance(&instance_info, nullptr, &instance_));
     try
     {
-        dispatch::load_instance(instance_);
+        vk_ = std::make_unique<dispatch::Table>();
+        dispatch::load_instance(globals, instance_, *vk_);
+        dispatch::bind(instance_, vk_.get());
     }
     catch (...)
     {
+        if (vk_)
+            dispatch::unbind(vk_.get());
         if (auto destroy = reinterpret_cast<PFN_vkDestroyInstance>(
-                vkGetInstanceProcAddr(instance_, "vkDestroyInstance")))
+                globals.vkGetInstanceProcAddr(instance_, "vkDestroyInstance")))
             destroy(instance_, nullptr);
         throw;
     }
@@ -259,10 +266,10 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         if (validation)
         {
             auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
-                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+                vk_->vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
             HEMI_VK_CHECK(create(instance_, &messenger_info, nullptr, &messenger_));
             set_object_name_ = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
-                vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
+                vk_->vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
             // HEMI_VALIDATION_SELFTEST=1 (test-only) submits one synthetic validation warning through the
             // messenger, so that a test can see a real message arrive at debug_callback, be counted by
             // validation_messages() and reach the log callback, without provoking a driver bug on purpose.
@@ -270,7 +277,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
                 selftest && *selftest && std::string_view(selftest) != "0")
             {
                 auto submit = reinterpret_cast<PFN_vkSubmitDebugUtilsMessageEXT>(
-                    vkGetInstanceProcAddr(instance_, "vkSubmitDebugUtilsMessageEXT"));
+                    vk_->vkGetInstanceProcAddr(instance_, "vkSubmitDebugUtilsMessageEXT"));
                 VkDebugUtilsMessengerCallbackDataEXT message{
                     VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CALLBACK_DATA_EXT};
                 message.pMessageIdName = "hemi-validation-selftest";
@@ -284,7 +291,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         std::string selector = desc.device_selector;
         if (const char* env = std::getenv("HEMI_DEVICE"); selector.empty() && env)
             selector = env;
-        physical_device_ = choose_physical_device(instance_, selector);
+        physical_device_ = choose_physical_device(instance_, selector, vk_.get());
         find_queue_family(physical_device_, &queue_family_);
 
         float priority = 1.0f;
@@ -334,6 +341,7 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         device_info.queueCreateInfoCount = 1;
         device_info.pQueueCreateInfos = &queue_info;
         HEMI_VK_CHECK(vkCreateDevice(physical_device_, &device_info, nullptr, &device_));
+        dispatch::bind(device_, vk_.get());
         vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
         init_properties();
         log(LogLevel::Info, std::string("hemi: using ") + properties_.deviceName);
@@ -345,10 +353,11 @@ Device::Device(const DeviceDesc& desc) : owns_(true), log_(desc.log)
         if (messenger_)
         {
             auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
-                vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+                vk_->vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
             destroy(instance_, messenger_, nullptr);
         }
         vkDestroyInstance(instance_, nullptr);
+        dispatch::unbind(vk_.get());
         throw;
     }
 }
@@ -364,11 +373,14 @@ Device::Device(const ExternalDevice& external)
 #endif
     if (!instance_ || !physical_device_ || !device_ || !queue_)
         throw std::invalid_argument("hemi: ExternalDevice needs instance, physical_device, device and queue");
-    dispatch::load_global(external.get_instance_proc_addr);
-    dispatch::load_instance(instance_);
+    vk_ = std::make_unique<dispatch::Table>();
+    dispatch::load_instance(dispatch::load_global(external.get_instance_proc_addr), instance_, *vk_);
+    dispatch::bind(instance_, vk_.get());
+    dispatch::bind(physical_device_, vk_.get());
+    dispatch::bind(device_, vk_.get());
     if (external.debug_utils)
         set_object_name_ = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
-            vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
+            vk_->vkGetInstanceProcAddr(instance_, "vkSetDebugUtilsObjectNameEXT"));
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &count, nullptr);
     std::vector<VkQueueFamilyProperties> families(count);
@@ -413,6 +425,7 @@ Device::~Device()
     if (!owns_)
     {
         allocator_.reset(); // the host's device: its memory blocks are hemi's to free
+        dispatch::unbind(vk_.get());
         return;
     }
     vkDeviceWaitIdle(device_);
@@ -421,10 +434,11 @@ Device::~Device()
     if (messenger_)
     {
         auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
-            vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+            vk_->vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
         destroy(instance_, messenger_, nullptr);
     }
     vkDestroyInstance(instance_, nullptr);
+    dispatch::unbind(vk_.get());
 }
 
 void Device::init_properties()

@@ -3,8 +3,17 @@
 // does not force the Vulkan loader, an engine that loads Vulkan its own way (volk, its own loader) hands
 // hemi its vkGetInstanceProcAddr (gpu::ExternalDevice), and a headless gpu::Device opens the loader
 // (libvulkan.so.1) itself. hemi's sources are compiled with VK_NO_PROTOTYPES and include this header
-// (engine/CMakeLists.txt); each entry point is a function pointer in namespace hemi, so that hemi's code
-// calls vkCmdDraw(...) as usual and no symbol of the loader's or of volk's is defined twice.
+// (engine/CMakeLists.txt).
+//
+// One table of entry points per gpu::Device, as VmaVulkanFunctions is per allocator: each Device loads its
+// own through its own vkGetInstanceProcAddr, so that two Devices on two instances in one process (an
+// engine's, and a tool's headless one in the same editor) each reach only their own. hemi's code still
+// calls vkCmdDraw(cmd, ...): in namespace hemi each entry point is a small inline function that finds the
+// table of the Device its first argument belongs to. That argument is always a dispatchable handle
+// (VkInstance, VkPhysicalDevice, VkDevice, VkQueue, VkCommandBuffer), and the Vulkan loader writes into the
+// first word of every dispatchable object the dispatch table of its instance (VkInstance, VkPhysicalDevice)
+// or its device (VkDevice and its queues and command buffers): the key under which each Device binds its
+// table (dispatch::bind), the key validation layers use for the same purpose.
 #ifndef VK_NO_PROTOTYPES
 #error "hemi's sources are compiled with VK_NO_PROTOTYPES (engine/CMakeLists.txt)"
 #endif
@@ -102,21 +111,50 @@
     X(vkUpdateDescriptorSets)                                                                                \
     X(vkWaitForFences)
 
+#include <utility>
+
 namespace hemi
 {
-#define HEMI_VK_DECLARE(name) extern PFN_##name name;
-HEMI_VK_GLOBAL_FUNCTIONS(HEMI_VK_DECLARE)
-HEMI_VK_INSTANCE_FUNCTIONS(HEMI_VK_DECLARE)
-#undef HEMI_VK_DECLARE
-extern PFN_vkGetInstanceProcAddr vkGetInstanceProcAddr;
-
 namespace gpu::dispatch
 {
+// The entry points that need no instance, from one vkGetInstanceProcAddr.
+struct Globals
+{
+    PFN_vkGetInstanceProcAddr vkGetInstanceProcAddr = nullptr;
+#define HEMI_VK_MEMBER(name) PFN_##name name = nullptr;
+    HEMI_VK_GLOBAL_FUNCTIONS(HEMI_VK_MEMBER)
+};
+// A Device's entry points.
+struct Table
+{
+    PFN_vkGetInstanceProcAddr vkGetInstanceProcAddr = nullptr;
+    HEMI_VK_INSTANCE_FUNCTIONS(HEMI_VK_MEMBER)
+#undef HEMI_VK_MEMBER
+};
+
 // Loads the global entry points from `get_instance_proc_addr`, or, when it is null, from the Vulkan loader
 // opened with dlopen (libvulkan.so.1; std::runtime_error naming it when it cannot be opened).
-void load_global(PFN_vkGetInstanceProcAddr get_instance_proc_addr);
-// Loads every other entry point through `instance` (after load_global). Throws std::runtime_error naming
-// an entry point the implementation does not have.
-void load_instance(VkInstance instance);
+Globals load_global(PFN_vkGetInstanceProcAddr get_instance_proc_addr);
+// Loads every other entry point through `instance`. Throws std::runtime_error naming an entry point the
+// implementation does not have.
+void load_instance(const Globals& globals, VkInstance instance, Table& table);
+
+// Makes `table` the one for every dispatchable handle that shares `handle`'s dispatch key (a Device binds
+// its instance, physical device and device). A key bound twice (two Devices adopting one VkDevice) goes to
+// the later table until it is unbound.
+void bind(const void* handle, const Table* table);
+// Removes every binding of `table` (before the Device that owns it goes).
+void unbind(const Table* table);
+// The table bound to the dispatch key of `handle`; a handle of no Device's terminates the process with a
+// message naming it (a handle from outside hemi's Devices is a programming error, not an input).
+const Table& of(const void* handle);
 } // namespace gpu::dispatch
+
+#define HEMI_VK_FORWARD(name)                                                                                \
+    template <class Handle, class... Args> inline auto name(Handle handle, Args&&... args)                   \
+    {                                                                                                        \
+        return gpu::dispatch::of(handle).name(handle, std::forward<Args>(args)...);                          \
+    }
+HEMI_VK_INSTANCE_FUNCTIONS(HEMI_VK_FORWARD)
+#undef HEMI_VK_FORWARD
 } // namespace hemi

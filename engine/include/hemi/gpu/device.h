@@ -18,6 +18,10 @@ namespace hemi::gpu
 
 class MemoryAllocator;
 class MemoryProvider;
+namespace dispatch
+{
+struct Table; // the Device's own Vulkan entry points (internal)
+} // namespace dispatch
 
 enum class LogLevel
 {
@@ -67,7 +71,7 @@ struct ExternalDevice
     bool independent_blend = false;
     // Where hemi gets its Vulkan entry points: the engine's vkGetInstanceProcAddr (volk's, its own loader's,
     // a layer chain's); null opens the system's loader (libvulkan.so.1) at run time. hemi does not link the
-    // loader.
+    // loader. Each Device keeps its own entry points: other Devices in the process never change them.
     PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
     // True when `instance` was created with VK_EXT_debug_utils enabled: then hemi names the Vulkan objects it
     // creates (vkSetDebugUtilsObjectNameEXT: "hemi mesh vertices", "hemi lightmap 'h4'", "hemi material
@@ -197,6 +201,7 @@ class Device
     double timestamp_period_ns_ = 0.0;
     LogCallback log_;
     PFN_vkSetDebugUtilsObjectNameEXT set_object_name_ = nullptr;
+    std::unique_ptr<dispatch::Table> vk_; // bound to its instance, physical device and device while it lives
     std::unique_ptr<MemoryAllocator> allocator_;
     MemoryProvider* memory_provider_ = nullptr; // the engine's, or null
     std::atomic<uint64_t> validation_messages_{0};
