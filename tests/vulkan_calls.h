@@ -10,7 +10,12 @@
 #include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 namespace hemi::test
 {
@@ -36,6 +41,45 @@ inline VulkanCalls& vulkan_calls()
 {
     static VulkanCalls calls;
     return calls;
+}
+
+// The Vulkan objects made through counting_proc_addr, and the debug-utils names given to them (issue 42:
+// hemi names every object it creates). Keyed by handle value; a handle made again after its destruction
+// keeps its first record.
+struct CreatedObjects
+{
+    std::mutex mutex;
+    std::map<uint64_t, VkObjectType> created;
+    std::map<uint64_t, std::string> names;
+
+    void clear()
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        created.clear();
+        names.clear();
+    }
+    void add(VkObjectType type, uint64_t handle)
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        created.emplace(handle, type);
+    }
+    // "type handle" of each object made and never named.
+    std::vector<std::string> unnamed()
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        std::vector<std::string> out;
+        for (const auto& [handle, type] : created)
+            if (!names.count(handle))
+                out.push_back("object type " + std::to_string(int(type)) + " handle " +
+                              std::to_string(handle));
+        return out;
+    }
+};
+
+inline CreatedObjects& created_objects()
+{
+    static CreatedObjects objects;
+    return objects;
 }
 
 namespace detail
@@ -70,6 +114,106 @@ inline PFN_vkGetInstanceProcAddr loader_proc_addr()
 HEMI_TEST_COUNTED(HEMI_TEST_REAL)
 #undef HEMI_TEST_REAL
 
+// Entry points that make objects: vkCreateX(device, info, allocator, handle*) and the batch ones.
+#define HEMI_TEST_CREATES(X)                                                                                 \
+    X(vkCreateBuffer, VK_OBJECT_TYPE_BUFFER)                                                                 \
+    X(vkCreateImage, VK_OBJECT_TYPE_IMAGE)                                                                   \
+    X(vkCreateImageView, VK_OBJECT_TYPE_IMAGE_VIEW)                                                          \
+    X(vkCreateBufferView, VK_OBJECT_TYPE_BUFFER_VIEW)                                                        \
+    X(vkCreateSampler, VK_OBJECT_TYPE_SAMPLER)                                                               \
+    X(vkCreatePipelineLayout, VK_OBJECT_TYPE_PIPELINE_LAYOUT)                                                \
+    X(vkCreateDescriptorSetLayout, VK_OBJECT_TYPE_DESCRIPTOR_SET_LAYOUT)                                     \
+    X(vkCreateDescriptorPool, VK_OBJECT_TYPE_DESCRIPTOR_POOL)                                                \
+    X(vkCreateShaderModule, VK_OBJECT_TYPE_SHADER_MODULE)                                                    \
+    X(vkCreateRenderPass, VK_OBJECT_TYPE_RENDER_PASS)                                                        \
+    X(vkCreateFramebuffer, VK_OBJECT_TYPE_FRAMEBUFFER)                                                       \
+    X(vkCreateQueryPool, VK_OBJECT_TYPE_QUERY_POOL)                                                          \
+    X(vkCreateCommandPool, VK_OBJECT_TYPE_COMMAND_POOL)                                                      \
+    X(vkCreateFence, VK_OBJECT_TYPE_FENCE)
+
+#define HEMI_TEST_REAL(name, type) inline PFN_##name real_##name = nullptr;
+HEMI_TEST_CREATES(HEMI_TEST_REAL)
+#undef HEMI_TEST_REAL
+inline PFN_vkCreateGraphicsPipelines real_vkCreateGraphicsPipelines = nullptr;
+inline PFN_vkCreateComputePipelines real_vkCreateComputePipelines = nullptr;
+inline PFN_vkAllocateDescriptorSets real_vkAllocateDescriptorSets = nullptr;
+inline PFN_vkAllocateCommandBuffers real_vkAllocateCommandBuffers = nullptr;
+inline PFN_vkSetDebugUtilsObjectNameEXT real_vkSetDebugUtilsObjectNameEXT = nullptr;
+
+template <typename Handle> uint64_t handle_value(Handle h)
+{
+    if constexpr (std::is_pointer_v<Handle>)
+        return uint64_t(reinterpret_cast<uintptr_t>(h));
+    else
+        return uint64_t(h);
+}
+
+template <typename F> struct Create;
+template <typename Info, typename Handle>
+struct Create<VkResult(VKAPI_PTR*)(VkDevice, const Info*, const VkAllocationCallbacks*, Handle*)>
+{
+    template <VkResult(VKAPI_PTR** real)(VkDevice, const Info*, const VkAllocationCallbacks*, Handle*),
+              VkObjectType type>
+    static VKAPI_ATTR VkResult VKAPI_CALL call(VkDevice device, const Info* info,
+                                               const VkAllocationCallbacks* allocator, Handle* out)
+    {
+        const VkResult r = (*real)(device, info, allocator, out);
+        if (r == VK_SUCCESS)
+            created_objects().add(type, handle_value(*out));
+        return r;
+    }
+};
+
+inline VKAPI_ATTR VkResult VKAPI_CALL created_graphics_pipelines(VkDevice device, VkPipelineCache cache,
+                                                                 uint32_t count,
+                                                                 const VkGraphicsPipelineCreateInfo* infos,
+                                                                 const VkAllocationCallbacks* allocator,
+                                                                 VkPipeline* out)
+{
+    const VkResult r = real_vkCreateGraphicsPipelines(device, cache, count, infos, allocator, out);
+    for (uint32_t i = 0; r == VK_SUCCESS && i < count; ++i)
+        created_objects().add(VK_OBJECT_TYPE_PIPELINE, handle_value(out[i]));
+    return r;
+}
+inline VKAPI_ATTR VkResult VKAPI_CALL created_compute_pipelines(VkDevice device, VkPipelineCache cache,
+                                                                uint32_t count,
+                                                                const VkComputePipelineCreateInfo* infos,
+                                                                const VkAllocationCallbacks* allocator,
+                                                                VkPipeline* out)
+{
+    const VkResult r = real_vkCreateComputePipelines(device, cache, count, infos, allocator, out);
+    for (uint32_t i = 0; r == VK_SUCCESS && i < count; ++i)
+        created_objects().add(VK_OBJECT_TYPE_PIPELINE, handle_value(out[i]));
+    return r;
+}
+inline VKAPI_ATTR VkResult VKAPI_CALL allocated_descriptor_sets(VkDevice device,
+                                                                const VkDescriptorSetAllocateInfo* info,
+                                                                VkDescriptorSet* out)
+{
+    const VkResult r = real_vkAllocateDescriptorSets(device, info, out);
+    for (uint32_t i = 0; r == VK_SUCCESS && i < info->descriptorSetCount; ++i)
+        created_objects().add(VK_OBJECT_TYPE_DESCRIPTOR_SET, handle_value(out[i]));
+    return r;
+}
+inline VKAPI_ATTR VkResult VKAPI_CALL allocated_command_buffers(VkDevice device,
+                                                                const VkCommandBufferAllocateInfo* info,
+                                                                VkCommandBuffer* out)
+{
+    const VkResult r = real_vkAllocateCommandBuffers(device, info, out);
+    for (uint32_t i = 0; r == VK_SUCCESS && i < info->commandBufferCount; ++i)
+        created_objects().add(VK_OBJECT_TYPE_COMMAND_BUFFER, handle_value(out[i]));
+    return r;
+}
+inline VKAPI_ATTR VkResult VKAPI_CALL named_object(VkDevice device, const VkDebugUtilsObjectNameInfoEXT* info)
+{
+    {
+        CreatedObjects& c = created_objects();
+        const std::lock_guard<std::mutex> lock(c.mutex);
+        c.names[info->objectHandle] = info->pObjectName ? info->pObjectName : "";
+    }
+    return real_vkSetDebugUtilsObjectNameEXT ? real_vkSetDebugUtilsObjectNameEXT(device, info) : VK_SUCCESS;
+}
+
 template <typename R, typename... A> struct Wrap;
 template <typename R, typename... A> struct Wrap<R(VKAPI_PTR*)(A...)>
 {
@@ -98,8 +242,31 @@ inline VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL counting_proc_addr(VkInstance in
     }
     HEMI_TEST_COUNTED(HEMI_TEST_WRAP)
 #undef HEMI_TEST_WRAP
+#define HEMI_TEST_WRAP(fn, type)                                                                             \
+    if (std::strcmp(name, #fn) == 0)                                                                         \
+    {                                                                                                        \
+        real_##fn = reinterpret_cast<PFN_##fn>(gipa(instance, name));                                        \
+        if (!real_##fn)                                                                                      \
+            return nullptr;                                                                                  \
+        return reinterpret_cast<PFN_vkVoidFunction>(&Create<PFN_##fn>::call<&real_##fn, type>);              \
+    }
+    HEMI_TEST_CREATES(HEMI_TEST_WRAP)
+#undef HEMI_TEST_WRAP
+#define HEMI_TEST_WRAP(fn, wrapper)                                                                          \
+    if (std::strcmp(name, #fn) == 0)                                                                         \
+    {                                                                                                        \
+        real_##fn = reinterpret_cast<PFN_##fn>(gipa(instance, name));                                        \
+        return real_##fn ? reinterpret_cast<PFN_vkVoidFunction>(&wrapper) : nullptr;                         \
+    }
+    HEMI_TEST_WRAP(vkCreateGraphicsPipelines, created_graphics_pipelines)
+    HEMI_TEST_WRAP(vkCreateComputePipelines, created_compute_pipelines)
+    HEMI_TEST_WRAP(vkAllocateDescriptorSets, allocated_descriptor_sets)
+    HEMI_TEST_WRAP(vkAllocateCommandBuffers, allocated_command_buffers)
+    HEMI_TEST_WRAP(vkSetDebugUtilsObjectNameEXT, named_object)
+#undef HEMI_TEST_WRAP
     return gipa(instance, name);
 }
 #undef HEMI_TEST_COUNTED
+#undef HEMI_TEST_CREATES
 
 } // namespace hemi::test

@@ -15,17 +15,20 @@ CommandContext::CommandContext(const Device& device) : device_(&device)
     VkCommandPool pool;
     HEMI_VK_CHECK(vkCreateCommandPool(d, &pool_info, nullptr, &pool));
     pool_ = CommandPool(d, pool);
+    device.set_name(VK_OBJECT_TYPE_COMMAND_POOL, pool, "hemi one-shot command pool");
 
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = pool_;
     alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     alloc.commandBufferCount = 1;
     HEMI_VK_CHECK(vkAllocateCommandBuffers(d, &alloc, &cmd_));
+    device.set_name(VK_OBJECT_TYPE_COMMAND_BUFFER, cmd_, "hemi one-shot command buffer");
 
     VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VkFence fence;
     HEMI_VK_CHECK(vkCreateFence(d, &fence_info, nullptr, &fence));
     fence_ = Fence(d, fence);
+    device.set_name(VK_OBJECT_TYPE_FENCE, fence, "hemi one-shot fence");
 }
 
 VkCommandBuffer CommandContext::begin()
@@ -70,6 +73,7 @@ TimestampQueries::TimestampQueries(const Device& device, uint32_t count)
     VkQueryPool pool;
     HEMI_VK_CHECK(vkCreateQueryPool(device_, &info, nullptr, &pool));
     pool_ = QueryPool(device_, pool);
+    device.set_name(VK_OBJECT_TYPE_QUERY_POOL, pool, "hemi timestamp queries");
 }
 
 void TimestampQueries::reset(VkCommandBuffer cmd)

@@ -104,6 +104,7 @@ DescriptorSet DescriptorAllocator::allocate(VkDescriptorSetLayout layout, std::s
     info.pSetLayouts = &layout;
     DescriptorSet set;
     HEMI_VK_CHECK(vkAllocateDescriptorSets(device_->device(), &info, &set.set_));
+    device_->set_name(VK_OBJECT_TYPE_DESCRIPTOR_SET, set.set_, "hemi descriptor set");
     --p.sets;
     for (size_t i = 0; i < kTypeCount; ++i)
         p.counts[i] -= need[i];

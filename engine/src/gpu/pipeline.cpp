@@ -38,6 +38,7 @@ ShaderModule create_shader_module(const Device& device, std::span<const uint32_t
     info.pCode = spirv.data();
     VkShaderModule module;
     HEMI_VK_CHECK(vkCreateShaderModule(device.device(), &info, nullptr, &module));
+    device.set_name(VK_OBJECT_TYPE_SHADER_MODULE, module, "hemi shader module");
     return ShaderModule(device.device(), module);
 }
 
@@ -51,6 +52,8 @@ DescriptorSetLayout create_set_layout(const Device& device, const std::vector<Bi
     set_info.pBindings = vk_bindings.data();
     VkDescriptorSetLayout set_layout;
     HEMI_VK_CHECK(vkCreateDescriptorSetLayout(device.device(), &set_info, nullptr, &set_layout));
+    device.set_name(VK_OBJECT_TYPE_DESCRIPTOR_SET_LAYOUT, set_layout,
+                    "hemi descriptor set layout of " + std::to_string(bindings.size()) + " bindings");
     return DescriptorSetLayout(device.device(), set_layout);
 }
 
@@ -78,6 +81,7 @@ void create_layouts(const Device& device, const std::vector<Binding>& bindings,
     VkPipelineLayout layout;
     HEMI_VK_CHECK(vkCreatePipelineLayout(d, &layout_info, nullptr, &layout));
     p.layout = PipelineLayout(d, layout);
+    device.set_name(VK_OBJECT_TYPE_PIPELINE_LAYOUT, layout, "hemi pipeline layout");
     p.push_constant_size = push_size;
 }
 
@@ -116,6 +120,7 @@ Program create_compute_program(const Device& device, const ComputeProgramDesc& d
     VkPipeline pipeline;
     HEMI_VK_CHECK(vkCreateComputePipelines(device.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
     p.pipeline = Pipeline(device.device(), pipeline);
+    device.set_name(VK_OBJECT_TYPE_PIPELINE, pipeline, "hemi compute pipeline");
     return p;
 }
 
@@ -239,6 +244,7 @@ Program create_graphics_program(const Device& device, const GraphicsProgramDesc&
     VkPipeline pipeline;
     HEMI_VK_CHECK(vkCreateGraphicsPipelines(device.device(), desc.cache, 1, &info, nullptr, &pipeline));
     p.pipeline = Pipeline(device.device(), pipeline);
+    device.set_name(VK_OBJECT_TYPE_PIPELINE, pipeline, "hemi graphics pipeline");
     return p;
 }
 
@@ -257,6 +263,8 @@ DescriptorPool create_descriptor_pool(const Device& device, const std::vector<Bi
     info.pPoolSizes = sizes.data();
     VkDescriptorPool pool;
     HEMI_VK_CHECK(vkCreateDescriptorPool(device.device(), &info, nullptr, &pool));
+    device.set_name(VK_OBJECT_TYPE_DESCRIPTOR_POOL, pool,
+                    "hemi descriptor pool of " + std::to_string(max_sets) + " sets");
     return DescriptorPool(device.device(), pool);
 }
 
@@ -269,6 +277,7 @@ VkDescriptorSet allocate_descriptor_set(const Device& device, VkDescriptorPool p
     info.pSetLayouts = &layout;
     VkDescriptorSet set;
     HEMI_VK_CHECK(vkAllocateDescriptorSets(device.device(), &info, &set));
+    device.set_name(VK_OBJECT_TYPE_DESCRIPTOR_SET, set, "hemi descriptor set");
     return set;
 }
 

@@ -22,6 +22,8 @@ Buffer create_buffer(const Device& device, const BufferDesc& desc)
     VkBuffer buffer;
     HEMI_VK_CHECK(vkCreateBuffer(d, &info, nullptr, &buffer));
     b.buffer_ = VkBufferHandle(d, buffer);
+    // Every object hemi makes carries a name from the start (renamed by its owner where it knows better).
+    device.set_name(VK_OBJECT_TYPE_BUFFER, buffer, "hemi buffer of " + std::to_string(desc.size) + " bytes");
 
     b.memory_ = allocate(device, memory_request(device, buffer, desc.memory));
     HEMI_VK_CHECK(vkBindBufferMemory(d, buffer, b.memory_.memory(), b.memory_.offset()));
@@ -145,6 +147,9 @@ Image create_image(const Device& device, const ImageDesc& desc)
     VkImage image;
     HEMI_VK_CHECK(vkCreateImage(d, &info, nullptr, &image));
     img.image_ = VkImageHandle(d, image);
+    const std::string extent = std::to_string(desc.width) + "x" + std::to_string(desc.height) + "x" +
+                               std::to_string(desc.layers) + ", format " + std::to_string(int(desc.format));
+    device.set_name(VK_OBJECT_TYPE_IMAGE, image, "hemi image " + extent);
 
     img.memory_ = allocate(device, memory_request(device, image));
     HEMI_VK_CHECK(vkBindImageMemory(d, image, img.memory_.memory(), img.memory_.offset()));
@@ -157,6 +162,7 @@ Image create_image(const Device& device, const ImageDesc& desc)
     VkImageView view;
     HEMI_VK_CHECK(vkCreateImageView(d, &view_info, nullptr, &view));
     img.view_ = ImageView(d, view);
+    device.set_name(VK_OBJECT_TYPE_IMAGE_VIEW, view, "hemi view of image " + extent);
     img.format_ = desc.format;
     img.width_ = desc.width;
     img.height_ = desc.height;
@@ -241,6 +247,7 @@ Sampler create_sampler(const Device& device, const SamplerDesc& desc)
     info.maxLod = desc.max_lod;
     VkSampler sampler;
     HEMI_VK_CHECK(vkCreateSampler(device.device(), &info, nullptr, &sampler));
+    device.set_name(VK_OBJECT_TYPE_SAMPLER, sampler, "hemi sampler");
     return Sampler(device.device(), sampler);
 }
 
@@ -254,6 +261,8 @@ BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkForm
     info.range = range;
     VkBufferView view;
     HEMI_VK_CHECK(vkCreateBufferView(device.device(), &info, nullptr, &view));
+    device.set_name(VK_OBJECT_TYPE_BUFFER_VIEW, view,
+                    "hemi buffer view, format " + std::to_string(int(format)));
     return BufferView(device.device(), view);
 }
 

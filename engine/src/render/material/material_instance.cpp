@@ -127,6 +127,7 @@ VkSampler TextureSet::sampler(const io::TextureSampler& state) const
     info.maxLod = state.mipmaps ? VK_LOD_CLAMP_NONE : 0.0f; // no mipmapped minification: mip 0 only
     VkSampler sampler;
     HEMI_VK_CHECK(vkCreateSampler(device_->device(), &info, nullptr, &sampler));
+    device_->set_name(VK_OBJECT_TYPE_SAMPLER, sampler, "hemi material sampler");
     samplers_.emplace_back(state, gpu::Sampler(device_->device(), sampler));
     return samplers_.back().second;
 }

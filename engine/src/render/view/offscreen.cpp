@@ -86,6 +86,7 @@ OffscreenTarget::OffscreenTarget(const gpu::Device& device, uint32_t width, uint
     VkRenderPass render_pass;
     HEMI_VK_CHECK(vkCreateRenderPass(device.device(), &rp, nullptr, &render_pass));
     render_pass_ = gpu::RenderPass(device.device(), render_pass);
+    device.set_name(VK_OBJECT_TYPE_RENDER_PASS, render_pass, "hemi offscreen render pass");
 
     VkImageView views[3] = {color_.view(), aux_.view(), depth_.view()};
     VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
@@ -98,6 +99,7 @@ OffscreenTarget::OffscreenTarget(const gpu::Device& device, uint32_t width, uint
     VkFramebuffer framebuffer;
     HEMI_VK_CHECK(vkCreateFramebuffer(device.device(), &fb, nullptr, &framebuffer));
     framebuffer_ = gpu::Framebuffer(device.device(), framebuffer);
+    device.set_name(VK_OBJECT_TYPE_FRAMEBUFFER, framebuffer, "hemi offscreen framebuffer");
 }
 
 void OffscreenTarget::begin(VkCommandBuffer cmd, const glm::vec4& clear) const
