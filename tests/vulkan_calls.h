@@ -164,24 +164,14 @@ struct Create<VkResult(VKAPI_PTR*)(VkDevice, const Info*, const VkAllocationCall
     }
 };
 
-inline VKAPI_ATTR VkResult VKAPI_CALL created_graphics_pipelines(VkDevice device, VkPipelineCache cache,
-                                                                 uint32_t count,
-                                                                 const VkGraphicsPipelineCreateInfo* infos,
-                                                                 const VkAllocationCallbacks* allocator,
-                                                                 VkPipeline* out)
+// vkCreateGraphicsPipelines and vkCreateComputePipelines: `count` pipelines at once.
+template <typename Info, VkResult(VKAPI_PTR** real)(VkDevice, VkPipelineCache, uint32_t, const Info*,
+                                                    const VkAllocationCallbacks*, VkPipeline*)>
+VKAPI_ATTR VkResult VKAPI_CALL created_pipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
+                                                 const Info* infos, const VkAllocationCallbacks* allocator,
+                                                 VkPipeline* out)
 {
-    const VkResult r = real_vkCreateGraphicsPipelines(device, cache, count, infos, allocator, out);
-    for (uint32_t i = 0; r == VK_SUCCESS && i < count; ++i)
-        created_objects().add(VK_OBJECT_TYPE_PIPELINE, handle_value(out[i]));
-    return r;
-}
-inline VKAPI_ATTR VkResult VKAPI_CALL created_compute_pipelines(VkDevice device, VkPipelineCache cache,
-                                                                uint32_t count,
-                                                                const VkComputePipelineCreateInfo* infos,
-                                                                const VkAllocationCallbacks* allocator,
-                                                                VkPipeline* out)
-{
-    const VkResult r = real_vkCreateComputePipelines(device, cache, count, infos, allocator, out);
+    const VkResult r = (*real)(device, cache, count, infos, allocator, out);
     for (uint32_t i = 0; r == VK_SUCCESS && i < count; ++i)
         created_objects().add(VK_OBJECT_TYPE_PIPELINE, handle_value(out[i]));
     return r;
@@ -258,8 +248,10 @@ inline VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL counting_proc_addr(VkInstance in
         real_##fn = reinterpret_cast<PFN_##fn>(gipa(instance, name));                                        \
         return real_##fn ? reinterpret_cast<PFN_vkVoidFunction>(&wrapper) : nullptr;                         \
     }
-    HEMI_TEST_WRAP(vkCreateGraphicsPipelines, created_graphics_pipelines)
-    HEMI_TEST_WRAP(vkCreateComputePipelines, created_compute_pipelines)
+    HEMI_TEST_WRAP(vkCreateGraphicsPipelines,
+                   (created_pipelines<VkGraphicsPipelineCreateInfo, &real_vkCreateGraphicsPipelines>))
+    HEMI_TEST_WRAP(vkCreateComputePipelines,
+                   (created_pipelines<VkComputePipelineCreateInfo, &real_vkCreateComputePipelines>))
     HEMI_TEST_WRAP(vkAllocateDescriptorSets, allocated_descriptor_sets)
     HEMI_TEST_WRAP(vkAllocateCommandBuffers, allocated_command_buffers)
     HEMI_TEST_WRAP(vkSetDebugUtilsObjectNameEXT, named_object)
