@@ -512,8 +512,7 @@ void table1(benchmark::State& state, Table1Row row, std::string technique, bool 
             else
                 hemi::render::transfer_multiply_host(*host_matrices, lighting, coefficients);
             const auto t1 = std::chrono::steady_clock::now();
-            hemi::gpu::write_buffer(device, view.coefficients().coefficients(), coefficients.data(),
-                                    coefficients.size() * sizeof(float));
+            view.coefficients().write_coefficients(coefficients);
             const auto t2 = std::chrono::steady_clock::now();
             cpu += std::chrono::duration<double>(t1 - t0).count();
             upload += std::chrono::duration<double>(t2 - t1).count();

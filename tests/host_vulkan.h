@@ -42,6 +42,9 @@ struct HostVulkan
     {
         if (vk_device)
             vkDestroyDevice(vk_device, nullptr);
+        if (messenger)
+            reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(
+                instance, "vkDestroyDebugUtilsMessengerEXT"))(instance, messenger, nullptr);
         if (instance)
             vkDestroyInstance(instance, nullptr);
     }
@@ -58,6 +61,8 @@ struct HostVulkan
     }
 
   private:
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+
     void create(bool synchronization_validation)
     {
         VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
@@ -84,6 +89,13 @@ struct HostVulkan
         ii.enabledExtensionCount = 1;
         ii.ppEnabledExtensionNames = &ext;
         ASSERT_EQ(vkCreateInstance(&ii, nullptr, &instance), VK_SUCCESS);
+        // The messenger chained to VkInstanceCreateInfo reports only while the instance is made and
+        // destroyed: the one that hears every command's validation is made now.
+        mi.pNext = nullptr;
+        const auto create_messenger = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
+        ASSERT_NE(create_messenger, nullptr);
+        ASSERT_EQ(create_messenger(instance, &mi, nullptr, &messenger), VK_SUCCESS);
 
         uint32_t count = 0;
         vkEnumeratePhysicalDevices(instance, &count, nullptr);

@@ -402,8 +402,9 @@ struct Renderer::Impl
         upload.submit_and_wait();
         camera_set = std::make_unique<render::FrameSet>(*system);
         light_set = std::make_unique<render::FrameSet>(*system);
-        torus_coefficients = gpu::create_buffer_view(device, torus->coefficients().coefficients(),
-                                                     VK_FORMAT_R32G32B32A32_SFLOAT, 0, VK_WHOLE_SIZE);
+        const gpu::BufferRange range = torus->coefficients().coefficients();
+        torus_coefficients = gpu::create_buffer_view(device, range.buffer, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                     range.offset, range.size);
     }
 
     void create_descriptors()

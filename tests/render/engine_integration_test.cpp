@@ -237,7 +237,8 @@ Images draw_both(const Case& c, const glm::mat4& model = glm::mat4(1.0f), const 
         prt_buffer =
             gpu::create_buffer(dev, {texels * sizeof(glm::vec4), VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
         gpu::write_buffer(dev, prt_buffer, data.data(), texels * sizeof(glm::vec4));
-        vertex = std::make_unique<render::VertexCoefficients>(system, prt_buffer, texels);
+        vertex = std::make_unique<render::VertexCoefficients>(
+            system, gpu::BufferRange{prt_buffer.handle(), 0, prt_buffer.size()}, texels);
         source_set = vertex->set();
         break;
     }

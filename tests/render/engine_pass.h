@@ -2,7 +2,10 @@
 // An engine's own render pass, as the tests build one: colour attachments of the given formats and a D32
 // depth buffer, one subpass, cleared on begin; the colour images end in COLOR_ATTACHMENT_OPTIMAL for
 // readback. Independent of hemi's OffscreenTarget on purpose: materials must draw into passes hemi did not
-// make.
+// make. Its external dependency either orders every earlier write before the pass (as OffscreenTarget's
+// does) or, with `attachments_only`, only earlier uses of its attachments, as an engine's render pass does:
+// then nothing but the caller's barriers orders earlier work before the draws, and synchronisation
+// validation sees a missing one.
 #include "../gpu_fixture.h"
 
 #include <hemi/gpu/handle.h>
@@ -19,28 +22,31 @@ namespace hemi::test
 
 struct EnginePass
 {
+    const gpu::Device* dev;
     uint32_t width, height;
     std::vector<gpu::Image> colors;
     gpu::Image depth;
     gpu::RenderPass render_pass;
     gpu::Framebuffer framebuffer;
 
-    EnginePass(uint32_t w, uint32_t h, const std::vector<VkFormat>& formats) : width(w), height(h)
+    EnginePass(uint32_t w, uint32_t h, const std::vector<VkFormat>& formats, const gpu::Device& on = device(),
+               bool attachments_only = false)
+        : dev(&on), width(w), height(h)
     {
-        const VkDevice d = device().device();
+        const VkDevice d = on.device();
         std::vector<VkAttachmentDescription> attachments;
         std::vector<VkAttachmentReference> refs;
         std::vector<VkImageView> views;
         for (VkFormat f : formats)
         {
-            colors.push_back(gpu::create_image(device(), {w, h, f, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT}));
+            colors.push_back(gpu::create_image(on, {w, h, f, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT}));
             views.push_back(colors.back().view());
             refs.push_back({uint32_t(attachments.size()), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL});
             attachments.push_back(
                 attachment(f, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_ATTACHMENT_STORE_OP_STORE));
         }
-        depth = gpu::create_image(device(),
-                                  {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+        depth =
+            gpu::create_image(on, {w, h, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
         views.push_back(depth.view());
         const VkAttachmentReference depth_ref{uint32_t(attachments.size()),
                                               VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
@@ -58,6 +64,14 @@ struct EnginePass
         dependency.dstStageMask = VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT;
         dependency.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
         dependency.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+        if (attachments_only)
+        {
+            dependency.srcStageMask = dependency.dstStageMask =
+                VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+            dependency.srcAccessMask = dependency.dstAccessMask =
+                VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+        }
         VkRenderPassCreateInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
         rp.attachmentCount = uint32_t(attachments.size());
         rp.pAttachments = attachments.data();
@@ -103,7 +117,7 @@ struct EnginePass
     // Colour attachment `i` read back as floats (an RGBA32F attachment; after the pass has ended).
     std::vector<float> read_color(size_t i = 0) const
     {
-        const auto bytes = gpu::read_image(device(), colors.at(i), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+        const auto bytes = gpu::read_image(*dev, colors.at(i), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
         std::vector<float> out(bytes.size() / sizeof(float));
         std::memcpy(out.data(), bytes.data(), bytes.size());
         return out;

@@ -10,6 +10,7 @@
 #include "../gpu_fixture.h"
 #include "../host_vulkan.h"
 #include "../vulkan_calls.h"
+#include "engine_pass.h"
 #include "sphere_asset.h"
 #include "table_level.h"
 
@@ -29,8 +30,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <vector>
 
 namespace
@@ -39,6 +42,36 @@ namespace
 class EnginePath : public hemi::test::GpuTest
 {
 };
+
+// An engine's own render target (tests/render/engine_pass.h): colour and aux RGBA32F, D32 depth, and a render
+// pass whose external dependency orders its attachments only. hemi's OffscreenTarget depends on all earlier
+// commands' writes, which would order the transfers before the draws by itself: a barrier the engine forgot
+// would go unseen by synchronisation validation there.
+std::unique_ptr<hemi::test::EnginePass> engine_target(const hemi::gpu::Device& dev, uint32_t w, uint32_t h)
+{
+    return std::make_unique<hemi::test::EnginePass>(
+        w, h, std::vector<VkFormat>{VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT}, dev, true);
+}
+
+hemi::render::RenderTargetDesc target_desc(const hemi::test::EnginePass& pass)
+{
+    hemi::render::RenderTargetDesc d;
+    d.render_pass = pass.render_pass;
+    d.color_attachments = 2;
+    d.aux_output = true;
+    return d;
+}
+
+constexpr float kBlack[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+
+// Frame `frame`'s lighting: one directional light as SH9, turning a little each frame.
+void frame_light(uint32_t frame, std::vector<glm::vec3>& light)
+{
+    float y[9];
+    hemi::math::sh_eval(3, glm::normalize(glm::vec3(0.3f * float(frame), -1.0f, 1.0f)), y);
+    for (int i = 0; i < 9; ++i)
+        light[i] = glm::vec3(y[i]);
+}
 
 hemi::io::PrtAsset sphere_asset()
 {
@@ -130,10 +163,7 @@ TEST_F(EnginePath, NoLibraryCallSubmitsOrWaits)
             render::FrameData data;
             data.view_projection = view;
             frame_set.write(slot, data);
-            float y[9];
-            math::sh_eval(3, glm::normalize(glm::vec3(0.3f * float(frame), -1.0f, 1.0f)), y);
-            for (int i = 0; i < 9; ++i)
-                light[i] = glm::vec3(y[i]);
+            frame_light(frame, light);
             for (uint32_t i = 0; i < probes.instances(); ++i)
                 probes.write_lighting(i, light, slot);
             begin();
@@ -267,4 +297,360 @@ TEST_F(EnginePath, ASortedFrameOfTenThousandDrawsBindsEachMaterialTypeOnce)
                       EXPECT_EQ(calls.pipeline_binds, uint64_t(kObjects) * kPrimitives);
                       target.end(cmd);
                   });
+}
+
+// Issue 42, "synchronisation declared, not recorded": an engine's steady frame of 1,000 probe-lit objects and
+// 16 PRT objects (8 models of 2 instances) relit every frame, 2 frames in flight, each with its own command
+// buffer, fence and target. hemi writes the per-frame lighting through mapped memory and records only
+// dispatches and draws: 0 barriers and 0 vkCmdUpdateBuffer of its own per frame (counted through the entry
+// points hemi was given). The engine places the barriers itself from what hemi declares (the transfers'
+// AccessLists and PrtModel::draw_accesses), as buffer barriers over exactly the declared ranges, with its own
+// loader's vkCmdPipelineBarrier; the engine's instance runs synchronisation validation and any message fails
+// the test. One descriptor pool (the MaterialSystem's) serves every material, probe buffer, frame set and all
+// 8 transfer passes.
+// The engine draws into its own target (EngineTarget: subpass dependencies on the attachments only), so
+// nothing but its barriers orders the transfers before the draws: in a last frame its graph leaves out model
+// 0's declared coefficient write, and synchronisation validation reports the read-after-write hazard of that
+// model's vertex shaders. A final frame records the transfers with hemi's own barriers instead
+// (render::record_barrier, 2 per model) and none of the engine's: silent too.
+// Fails when a transfer pass updates its lighting with vkCmdUpdateBuffer or records its own barrier (the
+// frame without the declared write then passes validation), or makes a descriptor pool of its own.
+TEST_F(EnginePath, ASteadyFrameRecordsNoBarrierAndTheEnginesBarriersFromDeclaredAccessesAreClean)
+{
+    using namespace hemi;
+    test::HostVulkan host(true);
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    test::VulkanCalls& calls = test::vulkan_calls();
+    constexpr uint32_t kW = 48, kH = 48, kInFlight = 2, kProbeObjects = 1000, kModels = 8, kPerModel = 2,
+                       kFrames = 6;
+
+    VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pi.queueFamilyIndex = host.family;
+    VkCommandPool pool = VK_NULL_HANDLE;
+    ASSERT_EQ(vkCreateCommandPool(host.vk_device, &pi, nullptr, &pool), VK_SUCCESS);
+    VkCommandBuffer cmds[kInFlight];
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = pool;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = kInFlight;
+    ASSERT_EQ(vkAllocateCommandBuffers(host.vk_device, &ai, cmds), VK_SUCCESS);
+    VkFence fences[kInFlight];
+    for (VkFence& f : fences)
+    {
+        VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        fi.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+        ASSERT_EQ(vkCreateFence(host.vk_device, &fi, nullptr, &f), VK_SUCCESS);
+    }
+    // The engine's render graph, reduced to what this frame needs: a buffer barrier for each declared access
+    // that follows a declared write to the same bytes (or a declared read, before a write), over their common
+    // range, recorded with the engine's own entry point.
+    auto engine_barriers = [&](VkCommandBuffer cmd, std::span<const render::BufferAccess> before,
+                               std::span<const render::BufferAccess> after)
+    {
+        std::vector<VkBufferMemoryBarrier> barriers;
+        VkPipelineStageFlags src = 0, dst = 0;
+        for (const render::BufferAccess& a : before)
+            for (const render::BufferAccess& b : after)
+                if ((a.writes() || b.writes()) && a.overlaps(b))
+                {
+                    VkBufferMemoryBarrier m{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
+                    m.srcAccessMask = a.writes() ? a.access : 0;
+                    m.dstAccessMask = b.access;
+                    m.srcQueueFamilyIndex = m.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+                    m.buffer = b.buffer;
+                    m.offset = std::max(a.offset, b.offset);
+                    m.size = std::min(a.offset + a.size, b.offset + b.size) - m.offset;
+                    barriers.push_back(m);
+                    src |= a.stages;
+                    dst |= b.stages;
+                }
+        if (!barriers.empty())
+            vkCmdPipelineBarrier(cmd, src, dst, 0, 0, nullptr, uint32_t(barriers.size()), barriers.data(), 0,
+                                 nullptr);
+        return barriers.size();
+    };
+
+    {
+        test::created_objects().clear();
+        gpu::Device dev(host.external(test::counting_proc_addr));
+        std::vector<std::unique_ptr<test::EnginePass>> targets;
+        for (uint32_t i = 0; i < kInFlight; ++i)
+            targets.push_back(engine_target(dev, kW, kH));
+        render::MaterialSystem system(dev, target_desc(*targets[0]));
+        gpu::UploadBatch upload(dev);
+        std::vector<std::unique_ptr<render::PrtModel>> models;
+        {
+            const io::PrtAsset asset = test::unshadowed_sphere_asset(16, 8, "gs", 9);
+            render::PrtModelDesc desc;
+            desc.technique = "gs";
+            desc.instances = kPerModel;
+            desc.frames_in_flight = kInFlight;
+            for (uint32_t m = 0; m < kModels; ++m)
+                models.push_back(std::make_unique<render::PrtModel>(system, asset, desc, upload));
+        }
+        const io::Mesh probe_mesh = io::make_uv_sphere(0.05f, 8, 4);
+        render::ProbeObject probes(system, probe_mesh, {}, std::vector<io::Material>(1), {}, kProbeObjects,
+                                   upload, kInFlight);
+        render::FrameSet frame_set(system, kInFlight);
+        size_t pools = 0;
+        for (const auto& [handle, type] : test::created_objects().created)
+            pools += type == VK_OBJECT_TYPE_DESCRIPTOR_POOL ? 1 : 0;
+        EXPECT_EQ(pools, 1u)
+            << "descriptor pools made for 8 PRT models, 1,000 probe-lit objects and a frame set";
+        EXPECT_EQ(system.descriptors().pool_count(), 1u);
+        {
+            VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+            bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+            ASSERT_EQ(vkWaitForFences(host.vk_device, 1, &fences[0], VK_TRUE, UINT64_MAX), VK_SUCCESS);
+            ASSERT_EQ(vkResetFences(host.vk_device, 1, &fences[0]), VK_SUCCESS);
+            ASSERT_EQ(vkBeginCommandBuffer(cmds[0], &bi), VK_SUCCESS);
+            upload.record(cmds[0]);
+            ASSERT_EQ(vkEndCommandBuffer(cmds[0]), VK_SUCCESS);
+            VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+            si.commandBufferCount = 1;
+            si.pCommandBuffers = &cmds[0];
+            ASSERT_EQ(vkQueueSubmit(host.queue, 1, &si, fences[0]), VK_SUCCESS);
+        }
+
+        const glm::mat4 view = math::look_at_projection(glm::vec3(0, -6, 2), glm::vec3(0), 50.0f, 1.0f);
+        std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+        render::DrawQueue queue;
+        render::AccessList transfer_accesses[kModels], draw_accesses[kModels]; // one per recording call
+        // Frame kFrames: the engine's graph leaves out model 0's declared coefficient write, so no barrier
+        // orders its transfer before its draws. Frame kFrames + 1: hemi's own barriers (record_transfer
+        // without a list, render::record_barrier) and none of the engine's.
+        for (uint32_t frame = 0; frame <= kFrames + 1; ++frame)
+        {
+            const bool drop = frame == kFrames, own = frame == kFrames + 1;
+            const uint32_t slot = frame % kInFlight;
+            VkCommandBuffer cmd = cmds[slot];
+            // The engine's fence: the GPU is done with the frame that last used this slot.
+            ASSERT_EQ(vkWaitForFences(host.vk_device, 1, &fences[slot], VK_TRUE, UINT64_MAX), VK_SUCCESS);
+            ASSERT_EQ(vkResetFences(host.vk_device, 1, &fences[slot]), VK_SUCCESS);
+            ASSERT_EQ(vkResetCommandBuffer(cmd, 0), VK_SUCCESS);
+            calls.reset();
+            render::FrameData data;
+            data.view_projection = view;
+            frame_set.write(slot, data);
+            frame_light(frame, light);
+            for (uint32_t i = 0; i < kProbeObjects; ++i)
+                probes.write_lighting(i, light, slot);
+            VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+            bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+            ASSERT_EQ(vkBeginCommandBuffer(cmd, &bi), VK_SUCCESS);
+            size_t engine_barrier_count = 0;
+            for (uint32_t m = 0; m < kModels; ++m)
+            {
+                const render::PrtInstance objects[kPerModel] = {
+                    {glm::translate(glm::mat4(1.0f), glm::vec3(float(m) - 3.5f, 0.0f, 0.5f)), light, 0.0f},
+                    {glm::translate(glm::mat4(1.0f), glm::vec3(float(m) - 3.5f, 0.0f, -0.5f)), light, 30.0f}};
+                transfer_accesses[m].clear();
+                draw_accesses[m].clear();
+                if (own)
+                {
+                    models[m]->record_transfer(cmd, objects, slot);
+                    continue;
+                }
+                models[m]->record_transfer(cmd, objects, slot, transfer_accesses[m]);
+                models[m]->draw_accesses(slot, draw_accesses[m]);
+                EXPECT_EQ(transfer_accesses[m].size(), 3u) << "matrices, lighting, coefficients";
+            }
+            // Every model's coefficients of this slot: written by the compute stage, then read by the vertex
+            // shaders.
+            for (uint32_t m = drop ? 1 : 0; m < kModels; ++m)
+                engine_barrier_count +=
+                    engine_barriers(cmd, transfer_accesses[m].accesses(), draw_accesses[m].accesses());
+            EXPECT_EQ(engine_barrier_count, own ? 0 : drop ? kModels - 1 : kModels);
+            queue.clear();
+            for (uint32_t m = 0; m < kModels; ++m)
+                for (uint32_t i = 0; i < kPerModel; ++i)
+                    models[m]->enqueue(
+                        queue, frame_set.set(slot), i,
+                        glm::translate(glm::mat4(1.0f), glm::vec3(float(m) - 3.5f, 0.0f, i ? -0.5f : 0.5f)),
+                        0, slot);
+            for (uint32_t i = 0; i < kProbeObjects; ++i)
+                probes.enqueue(queue, frame_set.set(slot), i,
+                               glm::translate(glm::mat4(1.0f), glm::vec3(float(i % 40) * 0.2f - 4.0f, -1.0f,
+                                                                         float(i / 40) * 0.2f - 2.5f)),
+                               slot);
+            queue.sort();
+            targets[slot]->begin(cmd, kBlack);
+            const render::DrawStats stats = queue.record(cmd);
+            vkCmdEndRenderPass(cmd);
+            ASSERT_EQ(vkEndCommandBuffer(cmd), VK_SUCCESS);
+            EXPECT_EQ(calls.pipeline_barriers, own ? 2u * kModels : 0u)
+                << "frame " << frame << ": barriers hemi recorded";
+            EXPECT_EQ(calls.buffer_updates, 0u) << "frame " << frame << ": vkCmdUpdateBuffer hemi recorded";
+            EXPECT_EQ(calls.dispatches, uint64_t(kModels) * kPerModel) << "frame " << frame;
+            EXPECT_EQ(calls.queue_work(), 0u);
+            EXPECT_EQ(stats.draws, uint64_t(kModels) * kPerModel + kProbeObjects);
+            VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+            si.commandBufferCount = 1;
+            si.pCommandBuffers = &cmd;
+            ASSERT_EQ(vkQueueSubmit(host.queue, 1, &si, fences[slot]), VK_SUCCESS);
+            if (drop)
+            {
+                size_t hazards = 0;
+                for (const std::string& m : test::validation_log().take())
+                    hazards += m.find("SYNC-HAZARD-READ-AFTER-WRITE") != std::string::npos ? 1 : 0;
+                EXPECT_GT(hazards, 0u) << "a frame without model 0's declared write passed synchronisation "
+                                          "validation";
+            }
+            if (frame + 1 == kFrames)
+            {
+                EXPECT_TRUE(test::validation_log().take().empty())
+                    << "the engine's barriers from hemi's declared accesses";
+                ASSERT_EQ(vkWaitForFences(host.vk_device, 1, &fences[slot], VK_TRUE, UINT64_MAX), VK_SUCCESS);
+                const std::vector<float> aux = targets[slot]->read_color(1);
+                size_t covered = 0;
+                for (size_t p = 0; p < size_t(kW) * kH; ++p)
+                    covered += aux[p * 4 + 3] == 1.0f ? 1 : 0;
+                EXPECT_GT(covered, size_t(kW) * kH / 10);
+            }
+        }
+        ASSERT_EQ(vkWaitForFences(host.vk_device, kInFlight, fences, VK_TRUE, UINT64_MAX), VK_SUCCESS);
+        EXPECT_TRUE(test::validation_log().take().empty()) << "the frame with hemi's own barriers";
+        ASSERT_EQ(vkDeviceWaitIdle(host.vk_device), VK_SUCCESS);
+    }
+    for (VkFence f : fences)
+        vkDestroyFence(host.vk_device, f, nullptr);
+    vkDestroyCommandPool(host.vk_device, pool, nullptr);
+}
+
+// Issue 42: the PRT transfer writes its coefficients into a range of the engine's own buffer, which the
+// engine's vertex shader reads as one more vertex stream (PrtModel::coefficient_stream), and the barrier
+// between the two is the engine's, made from what hemi declares (the transfer's AccessList, the stream's
+// draw_accesses). Under synchronisation validation: with every declared access the frame is silent; with the
+// transfer's declared coefficient write left out of the engine's graph (so no barrier), the layer reports the
+// read-after-write hazard on the engine's buffer. The coefficients hemi writes at the range's offset equal
+// those a model of hemi's own buffer writes, and the engine's stream draws the sphere.
+TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccessesMake)
+{
+    using namespace hemi;
+    test::HostVulkan host(true);
+    ASSERT_NE(host.queue, VK_NULL_HANDLE);
+    gpu::Device dev(host.external());
+    constexpr uint32_t kW = 48, kH = 48;
+    const std::unique_ptr<test::EnginePass> target = engine_target(dev, kW, kH);
+    render::MaterialSystem system(dev, target_desc(*target));
+    const io::PrtAsset asset = test::unshadowed_sphere_asset(24, 12, "h4", 4);
+    render::PrtModelDesc desc;
+    desc.technique = "h4";
+    desc.instances = 2;
+    desc.frames_in_flight = 2;
+    // The engine's buffer: its own data first, hemi's coefficients from an aligned offset past them.
+    const VkDeviceSize align =
+        std::lcm<VkDeviceSize>(16, std::max<VkDeviceSize>(1, dev.limits().minTexelBufferOffsetAlignment));
+    const VkDeviceSize offset = 3 * align, bytes = render::PrtModel::coefficient_bytes(dev, asset, desc);
+    const gpu::Buffer engine_buffer =
+        gpu::create_buffer(dev, {offset + bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                                                     VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+                                                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer positions = gpu::create_buffer(
+        dev, {asset.mesh.positions.size() * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    gpu::write_buffer(dev, positions, asset.mesh.positions.data(), positions.size());
+    const gpu::Buffer indices =
+        gpu::create_buffer(dev, {asset.mesh.indices.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
+    gpu::write_buffer(dev, indices, asset.mesh.indices.data(), indices.size());
+    gpu::UploadBatch upload(dev);
+    render::PrtModelDesc own_desc = desc;
+    render::PrtModel own(system, asset, own_desc, upload);
+    desc.coefficient_output = {engine_buffer.handle(), offset, bytes};
+    render::PrtModel model(system, asset, desc, upload);
+    upload.submit_and_wait();
+    EXPECT_EQ(model.coefficient_range(1).buffer, engine_buffer.handle());
+    EXPECT_EQ(model.coefficient_range(1).offset, offset + bytes / 2);
+    EXPECT_EQ(model.coefficient_stride(), 4u * 16u);
+
+    gpu::GraphicsProgramDesc pd;
+    pd.vertex_shader = test::test_spirv("engine_stream.vert");
+    pd.fragment_shader = test::test_spirv("engine_stream.frag");
+    pd.push_constant_size = sizeof(glm::mat4);
+    pd.vertex_bindings = {{0, sizeof(glm::vec3), VK_VERTEX_INPUT_RATE_VERTEX},
+                          {1, model.coefficient_stride(), VK_VERTEX_INPUT_RATE_VERTEX}};
+    pd.vertex_attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
+    for (uint32_t k = 0; k < 4; ++k)
+        pd.vertex_attributes.push_back({1 + k, 1, VK_FORMAT_R32G32B32A32_SFLOAT, 16 * k});
+    pd.render_pass = target->render_pass;
+    pd.color_attachments = 2;
+    pd.cull_mode = VK_CULL_MODE_NONE;
+    const gpu::Program program = gpu::create_graphics_program(dev, pd);
+    const glm::mat4 view_projection =
+        math::look_at_projection(glm::vec3(0, -4, 0), glm::vec3(0), 40.0f, 1.0f);
+
+    std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+    light[0] = glm::vec3(1.0f, 0.5f, 0.25f);
+    light[2] = glm::vec3(0.5f);
+    const render::PrtInstance objects[2] = {{glm::mat4(1.0f), light, 0.0f}, {glm::mat4(1.0f), light, 90.0f}};
+    // One frame of the engine's, into slot 1 (instance 1 drawn from its stream), its graph's barrier made
+    // from the declared accesses, all of them or all but the coefficient write.
+    auto frame = [&](bool drop_the_write)
+    {
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          render::AccessList transfer, draws;
+                          model.record_transfer(cmd, objects, 1, transfer);
+                          model.draw_accesses(1, draws, true);
+                          VkPipelineStageFlags src = 0, dst = 0;
+                          std::vector<VkBufferMemoryBarrier> barriers;
+                          for (const render::BufferAccess& a : transfer.accesses())
+                              for (const render::BufferAccess& b : draws.accesses())
+                              {
+                                  if (drop_the_write && a.writes())
+                                      continue;
+                                  if (!(a.writes() || b.writes()) || !a.overlaps(b))
+                                      continue;
+                                  VkBufferMemoryBarrier m{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
+                                  m.srcAccessMask = a.access;
+                                  m.dstAccessMask = b.access;
+                                  m.srcQueueFamilyIndex = m.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+                                  m.buffer = b.buffer;
+                                  m.offset = b.offset;
+                                  m.size = b.size;
+                                  barriers.push_back(m);
+                                  src |= a.stages;
+                                  dst |= b.stages;
+                              }
+                          EXPECT_EQ(barriers.size(), drop_the_write ? 0u : 1u);
+                          if (!barriers.empty())
+                              vkCmdPipelineBarrier(cmd, src, dst, 0, 0, nullptr, uint32_t(barriers.size()),
+                                                   barriers.data(), 0, nullptr);
+                          target->begin(cmd, kBlack);
+                          vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
+                          vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0,
+                                             sizeof view_projection, &view_projection);
+                          const gpu::BufferRange stream = model.coefficient_stream(1, 1);
+                          const VkBuffer buffers[2] = {positions.handle(), stream.buffer};
+                          const VkDeviceSize offsets[2] = {0, stream.offset};
+                          vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
+                          vkCmdBindIndexBuffer(cmd, indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+                          vkCmdDrawIndexed(cmd, uint32_t(asset.mesh.indices.size()), 1, 0, 0, 0);
+                          vkCmdEndRenderPass(cmd);
+                      });
+    };
+    frame(false);
+    EXPECT_TRUE(test::validation_log().take().empty()) << "the engine's barriers from hemi's accesses";
+    const std::vector<float> color = target->read_color(0);
+    frame(true);
+    size_t hazards = 0;
+    for (const std::string& m : test::validation_log().take())
+        hazards += m.find("SYNC-HAZARD-READ-AFTER-WRITE") != std::string::npos ? 1 : 0;
+    EXPECT_GT(hazards, 0u) << "without the declared write's barrier, synchronisation validation is silent";
+
+    // The engine's stream drew the sphere, lit.
+    size_t lit = 0;
+    for (size_t p = 0; p < size_t(kW) * kH; ++p)
+        lit += color[p * 4 + 3] == 1.0f && color[p * 4] > 0.01f ? 1 : 0;
+    EXPECT_GT(lit, size_t(kW) * kH / 8);
+    // The same coefficients as a model writing into hemi's own buffer, at the engine's offset.
+    gpu::one_shot(dev, [&](VkCommandBuffer cmd) { own.record_transfer(cmd, objects, 1); });
+    const gpu::BufferRange mine = model.coefficient_range(1), hemis = own.coefficient_range(1);
+    ASSERT_EQ(mine.size, hemis.size);
+    std::vector<float> a(mine.size / 4), b(hemis.size / 4);
+    gpu::read_buffer(dev, mine, a.data());
+    gpu::read_buffer(dev, hemis, b.data());
+    EXPECT_EQ(a, b);
+    EXPECT_GT(std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]), 0.0f);
 }

@@ -2,9 +2,10 @@
 // async compute would: the transfer pass of frame k runs one frame ahead, in the same submission as the
 // draws of frame k - 1, and the CPU writes frame k's view (FrameSet::write) while frames k - 1 and k - 2 are
 // still on the GPU. The engine's instance runs the validation layer with synchronisation validation; any
-// message fails the test. (Debian's layer, 1.3.239, tracks the transfer pass's storage-texel writes but not
-// a vertex shader's uniform-texel reads: without PrtModel's barrier it stays silent, checked by hand. The
-// image check is what catches a frame drawn from the wrong coefficients.)
+// message fails the test. (The frames draw into hemi's OffscreenTarget, whose render pass depends on every
+// earlier write, so within a submission that dependency alone orders the transfer before the draws; the
+// image check is what catches a frame drawn from the wrong coefficients. tests/render/engine_path_test.cpp
+// draws into an engine's own render pass, where a missing barrier is a hazard the layer reports.)
 //
 // The check, for every frame: an unshadowed SH9 sphere lit by one directional light of direction d_k (SH
 // coefficients y_lm(d_k)), which turns by 50 degrees a frame. Each covered pixel's exit radiance (albedo 1,

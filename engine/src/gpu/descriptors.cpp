@@ -10,10 +10,10 @@ namespace hemi::gpu
 {
 namespace
 {
-constexpr VkDescriptorType kTypes[] = {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                                       VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER};
+constexpr VkDescriptorType kTypes[] = {
+    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,       VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC,
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,       VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+    VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER};
 constexpr size_t kTypeCount = sizeof kTypes / sizeof kTypes[0];
 } // namespace
 

@@ -54,13 +54,20 @@ void write_buffer(const Device& device, const Buffer& buffer, const void* data, 
         std::memcpy(static_cast<std::byte*>(buffer.mapped()) + offset, data, size);
         return;
     }
-    Buffer staging = create_buffer(device, {size, 0, MemoryUsage::Upload});
-    std::memcpy(staging.mapped(), data, size);
+    write_buffer(device, BufferRange{buffer, offset, size}, data);
+}
+
+void write_buffer(const Device& device, const BufferRange& range, const void* data)
+{
+    if (range.size == 0)
+        return;
+    Buffer staging = create_buffer(device, {range.size, 0, MemoryUsage::Upload});
+    std::memcpy(staging.mapped(), data, range.size);
     one_shot(device,
              [&](VkCommandBuffer cmd)
              {
-                 VkBufferCopy region{0, offset, size};
-                 vkCmdCopyBuffer(cmd, staging, buffer, 1, &region);
+                 VkBufferCopy region{0, range.offset, range.size};
+                 vkCmdCopyBuffer(cmd, staging, range.buffer, 1, &region);
              });
 }
 
@@ -75,16 +82,23 @@ void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDevice
         std::memcpy(out, static_cast<const std::byte*>(buffer.mapped()) + offset, size);
         return;
     }
-    Buffer staging = create_buffer(device, {size, 0, MemoryUsage::Readback});
+    read_buffer(device, BufferRange{buffer, offset, size}, out);
+}
+
+void read_buffer(const Device& device, const BufferRange& range, void* out)
+{
+    if (range.size == 0)
+        return;
+    Buffer staging = create_buffer(device, {range.size, 0, MemoryUsage::Readback});
     one_shot(device,
              [&](VkCommandBuffer cmd)
              {
-                 VkBufferCopy region{offset, 0, size};
-                 vkCmdCopyBuffer(cmd, buffer, staging, 1, &region);
+                 VkBufferCopy region{range.offset, 0, range.size};
+                 vkCmdCopyBuffer(cmd, range.buffer, staging, 1, &region);
                  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                                 VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
              });
-    std::memcpy(out, staging.mapped(), size);
+    std::memcpy(out, staging.mapped(), range.size);
 }
 
 uint32_t format_size(VkFormat format)
@@ -251,8 +265,8 @@ Sampler create_sampler(const Device& device, const SamplerDesc& desc)
     return Sampler(device.device(), sampler);
 }
 
-BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format,
-                              VkDeviceSize offset, VkDeviceSize range)
+BufferView create_buffer_view(const Device& device, VkBuffer buffer, VkFormat format, VkDeviceSize offset,
+                              VkDeviceSize range)
 {
     VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
     info.buffer = buffer;

@@ -1,8 +1,8 @@
 #pragma once
 // One growable allocator of descriptor sets shared by many objects (every material instance, coefficient
-// source, frame set and environment made with one render::MaterialSystem): pools of a fixed capacity,
-// another pool only when those are full, and sets freed back to their pool when their owner goes. A thousand
-// materials and a thousand probe-lit objects take two pools, not two thousand.
+// source, PRT transfer pass, frame set and environment made with one render::MaterialSystem): pools of a
+// fixed capacity, another pool only when those are full, and sets freed back to their pool when their owner
+// goes. A thousand materials and a thousand probe-lit objects take two pools, not two thousand.
 #include <hemi/gpu/pipeline.h>
 
 #include <vulkan/vulkan.h>
@@ -46,7 +46,8 @@ class DescriptorAllocator
 {
   public:
     // Each pool holds `sets_per_pool` sets and 4 x `sets_per_pool` descriptors of each type hemi's layouts
-    // use (uniform and storage buffers, combined image samplers, uniform and storage texel buffers). Pools
+    // use (uniform, dynamic uniform and storage buffers, combined image samplers, uniform and storage texel
+    // buffers). Pools
     // are made with FREE_DESCRIPTOR_SET so that sets go back one by one.
     explicit DescriptorAllocator(const Device& device, uint32_t sets_per_pool = 1024);
     // Every set it gave out must be gone (the objects holding them are destroyed first).

@@ -59,14 +59,25 @@ class Buffer
     void* mapped_ = nullptr;
 };
 
+// A range of a buffer hemi may not own (an engine's): what hemi writes into or views by handle.
+struct BufferRange
+{
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceSize offset = 0, size = 0;
+};
+
 // Throws std::invalid_argument for size 0, VulkanError when allocation fails.
 Buffer create_buffer(const Device& device, const BufferDesc& desc);
 // Copies `size` bytes into the buffer at `offset`: memcpy when mapped, otherwise through a staging buffer.
 void write_buffer(const Device& device, const Buffer& buffer, const void* data, VkDeviceSize size,
                   VkDeviceSize offset = 0);
+// The same into a buffer hemi does not own (created with TRANSFER_DST usage): always a copy, waited for.
+void write_buffer(const Device& device, const BufferRange& range, const void* data);
 // Copies `size` bytes at `offset` out of the buffer (waits for the copy when not mapped).
 void read_buffer(const Device& device, const Buffer& buffer, void* out, VkDeviceSize size,
                  VkDeviceSize offset = 0);
+// The same from a buffer hemi does not own (created with TRANSFER_SRC usage): always a copy, waited for.
+void read_buffer(const Device& device, const BufferRange& range, void* out);
 
 struct ImageDesc
 {
@@ -126,7 +137,7 @@ struct SamplerDesc
 Sampler create_sampler(const Device& device, const SamplerDesc& desc = {});
 
 // A typed view of [offset, offset + range) of a buffer, for uniform/storage texel buffers.
-BufferView create_buffer_view(const Device& device, const Buffer& buffer, VkFormat format,
-                              VkDeviceSize offset, VkDeviceSize range);
+BufferView create_buffer_view(const Device& device, VkBuffer buffer, VkFormat format, VkDeviceSize offset,
+                              VkDeviceSize range);
 
 } // namespace hemi::gpu

@@ -45,20 +45,21 @@ void check_values(std::span<const float> values)
 }
 } // namespace
 
-VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients,
+VertexCoefficients::VertexCoefficients(const MaterialSystem& system, const gpu::BufferRange& coefficients,
                                        uint64_t texels)
 {
     const gpu::Device& device = system.device();
-    if (texels == 0 || texels * 16 > coefficients.size())
+    if (texels == 0 || texels * 16 > coefficients.size)
         throw std::invalid_argument("hemi: " + std::to_string(texels) +
-                                    " coefficient texels do not fit a buffer of " +
-                                    std::to_string(coefficients.size()) + " bytes");
+                                    " coefficient texels do not fit a buffer range of " +
+                                    std::to_string(coefficients.size) + " bytes");
     if (texels > device.limits().maxTexelBufferElements)
         throw std::invalid_argument("hemi: " + std::to_string(texels) +
                                     " coefficient texels exceed the device's "
                                     "maxTexelBufferElements (" +
                                     std::to_string(device.limits().maxTexelBufferElements) + ")");
-    view_ = gpu::create_buffer_view(device, coefficients, VK_FORMAT_R32G32B32A32_SFLOAT, 0, texels * 16);
+    view_ = gpu::create_buffer_view(device, coefficients.buffer, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                    coefficients.offset, texels * 16);
     gpu::DescriptorWrite write;
     write.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     write.texel_view = view_;

@@ -18,10 +18,19 @@ void CoefficientSource::run(std::span<const glm::vec3> lighting)
                   });
 }
 
+BufferAccess CoefficientSource::coefficient_access(uint32_t first, uint32_t count,
+                                                   VkPipelineStageFlags stages, VkAccessFlags access) const
+{
+    const VkDeviceSize stride = instance_stride() * 16;
+    const gpu::BufferRange range = coefficients();
+    return {range.buffer, range.offset + first * stride, count * stride, stages, access};
+}
+
 std::vector<float> CoefficientSource::read_coefficients() const
 {
     std::vector<float> out(size_t(vertex_count()) * k() * 4);
-    gpu::read_buffer(device(), coefficients(), out.data(), out.size() * sizeof(float));
+    const gpu::BufferRange range = coefficients();
+    gpu::read_buffer(device(), {range.buffer, range.offset, out.size() * sizeof(float)}, out.data());
     return out;
 }
 

@@ -28,16 +28,19 @@ struct CpcaTransferPass::Impl
         uint32_t cluster, first_invocation, invocations;
     };
     std::vector<Run> runs; // one dispatch per non-empty cluster
-    gpu::Buffer rows_buffer, lighting, projected, weights, slots, coefficients;
+    gpu::Buffer rows_buffer, lighting, projected, weights, slots;
+    CoefficientStore coefficients;
     gpu::BufferView coefficient_view, weight_view;
     gpu::Program project, reconstruct;
-    gpu::DescriptorPool pool;
+    std::vector<gpu::Binding> project_bindings, reconstruct_bindings;
+    PassDescriptors descriptors;
     std::vector<gpu::BufferView> instance_views;
-    std::vector<VkDescriptorSet> project_sets, reconstruct_sets; // one each per instance
+    std::vector<gpu::DescriptorSet> project_sets, reconstruct_sets; // one each per instance
 };
 
 CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& c, uint32_t instances,
-                                   gpu::UploadBatch* upload)
+                                   gpu::UploadBatch* upload, gpu::DescriptorAllocator* descriptors,
+                                   const gpu::BufferRange& output)
     : impl_(std::make_unique<Impl>())
 {
     auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size)
@@ -137,34 +140,28 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     s.projected =
         gpu::create_buffer(device, {s.projected_instance_bytes * instances,
                                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    s.lighting = gpu::create_buffer(
-        device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
-    s.coefficients =
-        gpu::create_buffer(device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
-                                                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.lighting = create_lighting_buffer(device, s.instances.lighting_stride, instances);
+    s.coefficients = coefficient_store(device, s.instances.coefficient_stride * 16 * instances, output);
 
     const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
-    const std::vector<gpu::Binding> project_bindings = {
+    s.project_bindings = {
         {HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
         {HEMI_CPCA_BINDING_LIGHTING, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, cs},
         {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
     };
-    const std::vector<gpu::Binding> reconstruct_bindings = {
+    s.reconstruct_bindings = {
         {HEMI_CPCA_BINDING_PROJECTED, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, cs},
         {HEMI_CPCA_BINDING_WEIGHTS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, cs},
         {HEMI_CPCA_BINDING_SLOTS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
         {HEMI_CPCA_BINDING_COEFFICIENTS, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, cs},
     };
     s.project = gpu::create_compute_program(
-        device, {gpu::embedded_spirv("cpca_project.comp"), project_bindings, sizeof(CpcaPush), {s.l}});
+        device, {gpu::embedded_spirv("cpca_project.comp"), s.project_bindings, sizeof(CpcaPush), {s.l}});
     s.reconstruct = gpu::create_compute_program(device, {gpu::embedded_spirv("cpca_reconstruct.comp"),
-                                                         reconstruct_bindings,
+                                                         s.reconstruct_bindings,
                                                          sizeof(CpcaPush),
                                                          {s.k, c.vectors}});
-    std::vector<gpu::Binding> all = project_bindings;
-    all.insert(all.end(), reconstruct_bindings.begin(), reconstruct_bindings.end());
-    s.pool = gpu::create_descriptor_pool(device, all, 2 * instances);
+    s.descriptors = pass_descriptors(device, descriptors, 2 * instances);
     auto buffer_write =
         [](uint32_t binding, VkDescriptorType type, VkBuffer buffer, VkDeviceSize offset, VkDeviceSize range)
     {
@@ -178,13 +175,13 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
     {
         const VkDeviceSize projected_base = i * s.projected_instance_bytes;
         const VkDeviceSize coefficient_base = i * s.instances.coefficient_stride * 16;
-        s.instance_views.push_back(gpu::create_buffer_view(device, s.coefficients,
-                                                           VK_FORMAT_R32G32B32A32_SFLOAT, coefficient_base,
-                                                           VkDeviceSize(s.n) * s.k * 16));
-        const VkDescriptorSet project_set =
-            gpu::allocate_descriptor_set(device, s.pool, s.project.set_layout);
-        const VkDescriptorSet reconstruct_set =
-            gpu::allocate_descriptor_set(device, s.pool, s.reconstruct.set_layout);
+        s.instance_views.push_back(gpu::create_buffer_view(
+            device, s.coefficients.range.buffer, VK_FORMAT_R32G32B32A32_SFLOAT,
+            s.coefficients.range.offset + coefficient_base, VkDeviceSize(s.n) * s.k * 16));
+        gpu::DescriptorSet project_set =
+            s.descriptors.allocator->allocate(s.project.set_layout, s.project_bindings);
+        gpu::DescriptorSet reconstruct_set =
+            s.descriptors.allocator->allocate(s.reconstruct.set_layout, s.reconstruct_bindings);
         gpu::DescriptorWrite project_writes[3] = {
             buffer_write(HEMI_CPCA_BINDING_ROWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, s.rows_buffer, 0,
                          VK_WHOLE_SIZE),
@@ -209,28 +206,40 @@ CpcaTransferPass::CpcaTransferPass(const gpu::Device& device, const CpcaMatrices
         reconstruct_writes[3].type = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
         reconstruct_writes[3].texel_view = s.instance_views.back();
         gpu::write_descriptors(device, reconstruct_set, reconstruct_writes);
-        s.project_sets.push_back(project_set);
-        s.reconstruct_sets.push_back(reconstruct_set);
+        s.project_sets.push_back(std::move(project_set));
+        s.reconstruct_sets.push_back(std::move(reconstruct_set));
     }
 }
 
 CpcaTransferPass::~CpcaTransferPass() = default;
 
 void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
-                              uint32_t first_instance)
+                              uint32_t first_instance, AccessList* accesses)
 {
     Impl& s = *impl_;
     const uint32_t count = lighting_instances(lighting, s.l, s.instances.count, first_instance);
     const uint32_t instances = first_instance + count;
-    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
+    write_lighting(s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
+    if (accesses)
+    {
+        for (const gpu::Buffer* b : {&s.rows_buffer, &s.weights, &s.slots})
+            accesses->add(
+                {b->handle(), 0, b->size(), VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+        accesses->add({s.lighting.handle(), first_instance * s.instances.lighting_stride,
+                       count * s.instances.lighting_stride, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_UNIFORM_READ_BIT});
+        accesses->add(coefficient_access(first_instance, count, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                         VK_ACCESS_SHADER_WRITE_BIT));
+    }
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.pipeline);
     const CpcaPush push{s.rows, 0, s.per_cluster, uint32_t(s.projected_stride / 16)};
     vkCmdPushConstants(cmd, s.project.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
     for (uint32_t i = first_instance; i < instances; ++i)
     {
         const uint32_t lighting_offset = uint32_t(i * s.instances.lighting_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1,
-                                &s.project_sets[i], 1, &lighting_offset);
+        const VkDescriptorSet set = s.project_sets[i];
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.project.layout, 0, 1, &set, 1,
+                                &lighting_offset);
         vkCmdDispatch(cmd, (s.rows + HEMI_TRANSFER_WORKGROUP_SIZE - 1) / HEMI_TRANSFER_WORKGROUP_SIZE, 1, 1);
     }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
@@ -240,8 +249,9 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
         for (const Impl::Run& run : s.runs)
         {
             const uint32_t offset = uint32_t(run.cluster * s.projected_stride);
-            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1,
-                                    &s.reconstruct_sets[i], 1, &offset);
+            const VkDescriptorSet set = s.reconstruct_sets[i];
+            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.reconstruct.layout, 0, 1, &set, 1,
+                                    &offset);
             const CpcaPush run_push{run.invocations, run.first_invocation, 0, 0};
             vkCmdPushConstants(cmd, s.reconstruct.layout, VK_SHADER_STAGE_ALL, 0, sizeof run_push, &run_push);
             vkCmdDispatch(cmd,
@@ -250,9 +260,14 @@ void CpcaTransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> li
         }
 }
 
-const gpu::Buffer& CpcaTransferPass::coefficients() const
+gpu::BufferRange CpcaTransferPass::coefficients() const
 {
-    return impl_->coefficients;
+    return impl_->coefficients.range;
+}
+
+void CpcaTransferPass::write_coefficients(std::span<const float> coefficients)
+{
+    detail::write_coefficients(*impl_->device, impl_->coefficients, coefficients, impl_->n, impl_->k);
 }
 uint32_t CpcaTransferPass::instances() const
 {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -84,36 +85,79 @@ uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uin
     return uint32_t(lighting.size() / l);
 }
 
-// The per-frame lighting update both passes start with: instance i's L coefficients at i * stride bytes.
-void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
-                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride,
-                            uint32_t first)
+void write_lighting(const gpu::Buffer& buffer, std::span<const glm::vec3> lighting, uint32_t l,
+                    VkDeviceSize stride, uint32_t first)
 {
+    auto* base = static_cast<std::byte*>(buffer.mapped());
     const size_t instances = lighting.size() / l;
-    std::vector<float> packed(instances * stride / 4, 0.0f);
     for (size_t i = 0; i < instances; ++i)
+    {
+        auto* p = reinterpret_cast<float*>(base + (first + i) * stride);
         for (uint32_t j = 0; j < l; ++j)
         {
-            float* p = &packed[i * stride / 4 + j * 4];
-            p[0] = lighting[i * l + j].x;
-            p[1] = lighting[i * l + j].y;
-            p[2] = lighting[i * l + j].z;
+            p[j * 4 + 0] = lighting[i * l + j].x;
+            p[j * 4 + 1] = lighting[i * l + j].y;
+            p[j * 4 + 2] = lighting[i * l + j].z;
+            p[j * 4 + 3] = 0.0f;
         }
-    // Earlier reads of the lighting (a previous frame's dispatch) finish before the update; the update
-    // finishes before this frame's dispatch reads it. Earlier reads of the coefficients (vertex shaders)
-    // finish before this dispatch overwrites them.
-    // ALL_COMMANDS as the source: valid on compute-only queues, and covers readers in any shader stage.
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-                        VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
-                        VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    // vkCmdUpdateBuffer takes at most 65,536 bytes per call.
-    const VkDeviceSize bytes = packed.size() * 4;
-    for (VkDeviceSize offset = 0; offset < bytes; offset += 65536)
-        vkCmdUpdateBuffer(cmd, buffer, first * stride + offset, std::min<VkDeviceSize>(65536, bytes - offset),
-                          reinterpret_cast<const std::byte*>(packed.data()) + offset);
-    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_UNIFORM_READ_BIT);
+    }
+}
+
+gpu::Buffer create_lighting_buffer(const gpu::Device& device, VkDeviceSize stride, uint32_t instances)
+{
+    gpu::Buffer buffer = gpu::create_buffer(
+        device, {stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUsage::Dynamic});
+    if (!buffer.mapped())
+        throw std::runtime_error("hemi: the PRT lighting buffer got memory that is not mapped "
+                                 "(a gpu::MemoryProvider must map MemoryUsage::Dynamic memory)");
+    std::memset(buffer.mapped(), 0, stride * instances);
+    device.set_name(VK_OBJECT_TYPE_BUFFER, buffer.handle(), "hemi PRT lighting");
+    return buffer;
+}
+
+CoefficientStore coefficient_store(const gpu::Device& device, VkDeviceSize bytes,
+                                   const gpu::BufferRange& output)
+{
+    CoefficientStore store;
+    if (output.buffer == VK_NULL_HANDLE)
+    {
+        store.own = gpu::create_buffer(device, {bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                                                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+        device.set_name(VK_OBJECT_TYPE_BUFFER, store.own.handle(), "hemi PRT coefficients");
+        store.range = {store.own.handle(), 0, bytes};
+        return store;
+    }
+    const uint64_t align =
+        std::lcm<uint64_t>(16, std::max<uint64_t>(1, device.limits().minTexelBufferOffsetAlignment));
+    if (output.size < bytes || output.offset % align != 0)
+        throw std::invalid_argument("hemi: the coefficient output range (" + std::to_string(output.size) +
+                                    " bytes at offset " + std::to_string(output.offset) + ") must hold " +
+                                    std::to_string(bytes) + " bytes at an offset that is a multiple of " +
+                                    std::to_string(align));
+    store.range = {output.buffer, output.offset, bytes};
+    return store;
+}
+
+void write_coefficients(const gpu::Device& device, const CoefficientStore& store, std::span<const float> data,
+                        uint32_t n, uint32_t k)
+{
+    if (data.size() != size_t(n) * k * 4)
+        throw std::invalid_argument("hemi: " + std::to_string(data.size()) + " coefficient floats for " +
+                                    std::to_string(n) + " vertices of K = " + std::to_string(k) +
+                                    " (expected N * K * 4)");
+    if (store.own.handle() != VK_NULL_HANDLE)
+        gpu::write_buffer(device, store.own, data.data(), data.size_bytes());
+    else
+        gpu::write_buffer(device, {store.range.buffer, store.range.offset, data.size_bytes()}, data.data());
+}
+
+PassDescriptors pass_descriptors(const gpu::Device& device, gpu::DescriptorAllocator* shared, uint32_t sets)
+{
+    PassDescriptors d;
+    if (!shared)
+        d.own = std::make_unique<gpu::DescriptorAllocator>(device, sets);
+    d.allocator = shared ? shared : d.own.get();
+    return d;
 }
 
 } // namespace hemi::render::detail

@@ -1,6 +1,7 @@
 #pragma once
 // Internal helpers the transfer passes share (not installed): lighting checks and uploads, instance layout,
 // CPCA validation.
+#include <hemi/gpu/descriptors.h>
 #include <hemi/gpu/device.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/render/passes/transfer_matrices.h>
@@ -10,6 +11,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <span>
 
 namespace hemi::render::detail
@@ -37,10 +39,35 @@ InstanceLayout instance_layout(const gpu::Device& device, uint32_t instances, ui
 // within the capacity from `first` on, or a value is not finite.
 uint32_t lighting_instances(std::span<const glm::vec3> lighting, uint32_t l, uint32_t capacity,
                             uint32_t first = 0);
-// The per-frame lighting update both passes start with: instance first + i's L coefficients at
-// (first + i) * stride bytes.
-void record_lighting_update(VkCommandBuffer cmd, const gpu::Buffer& buffer,
-                            std::span<const glm::vec3> lighting, uint32_t l, VkDeviceSize stride,
-                            uint32_t first = 0);
+// The per-frame lighting both passes read, written through `buffer`'s persistent mapping (no command):
+// instance first + i's L coefficients at (first + i) * stride bytes. The caller's frames in flight keep the
+// GPU off these bytes (access.h).
+void write_lighting(const gpu::Buffer& buffer, std::span<const glm::vec3> lighting, uint32_t l,
+                    VkDeviceSize stride, uint32_t first = 0);
+// The lighting buffer both passes make: host-visible, persistently mapped, `instances` slots of `stride`.
+gpu::Buffer create_lighting_buffer(const gpu::Device& device, VkDeviceSize stride, uint32_t instances);
+
+// Where a pass writes its coefficients (`bytes`: every instance's): a buffer of its own, or the caller's
+// range `output` (an engine's buffer, read as a vertex stream), checked for room and texel-view alignment.
+struct CoefficientStore
+{
+    gpu::Buffer own;
+    gpu::BufferRange range;
+};
+// The host path's write of instance 0's coefficients (CoefficientSource::write_coefficients).
+void write_coefficients(const gpu::Device& device, const CoefficientStore& store, std::span<const float> data,
+                        uint32_t n, uint32_t k);
+CoefficientStore coefficient_store(const gpu::Device& device, VkDeviceSize bytes,
+                                   const gpu::BufferRange& output);
+
+// Where a pass takes its descriptor sets from: the caller's allocator (a MaterialSystem's, which every pass
+// and material of it shares) or, without one, an allocator of its own sized for `sets`. Declare it before the
+// sets, which go back to it.
+struct PassDescriptors
+{
+    std::unique_ptr<gpu::DescriptorAllocator> own;
+    gpu::DescriptorAllocator* allocator = nullptr;
+};
+PassDescriptors pass_descriptors(const gpu::Device& device, gpu::DescriptorAllocator* shared, uint32_t sets);
 
 } // namespace hemi::render::detail

@@ -25,14 +25,15 @@ struct TransferPass::Impl
     InstanceLayout instances;
     gpu::Buffer matrices;
     gpu::Buffer lighting;
-    gpu::Buffer coefficients;
+    CoefficientStore coefficients;
     gpu::Program program;
-    gpu::DescriptorPool pool;
+    std::vector<gpu::Binding> bindings;
+    PassDescriptors descriptors;
     struct Segment
     {
         gpu::BufferView matrix_view;
         gpu::BufferView coefficient_view;
-        VkDescriptorSet set;
+        gpu::DescriptorSet set;
         uint32_t vertex_count;
     };
     std::vector<Segment> segments; // instance i's segment s at i * segment_count + s
@@ -52,7 +53,8 @@ static std::vector<gpu::Binding> transfer_bindings()
 }
 
 TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m, uint64_t max_view_texels,
-                           uint32_t instances, gpu::UploadBatch* upload)
+                           uint32_t instances, gpu::UploadBatch* upload,
+                           gpu::DescriptorAllocator* descriptors, const gpu::BufferRange& output)
     : impl_(std::make_unique<Impl>())
 {
     auto put = [&](const gpu::Buffer& b, const void* data, VkDeviceSize size)
@@ -67,19 +69,13 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     const VkDeviceSize matrix_bytes = m.data().size_bytes();
     s.matrices = gpu::create_buffer(device, {matrix_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
     put(s.matrices, m.data().data(), matrix_bytes);
-    s.lighting = gpu::create_buffer(
-        device, {s.instances.lighting_stride * instances, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
-    const VkDeviceSize coefficient_bytes = s.instances.coefficient_stride * 16 * instances;
-    s.coefficients =
-        gpu::create_buffer(device, {coefficient_bytes, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
-                                                           VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    s.lighting = create_lighting_buffer(device, s.instances.lighting_stride, instances);
+    s.coefficients = coefficient_store(device, s.instances.coefficient_stride * 16 * instances, output);
 
-    std::vector<gpu::Binding> bindings = transfer_bindings();
+    s.bindings = transfer_bindings();
     s.program = gpu::create_compute_program(
-        device, {gpu::embedded_spirv("prt_transfer.comp"), bindings, sizeof(TransferPush), {s.k, s.l}});
+        device, {gpu::embedded_spirv("prt_transfer.comp"), s.bindings, sizeof(TransferPush), {s.k, s.l}});
     device.set_name(VK_OBJECT_TYPE_BUFFER, s.matrices.handle(), "hemi PRT transfer matrices");
-    device.set_name(VK_OBJECT_TYPE_BUFFER, s.lighting.handle(), "hemi PRT lighting");
-    device.set_name(VK_OBJECT_TYPE_BUFFER, s.coefficients.handle(), "hemi PRT coefficients");
     device.set_name(VK_OBJECT_TYPE_PIPELINE, s.program.pipeline.get(), "hemi PRT transfer pass");
 
     // Segments: whole blocks, at most maxTexelBufferElements texels of matrices (and of coefficients) per
@@ -110,7 +106,7 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
     const uint32_t total_blocks = m.block_count();
     const uint32_t segment_count = uint32_t((total_blocks + blocks_per_segment - 1) / blocks_per_segment);
     s.segment_count = segment_count;
-    s.pool = gpu::create_descriptor_pool(device, bindings, segment_count * instances);
+    s.descriptors = pass_descriptors(device, descriptors, segment_count * instances);
     for (uint32_t instance = 0; instance < instances; ++instance)
         for (uint32_t i = 0; i < segment_count; ++i)
         {
@@ -123,10 +119,11 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
                 uint32_t(std::min<uint64_t>(blocks * HEMI_TRANSFER_BLOCK_VERTICES, s.n - first_vertex));
             seg.matrix_view = gpu::create_buffer_view(device, s.matrices, VK_FORMAT_R32G32B32A32_SFLOAT,
                                                       first_block * block_bytes, blocks * block_bytes);
-            seg.coefficient_view = gpu::create_buffer_view(
-                device, s.coefficients, VK_FORMAT_R32G32B32A32_SFLOAT,
-                instance_base + first_vertex * s.k * 16, uint64_t(seg.vertex_count) * s.k * 16);
-            seg.set = gpu::allocate_descriptor_set(device, s.pool, s.program.set_layout);
+            seg.coefficient_view =
+                gpu::create_buffer_view(device, s.coefficients.range.buffer, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                        s.coefficients.range.offset + instance_base + first_vertex * s.k * 16,
+                                        uint64_t(seg.vertex_count) * s.k * 16);
+            seg.set = s.descriptors.allocator->allocate(s.program.set_layout, s.bindings);
             gpu::DescriptorWrite writes[3];
             writes[0].binding = HEMI_TRANSFER_BINDING_MATRICES;
             writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
@@ -144,18 +141,30 @@ TransferPass::TransferPass(const gpu::Device& device, const TransferMatrices& m,
 
 TransferPass::~TransferPass() = default;
 
-void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting, uint32_t first_instance)
+void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting, uint32_t first_instance,
+                          AccessList* accesses)
 {
     Impl& s = *impl_;
     const uint32_t instances = lighting_instances(lighting, s.l, s.instances.count, first_instance);
-    record_lighting_update(cmd, s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
+    write_lighting(s.lighting, lighting, s.l, s.instances.lighting_stride, first_instance);
+    if (accesses)
+    {
+        accesses->add({s.matrices.handle(), 0, s.matrices.size(), VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_SHADER_READ_BIT});
+        accesses->add({s.lighting.handle(), first_instance * s.instances.lighting_stride,
+                       instances * s.instances.lighting_stride, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_UNIFORM_READ_BIT});
+        accesses->add(coefficient_access(first_instance, instances, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                         VK_ACCESS_SHADER_WRITE_BIT));
+    }
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.pipeline);
     for (uint32_t i = first_instance * s.segment_count; i < (first_instance + instances) * s.segment_count;
          ++i)
     {
         const Impl::Segment& seg = s.segments[i];
         const uint32_t offset = uint32_t((i / s.segment_count) * s.instances.lighting_stride);
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &seg.set, 1,
+        const VkDescriptorSet set = seg.set;
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s.program.layout, 0, 1, &set, 1,
                                 &offset);
         TransferPush push{seg.vertex_count};
         vkCmdPushConstants(cmd, s.program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
@@ -166,9 +175,14 @@ void TransferPass::record(VkCommandBuffer cmd, std::span<const glm::vec3> lighti
     }
 }
 
-const gpu::Buffer& TransferPass::coefficients() const
+gpu::BufferRange TransferPass::coefficients() const
 {
-    return impl_->coefficients;
+    return impl_->coefficients.range;
+}
+
+void TransferPass::write_coefficients(std::span<const float> coefficients)
+{
+    detail::write_coefficients(*impl_->device, impl_->coefficients, coefficients, impl_->n, impl_->k);
 }
 
 uint32_t TransferPass::vertex_count() const

@@ -1,4 +1,4 @@
-#include <hemi/gpu/commands.h>
+#include "../passes/pass_detail.h"
 #include <hemi/math/sh.h>
 #include <hemi/render/scene/prt_model.h>
 
@@ -39,7 +39,8 @@ std::vector<glm::vec3> object_lighting(std::span<const glm::vec3> world_lighting
 namespace
 {
 std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const io::PrtAsset& asset,
-                                               const PrtModelDesc& desc, gpu::UploadBatch& upload)
+                                               const PrtModelDesc& desc, gpu::UploadBatch& upload,
+                                               gpu::DescriptorAllocator& descriptors)
 {
     const io::PrtTechnique& t = asset.technique(desc.technique);
     const uint32_t n = uint32_t(asset.mesh.vertex_count());
@@ -52,13 +53,14 @@ std::unique_ptr<CoefficientSource> make_source(const gpu::Device& device, const 
         return std::make_unique<CpcaTransferPass>(
             device,
             CpcaMatrices{n, t.k, asset.l(), c.clusters, c.vectors, c.means, c.basis, c.cluster, c.weights},
-            desc.instances * desc.frames_in_flight, &upload);
+            desc.instances * desc.frames_in_flight, &upload, &descriptors, desc.coefficient_output);
     }
     if (t.matrices.empty())
         throw std::invalid_argument("hemi: the asset holds only CPCA data for '" + desc.technique +
                                     "' (use --cpca)");
     return std::make_unique<TransferPass>(device, TransferMatrices(n, t.k, asset.l(), t.matrices), 0,
-                                          desc.instances * desc.frames_in_flight, &upload);
+                                          desc.instances * desc.frames_in_flight, &upload, &descriptors,
+                                          desc.coefficient_output);
 }
 } // namespace
 
@@ -72,7 +74,7 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
     const gpu::Device& device = system.device();
     if (desc.instances == 0 || desc.frames_in_flight == 0)
         throw std::invalid_argument("hemi: a PRT model needs at least one instance and one frame in flight");
-    source_ = make_source(device, asset, desc, upload);
+    source_ = make_source(device, asset, desc, upload, system.descriptors());
     if (int(source_->k()) != basis_->size)
         throw std::invalid_argument("hemi: technique '" + desc.technique +
                                     "' has K = " + std::to_string(source_->k()) +
@@ -92,8 +94,7 @@ uint32_t PrtModel::first_instance(uint32_t frame) const
     return frame * instances_;
 }
 
-void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
-                               bool to_vertex_shaders)
+std::vector<glm::vec3> PrtModel::lighting_of(std::span<const PrtInstance> instances) const
 {
     std::vector<glm::vec3> lighting;
     lighting.reserve(instances.size() * l());
@@ -103,25 +104,85 @@ void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance>
             object_lighting(i.world_lighting, int(order_), i.model, i.rotate_degrees);
         lighting.insert(lighting.end(), o.begin(), o.end());
     }
-    record_transfer_object_space(cmd, lighting, frame, to_vertex_shaders);
+    return lighting;
+}
+
+void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
+                               AccessList& accesses)
+{
+    record_transfer_object_space(cmd, lighting_of(instances), frame, accesses);
+}
+
+void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
+                                            uint32_t frame, AccessList& accesses)
+{
+    if (lighting.size() > size_t(instances_) * l())
+        throw std::invalid_argument("hemi: lighting for " + std::to_string(lighting.size() / l()) +
+                                    " instances of a PRT model made for " + std::to_string(instances_));
+    source_->record(cmd, lighting, first_instance(frame), &accesses);
+}
+
+void PrtModel::record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
+                               bool to_vertex_shaders)
+{
+    record_transfer_object_space(cmd, lighting_of(instances), frame, to_vertex_shaders);
 }
 
 void PrtModel::record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
                                             uint32_t frame, bool to_vertex_shaders)
 {
-    if (lighting.size() > size_t(instances_) * l())
-        throw std::invalid_argument("hemi: lighting for " + std::to_string(lighting.size() / l()) +
-                                    " instances of a PRT model made for " + std::to_string(instances_));
-    source_->record(cmd, lighting, first_instance(frame));
+    // Earlier uses of the slot's coefficients (any stage of this queue) before the pass overwrites them.
+    const uint32_t first = first_instance(frame);
+    const BufferAccess earlier =
+        source_->coefficient_access(first, instances_, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                                    VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    const BufferAccess write = source_->coefficient_access(
+        first, instances_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+    record_barrier(cmd, {&earlier, 1}, {&write, 1});
+    AccessList accesses;
+    record_transfer_object_space(cmd, lighting, frame, accesses);
     if (to_vertex_shaders)
-        gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                            VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+        record_barrier(cmd, accesses.accesses(), draw_accesses(frame).accesses());
+}
+
+void PrtModel::draw_accesses(uint32_t frame, AccessList& accesses, bool as_stream) const
+{
+    accesses.add(source_->coefficient_access(
+        first_instance(frame), instances_,
+        as_stream ? VK_PIPELINE_STAGE_VERTEX_INPUT_BIT : VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+        as_stream ? VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT : VK_ACCESS_SHADER_READ_BIT));
+}
+
+VkDeviceSize PrtModel::coefficient_bytes(const gpu::Device& device, const io::PrtAsset& asset,
+                                         const PrtModelDesc& desc)
+{
+    const io::PrtTechnique& t = asset.technique(desc.technique);
+    const uint32_t instances = desc.instances * desc.frames_in_flight;
+    return detail::instance_layout(device, instances, uint32_t(asset.mesh.vertex_count()), t.k)
+               .coefficient_stride *
+           16 * instances;
+}
+
+gpu::BufferRange PrtModel::coefficient_stream(uint32_t instance, uint32_t frame) const
+{
+    if (instance >= instances_)
+        throw std::invalid_argument("hemi: instance " + std::to_string(instance) +
+                                    " of a PRT model made for " + std::to_string(instances_));
+    const BufferAccess a = source_->coefficient_access(first_instance(frame) + instance, 1, 0, 0);
+    return {a.buffer, a.offset, VkDeviceSize(source_->vertex_count()) * coefficient_stride()};
+}
+
+AccessList PrtModel::draw_accesses(uint32_t frame) const
+{
+    AccessList accesses;
+    draw_accesses(frame, accesses);
+    return accesses;
 }
 
 PrtModel::BufferRange PrtModel::coefficient_range(uint32_t frame) const
 {
-    const VkDeviceSize stride = source_->instance_stride() * 16;
-    return {source_->coefficients().handle(), first_instance(frame) * stride, instances_ * stride};
+    const BufferAccess a = source_->coefficient_access(first_instance(frame), instances_, 0, 0);
+    return {a.buffer, a.offset, a.size};
 }
 
 void PrtModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,

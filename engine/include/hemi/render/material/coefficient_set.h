@@ -25,9 +25,9 @@ namespace hemi::render
 class VertexCoefficients
 {
   public:
-    // Views `texels` RGBA32F texels of `coefficients` from its start (every instance of a multi-instance
+    // Views `texels` RGBA32F texels of `coefficients` from its offset (every instance of a multi-instance
     // source; draws pick theirs by shared::DrawPush::coefficient_offset). The buffer must outlive this.
-    VertexCoefficients(const MaterialSystem& system, const gpu::Buffer& coefficients, uint64_t texels);
+    VertexCoefficients(const MaterialSystem& system, const gpu::BufferRange& coefficients, uint64_t texels);
     VkDescriptorSet set() const { return set_.get(); }
 
   private:

@@ -8,8 +8,9 @@
 
 namespace hemi::gpu
 {
+class DescriptorAllocator;
 class UploadBatch;
-}
+} // namespace hemi::gpu
 
 namespace hemi::render
 {
@@ -22,16 +23,22 @@ class CpcaTransferPass : public CoefficientSource
   public:
     // Throws std::invalid_argument on inconsistent sizes, a cluster out of range or a non-finite value, and
     // std::runtime_error when the data exceed the device's storage-buffer range or texel-buffer size.
-    // `instances` and `upload` as for TransferPass.
+    // `instances`, `upload`, `descriptors` and `output` as for TransferPass.
     CpcaTransferPass(const gpu::Device& device, const CpcaMatrices& cpca, uint32_t instances = 1,
-                     gpu::UploadBatch* upload = nullptr);
+                     gpu::UploadBatch* upload = nullptr, gpu::DescriptorAllocator* descriptors = nullptr,
+                     const gpu::BufferRange& output = {});
     ~CpcaTransferPass();
     CpcaTransferPass(const CpcaTransferPass&) = delete;
     CpcaTransferPass& operator=(const CpcaTransferPass&) = delete;
 
-    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting,
-                uint32_t first_instance = 0) override;
-    const gpu::Buffer& coefficients() const override;
+    // The lighting through mapped memory, the projections, one barrier (compute writes of the projections to
+    // the reconstruction's uniform reads: a buffer no one else touches), the reconstruction. It reports five
+    // accesses by the compute shader stage: the cluster matrices, weights, slots and the instances' lighting
+    // read, their coefficients written.
+    void record(VkCommandBuffer cmd, std::span<const glm::vec3> lighting, uint32_t first_instance = 0,
+                AccessList* accesses = nullptr) override;
+    gpu::BufferRange coefficients() const override;
+    void write_coefficients(std::span<const float> coefficients) override;
     uint32_t vertex_count() const override;
     uint32_t k() const override;
     uint32_t l() const override;

@@ -12,6 +12,7 @@
 #include <hemi/gpu/upload.h>
 #include <hemi/io/prt_asset.h>
 #include <hemi/math/basis.h>
+#include <hemi/render/access.h>
 #include <hemi/render/material/coefficient_set.h>
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/material/material_system.h>
@@ -50,6 +51,12 @@ struct PrtModelDesc
     // so the transfer pass of frame N+1 never overwrites what frame N's draws read (the two overlap when the
     // transfer is recorded on a compute queue; on one queue its first barrier waits for earlier work).
     uint32_t frames_in_flight = 1;
+    // Where the transfer pass writes the coefficients: a range of the engine's own buffer, so that its vertex
+    // shaders read them as one more vertex stream (coefficient_stream()). It holds coefficient_bytes() from
+    // an offset aligned to 16 and minTexelBufferOffsetAlignment; the buffer has STORAGE_TEXEL_BUFFER usage
+    // (the pass writes it), UNIFORM_TEXEL_BUFFER when hemi's materials draw the model, VERTEX_BUFFER for the
+    // engine's stream. Null (the default): a buffer of hemi's own.
+    gpu::BufferRange coefficient_output;
 };
 
 // One object drawn from a model, per frame.
@@ -72,18 +79,32 @@ class PrtModel
              gpu::UploadBatch& upload);
     ~PrtModel();
 
-    // Outside a render pass: the lighting of instances.size() <= desc.instances objects rotated into their
-    // frames, the coefficient pass into frame slot `frame` (< desc.frames_in_flight), and the barrier to the
-    // vertex shaders that read its output. What it writes: the slot's lighting (transfer write, then compute
-    // uniform read, both its own) and the slot's coefficients (compute shader write; coefficient_range()),
-    // with a barrier of its own before (earlier reads of the buffers, any stage of this queue) and one after
-    // (to vertex shader reads).
+    // The engine's path, outside a render pass: the lighting of instances.size() <= desc.instances objects
+    // rotated into their frames and written through mapped memory into frame slot `frame` (< desc.
+    // frames_in_flight; the GPU must be done with the frame that last used the slot), and the coefficient
+    // pass recorded. hemi records no barrier (a CPCA model: one, inside its pass, access.h) and no buffer
+    // update: `accesses` receives what the pass reads and writes on the device (the slot's coefficients
+    // written by the compute stage, coefficient_range(frame)), and draw_accesses() what the slot's draws
+    // read. The engine orders the pass after earlier uses of the slot's coefficients and before the draws
+    // (its render graph's barriers, or a queue-family release to the graphics queue when the pass runs on
+    // a compute queue: docs/integration.md).
+    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
+                         AccessList& accesses);
+    // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
+    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
+                                      uint32_t frame, AccessList& accesses);
+    // What the draws of frame slot `frame` read on the device: the slot's coefficients, by the vertex shader
+    // stage (hemi's materials), or with `as_stream` by the vertex input stage (the engine's own draws of
+    // coefficient_stream()). Appended to `accesses`, or returned.
+    void draw_accesses(uint32_t frame, AccessList& accesses, bool as_stream = false) const;
+    AccessList draw_accesses(uint32_t frame) const;
+    // The same work with hemi's own barriers, for callers without a render graph (tools, tests, a frame
+    // recorded and submitted at once): one before (earlier reads and writes of the slot's coefficients, any
+    // stage of this queue) and, with `to_vertex_shaders`, one after (to the vertex shaders that read them).
     // On a compute-only queue the barrier after names the vertex stage, which such a queue does not have:
-    // record with `to_vertex_shaders` false there and release the coefficients to the graphics queue
-    // (docs/integration.md).
+    // pass false there and release the coefficients to the graphics queue.
     void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame = 0,
                          bool to_vertex_shaders = true);
-    // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
     void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
                                       uint32_t frame = 0, bool to_vertex_shaders = true);
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
@@ -103,15 +124,22 @@ class PrtModel
     // coefficients: what an instanced draw reads where draw() would push.
     shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model,
                                      uint32_t frame_slot = 0) const;
+    // The bytes of PrtModelDesc::coefficient_output a model of `asset` made with `desc` writes (every
+    // instance of every frame slot) on `device`. Throws as the constructor does for a technique the asset
+    // lacks.
+    static VkDeviceSize coefficient_bytes(const gpu::Device& device, const io::PrtAsset& asset,
+                                          const PrtModelDesc& desc);
+    // Instance `instance`'s coefficients of frame slot `frame` as a vertex stream: vertex v's K RGBA32F
+    // attributes (k = 0 .. K - 1, at byte k * 16) at `offset` + v * stride(), stride() = K * 16. Bind with
+    // vkCmdBindVertexBuffers(buffer, offset) at input rate VERTEX. Its accesses are draw_accesses()'s, at the
+    // VERTEX_INPUT stage with VERTEX_ATTRIBUTE_READ instead.
+    gpu::BufferRange coefficient_stream(uint32_t instance, uint32_t frame = 0) const;
+    uint32_t coefficient_stride() const { return uint32_t(basis_->size) * 16; }
     uint32_t frames_in_flight() const { return frames_; }
     uint32_t instances() const { return instances_; }
     // The coefficient buffer's range frame slot `frame` writes and draws read (bytes): what an engine's
     // render graph names in a buffer barrier or a queue-family ownership transfer.
-    struct BufferRange
-    {
-        VkBuffer buffer;
-        VkDeviceSize offset, size;
-    };
+    using BufferRange = gpu::BufferRange;
     BufferRange coefficient_range(uint32_t frame) const;
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass).
     size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
@@ -128,6 +156,7 @@ class PrtModel
 
   private:
     uint32_t first_instance(uint32_t frame) const;
+    std::vector<glm::vec3> lighting_of(std::span<const PrtInstance> instances) const;
     MaterialSystem* system_;
     uint32_t instances_ = 1, frames_ = 1, order_ = 3;
     const math::BasisDesc* basis_;
