@@ -51,12 +51,23 @@ struct CreatedObjects
     std::mutex mutex;
     std::map<uint64_t, VkObjectType> created;
     std::map<uint64_t, std::string> names;
+    std::map<uint64_t, VkBufferUsageFlags> buffer_usage; // of each buffer made
 
     void clear()
     {
         const std::lock_guard<std::mutex> lock(mutex);
         created.clear();
         names.clear();
+        buffer_usage.clear();
+    }
+    // Buffers made with any of `usage`'s bits (vertex or index buffers, say).
+    size_t buffers_with(VkBufferUsageFlags usage)
+    {
+        const std::lock_guard<std::mutex> lock(mutex);
+        size_t n = 0;
+        for (const auto& [handle, flags] : buffer_usage)
+            n += (flags & usage) ? 1 : 0;
+        return n;
     }
     void add(VkObjectType type, uint64_t handle)
     {
@@ -160,6 +171,13 @@ struct Create<VkResult(VKAPI_PTR*)(VkDevice, const Info*, const VkAllocationCall
         const VkResult r = (*real)(device, info, allocator, out);
         if (r == VK_SUCCESS)
             created_objects().add(type, handle_value(*out));
+        if constexpr (std::is_same_v<Info, VkBufferCreateInfo>)
+            if (r == VK_SUCCESS)
+            {
+                CreatedObjects& c = created_objects();
+                const std::lock_guard<std::mutex> lock(c.mutex);
+                c.buffer_usage[handle_value(*out)] = info->usage;
+            }
         return r;
     }
 };

@@ -10,6 +10,7 @@
 #include "../gpu_fixture.h"
 
 #include "engine_pass.h"
+#include "packed_mesh.h"
 
 #include <hemi/bake/factored.h>
 #include <hemi/gpu/commands.h>
@@ -689,99 +690,31 @@ draw_with_gpu_mesh(const std::function<render::MaterialTextures(render::TextureS
         engine);
 }
 
-uint16_t half(float f)
-{
-    // Round-to-nearest fp32 -> fp16 for normal numbers in range (the test's positions: |x| <= 1).
-    uint32_t bits;
-    std::memcpy(&bits, &f, 4);
-    const uint32_t sign = (bits >> 16) & 0x8000u;
-    const int exponent = int((bits >> 23) & 0xffu) - 127 + 15;
-    if (exponent <= 0)
-        return uint16_t(sign); // |f| < 2^-14: zero is close enough for positions on a unit sphere
-    uint32_t mantissa = bits & 0x7fffffu;
-    uint32_t h = sign | (uint32_t(exponent) << 10) | (mantissa >> 13);
-    if ((mantissa & 0x1fffu) > 0x1000u || ((mantissa & 0x1fffu) == 0x1000u && (h & 1u)))
-        ++h;
-    return uint16_t(h);
-}
-int16_t snorm16(float f)
-{
-    return int16_t(std::lround(std::clamp(f, -1.0f, 1.0f) * 32767.0f));
-}
-
 } // namespace
 
-// The sphere in an engine's packed layout, two streams: positions as fp16 RGBA (8 bytes) in stream 0; normal
-// and tangent as snorm16 RGBA, then fp32 UV (uv1 pointing at uv0) in stream 1 (24 bytes); 16-bit indices.
-// Drawn through a material key with that layout, it equals the GpuMesh's fp32 drawing of the same values (the
-// packed ones widened on the CPU: the comparison is of the data path, not of the quantisation, which moves
-// pixel centres' barycentrics by enough to change steep texture lookups by 1%).
+// The sphere in an engine's packed layout (packed_mesh.h), two streams: positions as fp16 RGBA (8 bytes) in
+// stream 0; normal and tangent as snorm16 RGBA, then both fp32 UV sets in stream 1 (32 bytes); 16-bit
+// indices. Drawn through a material key with that layout, it equals the GpuMesh's fp32 drawing of the same
+// values (the packed ones widened on the CPU: the comparison is of the data path, not of the quantisation,
+// which moves pixel centres' barycentrics by enough to change steep texture lookups by 1%).
 TEST_F(EngineData, MeshInTheEnginesOwnLayoutDrawsLikeHemisLayout)
 {
     gpu::Device& dev = test::device();
-    const io::Mesh& m = scene().mesh;
-    const size_t n = m.vertex_count();
-    std::vector<uint16_t> positions(n * 4);
-    struct Packed
-    {
-        int16_t normal[4], tangent[4];
-        float uv[2];
-    };
-    static_assert(sizeof(Packed) == 24);
-    std::vector<Packed> packed(n);
-    for (size_t v = 0; v < n; ++v)
-    {
-        for (int c = 0; c < 3; ++c)
-            positions[v * 4 + c] = half(m.positions[v][c]);
-        positions[v * 4 + 3] = half(1.0f);
-        for (int c = 0; c < 3; ++c)
-            packed[v].normal[c] = snorm16(m.normals[v][c]);
-        packed[v].normal[3] = 0;
-        for (int c = 0; c < 4; ++c)
-            packed[v].tangent[c] = snorm16(m.tangents[v][c]);
-        packed[v].uv[0] = m.uvs[v].x;
-        packed[v].uv[1] = m.uvs[v].y;
-    }
-    ASSERT_LT(n, 65536u);
-    io::Mesh same = m; // the packed values, widened
-    auto widen_half = [](uint16_t h)
-    {
-        const uint32_t sign = uint32_t(h & 0x8000u) << 16, exponent = (h >> 10) & 0x1fu,
-                       mantissa = h & 0x3ffu;
-        const uint32_t bits = exponent == 0 ? sign : sign | ((exponent - 15 + 127) << 23) | (mantissa << 13);
-        float f;
-        std::memcpy(&f, &bits, 4);
-        return f;
-    };
-    for (size_t v = 0; v < n; ++v)
-        for (int c = 0; c < 4; ++c)
-        {
-            if (c < 3)
-            {
-                same.positions[v][c] = widen_half(positions[v * 4 + c]);
-                same.normals[v][c] = std::max(-1.0f, float(packed[v].normal[c]) / 32767.0f);
-            }
-            same.tangents[v][c] = std::max(-1.0f, float(packed[v].tangent[c]) / 32767.0f);
-        }
-    const std::vector<uint16_t> indices(m.indices.begin(), m.indices.end());
+    const test::PackedMesh packed = test::pack_mesh(scene().mesh);
+    const std::vector<uint16_t>& positions = packed.positions;
+    const std::vector<uint16_t>& indices = packed.indices;
+    const io::Mesh& same = packed.widened; // the packed values, widened
     const gpu::Buffer stream0 =
         gpu::create_buffer(dev, {positions.size() * 2, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
-    const gpu::Buffer stream1 =
-        gpu::create_buffer(dev, {packed.size() * sizeof(Packed), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer stream1 = gpu::create_buffer(
+        dev, {packed.attributes.size() * sizeof(test::PackedAttributes), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
     const gpu::Buffer index_buffer =
         gpu::create_buffer(dev, {indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
     gpu::write_buffer(dev, stream0, positions.data(), positions.size() * 2);
-    gpu::write_buffer(dev, stream1, packed.data(), packed.size() * sizeof(Packed));
+    gpu::write_buffer(dev, stream1, packed.attributes.data(), stream1.size());
     gpu::write_buffer(dev, index_buffer, indices.data(), indices.size() * 2);
 
-    render::VertexLayout layout;
-    layout.position = {0, VK_FORMAT_R16G16B16A16_SFLOAT, 0};
-    layout.normal = {1, VK_FORMAT_R16G16B16A16_SNORM, offsetof(Packed, normal)};
-    layout.tangent = {1, VK_FORMAT_R16G16B16A16_SNORM, offsetof(Packed, tangent)};
-    layout.uv0 = {1, VK_FORMAT_R32G32_SFLOAT, offsetof(Packed, uv)};
-    layout.uv1 = layout.uv0;
-    layout.strides[0] = 8;
-    layout.strides[1] = sizeof(Packed);
+    const render::VertexLayout layout = test::PackedMesh::layout();
     const std::vector<float> engine =
         draw_lightmapped(layout,
                          [&](VkCommandBuffer cmd)

@@ -11,6 +11,7 @@
 #include "../host_vulkan.h"
 #include "../vulkan_calls.h"
 #include "engine_pass.h"
+#include "packed_mesh.h"
 #include "sphere_asset.h"
 #include "table_level.h"
 
@@ -653,4 +654,156 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
     gpu::read_buffer(dev, hemis, b.data());
     EXPECT_EQ(a, b);
     EXPECT_GT(std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]), 0.0f);
+}
+
+// Issue 42, "draw from the engine's geometry": a lightmapped level, a PRT object and 4 instanced probe-lit
+// objects drawn by hemi's materials from the engine's own vertex and index buffers, in its own layout
+// (packed_mesh.h: fp16 positions in stream 0, snorm16 normals and tangents and fp32 UVs in stream 1, 16-bit
+// indices), all three meshes in one pair of streams and one index buffer (so each model's primitives have
+// their own index ranges and vertex offsets; the PRT model's coefficients are still read at its own vertex
+// indices). The frame equals hemi's own path (its fp32 copy of the same values, widened) within 0.5% at every
+// covered pixel, with the same coverage; hemi makes no vertex or index buffer for the engine's models
+// (counted through its entry points) where its own path makes one of each per model.
+// Fails when a model uploads its mesh regardless, when the engine's vertex offset is not taken out of the PRT
+// coefficient index (the sphere is lit by another vertex's coefficients), or when a draw binds hemi's
+// buffers.
+TEST_F(EnginePath, ModelsDrawFromTheEnginesOwnBuffersAsFromHemisCopy)
+{
+    using namespace hemi;
+    constexpr uint32_t kW = 64, kH = 64, kProbes = 4;
+    io::LightmapAsset level = test::table_level(io::Material{}, io::Material{}, {}, {"h4"});
+    io::PrtAsset prt = test::unshadowed_sphere_asset(16, 8, "h4", 4);
+    io::Mesh probe_mesh = io::make_uv_sphere(0.3f, 12, 6);
+    const test::PackedMesh packed[3] = {test::pack_mesh(level.mesh), test::pack_mesh(prt.mesh),
+                                        test::pack_mesh(probe_mesh)};
+    level.mesh = packed[0].widened; // hemi's own path draws the same values
+    prt.mesh = packed[1].widened;
+    probe_mesh = packed[2].widened;
+    // The engine's buffers: the three meshes one after another.
+    std::vector<uint16_t> positions, indices;
+    std::vector<test::PackedAttributes> attributes;
+    uint32_t base_vertex[3], base_index[3];
+    for (int i = 0; i < 3; ++i)
+    {
+        base_vertex[i] = uint32_t(attributes.size());
+        base_index[i] = uint32_t(indices.size());
+        positions.insert(positions.end(), packed[i].positions.begin(), packed[i].positions.end());
+        attributes.insert(attributes.end(), packed[i].attributes.begin(), packed[i].attributes.end());
+        indices.insert(indices.end(), packed[i].indices.begin(), packed[i].indices.end());
+    }
+    gpu::Device& base = test::device(); // the engine's buffers are made before hemi's counting device exists
+    const gpu::Buffer stream0 =
+        gpu::create_buffer(base, {positions.size() * 2, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer stream1 = gpu::create_buffer(
+        base, {attributes.size() * sizeof(test::PackedAttributes), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+    const gpu::Buffer index_buffer =
+        gpu::create_buffer(base, {indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
+    gpu::write_buffer(base, stream0, positions.data(), stream0.size());
+    gpu::write_buffer(base, stream1, attributes.data(), stream1.size());
+    gpu::write_buffer(base, index_buffer, indices.data(), index_buffer.size());
+    auto geometry_of = [&](int mesh, const std::vector<io::Primitive>& primitives, size_t index_count)
+    {
+        render::EngineGeometry g;
+        g.layout = test::PackedMesh::layout();
+        g.buffers.streams = 2;
+        g.buffers.vertex_buffers[0] = stream0.handle();
+        g.buffers.vertex_buffers[1] = stream1.handle();
+        g.buffers.index_buffer = index_buffer.handle();
+        g.buffers.index_type = VK_INDEX_TYPE_UINT16;
+        if (primitives.empty())
+            g.primitives.push_back({base_index[mesh], uint32_t(index_count), int32_t(base_vertex[mesh])});
+        for (const io::Primitive& p : primitives)
+            g.primitives.push_back(
+                {base_index[mesh] + p.first_index, p.index_count, int32_t(base_vertex[mesh])});
+        return g;
+    };
+    const render::EngineGeometry level_geometry = geometry_of(0, level.primitives, level.mesh.indices.size());
+    const render::EngineGeometry prt_geometry = geometry_of(1, prt.primitives, prt.mesh.indices.size());
+    const render::EngineGeometry probe_geometry = geometry_of(2, {}, probe_mesh.indices.size());
+
+    gpu::ExternalDevice adopt{base.instance(), base.physical_device(), base.device(),
+                              base.queue(),    base.queue_family(),    {}};
+    adopt.get_instance_proc_addr = test::counting_proc_addr;
+    gpu::Device dev(adopt);
+    const glm::mat4 view = math::look_at_projection(glm::vec3(0, -4, 2), glm::vec3(0), 50.0f, 1.0f);
+    std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+    frame_light(3, light);
+    // One frame of the three models, from the engine's buffers or from hemi's copy: colour and aux.
+    auto frame = [&](bool engine, std::vector<float>& color, std::vector<float>& aux)
+    {
+        const std::unique_ptr<test::EnginePass> target = engine_target(dev, kW, kH);
+        render::MaterialSystem system(dev, target_desc(*target));
+        gpu::UploadBatch upload(dev);
+        test::created_objects().clear();
+        render::PrtModelDesc desc;
+        desc.technique = "h4";
+        desc.geometry = engine ? &prt_geometry : nullptr;
+        render::PrtModel prt_model(system, prt, desc, upload);
+        render::LightmapModel level_model(system, level, {"h4"}, upload, {},
+                                          engine ? &level_geometry : nullptr);
+        render::ProbeObject probes(system, probe_mesh, {}, std::vector<io::Material>(1), {}, kProbes, upload,
+                                   1, engine ? &probe_geometry : nullptr);
+        const size_t geometry_buffers = test::created_objects().buffers_with(
+            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+        if (engine)
+        {
+            EXPECT_EQ(geometry_buffers, 0u) << "vertex or index buffers hemi made for the engine's models";
+            EXPECT_THROW(prt_model.mesh(), std::logic_error);
+        }
+        else
+            EXPECT_EQ(geometry_buffers, 6u) << "hemi's own path: a vertex and an index buffer per model";
+        render::FrameSet frame_set(system, 1, kProbes);
+        upload.submit_and_wait();
+        render::FrameData data;
+        data.view_projection = view;
+        frame_set.write(0, data);
+        shared::DrawPush records[kProbes];
+        for (uint32_t i = 0; i < kProbes; ++i)
+        {
+            probes.write_lighting(i, light, 0);
+            records[i] = probes.instance_record(
+                i, glm::translate(glm::mat4(1.0f), glm::vec3(float(i) - 1.5f, -1.0f, 0.5f)), 0);
+        }
+        frame_set.write_instances(0, records);
+        render::DrawQueue queue;
+        for (const render::LightmapDraw& d : level_model.draw_list("h4"))
+            level_model.enqueue(queue, frame_set.set(), d, glm::mat4(1.0f));
+        prt_model.enqueue(queue, frame_set.set(), 0,
+                          glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.0f, 1.0f)));
+        probes.enqueue_instances(queue, frame_set.set(), {0, kProbes});
+        queue.sort();
+        const render::PrtInstance instance{glm::mat4(1.0f), light, 0.0f};
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          prt_model.record_transfer(cmd, {&instance, 1});
+                          target->begin(cmd, kBlack);
+                          queue.record(cmd);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        color = target->read_color(0);
+        aux = target->read_color(1);
+    };
+    std::vector<float> engine_color, engine_aux, own_color, own_aux;
+    frame(true, engine_color, engine_aux);
+    frame(false, own_color, own_aux);
+    size_t covered = 0, coverage_differs = 0, outside = 0;
+    float worst = 0.0f;
+    for (size_t p = 0; p < size_t(kW) * kH; ++p)
+    {
+        const bool a = engine_aux[p * 4 + 3] == 1.0f, b = own_aux[p * 4 + 3] == 1.0f;
+        coverage_differs += a != b ? 1 : 0;
+        if (!a || !b)
+            continue;
+        ++covered;
+        for (int c = 0; c < 3; ++c)
+        {
+            const float e = engine_color[p * 4 + c], o = own_color[p * 4 + c], d = std::abs(e - o);
+            worst = std::max(worst, d / (std::abs(o) + 1e-3f));
+            outside += d > 0.005f * std::abs(o) + 1e-4f ? 1 : 0;
+        }
+    }
+    EXPECT_GT(covered, size_t(kW) * kH / 4);
+    EXPECT_EQ(coverage_differs, 0u);
+    EXPECT_EQ(outside, 0u) << "worst relative difference " << worst;
 }

@@ -200,7 +200,7 @@ TEST_F(LevelDrawList, ObjectsSharingOneAtlasEachSampleTheirOwnRectangle)
                               p.frame = frame.set();
                               p.material = instance.set();
                               p.source = atlas.set();
-                              p.mesh = &mesh;
+                              p.mesh = &mesh.binding();
                               p.index_count = mesh.index_count();
                               render::make_instanced(p, 0, 2);
                               stats = render::record_packets(cmd, {&p, 1});

@@ -17,6 +17,7 @@
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/scene/gpu_mesh.h>
 #include <hemi/render/scene/lightmap_model.h>
+#include <hemi/render/scene/probe_object.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -514,4 +515,107 @@ TEST_F(Passes, ExtraColourAttachmentsAreLeftToTheEngine)
             ASSERT_EQ(engine[p * 4 + c], clear[c]) << "pixel " << p;
     }
     EXPECT_GT(drawn, 500);
+}
+
+// A probe-lit object (issue 42: ProbeObject had no add_pass) drawn the same three ways as the level above:
+// the colour pass after a depth prepass with EQUAL equals the plain colour pass at every pixel (and draws
+// nothing without the prepass), and its shadow-map depth at the sphere's top is the analytic (1.5 - r) / 2.5
+// of light_view_projection(), with nothing outside the sphere's disc.
+TEST_F(Passes, AProbeLitObjectDrawsInAPrepassAShadowPassAndTheColourPass)
+{
+    gpu::Device& dev = test::device();
+    const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT});
+    const DepthPass shadow_target;
+    render::RenderTargetDesc target;
+    target.render_pass = pass.render_pass;
+    render::MaterialSystem system(dev, target);
+    gpu::UploadBatch upload(dev);
+    constexpr float kRadius = 0.6f;
+    render::ProbeObject object(system, io::make_uv_sphere(kRadius, 48, 24), {}, std::vector<io::Material>(1),
+                               {}, 1, upload);
+    upload.submit_and_wait();
+    std::vector<glm::vec3> sh(9, glm::vec3(0.0f));
+    sh[0] = glm::vec3(1.0f);
+    sh[2] = glm::vec3(0.5f); // brighter on top: a gradient the EQUAL pass must reproduce
+    object.write_lighting(0, sh);
+
+    render::PassDesc prepass;
+    prepass.kind = render::PassKind::Depth;
+    prepass.target = target;
+    render::PassDesc equal;
+    equal.target = target;
+    equal.target.depth_compare = VK_COMPARE_OP_EQUAL;
+    equal.target.depth_write = false;
+    render::PassDesc shadow;
+    shadow.kind = render::PassKind::Shadow;
+    shadow.target.render_pass = shadow_target.render_pass;
+    shadow.target.color_attachments = 0;
+    const size_t prepass_index = object.add_pass(prepass), equal_index = object.add_pass(equal),
+                 shadow_index = object.add_pass(shadow);
+
+    render::FrameSet camera(system), light(system);
+    render::FrameData view;
+    view.eye = glm::vec3(0.8f, -2.2f, 1.0f);
+    view.view_projection = math::look_at_projection(view.eye, glm::vec3(0.0f), 45.0f, 1.0f);
+    camera.write(0, view);
+    render::FrameData from_light;
+    from_light.view_projection = light_view_projection();
+    light.write(0, from_light);
+    const float clear[4] = {0, 0, 0, 0};
+    auto colour = [&](bool with_prepass, size_t colour_index)
+    {
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          pass.begin(cmd, clear);
+                          if (with_prepass)
+                              object.draw(cmd, camera.set(), 0, glm::mat4(1.0f), 0, prepass_index);
+                          object.draw(cmd, camera.set(), 0, glm::mat4(1.0f), 0, colour_index);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        return pass.read_color();
+    };
+    const std::vector<float> reference = colour(false, 0);
+    const std::vector<float> after_prepass = colour(true, equal_index);
+    const std::vector<float> without_prepass = colour(false, equal_index);
+    int covered = 0, different = 0, drawn_without = 0;
+    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
+    {
+        covered += reference[p * 4 + 3] == 1.0f;
+        drawn_without += without_prepass[p * 4 + 3] != 0.0f;
+        for (int c = 0; c < 4; ++c)
+            different += std::abs(after_prepass[p * 4 + c] - reference[p * 4 + c]) >
+                         0.005f * std::abs(reference[p * 4 + c]);
+    }
+    EXPECT_GT(covered, 1000);
+    EXPECT_EQ(different, 0) << "the colour pass after the prepass differs from the plain colour pass";
+    EXPECT_EQ(drawn_without, 0);
+
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      shadow_target.begin(cmd);
+                      object.draw(cmd, light.set(), 0, glm::mat4(1.0f), 0, shadow_index);
+                      vkCmdEndRenderPass(cmd);
+                  });
+    const std::vector<float> depth = shadow_target.read();
+    // The texel at the centre sees the sphere's top: within 5e-3 of it (the facets around the pole of a 48 x
+    // 24 tessellation and the shadow pass's default depth bias put it 2e-3 deeper; a radius 1% off
+    // is 2.4e-3).
+    const uint32_t c = kSize / 2;
+    EXPECT_NEAR(depth[c * kSize + c], (1.5f - kRadius) / 2.5f, 5e-3f);
+    for (uint32_t y = 0; y < kSize; y += 4)
+        for (uint32_t x = 0; x < kSize; x += 4)
+        {
+            const float wx = ((x + 0.5f) / kSize * 2.0f - 1.0f) * 1.25f,
+                        wy = -((y + 0.5f) / kSize * 2.0f - 1.0f) * 1.25f;
+            if (std::hypot(wx, wy) > kRadius * 1.05f)
+            {
+                EXPECT_EQ(depth[y * kSize + x], 1.0f) << "outside the sphere " << x << "," << y;
+            }
+            else if (std::hypot(wx, wy) < kRadius * 0.9f)
+            {
+                EXPECT_LT(depth[y * kSize + x], (1.5f + 0.1f) / 2.5f) << "on the sphere " << x << "," << y;
+            }
+        }
 }

@@ -39,7 +39,7 @@ DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packet
     DrawStats stats;
     const MaterialType* type = nullptr;
     VkDescriptorSet bound[3] = {VK_NULL_HANDLE, VK_NULL_HANDLE, VK_NULL_HANDLE};
-    const GpuMesh* mesh = nullptr;
+    const MeshBinding* mesh = nullptr;
     for (const DrawPacket& p : packets)
     {
         if (!p.type || !p.frame || !p.material || !p.source || !p.mesh)
@@ -72,7 +72,8 @@ DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packet
             ++stats.mesh_binds;
             mesh = p.mesh;
         }
-        p.mesh->draw(cmd, p.first_index, p.index_count, p.instance_count, p.first_instance);
+        vkCmdDrawIndexed(cmd, p.index_count, p.instance_count, p.first_index, p.vertex_offset,
+                         p.first_instance);
         ++stats.draws;
         stats.instances += p.instance_count;
     }

@@ -48,14 +48,14 @@ GpuMesh::GpuMesh(const gpu::Device& device, const io::Mesh& mesh, gpu::UploadBat
     device.set_name(VK_OBJECT_TYPE_BUFFER, indices_.handle(), "hemi mesh indices");
     vertex_count_ = uint32_t(n);
     index_count_ = uint32_t(mesh.indices.size());
+    binding_.vertex_buffers[0] = vertices_.handle();
+    binding_.index_buffer = indices_.handle();
 }
 
-void GpuMesh::bind(VkCommandBuffer cmd) const
+void MeshBinding::bind(VkCommandBuffer cmd) const
 {
-    VkBuffer vb = vertices_;
-    VkDeviceSize offset = 0;
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
-    vkCmdBindIndexBuffer(cmd, indices_, 0, VK_INDEX_TYPE_UINT32);
+    vkCmdBindVertexBuffers(cmd, 0, streams, vertex_buffers, vertex_offsets);
+    vkCmdBindIndexBuffer(cmd, index_buffer, index_offset, index_type);
 }
 
 void GpuMesh::draw(VkCommandBuffer cmd, uint32_t first_index, uint32_t index_count, uint32_t instance_count,

@@ -44,7 +44,8 @@ std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm:
 
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                              const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
-                             const std::map<std::string, std::string>& material_techniques)
+                             const std::map<std::string, std::string>& material_techniques,
+                             const EngineGeometry* geometry)
 {
     if (default_techniques.empty())
         throw std::invalid_argument("hemi: a lightmap model needs at least one technique");
@@ -97,7 +98,7 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
     }
     surfaces_ =
         std::make_unique<SceneSurfaces>(system, asset.mesh, asset.images, asset.materials, asset.primitives,
-                                        CoefficientSourceKind::Texel, variants, upload);
+                                        CoefficientSourceKind::Texel, variants, upload, geometry);
     for (size_t p = 0; p < surfaces_->primitive_count(); ++p)
     {
         const uint32_t m = surfaces_->primitive(p).material;

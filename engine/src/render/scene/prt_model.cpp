@@ -69,7 +69,8 @@ PrtModel::PrtModel(MaterialSystem& system, const io::PrtAsset& asset, const PrtM
     : system_(&system), instances_(desc.instances), frames_(desc.frames_in_flight), order_(asset.order),
       basis_(&math::technique(desc.technique)),
       surfaces_(system, asset.mesh, asset.images, asset.materials, asset.primitives,
-                CoefficientSourceKind::Vertex, {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload)
+                CoefficientSourceKind::Vertex, {SurfaceVariant{Technique::Irradiance, basis_->id}}, upload,
+                desc.geometry)
 {
     const gpu::Device& device = system.device();
     if (desc.instances == 0 || desc.frames_in_flight == 0)

@@ -1,3 +1,4 @@
+#include <hemi/math/basis.h>
 #include <hemi/render/scene/scene_surfaces.h>
 
 #include <glm/common.hpp>
@@ -9,16 +10,48 @@
 namespace hemi::render
 {
 
+namespace
+{
+int basis_size(int id)
+{
+    if (id == math::vertex_irradiance_basis().id)
+        return math::vertex_irradiance_basis().size;
+    for (const math::BasisDesc& b : math::bases())
+        if (b.id == id)
+            return b.size;
+    throw std::invalid_argument("hemi: unknown basis id " + std::to_string(id));
+}
+} // namespace
+
 SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
                              const std::vector<io::EncodedImage>& images,
                              const std::vector<io::Material>& asset_materials,
                              const std::vector<io::Primitive>& asset_primitives, CoefficientSourceKind source,
-                             const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload)
-    : system_(&system), mesh_(system.device(), mesh, upload),
-      textures_(system.device(), images, asset_materials, upload)
+                             const std::vector<SurfaceVariant>& variants, gpu::UploadBatch& upload,
+                             const EngineGeometry* geometry)
+    : system_(&system), textures_(system.device(), images, asset_materials, upload)
 {
     if (variants.empty())
         throw std::invalid_argument("hemi: scene surfaces need at least one variant");
+    if (geometry)
+    {
+        if (geometry->buffers.streams == 0 || geometry->buffers.streams > VertexLayout::kMaxVertexStreams ||
+            geometry->buffers.index_buffer == VK_NULL_HANDLE)
+            throw std::invalid_argument(
+                "hemi: the engine's geometry needs 1 to 4 vertex streams and an index "
+                "buffer");
+        for (uint32_t i = 0; i < geometry->buffers.streams; ++i)
+            if (geometry->buffers.vertex_buffers[i] == VK_NULL_HANDLE)
+                throw std::invalid_argument("hemi: the engine's vertex stream " + std::to_string(i) +
+                                            " has no buffer");
+        engine_buffers_ = geometry->buffers;
+        binding_ = &engine_buffers_;
+    }
+    else
+    {
+        mesh_ = std::make_unique<GpuMesh>(system.device(), mesh, upload);
+        binding_ = &mesh_->binding();
+    }
     std::vector<io::Material> materials = asset_materials;
     if (materials.empty())
         materials.emplace_back(); // glTF's default material
@@ -28,16 +61,37 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
     std::vector<io::Primitive> primitives = asset_primitives;
     if (primitives.empty())
         primitives.push_back({0, uint32_t(mesh.indices.size()), 0});
-    for (const io::Primitive& p : primitives)
+    if (geometry && !geometry->primitives.empty() && geometry->primitives.size() != primitives.size())
+        throw std::invalid_argument("hemi: the engine's geometry maps " +
+                                    std::to_string(geometry->primitives.size()) +
+                                    " primitives, the asset has " + std::to_string(primitives.size()));
+    for (size_t i = 0; i < primitives.size(); ++i)
     {
+        const io::Primitive& p = primitives[i];
         if (p.material >= materials_.size())
             throw std::invalid_argument("hemi: a primitive uses material " + std::to_string(p.material) +
                                         " of " + std::to_string(materials_.size()));
-        Draw d{p.first_index, p.index_count, p.material, glm::vec3(INFINITY), glm::vec3(-INFINITY), {}, {}};
-        for (uint32_t i = p.first_index; i < p.first_index + p.index_count && i < mesh.indices.size(); ++i)
+        if (uint64_t(p.first_index) + p.index_count > mesh.indices.size())
+            throw std::invalid_argument("hemi: primitive " + std::to_string(i) + " draws indices [" +
+                                        std::to_string(p.first_index) + ", +" +
+                                        std::to_string(p.index_count) + ") past the mesh's " +
+                                        std::to_string(mesh.indices.size()));
+        Draw d{p.first_index,       p.index_count,        p.material, 0,
+               glm::vec3(INFINITY), glm::vec3(-INFINITY), {},         {}};
+        if (geometry && !geometry->primitives.empty())
         {
-            d.bounds_min = glm::min(d.bounds_min, mesh.positions[mesh.indices[i]]);
-            d.bounds_max = glm::max(d.bounds_max, mesh.positions[mesh.indices[i]]);
+            d.first_index = geometry->primitives[i].first_index;
+            d.index_count = geometry->primitives[i].index_count;
+            d.vertex_offset = geometry->primitives[i].vertex_offset;
+        }
+        for (uint32_t j = p.first_index; j < p.first_index + p.index_count; ++j)
+        {
+            if (mesh.indices[j] >= mesh.positions.size())
+                throw std::invalid_argument("hemi: index " + std::to_string(j) +
+                                            " of the mesh names vertex " + std::to_string(mesh.indices[j]) +
+                                            " of " + std::to_string(mesh.positions.size()));
+            d.bounds_min = glm::min(d.bounds_min, mesh.positions[mesh.indices[j]]);
+            d.bounds_max = glm::max(d.bounds_max, mesh.positions[mesh.indices[j]]);
         }
         for (const SurfaceVariant& v : variants)
         {
@@ -48,6 +102,8 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
             key.frame = v.frame;
             key.double_sided = materials_[p.material]->double_sided();
             key.alpha = materials_[p.material]->alpha_mode();
+            if (geometry)
+                key.vertex = geometry->layout;
             d.keys.push_back(key);
         }
         draws_.push_back(std::move(d));
@@ -115,12 +171,18 @@ bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorS
     out.frame = frame;
     out.material = materials_[d.material]->set();
     out.source = source;
-    out.mesh = &mesh_;
+    out.mesh = binding_;
     out.first_index = d.first_index;
     out.index_count = d.index_count;
+    out.vertex_offset = d.vertex_offset;
     out.push = {};
     out.push.model = model;
-    out.push.coefficient_offset = coefficient_offset;
+    // Per-vertex coefficients are read at coefficient_offset + gl_VertexIndex K, and gl_VertexIndex counts
+    // the engine's vertex offset: taken out here (modulo 2^32, as the shader's sum is).
+    out.push.coefficient_offset =
+        d.keys[variant].source == CoefficientSourceKind::Vertex
+            ? coefficient_offset - uint32_t(d.vertex_offset) * uint32_t(basis_size(d.keys[variant].basis))
+            : coefficient_offset;
     out.push.draw_id = uint32_t(primitive + 1);
     out.push.lightmap_scale_offset = lightmap_scale_offset;
     return true;
@@ -134,6 +196,13 @@ void SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, V
     DrawPacket p;
     if (packet(p, frame, source, coefficient_offset, model, variant, pass, primitive, lightmap_scale_offset))
         record_packets(cmd, {&p, 1});
+}
+
+const GpuMesh& SceneSurfaces::mesh() const
+{
+    if (!mesh_)
+        throw std::logic_error("hemi: these surfaces draw from the engine's geometry: hemi holds no mesh");
+    return *mesh_;
 }
 
 SceneSurfaces::Primitive SceneSurfaces::primitive(size_t p) const

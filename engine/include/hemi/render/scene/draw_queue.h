@@ -24,8 +24,9 @@ struct DrawPacket
     uint64_t key = 0; // draw_key()
     const MaterialType* type = nullptr;
     VkDescriptorSet frame = VK_NULL_HANDLE, material = VK_NULL_HANDLE, source = VK_NULL_HANDLE;
-    const GpuMesh* mesh = nullptr;
+    const MeshBinding* mesh = nullptr; // GpuMesh::binding() or an EngineGeometry's buffers
     uint32_t first_index = 0, index_count = 0;
+    int32_t vertex_offset = 0;
     shared::DrawPush push{};
     // Instanced: `instance_count` instances whose values are records [first_instance, first_instance +
     // instance_count) of the frame set's instance buffer (push.instanced = 1; make_instanced()).

@@ -67,9 +67,12 @@ class LightmapModel
     // a material asks for (io::Material::technique, e.g. an SSBump wall's "ssbump"), overridden by
     // `material_techniques` (material name -> technique; "" = the level's default). Uploads go into
     // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
+    // With `geometry` the level draws from the engine's own vertex and index buffers (EngineGeometry):
+    // hemi uploads no vertex or index data.
     LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                   const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
-                  const std::map<std::string, std::string>& material_techniques = {});
+                  const std::map<std::string, std::string>& material_techniques = {},
+                  const EngineGeometry* geometry = nullptr);
     ~LightmapModel();
 
     // The level's draw list for `technique` (its default: materials with their own technique keep it) in

@@ -28,10 +28,12 @@ class ProbeObject
   public:
     // The mesh, images and materials are uploaded or copied here (they may be freed afterwards). Each of
     // `instances` gets its probe in a buffer of `frames_in_flight` slots (ProbeBuffer). Throws
-    // std::invalid_argument for no instances or frames.
+    // std::invalid_argument for no instances or frames. With `geometry` it draws from the engine's own vertex
+    // and index buffers (EngineGeometry; `mesh` then only gives the bounds): hemi uploads no geometry.
     ProbeObject(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                 const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
-                uint32_t instances, gpu::UploadBatch& upload, uint32_t frames_in_flight = 1);
+                uint32_t instances, gpu::UploadBatch& upload, uint32_t frames_in_flight = 1,
+                const EngineGeometry* geometry = nullptr);
     ~ProbeObject();
 
     // Instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g. probe_lighting() at its
@@ -40,18 +42,23 @@ class ProbeObject
     // Outside a render pass: the same, recorded in the command buffer (ProbeBuffer::record_update).
     void record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
                          uint32_t frame = 0) const;
-    // Inside the caller's render pass: instance `instance` under `model` with its lighting of slot `frame`.
+    // Another pass of the caller's frame (a depth prepass, a shadow map, a colour pass into another target;
+    // SceneSurfaces::add_pass): its index for draw() and enqueue(). 0 is the system's default colour pass.
+    size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
+
+    // Inside the caller's render pass: instance `instance` under `model` with its lighting of slot `frame`,
+    // with the pipelines of `pass` (add_pass).
     void draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
-              uint32_t frame = 0) const;
+              uint32_t frame = 0, size_t pass = 0) const;
 
     // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
     void enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
-                 uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f) const;
+                 uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const;
 
     // Instanced: instances.count copies in one draw per primitive, copy i with the frame set's record
     // instances.first + i (FrameSet::write_instances of instance_record()s).
     void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
-                           uint32_t layer = 0, float depth = 0.0f) const;
+                           uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const;
     // The record of instance `instance` under `model`, lit by its probe of slot `frame`.
     shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model, uint32_t frame = 0) const;
 

@@ -57,6 +57,9 @@ struct PrtModelDesc
     // (the pass writes it), UNIFORM_TEXEL_BUFFER when hemi's materials draw the model, VERTEX_BUFFER for the
     // engine's stream. Null (the default): a buffer of hemi's own.
     gpu::BufferRange coefficient_output;
+    // The engine's own vertex and index buffers to draw from (EngineGeometry; kept alive by the caller while
+    // the model draws): hemi then uploads no vertex or index data. Null: hemi's copy of the asset's mesh.
+    const EngineGeometry* geometry = nullptr;
 };
 
 // One object drawn from a model, per frame.
@@ -149,6 +152,7 @@ class PrtModel
     uint32_t order() const { return order_; }
     uint32_t l() const { return order_ * order_; }
     const math::BasisDesc& basis() const { return *basis_; }
+    // hemi's copy of the mesh (std::logic_error with PrtModelDesc::geometry).
     const GpuMesh& mesh() const { return surfaces_.mesh(); }
     // The primitives, materials and textures, for an engine's own shaders (docs/integration.md).
     const SceneSurfaces& surfaces() const { return surfaces_; }

@@ -37,11 +37,13 @@ class SceneSurfaces
     // finds in `system`) the material type of every primitive for `source` and each of `variants` (what a
     // draw picks from). No primitives draws the whole mesh with material 0; no materials uses glTF's default
     // one. Throws std::invalid_argument for a primitive whose material does not exist or no bases,
-    // io::FormatError when an image is corrupt.
+    // io::FormatError when an image is corrupt. A primitive past the mesh's indices is refused
+    // (std::invalid_argument). With `geometry`, the surfaces draw from the engine's buffers in its layout
+    // and `mesh` (the asset's, on the CPU) only gives the primitives' bounds: nothing of it is uploaded.
     SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh, const std::vector<io::EncodedImage>& images,
                   const std::vector<io::Material>& materials, const std::vector<io::Primitive>& primitives,
                   CoefficientSourceKind source, const std::vector<SurfaceVariant>& variants,
-                  gpu::UploadBatch& upload);
+                  gpu::UploadBatch& upload, const EngineGeometry* geometry = nullptr);
     ~SceneSurfaces();
 
     // Compiles every primitive's type for another pass of the caller's frame (a depth prepass, a shadow
@@ -87,20 +89,27 @@ class SceneSurfaces
     VkDescriptorSet material_set(size_t primitive) const;
     const io::Material& material(size_t primitive) const;
 
-    const GpuMesh& mesh() const { return mesh_; }
+    // hemi's copy of the mesh (std::logic_error for surfaces drawn from the engine's geometry).
+    const GpuMesh& mesh() const;
+    // What draws bind: mesh().binding() or the engine's buffers.
+    const MeshBinding& binding() const { return *binding_; }
+    bool engine_geometry() const { return !mesh_; }
     // The scene's images on the GPU (an engine's own shaders sample them: image(material.normal.image, ...)).
     const TextureSet& textures() const { return textures_; }
     size_t material_count() const { return materials_.size(); }
 
   private:
     MaterialSystem* system_;
-    GpuMesh mesh_;
+    std::unique_ptr<GpuMesh> mesh_; // null with the engine's geometry
+    MeshBinding engine_buffers_;
+    const MeshBinding* binding_ = nullptr;
     TextureSet textures_;
     std::vector<std::unique_ptr<MaterialInstance>> materials_;
     std::vector<io::Material> material_data_;
     struct Draw
     {
         uint32_t first_index, index_count, material;
+        int32_t vertex_offset;
         glm::vec3 bounds_min, bounds_max;
         std::vector<MaterialKey> keys;                       // per variant
         std::vector<std::vector<const MaterialType*>> types; // per pass, per variant
