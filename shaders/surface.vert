@@ -73,11 +73,9 @@ void main()
     const mat3 m = mat3(model);
     out_normal = hemi_normal_matrix(m) * in_normal;
     out_tangent = hemi_transform_tangent(m, in_tangent);
-    // Every pass of a key runs this same code (a colour pass tests EQUAL against a depth prepass); precise
-    // keeps the compiler from contracting it differently in different pipelines. (`invariant gl_Position`
-    // would say the same, but Mesa warns about the decoration glslang puts on gl_PerVertex's member.)
-    precise const vec4 world = model * vec4(in_position, 1.0);
-    precise const vec4 clip = frame.view_projection * world;
-    out_world = world.xyz;
-    gl_Position = clip;
+    // Every pass of a key runs this same code (a colour pass tests EQUAL against a depth prepass), and so
+    // does an engine's vertex shader that calls it: hemi_clip_position's products are precise. (`invariant
+    // gl_Position` would say the same, but Mesa warns about the decoration glslang puts on gl_PerVertex's
+    // member.)
+    gl_Position = hemi_clip_position(frame.view_projection, model, in_position, out_world);
 }

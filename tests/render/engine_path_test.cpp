@@ -567,7 +567,7 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
     gpu::GraphicsProgramDesc pd;
     pd.vertex_shader = test::test_spirv("engine_stream.vert");
     pd.fragment_shader = test::test_spirv("engine_stream.frag");
-    pd.push_constant_size = sizeof(glm::mat4);
+    pd.push_constant_size = 2 * sizeof(glm::mat4);
     pd.vertex_bindings = {{0, sizeof(glm::vec3), VK_VERTEX_INPUT_RATE_VERTEX},
                           {1, model.coefficient_stride(), VK_VERTEX_INPUT_RATE_VERTEX}};
     pd.vertex_attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
@@ -579,11 +579,28 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
     const gpu::Program program = gpu::create_graphics_program(dev, pd);
     const glm::mat4 view_projection =
         math::look_at_projection(glm::vec3(0, -4, 0), glm::vec3(0), 40.0f, 1.0f);
+    // The engine's push constants: the view, and the object's model matrix (a turn and a shift, so that the
+    // order of the products shows in the rounding).
+    const glm::mat4 pushed[2] = {view_projection,
+                                 glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(0.1f, 0.3f, -0.2f)),
+                                             0.7f, glm::normalize(glm::vec3(0.3f, 0.9f, 0.2f)))};
 
     std::vector<glm::vec3> light(9, glm::vec3(0.0f));
     light[0] = glm::vec3(1.0f, 0.5f, 0.25f);
     light[2] = glm::vec3(0.5f);
     const render::PrtInstance objects[2] = {{glm::mat4(1.0f), light, 0.0f}, {glm::mat4(1.0f), light, 90.0f}};
+    // The engine's draw of instance 1 of slot 1 from its streams, with `program`.
+    auto engine_draw = [&](VkCommandBuffer cmd, const gpu::Program& pipeline)
+    {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.pipeline);
+        vkCmdPushConstants(cmd, pipeline.layout, VK_SHADER_STAGE_ALL, 0, sizeof pushed, pushed);
+        const gpu::BufferRange stream = model.coefficient_stream(1, 1);
+        const VkBuffer buffers[2] = {positions.handle(), stream.buffer};
+        const VkDeviceSize offsets[2] = {0, stream.offset};
+        vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
+        vkCmdBindIndexBuffer(cmd, indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(cmd, uint32_t(asset.mesh.indices.size()), 1, 0, 0, 0);
+    };
     // One frame of the engine's, into slot 1 (instance 1 drawn from its stream), its graph's barrier made
     // from the declared accesses, all of them or all but the coefficient write.
     auto frame = [&](bool drop_the_write)
@@ -619,15 +636,7 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
                               vkCmdPipelineBarrier(cmd, src, dst, 0, 0, nullptr, uint32_t(barriers.size()),
                                                    barriers.data(), 0, nullptr);
                           target->begin(cmd, kBlack);
-                          vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
-                          vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0,
-                                             sizeof view_projection, &view_projection);
-                          const gpu::BufferRange stream = model.coefficient_stream(1, 1);
-                          const VkBuffer buffers[2] = {positions.handle(), stream.buffer};
-                          const VkDeviceSize offsets[2] = {0, stream.offset};
-                          vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
-                          vkCmdBindIndexBuffer(cmd, indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-                          vkCmdDrawIndexed(cmd, uint32_t(asset.mesh.indices.size()), 1, 0, 0, 0);
+                          engine_draw(cmd, program);
                           vkCmdEndRenderPass(cmd);
                       });
     };
@@ -645,6 +654,45 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
     for (size_t p = 0; p < size_t(kW) * kH; ++p)
         lit += color[p * 4 + 3] == 1.0f && color[p * 4] > 0.01f ? 1 : 0;
     EXPECT_GT(lit, size_t(kW) * kH / 8);
+    // The engine's view data and hemi's depth: hemi's depth prepass of the model, reading the view from the
+    // engine's own camera buffer (a FrameSet over it), then the engine's pipeline testing EQUAL without depth
+    // writes (its position from hemi_clip_position): every pixel the prepass covered is drawn.
+    const VkDeviceSize ubo_align = std::max<VkDeviceSize>(64, dev.limits().minUniformBufferOffsetAlignment);
+    const gpu::Buffer camera = gpu::create_buffer(
+        dev, {ubo_align + sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    render::FrameData view;
+    view.view_projection = view_projection;
+    const shared::FrameUniforms uniforms = render::frame_uniforms(view);
+    gpu::write_buffer(dev, camera, &uniforms, sizeof uniforms, ubo_align);
+    const gpu::BufferRange camera_range{camera.handle(), ubo_align, sizeof(shared::FrameUniforms)};
+    const render::FrameSet engine_view(system, {&camera_range, 1});
+    render::PassDesc depth_pass;
+    depth_pass.kind = render::PassKind::Depth;
+    depth_pass.target = target_desc(*target);
+    const size_t prepass = model.add_pass(depth_pass);
+    gpu::GraphicsProgramDesc equal_desc = pd;
+    equal_desc.depth_compare = VK_COMPARE_OP_EQUAL;
+    equal_desc.depth_write = false;
+    const gpu::Program equal = gpu::create_graphics_program(dev, equal_desc);
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      target->begin(cmd, kBlack); // (the coefficients are the frames' above)
+                      model.draw(cmd, engine_view.set(), 1, pushed[1], prepass, 1);
+                      engine_draw(cmd, equal);
+                      vkCmdEndRenderPass(cmd);
+                  });
+    const std::vector<float> after_prepass = target->read_color(0);
+    size_t drawn = 0, missed = 0;
+    for (size_t p = 0; p < size_t(kW) * kH; ++p)
+    {
+        const bool was = color[p * 4 + 3] == 1.0f, is = after_prepass[p * 4 + 3] == 1.0f;
+        drawn += is ? 1 : 0;
+        missed += was != is ? 1 : 0;
+    }
+    EXPECT_GT(drawn, size_t(kW) * kH / 8);
+    EXPECT_EQ(missed, 0u) << "pixels where the engine's depth differs from hemi's prepass";
+
     // The same coefficients as a model writing into hemi's own buffer, at the engine's offset.
     gpu::one_shot(dev, [&](VkCommandBuffer cmd) { own.record_transfer(cmd, objects, 1); });
     const gpu::BufferRange mine = model.coefficient_range(1), hemis = own.coefficient_range(1);

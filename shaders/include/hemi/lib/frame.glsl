@@ -44,6 +44,19 @@ vec3 hemi_normal_map_normal(vec3 texel, float scale)
     return normalize(vec3(nt.xy * scale, nt.z));
 }
 
+// A vertex's clip-space position and its world position (out), exactly as every pipeline of hemi's material
+// system computes them: `model` then `view_projection`, each product `precise` so that no compiler contracts
+// it differently in another pipeline. An engine's vertex shader that calls it with the same matrices and
+// position gets the same depth to the bit, so its colour pass can test EQUAL against hemi's depth prepass
+// (and hemi's against the engine's).
+vec4 hemi_clip_position(mat4 view_projection, mat4 model, vec3 position, out vec3 world_position)
+{
+    precise const vec4 world = model * vec4(position, 1.0);
+    precise const vec4 clip = view_projection * world;
+    world_position = world.xyz;
+    return clip;
+}
+
 // The matrix that carries normals through the model matrix's upper 3x3 `m`: the inverse transpose, up to a
 // positive scale (the cofactor matrix divided by the sign of the determinant), so that it stays correct under
 // non-uniform scale and mirroring. Normalise after interpolation.

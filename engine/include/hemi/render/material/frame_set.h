@@ -48,11 +48,24 @@ struct FrameData
 //   record_update(): outside a render pass, in the command buffer: the previous frame's reads finish before
 //                    the update, which finishes before this frame's draws read it (a frame recorded and
 //                    submitted at once: tools, tests).
+// The uniform block hemi's pipelines read for a view (shared::FrameUniforms, std140, hemi/shared/surface.h),
+// packed from `frame`: what an engine writes into its own buffer for FrameSet's engine-data constructor.
+// Throws std::invalid_argument for too many lights or values that are not finite.
+shared::FrameUniforms frame_uniforms(const FrameData& frame);
+
 class FrameSet
 {
   public:
     explicit FrameSet(const MaterialSystem& system, uint32_t frames_in_flight = 1,
                       uint32_t max_instances = 0);
+    // Over the engine's own view data: uniforms[slot] is a range of the engine's buffer (UNIFORM_BUFFER
+    // usage, its offset a multiple of minUniformBufferOffsetAlignment) holding a shared::FrameUniforms the
+    // engine writes itself (frame_uniforms()), one per frame slot; instances[slot], when given, a range
+    // (STORAGE_BUFFER usage) of shared::DrawPush records for instanced draws, max_instances of them. hemi
+    // makes only the descriptor sets (and, without instance ranges, a one-record buffer for the binding);
+    // write() and write_instances() are refused (std::logic_error): the engine writes its buffers.
+    FrameSet(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
+             std::span<const gpu::BufferRange> instances = {}, uint32_t max_instances = 0);
     void write(uint32_t slot, const FrameData& frame);
     // Records [first, first + records.size()) of slot `slot`'s instance buffer, which instanced draws read
     // (draw_queue.h: make_instanced; PrtModel::instance_record, LightmapModel::instance_record). Throws
@@ -65,6 +78,9 @@ class FrameSet
 
   private:
     VkDeviceSize slot_offset(uint32_t slot) const;
+    void make_sets(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
+                   std::span<const gpu::BufferRange> instances);
+    bool engine_data_ = false;
     gpu::Buffer uniforms_, instances_;
     VkDeviceSize stride_ = 0, instance_stride_ = 0;
     uint32_t max_instances_ = 0;
