@@ -46,25 +46,23 @@ inline Result run(const std::filesystem::path& dir, const std::string& exe, cons
     return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
 }
 
-// A --memory-budget (" --memory-budget <n>K") halfway between what a lightmap bake needs in memory and in
-// its least tiles, as hemi-bake estimates them: `bake(extra)` runs the bake with `extra` on its command line,
-// and its refusal of a budget of 1 MiB names both ("needs about 21.1 MiB of memory (15.4 MiB in tiles of
-// ..."). Both count what the process holds (its code, the scene), which differs under the sanitizers and
-// mpirun; the budget between them makes the bake run in tiles wherever it runs. "" (and a test failure) when
-// the refusal does not say so.
-inline std::string tiling_budget(const std::function<Result(const std::string&)>& bake)
+// Halfway between what a lightmap bake needs in memory and in its least tiles, in KiB, from its refusal of a
+// budget too small for either ("needs about 21.1 MiB of memory (15.4 MiB in tiles of ..."); 0 (and a test
+// failure) when `refusal` does not say so. Both estimates count what the process holds (its code, the
+// scene), which differs under the sanitizers and mpirun, and grows with the test binary: a budget between
+// them makes the bake run in tiles wherever it runs.
+inline uint64_t tiling_budget_kib(const std::string& refusal)
 {
-    const Result r = bake(" --memory-budget 1M");
     const auto size_after = [&](const std::string& label, size_t from, size_t& end) -> double
     {
-        const size_t at = r.err.find(label, from);
+        const size_t at = refusal.find(label, from);
         if (at == std::string::npos)
             return 0.0;
         char* stop = nullptr;
-        const char* begin = r.err.c_str() + at + label.size();
+        const char* begin = refusal.c_str() + at + label.size();
         const double value = std::strtod(begin, &stop);
-        end = size_t(stop - r.err.c_str());
-        const std::string unit = r.err.substr(end, 4);
+        end = size_t(stop - refusal.c_str());
+        const std::string unit = refusal.substr(end, 4);
         const double scale = unit == " GiB"   ? 1024.0 * 1024.0
                              : unit == " MiB" ? 1024.0
                              : unit == " KiB" ? 1.0
@@ -74,12 +72,26 @@ inline std::string tiling_budget(const std::function<Result(const std::string&)>
     size_t end = 0;
     const double whole = size_after("needs about ", 0, end);
     const double least = whole > 0.0 ? size_after("of memory (", end, end) : 0.0;
-    if (r.status != 1 || !(least > 0.0 && whole > least))
+    if (!(least > 0.0 && whole > least))
     {
-        ADD_FAILURE() << "no estimate in the refusal of --memory-budget 1M: " << r.err;
+        ADD_FAILURE() << "no estimate in the refusal of a small memory budget: " << refusal;
+        return 0;
+    }
+    return uint64_t((whole + least) / 2.0);
+}
+
+// The same as hemi-bake's option (" --memory-budget <n>K"): `bake(extra)` runs the bake with `extra` on its
+// command line, and its refusal of --memory-budget 1M names both estimates. "" when it does not.
+inline std::string tiling_budget(const std::function<Result(const std::string&)>& bake)
+{
+    const Result r = bake(" --memory-budget 1M");
+    if (r.status != 1)
+    {
+        ADD_FAILURE() << "hemi-bake did not refuse --memory-budget 1M: " << r.err;
         return "";
     }
-    return " --memory-budget " + std::to_string(uint64_t((whole + least) / 2.0)) + "K";
+    const uint64_t kib = tiling_budget_kib(r.err);
+    return kib ? " --memory-budget " + std::to_string(kib) + "K" : "";
 }
 
 } // namespace hemi::test
