@@ -854,4 +854,31 @@ TEST_F(EnginePath, ModelsDrawFromTheEnginesOwnBuffersAsFromHemisCopy)
     EXPECT_GT(covered, size_t(kW) * kH / 4);
     EXPECT_EQ(coverage_differs, 0u);
     EXPECT_EQ(outside, 0u) << "worst relative difference " << worst;
+    // Geometry that cannot draw the asset is refused when the model is made, naming what is wrong.
+    const std::unique_ptr<test::EnginePass> target = engine_target(dev, 8, 8);
+    render::MaterialSystem system(dev, target_desc(*target));
+    gpu::UploadBatch upload(dev);
+    auto refusal = [&](const render::EngineGeometry& g)
+    {
+        try
+        {
+            render::ProbeObject(system, probe_mesh, {}, std::vector<io::Material>(1), {}, 1, upload, 1, &g);
+        }
+        catch (const std::invalid_argument& e)
+        {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    render::EngineGeometry one_stream = probe_geometry;
+    one_stream.buffers.streams = 1;
+    EXPECT_NE(refusal(one_stream).find("reads stream 1, but its geometry binds 1 stream"), std::string::npos)
+        << refusal(one_stream);
+    render::EngineGeometry two_ranges = probe_geometry;
+    two_ranges.primitives.push_back(two_ranges.primitives[0]);
+    EXPECT_NE(refusal(two_ranges).find("maps 2 primitives, the asset has 1"), std::string::npos)
+        << refusal(two_ranges);
+    render::EngineGeometry no_indices = probe_geometry;
+    no_indices.buffers.index_buffer = VK_NULL_HANDLE;
+    EXPECT_NE(refusal(no_indices).find("an index buffer"), std::string::npos) << refusal(no_indices);
 }

@@ -44,6 +44,12 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
             if (geometry->buffers.vertex_buffers[i] == VK_NULL_HANDLE)
                 throw std::invalid_argument("hemi: the engine's vertex stream " + std::to_string(i) +
                                             " has no buffer");
+        const VertexLayout& l = geometry->layout;
+        for (const VertexInput* input : {&l.position, &l.normal, &l.tangent, &l.uv0, &l.uv1})
+            if (input->binding >= geometry->buffers.streams)
+                throw std::invalid_argument("hemi: the engine's layout reads stream " +
+                                            std::to_string(input->binding) + ", but its geometry binds " +
+                                            std::to_string(geometry->buffers.streams) + " stream(s)");
         engine_buffers_ = geometry->buffers;
         binding_ = &engine_buffers_;
     }
