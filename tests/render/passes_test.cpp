@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <thread>
 
@@ -136,6 +137,50 @@ glm::mat4 light_view_projection()
     return m;
 }
 
+// A model drawn three ways into `pass`: the plain colour pass 0 (the reference), the colour pass `equal`
+// (depth EQUAL, no writes) after the depth prepass `prepass`, and `equal` without the prepass. `draw(cmd,
+// index)` records the model with the pipelines of pass `index`; `setup(cmd)`, when given, what comes before
+// the render pass (uploads, frame data). Counts the covered pixels of the reference, the channels after the
+// prepass more than 0.5% from it, and the pixels drawn without the prepass.
+struct PrepassAgreement
+{
+    int covered = 0, different = 0, drawn_without = 0;
+};
+constexpr float kClearColour[4] = {0, 0, 0, 0};
+PrepassAgreement prepass_agreement(const test::EnginePass& pass, size_t prepass, size_t equal,
+                                   const std::function<void(VkCommandBuffer, size_t)>& draw,
+                                   const std::function<void(VkCommandBuffer)>& setup = {})
+{
+    auto colour = [&](bool with_prepass, size_t colour_index)
+    {
+        gpu::one_shot(test::device(),
+                      [&](VkCommandBuffer cmd)
+                      {
+                          if (setup)
+                              setup(cmd);
+                          pass.begin(cmd, kClearColour);
+                          if (with_prepass)
+                              draw(cmd, prepass);
+                          draw(cmd, colour_index);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        return pass.read_color();
+    };
+    const std::vector<float> reference = colour(false, 0);
+    const std::vector<float> after_prepass = colour(true, equal);
+    const std::vector<float> without_prepass = colour(false, equal);
+    PrepassAgreement a;
+    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
+    {
+        a.covered += reference[p * 4 + 3] == 1.0f;
+        a.drawn_without += without_prepass[p * 4 + 3] != 0.0f;
+        for (int c = 0; c < 4; ++c)
+            a.different += std::abs(after_prepass[p * 4 + c] - reference[p * 4 + c]) >
+                           0.005f * std::abs(reference[p * 4 + c]);
+    }
+    return a;
+}
+
 } // namespace
 
 // The level drawn three ways from one LightmapModel (one load, three sets of pipelines): a colour pass with
@@ -182,37 +227,18 @@ TEST_F(Passes, OneLevelDrawsInAPrepassAShadowPassAndTheColourPass)
     view.view_projection = math::look_at_projection(view.eye, glm::vec3(0.0f), 45.0f, 1.0f);
     render::FrameData from_light;
     from_light.view_projection = light_view_projection();
-    const float clear[4] = {0, 0, 0, 0};
-    auto colour = [&](bool with_prepass, size_t colour_index)
-    {
-        gpu::one_shot(dev,
-                      [&](VkCommandBuffer cmd)
-                      {
-                          upload.record(cmd);
-                          camera.record_update(cmd, view);
-                          pass.begin(cmd, clear);
-                          if (with_prepass)
-                              model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), prepass_index);
-                          model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), colour_index);
-                          vkCmdEndRenderPass(cmd);
-                      });
-        return pass.read_color();
-    };
-    const std::vector<float> reference = colour(false, 0);
-    const std::vector<float> after_prepass = colour(true, equal_index);
-    const std::vector<float> without_prepass = colour(false, equal_index);
-    int covered = 0, different = 0, drawn_without = 0;
-    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
-    {
-        covered += reference[p * 4 + 3] == 1.0f;
-        drawn_without += without_prepass[p * 4 + 3] != 0.0f;
-        for (int c = 0; c < 4; ++c)
-            different += std::abs(after_prepass[p * 4 + c] - reference[p * 4 + c]) >
-                         0.005f * std::abs(reference[p * 4 + c]);
-    }
-    EXPECT_GT(covered, 1500);
-    EXPECT_EQ(different, 0) << "the colour pass after the prepass differs from the plain colour pass";
-    EXPECT_EQ(drawn_without, 0) << "EQUAL drew without a prepass: the test cannot tell the prepass's depth";
+    const PrepassAgreement a = prepass_agreement(
+        pass, prepass_index, equal_index,
+        [&](VkCommandBuffer cmd, size_t index)
+        { model.draw(cmd, camera.set(), "h6", glm::mat4(1.0f), index); },
+        [&](VkCommandBuffer cmd)
+        {
+            upload.record(cmd);
+            camera.record_update(cmd, view);
+        });
+    EXPECT_GT(a.covered, 1500);
+    EXPECT_EQ(a.different, 0) << "the colour pass after the prepass differs from the plain colour pass";
+    EXPECT_EQ(a.drawn_without, 0) << "EQUAL drew without a prepass: the test cannot tell the prepass's depth";
 
     auto depth_from_light = [&](size_t index)
     {
@@ -561,35 +587,13 @@ TEST_F(Passes, AProbeLitObjectDrawsInAPrepassAShadowPassAndTheColourPass)
     render::FrameData from_light;
     from_light.view_projection = light_view_projection();
     light.write(0, from_light);
-    const float clear[4] = {0, 0, 0, 0};
-    auto colour = [&](bool with_prepass, size_t colour_index)
-    {
-        gpu::one_shot(dev,
-                      [&](VkCommandBuffer cmd)
-                      {
-                          pass.begin(cmd, clear);
-                          if (with_prepass)
-                              object.draw(cmd, camera.set(), 0, glm::mat4(1.0f), 0, prepass_index);
-                          object.draw(cmd, camera.set(), 0, glm::mat4(1.0f), 0, colour_index);
-                          vkCmdEndRenderPass(cmd);
-                      });
-        return pass.read_color();
-    };
-    const std::vector<float> reference = colour(false, 0);
-    const std::vector<float> after_prepass = colour(true, equal_index);
-    const std::vector<float> without_prepass = colour(false, equal_index);
-    int covered = 0, different = 0, drawn_without = 0;
-    for (size_t p = 0; p < size_t(kSize) * kSize; ++p)
-    {
-        covered += reference[p * 4 + 3] == 1.0f;
-        drawn_without += without_prepass[p * 4 + 3] != 0.0f;
-        for (int c = 0; c < 4; ++c)
-            different += std::abs(after_prepass[p * 4 + c] - reference[p * 4 + c]) >
-                         0.005f * std::abs(reference[p * 4 + c]);
-    }
-    EXPECT_GT(covered, 1000);
-    EXPECT_EQ(different, 0) << "the colour pass after the prepass differs from the plain colour pass";
-    EXPECT_EQ(drawn_without, 0);
+    const PrepassAgreement a =
+        prepass_agreement(pass, prepass_index, equal_index,
+                          [&](VkCommandBuffer cmd, size_t index)
+                          { object.draw(cmd, camera.set(), 0, glm::mat4(1.0f), 0, index); });
+    EXPECT_GT(a.covered, 1000);
+    EXPECT_EQ(a.different, 0) << "the colour pass after the prepass differs from the plain colour pass";
+    EXPECT_EQ(a.drawn_without, 0);
 
     gpu::one_shot(dev,
                   [&](VkCommandBuffer cmd)

@@ -82,8 +82,15 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
                                         std::to_string(p.first_index) + ", +" +
                                         std::to_string(p.index_count) + ") past the mesh's " +
                                         std::to_string(mesh.indices.size()));
-        Draw d{p.first_index,       p.index_count,        p.material, 0,
-               glm::vec3(INFINITY), glm::vec3(-INFINITY), {},         {}};
+        Draw d{p.first_index,
+               p.index_count,
+               p.material,
+               0,
+               glm::vec3(INFINITY),
+               glm::vec3(-INFINITY),
+               {},
+               {},
+               {}};
         if (geometry && !geometry->primitives.empty())
         {
             d.first_index = geometry->primitives[i].first_index;
@@ -111,6 +118,9 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
             if (geometry)
                 key.vertex = geometry->layout;
             d.keys.push_back(key);
+            d.coefficient_shift.push_back(source == CoefficientSourceKind::Vertex && d.vertex_offset != 0
+                                              ? uint32_t(d.vertex_offset) * uint32_t(basis_size(v.basis))
+                                              : 0u);
         }
         draws_.push_back(std::move(d));
     }
@@ -185,10 +195,7 @@ bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorS
     out.push.model = model;
     // Per-vertex coefficients are read at coefficient_offset + gl_VertexIndex K, and gl_VertexIndex counts
     // the engine's vertex offset: taken out here (modulo 2^32, as the shader's sum is).
-    out.push.coefficient_offset =
-        d.keys[variant].source == CoefficientSourceKind::Vertex
-            ? coefficient_offset - uint32_t(d.vertex_offset) * uint32_t(basis_size(d.keys[variant].basis))
-            : coefficient_offset;
+    out.push.coefficient_offset = coefficient_offset - d.coefficient_shift[variant];
     out.push.draw_id = uint32_t(primitive + 1);
     out.push.lightmap_scale_offset = lightmap_scale_offset;
     return true;

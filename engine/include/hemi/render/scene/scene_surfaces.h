@@ -112,6 +112,7 @@ class SceneSurfaces
         int32_t vertex_offset;
         glm::vec3 bounds_min, bounds_max;
         std::vector<MaterialKey> keys;                       // per variant
+        std::vector<uint32_t> coefficient_shift;             // per variant: vertex_offset * K (vertex source)
         std::vector<std::vector<const MaterialType*>> types; // per pass, per variant
     };
     std::vector<Draw> draws_;
