@@ -23,15 +23,22 @@ namespace hemi::test
 struct VulkanCalls
 {
     std::atomic<uint64_t> pipeline_barriers{0}, pipeline_binds{0}, descriptor_set_binds{0}, buffer_updates{0},
-        draws{0}, dispatches{0}, submits{0}, fence_waits{0}, idle_waits{0}, memory_allocations{0},
-        memory_frees{0};
+        draws{0}, dispatches{0}, push_constants{0}, vertex_buffer_binds{0}, index_buffer_binds{0}, submits{0},
+        fence_waits{0}, idle_waits{0}, memory_allocations{0}, memory_frees{0};
 
     void reset()
     {
         for (std::atomic<uint64_t>* c :
              {&pipeline_barriers, &pipeline_binds, &descriptor_set_binds, &buffer_updates, &draws,
-              &dispatches, &submits, &fence_waits, &idle_waits, &memory_allocations, &memory_frees})
+              &dispatches, &push_constants, &vertex_buffer_binds, &index_buffer_binds, &submits, &fence_waits,
+              &idle_waits, &memory_allocations, &memory_frees})
             c->store(0);
+    }
+    // Commands recorded into command buffers (of the kinds hemi records on the frame path).
+    uint64_t commands() const
+    {
+        return pipeline_barriers + pipeline_binds + descriptor_set_binds + buffer_updates + draws +
+               dispatches + push_constants + vertex_buffer_binds + index_buffer_binds;
     }
     // Work handed to a queue or waited on by the host: what the engine path must never do.
     uint64_t queue_work() const { return submits + fence_waits + idle_waits; }
@@ -115,6 +122,9 @@ inline PFN_vkGetInstanceProcAddr loader_proc_addr()
     X(vkCmdUpdateBuffer, buffer_updates)                                                                     \
     X(vkCmdDrawIndexed, draws)                                                                               \
     X(vkCmdDispatch, dispatches)                                                                             \
+    X(vkCmdPushConstants, push_constants)                                                                    \
+    X(vkCmdBindVertexBuffers, vertex_buffer_binds)                                                           \
+    X(vkCmdBindIndexBuffer, index_buffer_binds)                                                              \
     X(vkQueueSubmit, submits)                                                                                \
     X(vkWaitForFences, fence_waits)                                                                          \
     X(vkDeviceWaitIdle, idle_waits)                                                                          \

@@ -1,6 +1,8 @@
 #include <hemi/bake/distribution.h>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace hemi::bake
 {
@@ -33,6 +35,18 @@ class Local final : public Distribution
     uint64_t items_ = 0;
 };
 } // namespace
+
+void Distribution::check_same(uint64_t value, const std::string& what)
+{
+    if (ranks() == 1)
+        return;
+    uint64_t leaders = value;
+    broadcast(std::as_writable_bytes(std::span<uint64_t>(&leaders, 1)));
+    if (leaders != value)
+        throw std::runtime_error("rank " + std::to_string(rank()) + " " + what +
+                                 " differs from rank 0's: every rank needs the same hemi-bake and the same "
+                                 "inputs at the same paths");
+}
 
 Distribution& local_distribution()
 {

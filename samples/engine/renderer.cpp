@@ -688,8 +688,8 @@ struct Renderer::Impl
         const bool objects = settings.objects && !settings.baked_only;
         for (uint32_t s = 0; s < kSpheres; ++s)
         {
-            const std::vector<glm::vec3> sh =
-                render::probe_lighting(assets.level, sphere_position(s, state.object_time), level_model);
+            std::array<glm::vec3, 9> sh;
+            render::probe_lighting(assets.level, sphere_position(s, state.object_time), level_model, sh);
             for (uint32_t i = 0; i < 9; ++i)
                 f.probe_sh[s * 9 + i] = glm::vec4(sh[i], 0.0f);
         }

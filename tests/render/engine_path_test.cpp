@@ -662,7 +662,8 @@ TEST_F(EnginePath, CoefficientsInTheEnginesStreamNeedTheBarrierItsDeclaredAccess
         dev, {ubo_align + sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
     render::FrameData view;
     view.view_projection = view_projection;
-    const shared::FrameUniforms uniforms = render::frame_uniforms(view);
+    shared::FrameUniforms uniforms{};
+    ASSERT_TRUE(render::frame_uniforms(system, view, uniforms));
     gpu::write_buffer(dev, camera, &uniforms, sizeof uniforms, ubo_align);
     const gpu::BufferRange camera_range{camera.handle(), ubo_align, sizeof(shared::FrameUniforms)};
     const render::FrameSet engine_view(system, {&camera_range, 1});

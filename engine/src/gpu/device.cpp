@@ -533,7 +533,7 @@ bool Device::memory_is_host_coherent(uint32_t memory_type) const
     return (memory_.memoryTypes[memory_type].propertyFlags & need) == need;
 }
 
-void Device::log(LogLevel level, std::string_view message) const
+void Device::log(LogLevel level, std::string_view message) const noexcept
 {
     if (log_)
         log_(level, false, message);

@@ -16,9 +16,11 @@ namespace
 
 struct Bands
 {
-    const std::vector<float>& blocks;
-    const std::vector<int>& offsets;
-    float at(int l, int m, int n) const { return blocks[offsets[l] + (m + l) * (2 * l + 1) + (n + l)]; }
+    const float* blocks;
+    float at(int l, int m, int n) const
+    {
+        return blocks[ShRotation::block_offset(l) + (m + l) * (2 * l + 1) + (n + l)];
+    }
 };
 
 // P of Ivanic-Ruedenberg Table 2: built from the band-1 block R and band l-1.
@@ -42,13 +44,6 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
         for (int k = 0; k < 3; ++k)
             if (!std::isfinite(r[c][k]))
                 throw std::invalid_argument("hemi: ShRotation: the rotation matrix is not finite");
-    int total = 0;
-    for (int l = 0; l < order; ++l)
-    {
-        offsets_.push_back(total);
-        total += (2 * l + 1) * (2 * l + 1);
-    }
-    blocks_.assign(total, 0.0f);
     blocks_[0] = 1.0f;
     if (order == 1)
         return;
@@ -58,10 +53,10 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
     const float sign[3] = {-1.0f, 1.0f, -1.0f};
     for (int m = -1; m <= 1; ++m)
         for (int n = -1; n <= 1; ++n)
-            blocks_[offsets_[1] + (m + 1) * 3 + (n + 1)] =
+            blocks_[block_offset(1) + (m + 1) * 3 + (n + 1)] =
                 sign[m + 1] * sign[n + 1] * r[axis[n + 1]][axis[m + 1]];
 
-    Bands b{blocks_, offsets_};
+    Bands b{blocks_.data()};
     for (int l = 2; l < order; ++l)
     {
         for (int m = -l; m <= l; ++m)
@@ -103,7 +98,7 @@ ShRotation::ShRotation(int order, const glm::mat3& r) : order_(order)
                                         : p_term(b, 1, l, m - 1, n) - p_term(b, -1, l, -m + 1, n);
                     value += w * ww;
                 }
-                blocks_[offsets_[l] + (m + l) * (2 * l + 1) + (n + l)] = float(value);
+                blocks_[block_offset(l) + (m + l) * (2 * l + 1) + (n + l)] = float(value);
             }
     }
 }
@@ -112,12 +107,11 @@ float ShRotation::element(int l, int m, int n) const
 {
     if (l < 0 || l >= order_ || std::abs(m) > l || std::abs(n) > l)
         throw std::out_of_range("hemi: ShRotation::element out of range");
-    return blocks_[offsets_[l] + (m + l) * (2 * l + 1) + (n + l)];
+    return blocks_[block_offset(l) + (m + l) * (2 * l + 1) + (n + l)];
 }
 
 template <typename T>
-static void apply_blocks(int order, const std::vector<float>& blocks, const std::vector<int>& offsets,
-                         std::span<const T> in, std::span<T> out)
+static void apply_blocks(int order, const float* blocks, std::span<const T> in, std::span<T> out)
 {
     const size_t n = size_t(order) * order;
     if (in.size() != n || out.size() != n)
@@ -125,7 +119,7 @@ static void apply_blocks(int order, const std::vector<float>& blocks, const std:
     for (int l = 0; l < order; ++l)
     {
         const int size = 2 * l + 1, base = l * l;
-        const float* block = blocks.data() + offsets[l];
+        const float* block = blocks + ShRotation::block_offset(l);
         for (int i = 0; i < size; ++i)
         {
             T sum = T(0);
@@ -138,12 +132,12 @@ static void apply_blocks(int order, const std::vector<float>& blocks, const std:
 
 void ShRotation::apply(std::span<const glm::vec3> in, std::span<glm::vec3> out) const
 {
-    apply_blocks(order_, blocks_, offsets_, in, out);
+    apply_blocks(order_, blocks_.data(), in, out);
 }
 
 void ShRotation::apply(std::span<const float> in, std::span<float> out) const
 {
-    apply_blocks(order_, blocks_, offsets_, in, out);
+    apply_blocks(order_, blocks_.data(), in, out);
 }
 
 } // namespace hemi::math

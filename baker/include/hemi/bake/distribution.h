@@ -64,18 +64,7 @@ class Distribution
 
     // Throws std::runtime_error on a rank whose `value` (a bake's checkpoint key: a hash of its inputs and
     // options) differs from the leader's: ranks that would bake different scenes must not share slices.
-    void check_same(uint64_t value, const std::string& what)
-    {
-        if (ranks() == 1)
-            return;
-        uint64_t leaders = value;
-        broadcast(std::as_writable_bytes(std::span<uint64_t>(&leaders, 1)));
-        if (leaders != value)
-            throw std::runtime_error(
-                "rank " + std::to_string(rank()) + " " + what +
-                " differs from rank 0's: every rank needs the same hemi-bake and the same "
-                "inputs at the same paths");
-    }
+    void check_same(uint64_t value, const std::string& what);
 
     // On the leader: how many items each rank has computed in run() so far (the load balance, for reports).
     virtual std::vector<uint64_t> items_by_rank() const = 0;

@@ -32,7 +32,8 @@ enum class LogLevel
 };
 
 // hemi never prints: everything it has to say goes through the host's callback. Messages from the
-// Khronos validation layer arrive with `validation == true`. May be called from any thread.
+// Khronos validation layer arrive with `validation == true`. May be called from any thread, and from calls on
+// the frame path that refuse a bad argument (LogLevel::Error, docs/engine.md): it must not throw.
 using LogCallback = std::function<void(LogLevel level, bool validation, std::string_view message)>;
 
 struct DeviceDesc
@@ -160,7 +161,8 @@ class Device
     // Validation-layer warnings and errors seen so far (always 0 without validation).
     uint64_t validation_messages() const { return validation_messages_.load(); }
 
-    void log(LogLevel level, std::string_view message) const;
+    // Hands `message` to the callback (nothing without one).
+    void log(LogLevel level, std::string_view message) const noexcept;
     void wait_idle() const;
 
     // Names one of hemi's Vulkan objects for debuggers (RenderDoc, the validation layer's messages) when the

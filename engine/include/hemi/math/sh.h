@@ -74,6 +74,7 @@ glm::vec3 sh9_eval_rgb(const Sh9Rgb& coefficients, const glm::vec3& d);
 class ShRotation
 {
   public:
+    // Throws std::invalid_argument for an order outside [1, kMaxShOrder] or a rotation that is not finite.
     ShRotation(int order, const glm::mat3& rotation);
     int order() const { return order_; }
     // out = D in; in and out have order^2 entries and may not alias.
@@ -82,10 +83,15 @@ class ShRotation
     // Element (m, n) of band l's (2l+1)^2 block, m, n in [-l, l].
     float element(int l, int m, int n) const;
 
+    // Where band l's block starts: sum_{k<l} (2k+1)^2 = l (4l^2 - 1) / 3.
+    static constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
+    static constexpr int kBlockFloats = kMaxShOrder * (4 * kMaxShOrder * kMaxShOrder - 1) / 3;
+
   private:
     int order_;
-    std::vector<float> blocks_; // band l's block at offset sum_{k<l} (2k+1)^2, row-major
-    std::vector<int> offsets_;
+    // Band l's block at block_offset(l), row-major; fixed storage, so that a rotation made per object and
+    // frame allocates nothing.
+    std::array<float, kBlockFloats> blocks_{};
 };
 
 // An analytic sky with z up, in linear RGB radiance: a zenith-to-horizon gradient over a darker ground

@@ -1,3 +1,5 @@
+#include "../refuse.h"
+
 #include <hemi/gpu/commands.h>
 #include <hemi/math/separable_basis.h>
 #include <hemi/render/material/frame_set.h>
@@ -28,7 +30,7 @@ void record_uniform_update(VkCommandBuffer cmd, const gpu::Buffer& buffer, const
 }
 
 FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight, uint32_t max_instances)
-    : max_instances_(max_instances)
+    : device_(&system.device()), max_instances_(max_instances)
 {
     const gpu::Device& device = system.device();
     if (frames_in_flight == 0)
@@ -57,7 +59,7 @@ FrameSet::FrameSet(const MaterialSystem& system, uint32_t frames_in_flight, uint
 
 FrameSet::FrameSet(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
                    std::span<const gpu::BufferRange> instances, uint32_t max_instances)
-    : engine_data_(true), max_instances_(max_instances)
+    : device_(&system.device()), engine_data_(true), max_instances_(max_instances)
 {
     const gpu::Device& device = system.device();
     if (uniforms.empty())
@@ -114,58 +116,41 @@ void FrameSet::make_sets(const MaterialSystem& system, std::span<const gpu::Buff
     }
 }
 
-VkDeviceSize FrameSet::slot_offset(uint32_t slot) const
+namespace
 {
-    if (slot >= sets_.size())
-        throw std::invalid_argument("hemi: frame slot " + std::to_string(slot) + " of a frame set made for " +
-                                    std::to_string(sets_.size()) + " frame(s) in flight");
-    return slot * stride_;
-}
-
-void FrameSet::write_instances(uint32_t slot, std::span<const shared::DrawPush> records, uint32_t first)
+// FrameData's checks, reported as `call` through `device`.
+bool pack_frame(const gpu::Device& device, const char* call, const FrameData& frame,
+                shared::FrameUniforms& u) noexcept
 {
-    if (engine_data_)
-        throw std::logic_error("hemi: this frame set reads the engine's instance records: write them there");
-    (void)slot_offset(slot);
-    if (uint64_t(first) + records.size() > max_instances_)
-        throw std::invalid_argument("hemi: instance records [" + std::to_string(first) + ", +" +
-                                    std::to_string(records.size()) + ") past a frame set made for " +
-                                    std::to_string(max_instances_) + " instances");
-    if (records.empty())
-        return;
-    std::memcpy(static_cast<std::byte*>(instances_.mapped()) + slot * instance_stride_ +
-                    first * sizeof(shared::DrawPush),
-                records.data(), records.size_bytes());
-}
-
-VkDescriptorSet FrameSet::set(uint32_t slot) const
-{
-    (void)slot_offset(slot);
-    return sets_[slot].get();
-}
-
-shared::FrameUniforms frame_uniforms(const FrameData& frame)
-{
-    shared::FrameUniforms u{};
-    u.view_projection = frame.view_projection;
     if (frame.lights.size() > HEMI_MAX_LIGHTS)
-        throw std::invalid_argument("hemi: at most " + std::to_string(HEMI_MAX_LIGHTS) +
-                                    " dynamic lights, got " + std::to_string(frame.lights.size()));
+        return detail::refuse(device, call, "at most %d dynamic lights, got %zu", HEMI_MAX_LIGHTS,
+                              frame.lights.size());
     if (!(frame.specular_exponent > 0.0f) || !std::isfinite(frame.specular_exponent) ||
         !std::isfinite(frame.specular_strength))
-        throw std::invalid_argument(
-            "hemi: the specular exponent and strength must be finite, the exponent > 0");
-    u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()),
-                          frame.specular_exponent, frame.specular_strength);
-    u.eye = glm::vec4(frame.eye, 1.0f);
+        return detail::refuse(device, call,
+                              "the specular exponent and strength must be finite, the exponent > 0");
+    for (int c = 0; c < 4; ++c)
+        if (!std::isfinite(frame.view_projection[c].x + frame.view_projection[c].y +
+                           frame.view_projection[c].z + frame.view_projection[c].w))
+            return detail::refuse(device, call, "the view-projection matrix is not finite");
+    if (!std::isfinite(frame.eye.x + frame.eye.y + frame.eye.z))
+        return detail::refuse(device, call, "the eye position is not finite");
     for (size_t i = 0; i < frame.lights.size(); ++i)
     {
         const DynamicLight& l = frame.lights[i];
         const bool finite = std::isfinite(l.position.x + l.position.y + l.position.z) &&
                             std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z);
         if (!finite || (!l.point && !(glm::length(l.position) > 0.0f)))
-            throw std::invalid_argument("hemi: dynamic light " + std::to_string(i) +
-                                        " is not finite or has no direction");
+            return detail::refuse(device, call, "dynamic light %zu is not finite or has no direction", i);
+    }
+    u = {};
+    u.view_projection = frame.view_projection;
+    u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()),
+                          frame.specular_exponent, frame.specular_strength);
+    u.eye = glm::vec4(frame.eye, 1.0f);
+    for (size_t i = 0; i < frame.lights.size(); ++i)
+    {
+        const DynamicLight& l = frame.lights[i];
         u.light_position[i] =
             glm::vec4(l.point ? l.position : glm::normalize(l.position), l.point ? 1.0f : 0.0f);
         u.light_irradiance[i] = glm::vec4(l.irradiance, 0.0f);
@@ -173,23 +158,74 @@ shared::FrameUniforms frame_uniforms(const FrameData& frame)
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)
         u.sep4_weights[j] = glm::vec4(w[j * 4], w[j * 4 + 1], w[j * 4 + 2], w[j * 4 + 3]);
-    return u;
+    return true;
+}
+} // namespace
+
+bool frame_uniforms(const MaterialSystem& system, const FrameData& frame, shared::FrameUniforms& out) noexcept
+{
+    shared::FrameUniforms u;
+    if (!pack_frame(system.device(), "frame_uniforms", frame, u))
+        return false;
+    out = u;
+    return true;
 }
 
-void FrameSet::write(uint32_t slot, const FrameData& frame)
+bool FrameSet::check_write(const char* call, uint32_t slot) const noexcept
 {
     if (engine_data_)
-        throw std::logic_error("hemi: this frame set reads the engine's view data: write it there");
-    const shared::FrameUniforms u = frame_uniforms(frame);
-    std::memcpy(static_cast<std::byte*>(uniforms_.mapped()) + slot_offset(slot), &u, sizeof u);
+        return detail::refuse(*device_, call,
+                              "this frame set reads the engine's own buffers: write them there");
+    if (slot >= sets_.size())
+        return detail::refuse(*device_, call, "frame slot %u of a frame set made for %zu frame(s) in flight",
+                              slot, sets_.size());
+    return true;
 }
 
-void FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot) const
+bool FrameSet::write_instances(uint32_t slot, std::span<const shared::DrawPush> records,
+                               uint32_t first) noexcept
 {
-    if (engine_data_)
-        throw std::logic_error("hemi: this frame set reads the engine's view data: write it there");
-    const shared::FrameUniforms u = frame_uniforms(frame);
-    record_uniform_update(cmd, uniforms_, &u, sizeof u, slot_offset(slot));
+    if (!check_write("FrameSet::write_instances", slot))
+        return false;
+    if (uint64_t(first) + records.size() > max_instances_)
+        return detail::refuse(*device_, "FrameSet::write_instances",
+                              "instance records [%u, %llu) past a frame set made for %u instances", first,
+                              (unsigned long long)(first + records.size()), max_instances_);
+    if (!records.empty())
+        std::memcpy(static_cast<std::byte*>(instances_.mapped()) + slot * instance_stride_ +
+                        first * sizeof(shared::DrawPush),
+                    records.data(), records.size_bytes());
+    return true;
+}
+
+VkDescriptorSet FrameSet::set(uint32_t slot) const noexcept
+{
+    if (slot >= sets_.size())
+    {
+        detail::refuse(*device_, "FrameSet::set",
+                       "frame slot %u of a frame set made for %zu frame(s) in flight", slot, sets_.size());
+        return VK_NULL_HANDLE;
+    }
+    return sets_[slot].get();
+}
+
+bool FrameSet::write(uint32_t slot, const FrameData& frame) noexcept
+{
+    shared::FrameUniforms u;
+    if (!check_write("FrameSet::write", slot) || !pack_frame(*device_, "FrameSet::write", frame, u))
+        return false;
+    std::memcpy(static_cast<std::byte*>(uniforms_.mapped()) + slot * stride_, &u, sizeof u);
+    return true;
+}
+
+bool FrameSet::record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot) const noexcept
+{
+    shared::FrameUniforms u;
+    if (!check_write("FrameSet::record_update", slot) ||
+        !pack_frame(*device_, "FrameSet::record_update", frame, u))
+        return false;
+    record_uniform_update(cmd, uniforms_, &u, sizeof u, slot * stride_);
+    return true;
 }
 
 } // namespace hemi::render

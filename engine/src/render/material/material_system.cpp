@@ -233,6 +233,7 @@ std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, co
     auto type = std::make_unique<MaterialType>();
     type->key = key;
     type->pass = pass.kind;
+    type->device = device_;
     type->k = uint32_t(basis.size);
 
     const bool depth = pass.kind != PassKind::Color;

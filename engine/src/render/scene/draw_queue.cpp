@@ -1,4 +1,6 @@
 // Sorted draw packets (draw_queue.h).
+#include "../refuse.h"
+
 #include <hemi/render/scene/draw_queue.h>
 
 #include <algorithm>
@@ -24,27 +26,51 @@ uint64_t hash12(VkDescriptorSet set)
 } // namespace
 
 uint64_t draw_key(uint32_t layer, const MaterialType& type, VkDescriptorSet material, VkDescriptorSet source,
-                  float depth)
+                  float depth) noexcept
 {
-    if (layer > 0xffu)
-        throw std::invalid_argument("hemi: draw key layer " + std::to_string(layer) + " exceeds 255");
     const float d = std::isfinite(depth) ? std::clamp(depth, 0.0f, 1.0f) : 1.0f;
     const uint64_t depth16 = uint64_t(std::lround(d * 65535.0f));
-    return uint64_t(layer) << 56 | uint64_t(type.id & 0xffffu) << 40 | hash12(material) << 28 |
+    return uint64_t(layer & 0xffu) << 56 | uint64_t(type.id & 0xffffu) << 40 | hash12(material) << 28 |
            hash12(source) << 16 | depth16;
 }
 
-DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packets)
+DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packets) noexcept
 {
     DrawStats stats;
+    // Every packet is checked before the first is recorded: a refused list records nothing.
+    const gpu::Device* device = nullptr;
+    size_t first_bad = packets.size();
+    for (size_t i = 0; i < packets.size(); ++i)
+    {
+        const DrawPacket& p = packets[i];
+        if (p.type && !device)
+            device = p.type->device;
+        if (!p.type || !p.frame || !p.material || !p.source || !p.mesh)
+        {
+            first_bad = std::min(first_bad, i);
+            ++stats.refused;
+        }
+    }
+    if (stats.refused)
+    {
+        if (device)
+        {
+            const DrawPacket& p = packets[first_bad];
+            detail::refuse(*device, "record_packets",
+                           "%llu of %zu packets lack a material type, a descriptor set or a mesh (released, "
+                           "or never set); the first is packet %zu (type %s, frame %s, material %s, source "
+                           "%s, mesh %s): nothing recorded",
+                           (unsigned long long)stats.refused, packets.size(), first_bad,
+                           p.type ? "set" : "null", p.frame ? "set" : "null", p.material ? "set" : "null",
+                           p.source ? "set" : "null", p.mesh ? "set" : "null");
+        }
+        return stats;
+    }
     const MaterialType* type = nullptr;
     VkDescriptorSet bound[3] = {VK_NULL_HANDLE, VK_NULL_HANDLE, VK_NULL_HANDLE};
     const MeshBinding* mesh = nullptr;
     for (const DrawPacket& p : packets)
     {
-        if (!p.type || !p.frame || !p.material || !p.source || !p.mesh)
-            throw std::invalid_argument("hemi: a draw packet needs a material type, its three descriptor "
-                                        "sets and a mesh");
         const gpu::Program& program = p.type->program;
         const VkDescriptorSet sets[3] = {p.frame, p.material, p.source};
         uint32_t first = 0;
@@ -80,10 +106,8 @@ DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packet
     return stats;
 }
 
-void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count)
+void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count) noexcept
 {
-    if (count == 0)
-        throw std::invalid_argument("hemi: an instanced draw of 0 instances");
     packet.push.instanced = 1;
     packet.instance_count = count;
     packet.first_instance = first;
@@ -91,8 +115,18 @@ void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count)
 
 void DrawQueue::sort()
 {
-    std::stable_sort(packets_.begin(), packets_.end(),
-                     [](const DrawPacket& a, const DrawPacket& b) { return a.key < b.key; });
+    // By (key, position): a total order, so std::sort (which allocates nothing, unlike std::stable_sort's
+    // temporary buffer) keeps equal keys in the order they were added. The scratch arrays keep their
+    // capacity from frame to frame.
+    const size_t n = packets_.size();
+    order_.resize(n);
+    for (size_t i = 0; i < n; ++i)
+        order_[i] = {packets_[i].key, uint32_t(i)};
+    std::sort(order_.begin(), order_.end());
+    scratch_.resize(n);
+    for (size_t i = 0; i < n; ++i)
+        scratch_[i] = packets_[order_[i].second];
+    packets_.swap(scratch_);
 }
 
 } // namespace hemi::render

@@ -1,3 +1,5 @@
+#include "../refuse.h"
+
 #include <hemi/math/sh.h>
 #include <hemi/render/scene/lightmap_model.h>
 
@@ -21,31 +23,33 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
     return math::basis(output);
 }
 
-std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
-                                      const glm::mat4& model)
+bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position, const glm::mat4& model,
+                    std::array<glm::vec3, 9>& out) noexcept
 {
-    if (asset.probes.empty())
-        throw std::invalid_argument("hemi: the lightmap asset has no light probes (bake it with --probes)");
-    if (!std::isfinite(world_position.x + world_position.y + world_position.z))
-        throw std::invalid_argument("hemi: a probe-lit object's position is not finite");
+    out.fill(glm::vec3(0.0f));
+    if (asset.probes.empty() || !std::isfinite(world_position.x + world_position.y + world_position.z))
+        return false;
     // The level's irradiance function f in its own frame is g(d) = f(R^T d) in the world: math::ShRotation(R)
     // with R the model's rotation (its uniform scale divided out).
     glm::mat3 rotation(model);
+    for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(rotation[c].x + rotation[c].y + rotation[c].z))
+            return false;
     const float scale = std::cbrt(std::abs(glm::determinant(rotation)));
     if (!(scale > 0.0f) || !std::isfinite(scale))
-        throw std::invalid_argument("hemi: the model matrix is singular or not finite");
+        return false;
     rotation /= scale;
     const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
     const std::array<glm::vec3, 9> scene = asset.probes.at(p);
-    std::vector<glm::vec3> world(9);
-    math::ShRotation(3, rotation).apply(scene, world);
-    return world;
+    math::ShRotation(3, rotation).apply(scene, out);
+    return true;
 }
 
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                              const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
                              const std::map<std::string, std::string>& material_techniques,
                              const EngineGeometry* geometry)
+    : device_(&system.device())
 {
     if (default_techniques.empty())
         throw std::invalid_argument("hemi: a lightmap model needs at least one technique");
@@ -145,41 +149,77 @@ const TexelCoefficients& LightmapModel::coefficients(const std::string& techniqu
     return *coefficients_[size_t(it - names_.begin())];
 }
 
-void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry,
-                         const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset) const
+bool LightmapModel::check(const char* call, const LightmapDraw& entry) const noexcept
 {
-    surfaces_->draw_primitive(cmd, frame, coefficients_.at(entry.variant)->set(), 0, model, entry.variant,
-                              pass, entry.primitive, lightmap_scale_offset);
+    if (entry.variant >= coefficients_.size() || entry.primitive >= surfaces_->primitive_count() ||
+        entry.material != &surfaces_->material(entry.primitive))
+        return detail::refuse(
+            *device_, call, "the entry (primitive %zu, technique %zu) is not one of this model's draw_list()",
+            entry.primitive, entry.variant);
+    return true;
 }
 
-void LightmapModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
-                            const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset,
-                            uint32_t layer, float depth) const
+bool LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry,
+                         const glm::mat4& model, size_t pass,
+                         const glm::vec4& lightmap_scale_offset) const noexcept
 {
+    if (!check("LightmapModel::draw", entry))
+        return false;
+    const VkDescriptorSet source = coefficients_[entry.variant]->set();
+    if (!surfaces_->check("LightmapModel::draw", frame, source, entry.variant, pass))
+        return false;
+    return surfaces_->draw_primitive(cmd, frame, source, 0, model, entry.variant, pass, entry.primitive,
+                                     lightmap_scale_offset);
+}
+
+bool LightmapModel::enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+                            const glm::mat4& model, size_t pass, const glm::vec4& lightmap_scale_offset,
+                            uint32_t layer, float depth) const noexcept
+{
+    if (!check("LightmapModel::enqueue", entry))
+        return false;
+    const VkDescriptorSet source = coefficients_[entry.variant]->set();
+    if (!surfaces_->check("LightmapModel::enqueue", frame, source, entry.variant, pass))
+        return false;
+    if (layer > 0xffu)
+        return detail::refuse(*device_, "LightmapModel::enqueue", "layer %u exceeds 255", layer);
     DrawPacket p;
-    if (surfaces_->packet(p, frame, coefficients_.at(entry.variant)->set(), 0, model, entry.variant, pass,
-                          entry.primitive, lightmap_scale_offset))
+    if (surfaces_->packet(p, frame, source, 0, model, entry.variant, pass, entry.primitive,
+                          lightmap_scale_offset))
     {
         p.key = draw_key(layer, *p.type, p.material, p.source, depth);
         queue.add(p);
     }
+    return true;
 }
 
-void LightmapModel::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
-                                      InstanceRange instances, size_t pass, uint32_t layer, float depth) const
+bool LightmapModel::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+                                      InstanceRange instances, size_t pass, uint32_t layer,
+                                      float depth) const noexcept
 {
+    if (!check("LightmapModel::enqueue_instances", entry))
+        return false;
+    if (instances.count == 0)
+        return detail::refuse(*device_, "LightmapModel::enqueue_instances",
+                              "an instanced draw of 0 instances");
+    const VkDescriptorSet source = coefficients_[entry.variant]->set();
+    if (!surfaces_->check("LightmapModel::enqueue_instances", frame, source, entry.variant, pass))
+        return false;
+    if (layer > 0xffu)
+        return detail::refuse(*device_, "LightmapModel::enqueue_instances", "layer %u exceeds 255", layer);
     DrawPacket p;
-    if (surfaces_->packet(p, frame, coefficients_.at(entry.variant)->set(), 0, glm::mat4(1.0f), entry.variant,
-                          pass, entry.primitive))
+    if (surfaces_->packet(p, frame, source, 0, glm::mat4(1.0f), entry.variant, pass, entry.primitive))
     {
         make_instanced(p, instances.first, instances.count);
         p.key = draw_key(layer, *p.type, p.material, p.source, depth);
         queue.add(p);
     }
+    return true;
 }
 
 shared::DrawPush LightmapModel::instance_record(const glm::mat4& model,
-                                                const glm::vec4& lightmap_scale_offset, uint32_t draw_id)
+                                                const glm::vec4& lightmap_scale_offset,
+                                                uint32_t draw_id) noexcept
 {
     shared::DrawPush r{};
     r.model = model;
@@ -188,11 +228,23 @@ shared::DrawPush LightmapModel::instance_record(const glm::mat4& model,
     return r;
 }
 
-void LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
-                         const glm::mat4& model, size_t pass) const
+bool LightmapModel::draw(VkCommandBuffer cmd, VkDescriptorSet frame, std::string_view technique,
+                         const glm::mat4& model, size_t pass) const noexcept
 {
-    for (const LightmapDraw& entry : draw_list(technique, pass))
-        draw(cmd, frame, entry, model, pass);
+    const auto it = std::find(names_.begin(), names_.end(), technique);
+    if (it == names_.end())
+        return detail::refuse(*device_, "LightmapModel::draw", "technique '%.*s' is not loaded in this model",
+                              int(technique.size()), technique.data());
+    const size_t fallback = size_t(it - names_.begin());
+    if (!surfaces_->check("LightmapModel::draw", frame, coefficients_[fallback]->set(), fallback, pass))
+        return false;
+    // draw_list()'s entries, without making the list.
+    for (size_t p = 0; p < surfaces_->primitive_count(); ++p)
+    {
+        const size_t variant = primitive_variant_[p] >= 0 ? size_t(primitive_variant_[p]) : fallback;
+        surfaces_->draw_primitive(cmd, frame, coefficients_[variant]->set(), 0, model, variant, pass, p);
+    }
+    return true;
 }
 
 } // namespace hemi::render

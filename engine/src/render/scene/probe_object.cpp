@@ -1,5 +1,9 @@
 // A dynamic object lit by light probes (probe_object.h).
+#include "../refuse.h"
+
 #include <hemi/render/scene/probe_object.h>
+
+#include <cmath>
 
 #include <stdexcept>
 #include <string>
@@ -12,7 +16,8 @@ ProbeObject::ProbeObject(MaterialSystem& system, const io::Mesh& mesh,
                          const std::vector<io::Material>& materials,
                          const std::vector<io::Primitive>& primitives, uint32_t instances,
                          gpu::UploadBatch& upload, uint32_t frames_in_flight, const EngineGeometry* geometry)
-    : surfaces_(system, mesh, images, materials, primitives, CoefficientSourceKind::Uniform,
+    : device_(&system.device()),
+      surfaces_(system, mesh, images, materials, primitives, CoefficientSourceKind::Uniform,
                 {SurfaceVariant{Technique::Irradiance, HEMI_BASIS_SH9, ShadingFrame::World}}, upload,
                 geometry),
       probes_(system, instances, frames_in_flight)
@@ -21,51 +26,84 @@ ProbeObject::ProbeObject(MaterialSystem& system, const io::Mesh& mesh,
 
 ProbeObject::~ProbeObject() = default;
 
-void ProbeObject::check_sh9(std::span<const glm::vec3> sh9)
+bool ProbeObject::check(const char* call, uint32_t instance, uint32_t frame) const noexcept
+{
+    if (instance >= probes_.probes() || frame >= probes_.frames_in_flight())
+        return detail::refuse(*device_, call,
+                              "instance %u of frame slot %u: the object has %u instance(s) and %u "
+                              "frame(s) in flight",
+                              instance, frame, probes_.probes(), probes_.frames_in_flight());
+    return true;
+}
+
+bool ProbeObject::check_sh9(const char* call, std::span<const glm::vec3> sh9) const noexcept
 {
     if (sh9.size() != 9)
-        throw std::invalid_argument("hemi: a probe-lit object takes 9 SH9 coefficients, got " +
-                                    std::to_string(sh9.size()));
+        return detail::refuse(*device_, call, "a probe-lit object takes 9 SH9 coefficients, got %zu",
+                              sh9.size());
+    for (size_t i = 0; i < sh9.size(); ++i)
+        if (!std::isfinite(sh9[i].x + sh9[i].y + sh9[i].z))
+            return detail::refuse(*device_, call, "SH9 coefficient %zu is not finite", i);
+    return true;
 }
 
-void ProbeObject::write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame)
+bool ProbeObject::write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame) noexcept
 {
-    check_sh9(sh9);
+    if (!check("ProbeObject::write_lighting", instance, frame) ||
+        !check_sh9("ProbeObject::write_lighting", sh9))
+        return false;
     probes_.write(frame, instance, sh9);
+    return true;
 }
 
-void ProbeObject::record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
-                                  uint32_t frame) const
+bool ProbeObject::record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
+                                  uint32_t frame) const noexcept
 {
-    check_sh9(sh9);
+    if (!check("ProbeObject::record_lighting", instance, frame) ||
+        !check_sh9("ProbeObject::record_lighting", sh9))
+        return false;
     probes_.record_update(cmd, frame, instance, sh9);
+    return true;
 }
 
-void ProbeObject::draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance,
-                       const glm::mat4& model, uint32_t frame, size_t pass) const
+bool ProbeObject::draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance,
+                       const glm::mat4& model, uint32_t frame, size_t pass) const noexcept
 {
-    surfaces_.draw(cmd, frame_set, probes_.set(), probes_.offset(frame, instance), model, 0, pass);
+    if (!check("ProbeObject::draw", instance, frame) ||
+        !surfaces_.check("ProbeObject::draw", frame_set, probes_.set(), 0, pass))
+        return false;
+    return surfaces_.draw(cmd, frame_set, probes_.set(), probes_.offset(frame, instance), model, 0, pass);
 }
 
-void ProbeObject::enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance,
+bool ProbeObject::enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance,
                           const glm::mat4& model, uint32_t frame, uint32_t layer, float depth,
-                          size_t pass) const
+                          size_t pass) const noexcept
 {
-    surfaces_.enqueue(queue, frame_set, probes_.set(), probes_.offset(frame, instance), model, 0, pass, layer,
-                      depth);
+    if (!check("ProbeObject::enqueue", instance, frame) ||
+        !surfaces_.check("ProbeObject::enqueue", frame_set, probes_.set(), 0, pass))
+        return false;
+    return surfaces_.enqueue(queue, frame_set, probes_.set(), probes_.offset(frame, instance), model, 0, pass,
+                             layer, depth);
 }
 
-void ProbeObject::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
-                                    uint32_t layer, float depth, size_t pass) const
+bool ProbeObject::enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
+                                    uint32_t layer, float depth, size_t pass) const noexcept
 {
     if (instances.count == 0)
-        throw std::invalid_argument("hemi: an instanced draw of 0 instances");
-    surfaces_.enqueue(queue, frame_set, probes_.set(), 0, glm::mat4(1.0f), 0, pass, layer, depth, instances);
+        return detail::refuse(*device_, "ProbeObject::enqueue_instances", "an instanced draw of 0 instances");
+    if (!surfaces_.check("ProbeObject::enqueue_instances", frame_set, probes_.set(), 0, pass))
+        return false;
+    return surfaces_.enqueue(queue, frame_set, probes_.set(), 0, glm::mat4(1.0f), 0, pass, layer, depth,
+                             instances);
 }
 
-shared::DrawPush ProbeObject::instance_record(uint32_t instance, const glm::mat4& model, uint32_t frame) const
+shared::DrawPush ProbeObject::instance_record(uint32_t instance, const glm::mat4& model,
+                                              uint32_t frame) const noexcept
 {
     shared::DrawPush r{};
+    r.model = glm::mat4(0.0f);
+    if (!check("ProbeObject::instance_record", instance, frame))
+        return r;
     r.model = model;
     r.coefficient_offset = probes_.offset(frame, instance);
     return r;

@@ -1,3 +1,5 @@
+#include "../refuse.h"
+
 #include <hemi/math/basis.h>
 #include <hemi/render/scene/scene_surfaces.h>
 
@@ -142,26 +144,48 @@ size_t SceneSurfaces::add_pass(const PassDesc& pass)
 
 SceneSurfaces::~SceneSurfaces() = default;
 
-void SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
-                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
-                         size_t pass) const
+bool SceneSurfaces::check(const char* call, VkDescriptorSet frame, VkDescriptorSet source, size_t variant,
+                          size_t pass) const noexcept
 {
-    if (draws_.empty() || variant >= draws_.front().keys.size())
-        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " does not exist");
+    const gpu::Device& device = system_->device();
+    if (frame == VK_NULL_HANDLE)
+        return detail::refuse(device, call, "the frame set is VK_NULL_HANDLE (released, or never made)");
+    if (source == VK_NULL_HANDLE)
+        return detail::refuse(device, call, "the coefficient set is VK_NULL_HANDLE (released)");
     if (pass >= passes_.size())
-        throw std::invalid_argument("hemi: surface pass " + std::to_string(pass) + " was not added");
-    thread_local std::vector<DrawPacket> packets; // reused: no allocation per draw call
+        return detail::refuse(device, call,
+                              "pass %zu was not added (%zu pass(es); add_pass() returns the index)", pass,
+                              passes_.size());
+    const size_t variants = draws_.empty() ? 0 : draws_.front().keys.size();
+    if (variant >= variants)
+        return detail::refuse(device, call, "variant %zu does not exist (%zu loaded)", variant, variants);
+    return true;
+}
+
+bool SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
+                         size_t pass) const noexcept
+{
+    if (!check("draw", frame, source, variant, pass))
+        return false;
+    thread_local std::vector<DrawPacket>
+        packets; // grown once per thread, then reused: no allocation per call
     packets.resize(draws_.size());
     size_t n = 0;
     for (size_t i = 0; i < draws_.size(); ++i)
         n += packet(packets[n], frame, source, coefficient_offset, model, variant, pass, i) ? 1 : 0;
     record_packets(cmd, std::span(packets).first(n));
+    return true;
 }
 
-void SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source,
+bool SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source,
                             uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
-                            uint32_t layer, float depth, InstanceRange instances) const
+                            uint32_t layer, float depth, InstanceRange instances) const noexcept
 {
+    if (!check("enqueue", frame, source, variant, pass))
+        return false;
+    if (layer > 0xffu)
+        return detail::refuse(system_->device(), "enqueue", "layer %u exceeds 255", layer);
     DrawPacket p;
     for (size_t i = 0; i < draws_.size(); ++i)
         if (packet(p, frame, source, coefficient_offset, model, variant, pass, i))
@@ -171,16 +195,19 @@ void SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescripto
             p.key = draw_key(layer, *p.type, p.material, p.source, depth);
             queue.add(p);
         }
+    return true;
 }
 
 bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorSet source,
                            uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
-                           size_t primitive, const glm::vec4& lightmap_scale_offset) const
+                           size_t primitive, const glm::vec4& lightmap_scale_offset) const noexcept
 {
-    const Draw& d = draws_.at(primitive);
-    if (variant >= d.keys.size() || pass >= passes_.size())
-        throw std::invalid_argument("hemi: surface variant " + std::to_string(variant) + " or pass " +
-                                    std::to_string(pass) + " does not exist");
+    if (!check("packet", frame, source, variant, pass))
+        return false;
+    if (primitive >= draws_.size())
+        return detail::refuse(system_->device(), "packet", "primitive %zu does not exist (%zu)", primitive,
+                              draws_.size());
+    const Draw& d = draws_[primitive];
     if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
         return false;
     out.type = d.types[pass][variant];
@@ -191,6 +218,8 @@ bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorS
     out.first_index = d.first_index;
     out.index_count = d.index_count;
     out.vertex_offset = d.vertex_offset;
+    out.instance_count = 1;
+    out.first_instance = 0;
     out.push = {};
     out.push.model = model;
     // Per-vertex coefficients are read at coefficient_offset + gl_VertexIndex K, and gl_VertexIndex counts
@@ -201,14 +230,20 @@ bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorS
     return true;
 }
 
-void SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+bool SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
                                    uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
                                    size_t pass, size_t primitive,
-                                   const glm::vec4& lightmap_scale_offset) const
+                                   const glm::vec4& lightmap_scale_offset) const noexcept
 {
+    if (!check("draw_primitive", frame, source, variant, pass))
+        return false;
+    if (primitive >= draws_.size())
+        return detail::refuse(system_->device(), "draw_primitive", "primitive %zu does not exist (%zu)",
+                              primitive, draws_.size());
     DrawPacket p;
     if (packet(p, frame, source, coefficient_offset, model, variant, pass, primitive, lightmap_scale_offset))
         record_packets(cmd, {&p, 1});
+    return true;
 }
 
 const GpuMesh& SceneSurfaces::mesh() const

@@ -1,3 +1,4 @@
+#include "../refuse.h"
 #include <hemi/render/view/lightmap_view.h>
 
 #include <hemi/gpu/commands.h>
@@ -5,6 +6,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -28,12 +30,17 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
     if (frame.spheres.size() > kMaxSpheres)
         throw std::invalid_argument("hemi: at most " + std::to_string(kMaxSpheres) + " spheres, got " +
                                     std::to_string(frame.spheres.size()));
-    std::vector<std::vector<glm::vec3>> lighting;
-    for (const glm::vec4& s : frame.spheres)
+    std::vector<std::array<glm::vec3, 9>> lighting(frame.spheres.size());
+    for (size_t i = 0; i < frame.spheres.size(); ++i)
     {
+        const glm::vec4& s = frame.spheres[i];
         if (!(s.w > 0.0f) || !std::isfinite(s.x + s.y + s.z + s.w))
             throw std::invalid_argument("hemi: a sphere needs a finite centre and a radius > 0");
-        lighting.push_back(probe_lighting(*asset_, glm::vec3(s), frame.model)); // throws without probes
+        if (!probe_lighting(*asset_, glm::vec3(s), frame.model, lighting[i]))
+            throw std::invalid_argument(
+                asset_->probes.empty()
+                    ? "hemi: the lightmap asset has no light probes (bake it with --probes)"
+                    : "hemi: the level's model matrix is singular or not finite");
     }
     if (!frame.spheres.empty() && !spheres_)
     {
@@ -56,16 +63,20 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
                       dynamic.specular_exponent = frame.specular_exponent;
                       dynamic.specular_strength = frame.specular_strength;
                       view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
+                      // A tool's view: what the frame path refuses (and logs) throws here.
                       for (size_t i = 0; i < lighting.size(); ++i)
-                          spheres_->record_lighting(cmd, uint32_t(i), lighting[i]);
+                          if (!spheres_->record_lighting(cmd, uint32_t(i), lighting[i]))
+                              throw std::invalid_argument(detail::last_refusal());
                       view_.target().begin(cmd);
-                      model_->draw(cmd, view_.frame(), frame.technique, frame.model);
+                      if (!model_->draw(cmd, view_.frame(), frame.technique, frame.model))
+                          throw std::invalid_argument(detail::last_refusal());
                       for (size_t i = 0; i < frame.spheres.size(); ++i)
                       {
                           const glm::vec4& s = frame.spheres[i];
                           const glm::mat4 m =
                               glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(s)), glm::vec3(s.w));
-                          spheres_->draw(cmd, view_.frame(), uint32_t(i), m);
+                          if (!spheres_->draw(cmd, view_.frame(), uint32_t(i), m))
+                              throw std::invalid_argument(detail::last_refusal());
                       }
                       view_.target().end(cmd);
                   });

@@ -1,3 +1,5 @@
+#include "../refuse.h"
+
 #include <hemi/math/basis.h>
 #include <hemi/math/sh.h>
 #include <hemi/math/sh_environment.h>
@@ -58,7 +60,8 @@ void ViewTarget::record_frame(VkCommandBuffer cmd, const PrtCamera& camera, cons
     f.view_projection = camera_matrix(camera, BoundingSphere{bounds_centre_, bounds_radius_}, aspect);
     f.lighting_only = white;
     f.eye = camera.eye;
-    frame_set_.record_update(cmd, f);
+    if (!frame_set_.record_update(cmd, f))
+        throw std::invalid_argument(detail::last_refusal()); // a tool's view: bad input throws
 }
 
 io::ImageRgba ViewTarget::read() const
@@ -89,7 +92,8 @@ std::vector<glm::vec3> PrtView::object_lighting(const PrtFrame& frame) const
 
 void PrtView::record_transfer(VkCommandBuffer cmd, const PrtFrame& frame)
 {
-    model_->record_transfer_object_space(cmd, object_lighting(frame));
+    if (!model_->record_transfer_object_space(cmd, object_lighting(frame)))
+        throw std::invalid_argument(detail::last_refusal());
     record_material(cmd, frame);
 }
 
@@ -102,7 +106,8 @@ void PrtView::record_material(VkCommandBuffer cmd, const PrtFrame& frame)
 void PrtView::record_raster(VkCommandBuffer cmd) const
 {
     view_.target().begin(cmd);
-    model_->draw(cmd, view_.frame(), 0, model_matrix_);
+    if (!model_->draw(cmd, view_.frame(), 0, model_matrix_))
+        throw std::invalid_argument(detail::last_refusal());
     view_.target().end(cmd);
 }
 

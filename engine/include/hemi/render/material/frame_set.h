@@ -49,9 +49,11 @@ struct FrameData
 //                    the update, which finishes before this frame's draws read it (a frame recorded and
 //                    submitted at once: tools, tests).
 // The uniform block hemi's pipelines read for a view (shared::FrameUniforms, std140, hemi/shared/surface.h),
-// packed from `frame`: what an engine writes into its own buffer for FrameSet's engine-data constructor.
-// Throws std::invalid_argument for too many lights or values that are not finite.
-shared::FrameUniforms frame_uniforms(const FrameData& frame);
+// packed from `frame` into `out`: what an engine writes into its own buffer for FrameSet's engine-data
+// constructor. On the frame path: too many lights or values that are not finite are reported through the
+// system's device's log callback, and `out` is left as it was (false).
+bool frame_uniforms(const MaterialSystem& system, const FrameData& frame,
+                    shared::FrameUniforms& out) noexcept;
 
 class FrameSet
 {
@@ -66,18 +68,25 @@ class FrameSet
     // write() and write_instances() are refused (std::logic_error): the engine writes its buffers.
     FrameSet(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
              std::span<const gpu::BufferRange> instances = {}, uint32_t max_instances = 0);
-    void write(uint32_t slot, const FrameData& frame);
+    //
+    // The calls below are on the frame path: none throws or allocates. A bad argument (a slot out of range,
+    // too many lights, values that are not finite, records past max_instances, a write to a frame set over
+    // the engine's data) is reported through the device's log callback, and the call writes and records
+    // nothing and returns false (set(): VK_NULL_HANDLE, which the draws given it refuse in turn).
+    bool write(uint32_t slot, const FrameData& frame) noexcept;
     // Records [first, first + records.size()) of slot `slot`'s instance buffer, which instanced draws read
-    // (draw_queue.h: make_instanced; PrtModel::instance_record, LightmapModel::instance_record). Throws
-    // std::invalid_argument past max_instances. Write a slot only once the GPU is done with it, as write().
-    void write_instances(uint32_t slot, std::span<const shared::DrawPush> records, uint32_t first = 0);
+    // (draw_queue.h: make_instanced; PrtModel::instance_record, LightmapModel::instance_record), at most
+    // max_instances. Write a slot only once the GPU is done with it, as write().
+    bool write_instances(uint32_t slot, std::span<const shared::DrawPush> records,
+                         uint32_t first = 0) noexcept;
     uint32_t max_instances() const { return max_instances_; }
-    void record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot = 0) const;
-    VkDescriptorSet set(uint32_t slot = 0) const;
+    bool record_update(VkCommandBuffer cmd, const FrameData& frame, uint32_t slot = 0) const noexcept;
+    VkDescriptorSet set(uint32_t slot = 0) const noexcept;
     uint32_t frames_in_flight() const { return uint32_t(sets_.size()); }
 
   private:
-    VkDeviceSize slot_offset(uint32_t slot) const;
+    bool check_write(const char* call, uint32_t slot) const noexcept;
+    const gpu::Device* device_;
     void make_sets(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
                    std::span<const gpu::BufferRange> instances);
     bool engine_data_ = false;

@@ -186,6 +186,7 @@ struct MaterialType
     uint32_t k = 0;       // coefficients the basis takes
     gpu::Program program; // pipeline + layout (sets 0-2 of the system's shared layouts, shared::DrawPush)
     uint32_t id = 0; // 0, 1, 2, ... in the order the system compiled its types: a draw sort key's pipeline
+    const gpu::Device* device = nullptr; // the system's: where a refused draw of this type is reported
 };
 
 class MaterialSystem

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace hemi::render
@@ -40,39 +41,43 @@ struct InstanceRange
 };
 
 // Makes `packet` draw `count` instances with the values of the frame's instance records from `first` on
-// (FrameSet::write_instances): one draw for many instances of one asset.
-void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count);
+// (FrameSet::write_instances): one draw for many instances of one asset (count 0 draws nothing).
+void make_instanced(DrawPacket& packet, uint32_t first, uint32_t count) noexcept;
 
-// `layer` < 256; `depth` in [0, 1] (clamped), e.g. the view depth of the draw's bounds' centre over the far
-// plane.
+// `layer` < 256 (its low 8 bits are used); `depth` in [0, 1] (clamped; not finite: 1), e.g. the view depth
+// of the draw's bounds' centre over the far plane.
 uint64_t draw_key(uint32_t layer, const MaterialType& type, VkDescriptorSet material, VkDescriptorSet source,
-                  float depth);
+                  float depth) noexcept;
 
 // What record_packets() bound, for an engine's statistics (and hemi-bench's counters).
 struct DrawStats
 {
     uint64_t draws = 0, pipeline_binds = 0, descriptor_set_binds = 0, mesh_binds = 0;
     uint64_t instances = 0; // drawn by those draws (each instanced draw's count)
+    uint64_t refused = 0;   // packets without a type, a set or a mesh: then nothing was recorded
 };
 
 // Inside the caller's render pass: the packets in the order given, binding a pipeline, descriptor sets or a
-// mesh only where it differs from the previous packet's. Throws std::invalid_argument for a packet without
-// a type, a set or a mesh.
-DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packets);
+// mesh only where it differs from the previous packet's. A packet without a type, a descriptor set or a mesh
+// (a released object's) refuses the whole list: nothing is recorded, the stats count the refused packets,
+// and the device of the packets' material types logs it (docs/engine.md, "Errors"). Allocates nothing.
+DrawStats record_packets(VkCommandBuffer cmd, std::span<const DrawPacket> packets) noexcept;
 
 class DrawQueue
 {
   public:
+    // The queue keeps its capacity through clear(): a steady frame allocates nothing.
     void add(const DrawPacket& packet) { packets_.push_back(packet); }
     // By key; packets of equal keys keep the order they were added in.
     void sort();
-    DrawStats record(VkCommandBuffer cmd) const { return record_packets(cmd, packets_); }
+    DrawStats record(VkCommandBuffer cmd) const noexcept { return record_packets(cmd, packets_); }
     void clear() { packets_.clear(); }
     size_t size() const { return packets_.size(); }
     std::span<const DrawPacket> packets() const { return packets_; }
 
   private:
-    std::vector<DrawPacket> packets_;
+    std::vector<DrawPacket> packets_, scratch_;
+    std::vector<std::pair<uint64_t, uint32_t>> order_; // sort(): (key, position)
 };
 
 } // namespace hemi::render

@@ -24,9 +24,11 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hemi::render
@@ -41,9 +43,10 @@ const math::BasisDesc& lightmap_basis(const std::string& output);
 // `world_position` in a level placed by `model` (a rotation, uniform scale and translation): the probes'
 // interpolation at the position in the level's space, rotated into the world, as the 9 world-space SH9
 // irradiance coefficients a ProbeBuffer takes (technique "sh9" on the world frame: the object's
-// normal-map normal in world space). Throws std::invalid_argument when the asset has no probes.
-std::vector<glm::vec3> probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position,
-                                      const glm::mat4& model);
+// normal-map normal in world space), into `out`. On the frame path: allocates and throws nothing; false (and
+// `out` zero) when the asset has no probes, the position is not finite or the model matrix is singular.
+bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position, const glm::mat4& model,
+                    std::array<glm::vec3, 9>& out) noexcept;
 
 // One entry of a level's draw list: a primitive with its material and the technique that lights it, the
 // pipeline it binds and its bounds, for an engine to cull, sort and draw (LightmapModel::draw(cmd, frame,
@@ -78,26 +81,32 @@ class LightmapModel
     // The level's draw list for `technique` (its default: materials with their own technique keep it) in
     // `pass`: no per-primitive decision is left to the caller.
     std::vector<LightmapDraw> draw_list(const std::string& technique, size_t pass = 0) const;
+    // The calls from here to the draw of a technique are on the frame path: none throws or allocates. A bad
+    // argument (an entry of another model, a pass that was not added, a technique that is not loaded, a
+    // released frame set) is reported through the device's log callback and the call records nothing and
+    // returns false (docs/engine.md, "Errors").
+
     // Inside the caller's render pass: one entry, under `model`, with this draw's lightmap rectangle
     // (TEXCOORD_1 * xy + zw: several objects sharing one atlas).
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
-              size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+    bool draw(VkCommandBuffer cmd, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
+              size_t pass = 0,
+              const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const noexcept;
     // The same as a draw packet (draw_queue.h), keyed by `layer` and `depth`. The entry must come from
     // draw_list(..., pass).
-    void enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
+    bool enqueue(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry, const glm::mat4& model,
                  size_t pass = 0, const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f},
-                 uint32_t layer = 0, float depth = 0.0f) const;
+                 uint32_t layer = 0, float depth = 0.0f) const noexcept;
 
     // Instanced: instances.count copies of the entry in one draw, copy i placed by the frame set's record
     // instances.first + i (FrameSet::write_instances of instance_record()s): many instances of one asset.
-    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
+    bool enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, const LightmapDraw& entry,
                            InstanceRange instances, size_t pass = 0, uint32_t layer = 0,
-                           float depth = 0.0f) const;
+                           float depth = 0.0f) const noexcept;
     // The record of one instance: its model matrix and lightmap rectangle (TEXCOORD_1 * xy + zw), and its
     // draw id for the aux attachment (0: the primitive's).
     static shared::DrawPush instance_record(const glm::mat4& model,
                                             const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f},
-                                            uint32_t draw_id = 0);
+                                            uint32_t draw_id = 0) noexcept;
 
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
     // index for draw(). Pass 0 is the system's default colour pass.
@@ -105,8 +114,8 @@ class LightmapModel
 
     // Inside the caller's render pass: every entry of draw_list(technique, pass), under `model`. Depth and
     // shadow passes ignore the technique's lighting (any loaded technique will do).
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, const std::string& technique,
-              const glm::mat4& model, size_t pass = 0) const;
+    bool draw(VkCommandBuffer cmd, VkDescriptorSet frame, std::string_view technique, const glm::mat4& model,
+              size_t pass = 0) const noexcept;
 
     // hemi's data for an engine's own shaders (its main pass including hemi's GLSL library, docs/
     // integration.md): the mesh (GpuMesh::layout(), bound by surfaces().mesh().bind()), the materials'
@@ -120,6 +129,8 @@ class LightmapModel
     const TexelCoefficients& coefficients(const std::string& technique) const;
 
   private:
+    bool check(const char* call, const LightmapDraw& entry) const noexcept;
+    const gpu::Device* device_;
     std::vector<std::string> names_;
     std::vector<int> primitive_variant_;      // per primitive: its material's technique, or -1 (the default)
     std::unique_ptr<SceneSurfaces> surfaces_; // variant i draws technique names_[i]

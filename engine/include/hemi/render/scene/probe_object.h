@@ -36,38 +36,47 @@ class ProbeObject
                 const EngineGeometry* geometry = nullptr);
     ~ProbeObject();
 
+    // The calls below are on the frame path: none throws or allocates. A bad argument (an instance, frame
+    // slot or pass out of range, lighting that is not 9 finite coefficients, a released frame set) is
+    // reported through the device's log callback and the call writes and records nothing and returns false
+    // (docs/engine.md, "Errors").
+
     // Instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g. probe_lighting() at its
     // position) in frame slot `frame`, through mapped memory (no command; ProbeBuffer::write's contract).
-    void write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame = 0);
+    bool write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame = 0) noexcept;
     // Outside a render pass: the same, recorded in the command buffer (ProbeBuffer::record_update).
-    void record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
-                         uint32_t frame = 0) const;
+    bool record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
+                         uint32_t frame = 0) const noexcept;
     // Another pass of the caller's frame (a depth prepass, a shadow map, a colour pass into another target;
     // SceneSurfaces::add_pass): its index for draw() and enqueue(). 0 is the system's default colour pass.
     size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
 
     // Inside the caller's render pass: instance `instance` under `model` with its lighting of slot `frame`,
     // with the pipelines of `pass` (add_pass).
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
-              uint32_t frame = 0, size_t pass = 0) const;
+    bool draw(VkCommandBuffer cmd, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
+              uint32_t frame = 0, size_t pass = 0) const noexcept;
 
     // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
-    void enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
-                 uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const;
+    bool enqueue(DrawQueue& queue, VkDescriptorSet frame_set, uint32_t instance, const glm::mat4& model,
+                 uint32_t frame = 0, uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const noexcept;
 
     // Instanced: instances.count copies in one draw per primitive, copy i with the frame set's record
     // instances.first + i (FrameSet::write_instances of instance_record()s).
-    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
-                           uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const;
-    // The record of instance `instance` under `model`, lit by its probe of slot `frame`.
-    shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model, uint32_t frame = 0) const;
+    bool enqueue_instances(DrawQueue& queue, VkDescriptorSet frame_set, InstanceRange instances,
+                           uint32_t layer = 0, float depth = 0.0f, size_t pass = 0) const noexcept;
+    // The record of instance `instance` under `model`, lit by its probe of slot `frame` (refused: a zero
+    // model matrix, which draws nothing).
+    shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model,
+                                     uint32_t frame = 0) const noexcept;
 
     uint32_t instances() const { return probes_.probes(); }
     const ProbeBuffer& probes() const { return probes_; }
     const SceneSurfaces& surfaces() const { return surfaces_; }
 
   private:
-    static void check_sh9(std::span<const glm::vec3> sh9);
+    bool check(const char* call, uint32_t instance, uint32_t frame) const noexcept;
+    bool check_sh9(const char* call, std::span<const glm::vec3> sh9) const noexcept;
+    const gpu::Device* device_;
     SceneSurfaces surfaces_;
     ProbeBuffer probes_;
 };

@@ -82,6 +82,11 @@ class PrtModel
              gpu::UploadBatch& upload);
     ~PrtModel();
 
+    // The calls from here to instance_record() are on the frame path: none throws or allocates. A bad
+    // argument (a frame slot or instance out of range, a pass that was not added, too little or non-finite
+    // lighting, a singular model matrix, a released frame set) is reported through the device's log callback
+    // and the call records and writes nothing and returns false (docs/engine.md, "Errors").
+
     // The engine's path, outside a render pass: the lighting of instances.size() <= desc.instances objects
     // rotated into their frames and written through mapped memory into frame slot `frame` (< desc.
     // frames_in_flight; the GPU must be done with the frame that last used the slot), and the coefficient
@@ -91,42 +96,44 @@ class PrtModel
     // read. The engine orders the pass after earlier uses of the slot's coefficients and before the draws
     // (its render graph's barriers, or a queue-family release to the graphics queue when the pass runs on
     // a compute queue: docs/integration.md).
-    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
-                         AccessList& accesses);
+    bool record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame,
+                         AccessList& accesses) noexcept;
     // The same with object-space lighting the caller computed (L per instance, instance i's at i * L).
-    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
-                                      uint32_t frame, AccessList& accesses);
+    bool record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
+                                      uint32_t frame, AccessList& accesses) noexcept;
     // What the draws of frame slot `frame` read on the device: the slot's coefficients, by the vertex shader
     // stage (hemi's materials), or with `as_stream` by the vertex input stage (the engine's own draws of
     // coefficient_stream()). Appended to `accesses`, or returned.
-    void draw_accesses(uint32_t frame, AccessList& accesses, bool as_stream = false) const;
-    AccessList draw_accesses(uint32_t frame) const;
+    bool draw_accesses(uint32_t frame, AccessList& accesses, bool as_stream = false) const noexcept;
+    AccessList draw_accesses(uint32_t frame) const noexcept;
     // The same work with hemi's own barriers, for callers without a render graph (tools, tests, a frame
     // recorded and submitted at once): one before (earlier reads and writes of the slot's coefficients, any
     // stage of this queue) and, with `to_vertex_shaders`, one after (to the vertex shaders that read them).
     // On a compute-only queue the barrier after names the vertex stage, which such a queue does not have:
     // pass false there and release the coefficients to the graphics queue.
-    void record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame = 0,
-                         bool to_vertex_shaders = true);
-    void record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
-                                      uint32_t frame = 0, bool to_vertex_shaders = true);
+    bool record_transfer(VkCommandBuffer cmd, std::span<const PrtInstance> instances, uint32_t frame = 0,
+                         bool to_vertex_shaders = true) noexcept;
+    bool record_transfer_object_space(VkCommandBuffer cmd, std::span<const glm::vec3> object_lighting,
+                                      uint32_t frame = 0, bool to_vertex_shaders = true) noexcept;
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
     // with its own material, under `model`, with the frame set of this view. Primitive p is draw id p + 1 in
     // the aux attachment. `pass`: an index from add_pass (0: the system's default colour pass).
     // `frame_slot`: whose coefficients (record_transfer's `frame`).
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
-              size_t pass = 0, uint32_t frame_slot = 0) const;
+    bool draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+              size_t pass = 0, uint32_t frame_slot = 0) const noexcept;
     // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.
-    void enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
-                 size_t pass = 0, uint32_t frame_slot = 0, uint32_t layer = 0, float depth = 0.0f) const;
+    bool enqueue(DrawQueue& queue, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
+                 size_t pass = 0, uint32_t frame_slot = 0, uint32_t layer = 0,
+                 float depth = 0.0f) const noexcept;
     // Instanced: instances.count instances of the model in one draw per primitive, instance i with the
     // frame set's record instances.first + i (FrameSet::write_instances of instance_record()s).
-    void enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, InstanceRange instances, size_t pass = 0,
-                           uint32_t layer = 0, float depth = 0.0f) const;
+    bool enqueue_instances(DrawQueue& queue, VkDescriptorSet frame, InstanceRange instances, size_t pass = 0,
+                           uint32_t layer = 0, float depth = 0.0f) const noexcept;
     // The instance record of instance `instance` under `model`, lit by frame slot `frame_slot`'s
-    // coefficients: what an instanced draw reads where draw() would push.
+    // coefficients: what an instanced draw reads where draw() would push. Refused: a record with a zero
+    // model matrix, which draws nothing.
     shared::DrawPush instance_record(uint32_t instance, const glm::mat4& model,
-                                     uint32_t frame_slot = 0) const;
+                                     uint32_t frame_slot = 0) const noexcept;
     // The bytes of PrtModelDesc::coefficient_output a model of `asset` made with `desc` writes (every
     // instance of every frame slot) on `device`. Throws as the constructor does for a technique the asset
     // lacks.
@@ -160,8 +167,14 @@ class PrtModel
 
   private:
     uint32_t first_instance(uint32_t frame) const;
-    std::vector<glm::vec3> lighting_of(std::span<const PrtInstance> instances) const;
+    bool check_slot(const char* call, uint32_t frame) const noexcept;
+    bool check_lighting(const char* call, std::span<const glm::vec3> lighting, uint32_t frame) const noexcept;
+    bool check_instance(const char* call, uint32_t instance, uint32_t frame) const noexcept;
+    bool lighting_of(std::span<const PrtInstance> instances) noexcept; // into lighting_
+    void record_with_barriers(VkCommandBuffer cmd, std::span<const glm::vec3> lighting, uint32_t frame,
+                              bool to_vertex_shaders) noexcept;
     MaterialSystem* system_;
+    std::vector<glm::vec3> lighting_; // record_transfer's object-space lighting: desc.instances * L
     uint32_t instances_ = 1, frames_ = 1, order_ = 3;
     const math::BasisDesc* basis_;
     SceneSurfaces surfaces_;

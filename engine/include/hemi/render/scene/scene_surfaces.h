@@ -51,31 +51,42 @@ class SceneSurfaces
     // default colour pass. The mesh, textures and materials are shared by every pass.
     size_t add_pass(const PassDesc& pass);
 
+    // The calls below are on the frame path: none throws. A bad argument (a pass that was not added, a
+    // variant or primitive that does not exist, a frame or coefficient set that is VK_NULL_HANDLE because it
+    // was released) is reported through the device's log callback (LogLevel::Error, naming the call) and the
+    // call records nothing and returns false (docs/engine.md, "Errors").
+
+    // What every draw below checks first, reported as `call`: the models built on the surfaces check their
+    // arguments under their own names with it.
+    bool check(const char* call, VkDescriptorSet frame, VkDescriptorSet source, size_t variant,
+               size_t pass) const noexcept;
+
     // Inside the caller's render pass: every primitive with its material and variants[variant],
     // coefficients from `source` at `coefficient_offset` (the DrawPush field), under `model`, with the
     // pipelines of `pass` (add_pass). Primitive p is draw id p + 1. A depth pass (PassKind::Depth) skips
     // blended primitives; a shadow pass draws them alpha-tested at their alphaCutoff.
-    void draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
-              const glm::mat4& model, size_t variant = 0, size_t pass = 0) const;
+    bool draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
+              const glm::mat4& model, size_t variant = 0, size_t pass = 0) const noexcept;
 
     // One primitive (draw() is every primitive in order), with this draw's lightmap rectangle
     // (shared::DrawPush::lightmap_scale_offset). Binds the mesh too.
-    void draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
+    bool draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescriptorSet source,
                         uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
                         size_t primitive,
-                        const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+                        const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const noexcept;
 
     // Draw packets instead of draws (draw_queue.h): every primitive draw() would record, each keyed by
-    // `layer`, its material type and sets, and `depth`; sorted and recorded with the rest of the frame's.
-    // With `instances` (count > 0): each packet draws those instances, whose records (FrameSet::
+    // `layer` (< 256), its material type and sets, and `depth`; sorted and recorded with the rest of the
+    // frame's. With `instances` (count > 0): each packet draws those instances, whose records (FrameSet::
     // write_instances) hold the model, coefficient offset and lightmap rectangle in place of these.
-    void enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
+    bool enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
                  const glm::mat4& model, size_t variant = 0, size_t pass = 0, uint32_t layer = 0,
-                 float depth = 0.0f, InstanceRange instances = {}) const;
-    // The packet of one primitive; false for a primitive the pass does not draw (blended, in a depth pass).
+                 float depth = 0.0f, InstanceRange instances = {}) const noexcept;
+    // The packet of one primitive; false for a primitive the pass does not draw (blended, in a depth pass)
+    // and for a refused argument (then also reported).
     bool packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorSet source, uint32_t coefficient_offset,
                 const glm::mat4& model, size_t variant, size_t pass, size_t primitive,
-                const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const;
+                const glm::vec4& lightmap_scale_offset = {1.0f, 1.0f, 0.0f, 0.0f}) const noexcept;
 
     // What an engine's draw list needs of each primitive.
     struct Primitive
