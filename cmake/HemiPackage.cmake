@@ -3,16 +3,19 @@
 include(CMakePackageConfigHelpers)
 
 set(HEMI_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/hemi)
-set(hemi_install_targets hemi_core hemi)
-if(TARGET hemi_baker)
-    list(APPEND hemi_install_targets hemi_baker)
-    install(DIRECTORY ${PROJECT_SOURCE_DIR}/baker/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-endif()
-install(TARGETS ${hemi_install_targets} EXPORT hemiTargets
+# Two export sets: hemiTargets (hemi::core, hemi::hemi: what an engine renders with) and hemiBakerTargets
+# (hemi::baker, which needs Embree), so that a render-only engine's find_package(hemi) needs no Embree.
+set(hemi_install_destinations
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(TARGETS hemi_core hemi EXPORT hemiTargets ${hemi_install_destinations})
+if(TARGET hemi_baker)
+    install(TARGETS hemi_baker EXPORT hemiBakerTargets ${hemi_install_destinations})
+    install(DIRECTORY ${PROJECT_SOURCE_DIR}/baker/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+    install(EXPORT hemiBakerTargets NAMESPACE hemi:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/hemi)
+endif()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/engine/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 # hemi's GLSL library (hemi/hemi.glsl, docs/glsl.md) and the shared C++/GLSL headers, for engines' own shaders.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})

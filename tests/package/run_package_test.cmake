@@ -39,3 +39,29 @@ execute_process(COMMAND ldd ${WORK_DIR}/build/consumer OUTPUT_VARIABLE linked RE
 if(rc OR linked MATCHES "libvulkan")
     message(FATAL_ERROR "the consumer links the Vulkan loader (${rc}):\n${linked}")
 endif()
+
+# A render-only engine: find_package(hemi) with Embree and the Vulkan loader's package out of reach
+# (CMAKE_DISABLE_FIND_PACKAGE_<name>: a find_package of either fails the configure), Vulkan's headers from the
+# engine's own copy (Vulkan_INCLUDE_DIR; here the system's, copied). It links hemi::hemi alone, and hemi::baker
+# must not be loaded.
+file(COPY /usr/include/vulkan /usr/include/vk_video DESTINATION ${WORK_DIR}/engine-vulkan-headers)
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/render-only -DCMAKE_BUILD_TYPE=Release
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DRENDER_ONLY=ON
+                        -DCMAKE_DISABLE_FIND_PACKAGE_embree=TRUE -DCMAKE_DISABLE_FIND_PACKAGE_Vulkan=TRUE
+                        -DVulkan_INCLUDE_DIR=${WORK_DIR}/engine-vulkan-headers
+                RESULT_VARIABLE rc)
+if(rc)
+    message(FATAL_ERROR "a render-only consumer could not configure without Embree and the Vulkan package (${rc})")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/render-only RESULT_VARIABLE rc)
+if(rc)
+    message(FATAL_ERROR "building the render-only consumer failed (${rc})")
+endif()
+execute_process(COMMAND ${WORK_DIR}/render-only/consumer RESULT_VARIABLE rc)
+if(rc)
+    message(FATAL_ERROR "the render-only consumer failed (${rc})")
+endif()
+execute_process(COMMAND ldd ${WORK_DIR}/render-only/consumer OUTPUT_VARIABLE linked RESULT_VARIABLE rc)
+if(rc OR linked MATCHES "libembree|libvulkan")
+    message(FATAL_ERROR "the render-only consumer links Embree or the Vulkan loader (${rc}):\n${linked}")
+endif()

@@ -10,6 +10,7 @@
 #include "../gpu_fixture.h"
 #include "../host_vulkan.h"
 #include "../vulkan_calls.h"
+#include "depth_pass.h"
 #include "engine_pass.h"
 #include "packed_mesh.h"
 #include "sphere_asset.h"
@@ -78,6 +79,70 @@ hemi::io::PrtAsset sphere_asset()
 {
     return hemi::test::unshadowed_sphere_asset(16, 8, "h4", 4);
 }
+
+using namespace hemi;
+
+// The three models of the engine tests drawn from the engine's own buffers: the tests' table level, a PRT
+// sphere and a probe-lit sphere, their meshes packed as an engine packs them (test::PackedMesh: fp16
+// positions in stream 0, snorm normals and tangents and float UVs in stream 1, 16-bit indices) into one pair
+// of vertex buffers and one index buffer, one mesh after another; the assets hold the packed values widened
+// back, so that hemi's own path (its copy of each mesh) draws the same values. The buffers are made on the
+// tests' shared device, before any counting device adopts it.
+struct EngineScene
+{
+    io::LightmapAsset level = test::table_level(io::Material{}, io::Material{}, {}, {"h4"});
+    io::PrtAsset prt = test::unshadowed_sphere_asset(16, 8, "h4", 4);
+    io::Mesh probe_mesh = io::make_uv_sphere(0.3f, 12, 6);
+    gpu::Buffer stream0, stream1, index_buffer;
+    render::EngineGeometry level_geometry, prt_geometry, probe_geometry;
+
+    EngineScene()
+    {
+        const test::PackedMesh packed[3] = {test::pack_mesh(level.mesh), test::pack_mesh(prt.mesh),
+                                            test::pack_mesh(probe_mesh)};
+        level.mesh = packed[0].widened;
+        prt.mesh = packed[1].widened;
+        probe_mesh = packed[2].widened;
+        std::vector<uint16_t> positions, indices;
+        std::vector<test::PackedAttributes> attributes;
+        uint32_t base_vertex[3], base_index[3];
+        for (int i = 0; i < 3; ++i)
+        {
+            base_vertex[i] = uint32_t(attributes.size());
+            base_index[i] = uint32_t(indices.size());
+            positions.insert(positions.end(), packed[i].positions.begin(), packed[i].positions.end());
+            attributes.insert(attributes.end(), packed[i].attributes.begin(), packed[i].attributes.end());
+            indices.insert(indices.end(), packed[i].indices.begin(), packed[i].indices.end());
+        }
+        gpu::Device& base = test::device();
+        stream0 = gpu::create_buffer(base, {positions.size() * 2, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+        stream1 = gpu::create_buffer(
+            base, {attributes.size() * sizeof(test::PackedAttributes), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
+        index_buffer = gpu::create_buffer(base, {indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
+        gpu::write_buffer(base, stream0, positions.data(), stream0.size());
+        gpu::write_buffer(base, stream1, attributes.data(), stream1.size());
+        gpu::write_buffer(base, index_buffer, indices.data(), index_buffer.size());
+        auto geometry_of = [&](int mesh, const std::vector<io::Primitive>& primitives, size_t index_count)
+        {
+            render::EngineGeometry g;
+            g.layout = test::PackedMesh::layout();
+            g.buffers.streams = 2;
+            g.buffers.vertex_buffers[0] = stream0.handle();
+            g.buffers.vertex_buffers[1] = stream1.handle();
+            g.buffers.index_buffer = index_buffer.handle();
+            g.buffers.index_type = VK_INDEX_TYPE_UINT16;
+            if (primitives.empty())
+                g.primitives.push_back({base_index[mesh], uint32_t(index_count), int32_t(base_vertex[mesh])});
+            for (const io::Primitive& p : primitives)
+                g.primitives.push_back(
+                    {base_index[mesh] + p.first_index, p.index_count, int32_t(base_vertex[mesh])});
+            return g;
+        };
+        level_geometry = geometry_of(0, level.primitives, level.mesh.indices.size());
+        prt_geometry = geometry_of(1, prt.primitives, prt.mesh.indices.size());
+        probe_geometry = geometry_of(2, {}, probe_mesh.indices.size());
+    }
+};
 
 } // namespace
 
@@ -720,56 +785,13 @@ TEST_F(EnginePath, ModelsDrawFromTheEnginesOwnBuffersAsFromHemisCopy)
 {
     using namespace hemi;
     constexpr uint32_t kW = 64, kH = 64, kProbes = 4;
-    io::LightmapAsset level = test::table_level(io::Material{}, io::Material{}, {}, {"h4"});
-    io::PrtAsset prt = test::unshadowed_sphere_asset(16, 8, "h4", 4);
-    io::Mesh probe_mesh = io::make_uv_sphere(0.3f, 12, 6);
-    const test::PackedMesh packed[3] = {test::pack_mesh(level.mesh), test::pack_mesh(prt.mesh),
-                                        test::pack_mesh(probe_mesh)};
-    level.mesh = packed[0].widened; // hemi's own path draws the same values
-    prt.mesh = packed[1].widened;
-    probe_mesh = packed[2].widened;
-    // The engine's buffers: the three meshes one after another.
-    std::vector<uint16_t> positions, indices;
-    std::vector<test::PackedAttributes> attributes;
-    uint32_t base_vertex[3], base_index[3];
-    for (int i = 0; i < 3; ++i)
-    {
-        base_vertex[i] = uint32_t(attributes.size());
-        base_index[i] = uint32_t(indices.size());
-        positions.insert(positions.end(), packed[i].positions.begin(), packed[i].positions.end());
-        attributes.insert(attributes.end(), packed[i].attributes.begin(), packed[i].attributes.end());
-        indices.insert(indices.end(), packed[i].indices.begin(), packed[i].indices.end());
-    }
-    gpu::Device& base = test::device(); // the engine's buffers are made before hemi's counting device exists
-    const gpu::Buffer stream0 =
-        gpu::create_buffer(base, {positions.size() * 2, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
-    const gpu::Buffer stream1 = gpu::create_buffer(
-        base, {attributes.size() * sizeof(test::PackedAttributes), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT});
-    const gpu::Buffer index_buffer =
-        gpu::create_buffer(base, {indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT});
-    gpu::write_buffer(base, stream0, positions.data(), stream0.size());
-    gpu::write_buffer(base, stream1, attributes.data(), stream1.size());
-    gpu::write_buffer(base, index_buffer, indices.data(), index_buffer.size());
-    auto geometry_of = [&](int mesh, const std::vector<io::Primitive>& primitives, size_t index_count)
-    {
-        render::EngineGeometry g;
-        g.layout = test::PackedMesh::layout();
-        g.buffers.streams = 2;
-        g.buffers.vertex_buffers[0] = stream0.handle();
-        g.buffers.vertex_buffers[1] = stream1.handle();
-        g.buffers.index_buffer = index_buffer.handle();
-        g.buffers.index_type = VK_INDEX_TYPE_UINT16;
-        if (primitives.empty())
-            g.primitives.push_back({base_index[mesh], uint32_t(index_count), int32_t(base_vertex[mesh])});
-        for (const io::Primitive& p : primitives)
-            g.primitives.push_back(
-                {base_index[mesh] + p.first_index, p.index_count, int32_t(base_vertex[mesh])});
-        return g;
-    };
-    const render::EngineGeometry level_geometry = geometry_of(0, level.primitives, level.mesh.indices.size());
-    const render::EngineGeometry prt_geometry = geometry_of(1, prt.primitives, prt.mesh.indices.size());
-    const render::EngineGeometry probe_geometry = geometry_of(2, {}, probe_mesh.indices.size());
-
+    const EngineScene scene;
+    const io::LightmapAsset& level = scene.level;
+    const io::PrtAsset& prt = scene.prt;
+    const io::Mesh& probe_mesh = scene.probe_mesh;
+    const render::EngineGeometry &level_geometry = scene.level_geometry, &prt_geometry = scene.prt_geometry,
+                                 &probe_geometry = scene.probe_geometry;
+    gpu::Device& base = test::device();
     gpu::ExternalDevice adopt{base.instance(), base.physical_device(), base.device(),
                               base.queue(),    base.queue_family(),    {}};
     adopt.get_instance_proc_addr = test::counting_proc_addr;
@@ -882,4 +904,228 @@ TEST_F(EnginePath, ModelsDrawFromTheEnginesOwnBuffersAsFromHemisCopy)
     render::EngineGeometry no_indices = probe_geometry;
     no_indices.buffers.index_buffer = VK_NULL_HANDLE;
     EXPECT_NE(refusal(no_indices).find("an index buffer"), std::string::npos) << refusal(no_indices);
+}
+
+// Issue 42's consumer: an engine that draws a lightmapped level, a PRT object and 4 instanced probe-lit
+// objects from its own vertex and index buffers (EngineScene: two streams of fp16, snorm and float
+// attributes, 16-bit indices), with its own view: no FrameSet, but descriptor sets of the system's frame
+// layout that it allocates from its own pool and points at its own camera and instance buffers (the light's
+// view for the shadow map, the camera's for the rest; their uniforms packed by render::frame_uniforms). Its
+// frame: the PRT transfer with the barrier it makes from hemi's declared accesses; a shadow map from above
+// (hemi's shadow pipelines, its own depth-only render pass); then its main pass with a depth prepass (hemi's
+// depth pipelines) and the colour pass testing EQUAL against it. The same frame drawn hemi's own way (hemi's
+// copy of every mesh, FrameSets, the colour pass testing LESS, the shadow map alike) is the reference: the
+// colour agrees within 0.5% at every covered pixel, coverage is the same, and so is every texel of the
+// shadow map. hemi makes no vertex or index buffer for the engine's models (counted through the entry points
+// it was given), under the validation layer (any message fails the test). The device is the tests' own,
+// created with the loader; an engine loading Vulkan with volk is tests/volk/volk_test.cpp.
+// Broken once to see it fail: the engine's camera set pointed at the light's uniforms draws the main view
+// from above (coverage and colour differ); without the prepass the EQUAL pass draws nothing.
+TEST_F(EnginePath, AConsumerDrawsEveryPassFromItsOwnBuffersAndViewAsHemisOwnPathDoes)
+{
+    constexpr uint32_t kW = 64, kH = 64, kProbes = 4;
+    const EngineScene scene;
+    gpu::Device& base = test::device();
+    // The engine's view data: a camera and a light uniform block each at an offset of their own buffer, and
+    // its instance records (made before hemi's counting device adopts the device).
+    const VkDeviceSize ubo_align = std::max<VkDeviceSize>(256, base.limits().minUniformBufferOffsetAlignment);
+    const gpu::Buffer views = gpu::create_buffer(
+        base, {2 * ubo_align + sizeof(shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT});
+    const gpu::Buffer records_buffer =
+        gpu::create_buffer(base, {kProbes * sizeof(shared::DrawPush), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    const test::DepthPass shadow_map(kW);
+
+    gpu::ExternalDevice adopt{base.instance(), base.physical_device(), base.device(),
+                              base.queue(),    base.queue_family(),    {}};
+    adopt.get_instance_proc_addr = test::counting_proc_addr;
+    gpu::Device dev(adopt);
+    const std::unique_ptr<test::EnginePass> target = engine_target(dev, kW, kH);
+    const render::RenderTargetDesc main_target = target_desc(*target);
+    render::MaterialSystem system(dev, main_target);
+    render::PassDesc prepass, equal, shadow;
+    prepass.kind = render::PassKind::Depth;
+    prepass.target = main_target;
+    equal.target = main_target;
+    equal.target.depth_compare = VK_COMPARE_OP_EQUAL;
+    equal.target.depth_write = false;
+    shadow.kind = render::PassKind::Shadow;
+    shadow.target.render_pass = shadow_map.render_pass;
+    shadow.target.color_attachments = 0;
+
+    render::FrameData camera, light_view;
+    camera.eye = glm::vec3(0.8f, -3.2f, 2.4f);
+    camera.view_projection = math::look_at_projection(camera.eye, glm::vec3(0.0f, 0.0f, 0.4f), 50.0f, 1.0f);
+    light_view.view_projection =
+        math::look_at_projection(glm::vec3(0.3f, -0.2f, 4.0f), glm::vec3(0.0f), 50.0f, 1.0f);
+    std::vector<glm::vec3> light(9, glm::vec3(0.0f));
+    frame_light(3, light);
+    const glm::mat4 prt_place = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.0f, 1.0f));
+
+    struct Frame
+    {
+        std::vector<float> color, aux, shadow;
+    };
+    auto frame = [&](bool engine)
+    {
+        gpu::UploadBatch upload(dev);
+        test::created_objects().clear();
+        render::PrtModelDesc desc;
+        desc.technique = "h4";
+        desc.geometry = engine ? &scene.prt_geometry : nullptr;
+        render::PrtModel prt(system, scene.prt, desc, upload);
+        render::LightmapModel level(system, scene.level, {"h4"}, upload, {},
+                                    engine ? &scene.level_geometry : nullptr);
+        render::ProbeObject probes(system, scene.probe_mesh, {}, std::vector<io::Material>(1), {}, kProbes,
+                                   upload, 1, engine ? &scene.probe_geometry : nullptr);
+        const size_t hemi_geometry = test::created_objects().buffers_with(VK_BUFFER_USAGE_VERTEX_BUFFER_BIT |
+                                                                          VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+        EXPECT_EQ(hemi_geometry, engine ? 0u : 6u) << (engine ? "engine" : "hemi's") << " path";
+        // Each model's pass indices: 0 colour (LESS), then these, in the same order for all three.
+        size_t prepass_index = 0, equal_index = 0, shadow_index = 0;
+        for (size_t m = 0; m < 3; ++m)
+        {
+            auto add = [&](const render::PassDesc& p) {
+                return m == 0 ? prt.add_pass(p) : m == 1 ? level.add_pass(p) : probes.add_pass(p);
+            };
+            prepass_index = add(prepass);
+            equal_index = add(equal);
+            shadow_index = add(shadow);
+        }
+        shared::DrawPush records[kProbes];
+        for (uint32_t i = 0; i < kProbes; ++i)
+        {
+            EXPECT_TRUE(probes.write_lighting(i, light, 0));
+            records[i] = probes.instance_record(
+                i, glm::translate(glm::mat4(1.0f), glm::vec3(float(i) - 1.5f, -1.0f, 0.5f)), 0);
+        }
+        // The view: the engine's own sets over its own buffers, or hemi's FrameSets.
+        VkDescriptorPool pool = VK_NULL_HANDLE;
+        VkDescriptorSet camera_set = VK_NULL_HANDLE, light_set = VK_NULL_HANDLE;
+        std::unique_ptr<render::FrameSet> camera_frames, light_frames;
+        if (engine)
+        {
+            shared::FrameUniforms u{};
+            EXPECT_TRUE(render::frame_uniforms(system, camera, u));
+            gpu::write_buffer(base, views, &u, sizeof u, 0);
+            EXPECT_TRUE(render::frame_uniforms(system, light_view, u));
+            gpu::write_buffer(base, views, &u, sizeof u, ubo_align);
+            gpu::write_buffer(base, records_buffer, records, sizeof records);
+            const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
+                                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2}};
+            VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+            pi.maxSets = 2;
+            pi.poolSizeCount = 2;
+            pi.pPoolSizes = sizes;
+            EXPECT_EQ(vkCreateDescriptorPool(base.device(), &pi, nullptr, &pool), VK_SUCCESS);
+            const VkDescriptorSetLayout layouts[2] = {system.frame_layout(), system.frame_layout()};
+            VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+            ai.descriptorPool = pool;
+            ai.descriptorSetCount = 2;
+            ai.pSetLayouts = layouts;
+            VkDescriptorSet sets[2];
+            EXPECT_EQ(vkAllocateDescriptorSets(base.device(), &ai, sets), VK_SUCCESS);
+            camera_set = sets[0];
+            light_set = sets[1];
+            const VkDescriptorBufferInfo infos[3] = {
+                {views.handle(), 0, sizeof(shared::FrameUniforms)},
+                {views.handle(), ubo_align, sizeof(shared::FrameUniforms)},
+                {records_buffer.handle(), 0, VK_WHOLE_SIZE}};
+            VkWriteDescriptorSet writes[4]{};
+            for (int w = 0; w < 4; ++w)
+            {
+                writes[w].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+                writes[w].dstSet = sets[w / 2];
+                writes[w].descriptorCount = 1;
+                const bool uniforms = w % 2 == 0;
+                writes[w].dstBinding = uniforms ? HEMI_FRAME_BINDING_UNIFORMS : HEMI_FRAME_BINDING_INSTANCES;
+                writes[w].descriptorType =
+                    uniforms ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+                writes[w].pBufferInfo = uniforms ? &infos[w / 2] : &infos[2];
+            }
+            vkUpdateDescriptorSets(base.device(), 4, writes, 0, nullptr);
+        }
+        else
+        {
+            camera_frames = std::make_unique<render::FrameSet>(system, 1, kProbes);
+            light_frames = std::make_unique<render::FrameSet>(system, 1, kProbes);
+            EXPECT_TRUE(camera_frames->write(0, camera));
+            EXPECT_TRUE(light_frames->write(0, light_view));
+            EXPECT_TRUE(camera_frames->write_instances(0, records));
+            EXPECT_TRUE(light_frames->write_instances(0, records));
+            camera_set = camera_frames->set();
+            light_set = light_frames->set();
+        }
+        upload.submit_and_wait();
+        // Every model with the pipelines of `pass`, through one sorted queue.
+        render::DrawQueue queue;
+        auto draw_all = [&](VkCommandBuffer cmd, VkDescriptorSet view, size_t pass)
+        {
+            queue.clear();
+            for (const render::LightmapDraw& d : level.draw_list("h4", pass))
+                EXPECT_TRUE(level.enqueue(queue, view, d, glm::mat4(1.0f), pass));
+            EXPECT_TRUE(prt.enqueue(queue, view, 0, prt_place, pass));
+            EXPECT_TRUE(probes.enqueue_instances(queue, view, {0, kProbes}, 0, 0.0f, pass));
+            queue.sort();
+            const render::DrawStats stats = queue.record(cmd);
+            EXPECT_EQ(stats.refused, 0u);
+        };
+        const render::PrtInstance instance{prt_place, light, 0.0f};
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          if (engine)
+                          {
+                              render::AccessList transfer, reads;
+                              EXPECT_TRUE(prt.record_transfer(cmd, {&instance, 1}, 0, transfer));
+                              EXPECT_TRUE(prt.draw_accesses(0, reads));
+                              render::record_barrier(cmd, transfer.accesses(), reads.accesses());
+                          }
+                          else
+                              EXPECT_TRUE(prt.record_transfer(cmd, {&instance, 1}, 0));
+                          shadow_map.begin(cmd);
+                          draw_all(cmd, light_set, shadow_index);
+                          vkCmdEndRenderPass(cmd);
+                          target->begin(cmd, kBlack);
+                          if (engine)
+                          {
+                              draw_all(cmd, camera_set, prepass_index);
+                              draw_all(cmd, camera_set, equal_index);
+                          }
+                          else
+                              draw_all(cmd, camera_set, 0);
+                          vkCmdEndRenderPass(cmd);
+                      });
+        Frame f{target->read_color(0), target->read_color(1), shadow_map.read()};
+        if (pool)
+            vkDestroyDescriptorPool(base.device(), pool, nullptr);
+        return f;
+    };
+    const Frame engine = frame(true), own = frame(false);
+    size_t covered = 0, coverage_differs = 0, outside = 0;
+    float worst = 0.0f;
+    for (size_t p = 0; p < size_t(kW) * kH; ++p)
+    {
+        const bool a = engine.aux[p * 4 + 3] == 1.0f, b = own.aux[p * 4 + 3] == 1.0f;
+        coverage_differs += a != b ? 1 : 0;
+        if (!a || !b)
+            continue;
+        ++covered;
+        for (int c = 0; c < 3; ++c)
+        {
+            const float e = engine.color[p * 4 + c], o = own.color[p * 4 + c], d = std::abs(e - o);
+            worst = std::max(worst, d / (std::abs(o) + 1e-3f));
+            outside += d > 0.005f * std::abs(o) + 1e-4f ? 1 : 0;
+        }
+    }
+    EXPECT_GT(covered, size_t(kW) * kH / 4);
+    EXPECT_EQ(coverage_differs, 0u);
+    EXPECT_EQ(outside, 0u) << "worst relative difference " << worst;
+    size_t shadowed = 0, shadow_differs = 0;
+    for (size_t t = 0; t < engine.shadow.size(); ++t)
+    {
+        shadowed += own.shadow[t] < 1.0f ? 1 : 0;
+        shadow_differs += std::abs(engine.shadow[t] - own.shadow[t]) > 1e-6f ? 1 : 0;
+    }
+    EXPECT_GT(shadowed, engine.shadow.size() / 4) << "the shadow map saw too little of the scene";
+    EXPECT_EQ(shadow_differs, 0u);
 }

@@ -76,8 +76,8 @@ struct Frame
         prt = std::make_unique<render::PrtModel>(*system, test::unshadowed_sphere_asset(12, 6, "h4", 4), desc,
                                                  *upload);
         level = std::make_unique<render::LightmapModel>(
-            *system, test::table_level(io::Material{}, io::Material{}, {}, {"h4"}), std::vector<std::string>{"h4"},
-            *upload);
+            *system, test::table_level(io::Material{}, io::Material{}, {}, {"h4"}),
+            std::vector<std::string>{"h4"}, *upload);
         const io::Mesh sphere = io::make_uv_sphere(0.3f, 8, 4);
         probes = std::make_unique<render::ProbeObject>(*system, sphere, std::vector<io::EncodedImage>{},
                                                        std::vector<io::Material>(1),
@@ -156,7 +156,8 @@ TEST_F(FramePathErrors, AnUnknownTechniqueIsLoggedAndRecordsNothing)
     expect_refused(f, f.level->draw(f.cmd, f.frame_set->set(), "h6", glm::mat4(1.0f)), "LightmapModel::draw",
                    "technique 'h6' is not loaded");
     test::vulkan_calls().reset();
-    expect_recorded(f, f.level->draw(f.cmd, f.frame_set->set(), "h4", glm::mat4(1.0f)), "LightmapModel::draw");
+    expect_recorded(f, f.level->draw(f.cmd, f.frame_set->set(), "h4", glm::mat4(1.0f)),
+                    "LightmapModel::draw");
 }
 
 TEST_F(FramePathErrors, APassIndexOutOfRangeIsLoggedAndRecordsNothing)
@@ -165,7 +166,8 @@ TEST_F(FramePathErrors, APassIndexOutOfRangeIsLoggedAndRecordsNothing)
     ASSERT_TRUE(f.host.queue);
     const VkDescriptorSet view = f.frame_set->set();
     test::vulkan_calls().reset();
-    expect_refused(f, f.prt->draw(f.cmd, view, 0, glm::mat4(1.0f), 7), "PrtModel::draw", "pass 7 was not added");
+    expect_refused(f, f.prt->draw(f.cmd, view, 0, glm::mat4(1.0f), 7), "PrtModel::draw",
+                   "pass 7 was not added");
     expect_refused(f, f.probes->draw(f.cmd, view, 0, glm::mat4(1.0f), 0, 3), "ProbeObject::draw",
                    "pass 3 was not added");
     render::DrawQueue queue;
@@ -179,7 +181,8 @@ TEST_F(FramePathErrors, APassIndexOutOfRangeIsLoggedAndRecordsNothing)
     EXPECT_EQ(queue.size(), 0u);
     // An instance and a frame slot out of range are refused the same way.
     expect_refused(f, f.prt->draw(f.cmd, view, 2, glm::mat4(1.0f)), "PrtModel::draw", "instance 2");
-    expect_refused(f, f.probes->draw(f.cmd, view, 0, glm::mat4(1.0f), 1), "ProbeObject::draw", "frame slot 1");
+    expect_refused(f, f.probes->draw(f.cmd, view, 0, glm::mat4(1.0f), 1), "ProbeObject::draw",
+                   "frame slot 1");
     test::vulkan_calls().reset();
     expect_recorded(f, f.prt->draw(f.cmd, view, 1, glm::mat4(1.0f), 0), "PrtModel::draw");
     test::vulkan_calls().reset();

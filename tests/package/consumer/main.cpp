@@ -1,6 +1,8 @@
 // Links hemi from its installed package, runs the transfer pass on the device and the host, and checks
 // that both give T * l for a matrix whose product is known.
+#ifdef HEMI_CONSUMER_BAKER
 #include <hemi/bake/normal_map.h>
+#endif
 #include <hemi/gpu/device.h>
 #include <hemi/render/transfer.h>
 
