@@ -19,8 +19,8 @@ inline char* last_refusal() noexcept
 }
 
 // Logs "hemi: <call>: <format...>" and returns false, so that `return refuse(...);` ends the call.
-[[gnu::format(printf, 3, 4)]] inline bool refuse(const gpu::Device& device, const char* call, const char* format,
-                                                 ...) noexcept
+[[gnu::format(printf, 3, 4)]] inline bool refuse(const gpu::Device& device, const char* call,
+                                                 const char* format, ...) noexcept
 {
     char* message = last_refusal();
     constexpr size_t kSize = 512;
