@@ -26,6 +26,8 @@
 #include <hemi/render/scene/prt_model.h>
 #include <hemi/render/view/offscreen.h>
 
+#include <array>
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -243,6 +245,47 @@ TEST_F(FramePathErrors, AReleasedObjectIsLoggedAndRecordsNothing)
     test::vulkan_calls().reset();
     stats = render::record_packets(f.cmd, packets);
     expect_recorded(f, stats.draws == packets.size(), "record_packets");
+}
+
+// Lighting and matrices an object cannot be lit by: refused with a message, nothing recorded or written, and
+// never a throw out of the noexcept call (a finite matrix far from a rotation overflows once its scale is
+// divided out: it is refused before an SH rotation is made of it).
+TEST_F(FramePathErrors, ValuesThatCannotLightAnObjectAreLoggedAndRecordNothing)
+{
+    Frame f;
+    ASSERT_TRUE(f.host.queue);
+    std::vector<glm::vec3> light(9, glm::vec3(0.1f));
+    glm::mat4 far_from_rotation(1.0f);
+    far_from_rotation[0][0] = 3e38f;
+    far_from_rotation[1][1] = far_from_rotation[2][2] = 1e-20f;
+    render::AccessList accesses;
+    test::vulkan_calls().reset();
+    for (const glm::mat4& m : {glm::mat4(0.0f), far_from_rotation})
+    {
+        const render::PrtInstance instance{m, light, 0.0f};
+        expect_refused(f, f.prt->record_transfer(f.cmd, {&instance, 1}, 0, accesses),
+                       "PrtModel::record_transfer", "singular or not finite");
+    }
+    EXPECT_EQ(accesses.size(), 0u) << "a refused transfer declared accesses";
+    light[4].y = std::nanf("");
+    const render::PrtInstance lit_by_nan{glm::mat4(1.0f), light, 0.0f};
+    expect_refused(f, f.prt->record_transfer(f.cmd, {&lit_by_nan, 1}, 0, accesses),
+                   "PrtModel::record_transfer", "not finite");
+    expect_refused(f, f.probes->write_lighting(0, light, 0), "ProbeObject::write_lighting", "not finite");
+    const shared::DrawPush records[2] = {};
+    expect_refused(f, f.frame_set->write_instances(0, records), "FrameSet::write_instances",
+                   "past a frame set");
+    std::array<glm::vec3, 9> sh;
+    glm::mat4 nan_translation(1.0f);
+    nan_translation[3].x = std::nanf("");
+    EXPECT_FALSE(render::probe_lighting(io::LightmapAsset{}, glm::vec3(0.0f), glm::mat4(1.0f), sh));
+    io::LightmapAsset with_probes;
+    with_probes.probes.count = glm::uvec3(1);
+    with_probes.probes.irradiance.assign(1, std::array<glm::vec3, 9>{});
+    with_probes.probes.valid.assign(1, 1);
+    EXPECT_TRUE(render::probe_lighting(with_probes, glm::vec3(0.0f), glm::mat4(1.0f), sh));
+    EXPECT_FALSE(render::probe_lighting(with_probes, glm::vec3(0.0f), nan_translation, sh));
+    EXPECT_FALSE(render::probe_lighting(with_probes, glm::vec3(0.0f), far_from_rotation, sh));
 }
 
 } // namespace

@@ -37,13 +37,15 @@
 
 namespace
 {
-std::atomic<bool> counting{false};
-std::atomic<uint64_t> allocations{0};
+// Counted on the thread that records the frame (hemi's calls and the engine's recording), not on the
+// driver's threads.
+thread_local bool counting = false;
+thread_local uint64_t allocations = 0;
 
 void* counted(size_t size, size_t align = 0)
 {
-    if (counting.load(std::memory_order_relaxed))
-        allocations.fetch_add(1, std::memory_order_relaxed);
+    if (counting)
+        ++allocations;
     void* p =
         align ? std::aligned_alloc(align, (size + align - 1) / align * align) : std::malloc(size ? size : 1);
     if (!p)
@@ -237,7 +239,7 @@ int run_hemi(VkInstance instance, VkPhysicalDevice physical, VkDevice device, Vk
         {
             if (allocations)
                 std::fprintf(stderr, "volk test: steady frame %u allocated %llu time(s)\n", frame,
-                             (unsigned long long)allocations.load());
+                             (unsigned long long)allocations);
             steady_allocations += allocations;
         }
     }

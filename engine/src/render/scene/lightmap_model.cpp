@@ -31,14 +31,17 @@ bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_posit
         return false;
     // The level's irradiance function f in its own frame is g(d) = f(R^T d) in the world: math::ShRotation(R)
     // with R the model's rotation (its uniform scale divided out).
-    glm::mat3 rotation(model);
-    for (int c = 0; c < 3; ++c)
-        if (!std::isfinite(rotation[c].x + rotation[c].y + rotation[c].z))
+    for (int c = 0; c < 4; ++c)
+        if (!std::isfinite(model[c].x + model[c].y + model[c].z + model[c].w))
             return false;
+    glm::mat3 rotation(model);
     const float scale = std::cbrt(std::abs(glm::determinant(rotation)));
     if (!(scale > 0.0f) || !std::isfinite(scale))
         return false;
     rotation /= scale;
+    for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(rotation[c].x + rotation[c].y + rotation[c].z))
+            return false;
     const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
     const std::array<glm::vec3, 9> scene = asset.probes.at(p);
     math::ShRotation(3, rotation).apply(scene, out);

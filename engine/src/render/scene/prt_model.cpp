@@ -28,6 +28,10 @@ bool object_rotation(const glm::mat4& model, float rotate_degrees, glm::mat3& ou
     if (!(scale > 0.0f) || !std::isfinite(scale) || !std::isfinite(rotate_degrees))
         return false;
     linear /= scale;
+    // A finite matrix far from a rotation (one axis 1e38, the others 1e-20) overflows here.
+    for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(linear[c].x + linear[c].y + linear[c].z))
+            return false;
     const glm::mat3 turn =
         glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(rotate_degrees), glm::vec3(0.0f, 0.0f, 1.0f)));
     out = glm::transpose(linear) * turn;

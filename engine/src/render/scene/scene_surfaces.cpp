@@ -166,7 +166,7 @@ bool SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
                          uint32_t coefficient_offset, const glm::mat4& model, size_t variant,
                          size_t pass) const noexcept
 {
-    if (!check("draw", frame, source, variant, pass))
+    if (!check("SceneSurfaces::draw", frame, source, variant, pass))
         return false;
     thread_local std::vector<DrawPacket>
         packets; // grown once per thread, then reused: no allocation per call
@@ -174,18 +174,17 @@ bool SceneSurfaces::draw(VkCommandBuffer cmd, VkDescriptorSet frame, VkDescripto
     size_t n = 0;
     for (size_t i = 0; i < draws_.size(); ++i)
         n += packet(packets[n], frame, source, coefficient_offset, model, variant, pass, i) ? 1 : 0;
-    record_packets(cmd, std::span(packets).first(n));
-    return true;
+    return record_packets(cmd, std::span(packets).first(n)).refused == 0;
 }
 
 bool SceneSurfaces::enqueue(DrawQueue& queue, VkDescriptorSet frame, VkDescriptorSet source,
                             uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
                             uint32_t layer, float depth, InstanceRange instances) const noexcept
 {
-    if (!check("enqueue", frame, source, variant, pass))
+    if (!check("SceneSurfaces::enqueue", frame, source, variant, pass))
         return false;
     if (layer > 0xffu)
-        return detail::refuse(system_->device(), "enqueue", "layer %u exceeds 255", layer);
+        return detail::refuse(system_->device(), "SceneSurfaces::enqueue", "layer %u exceeds 255", layer);
     DrawPacket p;
     for (size_t i = 0; i < draws_.size(); ++i)
         if (packet(p, frame, source, coefficient_offset, model, variant, pass, i))
@@ -202,11 +201,11 @@ bool SceneSurfaces::packet(DrawPacket& out, VkDescriptorSet frame, VkDescriptorS
                            uint32_t coefficient_offset, const glm::mat4& model, size_t variant, size_t pass,
                            size_t primitive, const glm::vec4& lightmap_scale_offset) const noexcept
 {
-    if (!check("packet", frame, source, variant, pass))
+    if (!check("SceneSurfaces::packet", frame, source, variant, pass))
         return false;
     if (primitive >= draws_.size())
-        return detail::refuse(system_->device(), "packet", "primitive %zu does not exist (%zu)", primitive,
-                              draws_.size());
+        return detail::refuse(system_->device(), "SceneSurfaces::packet",
+                              "primitive %zu does not exist (%zu)", primitive, draws_.size());
     const Draw& d = draws_[primitive];
     if (passes_[pass] == PassKind::Depth && d.keys[variant].alpha == io::AlphaMode::Blend)
         return false;
@@ -235,14 +234,14 @@ bool SceneSurfaces::draw_primitive(VkCommandBuffer cmd, VkDescriptorSet frame, V
                                    size_t pass, size_t primitive,
                                    const glm::vec4& lightmap_scale_offset) const noexcept
 {
-    if (!check("draw_primitive", frame, source, variant, pass))
+    if (!check("SceneSurfaces::draw_primitive", frame, source, variant, pass))
         return false;
     if (primitive >= draws_.size())
-        return detail::refuse(system_->device(), "draw_primitive", "primitive %zu does not exist (%zu)",
-                              primitive, draws_.size());
+        return detail::refuse(system_->device(), "SceneSurfaces::draw_primitive",
+                              "primitive %zu does not exist (%zu)", primitive, draws_.size());
     DrawPacket p;
     if (packet(p, frame, source, coefficient_offset, model, variant, pass, primitive, lightmap_scale_offset))
-        record_packets(cmd, {&p, 1});
+        return record_packets(cmd, {&p, 1}).refused == 0;
     return true;
 }
 

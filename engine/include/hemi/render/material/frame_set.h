@@ -31,7 +31,7 @@ struct FrameData
     glm::mat4 view_projection{1.0f};  // Vulkan clip space (material_system.h)
     bool lighting_only = false;       // albedo 1 and no emissive: the "white" view of the lighting alone
     glm::vec3 eye{0.0f};              // the camera's position (world): the view direction of specular terms
-    std::vector<DynamicLight> lights; // at most HEMI_MAX_LIGHTS (std::invalid_argument else)
+    std::vector<DynamicLight> lights; // at most HEMI_MAX_LIGHTS (more are refused)
     // The dynamic lights' specular term (normalised Blinn-Phong, (m + 8) / (8 pi) (n.h)^m (n.l) E, at the
     // technique's normal): exponent m and strength (0: none). A stand-in for per-material gloss.
     float specular_exponent = 32.0f; // > 0
@@ -65,7 +65,7 @@ class FrameSet
     // engine writes itself (frame_uniforms()), one per frame slot; instances[slot], when given, a range
     // (STORAGE_BUFFER usage) of shared::DrawPush records for instanced draws, max_instances of them. hemi
     // makes only the descriptor sets (and, without instance ranges, a one-record buffer for the binding);
-    // write() and write_instances() are refused (std::logic_error): the engine writes its buffers.
+    // write() and write_instances() are refused (logged, false): the engine writes its buffers.
     FrameSet(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
              std::span<const gpu::BufferRange> instances = {}, uint32_t max_instances = 0);
     //

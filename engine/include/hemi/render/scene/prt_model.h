@@ -87,6 +87,9 @@ class PrtModel
     // lighting, a singular model matrix, a released frame set) is reported through the device's log callback
     // and the call records and writes nothing and returns false (docs/engine.md, "Errors").
 
+    // record_transfer uses a lighting buffer of the model's: one thread records a model's transfers at a
+    // time.
+
     // The engine's path, outside a render pass: the lighting of instances.size() <= desc.instances objects
     // rotated into their frames and written through mapped memory into frame slot `frame` (< desc.
     // frames_in_flight; the GPU must be done with the frame that last used the slot), and the coefficient
