@@ -1,10 +1,10 @@
 #include "renderer.h"
+#include "vulkan.h"
 
-#include <hemi/gpu/handle.h>
-#include <hemi/gpu/pipeline.h>
 #include <hemi/gpu/upload.h>
 #include <hemi/io/image.h>
 #include <hemi/math/camera.h>
+#include <hemi/render/access.h>
 #include <hemi/render/material/environment_lighting.h>
 #include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
@@ -18,8 +18,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -50,12 +52,6 @@ std::span<const uint32_t> spirv(std::string_view name)
         if (shaders::detail::kEngineShaders[i].name == name)
             return {shaders::detail::kEngineShaders[i].code, shaders::detail::kEngineShaders[i].words};
     throw std::logic_error("engine sample: no shader " + std::string(name));
-}
-
-void check(VkResult r, const char* what)
-{
-    if (r != VK_SUCCESS)
-        throw std::runtime_error(std::string(what) + " failed (VkResult " + std::to_string(int(r)) + ")");
 }
 
 constexpr uint32_t kFramesInFlight = 2;
@@ -179,6 +175,43 @@ bool visible(const glm::mat4& view_projection, const glm::mat4& model, glm::vec3
     return true;
 }
 
+// The engine's vertex format: positions alone in stream 0 (all its depth-only passes bind), the rest in
+// stream 1; 32-bit indices. Every mesh of the scene lies once in these buffers: hemi is told the layout and
+// the ranges (render::EngineGeometry) and its depth and shadow pipelines draw from them too.
+struct VertexRest
+{
+    glm::vec3 normal;
+    glm::vec4 tangent;
+    glm::vec2 uv0, uv1;
+};
+static_assert(sizeof(VertexRest) == 44);
+
+render::VertexLayout engine_layout()
+{
+    render::VertexLayout l;
+    l.position = {0, VK_FORMAT_R32G32B32_SFLOAT, 0};
+    l.normal = {1, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(VertexRest, normal))};
+    l.tangent = {1, VK_FORMAT_R32G32B32A32_SFLOAT, uint32_t(offsetof(VertexRest, tangent))};
+    l.uv0 = {1, VK_FORMAT_R32G32_SFLOAT, uint32_t(offsetof(VertexRest, uv0))};
+    l.uv1 = {1, VK_FORMAT_R32G32_SFLOAT, uint32_t(offsetof(VertexRest, uv1))};
+    l.strides[0] = sizeof(glm::vec3);
+    l.strides[1] = sizeof(VertexRest);
+    return l;
+}
+
+// Where one mesh lies in the engine's buffers.
+struct MeshRange
+{
+    uint32_t base_vertex = 0, first_index = 0, index_count = 0;
+};
+
+// A pipeline and its layout.
+struct Program
+{
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+};
+
 } // namespace
 
 struct Renderer::Impl
@@ -188,10 +221,18 @@ struct Renderer::Impl
     const samples::EngineAssets& assets;
     gpu::Device device;
     VkDevice vk;
+    Memory memory;
+    VkCommandPool command_pool = VK_NULL_HANDLE;
 
     // The graph's passes.
     VkRenderPass shadow_pass = VK_NULL_HANDLE, depth_pass = VK_NULL_HANDLE, main_pass = VK_NULL_HANDLE,
                  post_pass = VK_NULL_HANDLE;
+
+    // The scene's geometry, once, in the engine's buffers.
+    io::Mesh sphere_mesh;
+    Buffer positions, attributes, indices;
+    MeshRange level_range, torus_range, sphere_range;
+    render::EngineGeometry level_geometry, torus_geometry;
 
     // hemi: the material system (its default pass is the main pass, unused: the engine's shaders draw there),
     // the level and the PRT torus with their depth and shadow pipelines, the sky's parabolic maps.
@@ -199,50 +240,52 @@ struct Renderer::Impl
     std::unique_ptr<render::LightmapModel> level;
     std::unique_ptr<render::PrtModel> torus;
     std::unique_ptr<render::EnvironmentLighting> sky;
-    std::unique_ptr<render::GpuMesh> sphere;
-    io::Mesh sphere_mesh;
     size_t level_depth = 0, level_shadow = 0, torus_depth = 0, torus_shadow = 0;
-    std::unique_ptr<render::FrameSet> camera_set, light_set; // set 0 of hemi's depth and shadow pipelines
     render::EnvironmentMaterial glossy;
     glm::mat4 level_model, torus_model;
     math::BoundingSphere level_bounds;
 
     // The engine's own descriptors and pipelines.
-    gpu::DescriptorSetLayout frame_layout, level_layout, prt_layout, env_layout, post_layout;
-    gpu::DescriptorPool pool;
+    VkDescriptorSetLayout frame_layout = VK_NULL_HANDLE, level_layout = VK_NULL_HANDLE,
+                          prt_layout = VK_NULL_HANDLE, env_layout = VK_NULL_HANDLE,
+                          post_layout = VK_NULL_HANDLE;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
     std::vector<VkDescriptorSet> level_sets; // per primitive of the level
     std::vector<VkDescriptorSet> torus_sets; // per primitive of the torus
     VkDescriptorSet env_set = VK_NULL_HANDLE;
-    gpu::BufferView torus_coefficients;
-    gpu::Program depth_program, shadow_program, level_basis, level_ssbump, prt_program, probe_program,
-        env_program, post_program;
-    gpu::Sampler shadow_sampler, post_sampler;
+    VkBufferView torus_coefficients = VK_NULL_HANDLE;
+    Program depth_program, shadow_program, level_basis, level_ssbump, prt_program, probe_program, env_program,
+        post_program;
+    VkSampler shadow_sampler = VK_NULL_HANDLE, post_sampler = VK_NULL_HANDLE;
 
+    // Per frame in flight: the engine's command buffer, fence, uniform blocks and images, and hemi's view of
+    // the frame (set 0 of hemi's depth and shadow pipelines): descriptor sets of hemi's frame layout that the
+    // engine allocates from its own pool over its own buffer (the camera's and the light's
+    // shared::FrameUniforms, then instance records, which no draw here reads).
     struct Slot
     {
         VkCommandBuffer cmd = VK_NULL_HANDLE;
         VkFence fence = VK_NULL_HANDLE;
         VkSemaphore acquired = VK_NULL_HANDLE;
-        gpu::Buffer uniforms; // EngineFrame, host-mapped
-        gpu::Image shadow, depth, hdr;
+        Buffer uniforms;  // EngineFrame, host-mapped
+        Buffer hemi_view; // camera FrameUniforms at 0, the light's at view_stride, a record at 2 view_stride
+        Image shadow, depth, hdr;
         VkFramebuffer shadow_fb = VK_NULL_HANDLE, depth_fb = VK_NULL_HANDLE, main_fb = VK_NULL_HANDLE;
         VkDescriptorSet frame_set = VK_NULL_HANDLE, post_set = VK_NULL_HANDLE;
+        VkDescriptorSet camera_set = VK_NULL_HANDLE, light_set = VK_NULL_HANDLE; // hemi's frame layout
     };
     std::array<Slot, kFramesInFlight> slots;
-    VkCommandPool command_pool = VK_NULL_HANDLE;
+    VkDeviceSize view_stride = 0;
     std::vector<VkSemaphore> rendered; // per swapchain image
     std::vector<VkFramebuffer> post_fbs;
     uint64_t generation = ~uint64_t(0);
     uint32_t frame_index = 0;
-    gpu::Buffer screenshot_buffer;
+    Buffer screenshot_buffer;
 
     Impl(Context& c, Swapchain& s, const samples::EngineAssets& a)
         : ctx(c), swapchain(s), assets(a), device(external(c)), vk(c.device)
     {
-        create_passes();
-        load_scene();
-        create_descriptors();
-        create_pipelines();
+        vkGetPhysicalDeviceMemoryProperties(c.physical_device, &memory.properties);
         VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
         pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
         pool_info.queueFamilyIndex = c.queue_family;
@@ -260,6 +303,10 @@ struct Renderer::Impl
             VkSemaphoreCreateInfo sem{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
             check(vkCreateSemaphore(vk, &sem, nullptr, &slot.acquired), "vkCreateSemaphore");
         }
+        create_passes();
+        load_scene();
+        create_descriptors();
+        create_pipelines();
     }
 
     ~Impl()
@@ -271,10 +318,34 @@ struct Renderer::Impl
             vkDestroyFramebuffer(vk, slot.shadow_fb, nullptr);
             vkDestroyFence(vk, slot.fence, nullptr);
             vkDestroySemaphore(vk, slot.acquired, nullptr);
+            destroy(vk, slot.uniforms);
+            destroy(vk, slot.hemi_view);
+            destroy(vk, slot.shadow);
         }
         vkDestroyCommandPool(vk, command_pool, nullptr);
+        for (Program* p : {&depth_program, &shadow_program, &level_basis, &level_ssbump, &prt_program,
+                           &probe_program, &env_program, &post_program})
+        {
+            vkDestroyPipeline(vk, p->pipeline, nullptr);
+            vkDestroyPipelineLayout(vk, p->layout, nullptr);
+        }
+        vkDestroyDescriptorPool(vk, pool, nullptr);
+        for (VkDescriptorSetLayout l : {frame_layout, level_layout, prt_layout, env_layout, post_layout})
+            vkDestroyDescriptorSetLayout(vk, l, nullptr);
+        vkDestroySampler(vk, shadow_sampler, nullptr);
+        vkDestroySampler(vk, post_sampler, nullptr);
+        vkDestroyBufferView(vk, torus_coefficients, nullptr);
+        destroy(vk, screenshot_buffer);
         for (VkRenderPass p : {shadow_pass, depth_pass, main_pass, post_pass})
             vkDestroyRenderPass(vk, p, nullptr);
+        // hemi's models go before the geometry they draw from.
+        sky.reset();
+        torus.reset();
+        level.reset();
+        system.reset();
+        destroy(vk, positions);
+        destroy(vk, attributes);
+        destroy(vk, indices);
     }
 
     static gpu::ExternalDevice external(const Context& c)
@@ -360,8 +431,91 @@ struct Renderer::Impl
         post_pass = make_render_pass(vk, {present}, nullptr, {post_in});
     }
 
+    // The scene's meshes into the engine's two vertex streams and index buffer, one after another.
+    void load_geometry()
+    {
+        sphere_mesh = io::make_uv_sphere(1.0f, 48, 24);
+        const io::Mesh* meshes[3] = {&assets.level.mesh, &assets.torus.mesh, &sphere_mesh};
+        MeshRange* ranges[3] = {&level_range, &torus_range, &sphere_range};
+        std::vector<glm::vec3> p;
+        std::vector<VertexRest> rest;
+        std::vector<uint32_t> idx;
+        for (int i = 0; i < 3; ++i)
+        {
+            const io::Mesh& m = *meshes[i];
+            *ranges[i] = {uint32_t(p.size()), uint32_t(idx.size()), uint32_t(m.indices.size())};
+            for (size_t v = 0; v < m.positions.size(); ++v)
+            {
+                p.push_back(m.positions[v]);
+                rest.push_back({v < m.normals.size() ? m.normals[v] : glm::vec3(0.0f, 0.0f, 1.0f),
+                                v < m.tangents.size() ? m.tangents[v] : glm::vec4(1.0f, 0.0f, 0.0f, 1.0f),
+                                v < m.uvs.size() ? m.uvs[v] : glm::vec2(0.0f),
+                                v < m.uvs1.size() ? m.uvs1[v] : glm::vec2(0.0f)});
+            }
+            idx.insert(idx.end(), m.indices.begin(), m.indices.end());
+        }
+        auto upload = [&](Buffer& b, const void* data, size_t bytes, VkBufferUsageFlags usage)
+        {
+            b = create_buffer(vk, memory, bytes, usage);
+            std::memcpy(b.mapped, data, bytes);
+        };
+        upload(positions, p.data(), p.size() * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+        upload(attributes, rest.data(), rest.size() * sizeof(VertexRest), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+        upload(indices, idx.data(), idx.size() * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+        auto geometry_of = [&](const MeshRange& r, const std::vector<io::Primitive>& primitives)
+        {
+            render::EngineGeometry g;
+            g.layout = engine_layout();
+            g.buffers.streams = 2;
+            g.buffers.vertex_buffers[0] = positions.buffer;
+            g.buffers.vertex_buffers[1] = attributes.buffer;
+            g.buffers.index_buffer = indices.buffer;
+            g.buffers.index_type = VK_INDEX_TYPE_UINT32;
+            for (const io::Primitive& prim : primitives)
+                g.primitives.push_back(
+                    {r.first_index + prim.first_index, prim.index_count, int32_t(r.base_vertex)});
+            if (primitives.empty())
+                g.primitives.push_back({r.first_index, r.index_count, int32_t(r.base_vertex)});
+            return g;
+        };
+        level_geometry = geometry_of(level_range, assets.level.primitives);
+        torus_geometry = geometry_of(torus_range, assets.torus.primitives);
+    }
+
+    // Both streams (the main pass), or positions alone (the depth-only passes' own pipelines).
+    void bind_geometry(VkCommandBuffer cmd, bool positions_only) const
+    {
+        const VkBuffer buffers[2] = {positions.buffer, attributes.buffer};
+        const VkDeviceSize offsets[2] = {0, 0};
+        vkCmdBindVertexBuffers(cmd, 0, positions_only ? 1 : 2, buffers, offsets);
+        vkCmdBindIndexBuffer(cmd, indices.buffer, 0, VK_INDEX_TYPE_UINT32);
+    }
+
+    // A one-time command buffer of the engine's, submitted and waited for (loading).
+    template <typename Record> void submit_once(Record&& record)
+    {
+        VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        alloc.commandPool = command_pool;
+        alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+        alloc.commandBufferCount = 1;
+        VkCommandBuffer cmd;
+        check(vkAllocateCommandBuffers(vk, &alloc, &cmd), "vkAllocateCommandBuffers");
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+        record(cmd);
+        check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        submit.commandBufferCount = 1;
+        submit.pCommandBuffers = &cmd;
+        check(vkQueueSubmit(ctx.queue, 1, &submit, VK_NULL_HANDLE), "vkQueueSubmit");
+        check(vkQueueWaitIdle(ctx.queue), "vkQueueWaitIdle");
+        vkFreeCommandBuffers(vk, command_pool, 1, &cmd);
+    }
+
     void load_scene()
     {
+        load_geometry();
         render::RenderTargetDesc main_target;
         main_target.render_pass = main_pass;
         system = std::make_unique<render::MaterialSystem>(device, main_target);
@@ -369,8 +523,9 @@ struct Renderer::Impl
         level_model = math::gltf_to_world();
         level_bounds = math::bounding_sphere(assets.level.mesh, level_model);
         // The level's default technique is H4; its SSBump wall asks for "ssbump" itself (its material).
-        level = std::make_unique<render::LightmapModel>(*system, assets.level,
-                                                        std::vector<std::string>{"h4", "h6"}, upload);
+        level = std::make_unique<render::LightmapModel>(
+            *system, assets.level, std::vector<std::string>{"h4", "h6"}, upload,
+            std::map<std::string, std::string>{}, &level_geometry);
         render::PassDesc depth;
         depth.kind = render::PassKind::Depth;
         depth.target.render_pass = depth_pass;
@@ -381,8 +536,11 @@ struct Renderer::Impl
         level_depth = level->add_pass(depth);
         level_shadow = level->add_pass(shadow);
 
+        // The torus relit every frame: one lighting and one set of coefficients per frame in flight.
         render::PrtModelDesc prt;
         prt.technique = "h4";
+        prt.frames_in_flight = kFramesInFlight;
+        prt.geometry = &torus_geometry;
         torus = std::make_unique<render::PrtModel>(*system, assets.torus, prt, upload);
         torus_depth = torus->add_pass(depth);
         torus_shadow = torus->add_pass(shadow);
@@ -397,48 +555,60 @@ struct Renderer::Impl
         glossy.ks = 0.9f;
         sky = std::make_unique<render::EnvironmentLighting>(
             *system, assets.sky, std::span<const math::BrdfTable>{}, glossy, upload);
-        sphere_mesh = io::make_uv_sphere(1.0f, 48, 24);
-        sphere = std::make_unique<render::GpuMesh>(device, sphere_mesh, upload);
-        upload.submit_and_wait();
-        camera_set = std::make_unique<render::FrameSet>(*system);
-        light_set = std::make_unique<render::FrameSet>(*system);
+        // hemi's uploads, recorded into the engine's command buffer and submitted by the engine.
+        submit_once([&](VkCommandBuffer cmd) { upload.record(cmd); });
+        // The engine's own texel-buffer view of the coefficients hemi's transfer writes (every frame slot's).
         const gpu::BufferRange range = torus->coefficients().coefficients();
-        torus_coefficients = gpu::create_buffer_view(device, range.buffer, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                     range.offset, range.size);
+        VkBufferViewCreateInfo view{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+        view.buffer = range.buffer;
+        view.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+        view.offset = range.offset;
+        view.range = range.size;
+        check(vkCreateBufferView(vk, &view, nullptr, &torus_coefficients), "vkCreateBufferView");
     }
 
     void create_descriptors()
     {
         const VkShaderStageFlags fs = VK_SHADER_STAGE_FRAGMENT_BIT, vs = VK_SHADER_STAGE_VERTEX_BIT;
         const VkDescriptorType image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        const std::vector<gpu::Binding> frame_bindings = {{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs},
-                                                          {1, image, fs}};
-        const std::vector<gpu::Binding> level_bindings = {{0, image, fs}, {1, image, fs}, {2, image, fs},
-                                                          {3, image, fs}, {5, image, fs}, {8, image, fs},
-                                                          {9, image, fs}, {10, image, fs}};
-        const std::vector<gpu::Binding> prt_bindings = {
-            {0, image, fs}, {1, image, fs}, {4, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs}};
-        const std::vector<gpu::Binding> env_bindings = {{6, image, fs}, {7, image, fs}};
-        const std::vector<gpu::Binding> post_bindings = {{0, image, fs}};
-        frame_layout = gpu::create_set_layout(device, frame_bindings);
-        level_layout = gpu::create_set_layout(device, level_bindings);
-        prt_layout = gpu::create_set_layout(device, prt_bindings);
-        env_layout = gpu::create_set_layout(device, env_bindings);
-        post_layout = gpu::create_set_layout(device, post_bindings);
-        std::vector<gpu::Binding> all = {{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs, 4},
-                                         {0, image, fs, 160},
-                                         {0, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs, 4}};
-        pool = gpu::create_descriptor_pool(device, all, 32);
-
-        auto image_write = [](uint32_t binding, VkSampler sampler, VkImageView view,
-                              VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
-        {
-            gpu::DescriptorWrite w;
-            w.binding = binding;
-            w.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-            w.image = {sampler, view, layout};
-            return w;
+        auto binding = [](uint32_t b, VkDescriptorType type, VkShaderStageFlags stages) {
+            return VkDescriptorSetLayoutBinding{b, type, 1, stages, nullptr};
         };
+        const VkDescriptorSetLayoutBinding frame_bindings[] = {
+            binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs), binding(1, image, fs)};
+        const VkDescriptorSetLayoutBinding level_bindings[] = {
+            binding(0, image, fs), binding(1, image, fs), binding(2, image, fs), binding(3, image, fs),
+            binding(5, image, fs), binding(8, image, fs), binding(9, image, fs), binding(10, image, fs)};
+        const VkDescriptorSetLayoutBinding prt_bindings[] = {
+            binding(0, image, fs), binding(1, image, fs),
+            binding(4, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs)};
+        const VkDescriptorSetLayoutBinding env_bindings[] = {binding(6, image, fs), binding(7, image, fs)};
+        const VkDescriptorSetLayoutBinding post_bindings[] = {binding(0, image, fs)};
+        frame_layout = create_set_layout(vk, frame_bindings);
+        level_layout = create_set_layout(vk, level_bindings);
+        prt_layout = create_set_layout(vk, prt_bindings);
+        env_layout = create_set_layout(vk, env_bindings);
+        post_layout = create_set_layout(vk, post_bindings);
+        const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
+                                              {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4},
+                                              {image, 160},
+                                              {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4}};
+        VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+        pool_info.maxSets = 40;
+        pool_info.poolSizeCount = uint32_t(std::size(sizes));
+        pool_info.pPoolSizes = sizes;
+        check(vkCreateDescriptorPool(vk, &pool_info, nullptr, &pool), "vkCreateDescriptorPool");
+        auto allocate = [&](VkDescriptorSetLayout layout)
+        {
+            VkDescriptorSetAllocateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+            info.descriptorPool = pool;
+            info.descriptorSetCount = 1;
+            info.pSetLayouts = &layout;
+            VkDescriptorSet set;
+            check(vkAllocateDescriptorSets(vk, &info, &set), "vkAllocateDescriptorSets");
+            return set;
+        };
+
         // The level: each primitive's material textures and the lightmaps hemi uploaded.
         const render::SceneSurfaces& surfaces = level->surfaces();
         const render::TextureSet& textures = surfaces.textures();
@@ -447,151 +617,175 @@ struct Renderer::Impl
         for (size_t p = 0; p < surfaces.primitive_count(); ++p)
         {
             const io::Material& m = surfaces.material(p);
-            const VkDescriptorSet set = gpu::allocate_descriptor_set(device, pool, level_layout);
-            const gpu::DescriptorWrite writes[] = {
-                image_write(0, textures.sampler(m.base_color.sampler),
-                            textures.image(m.base_color.image, true).view()),
-                image_write(1, textures.sampler(m.normal.sampler),
-                            textures.image(m.normal.image, false).view()),
-                image_write(2, h6.sampler(), h6.pages().view()),
-                image_write(3, h4.sampler(), h4.pages().view()),
-                image_write(5, rnm.sampler(), rnm.pages().view()),
-                image_write(8, h6.table_sampler(), h6.page_table().view()),
-                image_write(9, h4.table_sampler(), h4.page_table().view()),
-                image_write(10, rnm.table_sampler(), rnm.page_table().view())};
-            gpu::write_descriptors(device, set, writes);
+            const VkDescriptorSet set = allocate(level_layout);
+            write_image(vk, set, 0, textures.sampler(m.base_color.sampler),
+                        textures.image(m.base_color.image, true).view());
+            write_image(vk, set, 1, textures.sampler(m.normal.sampler),
+                        textures.image(m.normal.image, false).view());
+            write_image(vk, set, 2, h6.sampler(), h6.pages().view());
+            write_image(vk, set, 3, h4.sampler(), h4.pages().view());
+            write_image(vk, set, 5, rnm.sampler(), rnm.pages().view());
+            write_image(vk, set, 8, h6.table_sampler(), h6.page_table().view());
+            write_image(vk, set, 9, h4.table_sampler(), h4.page_table().view());
+            write_image(vk, set, 10, rnm.table_sampler(), rnm.page_table().view());
             level_sets.push_back(set);
         }
-        // The torus: its textures and this frame's coefficients (hemi's transfer pass writes them).
+        // The torus: its textures and the coefficients hemi's transfer pass writes.
         const render::SceneSurfaces& ts = torus->surfaces();
         for (size_t p = 0; p < ts.primitive_count(); ++p)
         {
             const io::Material& m = ts.material(p);
-            const VkDescriptorSet set = gpu::allocate_descriptor_set(device, pool, prt_layout);
-            gpu::DescriptorWrite coefficients;
-            coefficients.binding = 4;
-            coefficients.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-            coefficients.texel_view = torus_coefficients;
-            const gpu::DescriptorWrite writes[] = {
-                image_write(0, ts.textures().sampler(m.base_color.sampler),
-                            ts.textures().image(m.base_color.image, true).view()),
-                image_write(1, ts.textures().sampler(m.normal.sampler),
-                            ts.textures().image(m.normal.image, false).view()),
-                coefficients};
-            gpu::write_descriptors(device, set, writes);
+            const VkDescriptorSet set = allocate(prt_layout);
+            write_image(vk, set, 0, ts.textures().sampler(m.base_color.sampler),
+                        ts.textures().image(m.base_color.image, true).view());
+            write_image(vk, set, 1, ts.textures().sampler(m.normal.sampler),
+                        ts.textures().image(m.normal.image, false).view());
+            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            w.dstSet = set;
+            w.dstBinding = 4;
+            w.descriptorCount = 1;
+            w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+            w.pTexelBufferView = &torus_coefficients;
+            vkUpdateDescriptorSets(vk, 1, &w, 0, nullptr);
             torus_sets.push_back(set);
         }
-        env_set = gpu::allocate_descriptor_set(device, pool, env_layout);
-        const gpu::DescriptorWrite env_writes[] = {image_write(6, sky->sampler(), sky->glossy_map().view()),
-                                                   image_write(7, sky->sampler(), sky->diffuse_map().view())};
-        gpu::write_descriptors(device, env_set, env_writes);
+        env_set = allocate(env_layout);
+        write_image(vk, env_set, 6, sky->sampler(), sky->glossy_map().view());
+        write_image(vk, env_set, 7, sky->sampler(), sky->diffuse_map().view());
 
-        // The shadow map is read with depth comparison (hardware PCF).
+        // The shadow map is read with depth comparison (hardware PCF); the post pass reads the HDR image.
         VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
         s.magFilter = s.minFilter = VK_FILTER_LINEAR;
         s.addressModeU = s.addressModeV = s.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
         s.compareEnable = VK_TRUE;
         s.compareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
         s.maxLod = 0.0f;
-        VkSampler raw;
-        check(vkCreateSampler(vk, &s, nullptr, &raw), "vkCreateSampler");
-        shadow_sampler = gpu::Sampler(vk, raw);
-        gpu::SamplerDesc post;
-        post.filter = VK_FILTER_NEAREST;
-        post.address = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-        post.max_lod = 0.0f;
-        post_sampler = gpu::create_sampler(device, post);
+        check(vkCreateSampler(vk, &s, nullptr, &shadow_sampler), "vkCreateSampler");
+        s.magFilter = s.minFilter = VK_FILTER_NEAREST;
+        s.compareEnable = VK_FALSE;
+        check(vkCreateSampler(vk, &s, nullptr, &post_sampler), "vkCreateSampler");
 
+        const VkPhysicalDeviceLimits& limits = device.limits();
+        view_stride = (sizeof(shared::FrameUniforms) + limits.minUniformBufferOffsetAlignment - 1) /
+                      limits.minUniformBufferOffsetAlignment * limits.minUniformBufferOffsetAlignment;
+        view_stride = (view_stride + limits.minStorageBufferOffsetAlignment - 1) /
+                      limits.minStorageBufferOffsetAlignment * limits.minStorageBufferOffsetAlignment;
         for (Slot& slot : slots)
         {
-            slot.uniforms = gpu::create_buffer(
-                device, {sizeof(EngineFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUsage::Upload});
-            if (!slot.uniforms.mapped())
-                throw std::runtime_error("the device has no host-visible coherent memory for uniforms");
-            slot.shadow = gpu::create_image(
-                device, {kShadowSize, kShadowSize, kDepthFormat,
-                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT});
+            slot.uniforms =
+                create_buffer(vk, memory, sizeof(EngineFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+            slot.shadow =
+                create_image(vk, memory, {kShadowSize, kShadowSize}, kDepthFormat,
+                             VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT);
             slot.shadow_fb =
-                make_framebuffer(vk, shadow_pass, {slot.shadow.view()}, {kShadowSize, kShadowSize});
-            slot.frame_set = gpu::allocate_descriptor_set(device, pool, frame_layout);
-            gpu::DescriptorWrite ubo;
-            ubo.binding = 0;
-            ubo.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-            ubo.buffer = {slot.uniforms, 0, VK_WHOLE_SIZE};
-            const gpu::DescriptorWrite writes[] = {
-                ubo, image_write(1, shadow_sampler, slot.shadow.view(),
-                                 VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL)};
-            gpu::write_descriptors(device, slot.frame_set, writes);
-            slot.post_set = gpu::allocate_descriptor_set(device, pool, post_layout);
+                make_framebuffer(vk, shadow_pass, {slot.shadow.view}, {kShadowSize, kShadowSize});
+            slot.frame_set = allocate(frame_layout);
+            const VkDescriptorBufferInfo ubo{slot.uniforms.buffer, 0, VK_WHOLE_SIZE};
+            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            w.dstSet = slot.frame_set;
+            w.dstBinding = 0;
+            w.descriptorCount = 1;
+            w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+            w.pBufferInfo = &ubo;
+            vkUpdateDescriptorSets(vk, 1, &w, 0, nullptr);
+            write_image(vk, slot.frame_set, 1, shadow_sampler, slot.shadow.view,
+                        VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+            slot.post_set = allocate(post_layout);
+
+            // hemi's view of this slot: two sets of hemi's frame layout over the engine's buffer.
+            slot.hemi_view =
+                create_buffer(vk, memory, 2 * view_stride + sizeof(shared::DrawPush),
+                              VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+            std::memset(slot.hemi_view.mapped, 0, slot.hemi_view.size);
+            slot.camera_set = allocate(system->frame_layout());
+            slot.light_set = allocate(system->frame_layout());
+            const VkDescriptorBufferInfo infos[3] = {
+                {slot.hemi_view.buffer, 0, sizeof(shared::FrameUniforms)},
+                {slot.hemi_view.buffer, view_stride, sizeof(shared::FrameUniforms)},
+                {slot.hemi_view.buffer, 2 * view_stride, sizeof(shared::DrawPush)}};
+            VkWriteDescriptorSet writes[4]{};
+            for (int i = 0; i < 4; ++i)
+            {
+                const bool uniforms = i % 2 == 0;
+                writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+                writes[i].dstSet = i < 2 ? slot.camera_set : slot.light_set;
+                writes[i].dstBinding = uniforms ? HEMI_FRAME_BINDING_UNIFORMS : HEMI_FRAME_BINDING_INSTANCES;
+                writes[i].descriptorCount = 1;
+                writes[i].descriptorType =
+                    uniforms ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+                writes[i].pBufferInfo = uniforms ? &infos[i / 2] : &infos[2];
+            }
+            vkUpdateDescriptorSets(vk, 4, writes, 0, nullptr);
         }
     }
 
     void create_pipelines()
     {
-        const render::VertexLayout layout = render::GpuMesh::layout();
+        const render::VertexLayout layout = engine_layout();
         const std::vector<VkVertexInputBindingDescription> bindings = {
-            {0, layout.strides[0], VK_VERTEX_INPUT_RATE_VERTEX}};
-        const std::vector<VkVertexInputAttributeDescription> attributes = {
+            {0, layout.strides[0], VK_VERTEX_INPUT_RATE_VERTEX},
+            {1, layout.strides[1], VK_VERTEX_INPUT_RATE_VERTEX}};
+        const std::vector<VkVertexInputAttributeDescription> attributes_in = {
             {0, 0, layout.position.format, layout.position.offset},
-            {1, 0, layout.normal.format, layout.normal.offset},
-            {2, 0, layout.tangent.format, layout.tangent.offset},
-            {3, 0, layout.uv0.format, layout.uv0.offset},
-            {4, 0, layout.uv1.format, layout.uv1.offset}};
+            {1, 1, layout.normal.format, layout.normal.offset},
+            {2, 1, layout.tangent.format, layout.tangent.offset},
+            {3, 1, layout.uv0.format, layout.uv0.offset},
+            {4, 1, layout.uv1.format, layout.uv1.offset}};
+        auto program = [&](std::vector<VkDescriptorSetLayout> sets, uint32_t push, PipelineDesc d)
+        {
+            Program p;
+            p.layout = create_pipeline_layout(vk, sets, push);
+            d.layout = p.layout;
+            p.pipeline = create_pipeline(vk, d);
+            return p;
+        };
 
-        gpu::GraphicsProgramDesc d;
-        d.vertex_bindings = bindings;
-        d.vertex_attributes = {attributes[0]};
-        d.push_constant_size = sizeof(EngineObject);
-        d.set_layouts = {frame_layout};
+        // Depth-only: positions alone (stream 0).
+        PipelineDesc d;
+        d.bindings = {bindings[0]};
+        d.attributes = {attributes_in[0]};
         d.color_attachments = 0;
         d.render_pass = depth_pass;
         d.vertex_shader = spirv("depth.vert");
-        depth_program = gpu::create_graphics_program(device, d);
+        depth_program = program({frame_layout}, sizeof(EngineObject), d);
         d.render_pass = shadow_pass;
         d.vertex_shader = spirv("depth_shadow.vert");
         d.depth_bias_constant = 1.25f;
         d.depth_bias_slope = 1.75f;
-        shadow_program = gpu::create_graphics_program(device, d);
+        shadow_program = program({frame_layout}, sizeof(EngineObject), d);
 
-        gpu::GraphicsProgramDesc m;
-        m.vertex_bindings = bindings;
-        m.vertex_attributes = attributes;
-        m.push_constant_size = sizeof(EngineObject);
+        PipelineDesc m;
+        m.bindings = bindings;
+        m.attributes = attributes_in;
         m.render_pass = main_pass;
         m.depth_write = false;
         m.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL; // against the prepass: each pixel shaded once
         m.vertex_shader = spirv("main.vert");
-        m.set_layouts = {frame_layout, level_layout};
         m.fragment_shader = spirv("main_level.frag");
         m.specialization = {0, 4, 0};
-        level_basis = gpu::create_graphics_program(device, m);
+        level_basis = program({frame_layout, level_layout}, sizeof(EngineObject), m);
         m.specialization = {1, 4, 0};
-        level_ssbump = gpu::create_graphics_program(device, m);
+        level_ssbump = program({frame_layout, level_layout}, sizeof(EngineObject), m);
         const uint32_t k = uint32_t(torus->basis().size);
         m.vertex_shader = spirv("main_prt.vert");
         m.fragment_shader = spirv("main_prt.frag");
-        m.set_layouts = {frame_layout, prt_layout};
         m.specialization = {0, k, uint32_t(torus->basis().id)};
-        prt_program = gpu::create_graphics_program(device, m);
+        prt_program = program({frame_layout, prt_layout}, sizeof(EngineObject), m);
         m.vertex_shader = spirv("main.vert");
         m.fragment_shader = spirv("main_probe.frag");
-        m.set_layouts = {frame_layout};
         m.specialization = {0, 4, 0};
-        probe_program = gpu::create_graphics_program(device, m);
+        probe_program = program({frame_layout}, sizeof(EngineObject), m);
         m.fragment_shader = spirv("main_env.frag");
-        m.set_layouts = {frame_layout, env_layout};
-        env_program = gpu::create_graphics_program(device, m);
+        env_program = program({frame_layout, env_layout}, sizeof(EngineObject), m);
 
-        gpu::GraphicsProgramDesc p;
+        PipelineDesc p;
         p.vertex_shader = spirv("post.vert");
         p.fragment_shader = spirv("post.frag");
-        p.set_layouts = {post_layout};
-        p.push_constant_size = sizeof(PostPush);
         p.render_pass = post_pass;
         p.depth_test = false;
         p.depth_write = false;
-        p.cull_mode = VK_CULL_MODE_NONE;
-        post_program = gpu::create_graphics_program(device, p);
+        p.cull = VK_CULL_MODE_NONE;
+        post_program = program({post_layout}, sizeof(PostPush), p);
     }
 
     // What depends on the swapchain's size: depth and HDR images, their framebuffers, the post targets.
@@ -605,8 +799,8 @@ struct Renderer::Impl
                     vkDestroyFramebuffer(vk, *fb, nullptr);
                     *fb = VK_NULL_HANDLE;
                 }
-            slot.depth = {};
-            slot.hdr = {};
+            destroy(vk, slot.depth);
+            destroy(vk, slot.hdr);
         }
         for (VkFramebuffer fb : post_fbs)
             vkDestroyFramebuffer(vk, fb, nullptr);
@@ -621,18 +815,13 @@ struct Renderer::Impl
         const VkExtent2D e = swapchain.extent;
         for (Slot& slot : slots)
         {
-            slot.depth = gpu::create_image(
-                device, {e.width, e.height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
-            slot.hdr =
-                gpu::create_image(device, {e.width, e.height, kHdrFormat,
-                                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT});
-            slot.depth_fb = make_framebuffer(vk, depth_pass, {slot.depth.view()}, e);
-            slot.main_fb = make_framebuffer(vk, main_pass, {slot.hdr.view(), slot.depth.view()}, e);
-            gpu::DescriptorWrite w;
-            w.binding = 0;
-            w.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-            w.image = {post_sampler, slot.hdr.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-            gpu::write_descriptors(device, slot.post_set, std::span<const gpu::DescriptorWrite>(&w, 1));
+            slot.depth =
+                create_image(vk, memory, e, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT);
+            slot.hdr = create_image(vk, memory, e, kHdrFormat,
+                                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT);
+            slot.depth_fb = make_framebuffer(vk, depth_pass, {slot.depth.view}, e);
+            slot.main_fb = make_framebuffer(vk, main_pass, {slot.hdr.view, slot.depth.view}, e);
+            write_image(vk, slot.post_set, 0, post_sampler, slot.hdr.view);
         }
         for (VkImageView v : swapchain.views)
         {
@@ -660,8 +849,8 @@ struct Renderer::Impl
         return glm::vec3(1.9f * std::cos(a), 1.9f * std::sin(a), 0.45f + 0.5f * float(i));
     }
 
-    FrameStats record(Slot& slot, uint32_t image, const Settings& settings, const FrameState& state,
-                      bool screenshot)
+    FrameStats record(Slot& slot, uint32_t slot_index, uint32_t image, const Settings& settings,
+                      const FrameState& state, bool screenshot)
     {
         const VkCommandBuffer cmd = slot.cmd;
         const VkExtent2D e = swapchain.extent;
@@ -689,7 +878,8 @@ struct Renderer::Impl
         for (uint32_t s = 0; s < kSpheres; ++s)
         {
             std::array<glm::vec3, 9> sh;
-            render::probe_lighting(assets.level, sphere_position(s, state.object_time), level_model, sh);
+            if (!render::probe_lighting(assets.level, sphere_position(s, state.object_time), level_model, sh))
+                throw std::runtime_error("the level has no light probes for the spheres");
             for (uint32_t i = 0; i < 9; ++i)
                 f.probe_sh[s * 9 + i] = glm::vec4(sh[i], 0.0f);
         }
@@ -697,48 +887,63 @@ struct Renderer::Impl
         glossy.world_to_env =
             glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-env_degrees), glm::vec3(0.0f, 0.0f, 1.0f)));
         f.env = sky->uniforms(glossy);
-        std::memcpy(slot.uniforms.mapped(), &f, sizeof f);
+        std::memcpy(slot.uniforms.mapped, &f, sizeof f);
+        // hemi's view of the frame, into the slot's own buffer (set 0 of hemi's depth and shadow pipelines).
+        render::FrameData camera_frame;
+        camera_frame.view_projection = f.view_projection;
+        camera_frame.eye = eye;
+        render::FrameData light_frame;
+        light_frame.view_projection = f.light_view_projection;
+        light_frame.eye = light_pos;
+        shared::FrameUniforms hemi_uniforms;
+        if (!render::frame_uniforms(*system, camera_frame, hemi_uniforms))
+            throw std::runtime_error("hemi refused the camera's frame data");
+        std::memcpy(slot.hemi_view.mapped, &hemi_uniforms, sizeof hemi_uniforms);
+        if (!render::frame_uniforms(*system, light_frame, hemi_uniforms))
+            throw std::runtime_error("hemi refused the light's frame data");
+        std::memcpy(static_cast<std::byte*>(slot.hemi_view.mapped) + view_stride, &hemi_uniforms,
+                    sizeof hemi_uniforms);
 
         VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
         begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
         check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
 
-        // hemi's per-frame work, outside render passes: the torus relit by the turning sky, and the frame
-        // sets of hemi's depth and shadow pipelines.
+        // hemi's per-frame work, outside render passes: the torus relit by the turning sky into this slot's
+        // coefficients. hemi records the dispatch and declares what it reads and writes; the engine places
+        // the barrier between the transfer and the vertex shaders that read the coefficients (hemi's depth
+        // and shadow pipelines, the engine's main_prt.vert). Earlier reads of the slot's coefficients are
+        // done: the slot's fence has passed.
         if (objects)
         {
             render::PrtInstance instance;
             instance.model = torus_model;
             instance.world_lighting = assets.sky_sh;
             instance.rotate_degrees = env_degrees;
-            torus->record_transfer(cmd, std::span<const render::PrtInstance>(&instance, 1));
+            render::AccessList transfer, reads;
+            if (!torus->record_transfer(cmd, std::span<const render::PrtInstance>(&instance, 1), slot_index,
+                                        transfer) ||
+                !torus->draw_accesses(slot_index, reads))
+                throw std::runtime_error("hemi refused the torus's transfer (see its message)");
+            render::record_barrier(cmd, transfer.accesses(), reads.accesses());
         }
-        render::FrameData camera_frame;
-        camera_frame.view_projection = f.view_projection;
-        camera_frame.eye = eye;
-        camera_set->record_update(cmd, camera_frame);
-        render::FrameData light_frame;
-        light_frame.view_projection = f.light_view_projection;
-        light_frame.eye = light_pos;
-        light_set->record_update(cmd, light_frame);
 
         const std::vector<render::LightmapDraw> list = level->draw_list("h4", 0);
-        auto draw_objects_depth =
-            [&](const gpu::Program& program, size_t torus_pass, VkDescriptorSet hemi_frame)
+        auto draw_objects_depth = [&](const Program& program, size_t torus_pass, VkDescriptorSet hemi_frame)
         {
             if (!objects)
                 return;
-            torus->draw(cmd, hemi_frame, 0, torus_model, torus_pass);
+            torus->draw(cmd, hemi_frame, 0, torus_model, torus_pass, slot_index);
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
             vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.layout, 0, 1,
                                     &slot.frame_set, 0, nullptr);
-            sphere->bind(cmd);
+            bind_geometry(cmd, true);
             for (uint32_t s = 0; s <= kSpheres; ++s)
             {
                 EngineObject o;
                 o.model = object_model(s, state);
                 vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
-                sphere->draw(cmd, 0, sphere->index_count());
+                vkCmdDrawIndexed(cmd, sphere_range.index_count, 1, sphere_range.first_index,
+                                 int32_t(sphere_range.base_vertex), 0);
             }
         };
 
@@ -755,8 +960,8 @@ struct Renderer::Impl
         set_viewport(cmd, {kShadowSize, kShadowSize});
         if (light_on)
         {
-            level->draw(cmd, light_set->set(), "h4", level_model, level_shadow);
-            draw_objects_depth(shadow_program, torus_shadow, light_set->set());
+            level->draw(cmd, slot.light_set, "h4", level_model, level_shadow);
+            draw_objects_depth(shadow_program, torus_shadow, slot.light_set);
         }
         vkCmdEndRenderPass(cmd);
 
@@ -773,8 +978,8 @@ struct Renderer::Impl
             else
                 ++stats.culled;
         for (const render::LightmapDraw* entry : visible_entries)
-            level->draw(cmd, camera_set->set(), *entry, level_model, level_depth);
-        draw_objects_depth(depth_program, torus_depth, camera_set->set());
+            level->draw(cmd, slot.camera_set, *entry, level_model, level_depth);
+        draw_objects_depth(depth_program, torus_depth, slot.camera_set);
         vkCmdEndRenderPass(cmd);
 
         // 3. The main pass: the engine's own shaders over hemi's data.
@@ -786,10 +991,10 @@ struct Renderer::Impl
         rp.pClearValues = clears;
         vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
         set_viewport(cmd, e);
-        level->surfaces().mesh().bind(cmd);
+        bind_geometry(cmd, false);
         for (const render::LightmapDraw* entry : visible_entries)
         {
-            const gpu::Program& program = *entry->technique == "ssbump" ? level_ssbump : level_basis;
+            const Program& program = *entry->technique == "ssbump" ? level_ssbump : level_basis;
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
             const VkDescriptorSet sets[2] = {slot.frame_set, level_sets[entry->primitive]};
             vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.layout, 0, 2, sets, 0,
@@ -798,15 +1003,21 @@ struct Renderer::Impl
             o.model = level_model;
             o.albedo = entry->material->base_color_factor;
             vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
-            level->surfaces().mesh().draw(cmd, entry->first_index, entry->index_count);
+            // The entry's indices are the engine's own (level_geometry's ranges).
+            vkCmdDrawIndexed(cmd, entry->index_count, 1, entry->first_index, int32_t(level_range.base_vertex),
+                             0);
             ++stats.draws;
         }
         if (objects)
         {
             // The torus, relit this frame.
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, prt_program.pipeline);
-            torus->mesh().bind(cmd);
             const render::SceneSurfaces& ts = torus->surfaces();
+            // This slot's coefficients of vertex v are at coefficient_offset + v K; gl_VertexIndex counts
+            // the torus's base vertex in the engine's buffers, taken out here.
+            const uint32_t coefficients =
+                torus->instance_record(0, torus_model, slot_index).coefficient_offset -
+                torus_range.base_vertex * uint32_t(torus->basis().size);
             for (size_t p = 0; p < ts.primitive_count(); ++p)
             {
                 const VkDescriptorSet sets[2] = {slot.frame_set, torus_sets[p]};
@@ -815,18 +1026,18 @@ struct Renderer::Impl
                 EngineObject o;
                 o.model = torus_model;
                 o.albedo = ts.material(p).base_color_factor;
-                o.index.x = int32_t(torus->coefficients().instance_offset(0));
+                o.index.x = int32_t(coefficients);
                 vkCmdPushConstants(cmd, prt_program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
                 const render::SceneSurfaces::Primitive prim = ts.primitive(p);
-                torus->mesh().draw(cmd, prim.first_index, prim.index_count);
+                vkCmdDrawIndexed(cmd, prim.index_count, 1, prim.first_index, int32_t(torus_range.base_vertex),
+                                 0);
             }
             // The spheres lit by the probes, then the glossy ball.
-            sphere->bind(cmd);
             const glm::vec4 colours[kSpheres] = {
                 {0.9f, 0.3f, 0.25f, 1}, {0.9f, 0.85f, 0.8f, 1}, {0.3f, 0.5f, 0.9f, 1}};
             for (uint32_t s = 0; s <= kSpheres; ++s)
             {
-                const gpu::Program& program = s < kSpheres ? probe_program : env_program;
+                const Program& program = s < kSpheres ? probe_program : env_program;
                 vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.pipeline);
                 const VkDescriptorSet sets[2] = {slot.frame_set, env_set};
                 vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, program.layout, 0,
@@ -836,7 +1047,8 @@ struct Renderer::Impl
                 o.albedo = s < kSpheres ? colours[s] : glm::vec4(0.8f, 0.75f, 0.6f, 1.0f);
                 o.index.x = int32_t(s);
                 vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
-                sphere->draw(cmd, 0, sphere->index_count());
+                vkCmdDrawIndexed(cmd, sphere_range.index_count, 1, sphere_range.first_index,
+                                 int32_t(sphere_range.base_vertex), 0);
             }
         }
         vkCmdEndRenderPass(cmd);
@@ -877,9 +1089,9 @@ struct Renderer::Impl
     void record_screenshot(VkCommandBuffer cmd, VkImage image)
     {
         const VkExtent2D e = swapchain.extent;
-        screenshot_buffer =
-            gpu::create_buffer(device, {VkDeviceSize(e.width) * e.height * 4,
-                                        VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu::MemoryUsage::Readback});
+        destroy(vk, screenshot_buffer);
+        screenshot_buffer = create_buffer(vk, memory, VkDeviceSize(e.width) * e.height * 4,
+                                          VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
         VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
         b.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
         b.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
@@ -893,7 +1105,8 @@ struct Renderer::Impl
         VkBufferImageCopy copy{};
         copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
         copy.imageExtent = {e.width, e.height, 1};
-        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot_buffer, 1, &copy);
+        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot_buffer.buffer, 1,
+                               &copy);
         b.srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
         b.dstAccessMask = 0;
         b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
@@ -913,7 +1126,7 @@ struct Renderer::Impl
     {
         const VkExtent2D e = swapchain.extent;
         io::ImageRgba8 img{e.width, e.height, std::vector<uint8_t>(size_t(e.width) * e.height * 4)};
-        std::memcpy(img.pixels.data(), screenshot_buffer.mapped(), img.pixels.size());
+        std::memcpy(img.pixels.data(), screenshot_buffer.mapped, img.pixels.size());
         const bool bgra =
             swapchain.format == VK_FORMAT_B8G8R8A8_SRGB || swapchain.format == VK_FORMAT_B8G8R8A8_UNORM;
         for (size_t i = 0; i < img.pixels.size(); i += 4)
@@ -923,7 +1136,7 @@ struct Renderer::Impl
             img.pixels[i + 3] = 255;
         }
         io::write_png(path, img);
-        screenshot_buffer = {};
+        destroy(vk, screenshot_buffer);
     }
 
     FrameStats frame(const Settings& settings, const FrameState& state,
@@ -935,7 +1148,8 @@ struct Renderer::Impl
             destroy_sized();
             create_sized();
         }
-        Slot& slot = slots[frame_index % kFramesInFlight];
+        const uint32_t slot_index = frame_index % kFramesInFlight;
+        Slot& slot = slots[slot_index];
         // The slot's previous frame (two frames ago) has finished: its command buffer, uniform block and
         // images are free.
         check(vkWaitForFences(vk, 1, &slot.fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
@@ -955,7 +1169,7 @@ struct Renderer::Impl
         if (shot && !(swapchain_usage_has_transfer()))
             throw std::runtime_error(
                 "the window's swapchain cannot be copied (no TRANSFER_SRC usage): no screenshot");
-        const FrameStats stats = record(slot, image, settings, state, shot);
+        const FrameStats stats = record(slot, slot_index, image, settings, state, shot);
 
         const VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
         VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};

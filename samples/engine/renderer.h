@@ -18,7 +18,6 @@
 #include "context.h"
 
 #include <hemi/gpu/device.h>
-#include <hemi/gpu/resources.h>
 
 #include <hemi/math/camera.h>
 

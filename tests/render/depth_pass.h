@@ -23,8 +23,8 @@ struct DepthPass
     explicit DepthPass(uint32_t side = 64) : size(side)
     {
         const VkDevice d = device().device();
-        depth = gpu::create_image(device(), {size, size, VK_FORMAT_D32_SFLOAT,
-                                                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
+        depth = gpu::create_image(
+            device(), {size, size, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT});
         VkAttachmentDescription a{};
         a.format = VK_FORMAT_D32_SFLOAT;
         a.samples = VK_SAMPLE_COUNT_1_BIT;
@@ -82,8 +82,7 @@ struct DepthPass
     }
     std::vector<float> read() const
     {
-        const auto bytes =
-            gpu::read_image(device(), depth, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
+        const auto bytes = gpu::read_image(device(), depth, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
         std::vector<float> out(bytes.size() / 4);
         std::memcpy(out.data(), bytes.data(), bytes.size());
         return out;
