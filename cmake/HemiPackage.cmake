@@ -11,6 +11,15 @@ set(hemi_install_destinations
     RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS hemi_core hemi EXPORT hemiTargets ${hemi_install_destinations})
+# Shared libraries: the installed tools find hemi's libraries beside them, wherever the prefix is moved.
+if(BUILD_SHARED_LIBS)
+    file(RELATIVE_PATH hemi_bin_to_lib ${CMAKE_INSTALL_FULL_BINDIR} ${CMAKE_INSTALL_FULL_LIBDIR})
+    foreach(tool hemi-render hemi-bake)
+        if(TARGET ${tool})
+            set_target_properties(${tool} PROPERTIES INSTALL_RPATH "$ORIGIN/${hemi_bin_to_lib}")
+        endif()
+    endforeach()
+endif()
 if(TARGET hemi_baker)
     install(TARGETS hemi_baker EXPORT hemiBakerTargets ${hemi_install_destinations})
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/baker/include/hemi DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})

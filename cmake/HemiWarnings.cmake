@@ -7,3 +7,18 @@ function(hemi_set_warnings target)
         target_compile_options(${target} PRIVATE /W4)
     endif()
 endfunction()
+
+# A library of hemi's package: its export name, and as a shared library (BUILD_SHARED_LIBS) a SONAME that
+# changes with the minor version (0.x: the minor version is the ABI, as the package's SameMinorVersion says)
+# and only hemi's own symbols exported (cmake/hemi.map).
+function(hemi_library_properties target export_name)
+    set_target_properties(${target} PROPERTIES VERSION ${PROJECT_VERSION}
+        SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR} EXPORT_NAME ${export_name})
+    get_target_property(type ${target} TYPE)
+    if(type STREQUAL "SHARED_LIBRARY")
+        target_link_options(${target} PRIVATE "LINKER:--version-script=${PROJECT_SOURCE_DIR}/cmake/hemi.map")
+        set_property(TARGET ${target} APPEND PROPERTY LINK_DEPENDS ${PROJECT_SOURCE_DIR}/cmake/hemi.map)
+        # Installed, hemi's libraries find each other beside themselves (libhemi.so needs libhemi_core.so).
+        set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN")
+    endif()
+endfunction()
