@@ -516,9 +516,9 @@ struct Renderer::Impl
     void load_scene()
     {
         load_geometry();
-        render::RenderTargetDesc main_target;
-        main_target.render_pass = main_pass;
-        system = std::make_unique<render::MaterialSystem>(device, main_target);
+        // No default target: the engine draws colour with its own shaders, so hemi compiles only the depth
+        // and shadow pipelines its models are given below.
+        system = std::make_unique<render::MaterialSystem>(device);
         gpu::UploadBatch upload(device);
         level_model = math::gltf_to_world();
         level_bounds = math::bounding_sphere(assets.level.mesh, level_model);

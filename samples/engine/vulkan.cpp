@@ -56,9 +56,9 @@ Buffer create_buffer(VkDevice device, const Memory& memory, VkDeviceSize size, V
     check(vkCreateBuffer(device, &info, nullptr, &b.buffer), "vkCreateBuffer");
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(device, b.buffer, &req);
-    b.memory = allocate(device, memory, req,
-                        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                        host_cached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    b.memory = allocate(
+        device, memory, req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+        host_cached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     check(vkBindBufferMemory(device, b.buffer, b.memory, 0), "vkBindBufferMemory");
     check(vkMapMemory(device, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped), "vkMapMemory");
     return b;
@@ -97,8 +97,8 @@ Image create_image(VkDevice device, const Memory& memory, VkExtent2D extent, VkF
     view.image = img.image;
     view.viewType = VK_IMAGE_VIEW_TYPE_2D;
     view.format = format;
-    view.subresourceRange = {VkImageAspectFlags(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0,
-                             1, 0, 1};
+    view.subresourceRange = {
+        VkImageAspectFlags(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
     check(vkCreateImageView(device, &view, nullptr, &img.view), "vkCreateImageView");
     return img;
 }
@@ -114,7 +114,8 @@ void destroy(VkDevice device, Image& img)
     img = {};
 }
 
-VkDescriptorSetLayout create_set_layout(VkDevice device, std::span<const VkDescriptorSetLayoutBinding> bindings)
+VkDescriptorSetLayout create_set_layout(VkDevice device,
+                                        std::span<const VkDescriptorSetLayoutBinding> bindings)
 {
     VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     info.bindingCount = uint32_t(bindings.size());
@@ -166,7 +167,8 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc)
     for (uint32_t i = 0; i < desc.specialization.size(); ++i)
         entries.push_back({i, uint32_t(i * sizeof(uint32_t)), sizeof(uint32_t)});
     const VkSpecializationInfo spec{uint32_t(entries.size()), entries.data(),
-                                    desc.specialization.size() * sizeof(uint32_t), desc.specialization.data()};
+                                    desc.specialization.size() * sizeof(uint32_t),
+                                    desc.specialization.data()};
     VkPipelineShaderStageCreateInfo stages[2]{};
     const uint32_t stage_count = desc.fragment_shader.empty() ? 1 : 2;
     for (uint32_t i = 0; i < stage_count; ++i)
@@ -177,12 +179,14 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc)
         stages[i].pName = "main";
         stages[i].pSpecializationInfo = desc.specialization.empty() ? nullptr : &spec;
     }
-    VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineVertexInputStateCreateInfo vertex_input{
+        VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
     vertex_input.vertexBindingDescriptionCount = uint32_t(desc.bindings.size());
     vertex_input.pVertexBindingDescriptions = desc.bindings.data();
     vertex_input.vertexAttributeDescriptionCount = uint32_t(desc.attributes.size());
     vertex_input.pVertexAttributeDescriptions = desc.attributes.data();
-    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly{
+        VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
     assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
     VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
     viewport.viewportCount = 1;
@@ -198,7 +202,8 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc)
         raster.depthBiasConstantFactor = desc.depth_bias_constant;
         raster.depthBiasSlopeFactor = desc.depth_bias_slope;
     }
-    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    VkPipelineMultisampleStateCreateInfo multisample{
+        VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
     multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
     VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
     depth.depthTestEnable = desc.depth_test;

@@ -46,7 +46,8 @@ Image create_image(VkDevice device, const Memory& memory, VkExtent2D extent, VkF
                    VkImageUsageFlags usage);
 void destroy(VkDevice device, Image& image);
 
-VkDescriptorSetLayout create_set_layout(VkDevice device, std::span<const VkDescriptorSetLayoutBinding> bindings);
+VkDescriptorSetLayout create_set_layout(VkDevice device,
+                                        std::span<const VkDescriptorSetLayoutBinding> bindings);
 // Push constants of `push_size` bytes visible to every stage.
 VkPipelineLayout create_pipeline_layout(VkDevice device, std::span<const VkDescriptorSetLayout> sets,
                                         uint32_t push_size);

@@ -549,3 +549,53 @@ TEST_F(Passes, AProbeLitObjectDrawsInAPrepassAShadowPassAndTheColourPass)
             }
         }
 }
+
+// An engine that draws colour with its own shaders makes the system without a default target: loading the
+// level and a probe-lit object compiles no pipeline, their first pass is the one they are given (index 0),
+// only that pass's pipelines are compiled, and the level drawn into it gives the analytic shadow depths.
+// type(key) without a pass is refused by name, and a pass that was never added is refused at draw time.
+TEST_F(Passes, ASystemWithoutADefaultTargetCompilesOnlyThePassesItsObjectsAreGiven)
+{
+    gpu::Device& dev = test::device();
+    const io::LightmapAsset asset = level();
+    const DepthPass shadow_target;
+    render::MaterialSystem system(dev);
+    EXPECT_FALSE(system.has_default_pass());
+    gpu::UploadBatch upload(dev);
+    render::LightmapModel model(system, asset, {"h6"}, upload);
+    render::ProbeObject sphere(system, io::make_uv_sphere(0.3f, 16, 8), {}, std::vector<io::Material>(1), {},
+                               1, upload);
+    upload.submit_and_wait();
+    EXPECT_EQ(system.type_count(), 0u) << "loading compiled pipelines no pass asked for";
+    EXPECT_THROW(system.type(render::MaterialKey{}), std::invalid_argument);
+
+    render::PassDesc shadow;
+    shadow.kind = render::PassKind::Depth;
+    shadow.target.render_pass = shadow_target.render_pass;
+    shadow.target.color_attachments = 0;
+    EXPECT_EQ(model.add_pass(shadow), 0u);
+    EXPECT_EQ(sphere.add_pass(shadow), 0u);
+    // The level's two materials and the sphere's default one are single-sided and opaque: one depth type per
+    // coefficient source (the level's texels, the sphere's uniform SH9), whatever the technique and basis.
+    EXPECT_EQ(system.type_count(), 2u);
+
+    render::FrameSet light(system);
+    render::FrameData from_light;
+    from_light.view_projection = light_view_projection();
+    light.write(0, from_light);
+    bool refused_pass_1 = true;
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      shadow_target.begin(cmd);
+                      EXPECT_TRUE(model.draw(cmd, light.set(), "h6", glm::mat4(1.0f), 0));
+                      refused_pass_1 = !model.draw(cmd, light.set(), "h6", glm::mat4(1.0f), 1);
+                      vkCmdEndRenderPass(cmd);
+                  });
+    EXPECT_TRUE(refused_pass_1) << "pass 1 was never added";
+    const std::vector<float> depth = shadow_target.read();
+    const uint32_t c = kSize / 2, corner = 2;
+    EXPECT_NEAR(depth[c * kSize + c], 0.4f, 1e-6f) << "the table's top (z = 0.5)";
+    EXPECT_NEAR(depth[(c - 4) * kSize + 6], 0.6f, 1e-6f) << "the floor (z = 0)";
+    EXPECT_EQ(depth[corner * kSize + corner], 1.0f) << "outside the level";
+}

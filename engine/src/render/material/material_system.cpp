@@ -148,10 +148,16 @@ void check_target(const gpu::Device& device, const PassDesc& pass)
 
 MaterialSystem::MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
                                VkPipelineCache cache)
-    : device_(&device), cache_(cache)
+    : MaterialSystem(device, cache)
 {
     default_pass_.target = target;
     check_target(device, default_pass_);
+    has_default_pass_ = true;
+}
+
+MaterialSystem::MaterialSystem(const gpu::Device& device, VkPipelineCache cache)
+    : device_(&device), cache_(cache)
+{
     frame_layout_ = gpu::create_set_layout(device, frame_bindings());
     material_layout_ = gpu::create_set_layout(device, material_bindings());
     for (CoefficientSourceKind kind : {CoefficientSourceKind::Vertex, CoefficientSourceKind::Texel,
@@ -177,6 +183,9 @@ size_t MaterialSystem::type_count() const
 
 const MaterialType& MaterialSystem::type(const MaterialKey& key)
 {
+    if (!has_default_pass_)
+        throw std::invalid_argument("hemi: MaterialSystem::type(key): this system was made without a default "
+                                    "target; give the pass (type(key, pass))");
     return type(key, default_pass_);
 }
 

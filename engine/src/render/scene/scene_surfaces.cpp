@@ -126,7 +126,8 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
         }
         draws_.push_back(std::move(d));
     }
-    add_pass(system.default_pass());
+    if (system.has_default_pass())
+        add_pass(system.default_pass());
 }
 
 size_t SceneSurfaces::add_pass(const PassDesc& pass)

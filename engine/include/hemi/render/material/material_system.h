@@ -198,6 +198,10 @@ class MaterialSystem
     // outlive the system.
     MaterialSystem(const gpu::Device& device, const RenderTargetDesc& target,
                    VkPipelineCache cache = VK_NULL_HANDLE);
+    // A system without a default pass, for an engine that draws colour with its own shaders: loading a model
+    // compiles no pipeline, and each object's passes are the ones it is given (add_pass: the first is 0).
+    // type(key) without a pass throws.
+    explicit MaterialSystem(const gpu::Device& device, VkPipelineCache cache = VK_NULL_HANDLE);
     ~MaterialSystem();
     MaterialSystem(const MaterialSystem&) = delete;
     MaterialSystem& operator=(const MaterialSystem&) = delete;
@@ -212,6 +216,8 @@ class MaterialSystem
     const MaterialType& type(const MaterialKey& key, const PassDesc& pass);
     // Compiles every key for `pass` now (at load time, so that no draw waits for a pipeline).
     void prepare(std::span<const MaterialKey> keys, const PassDesc& pass);
+    // Whether the system was made with a default target (the models' pass 0), and that pass.
+    bool has_default_pass() const { return has_default_pass_; }
     const PassDesc& default_pass() const { return default_pass_; }
     size_t type_count() const;
 
@@ -239,6 +245,7 @@ class MaterialSystem
 
     const gpu::Device* device_;
     PassDesc default_pass_;
+    bool has_default_pass_ = false;
     VkPipelineCache cache_;
     gpu::DescriptorSetLayout frame_layout_, material_layout_;
     gpu::DescriptorSetLayout source_layouts_[4];

@@ -109,7 +109,7 @@ class LightmapModel
                                             uint32_t draw_id = 0) noexcept;
 
     // Another pass of the caller's frame (a depth prepass, a shadow map; SceneSurfaces::add_pass): its
-    // index for draw(). Pass 0 is the system's default colour pass.
+    // index for draw(). Pass 0 is the system's default colour pass, when it has one.
     size_t add_pass(const PassDesc& pass) { return surfaces_->add_pass(pass); }
 
     // Inside the caller's render pass: every entry of draw_list(technique, pass), under `model`. Depth and

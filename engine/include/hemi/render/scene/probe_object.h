@@ -48,7 +48,8 @@ class ProbeObject
     bool record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
                          uint32_t frame = 0) const noexcept;
     // Another pass of the caller's frame (a depth prepass, a shadow map, a colour pass into another target;
-    // SceneSurfaces::add_pass): its index for draw() and enqueue(). 0 is the system's default colour pass.
+    // SceneSurfaces::add_pass): its index for draw() and enqueue(). 0 is the system's default colour pass,
+    // when it has one.
     size_t add_pass(const PassDesc& pass) { return surfaces_.add_pass(pass); }
 
     // Inside the caller's render pass: instance `instance` under `model` with its lighting of slot `frame`,

@@ -120,8 +120,8 @@ class PrtModel
                                       uint32_t frame = 0, bool to_vertex_shaders = true) noexcept;
     // Inside the caller's render pass (viewport and scissor set): every primitive of instance `instance`
     // with its own material, under `model`, with the frame set of this view. Primitive p is draw id p + 1 in
-    // the aux attachment. `pass`: an index from add_pass (0: the system's default colour pass).
-    // `frame_slot`: whose coefficients (record_transfer's `frame`).
+    // the aux attachment. `pass`: an index from add_pass (0: the system's default colour pass, when it has
+    // one). `frame_slot`: whose coefficients (record_transfer's `frame`).
     bool draw(VkCommandBuffer cmd, VkDescriptorSet frame, uint32_t instance, const glm::mat4& model,
               size_t pass = 0, uint32_t frame_slot = 0) const noexcept;
     // The same as draw packets (draw_queue.h), keyed by `layer` and `depth`.

@@ -48,7 +48,9 @@ class SceneSurfaces
 
     // Compiles every primitive's type for another pass of the caller's frame (a depth prepass, a shadow
     // map, a colour pass into another target) and returns its index for draw(). Pass 0 is the system's
-    // default colour pass. The mesh, textures and materials are shared by every pass.
+    // default colour pass when the system has one (MaterialSystem::has_default_pass), otherwise the first
+    // pass added: a system without one compiles nothing when surfaces load. The mesh, textures and materials
+    // are shared by every pass.
     size_t add_pass(const PassDesc& pass);
 
     // The calls below are on the frame path: none throws. A bad argument (a pass that was not added, a
