@@ -1,11 +1,12 @@
 // An engine as many are built: compiled with -fno-exceptions, loading Vulkan with volk (Debian's
 // libvulkan-volk-dev: VK_NO_PROTOTYPES, volk's function pointers in place of the loader's prototypes),
 // including every public header of hemi in one translation unit. It hands hemi its own device and volk's
-// vkGetInstanceProcAddr, round-trips a buffer and an image, then loads a lightmapped level, a PRT model of 4
-// objects and 16 probe-lit objects and draws frames the engine's way: 2 frames in flight, per-frame data
-// written through mapped memory, the PRT transfer recorded with the barriers the engine makes from hemi's
-// declared accesses, every draw through one sorted DrawQueue. The executable does not link the Vulkan
-// loader (volk opens it; hemi loads through volk's entry point).
+// vkGetInstanceProcAddr, round-trips a buffer and an image, then loads through hemi/render/create.h (after
+// five loads that must be refused by name, none of which may throw into this code) a lightmapped level, a PRT
+// model of 4 objects and 16 probe-lit objects and draws frames the engine's way: 2 frames in flight,
+// per-frame data written through mapped memory, the PRT transfer recorded with the barriers the engine makes
+// from hemi's declared accesses, every draw through one sorted DrawQueue. The executable does not link the
+// Vulkan loader (volk opens it; hemi loads through volk's entry point).
 //
 //   (no argument)         under the validation layer: any warning or error fails the program.
 //   --count-allocations   without the layer (the layer allocates for what it tracks): a counting global
@@ -101,7 +102,61 @@ int run_hemi(VkInstance instance, VkPhysicalDevice physical, VkDevice device, Vk
             ++hemi_errors;
         }
     };
-    const gpu::Device dev(external);
+    // Loading through render/create.h: what hemi's constructors and readers throw stays inside hemi. First
+    // what cannot load, each refused with a message naming the problem, and logged where a device is known.
+    {
+        gpu::ExternalDevice no_queue = external;
+        no_queue.queue = VK_NULL_HANDLE;
+        const Created<gpu::Device> refused = render::create_device(no_queue);
+        if (refused || refused.error().find("queue") == std::string::npos)
+            return fail("a device without a queue was not refused by name");
+    }
+    const Created<gpu::Device> made_device = render::create_device(external);
+    if (!made_device)
+        return fail(made_device.error().c_str());
+    const gpu::Device& dev = *made_device;
+    if (const Created<io::LightmapAsset> missing =
+            render::read_lightmap_asset("/nonexistent/missing_level.hemi");
+        missing || missing.error().find("missing_level.hemi") == std::string::npos)
+        return fail("a missing asset was not refused with its file named");
+    {
+        const char* garbage = "volk_test_garbage.hemi";
+        std::FILE* f = std::fopen(garbage, "wb");
+        if (!f || std::fputs("not an asset at all", f) < 0 || std::fclose(f) != 0)
+            return fail("could not write the garbage asset");
+        const Created<io::PrtAsset> refused = render::read_prt_asset(garbage);
+        std::remove(garbage);
+        if (refused || refused.error().find(garbage) == std::string::npos)
+            return fail("a file that is not an asset was not refused with its name");
+    }
+    {
+        const Created<render::MaterialSystem> system = render::create_material_system(dev);
+        if (!system)
+            return fail(system.error().c_str());
+        gpu::UploadBatch upload(dev);
+        const io::LightmapAsset asset = test::table_level(io::Material{}, io::Material{}, {}, {"h4"});
+        const Created<render::LightmapModel> unknown =
+            render::create_lightmap_model(*system, asset, {"h9"}, upload);
+        if (unknown || unknown.error().find("h9") == std::string::npos)
+            return fail("a technique the asset does not hold was not refused by name");
+        const Created<render::LightmapModel> level =
+            render::create_lightmap_model(*system, asset, {"h4"}, upload);
+        if (!level)
+            return fail(level.error().c_str());
+        render::PassDesc colourless; // a colour pass into a target without colour attachments
+        colourless.target.color_attachments = 0;
+        size_t index = 0;
+        if (render::add_pass(*level, colourless, index))
+            return fail("a colour pass without colour attachments was added");
+        std::vector<render::LightmapDraw> entries(3);
+        if (render::draw_list(*level, "h6", 0, entries) || !entries.empty())
+            return fail("a draw list of a technique the level did not load was made");
+        // The device (to the ExternalDevice's own callback), the model, the pass and the draw list were
+        // logged; the files had no device to log to.
+        if (hemi_errors != 4)
+            return fail("the refusals with a device were not all logged");
+        hemi_errors = 0;
+    }
     {
         std::vector<float> values(256);
         for (size_t i = 0; i < values.size(); ++i)
@@ -129,19 +184,31 @@ int run_hemi(VkInstance instance, VkPhysicalDevice physical, VkDevice device, Vk
     // Loading.
     constexpr uint32_t kInFlight = 2, kPrtObjects = 4, kProbeObjects = 16, kFrames = 12, kWarmFrames = 4;
     render::OffscreenTarget target(dev, 64, 64);
-    render::MaterialSystem system(dev, target.desc());
+    const Created<render::MaterialSystem> made_system = render::create_material_system(dev, target.desc());
+    if (!made_system)
+        return fail(made_system.error().c_str());
+    render::MaterialSystem& system = *made_system;
     gpu::UploadBatch upload(dev);
     render::PrtModelDesc desc;
     desc.technique = "h4";
     desc.instances = kPrtObjects;
     desc.frames_in_flight = kInFlight;
-    render::PrtModel prt(system, test::unshadowed_sphere_asset(12, 6, "h4", 4), desc, upload);
-    render::LightmapModel level(system, test::table_level(io::Material{}, io::Material{}, {}, {"h4"}), {"h4"},
-                                upload);
-    const std::vector<render::LightmapDraw> level_draws = level.draw_list("h4");
-    render::ProbeObject probes(system, io::make_uv_sphere(0.2f, 8, 4), {}, std::vector<io::Material>(1), {},
-                               kProbeObjects, upload, kInFlight);
-    render::FrameSet frame_set(system, kInFlight);
+    const Created<render::PrtModel> made_prt =
+        render::create_prt_model(system, test::unshadowed_sphere_asset(12, 6, "h4", 4), desc, upload);
+    const Created<render::LightmapModel> made_level = render::create_lightmap_model(
+        system, test::table_level(io::Material{}, io::Material{}, {}, {"h4"}), {"h4"}, upload);
+    const Created<render::ProbeObject> made_probes =
+        render::create_probe_object(system, io::make_uv_sphere(0.2f, 8, 4), {}, std::vector<io::Material>(1),
+                                    {}, kProbeObjects, upload, kInFlight);
+    const Created<render::FrameSet> made_frame_set = render::create_frame_set(system, kInFlight);
+    std::vector<render::LightmapDraw> level_draws;
+    if (!made_prt || !made_level || !made_probes || !made_frame_set ||
+        !render::draw_list(*made_level, "h4", 0, level_draws))
+        return fail("loading failed (see hemi's messages)");
+    render::PrtModel& prt = *made_prt;
+    render::LightmapModel& level = *made_level;
+    render::ProbeObject& probes = *made_probes;
+    render::FrameSet& frame_set = *made_frame_set;
 
     VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
@@ -176,7 +243,8 @@ int run_hemi(VkInstance instance, VkPhysicalDevice physical, VkDevice device, Vk
            ok(vkBeginCommandBuffer(cmds[0], &bi), "vkBeginCommandBuffer");
     if (!good)
         return 1;
-    upload.record(cmds[0]);
+    if (!render::record_uploads(upload, cmds[0]))
+        return fail("the uploads could not be recorded");
     if (!ok(vkEndCommandBuffer(cmds[0]), "vkEndCommandBuffer") || !submit(0))
         return 1;
 

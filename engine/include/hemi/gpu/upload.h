@@ -18,6 +18,7 @@ class UploadBatch
 {
   public:
     explicit UploadBatch(const Device& device) : device_(&device) {}
+    const Device& device() const { return *device_; }
 
     // `size` bytes into `dst` at `offset`: written directly when the buffer is host-mapped (lavapipe, most
     // integrated GPUs), else staged and copied by record(). The data are copied now.
