@@ -39,8 +39,7 @@ std::string message_of(std::exception_ptr e) noexcept
 }
 
 // Runs make(); an exception becomes the result's error, logged to `device` when there is one.
-template <typename T, typename Make>
-Created<T> guarded(const gpu::Device* device, Make&& make) noexcept
+template <typename T, typename Make> Created<T> guarded(const gpu::Device* device, Make&& make) noexcept
 {
     std::string error;
     try
@@ -57,8 +56,7 @@ Created<T> guarded(const gpu::Device* device, Make&& make) noexcept
 }
 
 // Runs run() for its effect: false, logged, when it throws.
-template <typename Run>
-bool guarded_call(const gpu::Device& device, Run&& run) noexcept
+template <typename Run> bool guarded_call(const gpu::Device& device, Run&& run) noexcept
 {
     try
     {
@@ -105,36 +103,38 @@ Created<MaterialSystem> create_material_system(const gpu::Device& device, const 
 
 Created<io::LightmapAsset> read_lightmap_asset(const std::filesystem::path& path) noexcept
 {
-    return guarded<io::LightmapAsset>(nullptr,
-                                      [&] { return std::make_unique<io::LightmapAsset>(io::read_lightmap_asset(path)); });
+    return guarded<io::LightmapAsset>(
+        nullptr, [&] { return std::make_unique<io::LightmapAsset>(io::read_lightmap_asset(path)); });
 }
 
 Created<io::PrtAsset> read_prt_asset(const std::filesystem::path& path) noexcept
 {
-    return guarded<io::PrtAsset>(nullptr, [&] { return std::make_unique<io::PrtAsset>(io::read_prt_asset(path)); });
+    return guarded<io::PrtAsset>(nullptr,
+                                 [&] { return std::make_unique<io::PrtAsset>(io::read_prt_asset(path)); });
 }
 
 Created<io::EnvmapAsset> read_envmap_asset(const std::filesystem::path& path) noexcept
 {
-    return guarded<io::EnvmapAsset>(nullptr,
-                                    [&] { return std::make_unique<io::EnvmapAsset>(io::read_envmap_asset(path)); });
+    return guarded<io::EnvmapAsset>(
+        nullptr, [&] { return std::make_unique<io::EnvmapAsset>(io::read_envmap_asset(path)); });
 }
 
 Created<LightmapModel> create_lightmap_model(MaterialSystem& system, const io::LightmapAsset& asset,
-                                             const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
+                                             const std::vector<std::string>& techniques,
+                                             gpu::UploadBatch& upload,
                                              const std::map<std::string, std::string>& material_techniques,
                                              const EngineGeometry* geometry) noexcept
 {
     return guarded<LightmapModel>(&system.device(),
                                   [&]
                                   {
-                                      return std::make_unique<LightmapModel>(system, asset, techniques, upload,
-                                                                             material_techniques, geometry);
+                                      return std::make_unique<LightmapModel>(
+                                          system, asset, techniques, upload, material_techniques, geometry);
                                   });
 }
 
-Created<PrtModel> create_prt_model(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
-                                   gpu::UploadBatch& upload) noexcept
+Created<PrtModel> create_prt_model(MaterialSystem& system, const io::PrtAsset& asset,
+                                   const PrtModelDesc& desc, gpu::UploadBatch& upload) noexcept
 {
     return guarded<PrtModel>(&system.device(),
                              [&] { return std::make_unique<PrtModel>(system, asset, desc, upload); });
@@ -159,15 +159,17 @@ Created<ProbeObject> create_probe_object(MaterialSystem& system, const io::Mesh&
 Created<FrameSet> create_frame_set(const MaterialSystem& system, uint32_t frames_in_flight,
                                    uint32_t max_instances) noexcept
 {
-    return guarded<FrameSet>(&system.device(),
-                             [&] { return std::make_unique<FrameSet>(system, frames_in_flight, max_instances); });
+    return guarded<FrameSet>(&system.device(), [&]
+                             { return std::make_unique<FrameSet>(system, frames_in_flight, max_instances); });
 }
 
 Created<FrameSet> create_frame_set(const MaterialSystem& system, std::span<const gpu::BufferRange> uniforms,
-                                   std::span<const gpu::BufferRange> instances, uint32_t max_instances) noexcept
+                                   std::span<const gpu::BufferRange> instances,
+                                   uint32_t max_instances) noexcept
 {
-    return guarded<FrameSet>(&system.device(),
-                             [&] { return std::make_unique<FrameSet>(system, uniforms, instances, max_instances); });
+    return guarded<FrameSet>(
+        &system.device(),
+        [&] { return std::make_unique<FrameSet>(system, uniforms, instances, max_instances); });
 }
 
 bool add_pass(LightmapModel& model, const PassDesc& pass, size_t& index) noexcept
@@ -189,7 +191,8 @@ bool draw_list(const LightmapModel& model, const std::string& technique, size_t 
                std::vector<LightmapDraw>& out) noexcept
 {
     out.clear();
-    const bool ok = guarded_call(model.surfaces().system().device(), [&] { out = model.draw_list(technique, pass); });
+    const bool ok =
+        guarded_call(model.surfaces().system().device(), [&] { out = model.draw_list(technique, pass); });
     if (!ok)
         out.clear();
     return ok;

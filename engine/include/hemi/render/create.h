@@ -26,10 +26,9 @@
 namespace hemi
 {
 
-// An object hemi made, or why it could not: `if (auto level = render::create_lightmap_model(...)) use(*level);
-// else log(level.error());`. Holds the object by unique_ptr (hemi's objects do not move).
-template <typename T>
-class Created
+// An object hemi made, or why it could not: `if (auto level = render::create_lightmap_model(...))
+// use(*level); else log(level.error());`. Holds the object by unique_ptr (hemi's objects do not move).
+template <typename T> class Created
 {
   public:
     Created(std::unique_ptr<T> value) noexcept : value_(std::move(value)) {}
@@ -65,13 +64,13 @@ Created<io::LightmapAsset> read_lightmap_asset(const std::filesystem::path& path
 Created<io::PrtAsset> read_prt_asset(const std::filesystem::path& path) noexcept;
 Created<io::EnvmapAsset> read_envmap_asset(const std::filesystem::path& path) noexcept;
 
-Created<LightmapModel> create_lightmap_model(MaterialSystem& system, const io::LightmapAsset& asset,
-                                             const std::vector<std::string>& techniques,
-                                             gpu::UploadBatch& upload,
-                                             const std::map<std::string, std::string>& material_techniques = {},
-                                             const EngineGeometry* geometry = nullptr) noexcept;
-Created<PrtModel> create_prt_model(MaterialSystem& system, const io::PrtAsset& asset, const PrtModelDesc& desc,
-                                   gpu::UploadBatch& upload) noexcept;
+Created<LightmapModel>
+create_lightmap_model(MaterialSystem& system, const io::LightmapAsset& asset,
+                      const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
+                      const std::map<std::string, std::string>& material_techniques = {},
+                      const EngineGeometry* geometry = nullptr) noexcept;
+Created<PrtModel> create_prt_model(MaterialSystem& system, const io::PrtAsset& asset,
+                                   const PrtModelDesc& desc, gpu::UploadBatch& upload) noexcept;
 Created<ProbeObject> create_probe_object(MaterialSystem& system, const io::Mesh& mesh,
                                          const std::vector<io::EncodedImage>& images,
                                          const std::vector<io::Material>& materials,
