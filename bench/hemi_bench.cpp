@@ -1119,6 +1119,45 @@ void lightmap_material(benchmark::State& state, std::string technique)
     set_ratio_counters(state, "lightmap", t);
 }
 
+// The bicubic lightmap lookup's cost (issue 43): the same level, technique and view as lightmap_material,
+// drawn by a model whose pipelines look the lightmap up with the cubic B-spline (four linear fetches per
+// packed layer, LightmapFilter::Bicubic) against one with the linear filter, in the same run.
+void lightmap_bicubic(benchmark::State& state, std::string technique)
+{
+    hemi::gpu::Device& device = bench_device();
+    static const hemi::io::LightmapAsset asset = level_lightmap_asset(g_sizes.lightmap_atlas);
+    const uint32_t w = 640, h = 480;
+    hemi::render::OffscreenTarget target(device, w, h);
+    hemi::render::MaterialSystem system(device, target.desc());
+    hemi::gpu::UploadBatch upload(device);
+    hemi::render::LightmapModel linear(system, asset, {technique}, upload);
+    hemi::render::LightmapModel bicubic(system, asset, {technique}, upload, {}, nullptr,
+                                        hemi::render::LightmapFilter::Bicubic);
+    upload.submit_and_wait();
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(
+        glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f, float(w) / float(h));
+    const glm::mat4 placement = hemi::render::gltf_to_world();
+    auto draw = [&](const hemi::render::LightmapModel& model)
+    {
+        return [&](VkCommandBuffer cmd)
+        {
+            target.begin(cmd);
+            model.draw(cmd, frame.set(), technique, placement);
+            target.end(cmd);
+        };
+    };
+    const PassTimes t = time_against_baseline(
+        state, device, [&](VkCommandBuffer cmd) { frame.record_update(cmd, f); }, draw(bicubic),
+        draw(linear));
+    state.counters["bicubic_ms"] = t.measured * 1e3;
+    state.counters["linear_ms"] = t.baseline * 1e3;
+    state.counters["bicubic_ratio"] = t.ratio;
+    state.counters["ratio_p10"] = t.ratio_p10;
+    state.counters["ratio_p90"] = t.ratio_p90;
+}
+
 // Issue 22's scale: 1,000 material instances and 1,000 probe-lit objects' coefficient sources made with one
 // material system, as an engine loading a large scene would. Counters: the descriptor pools they take
 // (before the shared allocator: one each, 2,000), the sets, and the CPU time per object made.
@@ -1459,6 +1498,12 @@ int main(int argc, char** argv)
         add("ssbump/tracers/" + relief, ssbump_tracers)->Unit(benchmark::kMillisecond)->UseManualTime(), 1);
     for (const char* technique : kLightmapTechniques)
         full_min_time(add(std::string("lightmap/material/level/640x480/") + technique, lightmap_material,
+                          std::string(technique))
+                          ->Unit(benchmark::kMillisecond)
+                          ->UseManualTime(),
+                      3.0);
+    for (const char* technique : {"h6", "plain"})
+        full_min_time(add(std::string("lightmap/bicubic/level/640x480/") + technique, lightmap_bicubic,
                           std::string(technique))
                           ->Unit(benchmark::kMillisecond)
                           ->UseManualTime(),

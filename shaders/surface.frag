@@ -18,6 +18,7 @@ layout(constant_id = HEMI_SPEC_FRAME) const int kFrame = HEMI_FRAME_TANGENT;
 layout(constant_id = HEMI_SPEC_TECHNIQUE) const int kTechnique = HEMI_TECHNIQUE_IRRADIANCE;
 layout(constant_id = HEMI_SPEC_DOUBLE_SIDED) const int kDoubleSided = 0;
 layout(constant_id = HEMI_SPEC_ALPHA) const int kAlpha = HEMI_ALPHA_OPAQUE;
+layout(constant_id = HEMI_SPEC_LIGHTMAP_FILTER) const int kLightmapFilter = HEMI_LIGHTMAP_FILTER_LINEAR;
 
 layout(set = HEMI_SET_FRAME, binding = HEMI_FRAME_BINDING_UNIFORMS, std140) uniform Frame
 {
@@ -90,8 +91,11 @@ void main()
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
-    hemi_lightmap_coefficients(coefficient_maps, page_table,
-                               in_uv1 * in_lightmap_scale_offset.xy + in_lightmap_scale_offset.zw, K, c);
+    const vec2 lightmap_uv = in_uv1 * in_lightmap_scale_offset.xy + in_lightmap_scale_offset.zw;
+    if (kLightmapFilter == HEMI_LIGHTMAP_FILTER_BICUBIC)
+        hemi_lightmap_coefficients_bicubic(coefficient_maps, page_table, lightmap_uv, K, c);
+    else
+        hemi_lightmap_coefficients(coefficient_maps, page_table, lightmap_uv, K, c);
 #else
     HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
     {

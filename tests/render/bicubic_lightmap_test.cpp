@@ -1,10 +1,10 @@
-// The GLSL library's bicubic lightmap lookups (hemi_lightmap_coefficients_bicubic, hemi/lib/coefficients.glsl),
-// paged and plain, run by a compute shader (tests/shaders/lightmap_lookup.comp) at a list of UVs and held to
-// an independent CPU evaluation of the same math: the uniform cubic B-spline over the texels, written out
-// here from its four weights and the texels' values with the atlas's edge clamped (not the GPU's
-// four-linear-lookup form). And the reason to have it: along a row of texels whose values are a parabola,
-// the linear lookup's slope jumps at every texel centre (a crease of the whole second difference), the
-// B-spline's does not.
+// The GLSL library's bicubic lightmap lookups (hemi_lightmap_coefficients_bicubic,
+// hemi/lib/coefficients.glsl), paged and plain, run by a compute shader (tests/shaders/lightmap_lookup.comp)
+// at a list of UVs and held to an independent CPU evaluation of the same math: the uniform cubic B-spline
+// over the texels, written out here from its four weights and the texels' values with the atlas's edge
+// clamped (not the GPU's four-linear-lookup form). And the reason to have it: along a row of texels whose
+// values are a parabola, the linear lookup's slope jumps at every texel centre (a crease of the whole second
+// difference), the B-spline's does not.
 #include "../gpu_fixture.h"
 
 #include <hemi/gpu/commands.h>
@@ -36,7 +36,8 @@ glm::vec3 texel(uint32_t k, int64_t x, int64_t y)
     y = std::clamp<int64_t>(y, 0, kH - 1);
     const float u = float(x) / kW, v = float(y) / kH;
     if (k == 0)
-        return {0.25f + 0.7f * u * u, 0.25f + 0.7f * v, 0.5f + 0.3f * std::sin(float(x) / 7.0f) * std::cos(float(y) / 5.0f)};
+        return {0.25f + 0.7f * u * u, 0.25f + 0.7f * v,
+                0.5f + 0.3f * std::sin(float(x) / 7.0f) * std::cos(float(y) / 5.0f)};
     return {0.3f + 0.5f * u * v, 0.9f - 0.6f * u, 0.4f + 0.2f * std::cos(float(x + y) / 9.0f)};
 }
 
@@ -93,17 +94,17 @@ struct Lookups
             {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
         const gpu::Program program = gpu::create_compute_program(
             dev, {test::test_spirv("lightmap_lookup.comp"), bindings, 4, {lookup, k}});
-        const gpu::Buffer in = gpu::create_buffer(
-            dev, {uvs.size() * sizeof(glm::vec2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+        const gpu::Buffer in =
+            gpu::create_buffer(dev, {uvs.size() * sizeof(glm::vec2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
         gpu::write_buffer(dev, in, uvs.data(), uvs.size() * sizeof(glm::vec2));
         const size_t out_bytes = uvs.size() * k * 16;
-        const gpu::Buffer out = gpu::create_buffer(
-            dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+        const gpu::Buffer out = gpu::create_buffer(dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
         const gpu::DescriptorPool pool = gpu::create_descriptor_pool(dev, bindings, 1);
         const VkDescriptorSet set = gpu::allocate_descriptor_set(dev, pool, program.set_layout);
         gpu::DescriptorWrite writes[5];
         const VkImageLayout read = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-        writes[0] = {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {paged.sampler(), paged.pages().view(), read}};
+        writes[0] = {
+            0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {paged.sampler(), paged.pages().view(), read}};
         writes[1] = {1,
                      VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                      {},
@@ -147,8 +148,8 @@ TEST_F(BicubicLightmap, EqualsTheCpuBSplineAndHasNoCreaseWhereTheLinearLookupHas
     const render::TexelCoefficients paged(system, kW, kH, kK, rgb, upload, /*full_precision=*/true);
     upload.submit_and_wait();
     // The plain layout: coefficient 0 alone (K = 1, one RGBA32F layer).
-    const gpu::Image plain =
-        gpu::create_image(dev, {kW, kH, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 1, true});
+    const gpu::Image plain = gpu::create_image(
+        dev, {kW, kH, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 1, true});
     std::vector<glm::vec4> texels(size_t(kW) * kH);
     for (uint32_t y = 0; y < kH; ++y)
         for (uint32_t x = 0; x < kW; ++x)
@@ -189,7 +190,8 @@ TEST_F(BicubicLightmap, EqualsTheCpuBSplineAndHasNoCreaseWhereTheLinearLookupHas
                 const glm::dvec3 want =
                     c.bicubic ? cpu_bicubic(k, uvs[i], kW, kH) : cpu_bilinear(k, uvs[i], kW, kH);
                 for (int ch = 0; ch < 3; ++ch)
-                    worst = std::max(worst, std::abs(double(gpu[i * c.k + k][ch]) - want[ch]) / std::abs(want[ch]));
+                    worst = std::max(worst,
+                                     std::abs(double(gpu[i * c.k + k][ch]) - want[ch]) / std::abs(want[ch]));
             }
         std::printf("%s: worst relative difference from the CPU %.2e over %zu lookups\n", c.name, worst,
                     uvs.size());
@@ -214,19 +216,21 @@ TEST_F(BicubicLightmap, EqualsTheCpuBSplineAndHasNoCreaseWhereTheLinearLookupHas
         for (size_t i = 0; i + 2 < row.size(); i += 3)
         {
             const double crease =
-                (double(gpu[(i + 2) * c.k].r) - 2.0 * double(gpu[(i + 1) * c.k].r) + double(gpu[i * c.k].r)) / h;
+                (double(gpu[(i + 2) * c.k].r) - 2.0 * double(gpu[(i + 1) * c.k].r) + double(gpu[i * c.k].r)) /
+                h;
             smallest = std::min(smallest, crease);
             largest = std::max(largest, crease);
         }
-        std::printf("%s: slope jumps at texel centres %.3g .. %.3g of the texels' second difference\n", c.name,
-                    smallest / texel_second_difference, largest / texel_second_difference);
+        std::printf("%s: slope jumps at texel centres %.3g .. %.3g of the texels' second difference\n",
+                    c.name, smallest / texel_second_difference, largest / texel_second_difference);
         if (c.bicubic)
         {
             EXPECT_LT(largest, 0.25 * texel_second_difference) << c.name << ": a crease at a texel centre";
         }
         else
         {
-            EXPECT_GT(smallest, 0.75 * texel_second_difference) << c.name << ": the linear lookup shows no crease";
+            EXPECT_GT(smallest, 0.75 * texel_second_difference)
+                << c.name << ": the linear lookup shows no crease";
         }
     }
 }

@@ -18,6 +18,7 @@
 #include <hemi/render/material/material_instance.h>
 #include <hemi/render/scene/gpu_mesh.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -38,7 +39,7 @@ glm::vec3 value(uint32_t x, uint32_t y)
 }
 } // namespace
 
-TEST_F(PagedLightmap, LookupsEqualTheAtlasBilinearLookupAcrossPageBorders)
+TEST_F(PagedLightmap, LinearAndBicubicLookupsEqualTheAtlasLookupsAcrossPageBorders)
 {
     gpu::Device& dev = test::device();
     const test::EnginePass pass(kSize, kSize, {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT});
@@ -88,31 +89,40 @@ TEST_F(PagedLightmap, LookupsEqualTheAtlasBilinearLookupAcrossPageBorders)
     // edge reads them), so it is stored; page columns 2 and 3 meet no block and are not: 4 x 3 - 6 pages.
     EXPECT_EQ(atlas.stored_pages(), 6u);
 
-    render::MaterialKey key;
-    key.source = render::CoefficientSourceKind::Texel;
-    key.basis = HEMI_BASIS_VERTEX_IRRADIANCE;
-    const render::MaterialType& type = system.type(key);
     render::FrameSet frame(system);
     render::FrameData f;
     f.view_projection = math::look_at_projection(glm::vec3(0, -2.6f, 0), glm::vec3(0.0f), 45.0f, 1.0f);
     const float clear[4] = {0, 0, 0, 0};
-    gpu::one_shot(dev,
-                  [&](VkCommandBuffer cmd)
-                  {
-                      upload.record(cmd);
-                      frame.record_update(cmd, f);
-                      pass.begin(cmd, clear);
-                      render::DrawBindings b;
-                      b.type = &type;
-                      b.frame = frame.set();
-                      b.material = instance.set();
-                      b.source = atlas.set();
-                      b.push.model = glm::mat4(1.0f);
-                      render::bind_material(cmd, b);
-                      mesh.bind(cmd);
-                      mesh.draw(cmd, 0, mesh.index_count());
-                      vkCmdEndRenderPass(cmd);
-                  });
+    // The quad drawn with the linear or the bicubic lookup (MaterialKey::lightmap_filter).
+    bool uploaded = false;
+    auto draw = [&](render::LightmapFilter filter)
+    {
+        render::MaterialKey key;
+        key.source = render::CoefficientSourceKind::Texel;
+        key.basis = HEMI_BASIS_VERTEX_IRRADIANCE;
+        key.lightmap_filter = filter;
+        const render::MaterialType& type = system.type(key);
+        gpu::one_shot(dev,
+                      [&](VkCommandBuffer cmd)
+                      {
+                          if (!uploaded)
+                              upload.record(cmd);
+                          uploaded = true;
+                          frame.record_update(cmd, f);
+                          pass.begin(cmd, clear);
+                          render::DrawBindings b;
+                          b.type = &type;
+                          b.frame = frame.set();
+                          b.material = instance.set();
+                          b.source = atlas.set();
+                          b.push.model = glm::mat4(1.0f);
+                          render::bind_material(cmd, b);
+                          mesh.bind(cmd);
+                          mesh.draw(cmd, 0, mesh.index_count());
+                          vkCmdEndRenderPass(cmd);
+                      });
+    };
+    draw(render::LightmapFilter::Linear);
     const std::vector<float> color = pass.read_color(0), aux = pass.read_color(1);
     int drawn = 0, outside = 0, at_borders = 0;
     double largest = 0.0;
@@ -142,4 +152,55 @@ TEST_F(PagedLightmap, LookupsEqualTheAtlasBilinearLookupAcrossPageBorders)
     EXPECT_EQ(outside, 0);
     std::printf("paged lightmap: %d pixels (%d within a texel of a page border), largest difference %.5f\n",
                 drawn, at_borders, largest);
+
+    // The bicubic lookup of the same pages against the cubic B-spline over the atlas's texels (the blocks
+    // not kept reading 0, the edge clamped), written out from its four weights per axis.
+    draw(render::LightmapFilter::Bicubic);
+    const std::vector<float> bicubic = pass.read_color(0), bicubic_aux = pass.read_color(1);
+    const std::vector<float> dense = maps.dense();
+    auto texel = [&](int64_t x, int64_t y)
+    {
+        x = std::clamp<int64_t>(x, 0, kW - 1);
+        y = std::clamp<int64_t>(y, 0, kH - 1);
+        const float* t = &dense[(size_t(y) * kW + size_t(x)) * 3];
+        return glm::dvec3(t[0], t[1], t[2]);
+    };
+    auto weights = [](double t, int64_t& first, double w[4])
+    {
+        const double i = std::floor(t - 0.5), u = t - 0.5 - i;
+        first = int64_t(i) - 1;
+        w[0] = (1 - u) * (1 - u) * (1 - u) / 6;
+        w[1] = (3 * u * u * u - 6 * u * u + 4) / 6;
+        w[2] = (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6;
+        w[3] = u * u * u / 6;
+    };
+    int bicubic_drawn = 0, bicubic_outside = 0;
+    double bicubic_largest = 0.0;
+    for (size_t p = 0; p < size_t(kSize) * kSize * 4; p += 4)
+    {
+        if (bicubic_aux[p + 3] != 1.0f)
+            continue;
+        ++bicubic_drawn;
+        int64_t x0, y0;
+        double wx[4], wy[4];
+        weights(double(std::clamp(bicubic_aux[p], 0.0f, 1.0f)) * kW, x0, wx);
+        weights(double(std::clamp(bicubic_aux[p + 1], 0.0f, 1.0f)) * kH, y0, wy);
+        glm::dvec3 want(0.0);
+        for (int j = 0; j < 4; ++j)
+            for (int i = 0; i < 4; ++i)
+                want += wx[i] * wy[j] * texel(x0 + i, y0 + j);
+        want /= M_PI;
+        for (int c = 0; c < 3; ++c)
+        {
+            const double d = std::abs(double(bicubic[p + c]) - want[c]);
+            bicubic_largest = std::max(bicubic_largest, d);
+            if (d > 2e-3 && bicubic_outside++ < 8)
+                ADD_FAILURE() << "bicubic: pixel " << p / 4 << " channel " << c << ": GPU " << bicubic[p + c]
+                              << ", CPU " << want[c];
+        }
+    }
+    EXPECT_GT(bicubic_drawn, 10000);
+    EXPECT_EQ(bicubic_outside, 0);
+    std::printf("paged lightmap, bicubic: %d pixels, largest difference %.5f\n", bicubic_drawn,
+                bicubic_largest);
 }

@@ -1,7 +1,8 @@
 #version 450
 // Looks a lightmap up at a list of UVs with the GLSL library's functions (hemi/lib/coefficients.glsl):
 // specialization constant 0 picks the lookup (0: paged linear, 1: paged bicubic, 2: plain linear, 3: plain
-// bicubic), 1 the coefficient count K. out[i * K + k] = coefficient k at uvs[i]. A test shader (tests/shaders/).
+// bicubic), 1 the coefficient count K. out[i * K + k] = coefficient k at uvs[i]. A test shader
+// (tests/shaders/).
 #extension GL_GOOGLE_include_directive : require
 #include "hemi/lib/coefficients.glsl"
 

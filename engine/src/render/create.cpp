@@ -123,13 +123,14 @@ Created<LightmapModel> create_lightmap_model(MaterialSystem& system, const io::L
                                              const std::vector<std::string>& techniques,
                                              gpu::UploadBatch& upload,
                                              const std::map<std::string, std::string>& material_techniques,
-                                             const EngineGeometry* geometry) noexcept
+                                             const EngineGeometry* geometry, LightmapFilter filter) noexcept
 {
     return guarded<LightmapModel>(&system.device(),
                                   [&]
                                   {
-                                      return std::make_unique<LightmapModel>(
-                                          system, asset, techniques, upload, material_techniques, geometry);
+                                      return std::make_unique<LightmapModel>(system, asset, techniques,
+                                                                             upload, material_techniques,
+                                                                             geometry, filter);
                                   });
 }
 

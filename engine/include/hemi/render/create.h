@@ -64,11 +64,10 @@ Created<io::LightmapAsset> read_lightmap_asset(const std::filesystem::path& path
 Created<io::PrtAsset> read_prt_asset(const std::filesystem::path& path) noexcept;
 Created<io::EnvmapAsset> read_envmap_asset(const std::filesystem::path& path) noexcept;
 
-Created<LightmapModel>
-create_lightmap_model(MaterialSystem& system, const io::LightmapAsset& asset,
-                      const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
-                      const std::map<std::string, std::string>& material_techniques = {},
-                      const EngineGeometry* geometry = nullptr) noexcept;
+Created<LightmapModel> create_lightmap_model(
+    MaterialSystem& system, const io::LightmapAsset& asset, const std::vector<std::string>& techniques,
+    gpu::UploadBatch& upload, const std::map<std::string, std::string>& material_techniques = {},
+    const EngineGeometry* geometry = nullptr, LightmapFilter filter = LightmapFilter::Linear) noexcept;
 Created<PrtModel> create_prt_model(MaterialSystem& system, const io::PrtAsset& asset,
                                    const PrtModelDesc& desc, gpu::UploadBatch& upload) noexcept;
 Created<ProbeObject> create_probe_object(MaterialSystem& system, const io::Mesh& mesh,

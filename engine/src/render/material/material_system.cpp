@@ -199,6 +199,8 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key_in, const PassDe
         key.basis = HEMI_BASIS_SH9;
         key.frame = ShadingFrame::Tangent;
     }
+    if (pass.kind != PassKind::Color || key.source != CoefficientSourceKind::Texel)
+        key.lightmap_filter = LightmapFilter::Linear; // looks no lightmap up
     PassDesc p = pass;
     if (p.kind != PassKind::Shadow)
         p.depth_bias_constant = p.depth_bias_slope = 0.0f;
@@ -262,11 +264,12 @@ std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, co
         desc.fragment_shader = gpu::embedded_spirv("surface_depth.frag");
     desc.set_layouts = {frame_layout_, material_layout_, source_layout(key.source)};
     desc.push_constant_size = sizeof(shared::DrawPush);
-    // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_ALPHA, in order.
+    // Ids HEMI_SPEC_BASIS .. HEMI_SPEC_LIGHTMAP_FILTER, in order.
     desc.specialization = {
-        uint32_t(key.basis),        uint32_t(basis.size),
-        uint32_t(key.frame),        uint32_t(key.technique),
-        key.double_sided ? 1u : 0u, alpha_tested ? 1u : key.alpha == io::AlphaMode::Blend ? 2u : 0u};
+        uint32_t(key.basis),          uint32_t(basis.size),
+        uint32_t(key.frame),          uint32_t(key.technique),
+        key.double_sided ? 1u : 0u,   alpha_tested ? 1u : key.alpha == io::AlphaMode::Blend ? 2u : 0u,
+        uint32_t(key.lightmap_filter)};
     vertex_input(*device_, key.vertex, desc);
     desc.render_pass = target.render_pass;
     desc.subpass = target.subpass;

@@ -51,7 +51,7 @@ bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_posit
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                              const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
                              const std::map<std::string, std::string>& material_techniques,
-                             const EngineGeometry* geometry)
+                             const EngineGeometry* geometry, LightmapFilter filter)
     : device_(&system.device())
 {
     if (default_techniques.empty())
@@ -96,6 +96,7 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         else
             variants.push_back(
                 {baseline ? baseline_technique : Technique::Irradiance, lightmap_basis(source).id});
+        variants.back().lightmap_filter = filter;
         names_.push_back(name);
         coefficients_.push_back(std::make_unique<TexelCoefficients>(system, output.maps, upload));
         system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->pages().handle(),

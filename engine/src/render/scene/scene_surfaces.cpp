@@ -117,6 +117,7 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
             key.frame = v.frame;
             key.double_sided = materials_[p.material]->double_sided();
             key.alpha = materials_[p.material]->alpha_mode();
+            key.lightmap_filter = v.lightmap_filter;
             if (geometry)
                 key.vertex = geometry->layout;
             d.keys.push_back(key);

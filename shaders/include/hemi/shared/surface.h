@@ -64,7 +64,13 @@ using uint = uint32_t;
 #define HEMI_SPEC_FRAME 2
 #define HEMI_SPEC_TECHNIQUE 3
 #define HEMI_SPEC_DOUBLE_SIDED 4
-#define HEMI_SPEC_ALPHA 5 // HEMI_ALPHA_*
+#define HEMI_SPEC_ALPHA 5           // HEMI_ALPHA_*
+#define HEMI_SPEC_LIGHTMAP_FILTER 6 // HEMI_LIGHTMAP_FILTER_*
+
+// Lightmap lookups (specialization constant HEMI_SPEC_LIGHTMAP_FILTER): the linear filter, or the cubic
+// B-spline of hemi_lightmap_coefficients_bicubic (four linear fetches per packed layer).
+#define HEMI_LIGHTMAP_FILTER_LINEAR 0
+#define HEMI_LIGHTMAP_FILTER_BICUBIC 1
 
 // Alpha modes (glTF alphaMode; specialization constant HEMI_SPEC_ALPHA).
 #define HEMI_ALPHA_OPAQUE 0 // alpha ignored, output alpha 1

@@ -109,6 +109,15 @@ struct VertexLayout
     bool operator==(const VertexLayout& o) const { return tie() == o.tie(); }
 };
 
+// How a lightmap (a Texel coefficient source) is looked up: the linear filter, or the cubic B-spline, which
+// shows no crease at texel centres in gradients and costs four linear fetches per packed layer instead of one
+// (hemi_lightmap_coefficients_bicubic, docs/glsl.md).
+enum class LightmapFilter
+{
+    Linear = HEMI_LIGHTMAP_FILTER_LINEAR,
+    Bicubic = HEMI_LIGHTMAP_FILTER_BICUBIC,
+};
+
 struct MaterialKey
 {
     Technique technique = Technique::Irradiance;
@@ -120,8 +129,12 @@ struct MaterialKey
     // glTF alphaMode: Mask discards where alpha < the material's alphaCutoff; Blend blends over attachment 0
     // without writing depth (the caller draws blended surfaces after the opaque ones, back to front).
     io::AlphaMode alpha = io::AlphaMode::Opaque;
+    LightmapFilter lightmap_filter = LightmapFilter::Linear; // Texel sources only (others ignore it)
 
-    auto tie() const { return std::tie(technique, source, basis, frame, double_sided, vertex, alpha); }
+    auto tie() const
+    {
+        return std::tie(technique, source, basis, frame, double_sided, vertex, alpha, lightmap_filter);
+    }
     bool operator<(const MaterialKey& o) const { return tie() < o.tie(); }
     bool operator==(const MaterialKey& o) const { return tie() == o.tie(); }
 };

@@ -71,11 +71,13 @@ class LightmapModel
     // `material_techniques` (material name -> technique; "" = the level's default). Uploads go into
     // `upload`. Throws std::invalid_argument naming a technique the asset lacks (and listing what it has).
     // With `geometry` the level draws from the engine's own vertex and index buffers (EngineGeometry):
-    // hemi uploads no vertex or index data.
+    // hemi uploads no vertex or index data. `filter`: how every technique's colour pipelines look the
+    // lightmaps up (LightmapFilter::Bicubic: the cubic B-spline, no creases in gradients, four fetches per
+    // packed layer).
     LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                   const std::vector<std::string>& techniques, gpu::UploadBatch& upload,
                   const std::map<std::string, std::string>& material_techniques = {},
-                  const EngineGeometry* geometry = nullptr);
+                  const EngineGeometry* geometry = nullptr, LightmapFilter filter = LightmapFilter::Linear);
     ~LightmapModel();
 
     // The level's draw list for `technique` (its default: materials with their own technique keep it) in

@@ -28,6 +28,7 @@ struct SurfaceVariant
     Technique technique = Technique::Irradiance;
     int basis = HEMI_BASIS_SH9;
     ShadingFrame frame = ShadingFrame::Tangent; // World: coefficients in world space (an SH9 probe)
+    LightmapFilter lightmap_filter = LightmapFilter::Linear;
 };
 
 class SceneSurfaces
