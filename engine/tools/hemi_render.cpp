@@ -37,7 +37,7 @@ int main(int argc, char** argv)
     CLI::App app{"hemi-render: render a baked PRT (hemi-bake prt) or lightmap (hemi-bake lightmap) asset to "
                  "PNG or EXR"};
     std::string asset_path, technique = "gs", env = "sky", size = "800x600", camera = "auto", output;
-    bool cpca = false, white = false;
+    bool cpca = false, white = false, bicubic = false;
     std::vector<std::string> spheres;
     float rotate = 0.0f, exposure = 1.0f;
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
@@ -58,6 +58,9 @@ int main(int argc, char** argv)
         ->check(hemi::tool::finite(-1e6, 1e6))
         ->capture_default_str();
     app.add_flag("--white", white, "albedo 1: the lighting-only view");
+    app.add_flag("--bicubic", bicubic,
+                 "lightmaps: look the lightmap up with the cubic B-spline instead of the linear filter (no "
+                 "creases at texel centres in gradients)");
     app.add_option("--size", size, "WIDTHxHEIGHT in pixels")->capture_default_str();
     app.add_option("--camera", camera,
                    "auto (frames the model) or EYE,TARGET as x,y,z,x,y,z in world space (z up; "
@@ -107,6 +110,9 @@ int main(int argc, char** argv)
             const bool lightmap = kind == "lightmap";
             if (!lightmap && !spheres.empty())
                 throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
+            if (!lightmap && bicubic)
+                throw std::invalid_argument(asset_path +
+                                            " is not a lightmap asset: --bicubic is for lightmaps");
             if (lightmap && (cpca || rotate != 0.0f || env_option->count() > 0))
                 throw std::invalid_argument(asset_path +
                                             " is a lightmap asset: its lighting is baked in (--env, --rotate "
@@ -162,7 +168,9 @@ int main(int argc, char** argv)
                         throw std::invalid_argument(asset_path + ": " + e.what());
                     }
                     device = std::make_unique<hemi::gpu::Device>(desc);
-                    hemi::render::LightmapView view(*device, asset, {technique}, w, h);
+                    hemi::render::LightmapView view(*device, asset, {technique}, w, h,
+                                                    bicubic ? hemi::render::LightmapFilter::Bicubic
+                                                            : hemi::render::LightmapFilter::Linear);
                     hemi::render::LightmapFrame frame;
                     frame.technique = technique;
                     frame.white = white;

@@ -141,6 +141,11 @@ TEST(Cli, BakeThenRenderEndToEnd)
     const fs::path exr = dir() / "white.exr";
     const Result r = render(q(asset) + " --technique h4 --env uniform --white --size 96x64 -o " + q(exr));
     ASSERT_EQ(r.status, 0) << r.err;
+    // A lightmap option on a PRT asset is refused, naming the file.
+    const Result bicubic = render(q(asset) + " --bicubic -o " + q(dir() / "x.png"));
+    EXPECT_EQ(bicubic.status, 1);
+    EXPECT_NE(bicubic.err.find(asset.filename().string() + " is not a lightmap asset"), std::string::npos)
+        << bicubic.err;
     const hemi::io::ImageRgba img = hemi::io::read_exr(exr);
     ASSERT_EQ(img.width, 96u);
     ASSERT_EQ(img.height, 64u);
@@ -772,6 +777,15 @@ TEST(BakeCli, LightmapAssetRendersItsFurnaceWithEveryBasis)
                                 " --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(out));
         ASSERT_EQ(r.status, 0) << technique << ": " << r.err;
         expect_white_furnace(out, technique);
+    }
+    // The bicubic lookup's weights sum to 1: the furnace holds with --bicubic too.
+    for (const char* technique : {"h6", "plain"})
+    {
+        const fs::path out = dir() / (std::string("furnace_bicubic_") + technique + ".exr");
+        const Result r = render(q(asset) + " --technique " + technique +
+                                " --bicubic --white --size 48x48 --camera 0,0,3,0,0,0 -o " + q(out));
+        ASSERT_EQ(r.status, 0) << technique << ": " << r.err;
+        expect_white_furnace(out, std::string(technique) + " --bicubic");
     }
     // HL2 cannot hold a constant over the hemisphere (Habel & Wimmer): its furnace is off, as for PRT.
     const fs::path hl2 = dir() / "furnace_hl2.exr";

@@ -15,11 +15,13 @@ namespace hemi::render
 {
 
 LightmapView::LightmapView(const gpu::Device& device, const io::LightmapAsset& asset,
-                           const std::vector<std::string>& techniques, uint32_t width, uint32_t height)
+                           const std::vector<std::string>& techniques, uint32_t width, uint32_t height,
+                           LightmapFilter filter)
     : asset_(&asset), view_(device, width, height)
 {
     gpu::UploadBatch upload(device);
-    model_ = std::make_unique<LightmapModel>(view_.system(), asset, techniques, upload);
+    model_ = std::make_unique<LightmapModel>(view_.system(), asset, techniques, upload,
+                                             std::map<std::string, std::string>{}, nullptr, filter);
     upload.submit_and_wait();
 }
 

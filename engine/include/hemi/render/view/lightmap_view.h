@@ -41,9 +41,10 @@ class LightmapView
 {
   public:
     // `asset` must outlive the view. Loads `techniques` (outputs of the asset; std::invalid_argument names
-    // one it lacks).
+    // one it lacks), looked up with `filter`.
     LightmapView(const gpu::Device& device, const io::LightmapAsset& asset,
-                 const std::vector<std::string>& techniques, uint32_t width, uint32_t height);
+                 const std::vector<std::string>& techniques, uint32_t width, uint32_t height,
+                 LightmapFilter filter = LightmapFilter::Linear);
     ~LightmapView();
 
     static constexpr uint32_t kMaxSpheres = 16;
