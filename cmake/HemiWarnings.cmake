@@ -18,7 +18,9 @@ function(hemi_library_properties target export_name)
     if(type STREQUAL "SHARED_LIBRARY")
         target_link_options(${target} PRIVATE "LINKER:--version-script=${PROJECT_SOURCE_DIR}/cmake/hemi.map")
         set_property(TARGET ${target} APPEND PROPERTY LINK_DEPENDS ${PROJECT_SOURCE_DIR}/cmake/hemi.map)
-        # Installed, hemi's libraries find each other beside themselves (libhemi.so needs libhemi_core.so).
-        set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN")
+        # Built and installed, hemi's libraries find each other beside themselves (libhemi.so needs
+        # libhemi_core.so). Installed, the RUNPATH is "$ORIGIN" alone (.ci/shared_library checks it); in the
+        # build tree CMake leaves an empty entry after it, room for the install-time rewrite.
+        set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN" BUILD_RPATH "$ORIGIN")
     endif()
 endfunction()

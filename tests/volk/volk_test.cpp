@@ -39,7 +39,8 @@
 namespace
 {
 // Counted on the thread that records the frame (hemi's calls and the engine's recording), not on the
-// driver's threads.
+// driver's threads. hemi's frame-path calls run on their caller's thread (no TBB task on the frame path), so
+// this thread sees every allocation they make.
 thread_local bool counting = false;
 thread_local uint64_t allocations = 0;
 

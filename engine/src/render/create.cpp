@@ -10,7 +10,9 @@ namespace hemi::render
 namespace
 {
 
-// What an exception says, or a fixed text for one that says nothing hemi can read.
+// What an exception says, or a fixed text for one that says nothing hemi can read. The fixed texts fit the
+// standard library's short-string buffer (15 characters): they are made without allocating, out of memory
+// too.
 std::string message_of(std::exception_ptr e) noexcept
 {
     try
@@ -19,7 +21,7 @@ std::string message_of(std::exception_ptr e) noexcept
     }
     catch (const std::bad_alloc&)
     {
-        return "hemi: out of memory";
+        return "hemi: no memory";
     }
     catch (const std::exception& x)
     {
@@ -29,12 +31,12 @@ std::string message_of(std::exception_ptr e) noexcept
         }
         catch (...)
         {
-            return {};
+            return "hemi: no memory"; // the copy of what() could not be made
         }
     }
     catch (...)
     {
-        return "hemi: an unknown exception";
+        return "hemi: unknown";
     }
 }
 

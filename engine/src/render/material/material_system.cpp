@@ -199,7 +199,8 @@ const MaterialType& MaterialSystem::type(const MaterialKey& key_in, const PassDe
         key.basis = HEMI_BASIS_SH9;
         key.frame = ShadingFrame::Tangent;
     }
-    if (pass.kind != PassKind::Color || key.source != CoefficientSourceKind::Texel)
+    if (pass.kind != PassKind::Color || key.source != CoefficientSourceKind::Texel ||
+        key.technique == Technique::Constant || key.technique == Technique::Lambert)
         key.lightmap_filter = LightmapFilter::Linear; // looks no lightmap up
     PassDesc p = pass;
     if (p.kind != PassKind::Shadow)
@@ -301,7 +302,8 @@ std::unique_ptr<MaterialType> MaterialSystem::compile(const MaterialKey& key, co
         static const char* const kPasses[] = {"color", "depth", "shadow"};
         device_->set_name(VK_OBJECT_TYPE_PIPELINE, type->program.pipeline.get(),
                           "hemi material technique " + std::to_string(int(key.technique)) + " basis " +
-                              std::string(basis.name) + " source " + source + " " +
+                              std::string(basis.name) + " source " + source +
+                              (key.lightmap_filter == LightmapFilter::Bicubic ? " bicubic " : " ") +
                               kPasses[std::min<size_t>(size_t(pass.kind), 2)] + " pass");
     }
     return type;

@@ -124,6 +124,10 @@ std::vector<LightmapDraw> LightmapModel::draw_list(const std::string& technique,
     if (it == names_.end())
         throw std::invalid_argument("hemi: technique '" + technique +
                                     "' is not loaded in this lightmap model");
+    if (pass >= surfaces_->pass_count())
+        throw std::invalid_argument("hemi: LightmapModel::draw_list: pass " + std::to_string(pass) +
+                                    " was not added (" + std::to_string(surfaces_->pass_count()) +
+                                    " pass(es); add_pass() returns the index)");
     const size_t fallback = size_t(it - names_.begin());
     std::vector<LightmapDraw> list;
     for (size_t p = 0; p < surfaces_->primitive_count(); ++p)

@@ -133,13 +133,17 @@ SceneSurfaces::SceneSurfaces(MaterialSystem& system, const io::Mesh& mesh,
 
 size_t SceneSurfaces::add_pass(const PassDesc& pass)
 {
+    // Every type first: a compile that throws part of the way leaves the surfaces as they were (a later pass
+    // must not take this one's index with some draws holding its pipelines).
+    std::vector<std::vector<const MaterialType*>> types(draws_.size());
+    for (size_t i = 0; i < draws_.size(); ++i)
+        for (const MaterialKey& key : draws_[i].keys)
+            types[i].push_back(&system_->type(key, pass));
+    passes_.reserve(passes_.size() + 1);
     for (Draw& d : draws_)
-    {
-        std::vector<const MaterialType*> types;
-        for (const MaterialKey& key : d.keys)
-            types.push_back(&system_->type(key, pass));
-        d.types.push_back(std::move(types));
-    }
+        d.types.reserve(d.types.size() + 1);
+    for (size_t i = 0; i < draws_.size(); ++i)
+        draws_[i].types.push_back(std::move(types[i])); // no allocation: reserved above
     passes_.push_back(pass.kind);
     return passes_.size() - 1;
 }

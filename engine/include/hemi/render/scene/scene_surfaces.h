@@ -54,6 +54,7 @@ class SceneSurfaces
     // are shared by every pass.
     size_t add_pass(const PassDesc& pass);
     const MaterialSystem& system() const { return *system_; }
+    size_t pass_count() const { return passes_.size(); }
 
     // The calls below are on the frame path: none throws. A bad argument (a pass that was not added, a
     // variant or primitive that does not exist, a frame or coefficient set that is VK_NULL_HANDLE because it
