@@ -1075,13 +1075,26 @@ hemi::io::LightmapAsset level_lightmap_asset(uint32_t atlas)
     return hemi::io::read_lightmap_asset(dir / "level.hemi");
 }
 
+// The sample level's baked asset, made once per run for every frame benchmark that draws it, and the view
+// they draw it from (inside the room).
+const hemi::io::LightmapAsset& level_frame_asset()
+{
+    static const hemi::io::LightmapAsset asset = level_lightmap_asset(g_sizes.lightmap_atlas);
+    return asset;
+}
+glm::mat4 level_frame_view(uint32_t w, uint32_t h)
+{
+    return hemi::render::look_at_projection(glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f,
+                                            float(w) / float(h));
+}
+
 // Issue 12's frame-time goal: the lightmap material against the trivial one (Technique::Constant) on the
 // sample's level at 640 x 480, seen from inside the room, in the same run: GPU time of one raster pass each,
 // from timestamps (the bake of the small atlas it draws is set-up, not measured).
 void lightmap_material(benchmark::State& state, std::string technique)
 {
     hemi::gpu::Device& device = bench_device();
-    static const hemi::io::LightmapAsset asset = level_lightmap_asset(g_sizes.lightmap_atlas);
+    const hemi::io::LightmapAsset& asset = level_frame_asset();
     const uint32_t w = 640, h = 480;
     hemi::render::OffscreenTarget target(device, w, h);
     hemi::render::MaterialSystem system(device, target.desc());
@@ -1092,8 +1105,7 @@ void lightmap_material(benchmark::State& state, std::string technique)
     // the baseline's (one light).
     hemi::render::FrameSet frame(system), baseline_frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(
-        glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f, float(w) / float(h));
+    f.view_projection = level_frame_view(w, h);
     hemi::render::FrameData lit = f;
     lit.lights = {baseline_light()};
     const glm::mat4 placement = hemi::render::gltf_to_world();
@@ -1125,7 +1137,7 @@ void lightmap_material(benchmark::State& state, std::string technique)
 void lightmap_bicubic(benchmark::State& state, std::string technique)
 {
     hemi::gpu::Device& device = bench_device();
-    static const hemi::io::LightmapAsset asset = level_lightmap_asset(g_sizes.lightmap_atlas);
+    const hemi::io::LightmapAsset& asset = level_frame_asset();
     const uint32_t w = 640, h = 480;
     hemi::render::OffscreenTarget target(device, w, h);
     hemi::render::MaterialSystem system(device, target.desc());
@@ -1136,8 +1148,7 @@ void lightmap_bicubic(benchmark::State& state, std::string technique)
     upload.submit_and_wait();
     hemi::render::FrameSet frame(system);
     hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(
-        glm::vec3(-3.0f, -3.0f, 1.7f), glm::vec3(2.0f, 2.0f, 1.2f), 70.0f, float(w) / float(h));
+    f.view_projection = level_frame_view(w, h);
     const glm::mat4 placement = hemi::render::gltf_to_world();
     auto draw = [&](const hemi::render::LightmapModel& model)
     {
