@@ -39,6 +39,7 @@ layout(set = HEMI_SET_MATERIAL,
 layout(set = HEMI_SET_SOURCE,
        binding = HEMI_SOURCE_BINDING_COEFFICIENTS) uniform sampler2DArray coefficient_maps;
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_PAGE_TABLE) uniform usampler2D page_table;
+layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_SHADOWMASK) uniform sampler2DArray shadowmask;
 #elif HEMI_SOURCE == HEMI_SOURCE_UNIFORM
 // Every probe of every frame in flight (render::ProbeBuffer); this draw's from vec4 in_ids.x.
 layout(set = HEMI_SET_SOURCE, binding = HEMI_SOURCE_BINDING_COEFFICIENTS, std430) readonly buffer Probes
@@ -88,6 +89,7 @@ void main()
     }
 
     vec3 c[HEMI_BASIS_MAX_SIZE];
+    vec4 mask = vec4(1.0); // the mixed lights' shadowmask (lightmaps)
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
@@ -96,6 +98,12 @@ void main()
         hemi_lightmap_coefficients_bicubic(coefficient_maps, page_table, lightmap_uv, K, c);
     else
         hemi_lightmap_coefficients(coefficient_maps, page_table, lightmap_uv, K, c);
+    // Read only when a frame light is a mixed one (a branch uniform across the draw).
+    bool mixed = false;
+    for (int i = 0; i < min(int(frame.options.y), HEMI_MAX_LIGHTS); ++i)
+        mixed = mixed || frame.light_irradiance[i].w > 0.0;
+    if (mixed)
+        mask = hemi_lightmap_shadowmask(shadowmask, page_table, lightmap_uv);
 #else
     HEMI_UNROLL for (int k = 0; k < HEMI_BASIS_MAX_SIZE; ++k)
     {
@@ -139,7 +147,8 @@ void main()
         const vec3 to = p.w == 0.0 ? p.xyz : p.xyz - in_world;
         const float d2 = max(dot(to, to), 1e-12);
         s.l[i] = to_frame * (to * inversesqrt(d2));
-        s.e[i] = frame.light_irradiance[i].rgb / (p.w == 0.0 ? 1.0 : d2);
+        s.e[i] = frame.light_irradiance[i].rgb / (p.w == 0.0 ? 1.0 : d2) *
+                 hemi_shadowmask_channel(mask, int(frame.light_irradiance[i].w) - 1);
     }
     s.v = to_frame * normalize(frame.eye.xyz - in_world);
     s.specular_exponent = frame.options.z;

@@ -459,7 +459,7 @@ struct LightCli
 struct LightmapCli
 {
     std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes, uv_report,
-                              memory_budget;
+                              memory_budget, sun_mode = "baked";
     LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
@@ -507,6 +507,10 @@ int run_lightmap(LightmapCli& c)
     if (leader) // the other ranks write nothing (their machines may not even see the outputs' folder)
         files.check();
     o.lights = c.light.lights(); // read_exr names the environment's file; check_lights names it too
+    if (!hemi::io::parse_light_mode(c.sun_mode, o.lights.sun_mode))
+        throw std::invalid_argument("--sun-mode must be baked, mixed or realtime, not '" + c.sun_mode + "'");
+    if (o.lights.sun_mode != hemi::io::LightMode::Baked && !o.lights.sun)
+        throw std::invalid_argument("--sun-mode " + c.sun_mode + " needs a --sun");
     ProgressLine line("hemi-bake lightmap");
     // What the job is doing, for an out-of-memory message: the stage after the one just done.
     hemi::tool::set_stage("reading the scene");
@@ -579,13 +583,16 @@ int run_lightmap(LightmapCli& c)
         std::printf("--denoise: %zu texels filtered (%d passes)\n", s.denoised_texels, o.denoise_passes);
     if (s.seams)
     {
-        const auto& [before, after] = s.seam_difference.begin()->second;
+        // The first output's (the shadowmask has its own line in --json).
+        const auto first = std::find_if(s.seam_difference.begin(), s.seam_difference.end(),
+                                        [](const auto& d) { return d.first != "shadowmask"; });
+        const auto& [before, after] = first->second;
         if (s.stitched_texels)
             std::printf("%zu seam edge(s) between charts, stitched (%zu texels): their sides differed by "
                         "%.1f%% on average, %.1f%% at the 95th percentile, and now by %.2f%%, %.2f%% (%s; "
                         "--json has every output)\n",
                         s.seams, s.stitched_texels, 100.0 * before.first, 100.0 * before.second,
-                        100.0 * after.first, 100.0 * after.second, s.seam_difference.begin()->first.c_str());
+                        100.0 * after.first, 100.0 * after.second, first->first.c_str());
         else
             std::printf("%zu seam edge(s) between charts, not stitched: their sides differ by %.1f%% on "
                         "average, %.1f%% at the 95th percentile (%s; --json has every output)\n",
@@ -1123,6 +1130,12 @@ int main(int argc, char** argv)
         ->check(CLI::ExistingFile);
     lightmap->add_option("-o,--output", lm.asset, "lightmap asset to write (.hemi)")->required();
     lm.light.add_to(lightmap);
+    lightmap
+        ->add_option("--sun-mode", lm.sun_mode,
+                     "how the sun is baked: baked (direct and indirect light in the lightmap), mixed (only "
+                     "its indirect light; its shadows in a shadowmask channel, its direct light at run "
+                     "time) or realtime (not baked). glTF lights take theirs from extras.hemi_bake_mode")
+        ->capture_default_str();
     lightmap
         ->add_option("--bases", lm.bases,
                      "comma-separated outputs: sh9, hl2, h4, h6, sal4 (and every basis of "

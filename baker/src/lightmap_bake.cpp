@@ -149,7 +149,7 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 6;
+constexpr uint64_t kLightmapCheckpointVersion = 7; // 7: the mixed lights' shadowmask and direct light
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -163,6 +163,7 @@ void check(const LightmapLights& l, const LightmapBakeOptions& o)
     if (o.bounces < 0 || o.bounces > 16)
         throw std::invalid_argument("bounces " + std::to_string(o.bounces) + " is not in [0, 16]");
     detail::check_lights(l);
+    shadowmask_channels(l); // throws for a fifth overlapping mixed light
 }
 
 uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& l,
@@ -180,7 +181,8 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
     key.add_value(l.sun)
         .add_value(l.sun_direction)
         .add_value(l.sun_irradiance)
-        .add_value(l.sun_diameter_degrees);
+        .add_value(l.sun_diameter_degrees)
+        .add_value(int(l.sun_mode));
     key.add_value(l.scene_to_world);
     for (const io::PunctualLight& p : l.punctual)
         key.add_value(int(p.type))
@@ -190,7 +192,8 @@ uint64_t key_of(const io::Mesh& mesh, const LightmapAtlas& atlas, const Lightmap
             .add_value(p.inner_cone)
             .add_value(p.outer_cone)
             .add_value(p.position)
-            .add_value(p.direction);
+            .add_value(p.direction)
+            .add_value(int(p.mode));
     key.add_value(o.rays)
         .add_value(o.sun_rays)
         .add_value(o.seed)
@@ -454,6 +457,64 @@ void add_variance(const std::vector<std::array<double, 4>>& share, const SampleN
 
 } // namespace
 
+bool light_reaches(const io::PunctualLight& p, const glm::vec3& x)
+{
+    if (p.type == io::PunctualLight::Type::Directional || !(p.range > 0.0f))
+        return true;
+    const glm::vec3 d = x - p.position;
+    return glm::dot(d, d) < p.range * p.range;
+}
+
+std::vector<ShadowmaskChannel> shadowmask_channels(const LightmapLights& lights)
+{
+    // The mixed lights in order, each with its reach: a sphere (centre, radius), radius INFINITY for
+    // everywhere.
+    struct Mixed
+    {
+        int light;
+        glm::vec3 centre;
+        float radius;
+        std::string name;
+    };
+    std::vector<Mixed> mixed;
+    if (lights.sun && lights.sun_mode == io::LightMode::Mixed)
+        mixed.push_back({-1, glm::vec3(0.0f), INFINITY, "the sun (--sun)"});
+    for (size_t i = 0; i < lights.punctual.size(); ++i)
+    {
+        const io::PunctualLight& p = lights.punctual[i];
+        if (p.mode != io::LightMode::Mixed)
+            continue;
+        const bool everywhere = p.type == io::PunctualLight::Type::Directional || !(p.range > 0.0f);
+        mixed.push_back({int(i), p.position, everywhere ? INFINITY : p.range,
+                         "light " + std::to_string(i) + (p.name.empty() ? "" : " '" + p.name + "'")});
+    }
+    std::vector<ShadowmaskChannel> out;
+    for (size_t a = 0; a < mixed.size(); ++a)
+    {
+        bool taken[4] = {};
+        std::string holders;
+        for (size_t b = 0; b < a; ++b)
+        {
+            const float reach = mixed[a].radius + mixed[b].radius;
+            if (std::isfinite(reach) && glm::length(mixed[a].centre - mixed[b].centre) >= reach)
+                continue;
+            taken[out[b].channel] = true;
+            holders += (holders.empty() ? "" : ", ") + mixed[b].name;
+        }
+        int channel = 0;
+        while (channel < 4 && taken[channel])
+            ++channel;
+        if (channel == 4)
+            throw std::invalid_argument(
+                "mixed " + mixed[a].name + " reaches where the shadowmask's four channels are held by " +
+                holders +
+                ": a texel keeps the shadows of at most four mixed lights; make it baked or realtime "
+                "(extras.hemi_bake_mode), or give it a range that does not reach the others");
+        out.push_back({mixed[a].light, channel});
+    }
+    return out;
+}
+
 LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapLights& lights,
                             const LightmapBakeOptions& o, const LightmapSurfaces* surfaces,
                             const std::function<void(const LightmapProgress&)>& progress)
@@ -512,6 +573,16 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     std::vector<glm::vec3> next_previous(tiled ? n : 0,
                                          glm::vec3(0.0f)); // with tiles: the pass's, as it goes
     out.valid.assign(n, 1);
+    // The mixed lights' channels; their shadowmask and direct light are kept for every texel (28 bytes).
+    const std::vector<ShadowmaskChannel> channels = shadowmask_channels(lights);
+    int sun_channel = -1;
+    std::vector<int> punctual_channel(lights.punctual.size(), -1);
+    for (const ShadowmaskChannel& c : channels)
+        (c.light < 0 ? sun_channel : punctual_channel[size_t(c.light)]) = c.channel;
+    const bool mixed = !channels.empty();
+    out.shadowmask.assign(mixed ? n : 0, {1.0f, 1.0f, 1.0f, 1.0f});
+    out.mixed_direct.assign(mixed ? n : 0, glm::vec3(0.0f));
+    const bool sun_lit = lights.sun && lights.sun_mode != io::LightMode::Realtime;
     std::vector<uint8_t> pushed(n, 0);
     io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     tbb::enumerable_thread_specific<RayScratch> scratch;
@@ -704,9 +775,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight, 0, r);
         }
-        // Shadow rays, traced together and then added in order: `count` rays of a stream, ray(r, d, w)
-        // saying whether ray r is cast (its direction and weight).
-        auto shadow_rays = [&](int stream, int count, auto&& ray, auto&& radiance)
+        // Shadow rays, traced together and then taken in order: `count` rays of a stream, ray(r, d, w)
+        // saying whether ray r is cast (its direction and weight), visible(d, w, r) called for each that
+        // reaches the light.
+        auto shadow_rays = [&](int count, auto&& ray, auto&& visible)
         {
             size_t cast = 0;
             for (int r = 0; r < count; ++r)
@@ -722,36 +794,73 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             scene.occluded(std::span<const Ray>(s.rays.data(), cast), std::span(s.blocked.data(), cast));
             for (size_t k = 0; k < cast; ++k)
                 if (!s.blocked[k])
-                    add(s.rays[k].direction, radiance(s.rays[k].direction, s.weight[k]), stream, s.index[k]);
+                    visible(s.rays[k].direction, s.weight[k], s.index[k]);
         };
+        // The mixed lights' shadowmask channels and direct irradiance at the normal.
+        std::array<float, 4> mask = {1.0f, 1.0f, 1.0f, 1.0f};
+        glm::dvec3 mixed_e(0.0);
         if (pass == 0 && image_env)
             shadow_rays(
-                1, o.rays,
+                o.rays,
                 [&](int r, glm::vec3& d, double& w)
                 {
                     // Below the surface: the hemisphere of the frame, as the uniform rays see it.
                     return light.environment_ray(item, r, o.rays, d, w) &&
                            glm::dot(d, t.geometric_normal) > 0.0f && glm::dot(d, t.normal) > 0.0f;
                 },
-                [&](const glm::vec3& d, double w) { return glm::dvec3(lights.environment_radiance(d)) * w; });
-        if (lights.sun && pass == 0)
+                [&](const glm::vec3& d, double w, int r)
+                { add(d, glm::dvec3(lights.environment_radiance(d)) * w, 1, r); });
+        if (sun_lit && pass == 0)
+        {
+            // A directional light of irradiance E projects to E y(d): its delta radiance, per sample. A mixed
+            // sun's samples go to its shadowmask channel (the share that reaches the texel; rays below the
+            // surface do not) and to the bounces' light, not to the lightmap.
+            const glm::dvec3 e = glm::dvec3(lights.sun_irradiance) / double(o.sun_rays);
+            int visible = 0;
             shadow_rays(
-                2, o.sun_rays,
+                o.sun_rays,
                 [&](int r, glm::vec3& d, double&)
                 {
                     d = light.sun_ray(item, r);
                     return glm::dot(d, t.geometric_normal) > 0.0f;
                 },
-                // A directional light of irradiance E projects to E y(d): its delta radiance, per sample.
-                [&](const glm::vec3&, double)
-                { return glm::dvec3(lights.sun_irradiance) / double(o.sun_rays); });
+                [&](const glm::vec3& d, double, int r)
+                {
+                    if (sun_channel < 0)
+                        return add(d, e, 2, r);
+                    ++visible;
+                    mixed_e += e * double(std::max(glm::dot(d, t.normal), 0.0f));
+                });
+            if (sun_channel >= 0)
+                mask[size_t(sun_channel)] *= float(visible) / float(o.sun_rays);
+        }
         if (pass == 0)
-            for (const io::PunctualLight& p : lights.punctual)
+            for (size_t l = 0; l < lights.punctual.size(); ++l)
             {
-                glm::vec3 d;
+                const io::PunctualLight& p = lights.punctual[l];
+                if (p.mode == io::LightMode::Realtime)
+                    continue;
+                glm::vec3 d(0.0f, 0.0f, 1.0f);
                 float distance = INFINITY;
                 // A texel moved out of a wall is lit where its rays start.
-                const glm::vec3 e = light.punctual(p, pushed[i] ? origin : t.position, d, distance);
+                const glm::vec3 at = pushed[i] ? origin : t.position;
+                const glm::vec3 e = light.punctual(p, at, d, distance);
+                if (const int c = punctual_channel[l]; c >= 0)
+                {
+                    // A mixed light's visibility, wherever it reaches (its channel is 1 where none of the
+                    // channel's lights does), lit or not by its cone: the run time's light is multiplied by
+                    // it.
+                    if (!light_reaches(p, at))
+                        continue;
+                    const bool reached =
+                        distance > 0.0f && glm::dot(d, t.geometric_normal) > 0.0f &&
+                        !scene.occluded(origin, d, 0.0f,
+                                        std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY);
+                    mask[size_t(c)] *= reached ? 1.0f : 0.0f;
+                    if (reached)
+                        mixed_e += glm::dvec3(e) * double(std::max(glm::dot(d, t.normal), 0.0f));
+                    continue;
+                }
                 if (e == glm::vec3(0.0f) || glm::dot(d, t.geometric_normal) <= 0.0f)
                     continue;
                 // The shadow ray stops short of the light (it must not hit geometry behind it).
@@ -766,6 +875,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         pass_sh[i - base] = math::convolve_cosine(radiance);
         for (size_t b = 0; b < 4; ++b)
             pass_direct[i - base][b] = glm::vec3(direct[b]);
+        if (mixed && pass == 0)
+        {
+            out.shadowmask[i] = mask;
+            out.mixed_direct[i] = glm::vec3(mixed_e);
+        }
         if (o.keep_noise)
         {
             std::array<double, 4> variance{};
@@ -780,7 +894,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 }
                 add_variance(s.shares[1], environment_pattern, variance, s.stratum.data());
             }
-            if (pass == 0 && lights.sun)
+            if (pass == 0 && sun_lit)
                 add_variance(s.shares[2], sun_pattern, variance);
             for (size_t c = 0; c < 4; ++c)
                 pass_noise[i - base][c] = float(variance[c]);
@@ -804,6 +918,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         sections = {{"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
                     {"next_previous", std::as_writable_bytes(std::span<glm::vec3>(next_previous))},
                     {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
+    sections.push_back(
+        {"shadowmask", std::as_writable_bytes(std::span<std::array<float, 4>>(out.shadowmask))});
+    sections.push_back({"mixed_direct", std::as_writable_bytes(std::span<glm::vec3>(out.mixed_direct))});
     SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
                                n, std::move(sections), o.checkpoint_seconds);
     SlicePosition state;
@@ -823,9 +940,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         if (checkpoint.active())
             tiles->keep();
     }
-    const uint64_t rays_per_texel = uint64_t(o.rays) * (image_env ? 2 : 1) +
-                                    (lights.sun ? uint64_t(o.sun_rays) : 0) +
-                                    uint64_t(lights.punctual.size());
+    const uint64_t rays_per_texel =
+        uint64_t(o.rays) * (image_env ? 2 : 1) + (sun_lit ? uint64_t(o.sun_rays) : 0) +
+        uint64_t(std::count_if(lights.punctual.begin(), lights.punctual.end(),
+                               [](const io::PunctualLight& p) { return p.mode != io::LightMode::Realtime; }));
     // At least 256 texels a slice, at most a tile (std::clamp would be undefined for a tile under 256).
     const uint32_t slice =
         uint32_t(std::min<uint64_t>(std::max<uint64_t>((uint64_t(1) << 21) / rays_per_texel, 256), tile));
@@ -862,6 +980,13 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             if (o.keep_noise)
                 arrays.push_back(
                     {reinterpret_cast<std::byte*>(pass_noise.data()), sizeof(LightmapSh::Noise)});
+            if (mixed && pass == 0) // indexed from the tile's first texel, like the pass's
+            {
+                arrays.push_back({reinterpret_cast<std::byte*>(out.shadowmask.data() + base),
+                                  sizeof(std::array<float, 4>)});
+                arrays.push_back(
+                    {reinterpret_cast<std::byte*>(out.mixed_direct.data() + base), sizeof(glm::vec3)});
+            }
             dist.run(
                 begin - base, end - base, tiled ? std::min(slice, end - begin) : slice, arrays,
                 [&](uint32_t b, uint32_t e)
@@ -926,8 +1051,10 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (checkpoint.active())
                     tiles->sync();
             }
+            // The bounces start from all of the first pass's light, the mixed lights' direct light too.
             for (uint32_t i = 0; i < count; ++i)
-                next_previous[begin + i] = pass_direct[i][0];
+                next_previous[begin + i] =
+                    pass_direct[i][0] + (mixed && pass == 0 ? out.mixed_direct[begin + i] : glm::vec3(0.0f));
             if (end < n)
                 checkpoint.slice_done(uint32_t(pass), end);
             forget_failed_checkpoint();
@@ -948,6 +1075,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     for (size_t c = 0; c < 4; ++c)
                         out.noise[i][c] += pass_noise[i][c];
                 previous[i] = pass_direct[i][0]; // E at the normal, integrated directly
+                if (mixed && pass == 0)
+                    previous[i] += out.mixed_direct[i]; // the bounces carry the mixed lights' light
             }
         else
             std::copy(next_previous.begin(), next_previous.end(), previous.begin());
@@ -1004,7 +1133,8 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     if (!(probes.lo.x <= probes.hi.x && probes.lo.y <= probes.hi.y && probes.lo.z <= probes.hi.z) ||
         !std::isfinite(probes.lo.x + probes.lo.y + probes.lo.z + probes.hi.x + probes.hi.y + probes.hi.z))
         throw std::invalid_argument("the probe grid's corners must be finite and ordered");
-    if (sh.texels() != atlas.texels.size())
+    if (sh.texels() != atlas.texels.size() ||
+        (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
         throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
     if (surfaces && mesh.uvs1.size() != mesh.positions.size())
         throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
@@ -1024,13 +1154,20 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                                               sh.read(first, count, nullptr, directs.data());
                                               for (uint32_t i = 0; i < count; ++i)
                                                   out[i] = directs[i][0];
-                                              return;
                                           }
-                                          sh9.resize(count);
-                                          sh.read(first, count, sh9.data());
-                                          for (uint32_t i = 0; i < count; ++i)
-                                              out[i] =
-                                                  math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                                          else
+                                          {
+                                              sh9.resize(count);
+                                              sh.read(first, count, sh9.data());
+                                              for (uint32_t i = 0; i < count; ++i)
+                                                  out[i] =
+                                                      math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                                          }
+                                          // The mixed lights' direct light, which the lightmap leaves to the
+                                          // run time, still lights what the probes see.
+                                          if (!sh.mixed_direct.empty())
+                                              for (uint32_t i = 0; i < count; ++i)
+                                                  out[i] += sh.mixed_direct[first + i];
                                       });
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
@@ -1087,7 +1224,9 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                     if (light.environment_ray(item, r, o.rays, d, w) && !scene.occluded(p, d))
                         add(d, glm::dvec3(lights.environment_radiance(d)) * w);
                 }
-                for (int r = 0; r < o.sun_rays && lights.sun; ++r)
+                // Only baked lights' direct light: a mixed light's is the run time's, a realtime light not
+                // baked.
+                for (int r = 0; r < o.sun_rays && lights.sun && lights.sun_mode == io::LightMode::Baked; ++r)
                 {
                     const glm::vec3 d = light.sun_ray(item, r);
                     if (!scene.occluded(p, d))
@@ -1095,6 +1234,8 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                 }
                 for (const io::PunctualLight& l : lights.punctual)
                 {
+                    if (l.mode != io::LightMode::Baked)
+                        continue;
                     glm::vec3 d;
                     float distance = INFINITY;
                     const glm::vec3 e = light.punctual(l, p, d, distance);
@@ -1118,6 +1259,8 @@ int lightmap_output_size(std::string_view name)
 {
     if (name == "plain")
         return 1;
+    if (name == "shadowmask")
+        return 4;
     if (name == "rnm")
         return 3;
     return math::basis(name).size; // throws, listing the bases
@@ -1349,6 +1492,20 @@ io::BlockMaps maps_at(std::string_view name, uint32_t width, uint32_t height, co
                       size_t* adjusted)
 {
     const int k = lightmap_output_size(name);
+    if (name == "shadowmask")
+    {
+        if (sh.shadowmask.size() != sh.texels())
+            throw std::invalid_argument("the bake has no shadowmask (no mixed light)");
+        return dilated(
+            width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
+            [&](uint32_t first, std::span<glm::vec3> values)
+            {
+                for (size_t i = 0; i < values.size() / 4; ++i)
+                    for (size_t c = 0; c < 4; ++c)
+                        values[i * 4 + c] = glm::vec3(sh.shadowmask[first + i][c]);
+            },
+            charts);
+    }
     const std::vector<double>& m = output_matrix(name); // once, not per texel
     // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
     const bool direct = (name == "plain" || name == "rnm") && sh.has_direct();

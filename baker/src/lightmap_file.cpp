@@ -70,6 +70,8 @@ constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
 constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
+// With mixed lights, every covered texel's shadowmask (4 floats) and the mixed lights' direct light (3).
+constexpr uint64_t kMixedBytesPerCoveredTexel = 28;
 // Light probes (--probes) are held whole, beside the lightmap's sums while they bake and then written with
 // the asset: their SH9 irradiance and validity, the asset's copy and its spooled bytes. Measured 218-220
 // bytes a probe (64^3 and 128^3 probes at one ray each: +57.7 MB and +458 MB of peak); issue 41 found
@@ -175,7 +177,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (o.outputs.empty())
         throw std::invalid_argument("no lightmap outputs asked for");
     for (const std::string& name : o.outputs)
+    {
+        if (name == "shadowmask")
+            throw std::invalid_argument(
+                "the shadowmask is not an output to ask for: a bake with mixed lights "
+                "makes it (--sun-mode mixed, or a glTF light's extras.hemi_bake_mode)");
         lightmap_output_size(name); // throws for an unknown name, listing the known ones
+    }
     if (o.texel_size < 0.0f || !std::isfinite(o.texel_size))
         throw std::invalid_argument("the texel size must be positive (world units)");
     if (o.denoise && (o.denoise_passes < 1 || o.denoise_passes > 10))
@@ -217,6 +225,18 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
 
     io::GltfScene scene = io::read_gltf(scene_path);
     LightmapBakeSummary summary;
+    o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
+    o.lights.punctual = scene.lights; // in the mesh's (scene) space already
+    // The mixed lights' shadowmask channels, before anything is baked (a fifth overlapping light is refused).
+    std::vector<ShadowmaskChannel> mixed_channels;
+    try
+    {
+        mixed_channels = shadowmask_channels(o.lights);
+    }
+    catch (const std::invalid_argument& e)
+    {
+        throw io::FormatError(scene_path.string() + ": " + e.what());
+    }
     if (o.unwrap)
     {
         UnwrapOptions u;
@@ -309,6 +329,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         coefficients += uint64_t(lightmap_output_size(name)) * 3;
         largest_output = std::max<uint64_t>(largest_output, uint64_t(lightmap_output_size(name)) * 3);
     }
+    // With mixed lights, each texel's shadowmask and mixed direct light, through the whole bake.
+    const uint64_t mixed_bytes = mixed_channels.empty() ? 0 : kMixedBytesPerCoveredTexel;
     // The budget: --memory-budget, else what the machine has free (io::available_memory, which
     // HEMI_MEMORY_BUDGET and the process's limits lower); 0 when neither is known.
     const uint64_t budget = o.memory_budget ? o.memory_budget : io::available_memory();
@@ -331,7 +353,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // the pass in memory, or in tiles one tile of them; --denoise's filter after them, on the whole atlas or
     // in bands of rows) and the outputs (the texels' places, the float map of the output being made, the sums
     // when in memory).
-    const uint64_t per_texel = kLightmapBytesPerCoveredTexel + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
+    const uint64_t per_texel =
+        kLightmapBytesPerCoveredTexel + mixed_bytes + (o.denoise ? kDenoiseBytesPerCoveredTexel : 0);
     const uint64_t per_tile_texel =
         o.denoise ? std::max(kTileBytesPerTexel + kTileNoiseBytesPerTexel, kDenoiseBandBytesPerTexel)
                   : kTileBytesPerTexel;
@@ -341,8 +364,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             ? uint64_t(w) * uint64_t(3 + 4 * ((int64_t(1) << o.denoise_passes) - 1) + 2 * o.denoise_passes)
             : 0;
     const uint64_t sums_per_texel = kTileBytesPerTexel / 2 + (o.denoise ? kTileNoiseBytesPerTexel / 2 : 0);
+    // With mixed lights the shadowmask's float maps (4 x RGB) stay beside every output's until the asset is
+    // written.
     const uint64_t output_map_bytes =
-        output_slots * (largest_output * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot) +
+        output_slots * (largest_output * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot +
+                        (mixed_channels.empty() ? 0 : 12 * kLightmapBytesPerLargestCoefficient)) +
         exr_bytes;
     // The probes cannot be tiled: they count in full against the budget, on top of either stage.
     // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
@@ -372,14 +398,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         return held + probe_bytes +
                std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
-                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel));
+                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel + mixed_bytes));
     };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
         const uint64_t passes = slots * kLightmapBytesPerSlot +
-                                texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
+                                texels * (kTiledBytesPerCoveredTexel + mixed_bytes + (o.denoise ? 4 : 0)) +
                                 std::max(tile, std::min(texels, least_band)) * per_tile_texel;
-        return held + probe_bytes + std::max(passes, output_map_bytes + texels * kPlaceBytesPerTexel);
+        return held + probe_bytes +
+               std::max(passes, output_map_bytes + texels * (kPlaceBytesPerTexel + mixed_bytes));
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
@@ -472,8 +499,6 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                    "images for other renderers (hemi-bake export) cover the whole atlas; a "
                                    "smaller --size or a larger --texel-size gives the same density for less");
 
-    o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
-    o.lights.punctual = scene.lights; // in the mesh's (scene) space already
     summary.lights = scene.lights.size();
     summary.irradiance_bound = check_light_bound(o.lights, scene.materials, scene.mesh, scene_path).total;
     LightmapBakeOptions bake_options = o.bake;
@@ -651,6 +676,62 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             summary.stitch_clamped[name] = size_t(made.clamped);
         summary.output_scales[name] = std::ldexp(1.0, made.scale_exponent);
     };
+    // The lights as the run time needs them (the sun in the mesh's space), and with mixed lights the
+    // shadowmask: dilated and stitched like plain (it does not depend on the tangent frame), kept in [0, 1].
+    if (leader)
+    {
+        if (o.lights.sun)
+        {
+            io::LightmapLight sun;
+            sun.light.type = io::PunctualLight::Type::Directional;
+            sun.light.name = "sun";
+            sun.light.color = o.lights.sun_irradiance;
+            sun.light.intensity = 1.0f;
+            sun.light.direction =
+                -glm::normalize(glm::transpose(o.lights.scene_to_world) * o.lights.sun_direction);
+            sun.light.mode = o.lights.sun_mode;
+            sun.angular_diameter_degrees = o.lights.sun_diameter_degrees;
+            asset.lights.push_back(sun);
+        }
+        for (const io::PunctualLight& p : o.lights.punctual)
+            asset.lights.push_back({p, 0.0f, -1});
+        for (const ShadowmaskChannel& c : mixed_channels)
+            asset.lights[size_t(c.light + (o.lights.sun ? 1 : 0))].channel = c.channel;
+        summary.light_table = asset.lights;
+    }
+    if (leader && !mixed_channels.empty())
+    {
+        io::BlockMaps mask = lightmap_maps("shadowmask", w, h, places, sh, o.dilate, false, nullptr, charts);
+        const LightmapSeamMetric before = measure_lightmap_seams(seams, mask);
+        LightmapSeamMetric after = before;
+        if (o.stitch && !seams.empty())
+        {
+            if (!all)
+                all.emplace(seams, mask.grid, o.stitch_closeness);
+            all->apply(mask);
+            for (float& v : mask.values)
+                v = std::clamp(v, 0.0f, 1.0f);
+            after = measure_lightmap_seams(seams, mask);
+        }
+        summary.seam_difference["shadowmask"] = {{before.mean, before.p95}, {after.mean, after.p95}};
+        if (!o.exr_dir.empty())
+        {
+            const std::vector<float> dense = mask.dense();
+            const size_t plane = size_t(w) * h * 3;
+            std::vector<io::ExrChannel> exr;
+            for (uint32_t c = 0; c < 4; ++c)
+                exr.push_back({std::string(1, "RGBA"[c]), dense.data() + c * plane, 3, true});
+            const std::filesystem::path file = lightmap_exr_path(o.exr_dir, asset_path, "shadowmask");
+            const std::vector<std::pair<std::string, std::string>> attributes = {
+                {"hemi.output", "shadowmask"},
+                {"hemi.layout",
+                 "per texel the fraction of the direct light of the mixed light of channel R, G, "
+                 "B, A that reaches it; rows from the top (v = 0) of the TEXCOORD_1 atlas"}};
+            io::write_exr_channels(file, w, h, exr, attributes);
+            summary.exr_files.push_back(file);
+        }
+        asset.shadowmask = std::move(mask);
+    }
     if (share_outputs)
     {
         // Each rank makes its outputs and sends rank 0 the made and the encoded section; rank 0 adds them in
@@ -763,6 +844,19 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["bounces"] = o.bake.bounces;
     j["environment"] = o.lights.environment.pixels.empty() ? "uniform" : "image";
     j["punctual_lights"] = s.lights;
+    // Every light with its bake mode and, for a mixed one, its shadowmask channel.
+    nlohmann::json lights = nlohmann::json::array();
+    for (const io::LightmapLight& l : s.light_table)
+    {
+        static const char* const types[] = {"directional", "point", "spot"};
+        nlohmann::json light = {{"name", l.light.name},
+                                {"type", types[int(l.light.type)]},
+                                {"mode", io::light_mode_name(l.light.mode)}};
+        if (l.channel >= 0)
+            light["shadowmask_channel"] = std::string(1, "RGBA"[l.channel]);
+        lights.push_back(light);
+    }
+    j["lights"] = lights;
     j["rays"] = s.rays;
     j["texels_moved_out_of_walls"] = s.pushed;
     j["texels_inside_geometry"] = s.invalid;

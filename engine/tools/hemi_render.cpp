@@ -177,6 +177,15 @@ int main(int argc, char** argv)
                     frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect)
                                                : view_camera;
                     frame.spheres = sphere_list;
+                    // The asset's mixed lights, lit at run time with their shadowmask channels.
+                    try
+                    {
+                        frame.lights = hemi::render::mixed_lights(asset, frame.model);
+                    }
+                    catch (const std::invalid_argument& e)
+                    {
+                        throw std::invalid_argument(asset_path + ": " + e.what());
+                    }
                     if (!frame.spheres.empty() && asset.probes.empty())
                         throw std::invalid_argument(
                             asset_path + " has no light probes for --sphere (bake it with --probes)");

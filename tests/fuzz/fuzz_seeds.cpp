@@ -384,6 +384,21 @@ int main(int argc, char** argv)
             {"h4", 4, io::BlockMaps::from_dense(20, 12, 4, std::vector<float>(4 * 20 * 12 * 3, 0.25f))});
         io::write_lightmap_asset(scratch / "tiny_lightmap.hemi", l);
         put(out / "asset/corpus/tiny_lightmap.hemi", slurp(scratch / "tiny_lightmap.hemi"));
+        // The same with a mixed sun, a realtime lamp and their shadowmask (lightmap.lights and
+        // lightmap.shadowmask).
+        io::LightmapLight sun, lamp;
+        sun.light.type = io::PunctualLight::Type::Directional;
+        sun.light.name = "sun";
+        sun.light.mode = io::LightMode::Mixed;
+        sun.channel = 0;
+        lamp.light.name = "lamp";
+        lamp.light.mode = io::LightMode::Realtime;
+        l.lights = {sun, lamp};
+        std::vector<float> mask(4 * 20 * 12 * 3, 1.0f);
+        mask[(1 * 20 + 2) * 3] = mask[(1 * 20 + 2) * 3 + 1] = mask[(1 * 20 + 2) * 3 + 2] = 0.5f;
+        l.shadowmask = io::BlockMaps::from_dense(20, 12, 4, mask);
+        io::write_lightmap_asset(scratch / "mixed_lightmap.hemi", l);
+        put(out / "asset/corpus/mixed_lightmap.hemi", slurp(scratch / "mixed_lightmap.hemi"));
     }
     {
         // envmap: two small environment assets; hostile ones each refused by one check of the reader.

@@ -836,7 +836,8 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
     Handmade h = handmade_quad();
     h.j["extensionsUsed"] = {"KHR_lights_punctual"};
     h.j["extensions"] = json::parse(R"({"KHR_lights_punctual": {"lights": [
-        {"type": "point", "color": [1, 0.5, 0.25], "intensity": 40, "range": 12, "name": "bulb"},
+        {"type": "point", "color": [1, 0.5, 0.25], "intensity": 40, "range": 12, "name": "bulb",
+         "extras": {"hemi_bake_mode": "mixed"}},
         {"type": "spot", "intensity": 7, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}},
         {"type": "directional", "intensity": 3}]}})");
     // A point light 2 up, a spot turned +90 degrees about x under a parent moved by (1, 0, 0) (its -Z points
@@ -846,7 +847,8 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
     h.j["nodes"].push_back({{"translation", {1, 0, 0}}, {"children", {3}}});
     h.j["nodes"].push_back({{"rotation", {0.7071068, 0, 0, 0.7071068}},
                             {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
-    h.j["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}});
+    h.j["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}},
+                            {"extras", {{"hemi_bake_mode", "realtime"}}}}); // the node's extras
     h.j["scenes"][0]["nodes"] = {0, 1, 2, 4};
     const hemi::io::GltfScene s = hemi::io::read_gltf(h.save("lights"));
     ASSERT_EQ(s.lights.size(), 3u);
@@ -864,6 +866,10 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
     EXPECT_FLOAT_EQ(s.lights[1].outer_cone, 0.6f);
     EXPECT_EQ(s.lights[2].type, T::Directional);
     EXPECT_EQ(s.lights[2].direction, glm::vec3(0, 0, -1));
+    // Bake modes (issue 43): the light's extras, else its node's, else baked.
+    EXPECT_EQ(s.lights[0].mode, hemi::io::LightMode::Mixed);
+    EXPECT_EQ(s.lights[1].mode, hemi::io::LightMode::Baked);
+    EXPECT_EQ(s.lights[2].mode, hemi::io::LightMode::Realtime);
     for (const std::string& w : s.warnings)
         EXPECT_EQ(w.find("light"), std::string::npos) << w;
 
@@ -876,6 +882,11 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
     bad = h;
     bad.j["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = -1;
     expect_error_naming(bad.save("light_negative"), "intensity");
+    bad = h;
+    bad.j["extensions"]["KHR_lights_punctual"]["lights"][0]["extras"]["hemi_bake_mode"] = "stationary";
+    expect_error_naming(bad.save("light_mode"),
+                        "light 0 (bulb): extras.hemi_bake_mode must be \"baked\", \"mixed\" or \"realtime\", "
+                        "not \"stationary\"");
 }
 
 TEST(GltfReader, UnreadableFeaturesAreErrorsNamingThem)

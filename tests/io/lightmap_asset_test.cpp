@@ -691,3 +691,105 @@ TEST(LightmapAsset, ReadsLayoutTwoWithoutAScale)
     const std::string e = error_of(bad);
     EXPECT_NE(e.find("L.plain: scale 2^200"), std::string::npos) << e;
 }
+
+// Issue 43: the lights with their bake modes and shadowmask channels, and the RGBA8 shadowmask, read back
+// (the mask to the nearest 1/255); a mixed light without a mask, a channel out of range and cut sections are
+// refused naming the file and the section.
+TEST(LightmapAsset, LightsAndTheShadowmaskRoundTrip)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    hemi::io::LightmapLight sun;
+    sun.light.type = hemi::io::PunctualLight::Type::Directional;
+    sun.light.name = "sun";
+    sun.light.color = glm::vec3(3.0f, 2.0f, 1.0f);
+    sun.light.intensity = 1.5f;
+    sun.light.direction = glm::normalize(glm::vec3(-1.0f, -2.0f, 0.5f));
+    sun.light.mode = hemi::io::LightMode::Mixed;
+    sun.angular_diameter_degrees = 0.53f;
+    sun.channel = 2;
+    hemi::io::LightmapLight lamp;
+    lamp.light.type = hemi::io::PunctualLight::Type::Spot;
+    lamp.light.name = "lamp \xc3\xa9"; // UTF-8
+    lamp.light.position = glm::vec3(1.0f, 2.0f, 3.0f);
+    lamp.light.range = 4.0f;
+    lamp.light.intensity = 20.0f;
+    lamp.light.color = glm::vec3(0.25f, 0.5f, 1.0f);
+    lamp.light.direction = glm::normalize(glm::vec3(0.0f, -1.0f, -1.0f));
+    lamp.light.inner_cone = 0.1f;
+    lamp.light.outer_cone = 0.4f;
+    lamp.light.mode = hemi::io::LightMode::Realtime;
+    a.lights = {sun, lamp};
+    std::vector<float> dense(4 * 15 * 3);
+    for (size_t c = 0; c < 4; ++c)
+        for (size_t t = 0; t < 15; ++t)
+            for (size_t rgb = 0; rgb < 3; ++rgb)
+                dense[(c * 15 + t) * 3 + rgb] = float((t * 7 + c * 3) % 16) / 15.0f;
+    a.shadowmask = hemi::io::BlockMaps::from_dense(5, 3, 4, dense);
+    const fs::path p = dir() / "mixed.hemi";
+    hemi::io::write_lightmap_asset(p, a);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(p);
+    ASSERT_EQ(b.lights.size(), 2u);
+    // Layout 4 with a mask (a hemi that knows no mixed lights refuses it), 3 without.
+    {
+        const hemi::io::AssetReader r(p);
+        uint32_t layout = 0;
+        std::memcpy(&layout, r.section("lightmap.info").data(), 4);
+        EXPECT_EQ(layout, 4u);
+    }
+    for (size_t i = 0; i < 2; ++i)
+    {
+        const hemi::io::LightmapLight &x = a.lights[i], &y = b.lights[i];
+        EXPECT_EQ(y.light.type, x.light.type);
+        EXPECT_EQ(y.light.name, x.light.name);
+        EXPECT_EQ(y.light.mode, x.light.mode);
+        EXPECT_EQ(y.channel, x.channel);
+        EXPECT_EQ(y.light.color, x.light.color);
+        EXPECT_EQ(y.light.position, x.light.position);
+        EXPECT_EQ(y.light.direction, x.light.direction);
+        EXPECT_EQ(y.light.range, x.light.range);
+        EXPECT_EQ(y.light.intensity, x.light.intensity);
+        EXPECT_EQ(y.light.inner_cone, x.light.inner_cone);
+        EXPECT_EQ(y.light.outer_cone, x.light.outer_cone);
+        EXPECT_EQ(y.angular_diameter_degrees, x.angular_diameter_degrees);
+    }
+    ASSERT_EQ(b.shadowmask.k, 4u);
+    const std::vector<float> back = b.shadowmask.dense();
+    ASSERT_EQ(back.size(), dense.size());
+    for (size_t i = 0; i < dense.size(); ++i)
+        ASSERT_NEAR(back[i], dense[i], 0.5f / 255.0f + 1e-6f) << i;
+
+    hemi::io::LightmapAsset bad = a;
+    bad.shadowmask = {};
+    EXPECT_THROW(hemi::io::write_lightmap_asset(dir() / "bad.hemi", bad), std::invalid_argument);
+    bad = a;
+    bad.lights[0].channel = 4;
+    EXPECT_THROW(hemi::io::write_lightmap_asset(dir() / "bad.hemi", bad), std::invalid_argument);
+    bad = a;
+    bad.lights[1].light.direction = glm::vec3(0.0f);
+    EXPECT_THROW(hemi::io::write_lightmap_asset(dir() / "bad.hemi", bad), std::invalid_argument);
+    bad = a;
+    bad.lights[1].light.intensity = -1.0f;
+    EXPECT_THROW(hemi::io::write_lightmap_asset(dir() / "bad.hemi", bad), std::invalid_argument);
+    for (const char* section : {"lightmap.lights", "lightmap.shadowmask"})
+    {
+        const fs::path cut = rewritten(p, std::string("cut_") + section + ".hemi",
+                                       [&](const std::string& name, std::vector<std::byte>& bytes)
+                                       {
+                                           if (name == section)
+                                               bytes.resize(bytes.size() - 3);
+                                       });
+        const std::string e = error_of(cut);
+        EXPECT_NE(e.find(cut.string()), std::string::npos) << e;
+        EXPECT_NE(e.find(section), std::string::npos) << e;
+    }
+    // A mask without its lights' section: the asset's mixed lights are gone, the mask is refused.
+    const fs::path no_lights =
+        rewritten(p, "no_lights.hemi",
+                  [](const std::string& name, std::vector<std::byte>& bytes)
+                  {
+                      if (name == "lightmap.lights")
+                          bytes = {std::byte(0), std::byte(0), std::byte(0), std::byte(0)};
+                  });
+    EXPECT_NE(error_of(no_lights).find("a shadowmask without mixed lights"), std::string::npos)
+        << error_of(no_lights);
+}

@@ -74,7 +74,9 @@ void main()
 #endif
     const vec3 lt = hemi_to_tangent(frame, l);
     if (kTechnique == 0)
-        color = albedo * hemi_basis_irradiance(kBasis, K, c, nt, view.sep4_weights) / kPi;
+        color = albedo *
+                (hemi_basis_irradiance(kBasis, K, c, nt, view.sep4_weights) + e * max(dot(nt, lt), 0.0)) /
+                kPi;
     else if (kTechnique == 1)
         color = albedo * (hemi_rnm_irradiance(nt, c[0], c[1], c[2]) + e * max(dot(nt, lt), 0.0)) / kPi;
     else if (kTechnique == 2)
@@ -86,7 +88,7 @@ void main()
     for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
         c[i] = i < 9 ? probe.sh[i].rgb : vec3(0.0);
     const vec3 n = normalize(hemi_from_tangent(frame, nt));
-    color = albedo * hemi_sh9_irradiance(c, n) / kPi;
+    color = albedo * (hemi_sh9_irradiance(c, n) + e * max(dot(n, l), 0.0)) / kPi;
 #elif ENGINE_SOURCE == 3
     // Heidrich & Seidel, world frame.
     const vec3 n = normalize(hemi_from_tangent(frame, nt));

@@ -1,6 +1,7 @@
 // The command lines pipelines script against, run as processes: hemi-bake prt and hemi-render with the
 // issue's exact forms, their outputs, and their errors on bad input (exit status 1, a message naming the
 // file and the problem, no output file left behind).
+#include "../bake/quads.h"
 #include "../png_writer.h"
 #include "../temp_dir.h"
 #include "level.h"
@@ -862,6 +863,256 @@ TEST(BakeCli, LightmapBakesTheScenesPunctualLights)
         EXPECT_GT(covered, 100) << technique;
         EXPECT_GT(brightest, 1.2f * dimmest) << technique << ": I / d^2 falls off from under the light";
     }
+}
+
+// Bake modes through hemi-bake lightmap (issue 43): a glTF point light marked mixed in its extras and a
+// --sun-mode mixed sun over an open floor leave the lightmap to the sky alone (plain = pi times the sky),
+// each take a shadowmask channel (the sun R, the lamp G: both see every texel, so both are 255 everywhere,
+// the unused channels too), and the asset and the JSON report list the lights with their modes and channels,
+// the sun in the mesh's frame (glTF y up). A realtime light is listed and not baked; --sun-mode without a sun
+// and the shadowmask asked for as an output are refused.
+TEST(BakeCli, LightmapBakesMixedLightsIntoAShadowmask)
+{
+    const fs::path plain_floor = write_floor_gltf("mixed_floor_source.gltf", 2);
+    nlohmann::json j = nlohmann::json::parse(slurp(plain_floor));
+    j["extensionsUsed"].push_back("KHR_lights_punctual");
+    j["extensions"]["KHR_lights_punctual"]["lights"] = {
+        {{"type", "point"}, {"intensity", 2.0}, {"name", "lamp"}, {"extras", {{"hemi_bake_mode", "mixed"}}}},
+        {{"type", "point"},
+         {"intensity", 5.0},
+         {"name", "torch"},
+         {"extras", {{"hemi_bake_mode", "realtime"}}}}};
+    for (int l = 0; l < 2; ++l)
+    {
+        j["nodes"].push_back(
+            {{"translation", {0.0, 1.0, 0.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", l}}}}}});
+        j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+    }
+    const fs::path scene = dir() / "mixed_floor.gltf";
+    std::ofstream(scene) << j.dump();
+    const fs::path asset = dir() / "mixed_floor.hemi", json = dir() / "mixed_floor.json",
+                   exr_dir = dir() / "mixed_floor_exr";
+    const std::string sun = " --sun 0.3,0.2,1,3,3,3 --env-scale 0.5 --size 16 --bases plain";
+    const Result r = lightmap(q(scene) + " -o " + q(asset) + sun + " --sun-mode mixed --json " + q(json) +
+                              " --exr-dir " + q(exr_dir));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(json));
+    ASSERT_EQ(report["lights"].size(), 3u) << report["lights"].dump();
+    EXPECT_EQ(report["lights"][0], nlohmann::json::parse(
+                                       R"({"name": "sun", "type": "directional", "mode": "mixed",
+                                           "shadowmask_channel": "R"})"));
+    EXPECT_EQ(report["lights"][1]["mode"], "mixed");
+    EXPECT_EQ(report["lights"][1]["shadowmask_channel"], "G");
+    EXPECT_EQ(report["lights"][2]["mode"], "realtime");
+    EXPECT_FALSE(report["lights"][2].contains("shadowmask_channel"));
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_EQ(a.lights.size(), 3u);
+    EXPECT_EQ(a.lights[0].channel, 0);
+    EXPECT_EQ(a.lights[1].channel, 1);
+    EXPECT_EQ(a.lights[1].light.name, "lamp");
+    EXPECT_EQ(a.lights[2].channel, -1);
+    // The sun points along -(0.3, 0.2, 1) in hemi's z-up world: (-0.3, -1, 0.2) normalised in glTF's y up.
+    const glm::vec3 towards = glm::normalize(glm::vec3(0.3f, 1.0f, -0.2f));
+    EXPECT_NEAR(glm::length(a.lights[0].light.direction + towards), 0.0f, 1e-5f);
+    EXPECT_FLOAT_EQ(a.lights[0].angular_diameter_degrees, 0.53f);
+    ASSERT_EQ(a.shadowmask.k, 4u);
+    const std::vector<float> mask = a.shadowmask.dense();
+    const std::vector<float> plain = a.output("plain").maps.dense();
+    for (size_t t = 0; t < 16 * 16; ++t)
+    {
+        for (size_t c = 0; c < 4; ++c)
+            ASSERT_EQ(mask[(c * 256 + t) * 3], 1.0f) << "texel " << t << " channel " << c;
+        ASSERT_NEAR(plain[t * 3], 0.5 * M_PI, 2e-3 * M_PI) << "texel " << t << ": the sky alone";
+    }
+    const hemi::io::ImageRgba exr = hemi::io::read_exr(exr_dir / "mixed_floor.shadowmask.exr");
+    EXPECT_EQ(exr.width, 16u);
+    EXPECT_EQ(exr.pixels[0], 1.0f);
+
+    const Result no_sun = lightmap(q(scene) + " -o " + q(dir() / "x.hemi") + " --sun-mode mixed");
+    EXPECT_EQ(no_sun.status, 1);
+    EXPECT_NE(no_sun.err.find("--sun-mode mixed needs a --sun"), std::string::npos) << no_sun.err;
+    const Result bad_mode =
+        lightmap(q(scene) + " -o " + q(dir() / "x.hemi") + sun + " --sun-mode stationary");
+    EXPECT_NE(bad_mode.err.find("--sun-mode must be baked, mixed or realtime, not 'stationary'"),
+              std::string::npos)
+        << bad_mode.err;
+    const Result as_output = lightmap(q(scene) + " -o " + q(dir() / "x.hemi") + " --bases plain,shadowmask");
+    EXPECT_NE(as_output.err.find("the shadowmask is not an output to ask for"), std::string::npos)
+        << as_output.err;
+}
+
+namespace
+{
+// hemi's z-up quads (tests/bake/quads.h) as a glTF scene, y up (gltf_to_world turns it back): (x, y, z) ->
+// (x, z, -y), with one default material.
+glm::vec3 to_gltf(const glm::vec3& v)
+{
+    return glm::vec3(v.x, v.z, -v.y);
+}
+void to_gltf_scene(hemi::io::GltfScene& s)
+{
+    for (glm::vec3& p : s.mesh.positions)
+        p = to_gltf(p);
+    for (glm::vec3& n : s.mesh.normals)
+        n = to_gltf(n);
+    for (glm::vec4& t : s.mesh.tangents)
+        t = glm::vec4(to_gltf(glm::vec3(t)), t.w);
+    s.materials.emplace_back();
+    s.primitives.push_back({0, uint32_t(s.mesh.indices.size()), 0});
+}
+
+// Two renders of one view (RGBA, alpha 1 where covered): every pixel both cover within `tolerance` per
+// channel (a failure names the first pixel off); the covered pixels and the worst difference.
+std::pair<int, double> compare_covered(const std::vector<float>& a, const std::vector<float>& b,
+                                       double tolerance)
+{
+    int covered = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < a.size() && i < b.size(); i += 4)
+    {
+        if (a[i + 3] != 1.0f || b[i + 3] != 1.0f)
+            continue;
+        ++covered;
+        for (int c = 0; c < 3; ++c)
+        {
+            worst = std::max(worst, double(std::abs(a[i + c] - b[i + c])));
+            EXPECT_NEAR(a[i + c], b[i + c], tolerance) << "pixel " << i / 4 << " channel " << c;
+            if (std::abs(a[i + c] - b[i + c]) > tolerance)
+                return {covered, worst};
+        }
+    }
+    return {covered, worst};
+}
+} // namespace
+
+// Done-when line 1 of issue 43 at run time: a floor and a wall on it (glTF, y up) under a sky,
+// one bounce and a 5-degree sun, baked with the sun mixed and with it baked. hemi-render lights the mixed
+// asset's sun from the asset's lights with its shadowmask channel (hemi's material: the sun's irradiance
+// times the channel, read bilinearly at TEXCOORD_1, times the cosine, added to the plain lightmap), and every
+// covered pixel of its lighting-only view equals the fully baked asset's, in the lit, shadowed and penumbra
+// parts: within 8-bit mask steps, five standard deviations of the bake's 64 samples of the disc (their cosine
+// against the centre's) and the shadowmask's own error in a penumbra (0.21 R sin(angle) of the sun, R its
+// angular radius). Without the mask (the sun unshadowed) the shadowed pixels are off by the sun's whole
+// light; without the sun's light at run time the lit ones are.
+TEST(BakeCli, AMixedSunLitAtRunTimeWithItsShadowmaskRendersLikeTheBakedSun)
+{
+    // The floor and wall of add_floor_and_wall, with gutters of four texels between the charts: a bilinear
+    // lookup of a covered texel never reads light dilated from another chart (with the wall's two sides a
+    // texel apart, the baked lightmap's dark side picks up the lit side's light at its edge, where the mixed
+    // sun's run-time light, facing away, gives none).
+    hemi::io::GltfScene s;
+    hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
+                         {0.02f, 0.62f, 0.62f, 0.02f});
+    hemi::test::add_quad(s.mesh, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
+                         {0.68f, 0.62f, 0.80f, 0.02f});
+    hemi::test::add_quad(s.mesh, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
+                         {0.86f, 0.62f, 0.98f, 0.02f});
+    to_gltf_scene(s);
+    const fs::path scene = dir() / "mixed_wall.gltf";
+    hemi::io::write_gltf(scene, s);
+    const glm::vec3 sun = glm::normalize(glm::vec3(0.8f, 0.3f, 0.6f));
+    const float e_sun = 3.0f, diameter = 5.0f;
+    char sun_option[128];
+    std::snprintf(sun_option, sizeof sun_option, " --sun %.6f,%.6f,%.6f,%g,%g,%g,%g", double(sun.x),
+                  double(sun.y), double(sun.z), double(e_sun), double(e_sun), double(e_sun),
+                  double(diameter));
+    std::vector<std::vector<float>> images;
+    for (const char* mode : {"mixed", "baked", "realtime"})
+    {
+        const fs::path asset = dir() / (std::string("mixed_wall_") + mode + ".hemi");
+        const fs::path image = dir() / (std::string("mixed_wall_") + mode + ".exr");
+        const Result b =
+            lightmap(q(scene) + " -o " + q(asset) + sun_option + " --sun-mode " + mode +
+                     " --env-scale 0.2 --bounces 1 --rays 64 --sun-rays 64 --size 64 --bases plain");
+        ASSERT_EQ(b.status, 0) << mode << ": " << b.err;
+        const Result r =
+            render(q(asset) + " --technique plain --white --size 128x128 --camera -2.2,-1.6,1.6,0,0,0.1 -o " +
+                   q(image));
+        ASSERT_EQ(r.status, 0) << mode << ": " << r.err;
+        images.push_back(hemi::io::read_exr(image).pixels);
+    }
+    const std::vector<float>&mixed = images[0], &baked = images[1], &no_sun = images[2];
+    ASSERT_EQ(mixed.size(), baked.size());
+    const double r = 0.5 * diameter * M_PI / 180.0, sin_angle = 0.8; // the floor: cos 0.6; the wall: 0.8
+    const double tolerance =
+        e_sun / M_PI * (0.6 / 255.0 + 5.0 * sin_angle * r / (2.0 * std::sqrt(64.0)) + 0.21 * r * sin_angle) +
+        2e-3;
+    const auto [covered, worst] = compare_covered(mixed, baked, tolerance);
+    int lit = 0, shadowed = 0;
+    for (size_t i = 0; i < mixed.size(); i += 4)
+        if (baked[i + 3] == 1.0f)
+        {
+            lit += baked[i] > no_sun[i] + 0.2f;
+            shadowed += std::abs(baked[i] - no_sun[i]) < 0.05f;
+        }
+    std::printf(
+        "%d covered pixels (%d lit by the sun, %d in its shadow): worst difference %.4f (bound %.4f)\n",
+        covered, lit, shadowed, worst, tolerance);
+    EXPECT_GT(covered, 4000);
+    EXPECT_GT(lit, 1000);
+    EXPECT_GT(shadowed, 300);
+}
+
+// Done-when line 2 of issue 43 at run time: four point lights over a floor, a roof between them and the
+// floor, all four mixed (glTF extras), bake into the four channels, and hemi-render lights them as four
+// dynamic lights with their channels: every covered pixel of the lighting-only view equals the fully baked
+// asset's within 0.02 (the run time evaluates each light per pixel, the bake per texel: bilinear
+// interpolation of I cos / d^2 against its exact value, at most |gradient| times half a texel, 0.01, at
+// shadow edges). A light in the wrong channel, or unshadowed, is off by its whole light under the roof's
+// shadow (0.2 to 0.6).
+TEST(BakeCli, FourMixedPointLightsRenderAsFourDynamicLightsLikeTheirBakedSelves)
+{
+    hemi::io::GltfScene s;
+    hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
+                         {0.02f, 0.62f, 0.62f, 0.02f});
+    // A roof 0.3 above the floor's middle, facing down, in its own chart.
+    hemi::test::add_quad(s.mesh, {-0.3f, -0.3f, 0.3f}, {-0.3f, 0.3f, 0.3f}, {0.3f, 0.3f, 0.3f},
+                         {0.3f, -0.3f, 0.3f}, {0.7f, 0.3f, 0.9f, 0.1f});
+    to_gltf_scene(s);
+    const fs::path source = dir() / "four_lamps_source.gltf";
+    hemi::io::write_gltf(source, s);
+    std::vector<std::vector<float>> images;
+    for (const char* mode : {"mixed", "baked"})
+    {
+        nlohmann::json j = nlohmann::json::parse(slurp(source));
+        j["extensionsUsed"].push_back("KHR_lights_punctual");
+        const double colours[4][3] = {{1, 0.2, 0.2}, {0.2, 1, 0.2}, {0.2, 0.2, 1}, {1, 1, 0.2}};
+        for (int l = 0; l < 4; ++l)
+        {
+            j["extensions"]["KHR_lights_punctual"]["lights"].push_back(
+                {{"type", "point"},
+                 {"intensity", 2.0},
+                 {"color", {colours[l][0], colours[l][1], colours[l][2]}},
+                 {"name", "lamp" + std::to_string(l)},
+                 {"extras", {{"hemi_bake_mode", mode}}}});
+            const glm::vec3 at = to_gltf(glm::vec3(l & 1 ? 0.6f : -0.6f, l & 2 ? 0.6f : -0.6f, 0.9f));
+            j["nodes"].push_back({{"translation", {at.x, at.y, at.z}},
+                                  {"extensions", {{"KHR_lights_punctual", {{"light", l}}}}}});
+            j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
+        }
+        const fs::path scene = dir() / (std::string("four_lamps_") + mode + ".gltf");
+        std::ofstream(scene) << j.dump();
+        const fs::path asset = dir() / (std::string("four_lamps_") + mode + ".hemi"),
+                       json = dir() / (std::string("four_lamps_") + mode + ".json"),
+                       image = dir() / (std::string("four_lamps_") + mode + ".exr");
+        const Result b = lightmap(q(scene) + " -o " + q(asset) + " --json " + q(json) +
+                                  " --env-scale 0.1 --rays 16 --size 64 --bases plain");
+        ASSERT_EQ(b.status, 0) << mode << ": " << b.err;
+        if (std::string(mode) == "mixed")
+        {
+            const nlohmann::json report = nlohmann::json::parse(slurp(json));
+            for (int l = 0; l < 4; ++l)
+                EXPECT_EQ(report["lights"][l]["shadowmask_channel"], std::string(1, "RGBA"[l])) << l;
+        }
+        const Result r =
+            render(q(asset) + " --technique plain --white --size 128x128 --camera 0.3,-2.4,2.2,0,0,0 -o " +
+                   q(image));
+        ASSERT_EQ(r.status, 0) << mode << ": " << r.err;
+        images.push_back(hemi::io::read_exr(image).pixels);
+    }
+    const auto [covered, worst] = compare_covered(images[0], images[1], 0.02);
+    std::printf("%d covered pixels: worst difference %.4f\n", covered, worst);
+    EXPECT_GT(covered, 4000);
 }
 
 // hemi-bake reference frames a scene exactly like hemi-render's view of its lightmap asset: with the auto

@@ -276,6 +276,65 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
     }
 }
 
+// Issue 43 item 6: a level baked with a mixed sun exports its shadowmask (an RGBA8 PNG of the atlas under
+// HEMI_lightmaps, the asset's bytes in every texel, the post's shadow in channel R) and its lights with their
+// bake modes and channels, in the glTF's frame; the file passes the Khronos validator.
+TEST(HemiBakeExport, AMixedSunsShadowmaskAndLightsTravelInTheExtension)
+{
+    const fs::path scene = hemi::test::write_post_scene(dir() / "post_mixed.glb"),
+                   asset = dir() / "post_mixed.hemi", glb = dir() / "post_mixed_lit.glb";
+    const Result b = bake("lightmap " + q(scene) + " -o " + q(asset) +
+                          " --env-scale 0.5 --sun 0.4,0.3,1,4,3.6,3 --sun-mode mixed --size 64 --rays 16");
+    ASSERT_EQ(b.status, 0) << b.err;
+    const Result e = bake("export " + q(asset) + " -o " + q(glb));
+    ASSERT_EQ(e.status, 0) << e.err;
+    const hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_EQ(a.shadowmask.k, 4u);
+    tinygltf::Model m;
+    tinygltf::TinyGLTF loader;
+    std::string err, warn;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, glb.string())) << err;
+    const tinygltf::Value& ext = m.extensions.at("HEMI_lightmaps");
+    ASSERT_TRUE(ext.Has("shadowmask"));
+    const int texture = ext.Get("shadowmask").Get("index").GetNumberAsInt();
+    EXPECT_EQ(ext.Get("shadowmask").Get("texCoord").GetNumberAsInt(), 1);
+    ASSERT_LT(size_t(texture), m.textures.size());
+    const tinygltf::Image& image = m.images[size_t(m.textures[size_t(texture)].source)];
+    ASSERT_EQ(image.width, int(a.width));
+    ASSERT_EQ(image.height, int(a.height));
+    ASSERT_EQ(image.component, 4);
+    size_t shadowed = 0, lit = 0;
+    for (uint32_t y = 0; y < a.height; ++y)
+        for (uint32_t x = 0; x < a.width; ++x)
+            for (uint32_t c = 0; c < 4; ++c)
+            {
+                const int stored = int(std::lround(a.shadowmask.at(c, x, y).x * 255.0f));
+                ASSERT_EQ(int(image.image[(size_t(y) * a.width + x) * 4 + c]), stored)
+                    << "texel " << x << ", " << y << " channel " << c;
+                if (c == 0 && a.output("plain").maps.at(0, x, y).x > 0.0f)
+                {
+                    shadowed += stored == 0;
+                    lit += stored == 255;
+                }
+            }
+    EXPECT_GT(shadowed, 20u) << "the post's shadow";
+    EXPECT_GT(lit, 1000u);
+    ASSERT_TRUE(ext.Has("lights"));
+    const tinygltf::Value& sun = ext.Get("lights").Get(0);
+    EXPECT_EQ(sun.Get("name").Get<std::string>(), "sun");
+    EXPECT_EQ(sun.Get("type").Get<std::string>(), "directional");
+    EXPECT_EQ(sun.Get("mode").Get<std::string>(), "mixed");
+    EXPECT_EQ(sun.Get("shadowmaskChannel").GetNumberAsInt(), 0);
+    EXPECT_NEAR(sun.Get("angularDiameter").GetNumberAsDouble(), 0.53, 1e-6);
+    for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(sun.Get("direction").Get(i).GetNumberAsDouble(), double(a.lights[0].light.direction[i]),
+                    1e-6);
+    if (const char* validator = std::getenv("HEMI_GLTF_VALIDATOR"))
+    {
+        EXPECT_EQ(validate(glb, validator), std::make_pair(0, 0)) << glb;
+    }
+}
+
 // Bad input: exit status 1, a message naming the file and the problem, no output left behind.
 TEST(HemiBakeExport, RefusesWhatIsNotALightmapLevelWithTheFileNamed)
 {

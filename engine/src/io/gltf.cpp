@@ -1008,6 +1008,17 @@ struct Reader
             !std::isfinite(out.position.x + out.position.y + out.position.z))
             fail("node " + std::to_string(node) + " places " + what + " with a degenerate transform");
         out.direction = glm::normalize(forward);
+        // The bake mode: the light's extras, else its node's.
+        for (const tinygltf::Value* extras : {&l.extras, &model.nodes[size_t(node)].extras})
+        {
+            if (!extras->IsObject() || !extras->Has("hemi_bake_mode"))
+                continue;
+            const tinygltf::Value& v = extras->Get("hemi_bake_mode");
+            if (!v.IsString() || !parse_light_mode(v.Get<std::string>(), out.mode))
+                fail(what + ": extras.hemi_bake_mode must be \"baked\", \"mixed\" or \"realtime\"" +
+                     (v.IsString() ? ", not \"" + v.Get<std::string>() + "\"" : ""));
+            break;
+        }
         scene.lights.push_back(out);
         lights_placed = true;
     }
@@ -1130,6 +1141,31 @@ std::string json_version(const std::filesystem::path& path)
 }
 
 } // namespace
+
+const char* light_mode_name(LightMode mode)
+{
+    switch (mode)
+    {
+    case LightMode::Baked:
+        return "baked";
+    case LightMode::Mixed:
+        return "mixed";
+    case LightMode::Realtime:
+        return "realtime";
+    }
+    return "baked";
+}
+
+bool parse_light_mode(std::string_view name, LightMode& mode)
+{
+    for (const LightMode m : {LightMode::Baked, LightMode::Mixed, LightMode::Realtime})
+        if (name == light_mode_name(m))
+        {
+            mode = m;
+            return true;
+        }
+    return false;
+}
 
 GltfScene read_gltf(const std::filesystem::path& path)
 {

@@ -22,8 +22,9 @@ namespace
 
 // Layout 3 stores each output's kept 8 x 8 blocks (io/block_maps.h) as halves with a power-of-two scale
 // (io/half_scale.h); layout 2 (read, not written) the same blocks without a scale; layout 1 (read) the dense
-// atlas.
-constexpr uint32_t kLightmapLayoutVersion = 3;
+// atlas. Layout 4 is layout 3 with mixed lights: written only for an asset with a shadowmask, so that a hemi
+// that knows nothing of mixed lights refuses it instead of drawing them without their direct light.
+constexpr uint32_t kLightmapLayoutVersion = 4;
 
 struct Info
 {
@@ -55,6 +56,16 @@ struct ProbeHeader
     float lo[3], hi[3];
 };
 static_assert(sizeof(ProbeHeader) == 40);
+
+// A light's record in lightmap.lights, before its name.
+struct LightRecord
+{
+    uint32_t type, mode;
+    int32_t channel;
+    float color[3], intensity, range, inner_cone, outer_cone, position[3], direction[3], angular_diameter;
+    uint32_t name_length;
+};
+static_assert(sizeof(LightRecord) == 72);
 
 bool finite3(const glm::vec3& v)
 {
@@ -102,6 +113,47 @@ std::string output_problem(const LightmapOutput& o, uint32_t width, uint32_t hei
     return {};
 }
 
+std::string lights_problem(const LightmapAsset& a)
+{
+    int channels = 0;
+    for (const LightmapLight& l : a.lights)
+    {
+        const PunctualLight& p = l.light;
+        const std::string what = "light '" + p.name + "'";
+        if (int(p.type) < 0 || int(p.type) > 2 || uint32_t(p.mode) > 2)
+            return what + " has an unknown type or bake mode";
+        if (!finite3(p.color) || !finite3(p.position) || !finite3(p.direction) ||
+            !std::isfinite(p.intensity) || !std::isfinite(p.range) || !std::isfinite(p.inner_cone) ||
+            !std::isfinite(p.outer_cone) || !std::isfinite(l.angular_diameter_degrees))
+            return what + " holds a value that is not finite";
+        if (p.color.r < 0.0f || p.color.g < 0.0f || p.color.b < 0.0f || p.intensity < 0.0f ||
+            p.range < 0.0f || !(l.angular_diameter_degrees >= 0.0f && l.angular_diameter_degrees < 90.0f))
+            return what + " has a negative colour, intensity or range, or a disc outside [0, 90) degrees";
+        if (std::abs(glm::length(p.direction) - 1.0f) > 1e-3f)
+            return what + "'s direction is not a unit vector";
+        if (p.type == PunctualLight::Type::Spot &&
+            !(p.inner_cone >= 0.0f && p.inner_cone < p.outer_cone && p.outer_cone <= float(M_PI / 2) + 1e-6f))
+            return what + "'s cone angles do not satisfy 0 <= inner < outer <= pi/2";
+        if (p.mode == LightMode::Mixed ? l.channel < 0 || l.channel > 3 : l.channel != -1)
+            return what + " (" + light_mode_name(p.mode) + ") has shadowmask channel " +
+                   std::to_string(l.channel);
+        channels += p.mode == LightMode::Mixed;
+    }
+    const BlockMaps& m = a.shadowmask;
+    if (channels == 0 && m.k == 0)
+        return {};
+    if (channels == 0 || m.k != 4)
+        return channels == 0 ? "a shadowmask without mixed lights"
+                             : "mixed lights without a shadowmask of 4 channels";
+    if (m.width() != a.width || m.height() != a.height || m.values.size() != m.grid.slots() * 4 * 3)
+        return "the shadowmask does not match the " + std::to_string(a.width) + "x" +
+               std::to_string(a.height) + " atlas";
+    for (float v : m.values)
+        if (!(v >= 0.0f && v <= 1.0f))
+            return "the shadowmask holds a value outside [0, 1]";
+    return {};
+}
+
 // Everything but the outputs (LightmapAssetWriter's part), then the outputs when `outputs` says so.
 std::string problem(const LightmapAsset& a, bool outputs = true)
 {
@@ -117,6 +169,8 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
     if (outputs && a.outputs.empty())
         return "no outputs";
     if (std::string p = probes_problem(a.probes); !p.empty())
+        return p;
+    if (std::string p = lights_problem(a); !p.empty())
         return p;
     if (outputs)
         for (const LightmapOutput& o : a.outputs)
@@ -215,7 +269,13 @@ LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a, const std::file
 {
     if (std::string p = problem(a, false); !p.empty())
         throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
-    const Info info{kLightmapLayoutVersion, a.width, a.height, a.rays, a.seed, a.bounces, a.covered_texels};
+    const Info info{a.shadowmask.k == 4 ? kLightmapLayoutVersion : 3u,
+                    a.width,
+                    a.height,
+                    a.rays,
+                    a.seed,
+                    a.bounces,
+                    a.covered_texels};
     sections_->writer.add("lightmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
     write_scene_sections(sections_->writer, a.mesh, a.materials, a.images, a.primitives);
 }
@@ -304,6 +364,50 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
         std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(),
                     p.valid.size());
         sections_->writer.add("lightmap.probes", bytes);
+    }
+    if (!asset_->lights.empty())
+    {
+        std::vector<std::byte> bytes(4);
+        const uint32_t count = uint32_t(asset_->lights.size());
+        std::memcpy(bytes.data(), &count, 4);
+        for (const LightmapLight& l : asset_->lights)
+        {
+            const PunctualLight& p = l.light;
+            const LightRecord r{uint32_t(p.type),
+                                uint32_t(p.mode),
+                                l.channel,
+                                {p.color.r, p.color.g, p.color.b},
+                                p.intensity,
+                                p.range,
+                                p.inner_cone,
+                                p.outer_cone,
+                                {p.position.x, p.position.y, p.position.z},
+                                {p.direction.x, p.direction.y, p.direction.z},
+                                l.angular_diameter_degrees,
+                                uint32_t(p.name.size())};
+            const size_t at = bytes.size();
+            bytes.resize(at + sizeof r + p.name.size());
+            std::memcpy(bytes.data() + at, &r, sizeof r);
+            std::memcpy(bytes.data() + at + sizeof r, p.name.data(), p.name.size());
+        }
+        sections_->writer.add("lightmap.lights", bytes);
+    }
+    if (asset_->shadowmask.k == 4)
+    {
+        // u32 N, the blocks, then per texel of each block its 4 channels as u8.
+        const BlockMaps& m = asset_->shadowmask;
+        const std::vector<uint32_t>& blocks = m.grid.blocks();
+        std::vector<std::byte> bytes(4 + blocks.size() * 4 + m.grid.slots() * 4);
+        const uint32_t n = uint32_t(blocks.size());
+        std::memcpy(bytes.data(), &n, 4);
+        if (n > 0)
+            std::memcpy(bytes.data() + 4, blocks.data(), blocks.size() * 4);
+        std::byte* texels = bytes.data() + 4 + blocks.size() * 4;
+        for (size_t slot = 0; slot < m.grid.slots(); ++slot)
+            for (uint32_t c = 0; c < 4; ++c)
+                texels[slot * 4 + c] = std::byte(
+                    uint8_t(std::lround(std::clamp(m.values[m.index(c, slot)], 0.0f, 1.0f) * 255.0f)));
+        sections_->writer.add("lightmap.shadowmask", bytes);
     }
     sections_->writer.write(path);
 }
@@ -446,6 +550,85 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
         p.valid.resize(size_t(n));
         std::memcpy(p.irradiance.data(), b.data() + sizeof header, size_t(n) * 27 * 4);
         std::memcpy(p.valid.data(), b.data() + sizeof header + size_t(n) * 27 * 4, size_t(n));
+    }
+    if (r.has("lightmap.lights"))
+    {
+        const std::span<const std::byte> b = r.section("lightmap.lights");
+        uint32_t count = 0;
+        if (b.size() < 4)
+            throw fail("lightmap.lights is too short");
+        std::memcpy(&count, b.data(), 4);
+        size_t at = 4;
+        for (uint32_t i = 0; i < count; ++i)
+        {
+            LightRecord rec;
+            if (b.size() - at < sizeof rec)
+                throw fail("lightmap.lights ends inside light " + std::to_string(i) + " of " +
+                           std::to_string(count));
+            std::memcpy(&rec, b.data() + at, sizeof rec);
+            at += sizeof rec;
+            if (rec.type > 2 || rec.mode > 2)
+                throw fail("lightmap.lights: light " + std::to_string(i) + " has type " +
+                           std::to_string(rec.type) + " and bake mode " + std::to_string(rec.mode));
+            if (b.size() - at < rec.name_length)
+                throw fail("lightmap.lights ends inside the name of light " + std::to_string(i));
+            LightmapLight l;
+            PunctualLight& p = l.light;
+            p.type = PunctualLight::Type(rec.type);
+            p.mode = LightMode(rec.mode);
+            p.name.assign(reinterpret_cast<const char*>(b.data() + at), rec.name_length);
+            at += rec.name_length;
+            p.color = glm::vec3(rec.color[0], rec.color[1], rec.color[2]);
+            p.intensity = rec.intensity;
+            p.range = rec.range;
+            p.inner_cone = rec.inner_cone;
+            p.outer_cone = rec.outer_cone;
+            p.position = glm::vec3(rec.position[0], rec.position[1], rec.position[2]);
+            p.direction = glm::vec3(rec.direction[0], rec.direction[1], rec.direction[2]);
+            l.angular_diameter_degrees = rec.angular_diameter;
+            l.channel = rec.channel;
+            a.lights.push_back(std::move(l));
+        }
+        if (at != b.size())
+            throw fail("lightmap.lights has " + std::to_string(b.size() - at) + " bytes after its " +
+                       std::to_string(count) + " lights");
+    }
+    if (r.has("lightmap.shadowmask"))
+    {
+        const std::span<const std::byte> b = r.section("lightmap.shadowmask");
+        uint32_t n = 0;
+        if (b.size() < 4)
+            throw fail("lightmap.shadowmask is too short");
+        std::memcpy(&n, b.data(), 4);
+        const uint64_t grid = uint64_t((a.width + 7) / 8) * ((a.height + 7) / 8);
+        if (n > grid)
+            throw fail("lightmap.shadowmask lists " + std::to_string(n) + " blocks, but a " +
+                       std::to_string(a.width) + "x" + std::to_string(a.height) + " atlas has " +
+                       std::to_string(grid));
+        const uint64_t expected = 4 + uint64_t(n) * 4 + uint64_t(n) * BlockGrid::kTexels * 4;
+        if (b.size() != expected)
+            throw fail("lightmap.shadowmask has " + std::to_string(b.size()) + " bytes, " +
+                       std::to_string(n) + " blocks need " + std::to_string(expected));
+        std::vector<uint32_t> blocks(n);
+        if (n > 0)
+            std::memcpy(blocks.data(), b.data() + 4, size_t(n) * 4);
+        try
+        {
+            a.shadowmask = BlockMaps(BlockGrid(a.width, a.height, std::move(blocks)), 4);
+        }
+        catch (const std::invalid_argument& e)
+        {
+            throw fail("lightmap.shadowmask: " + std::string(e.what()));
+        }
+        const std::byte* mask = b.data() + 4 + size_t(n) * 4;
+        BlockMaps& m = a.shadowmask;
+        for (size_t slot = 0; slot < m.grid.slots(); ++slot)
+            for (uint32_t c = 0; c < 4; ++c)
+            {
+                const float v = float(uint8_t(mask[slot * 4 + c])) / 255.0f;
+                float* rgb = &m.values[m.index(c, slot)];
+                rgb[0] = rgb[1] = rgb[2] = v;
+            }
     }
     if (std::string p = problem(a); !p.empty())
         throw fail(p);

@@ -95,24 +95,29 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
         path, scene, std::vector<ImageStorage>(scene.images.size(), ImageStorage::BufferView));
     tinygltf::Model& m = b.m;
 
-    const std::vector<uint8_t> png = encode_png(rgbm);
-    tinygltf::Image image;
-    image.name = "hemi lightmap (RGBM)";
-    image.bufferView = b.view(png.data(), png.size(), 0);
-    image.mimeType = "image/png";
-    m.images.push_back(image);
     tinygltf::Sampler sampler; // no mipmaps: a coarser level would mix neighbouring charts
     sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
     sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
     sampler.wrapS = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
     sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
     m.samplers.push_back(sampler);
-    tinygltf::Texture texture;
-    texture.name = image.name;
-    texture.source = int(m.images.size() - 1);
-    texture.sampler = int(m.samplers.size() - 1);
-    m.textures.push_back(texture);
-    const int lightmap = int(m.textures.size() - 1);
+    // An atlas-sized PNG in the buffer, as a texture with that sampler: its index.
+    const auto add_texture = [&](const ImageRgba8& pixels, const std::string& name)
+    {
+        const std::vector<uint8_t> png = encode_png(pixels);
+        tinygltf::Image image;
+        image.name = name;
+        image.bufferView = b.view(png.data(), png.size(), 0);
+        image.mimeType = "image/png";
+        m.images.push_back(image);
+        tinygltf::Texture texture;
+        texture.name = name;
+        texture.source = int(m.images.size() - 1);
+        texture.sampler = int(m.samplers.size() - 1);
+        m.textures.push_back(texture);
+        return int(m.textures.size() - 1);
+    };
+    const int lightmap = add_texture(rgbm, "hemi lightmap (RGBM)");
 
     using Value = tinygltf::Value;
     auto number = [](double v) { return Value(v); };
@@ -182,6 +187,57 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
             Value(b.view(p.irradiance.data(), p.irradiance.size() * sizeof(p.irradiance[0]), 0));
         probes["valid"] = Value(b.view(p.valid.data(), p.valid.size(), 0));
         ext["probes"] = Value(probes);
+    }
+    // Mixed lights: the shadowmask as an RGBA8 PNG of the atlas (data, not colour: channel c / 255 is the
+    // share of the direct light of the mixed light of channel c that reaches the texel), and every light with
+    // its bake mode.
+    if (asset.shadowmask.k == 4)
+    {
+        ImageRgba8 mask{w, h, std::vector<uint8_t>(size_t(w) * h * 4, 0)};
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+                for (uint32_t c = 0; c < 4; ++c)
+                    mask.pixels[(size_t(y) * w + x) * 4 + c] =
+                        uint8_t(std::lround(std::clamp(asset.shadowmask.at(c, x, y).x, 0.0f, 1.0f) * 255.0f));
+        const int mask_texture = add_texture(mask, "hemi shadowmask");
+        Value::Object shadowmask;
+        shadowmask["index"] = Value(mask_texture);
+        shadowmask["texCoord"] = Value(1);
+        ext["shadowmask"] = Value(shadowmask);
+    }
+    if (!asset.lights.empty())
+    {
+        static const char* const types[] = {"directional", "point", "spot"};
+        Value::Array lights;
+        for (const LightmapLight& l : asset.lights)
+        {
+            const PunctualLight& p = l.light;
+            Value::Object light;
+            light["name"] = Value(p.name);
+            light["type"] = Value(std::string(types[int(p.type)]));
+            light["mode"] = Value(std::string(light_mode_name(p.mode)));
+            if (l.channel >= 0)
+                light["shadowmaskChannel"] = Value(l.channel);
+            light["color"] = vec3(p.color);
+            light["intensity"] = number(p.intensity);
+            if (p.type != PunctualLight::Type::Directional)
+            {
+                light["position"] = vec3(p.position);
+                if (p.range > 0.0f)
+                    light["range"] = number(p.range);
+            }
+            if (p.type != PunctualLight::Type::Point)
+                light["direction"] = vec3(p.direction);
+            if (p.type == PunctualLight::Type::Spot)
+            {
+                light["innerConeAngle"] = number(p.inner_cone);
+                light["outerConeAngle"] = number(p.outer_cone);
+            }
+            if (l.angular_diameter_degrees > 0.0f)
+                light["angularDiameter"] = number(l.angular_diameter_degrees);
+            lights.push_back(Value(light));
+        }
+        ext["lights"] = Value(lights);
     }
     m.extensions["HEMI_lightmaps"] = Value(ext);
     m.extensionsUsed.push_back("HEMI_lightmaps");

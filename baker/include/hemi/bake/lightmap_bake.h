@@ -51,6 +51,10 @@ struct LightmapLights
     glm::vec3 sun_direction{0.0f, 0.0f, 1.0f}; // unit, towards the sun (world)
     glm::vec3 sun_irradiance{0.0f};            // on a surface facing the sun
     float sun_diameter_degrees = 0.53f;        // the disc the shadow rays sample; 0 is a point (hard shadows)
+    // How the sun is baked (io::LightMode; hemi-bake's --sun-mode): baked, mixed (its indirect light in the
+    // lightmap, its visibility in a shadowmask channel) or realtime (not baked). The environment is always
+    // baked; each punctual light has its own (io::PunctualLight::mode).
+    io::LightMode sun_mode = io::LightMode::Baked;
 
     // glTF punctual lights in the mesh's space (io::GltfScene::lights), one shadow ray each per texel (hard
     // shadows). A point or spot light of intensity I gives I / d^2 at distance d, times glTF's recommended
@@ -67,6 +71,22 @@ struct LightmapLights
     // Radiance of the environment towards the scene from direction `d` (unit, mesh space).
     glm::vec3 environment_radiance(const glm::vec3& d) const;
 };
+
+// A mixed light's shadowmask channel: which light (-1 the sun, else LightmapLights::punctual[light]) and the
+// channel (0-3) of the RGBA8 shadowmask its visibility goes to.
+struct ShadowmaskChannel
+{
+    int light = -1;
+    int channel = 0;
+};
+// The mixed lights' channels, in order (the sun first, then the punctual lights): each takes the lowest
+// channel that no mixed light whose reach overlaps its own holds, so lights far apart share one. A light's
+// reach is everywhere for the sun and a directional light, the sphere of its range for a point or spot light
+// (everywhere without a range). Throws std::invalid_argument naming a light whose reach overlaps four mixed
+// lights that already hold the four channels (make it baked or realtime, or give it a shorter range).
+std::vector<ShadowmaskChannel> shadowmask_channels(const LightmapLights& lights);
+// Whether punctual light `p` can light point `x` (mesh space): inside its range, or it has none.
+bool light_reaches(const io::PunctualLight& p, const glm::vec3& x);
 
 // What a ray that hits the scene sees there: per triangle, its material's albedo (base colour factor times
 // the sRGB-decoded base colour texture, linear RGB) and emission (emissive factor times the emissive
@@ -167,6 +187,13 @@ struct LightmapSh
     // unless the bake estimated it (LightmapBakeOptions::keep_noise), and in a LightmapSh made by hand.
     using Noise = std::array<float, 4>;
     std::vector<Noise> noise;
+    // With mixed lights (shadowmask_channels): per texel, the fraction of the direct light of each channel's
+    // light that reaches it (of its shadow rays, those not blocked; a channel no light of which reaches the
+    // texel is 1), and the mixed lights' direct irradiance at its normal as their shadow rays gave it. The
+    // sums above hold none of the mixed lights' direct light, and all of their bounces: the bounce rays pick
+    // up the first pass's irradiance with mixed_direct added. Empty without mixed lights.
+    std::vector<std::array<float, 4>> shadowmask;
+    std::vector<glm::vec3> mixed_direct;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
     // of single-sided surfaces, after the push below): its outputs come from its valid neighbours.
     std::vector<uint8_t> valid;
@@ -213,6 +240,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 // (lightmap_coefficients below is the projection for every name; lightmap_maps uses LightmapSh::direct for
 // plain and rnm where the bake filled it.)
 int lightmap_output_size(std::string_view name);
+// Also "shadowmask" (K = 4, from LightmapSh::shadowmask: channel c in all three colours of coefficient c) is
+// made by lightmap_maps like an output, for the same dilation and stitching; the asset stores it as RGBA8
+// (io::LightmapAsset::shadowmask).
 // The coefficients of one texel's SH9 irradiance in the output `name`: lightmap_output_size(name) RGB values.
 std::vector<glm::vec3> lightmap_coefficients(std::string_view name,
                                              const std::array<glm::vec3, 9>& irradiance);
@@ -359,6 +389,8 @@ struct LightmapBakeSummary
     std::vector<uint64_t> texels_by_rank;
     std::string checkpoint_error;
     std::vector<std::filesystem::path> exr_files;
+    // The lights as the asset stores them (io::LightmapAsset::lights): modes and shadowmask channels.
+    std::vector<io::LightmapLight> light_table;
 };
 
 // Where a bake in tiles keeps the sums of its passes: ASSET.tiles (removed once the asset is written).

@@ -30,12 +30,28 @@
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hemi::io
 {
+
+// How a light is baked (glTF: the light's or its node's extras.hemi_bake_mode, "baked", "mixed" or
+// "realtime"; the light's own wins): Baked, its direct and indirect light in the lightmap; Mixed, only its
+// indirect light in the lightmap and its direct visibility in a shadowmask channel, its direct light given at
+// run time (a sun that lights dynamic objects and casts their shadows); Realtime, not baked at all.
+enum class LightMode : uint8_t
+{
+    Baked,
+    Mixed,
+    Realtime,
+};
+// "baked", "mixed", "realtime"; and back (false for another name).
+const char* light_mode_name(LightMode mode);
+bool parse_light_mode(std::string_view name, LightMode& mode);
 
 // A KHR_lights_punctual light placed by a node, in scene space (the node's world transform applied).
 // Units as glTF's: point and spot intensity in candela (lm/sr), directional in lux (lm/m^2); hemi's lighting
@@ -57,6 +73,7 @@ struct PunctualLight
     float outer_cone = 0.785398163f;        // pi/4, glTF's default
     glm::vec3 position{0.0f};               // point, spot
     glm::vec3 direction{0.0f, 0.0f, -1.0f}; // unit, where the light points (the node's -Z): directional, spot
+    LightMode mode = LightMode::Baked;
 };
 
 struct GltfScene

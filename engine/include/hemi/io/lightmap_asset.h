@@ -5,7 +5,8 @@
 // like a PRT asset.
 //
 // Sections (all little-endian; W x H atlas, K = the output's size):
-//   lightmap.info  u32 layout version (3), u32 W, u32 H, u32 rays per texel, u64 seed, u32 bounces,
+//   lightmap.info  u32 layout version (3; 4 with a shadowmask), u32 W, u32 H, u32 rays per texel, u64 seed,
+//   u32 bounces,
 //                  u32 covered texels
 //   mesh.*, scene.*, image.<i>: the mesh (mesh.uvs1 required) and the scene's surfaces, exactly as a PRT
 //                  asset stores them (prt_asset.h)
@@ -24,8 +25,18 @@
 //   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
 //                  then NX * NY * NZ u8 valid flags.
+//   lightmap.lights (optional) u32 count, then per light: u32 type (0 directional, 1 point, 2 spot), u32 bake
+//                  mode (0 baked, 1 mixed, 2 realtime), i32 shadowmask channel (0-3, -1 none), f32 colour
+//                  RGB, f32 intensity, f32 range (0: infinite), f32 inner and outer cone (radians), f32
+//                  position xyz, f32 direction xyz (unit, where the light points), f32 angular diameter
+//                  (degrees: the disc of hemi-bake's --sun; 0 for glTF's lights), u32 name length, the
+//                  name (UTF-8). Every light the bake was given, in the mesh's space.
+//   lightmap.shadowmask (with mixed lights) u32 N, N u32 block indices (strictly ascending, as an output's),
+//                  then N x 64 x 4 u8: per texel of a block (8 rows of 8, rows from the top) the fraction of
+//                  the direct light of the mixed light of channel R, G, B and A that reaches it, times 255.
 
 #include <hemi/io/block_maps.h>
+#include <hemi/io/gltf.h>
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
@@ -81,6 +92,14 @@ inline uint64_t probe_grid_count(uint64_t nx, uint64_t ny, uint64_t nz)
     return nx * ny * nz;
 }
 
+// A light the bake was given, as an engine's runtime needs it to light the lightmap's mixed lights.
+struct LightmapLight
+{
+    PunctualLight light;                   // in the mesh's space; light.mode: how it was baked
+    float angular_diameter_degrees = 0.0f; // the sun's disc (the shadowmask's penumbra); 0: a point
+    int channel = -1;                      // the shadowmask channel (0-3) of a mixed light; -1 otherwise
+};
+
 struct LightmapAsset
 {
     Mesh mesh; // with uvs1
@@ -91,7 +110,11 @@ struct LightmapAsset
     uint32_t rays = 0, bounces = 0, covered_texels = 0;
     uint64_t seed = 0;
     std::vector<LightmapOutput> outputs;
-    LightProbes probes; // optional
+    LightProbes probes;                // optional
+    std::vector<LightmapLight> lights; // optional (assets baked before bake modes have none)
+    // With mixed lights: the shadowmask, 4 maps of the atlas (k = 4; map c holds channel c's fraction in [0,
+    // 1] in all three colours), stored as RGBA8; k = 0 without one.
+    BlockMaps shadowmask;
 
     // Throws std::invalid_argument listing the outputs the asset has.
     const LightmapOutput& output(const std::string& name) const;

@@ -18,7 +18,11 @@
 //                          "outputs": [{"name": "sh9", "coefficients": K, "format": "RGB16F",
 //                                       "scale": S, "bufferView": V}, ...],
 //                          "probes": {"count": [NX, NY, NZ], "min": [x, y, z], "max": [x, y, z],
-//                                     "irradiance": V1, "valid": V2}}
+//                                     "irradiance": V1, "valid": V2},
+//                          "shadowmask": {"index": T2, "texCoord": 1},
+//                          "lights": [{"name": "sun", "type": "directional", "mode": "mixed",
+//                                      "shadowmaskChannel": 0, "color": [r, g, b], "intensity": I,
+//                                      "direction": [x, y, z], "angularDiameter": D}, ...]}
 //   ("outputs" is absent when none is stored.) Buffer view V holds K maps one after the other, each H rows
 //   from the top (v = 0) of W texels of three IEEE binary16 values (R, G, B), little-endian: the .hemi
 //   asset's half floats, dense over the atlas (texels the scene does not cover are 0); a value is its half
@@ -28,6 +32,13 @@
 //   has them) as io::LightProbes: V1 holds NX * NY * NZ probes of 9 x 3 float32 (coefficient j, channel c at
 //   j * 3 + c), x fastest; V2 one byte per probe (1 valid, 0 inside geometry). The scene's frame is the
 //   glTF's own (hemi reads glTF's y-up space into its z-up world; the probe grid is in the glTF's frame).
+//   With mixed lights (hemi-bake lightmap's bake modes), "shadowmask" is texture T2, an RGBA8 PNG of the
+//   atlas (data, not sRGB colour; the lightmap's sampler): channel c / 255 is the share of the direct light
+//   of the mixed light of channel c that reaches the texel, the asset's bytes. "lights" lists every light the
+//   bake was given in the glTF's frame (io::LightmapLight): "mode" baked, mixed or realtime, a mixed light's
+//   "shadowmaskChannel" (0-3: R, G, B, A), glTF's colour, intensity, range and cone angles, "position" for
+//   point and spot lights, "direction" (where the light points) for directional and spot lights, and the
+//   sun's "angularDiameter" in degrees.
 #include <hemi/io/lightmap_asset.h>
 
 #include <glm/vec3.hpp>

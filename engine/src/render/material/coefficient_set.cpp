@@ -153,8 +153,9 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, uint32_t widt
 }
 
 TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::BlockMaps& maps,
-                                     gpu::UploadBatch& upload, bool full_precision)
-    : k_(maps.k)
+                                     gpu::UploadBatch& upload, bool full_precision,
+                                     const io::BlockMaps* shadowmask)
+    : has_shadowmask_(shadowmask != nullptr), k_(maps.k)
 {
     const gpu::Device& device = system.device();
     check_k(maps.k);
@@ -166,6 +167,16 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
                                     " values for " + std::to_string(grid.slots()) + " texels of " +
                                     std::to_string(k) + " coefficients");
     check_values(maps.values);
+    if (shadowmask)
+    {
+        if (shadowmask->k != 4 || shadowmask->width() != width || shadowmask->height() != height ||
+            shadowmask->values.size() != shadowmask->grid.slots() * 4 * 3)
+            throw std::invalid_argument("hemi: a shadowmask must be 4 maps of the lightmap's " +
+                                        std::to_string(width) + "x" + std::to_string(height) + " atlas");
+        for (float v : shadowmask->values)
+            if (!(v >= 0.0f && v <= 1.0f))
+                throw std::invalid_argument("hemi: a shadowmask value is outside [0, 1]");
+    }
 
     // The pages whose slot (the page and its border) holds a texel of a kept block, numbered row after row:
     // the page table's entries (slot + 1). A page without a kept block of its own but beside one is stored
@@ -177,14 +188,15 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
     // Pages whose range widened by a texel on each side meets texels [t0, t0 + E).
     auto pages_meeting = [&](uint32_t t0, uint32_t count)
     { return std::pair<uint32_t, uint32_t>(t0 == 0 ? 0 : (t0 - 1) / P, std::min((t0 + E) / P, count - 1)); };
-    for (uint32_t b : grid.blocks())
-    {
-        const auto [x0, x1] = pages_meeting((b % grid.blocks_x()) * E, pages_x);
-        const auto [y0, y1] = pages_meeting((b / grid.blocks_x()) * E, pages_y);
-        for (uint32_t py = y0; py <= y1; ++py)
-            for (uint32_t px = x0; px <= x1; ++px)
-                table[size_t(py) * table_width + px] = 1;
-    }
+    for (const io::BlockGrid* g : {&grid, shadowmask ? &shadowmask->grid : nullptr})
+        for (uint32_t b : g ? g->blocks() : std::vector<uint32_t>{})
+        {
+            const auto [x0, x1] = pages_meeting((b % g->blocks_x()) * E, pages_x);
+            const auto [y0, y1] = pages_meeting((b / g->blocks_x()) * E, pages_y);
+            for (uint32_t py = y0; py <= y1; ++py)
+                for (uint32_t px = x0; px <= x1; ++px)
+                    table[size_t(py) * table_width + px] = 1;
+        }
     std::vector<uint32_t> stored; // page index (y * table_width + x) of each slot
     for (uint32_t p = 0; p < table_width * pages_y; ++p)
         if (table[p])
@@ -218,10 +230,10 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
     const uint32_t pw = per_row * S, ph = rows * S, layers = packed_layers(k);
     const size_t plane = size_t(pw) * ph;
 
-    // Packed (hemi_lightmap_coefficients): float f = 3 k + c of a texel is channel f % 4 of layer f / 4.
-    auto fill = [&](auto convert, auto& rgba)
+    // Every texel of every stored slot (its border included), with the atlas texel it holds (the edge
+    // texels at the atlas's edge): visit(at, x, y), `at` the texel's index in one layer of the slots' image.
+    auto for_each_slot_texel = [&](auto visit)
     {
-        rgba.assign(plane * layers * 4, convert(0.0f));
         for (size_t s = 0; s < stored.size(); ++s)
         {
             const uint32_t px = uint32_t(stored[s] % table_width), py = uint32_t(stored[s] / table_width);
@@ -232,23 +244,31 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
                 for (uint32_t gx = 0; gx < S; ++gx)
                 {
                     const int64_t x = std::clamp<int64_t>(int64_t(px) * P + gx - 1, 0, width - 1);
-                    const int64_t slot = grid.slot(x, y);
-                    if (slot < 0)
-                        continue;
-                    const size_t first =
-                        (size_t(slot) / io::BlockGrid::kTexels * k) * io::BlockGrid::kTexels +
-                        size_t(slot) % io::BlockGrid::kTexels;
-                    const size_t at = (oy + gy) * pw + ox + gx;
-                    for (uint32_t c = 0; c < k; ++c)
-                        for (uint32_t ch = 0; ch < 3; ++ch)
-                        {
-                            const uint32_t f = 3 * c + ch;
-                            rgba[((f / 4) * plane + at) * 4 + f % 4] =
-                                convert(maps.values[(first + size_t(c) * io::BlockGrid::kTexels) * 3 + ch]);
-                        }
+                    visit((oy + gy) * pw + ox + gx, x, y);
                 }
             }
         }
+    };
+    // Packed (hemi_lightmap_coefficients): float f = 3 k + c of a texel is channel f % 4 of layer f / 4.
+    auto fill = [&](auto convert, auto& rgba)
+    {
+        rgba.assign(plane * layers * 4, convert(0.0f));
+        for_each_slot_texel(
+            [&](size_t at, int64_t x, int64_t y)
+            {
+                const int64_t slot = grid.slot(x, y);
+                if (slot < 0)
+                    return;
+                const size_t first = (size_t(slot) / io::BlockGrid::kTexels * k) * io::BlockGrid::kTexels +
+                                     size_t(slot) % io::BlockGrid::kTexels;
+                for (uint32_t c = 0; c < k; ++c)
+                    for (uint32_t ch = 0; ch < 3; ++ch)
+                    {
+                        const uint32_t f = 3 * c + ch;
+                        rgba[((f / 4) * plane + at) * 4 + f % 4] =
+                            convert(maps.values[(first + size_t(c) * io::BlockGrid::kTexels) * 3 + ch]);
+                    }
+            });
     };
     const VkFormat format = full_precision ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R16G16B16A16_SFLOAT;
     pages_ = gpu::create_image(device, {pw, ph, format, VK_IMAGE_USAGE_SAMPLED_BIT, 1, layers, true});
@@ -264,6 +284,32 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
         fill([&](float v) { return uint16_t(glm::packHalf1x16(std::ldexp(v, -exponent))); }, rgba);
         upload.image(pages_, rgba.data(), rgba.size() * sizeof(rgba[0]));
     }
+    // The shadowmask's channels in the same slots, as RGBA8 (the asset's 8 bits); one white texel without
+    // one.
+    if (shadowmask)
+    {
+        std::vector<uint8_t> rgba(plane * 4, 0);
+        for_each_slot_texel(
+            [&](size_t at, int64_t x, int64_t y)
+            {
+                const int64_t slot = shadowmask->grid.slot(x, y);
+                if (slot < 0)
+                    return;
+                for (uint32_t c = 0; c < 4; ++c)
+                    rgba[at * 4 + c] =
+                        uint8_t(std::lround(shadowmask->values[shadowmask->index(c, size_t(slot))] * 255.0f));
+            });
+        shadowmask_ = gpu::create_image(
+            device, {pw, ph, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 1, true});
+        upload.image(shadowmask_, rgba.data(), rgba.size());
+    }
+    else
+    {
+        const uint8_t white[4] = {255, 255, 255, 255};
+        shadowmask_ = gpu::create_image(
+            device, {1, 1, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT, 1, 1, true});
+        upload.image(shadowmask_, white, 4);
+    }
     page_table_ = gpu::create_image(device, {table_width, pages_y + 1, VK_FORMAT_R32_UINT});
     upload.image(page_table_, table.data(), table.size() * sizeof(uint32_t));
     // Bilinear, clamped: a lightmap's charts are padded, and every slot has its border.
@@ -273,13 +319,16 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
                                                   VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0f});
     set_ = system.descriptors().allocate(system.source_layout(CoefficientSourceKind::Texel),
                                          MaterialSystem::source_bindings(CoefficientSourceKind::Texel));
-    gpu::DescriptorWrite writes[2];
+    gpu::DescriptorWrite writes[3];
     writes[0].binding = HEMI_SOURCE_BINDING_COEFFICIENTS;
     writes[0].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     writes[0].image = {sampler_, pages_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     writes[1].binding = HEMI_SOURCE_BINDING_PAGE_TABLE;
     writes[1].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     writes[1].image = {table_sampler_, page_table_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    writes[2].binding = HEMI_SOURCE_BINDING_SHADOWMASK;
+    writes[2].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    writes[2].image = {sampler_, shadowmask_.view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     gpu::write_descriptors(device, set_, writes);
 }
 

@@ -142,6 +142,9 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
                             std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z);
         if (!finite || (!l.point && !(glm::length(l.position) > 0.0f)))
             return detail::refuse(device, call, "dynamic light %zu is not finite or has no direction", i);
+        if (l.shadowmask_channel < -1 || l.shadowmask_channel > 3)
+            return detail::refuse(device, call, "dynamic light %zu has shadowmask channel %d (0 to 3, or -1)",
+                                  i, l.shadowmask_channel);
     }
     u = {};
     u.view_projection = frame.view_projection;
@@ -153,7 +156,7 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
         const DynamicLight& l = frame.lights[i];
         u.light_position[i] =
             glm::vec4(l.point ? l.position : glm::normalize(l.position), l.point ? 1.0f : 0.0f);
-        u.light_irradiance[i] = glm::vec4(l.irradiance, 0.0f);
+        u.light_irradiance[i] = glm::vec4(l.irradiance, float(l.shadowmask_channel + 1));
     }
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)

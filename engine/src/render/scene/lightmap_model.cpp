@@ -48,6 +48,35 @@ bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_posit
     return true;
 }
 
+std::vector<DynamicLight> mixed_lights(const io::LightmapAsset& asset, const glm::mat4& model)
+{
+    const glm::mat3 linear(model);
+    const float scale = std::cbrt(std::abs(glm::determinant(linear)));
+    if (!(scale > 0.0f) || !std::isfinite(scale))
+        throw std::invalid_argument("hemi: mixed_lights: the model matrix is singular or not finite");
+    std::vector<DynamicLight> out;
+    for (const io::LightmapLight& l : asset.lights)
+    {
+        const io::PunctualLight& p = l.light;
+        if (p.mode != io::LightMode::Mixed)
+            continue;
+        if (p.type == io::PunctualLight::Type::Spot ||
+            (p.type == io::PunctualLight::Type::Point && p.range > 0.0f))
+            throw std::invalid_argument(
+                "hemi: mixed light '" + p.name +
+                "' is a spot light or has a range, which hemi's dynamic lights do not "
+                "model yet (a point light without a range, or a directional light)");
+        DynamicLight d;
+        d.point = p.type == io::PunctualLight::Type::Point;
+        d.position = d.point ? glm::vec3(model * glm::vec4(p.position, 1.0f))
+                             : glm::normalize(linear * -p.direction); // towards the light
+        d.irradiance = p.color * p.intensity * (d.point ? scale * scale : 1.0f);
+        d.shadowmask_channel = l.channel;
+        out.push_back(d);
+    }
+    return out;
+}
+
 LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& asset,
                              const std::vector<std::string>& default_techniques, gpu::UploadBatch& upload,
                              const std::map<std::string, std::string>& material_techniques,
@@ -98,7 +127,10 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
                 {baseline ? baseline_technique : Technique::Irradiance, lightmap_basis(source).id});
         variants.back().lightmap_filter = filter;
         names_.push_back(name);
-        coefficients_.push_back(std::make_unique<TexelCoefficients>(system, output.maps, upload));
+        // Each technique's source carries the mixed lights' shadowmask in its slots (a frame's mixed lights
+        // read it: DynamicLight::shadowmask_channel).
+        coefficients_.push_back(std::make_unique<TexelCoefficients>(
+            system, output.maps, upload, false, asset.shadowmask.k == 4 ? &asset.shadowmask : nullptr));
         system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->pages().handle(),
                                  "hemi lightmap '" + name + "'");
         system.device().set_name(VK_OBJECT_TYPE_IMAGE, coefficients_.back()->page_table().handle(),

@@ -166,6 +166,23 @@ void hemi_lightmap_coefficients(sampler2DArray pages, usampler2D page_table, vec
     hemi_unpack_coefficients(packed, k, c);
 }
 
+// The mixed lights' shadowmask at `uv` (render::TexelCoefficients::shadowmask(): its RGBA8 layer in the same
+// slots as the coefficients' pages, read through the same page table, bilinear): channel c is the share of
+// the direct light of the mixed light of channel c that reaches the point (hemi-bake lightmap's bake modes;
+// docs/lightmaps.md). An engine multiplies each mixed light's direct light by its channel
+// (hemi_shadowmask_channel, hemi/lib/lights.glsl). A page not stored reads 0; a lightmap without a mask binds
+// one white texel, which reads 1 wherever a page is stored.
+vec4 hemi_lightmap_shadowmask(sampler2DArray mask, usampler2D page_table, vec2 uv)
+{
+    vec2 atlas;
+    float scale;
+    hemi_page_table_header(page_table, atlas, scale);
+    vec4 packed[7];
+    HEMI_UNROLL for (int i = 0; i < 7; ++i) packed[i] = vec4(0.0);
+    hemi_paged_lightmap_add(mask, page_table, atlas, 1.0, clamp(uv, 0.0, 1.0) * atlas, 1, 1.0, packed);
+    return packed[0];
+}
+
 // The paged lookup with the cubic B-spline: each of its four linear lookups finds its own page, so its
 // footprint of 4 x 4 texels may span pages as the linear one's 2 x 2 may.
 void hemi_lightmap_coefficients_bicubic(sampler2DArray pages, usampler2D page_table, vec2 uv, int k,

@@ -33,6 +33,7 @@ using uint = uint32_t;
 #define HEMI_MATERIAL_BINDING_OCCLUSION 4
 #define HEMI_SOURCE_BINDING_COEFFICIENTS 0
 #define HEMI_SOURCE_BINDING_PAGE_TABLE 1 // texel source: the paged lightmap's page table
+#define HEMI_SOURCE_BINDING_SHADOWMASK 2 // texel source: the mixed lights' shadowmask, in the pages' slots
 
 // Coefficient sources (a shader variant each: they bind different descriptor types).
 #define HEMI_SOURCE_VERTEX 0  // uniform texel buffer, texel offset + v*K + k (transfer / CPCA pass output)
@@ -90,7 +91,7 @@ struct FrameUniforms
     vec4 light_position[HEMI_MAX_LIGHTS];   // w = 0: xyz towards a directional light; w = 1: a point light at
                                             // xyz
     vec4 light_irradiance[HEMI_MAX_LIGHTS]; // rgb: on a surface facing it (a point light: at distance 1, /
-                                            // d^2)
+                                            // d^2); w: 1 + the shadowmask channel of a mixed light (0: none)
 };
 
 struct MaterialUniforms

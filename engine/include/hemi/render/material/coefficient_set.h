@@ -81,8 +81,14 @@ class TexelCoefficients
     // and the page table maps pages to slots. Memory follows the covered texels, and an atlas may be larger
     // than the device's largest image (up to 2^18 texels a side, BlockGrid's limit) as long as its stored
     // pages fit one image of slots: std::invalid_argument says how many pages that is.
+    // With a `shadowmask` (io::LightmapAsset::shadowmask: 4 maps of the same atlas, channel c in map c), its
+    // four channels are stored as one RGBA8 layer in the same slots (the pages of both maps' blocks), read by
+    // hemi_lightmap_shadowmask(shadowmask(), page_table(), uv) and by hemi's materials for the frame's mixed
+    // lights (DynamicLight::shadowmask_channel); without one, shadowmask() is a single white texel, so the
+    // same lookup reads 1. Throws std::invalid_argument for a mask of another atlas or a value outside [0,
+    // 1].
     TexelCoefficients(const MaterialSystem& system, const io::BlockMaps& maps, gpu::UploadBatch& upload,
-                      bool full_precision = false);
+                      bool full_precision = false, const io::BlockMaps* shadowmask = nullptr);
     // `rgb` holds K maps of width x height RGB texels, map after map, rows from the top (v = 0), 3 floats a
     // texel: coefficient k of texel (x, y) is rgb[((k * height + y) * width + x) * 3 + c]. Stored packed, as
     // hemi_lightmap_coefficients reads them: the texel's 3K floats fill the RGBA channels of
@@ -104,6 +110,10 @@ class TexelCoefficients
     const gpu::Image& pages() const { return pages_; }
     VkSampler sampler() const { return sampler_; }
     const gpu::Image& page_table() const { return page_table_; }
+    // The shadowmask's RGBA8 layer in the same slots (a 2D_ARRAY view of one layer; sampled with sampler()),
+    // or one white texel.
+    const gpu::Image& shadowmask() const { return shadowmask_; }
+    bool has_shadowmask() const { return has_shadowmask_; }
     VkSampler table_sampler() const { return table_sampler_; }
     uint32_t stored_pages() const { return stored_pages_; }
     // The power of two the stored halves are times (io/half_scale.h; 1 unless the values leave [2^-6, 2^15],
@@ -112,7 +122,8 @@ class TexelCoefficients
     float scale() const { return scale_; }
 
   private:
-    gpu::Image pages_, page_table_;
+    gpu::Image pages_, page_table_, shadowmask_;
+    bool has_shadowmask_ = false;
     gpu::Sampler sampler_, table_sampler_;
     uint32_t stored_pages_ = 0;
     float scale_ = 1.0f;

@@ -15,8 +15,9 @@
 namespace hemi::render
 {
 
-// A dynamic light, added to the precomputed lighting by the techniques that take dynamic lights (rnm, rnm_ao
-// and ssbump: Green 2007 projects them onto Valve's three directions). World space, z up.
+// A dynamic light, added to the precomputed lighting by the techniques that take dynamic lights (irradiance,
+// rnm, rnm_ao, ssbump: Green 2007 projects them onto Valve's three directions; lambert, banks, factored).
+// World space, z up.
 struct DynamicLight
 {
     bool point = false; // false: directional
@@ -24,6 +25,10 @@ struct DynamicLight
                        1.0f}; // a point light's position, or the direction towards a directional one
     glm::vec3 irradiance{
         1.0f}; // on a surface facing it (a point light's at distance 1, falling off as 1 / d^2)
+    // A lightmap's mixed light (io::LightmapLight::channel, 0-3): on a lightmapped surface its light is
+    // times that channel of the lightmap's shadowmask (the level's static shadows; surfaces of other sources
+    // take it unshadowed). -1: a light the lightmap knows nothing of.
+    int shadowmask_channel = -1;
 };
 
 struct FrameData

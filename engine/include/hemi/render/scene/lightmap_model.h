@@ -17,6 +17,7 @@
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/math/basis.h>
 #include <hemi/render/material/coefficient_set.h>
+#include <hemi/render/material/frame_set.h>
 #include <hemi/render/material/material_system.h>
 #include <hemi/render/scene/scene_surfaces.h>
 
@@ -47,6 +48,13 @@ const math::BasisDesc& lightmap_basis(const std::string& output);
 // `out` zero) when the asset has no probes, the position is not finite or the model matrix is singular.
 bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position, const glm::mat4& model,
                     std::array<glm::vec3, 9>& out) noexcept;
+
+// The asset's mixed lights (io::LightmapLight with mode Mixed) as the frame's dynamic lights of a level
+// placed by `model` (a rotation, uniform scale and translation), each with its shadowmask channel: what
+// lights them at run time (the lightmap holds only their bounces). A point light's intensity is times the
+// model's scale squared, so it gives the light the bake gave at the same place. Throws std::invalid_argument
+// naming a mixed spot light or a light with a range (DynamicLight has no cone or range window yet).
+std::vector<DynamicLight> mixed_lights(const io::LightmapAsset& asset, const glm::mat4& model);
 
 // One entry of a level's draw list: a primitive with its material and the technique that lights it, the
 // pipeline it binds and its bounds, for an engine to cull, sort and draw (LightmapModel::draw(cmd, frame,

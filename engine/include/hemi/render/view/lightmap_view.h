@@ -32,7 +32,8 @@ struct LightmapFrame
     // most LightmapView::kMaxSpheres; the asset must have probes. The view's depth range is the level's
     // bounds: a sphere outside them is clipped.
     std::vector<glm::vec4> spheres;
-    // Dynamic lights (world space) for the techniques that take them (rnm, ssbump), with their specular term.
+    // Dynamic lights (world space) for the techniques that take them (irradiance, rnm, ssbump), with their
+    // specular term; the asset's mixed lights are render::mixed_lights(asset, model) (hemi-render adds them).
     std::vector<DynamicLight> lights;
     float specular_exponent = 32.0f, specular_strength = 0.0f;
 };
