@@ -89,7 +89,12 @@ void main()
     }
 
     vec3 c[HEMI_BASIS_MAX_SIZE];
-    vec4 mask = vec4(1.0); // the mixed lights' shadowmask (lightmaps)
+    // The mixed lights' static shadows: a lightmap's shadowmask, a probe's occlusion; read only when a frame
+    // light is a mixed one (a branch uniform across the draw).
+    vec4 mask = vec4(1.0);
+    bool mixed = false;
+    for (int i = 0; i < min(int(frame.options.y), HEMI_MAX_LIGHTS); ++i)
+        mixed = mixed || frame.light_irradiance[i].w > 0.0;
 #if HEMI_SOURCE == HEMI_SOURCE_VERTEX
     hemi_unpack_coefficients(in_packed, K, c);
 #elif HEMI_SOURCE == HEMI_SOURCE_TEXEL
@@ -98,10 +103,6 @@ void main()
         hemi_lightmap_coefficients_bicubic(coefficient_maps, page_table, lightmap_uv, K, c);
     else
         hemi_lightmap_coefficients(coefficient_maps, page_table, lightmap_uv, K, c);
-    // Read only when a frame light is a mixed one (a branch uniform across the draw).
-    bool mixed = false;
-    for (int i = 0; i < min(int(frame.options.y), HEMI_MAX_LIGHTS); ++i)
-        mixed = mixed || frame.light_irradiance[i].w > 0.0;
     if (mixed)
         mask = hemi_lightmap_shadowmask(shadowmask, page_table, lightmap_uv);
 #else
@@ -113,6 +114,12 @@ void main()
             c[k] = probes[in_ids.x + uint(k)].rgb;
 #endif
     }
+#if HEMI_SOURCE == HEMI_SOURCE_UNIFORM
+    // A probe's occlusion of the mixed lights' channels: the fourth components of its first four vec4s.
+    if (mixed)
+        mask = vec4(probes[in_ids.x].w, probes[in_ids.x + 1u].w, probes[in_ids.x + 2u].w,
+                    probes[in_ids.x + 3u].w);
+#endif
 #endif
 
     // glTF frame (hemi_tangent_frame): a double-sided surface seen from behind is lit as the other side (its
@@ -147,7 +154,14 @@ void main()
         const vec3 to = p.w == 0.0 ? p.xyz : p.xyz - in_world;
         const float d2 = max(dot(to, to), 1e-12);
         s.l[i] = to_frame * (to * inversesqrt(d2));
-        s.e[i] = frame.light_irradiance[i].rgb / (p.w == 0.0 ? 1.0 : d2) *
+        // glTF's falloffs of a point or spot light (a range window, a spot's cone), and a mixed light's
+        // shadow.
+        const vec4 spot = frame.light_spot[i];
+        float falloff = p.w == 0.0 ? 1.0 : hemi_range_window(sqrt(d2), spot.w) / d2;
+        if (p.w != 0.0 && dot(spot.xyz, spot.xyz) > 0.0)
+            falloff *= hemi_spot_cone(dot(spot.xyz, -to * inversesqrt(d2)), frame.light_cone[i].x,
+                                      frame.light_cone[i].y);
+        s.e[i] = frame.light_irradiance[i].rgb * falloff *
                  hemi_shadowmask_channel(mask, int(frame.light_irradiance[i].w) - 1);
     }
     s.v = to_frame * normalize(frame.eye.xyz - in_world);

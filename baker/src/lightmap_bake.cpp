@@ -1172,6 +1172,9 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
+    // The mixed lights' occlusion at each probe, in their shadowmask channels.
+    const std::vector<ShadowmaskChannel> channels = shadowmask_channels(lights);
+    probes.occlusion.assign(channels.empty() ? 0 : size_t(n), {1.0f, 1.0f, 1.0f, 1.0f});
     tbb::parallel_for(
         tbb::blocked_range<uint64_t>(0, n, 1),
         [&](const tbb::blocked_range<uint64_t>& range)
@@ -1231,6 +1234,32 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                     const glm::vec3 d = light.sun_ray(item, r);
                     if (!scene.occluded(p, d))
                         add(d, glm::dvec3(lights.sun_irradiance) / double(o.sun_rays));
+                }
+                for (const ShadowmaskChannel& c : channels)
+                {
+                    // The sun: its rays over the disc not blocked (the whole sphere around a probe); a
+                    // punctual light: its one ray, where it reaches.
+                    float& share = probes.occlusion[at][size_t(c.channel)];
+                    if (c.light < 0)
+                    {
+                        int visible = 0;
+                        for (int r = 0; r < o.sun_rays; ++r)
+                            visible += !scene.occluded(p, light.sun_ray(item, r));
+                        share *= float(visible) / float(o.sun_rays);
+                        continue;
+                    }
+                    const io::PunctualLight& l = lights.punctual[size_t(c.light)];
+                    if (!light_reaches(l, p))
+                        continue;
+                    glm::vec3 d(0.0f, 0.0f, 1.0f);
+                    float distance = INFINITY;
+                    light.punctual(l, p, d, distance);
+                    share *=
+                        distance > 0.0f && !scene.occluded(p, d, 0.0f,
+                                                           std::isfinite(distance) ? distance * (1.0f - 1e-4f)
+                                                                                   : INFINITY)
+                            ? 1.0f
+                            : 0.0f;
                 }
                 for (const io::PunctualLight& l : lights.punctual)
                 {

@@ -12,10 +12,10 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <array>
 #include <string>
 #include <vector>
 
@@ -104,7 +104,8 @@ TEST(MixedLights, TheMixedSunsLightmapHoldsItsBouncesAndTheShadowmaskGivesBackIt
         ASSERT_TRUE(baked0.shadowmask.empty());
         EXPECT_EQ(0, std::memcmp(mixed0.direct.data(), none0.direct.data(), none0.direct.size() * 48))
             << "without bounces, a mixed sun adds nothing to the lightmap";
-        EXPECT_EQ(0, std::memcmp(mixed0.irradiance.data(), none0.irradiance.data(), none0.irradiance.size() * 108));
+        EXPECT_EQ(
+            0, std::memcmp(mixed0.irradiance.data(), none0.irradiance.data(), none0.irradiance.size() * 108));
         int lit = 0, shadowed = 0, penumbra = 0, bounced = 0;
         for (size_t i = 0; i < s.atlas.texels.size(); ++i)
         {
@@ -123,18 +124,17 @@ TEST(MixedLights, TheMixedSunsLightmapHoldsItsBouncesAndTheShadowmaskGivesBackIt
             const glm::vec3 full = baked1.direct[i][0];
             // A sun of 5 degrees (radius R): the bake's 64 random samples of the disc each have their own
             // cosine, the run time the centre's. Their mean is off by sin(angle) R / (2 sqrt 64) of the sun's
-            // irradiance in one standard deviation (0.2% of it here); five of them. In a penumbra the visible part
-            // of the disc has its centroid off the centre (a shadowmask's own error: a share, not a direction):
-            // mask times that offset is at most 4 R / (3 pi) / 2 = 0.21 R, times sin(angle) of the sun's
-            // irradiance (0.2% of it for a real sun of 0.53 degrees).
+            // irradiance in one standard deviation (0.2% of it here); five of them. In a penumbra the visible
+            // part of the disc has its centroid off the centre (a shadowmask's own error: a share, not a
+            // direction): mask times that offset is at most 4 R / (3 pi) / 2 = 0.21 R, times sin(angle) of
+            // the sun's irradiance (0.2% of it for a real sun of 0.53 degrees).
             const float cos_angle = std::max(glm::dot(t.normal, s.lights.sun_direction), 0.0f);
             const float sin_angle = std::sqrt(1.0f - cos_angle * cos_angle);
             const float r = 0.5f * diameter * float(M_PI) / 180.0f;
-            const float tolerance =
-                2e-5f * std::max(1.0f, largest(full)) +
-                (5.0f * sin_angle * r / (2.0f * std::sqrt(float(o.sun_rays))) +
-                 (mask > 0.0f && mask < 1.0f ? 0.22f * r * sin_angle : 0.0f)) *
-                    largest(s.lights.sun_irradiance);
+            const float tolerance = 2e-5f * std::max(1.0f, largest(full)) +
+                                    (5.0f * sin_angle * r / (2.0f * std::sqrt(float(o.sun_rays))) +
+                                     (mask > 0.0f && mask < 1.0f ? 0.22f * r * sin_angle : 0.0f)) *
+                                        largest(s.lights.sun_irradiance);
             for (int c = 0; c < 3; ++c)
                 ASSERT_NEAR(sum[c], full[c], tolerance)
                     << "diameter " << diameter << " texel " << i << " at " << t.position.x << ","
@@ -212,8 +212,9 @@ TEST(MixedLights, TheShadowmasksPenumbraFollowsTheSunsAngularSize)
         }
         // The analytic 10%-90% width: s(t) = 0.9 at t = -0.687, so 2 tan(0.687 R).
         const double width = 2.0 * std::tan(0.6870 * radius);
-        std::printf("sun of %.1f deg: penumbra 10%%-90%% %.3f mm (analytic %.3f mm), worst column off by %.4f\n",
-                    diameter, (x90 - x10) * 1e3, width * 1e3, worst);
+        std::printf(
+            "sun of %.1f deg: penumbra 10%%-90%% %.3f mm (analytic %.3f mm), worst column off by %.4f\n",
+            diameter, (x90 - x10) * 1e3, width * 1e3, worst);
         EXPECT_NEAR(x90 - x10, width, 3.0 * 2.0 * half / 256.0);
     }
 }
@@ -320,10 +321,12 @@ TEST(MixedLights, FourOverlappingLightsTakeFourChannelsAndAFifthIsRefusedByName)
 
 // The light probes follow the modes: a mixed sun's direct light is the run time's, its bounce is the probes'.
 // Baked with one bounce and a sun of one direction, the probes of the baked sun minus those of the mixed sun
-// are, at every probe, either 0 (the sun hidden) or the SH9 of the sun's direct light alone, the same at every
-// probe that sees it, whose constant coefficient is pi Y00 E (E / 4 at every normal). Fails if the probes add the mixed sun's
-// direct light, or if they leave its direct light out of what their rays pick up from the surfaces (the
-// difference would then hold the sun's bounce, which changes from probe to probe).
+// are, at every probe, either 0 (the sun hidden) or the SH9 of the sun's direct light alone, the same at
+// every probe that sees it, whose constant coefficient is pi Y00 E (E / 4 at every normal). Fails if the
+// probes add the mixed sun's direct light, or if they leave its direct light out of what their rays pick up
+// from the surfaces (the difference would then hold the sun's bounce, which changes from probe to probe).
+// Each probe's occlusion of the mixed sun (its channel R) is 1 where the difference is the sun's light and 0
+// where it is none; the baked sun leaves the probes without occlusion.
 TEST(MixedLights, LightProbesTakeAMixedSunsBounceButNotItsDirectLight)
 {
     FloorAndWall s;
@@ -355,6 +358,9 @@ TEST(MixedLights, LightProbesTakeAMixedSunsBounceButNotItsDirectLight)
             d[c] = pb.irradiance[j][c] - pm.irradiance[j][c];
             size = std::max(size, largest(d[c]));
         }
+        ASSERT_EQ(pm.occlusion.size(), pm.irradiance.size());
+        EXPECT_EQ(pm.occlusion[j][0], size < 1e-4f ? 0.0f : 1.0f) << "probe " << j;
+        EXPECT_EQ(pm.occlusion[j][1], 1.0f) << "no light in channel G";
         if (size < 1e-4f)
         {
             ++hidden;
@@ -371,6 +377,7 @@ TEST(MixedLights, LightProbesTakeAMixedSunsBounceButNotItsDirectLight)
                 ASSERT_NEAR(d[c][ch], direct[c][ch], 1e-4f) << "probe " << j << " coefficient " << c;
     }
     std::printf("%d probes see the sun, %d do not\n", seen, hidden);
+    EXPECT_TRUE(pb.occlusion.empty());
     EXPECT_GT(seen, 4);
     EXPECT_GT(hidden, 0);
     EXPECT_THROW(

@@ -725,6 +725,12 @@ TEST(LightmapAsset, LightsAndTheShadowmaskRoundTrip)
             for (size_t rgb = 0; rgb < 3; ++rgb)
                 dense[(c * 15 + t) * 3 + rgb] = float((t * 7 + c * 3) % 16) / 15.0f;
     a.shadowmask = hemi::io::BlockMaps::from_dense(5, 3, 4, dense);
+    // The probes' occlusion of the mixed lights, to 1/255, interpolated like the irradiance.
+    a.probes = probe_grid();
+    a.probes.occlusion.resize(a.probes.irradiance.size());
+    for (size_t i = 0; i < a.probes.occlusion.size(); ++i)
+        for (size_t c = 0; c < 4; ++c)
+            a.probes.occlusion[i][c] = float((i * 5 + c * 11) % 256) / 255.0f;
     const fs::path p = dir() / "mixed.hemi";
     hemi::io::write_lightmap_asset(p, a);
     const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(p);
@@ -751,6 +757,19 @@ TEST(LightmapAsset, LightsAndTheShadowmaskRoundTrip)
         EXPECT_EQ(y.light.inner_cone, x.light.inner_cone);
         EXPECT_EQ(y.light.outer_cone, x.light.outer_cone);
         EXPECT_EQ(y.angular_diameter_degrees, x.angular_diameter_degrees);
+    }
+    ASSERT_EQ(b.probes.occlusion.size(), a.probes.occlusion.size());
+    for (size_t i = 0; i < a.probes.occlusion.size(); ++i)
+        for (size_t c = 0; c < 4; ++c)
+            ASSERT_NEAR(b.probes.occlusion[i][c], a.probes.occlusion[i][c], 1e-6f) << i;
+    {
+        // Halfway between probes (0, 0, 0) and (1, 0, 0): the mean of theirs, as at() blends the irradiance.
+        const hemi::io::LightProbes& q = b.probes;
+        const glm::vec3 mid = (q.position(0, 0, 0) + q.position(1, 0, 0)) * 0.5f;
+        const std::array<float, 4> o = q.occlusion_at(mid);
+        for (size_t c = 0; c < 4; ++c)
+            EXPECT_NEAR(o[c], 0.5f * (q.occlusion[0][c] + q.occlusion[1][c]), 1e-5f) << c;
+        EXPECT_NEAR(q.at(mid)[0].x, 0.5f * (q.irradiance[0][0].x + q.irradiance[1][0].x), 1e-5f);
     }
     ASSERT_EQ(b.shadowmask.k, 4u);
     const std::vector<float> back = b.shadowmask.dense();

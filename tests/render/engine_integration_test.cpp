@@ -809,7 +809,8 @@ TEST_F(EngineData, MaterialFromTheEnginesOwnImageViewsEqualsTheTextureSetOne)
 
 // ProbeBuffer::write puts a probe's coefficients where offset(frame, probe) says (the vec4 index the surface
 // shader reads, checked by the probe case above through record_update), zero-fills the rest of the probe
-// and touches no other probe or frame slot.
+// and touches no other probe or frame slot; the fourth components of the first four hold the occlusion of the
+// mixed lights (1 unless given; outside [0, 1] refused).
 TEST_F(EngineShader, ProbeBufferWritesEachProbeOfEachFrameAtItsOffset)
 {
     const gpu::Device& dev = hemi::test::device();
@@ -825,18 +826,25 @@ TEST_F(EngineShader, ProbeBufferWritesEachProbeOfEachFrameAtItsOffset)
         {
             const std::vector<glm::vec3> c = {glm::vec3(float(f), float(p), 1.0f),
                                               glm::vec3(float(f * 10 + p))};
-            probes.write(f, p, c);
+            // The mixed lights' occlusion in the fourth components of the first four (1 by default).
+            if (p == 1)
+                probes.write(f, p, c, {0.5f, 0.25f, 0.125f, 0.0f});
+            else
+                probes.write(f, p, c);
         }
     for (uint32_t f = 0; f < 2; ++f)
         for (uint32_t p = 0; p < 3; ++p)
         {
             const uint32_t at = probes.offset(f, p);
+            const std::array<float, 4> o =
+                p == 1 ? std::array<float, 4>{0.5f, 0.25f, 0.125f, 0.0f} : std::array<float, 4>{1, 1, 1, 1};
             EXPECT_EQ(at, (f * 3 + p) * uint32_t(HEMI_BASIS_MAX_SIZE));
-            EXPECT_EQ(mapped[at], glm::vec4(float(f), float(p), 1.0f, 0.0f));
-            EXPECT_EQ(mapped[at + 1], glm::vec4(glm::vec3(float(f * 10 + p)), 0.0f));
+            EXPECT_EQ(mapped[at], glm::vec4(float(f), float(p), 1.0f, o[0]));
+            EXPECT_EQ(mapped[at + 1], glm::vec4(glm::vec3(float(f * 10 + p)), o[1]));
             for (uint32_t k = 2; k < HEMI_BASIS_MAX_SIZE; ++k)
-                EXPECT_EQ(mapped[at + k], glm::vec4(0.0f));
+                EXPECT_EQ(mapped[at + k], glm::vec4(0.0f, 0.0f, 0.0f, k < 4 ? o[k] : 0.0f));
         }
     EXPECT_THROW(probes.offset(2, 0), std::invalid_argument);
     EXPECT_THROW(probes.write(0, 3, {}), std::invalid_argument);
+    EXPECT_THROW(probes.write(0, 0, {}, {1.0f, 1.5f, 1.0f, 1.0f}), std::invalid_argument);
 }

@@ -638,3 +638,60 @@ TEST_F(PrtMaterial, LambertBaselineIsTheTexturesLitByTheFramesLightsAlone)
     const glm::vec3 want = albedo * e / float(M_PI);
     EXPECT_GT(covered_pixels_equal(target, want, 2e-3f), 1000u);
 }
+
+// A probe-lit object under a lightmap's mixed lights (issue 43): each frame light with a shadowmask channel
+// is times that channel of the probe's occlusion (ProbeBuffer's fourth components), a light without one is
+// not. Three lights in channels R and B and none, the probe's occlusion (1, 0.25, 0.5, 0): every covered
+// pixel is albedo * sum_i E_i o_i max(0, N . l_i) / pi. Fails if the occlusion is ignored or read from the
+// wrong component.
+TEST_F(PrtMaterial, ProbeLitObjectsTakeTheMixedLightsTimesTheirOcclusion)
+{
+    auto& dev = hemi::test::device();
+    const uint32_t w = 64, h = 64;
+    const uint8_t bump[3] = {176, 96, 230};
+    const glm::vec3 nt = glm::normalize(glm::vec3(bump[0], bump[1], bump[2]) / 255.0f * 2.0f - 1.0f);
+    const glm::vec3 world_normal =
+        nt.x * glm::vec3(1, 0, 0) + nt.y * glm::vec3(0, 0, 1) + nt.z * glm::vec3(0, -1, 0);
+    const glm::vec3 albedo(0.9f, 0.7f, 0.5f);
+    hemi::render::OffscreenTarget target(dev, w, h);
+    hemi::render::MaterialSystem system(dev, target.desc());
+    hemi::test::SurfaceObject object(system, hemi::test::quad(),
+                                     hemi::io::ImageRgba8{1, 1, {bump[0], bump[1], bump[2], 255}},
+                                     hemi::test::normal_mapped(albedo), hemi::math::basis("sh9"), nullptr);
+    hemi::render::MaterialKey key = object.type->key;
+    key.technique = hemi::render::Technique::Lambert;
+    key.frame = hemi::render::ShadingFrame::Tangent;
+    object.type = &system.type(key);
+    hemi::render::FrameSet frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
+    auto light = [](glm::vec3 towards, glm::vec3 e, int channel)
+    {
+        hemi::render::DynamicLight l;
+        l.position = glm::normalize(towards);
+        l.irradiance = e;
+        l.shadowmask_channel = channel;
+        return l;
+    };
+    f.lights = {light({0.3f, -1.0f, 0.2f}, {1.0f, 2.0f, 3.0f}, 0),
+                light({-0.5f, -0.4f, 0.7f}, {2.0f, 1.0f, 0.5f}, 2),
+                light({0.1f, -1.0f, -0.3f}, {0.5f, 0.5f, 0.5f}, -1)};
+    const hemi::render::ProbeBuffer::Occlusion occlusion = {1.0f, 0.25f, 0.5f, 0.0f};
+    const std::vector<glm::vec3> probe(9, glm::vec3(100.0f));
+    hemi::gpu::one_shot(dev,
+                        [&](VkCommandBuffer cmd)
+                        {
+                            object.upload.record(cmd);
+                            object.probe->record_update(cmd, 0, 0, probe, occlusion);
+                            frame.record_update(cmd, f);
+                            target.begin(cmd);
+                            object.draw(cmd, frame.set());
+                            target.end(cmd);
+                        });
+    glm::vec3 e(0.0f);
+    for (const hemi::render::DynamicLight& l : f.lights)
+        e += l.irradiance * std::max(0.0f, glm::dot(world_normal, l.position)) *
+             (l.shadowmask_channel < 0 ? 1.0f : occlusion[size_t(l.shadowmask_channel)]);
+    const glm::vec3 want = albedo * e / float(M_PI);
+    EXPECT_GT(covered_pixels_equal(target, want, 2e-3f), 1000u);
+}

@@ -1053,14 +1053,14 @@ TEST(BakeCli, AMixedSunLitAtRunTimeWithItsShadowmaskRendersLikeTheBakedSun)
     EXPECT_GT(shadowed, 300);
 }
 
-// Done-when line 2 of issue 43 at run time: four point lights over a floor, a roof between them and the
-// floor, all four mixed (glTF extras), bake into the four channels, and hemi-render lights them as four
-// dynamic lights with their channels: every covered pixel of the lighting-only view equals the fully baked
-// asset's within 0.02 (the run time evaluates each light per pixel, the bake per texel: bilinear
-// interpolation of I cos / d^2 against its exact value, at most |gradient| times half a texel, 0.01, at
-// shadow edges). A light in the wrong channel, or unshadowed, is off by its whole light under the roof's
-// shadow (0.2 to 0.6).
-TEST(BakeCli, FourMixedPointLightsRenderAsFourDynamicLightsLikeTheirBakedSelves)
+// Done-when line 2 of issue 43 at run time: four glTF lights over a floor (two point lights, a spot light
+// pointing down, a point light with a range), a roof between them and the floor, all four mixed (glTF
+// extras), bake into the four channels, and hemi-render lights them as four dynamic lights with their
+// channels and glTF's falloffs: every covered pixel of the lighting-only view equals the fully baked asset's
+// within 0.02 (the run time evaluates each light per pixel, the bake per texel: bilinear interpolation of
+// the light against its exact value, at most |gradient| times half a texel, 0.01, at shadow edges). A light
+// in the wrong channel, unshadowed, or without its cone or range window, is off by more.
+TEST(BakeCli, FourMixedLightsRenderAsFourDynamicLightsLikeTheirBakedSelves)
 {
     hemi::io::GltfScene s;
     hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
@@ -1079,15 +1079,23 @@ TEST(BakeCli, FourMixedPointLightsRenderAsFourDynamicLightsLikeTheirBakedSelves)
         const double colours[4][3] = {{1, 0.2, 0.2}, {0.2, 1, 0.2}, {0.2, 0.2, 1}, {1, 1, 0.2}};
         for (int l = 0; l < 4; ++l)
         {
-            j["extensions"]["KHR_lights_punctual"]["lights"].push_back(
-                {{"type", "point"},
-                 {"intensity", 2.0},
-                 {"color", {colours[l][0], colours[l][1], colours[l][2]}},
-                 {"name", "lamp" + std::to_string(l)},
-                 {"extras", {{"hemi_bake_mode", mode}}}});
+            nlohmann::json light = {{"type", l == 2 ? "spot" : "point"},
+                                    {"intensity", 2.0},
+                                    {"color", {colours[l][0], colours[l][1], colours[l][2]}},
+                                    {"name", "lamp" + std::to_string(l)},
+                                    {"extras", {{"hemi_bake_mode", mode}}}};
+            if (l == 2)
+                light["spot"] = {{"innerConeAngle", 0.3}, {"outerConeAngle", 0.9}};
+            if (l == 3)
+                light["range"] = 2.5;
+            j["extensions"]["KHR_lights_punctual"]["lights"].push_back(light);
             const glm::vec3 at = to_gltf(glm::vec3(l & 1 ? 0.6f : -0.6f, l & 2 ? 0.6f : -0.6f, 0.9f));
-            j["nodes"].push_back({{"translation", {at.x, at.y, at.z}},
-                                  {"extensions", {{"KHR_lights_punctual", {{"light", l}}}}}});
+            nlohmann::json node = {{"translation", {at.x, at.y, at.z}},
+                                   {"extensions", {{"KHR_lights_punctual", {{"light", l}}}}}};
+            if (l ==
+                2) // -90 degrees about x: the node's -Z (where a spot points) along glTF's -y, world down
+                node["rotation"] = {-0.70710678, 0.0, 0.0, 0.70710678};
+            j["nodes"].push_back(node);
             j["scenes"][0]["nodes"].push_back(int(j["nodes"].size()) - 1);
         }
         const fs::path scene = dir() / (std::string("four_lamps_") + mode + ".gltf");

@@ -89,6 +89,13 @@ std::string probes_problem(const LightProbes& p)
         for (const glm::vec3& c : probe)
             if (!finite3(c))
                 return "a probe holds a value that is not finite";
+    if (!p.occlusion.empty() && p.occlusion.size() != n)
+        return "the probe grid holds " + std::to_string(p.occlusion.size()) + " occlusions for " +
+               std::to_string(n) + " probes";
+    for (const auto& o : p.occlusion)
+        for (float v : o)
+            if (!(v >= 0.0f && v <= 1.0f))
+                return "a probe's occlusion is outside [0, 1]";
     return {};
 }
 
@@ -188,11 +195,11 @@ glm::vec3 LightProbes::position(uint32_t i, uint32_t j, uint32_t k) const
     return lo + (hi - lo) * ijk / steps;
 }
 
-std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
+LightProbes::Blend LightProbes::blend(const glm::vec3& p) const
 {
-    std::array<glm::vec3, 9> out{};
+    Blend b;
     if (empty())
-        return out;
+        return b;
     // The cell and the weights along each axis.
     uint32_t i0[3], i1[3];
     float t[3];
@@ -217,18 +224,17 @@ std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
         if (!valid[at] || w <= 0.0f)
             continue;
         total += w;
-        for (int c = 0; c < 9; ++c)
-            out[size_t(c)] += w * irradiance[at][size_t(c)];
+        b.probe[b.count] = at;
+        b.weight[b.count++] = w;
     }
     if (total > 0.0f)
     {
-        for (glm::vec3& c : out)
-            c /= total;
-        return out;
+        for (int c = 0; c < b.count; ++c)
+            b.weight[c] /= total;
+        return b;
     }
     // No valid probe around p: the nearest valid one.
     float best = INFINITY;
-    size_t nearest = irradiance.size();
     for (uint32_t k = 0; k < count.z; ++k)
         for (uint32_t j = 0; j < count.y; ++j)
             for (uint32_t i = 0; i < count.x; ++i)
@@ -239,10 +245,34 @@ std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
                 if (valid[at] && d2 < best)
                 {
                     best = d2;
-                    nearest = at;
+                    b.probe[0] = at;
+                    b.weight[0] = 1.0f;
+                    b.count = 1;
                 }
             }
-    return nearest < irradiance.size() ? irradiance[nearest] : out;
+    return b;
+}
+
+std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
+{
+    std::array<glm::vec3, 9> out{};
+    const Blend b = blend(p);
+    for (int n = 0; n < b.count; ++n)
+        for (int c = 0; c < 9; ++c)
+            out[size_t(c)] += b.weight[n] * irradiance[b.probe[n]][size_t(c)];
+    return out;
+}
+
+std::array<float, 4> LightProbes::occlusion_at(const glm::vec3& p) const
+{
+    if (occlusion.empty())
+        return {1.0f, 1.0f, 1.0f, 1.0f};
+    std::array<float, 4> out{};
+    const Blend b = blend(p);
+    for (int n = 0; n < b.count; ++n)
+        for (size_t c = 0; c < 4; ++c)
+            out[c] += b.weight[n] * occlusion[b.probe[n]][c];
+    return out;
 }
 
 const LightmapOutput& LightmapAsset::output(const std::string& name) const
@@ -358,11 +388,16 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
         const LightProbes& p = asset_->probes;
         const ProbeHeader header{
             p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
-        std::vector<std::byte> bytes(sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size());
+        const size_t base = sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size();
+        std::vector<std::byte> bytes(base + p.occlusion.size() * 4);
         std::memcpy(bytes.data(), &header, sizeof header);
         std::memcpy(bytes.data() + sizeof header, p.irradiance.data(), p.irradiance.size() * 27 * 4);
         std::memcpy(bytes.data() + sizeof header + p.irradiance.size() * 27 * 4, p.valid.data(),
                     p.valid.size());
+        for (size_t i = 0; i < p.occlusion.size(); ++i)
+            for (size_t c = 0; c < 4; ++c)
+                bytes[base + i * 4 + c] =
+                    std::byte(uint8_t(std::lround(std::clamp(p.occlusion[i][c], 0.0f, 1.0f) * 255.0f)));
         sections_->writer.add("lightmap.probes", bytes);
     }
     if (!asset_->lights.empty())
@@ -539,9 +574,11 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
             throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" +
                        std::to_string(header.ny) + "x" + std::to_string(header.nz) +
                        " probes is not supported");
-        if (b.size() != sizeof header + n * 27 * 4 + n)
+        const uint64_t base = sizeof header + n * 27 * 4 + n;
+        if (b.size() != base && b.size() != base + n * 4)
             throw fail("lightmap.probes has " + std::to_string(b.size()) + " bytes, " + std::to_string(n) +
-                       " probes need " + std::to_string(sizeof header + n * 27 * 4 + n));
+                       " probes need " + std::to_string(base) + " (" + std::to_string(base + n * 4) +
+                       " with the mixed lights' occlusion)");
         LightProbes& p = a.probes;
         p.count = glm::uvec3(header.nx, header.ny, header.nz);
         p.lo = glm::vec3(header.lo[0], header.lo[1], header.lo[2]);
@@ -550,6 +587,13 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
         p.valid.resize(size_t(n));
         std::memcpy(p.irradiance.data(), b.data() + sizeof header, size_t(n) * 27 * 4);
         std::memcpy(p.valid.data(), b.data() + sizeof header + size_t(n) * 27 * 4, size_t(n));
+        if (b.size() > base)
+        {
+            p.occlusion.resize(size_t(n));
+            for (size_t i = 0; i < size_t(n); ++i)
+                for (size_t c = 0; c < 4; ++c)
+                    p.occlusion[i][c] = float(uint8_t(b[size_t(base) + i * 4 + c])) / 255.0f;
+        }
     }
     if (r.has("lightmap.lights"))
     {

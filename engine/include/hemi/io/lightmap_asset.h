@@ -24,7 +24,8 @@
 //                  math::rnm_basis() direction (normalised to pi under uniform radiance).
 //   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
-//                  then NX * NY * NZ u8 valid flags.
+//                  then NX * NY * NZ u8 valid flags, then with mixed lights NX * NY * NZ x 4 u8: each probe's
+//                  occlusion of the shadowmask's four channels (LightProbes::occlusion), times 255.
 //   lightmap.lights (optional) u32 count, then per light: u32 type (0 directional, 1 point, 2 spot), u32 bake
 //                  mode (0 baked, 1 mixed, 2 realtime), i32 shadowmask channel (0-3, -1 none), f32 colour
 //                  RGB, f32 intensity, f32 range (0: infinite), f32 inner and outer cone (radians), f32
@@ -73,6 +74,10 @@ struct LightProbes
     glm::vec3 lo{0.0f}, hi{0.0f}; // the grid's corner probes (lo == hi along an axis with one probe)
     std::vector<std::array<glm::vec3, 9>> irradiance; // probe (i, j, k) at i + NX (j + NY k)
     std::vector<uint8_t> valid; // 0: inside geometry (most of its rays saw the backs of surfaces)
+    // With mixed lights: per probe, the share of each shadowmask channel's light that reaches it (the sun's
+    // rays over its disc not blocked, a punctual light's one ray; 1 where none of the channel's lights
+    // reaches), what a dynamic object's mixed lights are times (their static shadows). Empty otherwise.
+    std::vector<std::array<float, 4>> occlusion;
 
     bool empty() const { return irradiance.empty(); }
     glm::vec3 position(uint32_t i, uint32_t j, uint32_t k) const;
@@ -80,6 +85,20 @@ struct LightProbes
     // grid), over the valid ones, their weights renormalised; the nearest valid probe when none of the 8 is
     // valid; zero without a valid probe.
     std::array<glm::vec3, 9> at(const glm::vec3& p) const;
+    // The mixed lights' occlusion at `p`, interpolated as at() interpolates the irradiance; all 1 without.
+    std::array<float, 4> occlusion_at(const glm::vec3& p) const;
+
+  private:
+    // The probes at() blends at `p` and their weights (summing to 1): `count` of them.
+    struct Blend
+    {
+        size_t probe[8];
+        float weight[8];
+        int count = 0;
+    };
+    Blend blend(const glm::vec3& p) const;
+
+  public:
 };
 
 // The probes of an NX x NY x NZ grid, or 0 when the grid is empty or holds more than 2^24 (the product is

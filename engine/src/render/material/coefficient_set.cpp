@@ -99,8 +99,12 @@ uint32_t ProbeBuffer::offset(uint32_t frame, uint32_t probe) const
 }
 
 void ProbeBuffer::pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients,
-                       glm::vec4* out) const
+                       const Occlusion& occlusion, glm::vec4* out) const
 {
+    for (float o : occlusion)
+        if (!(o >= 0.0f && o <= 1.0f))
+            throw std::invalid_argument("hemi: probe " + std::to_string(probe) +
+                                        "'s occlusion is outside [0, 1]");
     (void)offset(frame, probe);
     if (coefficients.size() > HEMI_BASIS_MAX_SIZE)
         throw std::invalid_argument("hemi: a probe holds at most " + std::to_string(HEMI_BASIS_MAX_SIZE) +
@@ -111,22 +115,23 @@ void ProbeBuffer::pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3
         if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
             throw std::invalid_argument("hemi: probe " + std::to_string(probe) + "'s coefficient " +
                                         std::to_string(i) + " is not finite");
-        out[i] = glm::vec4(c, 0.0f);
+        out[i] = glm::vec4(c, i < 4 ? occlusion[i] : 0.0f);
     }
 }
 
-void ProbeBuffer::write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients)
+void ProbeBuffer::write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients,
+                        const Occlusion& occlusion)
 {
     glm::vec4 packed[HEMI_BASIS_MAX_SIZE];
-    pack(frame, probe, coefficients, packed);
+    pack(frame, probe, coefficients, occlusion, packed);
     std::memcpy(static_cast<glm::vec4*>(buffer_.mapped()) + offset(frame, probe), packed, sizeof packed);
 }
 
 void ProbeBuffer::record_update(VkCommandBuffer cmd, uint32_t frame, uint32_t probe,
-                                std::span<const glm::vec3> coefficients) const
+                                std::span<const glm::vec3> coefficients, const Occlusion& occlusion) const
 {
     glm::vec4 packed[HEMI_BASIS_MAX_SIZE];
-    pack(frame, probe, coefficients, packed);
+    pack(frame, probe, coefficients, occlusion, packed);
     record_uniform_update(cmd, buffer_, packed, sizeof packed, VkDeviceSize(offset(frame, probe)) * 16,
                           VK_ACCESS_SHADER_READ_BIT);
 }

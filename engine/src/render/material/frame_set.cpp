@@ -142,6 +142,16 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
                             std::isfinite(l.irradiance.x + l.irradiance.y + l.irradiance.z);
         if (!finite || (!l.point && !(glm::length(l.position) > 0.0f)))
             return detail::refuse(device, call, "dynamic light %zu is not finite or has no direction", i);
+        if (!(l.range >= 0.0f) || !std::isfinite(l.range) ||
+            (l.spot &&
+             (!l.point || !(glm::length(l.spot_direction) > 0.0f) ||
+              !std::isfinite(l.spot_direction.x + l.spot_direction.y + l.spot_direction.z) ||
+              !(l.inner_cone >= 0.0f && l.inner_cone < l.outer_cone && l.outer_cone <= 1.5707964f))))
+            return detail::refuse(
+                device, call,
+                "dynamic light %zu: a range must be >= 0, a spot light a point light with a "
+                "direction and 0 <= inner < outer <= pi/2",
+                i);
         if (l.shadowmask_channel < -1 || l.shadowmask_channel > 3)
             return detail::refuse(device, call, "dynamic light %zu has shadowmask channel %d (0 to 3, or -1)",
                                   i, l.shadowmask_channel);
@@ -157,6 +167,11 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
         u.light_position[i] =
             glm::vec4(l.point ? l.position : glm::normalize(l.position), l.point ? 1.0f : 0.0f);
         u.light_irradiance[i] = glm::vec4(l.irradiance, float(l.shadowmask_channel + 1));
+        u.light_spot[i] =
+            glm::vec4(l.spot ? glm::normalize(l.spot_direction) : glm::vec3(0.0f), l.point ? l.range : 0.0f);
+        const float cos_outer = std::cos(l.outer_cone);
+        u.light_cone[i] =
+            glm::vec4(cos_outer, 1.0f / std::max(0.001f, std::cos(l.inner_cone) - cos_outer), 0.0f, 0.0f);
     }
     const auto& w = math::sep4_weights();
     for (int j = 0; j < 9; ++j)

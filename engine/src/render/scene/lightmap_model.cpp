@@ -24,9 +24,11 @@ const math::BasisDesc& lightmap_basis(const std::string& output)
 }
 
 bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position, const glm::mat4& model,
-                    std::array<glm::vec3, 9>& out) noexcept
+                    std::array<glm::vec3, 9>& out, std::array<float, 4>* occlusion) noexcept
 {
     out.fill(glm::vec3(0.0f));
+    if (occlusion)
+        occlusion->fill(1.0f);
     if (asset.probes.empty() || !std::isfinite(world_position.x + world_position.y + world_position.z))
         return false;
     // The level's irradiance function f in its own frame is g(d) = f(R^T d) in the world: math::ShRotation(R)
@@ -45,6 +47,8 @@ bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_posit
     const glm::vec3 p = glm::vec3(glm::inverse(model) * glm::vec4(world_position, 1.0f));
     const std::array<glm::vec3, 9> scene = asset.probes.at(p);
     math::ShRotation(3, rotation).apply(scene, out);
+    if (occlusion)
+        *occlusion = asset.probes.occlusion_at(p);
     return true;
 }
 
@@ -60,14 +64,13 @@ std::vector<DynamicLight> mixed_lights(const io::LightmapAsset& asset, const glm
         const io::PunctualLight& p = l.light;
         if (p.mode != io::LightMode::Mixed)
             continue;
-        if (p.type == io::PunctualLight::Type::Spot ||
-            (p.type == io::PunctualLight::Type::Point && p.range > 0.0f))
-            throw std::invalid_argument(
-                "hemi: mixed light '" + p.name +
-                "' is a spot light or has a range, which hemi's dynamic lights do not "
-                "model yet (a point light without a range, or a directional light)");
         DynamicLight d;
-        d.point = p.type == io::PunctualLight::Type::Point;
+        d.point = p.type != io::PunctualLight::Type::Directional;
+        d.spot = p.type == io::PunctualLight::Type::Spot;
+        d.range = p.range * scale; // distances scale with the model
+        d.spot_direction = glm::normalize(linear * p.direction);
+        d.inner_cone = p.inner_cone;
+        d.outer_cone = p.outer_cone;
         d.position = d.point ? glm::vec3(model * glm::vec4(p.position, 1.0f))
                              : glm::normalize(linear * -p.direction); // towards the light
         d.irradiance = p.color * p.intensity * (d.point ? scale * scale : 1.0f);

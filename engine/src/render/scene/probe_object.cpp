@@ -36,8 +36,12 @@ bool ProbeObject::check(const char* call, uint32_t instance, uint32_t frame) con
     return true;
 }
 
-bool ProbeObject::check_sh9(const char* call, std::span<const glm::vec3> sh9) const noexcept
+bool ProbeObject::check_sh9(const char* call, std::span<const glm::vec3> sh9,
+                            const ProbeBuffer::Occlusion& occlusion) const noexcept
 {
+    for (float o : occlusion)
+        if (!(o >= 0.0f && o <= 1.0f))
+            return detail::refuse(*device_, call, "the mixed lights' occlusion must be in [0, 1]");
     if (sh9.size() != 9)
         return detail::refuse(*device_, call, "a probe-lit object takes 9 SH9 coefficients, got %zu",
                               sh9.size());
@@ -47,22 +51,23 @@ bool ProbeObject::check_sh9(const char* call, std::span<const glm::vec3> sh9) co
     return true;
 }
 
-bool ProbeObject::write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame) noexcept
+bool ProbeObject::write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame,
+                                 const ProbeBuffer::Occlusion& occlusion) noexcept
 {
     if (!check("ProbeObject::write_lighting", instance, frame) ||
-        !check_sh9("ProbeObject::write_lighting", sh9))
+        !check_sh9("ProbeObject::write_lighting", sh9, occlusion))
         return false;
-    probes_.write(frame, instance, sh9);
+    probes_.write(frame, instance, sh9, occlusion);
     return true;
 }
 
 bool ProbeObject::record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
-                                  uint32_t frame) const noexcept
+                                  uint32_t frame, const ProbeBuffer::Occlusion& occlusion) const noexcept
 {
     if (!check("ProbeObject::record_lighting", instance, frame) ||
-        !check_sh9("ProbeObject::record_lighting", sh9))
+        !check_sh9("ProbeObject::record_lighting", sh9, occlusion))
         return false;
-    probes_.record_update(cmd, frame, instance, sh9);
+    probes_.record_update(cmd, frame, instance, sh9, occlusion);
     return true;
 }
 

@@ -33,12 +33,13 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
         throw std::invalid_argument("hemi: at most " + std::to_string(kMaxSpheres) + " spheres, got " +
                                     std::to_string(frame.spheres.size()));
     std::vector<std::array<glm::vec3, 9>> lighting(frame.spheres.size());
+    std::vector<ProbeBuffer::Occlusion> occlusion(frame.spheres.size());
     for (size_t i = 0; i < frame.spheres.size(); ++i)
     {
         const glm::vec4& s = frame.spheres[i];
         if (!(s.w > 0.0f) || !std::isfinite(s.x + s.y + s.z + s.w))
             throw std::invalid_argument("hemi: a sphere needs a finite centre and a radius > 0");
-        if (!probe_lighting(*asset_, glm::vec3(s), frame.model, lighting[i]))
+        if (!probe_lighting(*asset_, glm::vec3(s), frame.model, lighting[i], &occlusion[i]))
             throw std::invalid_argument(
                 asset_->probes.empty()
                     ? "hemi: the lightmap asset has no light probes (bake it with --probes)"
@@ -67,7 +68,7 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
                       view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
                       // A tool's view: what the frame path refuses (and logs) throws here.
                       for (size_t i = 0; i < lighting.size(); ++i)
-                          if (!spheres_->record_lighting(cmd, uint32_t(i), lighting[i]))
+                          if (!spheres_->record_lighting(cmd, uint32_t(i), lighting[i], 0, occlusion[i]))
                               throw std::invalid_argument(detail::last_refusal());
                       view_.target().begin(cmd);
                       if (!model_->draw(cmd, view_.frame(), frame.technique, frame.model))

@@ -15,6 +15,23 @@ float hemi_blinn_phong(vec3 n, vec3 l, vec3 v, float exponent)
     return nl * pow(max(dot(n, normalize(lv)), 1e-6), exponent) * (exponent + 8.0) / (8.0 * 3.14159265358979);
 }
 
+// glTF's recommended falloffs (KHR_lights_punctual), as hemi-bake bakes a light: a point or spot light's
+// range window at distance d (range 0: none), clamp(1 - (d / range)^4, 0, 1), times its 1 / d^2; a spot
+// light's smooth cone at cos_angle = dot(where it points, -l): saturate((cos_angle - cos_outer) * scale)^2
+// with scale = 1 / max(0.001, cos_inner - cos_outer).
+float hemi_range_window(float d, float range)
+{
+    if (range <= 0.0)
+        return 1.0;
+    const float x = d / range;
+    return clamp(1.0 - x * x * x * x, 0.0, 1.0);
+}
+float hemi_spot_cone(float cos_angle, float cos_outer, float scale)
+{
+    const float a = clamp((cos_angle - cos_outer) * scale, 0.0, 1.0);
+    return a * a;
+}
+
 // A mixed light's static shadow (hemi-bake lightmap --sun-mode mixed, a glTF light's hemi_bake_mode): its
 // channel of the lightmap's shadowmask (hemi_lightmap_shadowmask), 1 for channel -1 (a light the lightmap
 // does not shadow). Its direct light at run time is the light's unshadowed irradiance times this.

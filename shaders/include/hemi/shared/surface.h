@@ -92,6 +92,10 @@ struct FrameUniforms
                                             // xyz
     vec4 light_irradiance[HEMI_MAX_LIGHTS]; // rgb: on a surface facing it (a point light: at distance 1, /
                                             // d^2); w: 1 + the shadowmask channel of a mixed light (0: none)
+    vec4 light_spot[HEMI_MAX_LIGHTS];       // xyz: where a spot light points (unit; 0: not a spot); w: glTF's
+                                            // range of a point or spot light (0: none)
+    vec4 light_cone[HEMI_MAX_LIGHTS]; // a spot light's x = cos(outer cone), y = 1 / max(0.001, cos(inner)
+                                      // - cos(outer)) (glTF's smooth cone); zw unused
 };
 
 struct MaterialUniforms
@@ -136,7 +140,7 @@ struct DrawPush
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 2 * HEMI_MAX_LIGHTS * 16, "std140 layout");
+static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 4 * HEMI_MAX_LIGHTS * 16, "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 96, "push constants (within the 128 bytes every device has)");
 static_assert(sizeof(EnvironmentUniforms) == 6 * 16, "std140 layout");

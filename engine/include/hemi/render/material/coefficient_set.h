@@ -17,6 +17,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <span>
 
 namespace hemi::render
@@ -51,11 +52,17 @@ class ProbeBuffer
     // Throws std::invalid_argument for no probes or no frames.
     ProbeBuffer(const MaterialSystem& system, uint32_t probes, uint32_t frames_in_flight = 1);
     // Up to HEMI_BASIS_MAX_SIZE RGB coefficients (finite; std::invalid_argument else) of probe `probe` in
-    // slot `frame` (< frames_in_flight); the rest of the probe's coefficients become 0.
-    void write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients);
+    // slot `frame` (< frames_in_flight); the rest of the probe's coefficients become 0. `occlusion`: the
+    // share of each shadowmask channel's mixed light that reaches the object (io::LightProbes::occlusion_at;
+    // in [0, 1]), by which hemi's materials multiply the frame's mixed lights
+    // (DynamicLight::shadowmask_channel), stored in the fourth components of the probe's first four vec4s.
+    using Occlusion = std::array<float, 4>;
+    void write(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients,
+               const Occlusion& occlusion = {1.0f, 1.0f, 1.0f, 1.0f});
     // Outside a render pass: the same, recorded (the previous reads of the buffer finish first).
     void record_update(VkCommandBuffer cmd, uint32_t frame, uint32_t probe,
-                       std::span<const glm::vec3> coefficients) const;
+                       std::span<const glm::vec3> coefficients,
+                       const Occlusion& occlusion = {1.0f, 1.0f, 1.0f, 1.0f}) const;
     // shared::DrawPush::coefficient_offset of probe `probe` in slot `frame`.
     uint32_t offset(uint32_t frame, uint32_t probe) const;
     VkDescriptorSet set() const { return set_.get(); }
@@ -65,7 +72,8 @@ class ProbeBuffer
     const gpu::Buffer& buffer() const { return buffer_; }
 
   private:
-    void pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients, glm::vec4* out) const;
+    void pack(uint32_t frame, uint32_t probe, std::span<const glm::vec3> coefficients,
+              const Occlusion& occlusion, glm::vec4* out) const;
     gpu::Buffer buffer_;
     gpu::DescriptorSet set_;
     uint32_t probes_ = 0, frames_ = 0;

@@ -25,6 +25,14 @@ struct DynamicLight
                        1.0f}; // a point light's position, or the direction towards a directional one
     glm::vec3 irradiance{
         1.0f}; // on a surface facing it (a point light's at distance 1, falling off as 1 / d^2)
+    // glTF's falloffs (KHR_lights_punctual, as hemi-bake bakes them): a point or spot light's range window
+    // clamp(1 - (d / range)^4, 0, 1) when range > 0; a spot light (spot) its smooth cone
+    // saturate((cos a - cos outer) / (cos inner - cos outer))^2, a the angle off spot_direction (where it
+    // points; radians, 0 <= inner < outer <= pi/2).
+    float range = 0.0f;
+    bool spot = false;
+    glm::vec3 spot_direction{0.0f, 0.0f, -1.0f};
+    float inner_cone = 0.0f, outer_cone = 0.785398163f;
     // A lightmap's mixed light (io::LightmapLight::channel, 0-3): on a lightmapped surface its light is
     // times that channel of the lightmap's shadowmask (the level's static shadows; surfaces of other sources
     // take it unshadowed). -1: a light the lightmap knows nothing of.

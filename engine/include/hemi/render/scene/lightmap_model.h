@@ -44,16 +44,18 @@ const math::BasisDesc& lightmap_basis(const std::string& output);
 // `world_position` in a level placed by `model` (a rotation, uniform scale and translation): the probes'
 // interpolation at the position in the level's space, rotated into the world, as the 9 world-space SH9
 // irradiance coefficients a ProbeBuffer takes (technique "sh9" on the world frame: the object's
-// normal-map normal in world space), into `out`. On the frame path: allocates and throws nothing; false (and
-// `out` zero) when the asset has no probes, the position is not finite or the model matrix is singular.
+// normal-map normal in world space), into `out`; with `occlusion`, the probes' occlusion of the level's mixed
+// lights there (io::LightProbes::occlusion_at: all 1 without mixed lights), for ProbeObject::write_lighting.
+// On the frame path: allocates and throws nothing; false (and `out` zero) when the asset has no probes, the
+// position is not finite or the model matrix is singular.
 bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_position, const glm::mat4& model,
-                    std::array<glm::vec3, 9>& out) noexcept;
+                    std::array<glm::vec3, 9>& out, std::array<float, 4>* occlusion = nullptr) noexcept;
 
 // The asset's mixed lights (io::LightmapLight with mode Mixed) as the frame's dynamic lights of a level
-// placed by `model` (a rotation, uniform scale and translation), each with its shadowmask channel: what
-// lights them at run time (the lightmap holds only their bounces). A point light's intensity is times the
-// model's scale squared, so it gives the light the bake gave at the same place. Throws std::invalid_argument
-// naming a mixed spot light or a light with a range (DynamicLight has no cone or range window yet).
+// placed by `model` (a rotation, uniform scale and translation), each with its shadowmask channel and glTF's
+// falloffs (range, spot cone): what lights them at run time (the lightmap holds only their bounces). A point
+// or spot light's intensity is times the model's scale squared and its range times the scale, so it gives
+// the light the bake gave at the same place. Throws std::invalid_argument for a singular model matrix.
 std::vector<DynamicLight> mixed_lights(const io::LightmapAsset& asset, const glm::mat4& model);
 
 // One entry of a level's draw list: a primitive with its material and the technique that lights it, the

@@ -42,11 +42,15 @@ class ProbeObject
     // (docs/engine.md, "Errors").
 
     // Instance `instance`'s world-space SH9 irradiance (9 RGB coefficients, e.g. probe_lighting() at its
-    // position) in frame slot `frame`, through mapped memory (no command; ProbeBuffer::write's contract).
-    bool write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame = 0) noexcept;
+    // position) in frame slot `frame`, through mapped memory (no command; ProbeBuffer::write's contract), and
+    // its occlusion of the level's mixed lights (probe_lighting()'s; in [0, 1]): the frame's mixed lights
+    // light it times their channel of it.
+    bool write_lighting(uint32_t instance, std::span<const glm::vec3> sh9, uint32_t frame = 0,
+                        const ProbeBuffer::Occlusion& occlusion = {1.0f, 1.0f, 1.0f, 1.0f}) noexcept;
     // Outside a render pass: the same, recorded in the command buffer (ProbeBuffer::record_update).
     bool record_lighting(VkCommandBuffer cmd, uint32_t instance, std::span<const glm::vec3> sh9,
-                         uint32_t frame = 0) const noexcept;
+                         uint32_t frame = 0,
+                         const ProbeBuffer::Occlusion& occlusion = {1.0f, 1.0f, 1.0f, 1.0f}) const noexcept;
     // Another pass of the caller's frame (a depth prepass, a shadow map, a colour pass into another target;
     // SceneSurfaces::add_pass): its index for draw() and enqueue(). 0 is the system's default colour pass,
     // when it has one.
@@ -76,7 +80,8 @@ class ProbeObject
 
   private:
     bool check(const char* call, uint32_t instance, uint32_t frame) const noexcept;
-    bool check_sh9(const char* call, std::span<const glm::vec3> sh9) const noexcept;
+    bool check_sh9(const char* call, std::span<const glm::vec3> sh9,
+                   const ProbeBuffer::Occlusion& occlusion) const noexcept;
     const gpu::Device* device_;
     SceneSurfaces surfaces_;
     ProbeBuffer probes_;
