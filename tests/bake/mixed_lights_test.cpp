@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -387,6 +388,32 @@ TEST(MixedLights, LightProbesTakeAMixedSunsBounceButNotItsDirectLight)
             bake_light_probes(pm, s.mesh, s.atlas, cut, mixed_lights, po, &s.surfaces);
         },
         std::invalid_argument);
+}
+
+// A bake in tiles (its sums on disk) keeps the mixed light's shadowmask and direct light, each tile's in its
+// place: the same bytes as the bake in memory, bounces included.
+TEST(MixedLights, ABakeInTilesGivesTheSameShadowmaskAndLightmap)
+{
+    FloorAndWall s;
+    s.lights.sun_mode = LightMode::Mixed;
+    LightmapBakeOptions o;
+    o.rays = 16;
+    o.sun_rays = 8;
+    o.bounces = 1;
+    const LightmapSh whole = bake_lightmap_sh(s.mesh, s.atlas, s.lights, o, &s.surfaces);
+    LightmapBakeOptions tiled = o;
+    tiled.tile_texels = 300; // several tiles, the last one short
+    tiled.tile_file = std::filesystem::temp_directory_path() / "hemi_mixed_tiles.bin";
+    LightmapSh parts = bake_lightmap_sh(s.mesh, s.atlas, s.lights, tiled, &s.surfaces);
+    ASSERT_GT(parts.tiles_count, 2u);
+    ASSERT_EQ(parts.shadowmask.size(), whole.shadowmask.size());
+    EXPECT_EQ(0, std::memcmp(parts.shadowmask.data(), whole.shadowmask.data(), whole.shadowmask.size() * 16));
+    EXPECT_EQ(
+        0, std::memcmp(parts.mixed_direct.data(), whole.mixed_direct.data(), whole.mixed_direct.size() * 12));
+    parts.load();
+    EXPECT_EQ(0, std::memcmp(parts.direct.data(), whole.direct.data(), whole.direct.size() * 48));
+    EXPECT_EQ(0,
+              std::memcmp(parts.irradiance.data(), whole.irradiance.data(), whole.irradiance.size() * 108));
 }
 
 // A realtime light is not baked at all: neither its direct light nor its bounces, nor a shadowmask.
