@@ -564,6 +564,17 @@ int run_lightmap(LightmapCli& c)
     std::printf("\nrays: %llu in %.2f s = %.2f Mrays/s; total %.2f s%s\n", (unsigned long long)s.rays,
                 s.trace_seconds, s.trace_seconds > 0 ? double(s.rays) / s.trace_seconds * 1e-6 : 0.0,
                 s.total_seconds, s.resumed ? " (resumed from a checkpoint)" : "");
+    // The lights that are not all baked: mixed ones with their shadowmask channel, realtime ones.
+    std::string modes;
+    for (const hemi::io::LightmapLight& l : s.light_table)
+        if (l.light.mode != hemi::io::LightMode::Baked)
+            modes +=
+                (modes.empty() ? "" : ", ") +
+                (l.light.name.empty() ? std::string("(unnamed)") : l.light.name) + " " +
+                hemi::io::light_mode_name(l.light.mode) +
+                (l.channel >= 0 ? std::string(" (shadowmask ") + "RGBA"[l.channel] + ")" : std::string());
+    if (!modes.empty())
+        std::printf("lights: %s\n", modes.c_str());
     if (s.probes)
         std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes, o.probes.x,
                     o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);

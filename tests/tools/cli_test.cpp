@@ -896,6 +896,9 @@ TEST(BakeCli, LightmapBakesMixedLightsIntoAShadowmask)
     const Result r = lightmap(q(scene) + " -o " + q(asset) + sun + " --sun-mode mixed --json " + q(json) +
                               " --exr-dir " + q(exr_dir));
     ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("lights: sun mixed (shadowmask R), lamp mixed (shadowmask G), torch realtime\n"),
+              std::string::npos)
+        << r.out;
     const nlohmann::json report = nlohmann::json::parse(slurp(json));
     ASSERT_EQ(report["lights"].size(), 3u) << report["lights"].dump();
     EXPECT_EQ(report["lights"][0], nlohmann::json::parse(
