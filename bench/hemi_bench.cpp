@@ -1048,11 +1048,13 @@ void lightmap_unwrap(benchmark::State& state)
 // textures, baked by bake::bake_lightmap_file (hemi-bake lightmap's whole job: 8 rays a texel, a sun, every
 // output lightmap/material draws) and read back by io::read_lightmap_asset, so that the asset holds what a
 // real one does (images, materials, primitives) whatever the format comes to hold. In a temporary folder,
-// removed afterwards.
-hemi::io::LightmapAsset level_lightmap_asset(uint32_t atlas)
+// removed afterwards. `sun_mode`: how the sun is baked (mixed: its bounces and a shadowmask).
+hemi::io::LightmapAsset level_lightmap_asset(uint32_t atlas,
+                                             hemi::io::LightMode sun_mode = hemi::io::LightMode::Baked)
 {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("hemi-bench-" + std::to_string(::getpid()));
+    const fs::path dir = fs::temp_directory_path() / ("hemi-bench-" + std::to_string(::getpid()) + "-" +
+                                                      hemi::io::light_mode_name(sun_mode));
     fs::create_directories(dir);
     struct Remove
     {
@@ -1070,6 +1072,7 @@ hemi::io::LightmapAsset level_lightmap_asset(uint32_t atlas)
     o.lights.sun = true;
     o.lights.sun_direction = glm::normalize(glm::vec3(0.4f, -0.35f, 1.0f)); // hemi's z-up world
     o.lights.sun_irradiance = glm::vec3(6.0f);
+    o.lights.sun_mode = sun_mode;
     o.outputs.assign(std::begin(kLightmapTechniques), std::end(kLightmapTechniques));
     hemi::bake::bake_lightmap_file(dir / "level.glb", dir / "level.hemi", o);
     return hemi::io::read_lightmap_asset(dir / "level.hemi");
@@ -1129,6 +1132,52 @@ void lightmap_material(benchmark::State& state, std::string technique)
             target.end(cmd);
         });
     set_ratio_counters(state, "lightmap", t);
+}
+
+// A mixed sun's cost at run time (issue 43): the same level, technique and view as lightmap_material, baked
+// with its sun mixed and lit by it as a frame light with its shadowmask channel (the mask fetched per pixel,
+// the sun's diffuse term added), against the same level with the sun baked and no frame light, in the same
+// run: what the frame pays for a sun that can light and shadow what moves.
+void lightmap_mixed(benchmark::State& state, std::string technique)
+{
+    hemi::gpu::Device& device = bench_device();
+    static const hemi::io::LightmapAsset mixed_asset =
+        level_lightmap_asset(g_sizes.lightmap_atlas, hemi::io::LightMode::Mixed);
+    const uint32_t w = 640, h = 480;
+    hemi::render::OffscreenTarget target(device, w, h);
+    hemi::render::MaterialSystem system(device, target.desc());
+    hemi::gpu::UploadBatch upload(device);
+    hemi::render::LightmapModel baked(system, level_frame_asset(), {technique}, upload);
+    hemi::render::LightmapModel mixed(system, mixed_asset, {technique}, upload);
+    upload.submit_and_wait();
+    const glm::mat4 placement = hemi::render::gltf_to_world();
+    hemi::render::FrameSet baked_frame(system), mixed_frame(system);
+    hemi::render::FrameData f;
+    f.view_projection = level_frame_view(w, h);
+    hemi::render::FrameData with_sun = f;
+    with_sun.lights = hemi::render::mixed_lights(mixed_asset, placement);
+    auto draw = [&](const hemi::render::LightmapModel& model, const hemi::render::FrameSet& frame)
+    {
+        return [&](VkCommandBuffer cmd)
+        {
+            target.begin(cmd);
+            model.draw(cmd, frame.set(), technique, placement);
+            target.end(cmd);
+        };
+    };
+    const PassTimes t = time_against_baseline(
+        state, device,
+        [&](VkCommandBuffer cmd)
+        {
+            baked_frame.record_update(cmd, f);
+            mixed_frame.record_update(cmd, with_sun);
+        },
+        draw(mixed, mixed_frame), draw(baked, baked_frame));
+    state.counters["mixed_ms"] = t.measured * 1e3;
+    state.counters["baked_ms"] = t.baseline * 1e3;
+    state.counters["mixed_ratio"] = t.ratio;
+    state.counters["ratio_p10"] = t.ratio_p10;
+    state.counters["ratio_p90"] = t.ratio_p90;
 }
 
 // The bicubic lightmap lookup's cost (issue 43): the same level, technique and view as lightmap_material,
@@ -1515,6 +1564,12 @@ int main(int argc, char** argv)
                       3.0);
     for (const char* technique : {"h6", "plain"})
         full_min_time(add(std::string("lightmap/bicubic/level/640x480/") + technique, lightmap_bicubic,
+                          std::string(technique))
+                          ->Unit(benchmark::kMillisecond)
+                          ->UseManualTime(),
+                      3.0);
+    for (const char* technique : {"h6", "plain"})
+        full_min_time(add(std::string("lightmap/mixed/level/640x480/") + technique, lightmap_mixed,
                           std::string(technique))
                           ->Unit(benchmark::kMillisecond)
                           ->UseManualTime(),
