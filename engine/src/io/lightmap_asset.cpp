@@ -272,6 +272,8 @@ std::array<float, 4> LightProbes::occlusion_at(const glm::vec3& p) const
     for (int n = 0; n < b.count; ++n)
         for (size_t c = 0; c < 4; ++c)
             out[c] += b.weight[n] * occlusion[b.probe[n]][c];
+    for (float& c : out) // weights that sum to 1 in float can take a blend of 1s a rounding above it
+        c = std::clamp(c, 0.0f, 1.0f);
     return out;
 }
 

@@ -293,7 +293,8 @@ TexelCoefficients::TexelCoefficients(const MaterialSystem& system, const io::Blo
     // one.
     if (shadowmask)
     {
-        std::vector<uint8_t> rgba(plane * 4, 0);
+        // White where the mask stores no texel (a coefficient map's block the mask lacks): unshadowed.
+        std::vector<uint8_t> rgba(plane * 4, 255);
         for_each_slot_texel(
             [&](size_t at, int64_t x, int64_t y)
             {

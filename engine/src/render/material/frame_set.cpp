@@ -143,10 +143,10 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
         if (!finite || (!l.point && !(glm::length(l.position) > 0.0f)))
             return detail::refuse(device, call, "dynamic light %zu is not finite or has no direction", i);
         if (!(l.range >= 0.0f) || !std::isfinite(l.range) ||
-            (l.spot &&
-             (!l.point || !(glm::length(l.spot_direction) > 0.0f) ||
-              !std::isfinite(l.spot_direction.x + l.spot_direction.y + l.spot_direction.z) ||
-              !(l.inner_cone >= 0.0f && l.inner_cone < l.outer_cone && l.outer_cone <= 1.5707964f))))
+            (l.spot && (!l.point || !(glm::length(l.spot_direction) > 0.0f) ||
+                        !std::isfinite(l.spot_direction.x + l.spot_direction.y + l.spot_direction.z) ||
+                        !(l.inner_cone >= 0.0f && l.inner_cone < l.outer_cone &&
+                          l.outer_cone <= float(M_PI / 2) + 1e-6f))))
             return detail::refuse(
                 device, call,
                 "dynamic light %zu: a range must be >= 0, a spot light a point light with a "

@@ -55,7 +55,9 @@ bool probe_lighting(const io::LightmapAsset& asset, const glm::vec3& world_posit
 // placed by `model` (a rotation, uniform scale and translation), each with its shadowmask channel and glTF's
 // falloffs (range, spot cone): what lights them at run time (the lightmap holds only their bounces). A point
 // or spot light's intensity is times the model's scale squared and its range times the scale, so it gives
-// the light the bake gave at the same place. Throws std::invalid_argument for a singular model matrix.
+// the light the bake gave at the same place. Throws std::invalid_argument for a singular model matrix. A
+// level may hold more mixed lights than a frame takes (HEMI_MAX_LIGHTS: lights far apart share a channel);
+// FrameData refuses more, naming the count, so an engine picks the ones near the view.
 std::vector<DynamicLight> mixed_lights(const io::LightmapAsset& asset, const glm::mat4& model);
 
 // One entry of a level's draw list: a primitive with its material and the technique that lights it, the
