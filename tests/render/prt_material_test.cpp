@@ -584,6 +584,57 @@ TEST_F(PrtMaterial, PackedTexelCoefficientMapsMatchCpuEvaluationForEveryBasis)
     }
 }
 
+namespace
+{
+// The lambert tests' quad: a tilted normal map (glTF frame: t = +x, b = n x t = +z, n = -y) and albedo,
+// drawn by Technique::Lambert with a probe of 100s (which must not show) and the frame's lights.
+struct LambertQuad
+{
+    static constexpr uint8_t kBump[3] = {176, 96, 230};
+    const glm::vec3 albedo{0.9f, 0.7f, 0.5f};
+    hemi::render::OffscreenTarget target{hemi::test::device(), 64, 64};
+    hemi::render::MaterialSystem system{hemi::test::device(), target.desc()};
+    hemi::test::SurfaceObject object{system,
+                                     hemi::test::quad(),
+                                     hemi::io::ImageRgba8{1, 1, {kBump[0], kBump[1], kBump[2], 255}},
+                                     hemi::test::normal_mapped(albedo),
+                                     hemi::math::basis("sh9"),
+                                     nullptr};
+    hemi::render::FrameSet frame{system};
+    hemi::render::FrameData f;
+
+    LambertQuad()
+    {
+        hemi::render::MaterialKey key = object.type->key;
+        key.technique = hemi::render::Technique::Lambert;
+        key.frame = hemi::render::ShadingFrame::Tangent;
+        object.type = &system.type(key);
+        f.view_projection =
+            hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
+    }
+    // The normal map's normal in the world, from the glTF convention.
+    static glm::vec3 world_normal()
+    {
+        const glm::vec3 nt = glm::normalize(glm::vec3(kBump[0], kBump[1], kBump[2]) / 255.0f * 2.0f - 1.0f);
+        return nt.x * glm::vec3(1, 0, 0) + nt.y * glm::vec3(0, 0, 1) + nt.z * glm::vec3(0, -1, 0);
+    }
+    void draw(const hemi::render::ProbeBuffer::Occlusion& occlusion = {1.0f, 1.0f, 1.0f, 1.0f})
+    {
+        const std::vector<glm::vec3> probe(9, glm::vec3(100.0f));
+        hemi::gpu::one_shot(hemi::test::device(),
+                            [&](VkCommandBuffer cmd)
+                            {
+                                object.upload.record(cmd);
+                                object.probe->record_update(cmd, 0, 0, probe, occlusion);
+                                frame.record_update(cmd, f);
+                                target.begin(cmd);
+                                object.draw(cmd, frame.set());
+                                target.end(cmd);
+                            });
+    }
+};
+} // namespace
+
 // The fair baseline of hemi-bench (Technique::Lambert): the material's textures lit by the frame's dynamic
 // lights alone. A tilted normal map on a quad (glTF frame: t = +x, b = n x t = +z, n = -y), three
 // directional lights, one of them behind the tilted normal: every covered pixel is
@@ -592,25 +643,9 @@ TEST_F(PrtMaterial, PackedTexelCoefficientMapsMatchCpuEvaluationForEveryBasis)
 // light or the clamp fails it.
 TEST_F(PrtMaterial, LambertBaselineIsTheTexturesLitByTheFramesLightsAlone)
 {
-    auto& dev = hemi::test::device();
-    const uint32_t w = 64, h = 64;
-    const uint8_t bump[3] = {176, 96, 230};
-    const glm::vec3 nt = glm::normalize(glm::vec3(bump[0], bump[1], bump[2]) / 255.0f * 2.0f - 1.0f);
-    const glm::vec3 world_normal =
-        nt.x * glm::vec3(1, 0, 0) + nt.y * glm::vec3(0, 0, 1) + nt.z * glm::vec3(0, -1, 0);
-    const glm::vec3 albedo(0.9f, 0.7f, 0.5f);
-    hemi::render::OffscreenTarget target(dev, w, h);
-    hemi::render::MaterialSystem system(dev, target.desc());
-    hemi::test::SurfaceObject object(system, hemi::test::quad(),
-                                     hemi::io::ImageRgba8{1, 1, {bump[0], bump[1], bump[2], 255}},
-                                     hemi::test::normal_mapped(albedo), hemi::math::basis("sh9"), nullptr);
-    hemi::render::MaterialKey key = object.type->key;
-    key.technique = hemi::render::Technique::Lambert;
-    key.frame = hemi::render::ShadingFrame::Tangent;
-    object.type = &system.type(key);
-    hemi::render::FrameSet frame(system);
-    hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
+    LambertQuad q;
+    hemi::render::FrameData& f = q.f;
+    const glm::vec3 world_normal = LambertQuad::world_normal(), albedo = q.albedo;
     auto light = [](glm::vec3 towards, glm::vec3 e)
     {
         hemi::render::DynamicLight l;
@@ -621,22 +656,12 @@ TEST_F(PrtMaterial, LambertBaselineIsTheTexturesLitByTheFramesLightsAlone)
     f.lights = {light({0.3f, -1.0f, 0.2f}, {1.0f, 2.0f, 3.0f}),
                 light({-0.5f, -0.4f, 0.7f}, {2.0f, 1.0f, 0.5f}),
                 light({0.2f, 1.0f, 0.1f}, {9.0f, 9.0f, 9.0f})}; // behind
-    const std::vector<glm::vec3> probe(9, glm::vec3(100.0f));
-    hemi::gpu::one_shot(dev,
-                        [&](VkCommandBuffer cmd)
-                        {
-                            object.upload.record(cmd);
-                            object.probe->record_update(cmd, 0, 0, probe);
-                            frame.record_update(cmd, f);
-                            target.begin(cmd);
-                            object.draw(cmd, frame.set());
-                            target.end(cmd);
-                        });
+    q.draw();
     glm::vec3 e(0.0f);
     for (const hemi::render::DynamicLight& l : f.lights)
         e += l.irradiance * std::max(0.0f, glm::dot(world_normal, l.position));
     const glm::vec3 want = albedo * e / float(M_PI);
-    EXPECT_GT(covered_pixels_equal(target, want, 2e-3f), 1000u);
+    EXPECT_GT(covered_pixels_equal(q.target, want, 2e-3f), 1000u);
 }
 
 // A probe-lit object under a lightmap's mixed lights (issue 43): each frame light with a shadowmask channel
@@ -646,25 +671,9 @@ TEST_F(PrtMaterial, LambertBaselineIsTheTexturesLitByTheFramesLightsAlone)
 // wrong component.
 TEST_F(PrtMaterial, ProbeLitObjectsTakeTheMixedLightsTimesTheirOcclusion)
 {
-    auto& dev = hemi::test::device();
-    const uint32_t w = 64, h = 64;
-    const uint8_t bump[3] = {176, 96, 230};
-    const glm::vec3 nt = glm::normalize(glm::vec3(bump[0], bump[1], bump[2]) / 255.0f * 2.0f - 1.0f);
-    const glm::vec3 world_normal =
-        nt.x * glm::vec3(1, 0, 0) + nt.y * glm::vec3(0, 0, 1) + nt.z * glm::vec3(0, -1, 0);
-    const glm::vec3 albedo(0.9f, 0.7f, 0.5f);
-    hemi::render::OffscreenTarget target(dev, w, h);
-    hemi::render::MaterialSystem system(dev, target.desc());
-    hemi::test::SurfaceObject object(system, hemi::test::quad(),
-                                     hemi::io::ImageRgba8{1, 1, {bump[0], bump[1], bump[2], 255}},
-                                     hemi::test::normal_mapped(albedo), hemi::math::basis("sh9"), nullptr);
-    hemi::render::MaterialKey key = object.type->key;
-    key.technique = hemi::render::Technique::Lambert;
-    key.frame = hemi::render::ShadingFrame::Tangent;
-    object.type = &system.type(key);
-    hemi::render::FrameSet frame(system);
-    hemi::render::FrameData f;
-    f.view_projection = hemi::render::look_at_projection(glm::vec3(0, -3.2f, 0), glm::vec3(0), 40.0f, 1.0f);
+    LambertQuad q;
+    hemi::render::FrameData& f = q.f;
+    const glm::vec3 world_normal = LambertQuad::world_normal(), albedo = q.albedo;
     auto light = [](glm::vec3 towards, glm::vec3 e, int channel)
     {
         hemi::render::DynamicLight l;
@@ -677,21 +686,11 @@ TEST_F(PrtMaterial, ProbeLitObjectsTakeTheMixedLightsTimesTheirOcclusion)
                 light({-0.5f, -0.4f, 0.7f}, {2.0f, 1.0f, 0.5f}, 2),
                 light({0.1f, -1.0f, -0.3f}, {0.5f, 0.5f, 0.5f}, -1)};
     const hemi::render::ProbeBuffer::Occlusion occlusion = {1.0f, 0.25f, 0.5f, 0.0f};
-    const std::vector<glm::vec3> probe(9, glm::vec3(100.0f));
-    hemi::gpu::one_shot(dev,
-                        [&](VkCommandBuffer cmd)
-                        {
-                            object.upload.record(cmd);
-                            object.probe->record_update(cmd, 0, 0, probe, occlusion);
-                            frame.record_update(cmd, f);
-                            target.begin(cmd);
-                            object.draw(cmd, frame.set());
-                            target.end(cmd);
-                        });
+    q.draw(occlusion);
     glm::vec3 e(0.0f);
     for (const hemi::render::DynamicLight& l : f.lights)
         e += l.irradiance * std::max(0.0f, glm::dot(world_normal, l.position)) *
              (l.shadowmask_channel < 0 ? 1.0f : occlusion[size_t(l.shadowmask_channel)]);
     const glm::vec3 want = albedo * e / float(M_PI);
-    EXPECT_GT(covered_pixels_equal(target, want, 2e-3f), 1000u);
+    EXPECT_GT(covered_pixels_equal(q.target, want, 2e-3f), 1000u);
 }
