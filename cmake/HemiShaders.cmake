@@ -55,7 +55,7 @@ function(hemi_add_shaders target)
             OUTPUT ${header}
             COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.1 ${include_flags} ${define_flags}
                     --depfile ${header}.d --vn ${ident} -o ${header} ${abs}
-            DEPENDS ${abs}
+            DEPENDS ${abs} ${HEMI_GENERATED_GLSL}
             DEPFILE ${header}.d
             COMMENT "glslang ${name}"
             VERBATIM)
@@ -88,6 +88,9 @@ extern const size_t @ARG_TABLE@Count = sizeof(@ARG_TABLE@) / sizeof(@ARG_TABLE@[
 }
 " @ONLY)
     add_library(${target} OBJECT ${table} ${headers})
+    if(TARGET hemi_glsl_generated)
+        add_dependencies(${target} hemi_glsl_generated)
+    endif()
     target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_BINARY_DIR})
     set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()

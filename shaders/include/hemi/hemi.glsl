@@ -10,6 +10,7 @@
 //   hemi/lib/rnm.glsl           radiosity normal mapping and SSBump (Green 2007)
 //   hemi/lib/environment.glsl   parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
 //   hemi/lib/lights.glsl        the dynamic-light terms hemi's techniques use
+//   hemi/lib/specular.glsl      GGX, and specular light from a basis's coefficients (directional lightmaps)
 #ifndef HEMI_HEMI_GLSL
 #define HEMI_HEMI_GLSL
 #include "hemi/lib/coefficients.glsl"
@@ -18,4 +19,5 @@
 #include "hemi/lib/irradiance.glsl"
 #include "hemi/lib/lights.glsl"
 #include "hemi/lib/rnm.glsl"
+#include "hemi/lib/specular.glsl"
 #endif
