@@ -167,6 +167,9 @@ void main()
     s.v = to_frame * normalize(frame.eye.xyz - in_world);
     s.specular_exponent = frame.options.z;
     s.specular_strength = frame.options.w;
+    s.roughness = frame.glossy.x;
+    s.f0 = vec3(frame.glossy.y);
+    s.world = kFrame == HEMI_FRAME_WORLD;
     out_color = vec4(hemi_shade(kTechnique, s), kAlpha == HEMI_ALPHA_BLEND ? alpha : 1.0);
 #if HEMI_AUX
     out_aux = vec4(in_uv0, float(in_ids.y), 1.0);

@@ -18,7 +18,8 @@
 //   envmap ENV.exr -o ENVMAP.hemi [--size N] [--exponents E1,E2,...] [--ior N1,...] [--exr-dir DIR]
 //       [--report REPORT.json]
 //   reference SCENE.gltf|.glb -o REF.exr [the lightmap's light options] [--bounces B]
-//       [--camera auto|EYE,TARGET] [--size WxH] [--white] [--rays R] [--seed S] [--json REPORT.json]
+//       [--camera auto|EYE,TARGET] [--size WxH] [--white] [--roughness R] [--f0 F] [--rays R] [--seed S]
+//       [--json REPORT.json]
 //   export LEVEL.hemi -o LEVEL_LIT.glb|.gltf [--outputs all|none|NAME,...] [--rgbm-range R]
 // Every error names the file or option it is about and exits 1 (usage errors too); outputs are checked
 // (writable, regular files, none of them an input) before any work starts (tool_options.h).
@@ -1243,6 +1244,14 @@ int main(int argc, char** argv)
         ->capture_default_str();
     reference->add_option("--size", rf.size, "WIDTHxHEIGHT in pixels")->capture_default_str();
     reference->add_flag("--white", rf.options.white, "albedo 1 and no emission: the lighting alone, E / pi");
+    reference
+        ->add_option(
+            "--roughness", rf.options.roughness,
+            "a GGX coat of this roughness (glTF's, 0.03 to 1; 0: none) over every surface, its specular "
+            "added (hemi-render --roughness; docs/specular.md)")
+        ->capture_default_str();
+    reference->add_option("--f0", rf.options.f0, "the GGX coat's reflectance at normal incidence (0 to 1)")
+        ->capture_default_str();
     reference->add_option("--rays", rf.options.rays, "paths per pixel")->capture_default_str();
     reference->add_option("--seed", rf.options.seed, "seed of the paths (same seed, same bytes)")
         ->capture_default_str();

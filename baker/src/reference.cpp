@@ -6,6 +6,7 @@
 #include <hemi/bake/reference.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
+#include <hemi/math/ggx.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -54,6 +55,7 @@ class Tracer
     {
         for (int level = 0; level <= kMaxBounces; ++level)
             seeds_[level] = mix64(o.seed + uint64_t(level + 1) * 0x9E3779B97F4A7C15ull);
+        specular_seed_ = mix64(o.seed ^ 0x5350454355ull);
     }
 
     float offset() const { return offset_; }
@@ -177,6 +179,71 @@ class Tracer
         return e;
     }
 
+    // One path's estimate of the GGX coat's specular radiance at `s` towards the unit view direction v, at
+    // the normal-map normal m (lit from the hemisphere of s.n, dark below s.g's plane): path `r` of `count`
+    // of `item`.
+    glm::dvec3 specular(const SurfacePoint& s, const glm::vec3& m, const glm::vec3& v, uint64_t item, int r,
+                        int count, uint64_t& rays) const
+    {
+        auto lit = [&](const glm::vec3& d) { return glm::dot(d, s.g) > 0.0f && glm::dot(d, s.n) > 0.0f; };
+        const glm::dvec3 f0(o_.f0), md(m), vd(v);
+        const uint64_t key = mix64(item ^ specular_seed_);
+        glm::dvec3 l(0.0);
+        if (lights_.sun)
+        {
+            const glm::vec3 d = light_.sun_ray(key, r);
+            if (lit(d) && glm::dot(d, m) > 0.0f)
+            {
+                ++rays;
+                if (!scene_.occluded(s.origin, d))
+                    l += glm::dvec3(lights_.sun_irradiance) *
+                         math::ggx_eval_cos(md, glm::dvec3(d), vd, o_.roughness, f0);
+            }
+        }
+        for (const io::PunctualLight& p : lights_.punctual)
+        {
+            glm::vec3 d;
+            float distance = INFINITY;
+            const glm::vec3 irr = light_.punctual(p, s.origin, d, distance);
+            if (irr == glm::vec3(0.0f) || !(glm::dot(d, m) > 0.0f) || !lit(d))
+                continue;
+            ++rays;
+            if (!scene_.occluded(s.origin, d, 0.0f,
+                                 std::isfinite(distance) ? distance * (1.0f - 1e-4f) : INFINITY))
+                l += glm::dvec3(irr) * math::ggx_eval_cos(md, glm::dvec3(d), vd, o_.roughness, f0);
+        }
+        // The lobe: a stratified pair of uniforms from the hemisphere set (z and the azimuth are uniform).
+        const glm::vec3 h = hemisphere_direction(specular_seed_, item, r, count);
+        double azimuth = std::atan2(double(h.y), double(h.x)) / (2.0 * M_PI);
+        if (azimuth < 0.0)
+            azimuth += 1.0;
+        double pdf = 0.0;
+        const glm::dvec3 dd =
+            math::ggx_sample(md, vd, o_.roughness, std::clamp(double(h.z), 0.0, 1.0 - 1e-12),
+                             std::clamp(azimuth, 0.0, 1.0 - 1e-12), pdf);
+        const glm::vec3 d = glm::normalize(glm::vec3(dd));
+        if (pdf > 0.0 && lit(d))
+        {
+            ++rays;
+            const std::optional<RayHit> hit = scene_.intersect(s.origin, d);
+            glm::dvec3 radiance(0.0);
+            if (!hit)
+                radiance = glm::dvec3(lights_.environment_radiance(d));
+            else if (seen(*hit, d))
+            {
+                radiance = glm::dvec3(surfaces_.emission(hit->primitive, hit->u, hit->v));
+                if (o_.bounces > 0)
+                {
+                    const SurfacePoint next = point(s.origin, d, *hit, nullptr);
+                    radiance += glm::dvec3(surfaces_.albedo(hit->primitive, hit->u, hit->v)) / M_PI *
+                                irradiance(next, next.n, item ^ (1ull << 62), r, count, 1, rays);
+                }
+            }
+            l += radiance * math::ggx_eval_cos(md, dd, vd, o_.roughness, f0) / pdf;
+        }
+        return l;
+    }
+
   private:
     const io::Mesh& mesh_;
     const LightmapSurfaces& surfaces_;
@@ -186,6 +253,7 @@ class Tracer
     detail::LightSampler light_;
     float offset_;
     uint64_t seeds_[kMaxBounces + 1];
+    uint64_t specular_seed_ = 0;
 };
 
 } // namespace
@@ -203,6 +271,11 @@ ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& su
         throw std::invalid_argument("bounces " + std::to_string(o.bounces) + " is not in [0, 16]");
     if (!(o.ray_offset >= 0.0f) || !std::isfinite(o.ray_offset))
         throw std::invalid_argument("the ray offset must be >= 0");
+    if (!(o.roughness == 0.0 || (o.roughness >= math::kGgxMinRoughness && o.roughness <= 1.0)))
+        throw std::invalid_argument("the GGX coat's roughness must be 0 (none) or in [0.03, 1], got " +
+                                    std::to_string(o.roughness));
+    if (!(o.f0 >= 0.0 && o.f0 <= 1.0))
+        throw std::invalid_argument("the GGX coat's f0 must be in [0, 1], got " + std::to_string(o.f0));
     detail::check_lights(lights);
     if (const std::string problem = io::mesh_problem(mesh, io::MeshNeeds::Frames); !problem.empty())
         throw std::invalid_argument("the reference needs normals, tangents and UVs: " + problem);
@@ -270,6 +343,9 @@ ReferenceImage render_reference(const io::Mesh& mesh, const LightmapSurfaces& su
                         if (!o.white)
                             colour = glm::dvec3(surfaces.albedo(hit->primitive, hit->u, hit->v)) * colour +
                                      glm::dvec3(surfaces.emission(hit->primitive, hit->u, hit->v));
+                        if (o.roughness > 0.0)
+                            colour += tracer.specular(s, m, -d, uint64_t(pixel) * 2 + uint64_t(half), r >> 1,
+                                                      halves[half], traced);
                         sum[r & 1] += colour;
                         ++hits[r & 1];
                     }

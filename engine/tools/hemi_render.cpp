@@ -39,7 +39,7 @@ int main(int argc, char** argv)
     std::string asset_path, technique = "gs", env = "sky", size = "800x600", camera = "auto", output;
     bool cpca = false, white = false, bicubic = false;
     std::vector<std::string> spheres;
-    float rotate = 0.0f, exposure = 1.0f;
+    float rotate = 0.0f, exposure = 1.0f, roughness = 0.0f, f0 = 0.04f;
     app.add_option("asset", asset_path, "baked asset (.hemi)")->required()->check(CLI::ExistingFile);
     app.add_option("--technique", technique,
                    "PRT: gs (SH9 gold standard), hl2, sal4, h4, h6, sep4, prt (classic PRT), "
@@ -61,6 +61,15 @@ int main(int argc, char** argv)
     app.add_flag("--bicubic", bicubic,
                  "lightmaps: look the lightmap up with the cubic B-spline instead of the linear filter (no "
                  "creases at texel centres in gradients)");
+    app.add_option("--roughness", roughness,
+                   "lightmaps: a GGX coat of this roughness (glTF's, 0.03 to 1) over every surface, its "
+                   "specular from the lightmap's coefficients and exact for mixed lights (0: none; "
+                   "docs/specular.md)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
+    app.add_option("--f0", f0, "lightmaps: the GGX coat's reflectance at normal incidence (0 to 1)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
     app.add_option("--size", size, "WIDTHxHEIGHT in pixels")->capture_default_str();
     app.add_option("--camera", camera,
                    "auto (frames the model) or EYE,TARGET as x,y,z,x,y,z in world space (z up; "
@@ -110,6 +119,9 @@ int main(int argc, char** argv)
             const bool lightmap = kind == "lightmap";
             if (!lightmap && !spheres.empty())
                 throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
+            if (!lightmap && roughness > 0.0f)
+                throw std::invalid_argument(asset_path +
+                                            " is not a lightmap asset: --roughness is for lightmaps");
             if (!lightmap && bicubic)
                 throw std::invalid_argument(asset_path +
                                             " is not a lightmap asset: --bicubic is for lightmaps");
@@ -168,6 +180,16 @@ int main(int argc, char** argv)
                         throw std::invalid_argument(asset_path + ": " + e.what());
                     }
                     device = std::make_unique<hemi::gpu::Device>(desc);
+                    // The GGX coat: the output drawn by the ggx technique ("<output>+ggx").
+                    if (roughness > 0.0f)
+                    {
+                        if (technique == "rnm" || technique == "ssbump" || technique == "rnm_ao")
+                            throw std::invalid_argument(
+                                "--roughness needs a basis's coefficients (sh9, h6, ..., "
+                                "plain), not --technique " +
+                                technique);
+                        technique += "+ggx";
+                    }
                     hemi::render::LightmapView view(*device, asset, {technique}, w, h,
                                                     bicubic ? hemi::render::LightmapFilter::Bicubic
                                                             : hemi::render::LightmapFilter::Linear);
@@ -177,6 +199,8 @@ int main(int argc, char** argv)
                     frame.camera = auto_camera ? hemi::render::auto_camera(asset.mesh, frame.model, aspect)
                                                : view_camera;
                     frame.spheres = sphere_list;
+                    frame.glossy_roughness = roughness;
+                    frame.glossy_f0 = f0;
                     // The asset's mixed lights, lit at run time with their shadowmask channels.
                     try
                     {

@@ -43,7 +43,8 @@ constexpr size_t kValues = 14; // vec4s out per record
 // shader).
 std::vector<glm::vec4> run(const std::vector<Record>& records)
 {
-    const std::vector<uint32_t> specialization = {uint32_t(records.at(0).params.z), uint32_t(records[0].params.w)};
+    const std::vector<uint32_t> specialization = {uint32_t(records.at(0).params.z),
+                                                  uint32_t(records[0].params.w)};
     for (const Record& r : records)
         if (r.params.z != records[0].params.z)
             throw std::logic_error("run(): one basis per call");
@@ -59,10 +60,12 @@ std::vector<glm::vec4> run(const std::vector<Record>& records)
                                                 {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
                                                 {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs}};
     const std::array<float, 36>& weights = hemi::math::sep4_weights();
-    hemi::gpu::Buffer sep4 = hemi::gpu::create_buffer(dev, {sizeof(weights), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    hemi::gpu::Buffer sep4 =
+        hemi::gpu::create_buffer(dev, {sizeof(weights), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     hemi::gpu::write_buffer(dev, sep4, weights.data(), sizeof(weights));
-    hemi::gpu::Program program = hemi::gpu::create_compute_program(
-        dev, {hemi::test::test_spirv("specular_eval.comp"), bindings, uint32_t(sizeof(uint32_t)), specialization});
+    hemi::gpu::Program program =
+        hemi::gpu::create_compute_program(dev, {hemi::test::test_spirv("specular_eval.comp"), bindings,
+                                                uint32_t(sizeof(uint32_t)), specialization});
     hemi::gpu::DescriptorPool pool = hemi::gpu::create_descriptor_pool(dev, bindings, 1);
     VkDescriptorSet set = hemi::gpu::allocate_descriptor_set(dev, pool, program.set_layout);
     hemi::gpu::DescriptorWrite writes[3];
@@ -144,8 +147,9 @@ TEST_F(SpecularGlsl, GgxEqualsTheCpp)
         r.params = glm::vec4(float(roughness), float(f0), float(HEMI_BASIS_SH9), 9);
         records.push_back(r);
         // The C++ at the float inputs the GPU sees.
-        expected.push_back(hemi::math::ggx_eval_cos({0, 0, 1}, glm::dvec3(glm::vec3(l)), glm::dvec3(glm::vec3(v)),
-                                                    double(float(roughness)), glm::dvec3(double(float(f0)))));
+        expected.push_back(hemi::math::ggx_eval_cos({0, 0, 1}, glm::dvec3(glm::vec3(l)),
+                                                    glm::dvec3(glm::vec3(v)), double(float(roughness)),
+                                                    glm::dvec3(double(float(f0)))));
     }
     const std::vector<glm::vec4> values = run(records);
     double worst = 0.0;
@@ -193,16 +197,16 @@ TEST_F(SpecularGlsl, TheGeneratedEstimatorEqualsTheCpp)
         {
             double worst = 0.0;
             for (size_t j = 0; j < 9; ++j)
-                worst = std::max(worst,
-                                 glm::length(glm::dvec3(glm::vec3(values[i * kValues + 3 + j])) - expected[i][j]));
+                worst = std::max(
+                    worst, glm::length(glm::dvec3(glm::vec3(values[i * kValues + 3 + j])) - expected[i][j]));
             ASSERT_LT(worst, 1e-5) << basis.name << ", record " << i;
         }
     }
 }
 
-// The split sum's closed-form albedo (the generated polynomial) against its quadrature, math::ggx_albedo, over
-// n.v and roughness in [0.1, 1] x [0.1, 1] and f0 in {0.04, 1}: within 0.03 (absolute, of an albedo at most
-// 1), as docs/specular.md states. Karis's fit for UE4's Smith term (0.31 off at roughness 1) fails.
+// The split sum's closed-form albedo (the generated polynomial) against its quadrature, math::ggx_albedo,
+// over n.v and roughness in [0.1, 1] x [0.1, 1] and f0 in {0.04, 1}: within 0.03 (absolute, of an albedo at
+// most 1), as docs/specular.md states. Karis's fit for UE4's Smith term (0.31 off at roughness 1) fails.
 TEST_F(SpecularGlsl, TheAlbedoFitIsWithinItsStatedError)
 {
     std::vector<Record> records;
@@ -259,7 +263,8 @@ TEST_F(SpecularGlsl, OneSunComesBackExactlyThroughSh9)
                     r.params = glm::vec4(0.2f + 0.3f * float(k % 3), 0.04f, float(HEMI_BASIS_SH9), 9);
                     records.push_back(r);
                     suns.push_back(l);
-                    truth.push_back(hemi::math::ggx_eval_cos(n, l, v, double(r.params.x), glm::dvec3(0.04)).x);
+                    truth.push_back(
+                        hemi::math::ggx_eval_cos(n, l, v, double(r.params.x), glm::dvec3(0.04)).x);
                 }
     const std::vector<glm::vec4> values = run(records);
     double worst_direction = 0.0, worst_colour = 0.0, worst_specular = 0.0;
@@ -317,9 +322,11 @@ TEST_F(SpecularGlsl, OneSunErrorOfEachBasis)
                             r.n = glm::vec4(glm::vec3(n), 0);
                             r.v = glm::vec4(glm::vec3(v), 0);
                             r.l = r.n;
-                            r.params = glm::vec4(float(roughnesses[ri]), 0.04f, float(basis.id), float(basis.size));
+                            r.params =
+                                glm::vec4(float(roughnesses[ri]), 0.04f, float(basis.id), float(basis.size));
                             records.push_back(r);
-                            truth.push_back(hemi::math::ggx_eval_cos(n, l, v, roughnesses[ri], glm::dvec3(0.04)).x);
+                            truth.push_back(
+                                hemi::math::ggx_eval_cos(n, l, v, roughnesses[ri], glm::dvec3(0.04)).x);
                         }
                 }
             const std::vector<glm::vec4> values = run(records);

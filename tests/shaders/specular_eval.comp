@@ -48,8 +48,7 @@ void main()
     const int basis = kBasis;
     const vec3 f0 = vec3(r.params.y);
     const uint o = i * 14u;
-    values[o] = vec4(hemi_basis_specular(basis, K, c, r.n.xyz, r.v.xyz, r.params.x, f0,
-                                            sep4_weights), 0.0);
+    values[o] = vec4(hemi_basis_specular(basis, K, c, r.n.xyz, r.v.xyz, r.params.x, f0, sep4_weights), 0.0);
     values[o + 1u] = vec4(hemi_ggx(r.n.xyz, r.l.xyz, r.v.xyz, r.params.x, f0), 0.0);
     values[o + 2u] = vec4(hemi_ggx_albedo(dot(r.n.xyz, r.v.xyz), r.params.x), 0.0, 0.0);
     vec3 e[9];

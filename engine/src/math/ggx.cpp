@@ -25,7 +25,8 @@ double dv_cos(double nl, double nv, double nh, double a2)
 {
     const double t = nh * nh * (a2 - 1.0) + 1.0;
     const double d = a2 / (kPi * t * t);
-    const double v = 0.5 / (nl * std::sqrt(nv * nv * (1.0 - a2) + a2) + nv * std::sqrt(nl * nl * (1.0 - a2) + a2));
+    const double v =
+        0.5 / (nl * std::sqrt(nv * nv * (1.0 - a2) + a2) + nv * std::sqrt(nl * nl * (1.0 - a2) + a2));
     return d * v * nl;
 }
 
@@ -58,7 +59,8 @@ glm::dvec3 ggx_eval_cos(const glm::dvec3& n, const glm::dvec3& l, const glm::dve
         return glm::dvec3(0.0);
     const glm::dvec3 h = glm::normalize(lv);
     const double fc = std::pow(1.0 - std::clamp(glm::dot(v, h), 0.0, 1.0), 5.0);
-    return (f0 + (glm::dvec3(1.0) - f0) * fc) * dv_cos(nl, nv, glm::dot(n, h), std::pow(alpha_of(roughness), 2));
+    return (f0 + (glm::dvec3(1.0) - f0) * fc) *
+           dv_cos(nl, nv, glm::dot(n, h), std::pow(alpha_of(roughness), 2));
 }
 
 glm::dvec3 ggx_sample(const glm::dvec3& n, const glm::dvec3& v, double roughness, double u0, double u1,
@@ -144,7 +146,8 @@ std::vector<double> sh9_from_basis(const BasisDesc& basis)
     // sky of irradiance 1 at the zenith (radiance 1 / pi: int_H y_j = 2 pi y00, pi y1 for j = 0, 2, zero
     // otherwise).
     Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(9, 9);
-    const double a[9] = {kPi, 2 * kPi / 3, 2 * kPi / 3, 2 * kPi / 3, kPi / 4, kPi / 4, kPi / 4, kPi / 4, kPi / 4};
+    const double a[9] = {kPi,     2 * kPi / 3, 2 * kPi / 3, 2 * kPi / 3, kPi / 4,
+                         kPi / 4, kPi / 4,     kPi / 4,     kPi / 4};
     for (const HemisphereSample& q : hemisphere_quadrature(32))
     {
         const Sh9 y = sh9_eval(glm::vec3(q.n));
@@ -158,7 +161,8 @@ std::vector<double> sh9_from_basis(const BasisDesc& basis)
     sky[2] = a[2] * kPi * 0.4886025119029199 / kPi;
     sigma += sky * sky.transpose();
     const std::vector<double> p = projection_from_sh9(basis);
-    const Eigen::MatrixXd pm = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>>(p.data(), k, 9);
+    const Eigen::MatrixXd pm =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>>(p.data(), k, 9);
     Eigen::MatrixXd c = pm * sigma * pm.transpose();
     c += Eigen::MatrixXd::Identity(k, k) * (1e-12 * c.trace());
     const Eigen::MatrixXd r = (sigma * pm.transpose()) * c.inverse(); // 9 x K

@@ -14,6 +14,8 @@
 // (at a bounce the surface's interpolated normal, which is what a lightmap texel stores). Back faces of
 // single-sided materials are not seen (the rasteriser culls them) and carry no light.
 //
+// With `roughness` > 0 each path also carries the GGX coat's specular (ReferenceOptions).
+//
 // Each pixel averages `rays` paths through points jittered over its square (so the normal map is box-
 // filtered, where the rasteriser filters it with mipmaps). The even and the odd paths are two independent
 // stratified sets, and the noise of the pixel's mean is estimated from the difference of their means.
@@ -44,6 +46,13 @@ struct ReferenceOptions
     bool white = false; // E / pi without albedo or emission
     uint64_t seed = 1;
     float ray_offset = 1e-4f; // of the scene's diagonal, as the lightmap bake's
+    // A GGX coat over every surface (math/ggx.h; what hemi-render --roughness draws): glTF's roughness in
+    // [0.03, 1] (0: none) and f0 in [0, 1]. Its specular at the normal-map normal, from the hemisphere of the
+    // surface normal: the sun's disc and the punctual lights sampled as lights, the environment and the
+    // surfaces (their emission, and with bounces their diffuse light) along directions drawn from the GGX
+    // lobe. Added to the diffuse colour (and to E / pi with `white`).
+    double roughness = 0.0;
+    double f0 = 0.04;
 };
 
 struct ReferenceImage

@@ -129,6 +129,10 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
         !std::isfinite(frame.specular_strength))
         return detail::refuse(device, call,
                               "the specular exponent and strength must be finite, the exponent > 0");
+    if (!(frame.glossy_roughness >= 0.0f && frame.glossy_roughness <= 1.0f) ||
+        !(frame.glossy_f0 >= 0.0f && frame.glossy_f0 <= 1.0f))
+        return detail::refuse(device, call, "the glossy roughness and f0 must be in [0, 1], got %g and %g",
+                              double(frame.glossy_roughness), double(frame.glossy_f0));
     for (int c = 0; c < 4; ++c)
         if (!std::isfinite(frame.view_projection[c].x + frame.view_projection[c].y +
                            frame.view_projection[c].z + frame.view_projection[c].w))
@@ -161,6 +165,7 @@ bool pack_frame(const gpu::Device& device, const char* call, const FrameData& fr
     u.options = glm::vec4(frame.lighting_only ? 1.0f : 0.0f, float(frame.lights.size()),
                           frame.specular_exponent, frame.specular_strength);
     u.eye = glm::vec4(frame.eye, 1.0f);
+    u.glossy = glm::vec4(frame.glossy_roughness, frame.glossy_f0, 0.0f, 0.0f);
     for (size_t i = 0; i < frame.lights.size(); ++i)
     {
         const DynamicLight& l = frame.lights[i];

@@ -100,8 +100,13 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         if (!t.empty() && std::find(techniques.begin(), techniques.end(), t) == techniques.end())
             techniques.push_back(t);
     std::vector<SurfaceVariant> variants;
-    for (const std::string& name : techniques)
+    for (const std::string& technique_name : techniques)
     {
+        // "<output>+ggx": the output's irradiance with the frame's GGX coat (Technique::Ggx).
+        const std::string_view suffix = "+ggx";
+        const bool ggx = technique_name.size() > suffix.size() && technique_name.ends_with(suffix);
+        const std::string name =
+            ggx ? technique_name.substr(0, technique_name.size() - suffix.size()) : technique_name;
         // rnm and ssbump draw the "rnm" output (K = 3, carried by the 3-function HL2 basis's id); the others
         // their own output with their basis.
         const bool rnm = name == "rnm" || name == "ssbump" || name == "rnm_ao";
@@ -117,6 +122,12 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
             if (o.k < smallest->k)
                 smallest = &o;
         const std::string source = rnm ? "rnm" : baseline ? smallest->name : name;
+        if (ggx && (rnm || baseline || source == "rnm"))
+            throw std::invalid_argument(
+                "hemi: '" + technique_name +
+                "': the GGX coat's specular needs a basis's coefficients (sh9, h6, ..., "
+                "plain), not " +
+                name);
         const io::LightmapOutput& output = asset.output(source); // lists what the asset has
         if (rnm)
             variants.push_back({name == "rnm"      ? Technique::Rnm
@@ -126,10 +137,12 @@ LightmapModel::LightmapModel(MaterialSystem& system, const io::LightmapAsset& as
         else if (source == "rnm")
             variants.push_back({baseline_technique, HEMI_BASIS_HL2});
         else
-            variants.push_back(
-                {baseline ? baseline_technique : Technique::Irradiance, lightmap_basis(source).id});
+            variants.push_back({baseline ? baseline_technique
+                                : ggx    ? Technique::Ggx
+                                         : Technique::Irradiance,
+                                lightmap_basis(source).id});
         variants.back().lightmap_filter = filter;
-        names_.push_back(name);
+        names_.push_back(technique_name);
         // Each technique's source carries the mixed lights' shadowmask in its slots (a frame's mixed lights
         // read it: DynamicLight::shadowmask_channel).
         coefficients_.push_back(std::make_unique<TexelCoefficients>(

@@ -65,6 +65,8 @@ io::ImageRgba LightmapView::render(const LightmapFrame& frame)
                       dynamic.lights = frame.lights;
                       dynamic.specular_exponent = frame.specular_exponent;
                       dynamic.specular_strength = frame.specular_strength;
+                      dynamic.glossy_roughness = frame.glossy_roughness;
+                      dynamic.glossy_f0 = frame.glossy_f0;
                       view_.record_frame(cmd, frame.camera, asset_->mesh, frame.model, frame.white, dynamic);
                       // A tool's view: what the frame path refuses (and logs) throws here.
                       for (size_t i = 0; i < lighting.size(); ++i)

@@ -83,8 +83,8 @@ void hemi_sh9_sun_derivative(vec3 d, vec3 t, out float y[9])
 // The one sun that best explains SH9 irradiance e: its direction (unit; in the upper hemisphere of the
 // frame when `hemisphere`) and its irradiance on a surface facing it; `rest` = e minus that sun. The lighting
 // is modelled as a sun plus a uniform sky (over the upper hemisphere of the coefficients' frame when
-// `hemisphere`, a lightmap's or a tangent-frame PRT vertex's; over the sphere otherwise, a world-space probe):
-// the direction comes from the linear band (luminance) once the sky's share is taken out, and both
+// `hemisphere`, a lightmap's or a tangent-frame PRT vertex's; over the sphere otherwise, a world-space
+// probe): the direction comes from the linear band (luminance) once the sky's share is taken out, and both
 // intensities from a least-squares fit of the nine coefficients, twice. One sun alone is recovered exactly.
 struct HemiSh9Sun
 {
@@ -109,7 +109,8 @@ HemiSh9Sun hemi_sh9_dominant_sun(vec3 e[9], bool hemisphere, out vec3 rest[9])
     for (int pass = 0; pass < 2; ++pass)
     {
         // Band 1 of e minus the sky: y1,-1 = -Y1 y, y1,0 = Y1 z, y1,1 = -Y1 x.
-        const vec3 b1 = vec3(-dot(e[3] - sky * h[3], w), -dot(e[1] - sky * h[1], w), dot(e[2] - sky * h[2], w));
+        const vec3 b1 =
+            vec3(-dot(e[3] - sky * h[3], w), -dot(e[1] - sky * h[1], w), dot(e[2] - sky * h[2], w));
         vec3 d = b1;
         if (hemisphere)
             d.z = max(d.z, 0.0);
@@ -173,9 +174,10 @@ vec3 hemi_sh9_specular(vec3 e[9], vec3 n, vec3 v, float roughness, vec3 f0, bool
 // in the basis's own space: c ~ C P y(d) + S P h, P the bake's projection (hemi_basis_from_sh9), y(d) a
 // unit sun's SH9 irradiance, h a uniform sky's. It starts from hemi_sh9_dominant_sun of the SH9 estimate
 // (hemi_basis_to_sh9) and refines direction and strengths by Gauss-Newton on the luminance (six steps),
-// then fits C and S per channel at that direction. A sun alone is recovered wherever the basis can tell its direction. `rest` = c minus
-// the sun's coefficients.
-HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE], out vec3 rest[HEMI_BASIS_MAX_SIZE])
+// then fits C and S per channel at that direction. A sun alone is recovered wherever the basis can tell its
+// direction. `rest` = c minus the sun's coefficients.
+HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE],
+                                   out vec3 rest[HEMI_BASIS_MAX_SIZE])
 {
     vec3 e[9], e_rest[9];
     hemi_basis_to_sh9(basis, c, e);
@@ -244,7 +246,8 @@ HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE]
         if (!sky)
             m[3][3] = 1.0;
         const vec4 delta = inverse(m) * g;
-        const vec2 turn = delta.xy * min(1.0, 0.5 / max(length(delta.xy), 1e-20)); // at most ~29 degrees a step
+        const vec2 turn =
+            delta.xy * min(1.0, 0.5 / max(length(delta.xy), 1e-20)); // at most ~29 degrees a step
         d = normalize(d + turn.x * t1 + turn.y * t2);
         d.z = max(d.z, 0.0);
         d = normalize(d);
@@ -283,8 +286,8 @@ HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE]
 // texel, a PRT vertex), at the normal-map normal n: the dominant sun's exact GGX, and the rest's irradiance
 // at the reflected direction (not below the frame's horizon) over pi times the split sum's albedo. Classic
 // PRT's vertex irradiance (one coefficient, no direction) is taken as a uniform sky.
-vec3 hemi_basis_specular(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE], vec3 n, vec3 v, float roughness, vec3 f0,
-                         vec4 sep4_weights[9])
+vec3 hemi_basis_specular(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE], vec3 n, vec3 v, float roughness,
+                         vec3 f0, vec4 sep4_weights[9])
 {
     const float nv = dot(n, v);
     if (nv <= 0.0)

@@ -96,6 +96,7 @@ struct FrameUniforms
                                             // range of a point or spot light (0: none)
     vec4 light_cone[HEMI_MAX_LIGHTS]; // a spot light's x = cos(outer cone), y = 1 / max(0.001, cos(inner)
                                       // - cos(outer)) (glTF's smooth cone); zw unused
+    vec4 glossy;                      // the GGX coat: x = roughness (0: none), y = f0; zw unused
 };
 
 struct MaterialUniforms
@@ -140,7 +141,8 @@ struct DrawPush
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 4 * HEMI_MAX_LIGHTS * 16, "std140 layout");
+static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 4 * HEMI_MAX_LIGHTS * 16 + 16,
+              "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 96, "push constants (within the 128 bytes every device has)");
 static_assert(sizeof(EnvironmentUniforms) == 6 * 16, "std140 layout");

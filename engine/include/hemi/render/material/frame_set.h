@@ -49,6 +49,13 @@ struct FrameData
     // technique's normal): exponent m and strength (0: none). A stand-in for per-material gloss.
     float specular_exponent = 32.0f; // > 0
     float specular_strength = 0.0f;
+    // The glossy layer (hemi/lib/specular.glsl, docs/specular.md): a GGX coat over every surface, of glTF's
+    // roughness (clamped to [0.03, 1]; 0: no coat, the Blinn-Phong term above instead) and reflectance f0 at
+    // normal incidence (in [0, 1]). It replaces the dynamic lights' Blinn-Phong with exact GGX, and the
+    // irradiance technique adds the specular its coefficients hold (hemi_basis_specular; a world-space SH9
+    // probe's, hemi_sh9_specular). Added to the diffuse light, not weighted against it.
+    float glossy_roughness = 0.0f;
+    float glossy_f0 = 0.04f;
 };
 
 // Per-frame data for `frames_in_flight` frames, each slot its own range of one buffer and its own set, and

@@ -54,6 +54,9 @@ enum class Technique : uint32_t
     // The material's textures (base colour, normal map, emissive) lit by the frame's dynamic lights alone
     // (Lambert at the normal-map normal), no precomputed lighting: hemi-bench's fair baseline.
     Lambert = HEMI_TECHNIQUE_LAMBERT,
+    // Irradiance plus the specular of the frame's GGX coat from the coefficients (hemi_coefficient_specular;
+    // FrameData::glossy_roughness): lightmap technique names "<output>+ggx".
+    Ggx = HEMI_TECHNIQUE_GGX,
 };
 
 enum class CoefficientSourceKind : uint32_t

@@ -36,6 +36,8 @@ struct LightmapFrame
     // specular term; the asset's mixed lights are render::mixed_lights(asset, model) (hemi-render adds them).
     std::vector<DynamicLight> lights;
     float specular_exponent = 32.0f, specular_strength = 0.0f;
+    // The GGX coat over every surface (FrameData::glossy_roughness, glossy_f0; 0: none).
+    float glossy_roughness = 0.0f, glossy_f0 = 0.04f;
 };
 
 class LightmapView
