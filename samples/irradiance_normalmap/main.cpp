@@ -8,7 +8,7 @@
 // every image on its own, so that hemi-bake and hemi-render can re-make each from the command line.
 //
 //   irradiance_normalmap [--dir DIR] [-o FIGURE.png] [--table TABLE.md] [--plot PLOT.png] [--atlas N]
-//                        [--rays R] [--reference-rays R] [--bounces B] [--size WxH]
+//                        [--rays R] [--reference-rays R] [--bounces B] [--size WxH] [--glossy-table GLOSSY.md]
 #include "figure.h"
 #include "level.h"
 
@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <ostream>
@@ -123,6 +124,44 @@ hemi::io::ImageRgba half(const hemi::io::ImageRgba& image)
     return out;
 }
 
+// The GGX coat's table (--glossy-table): per roughness, each technique's error of the total image (diffuse
+// and specular) against the glossy reference, and of its specular alone against the reference's.
+struct GlossyRow
+{
+    std::string label;
+    Error total[3];
+    double specular[3] = {0.0, 0.0, 0.0}; // RMSE of the specular over the reference specular's mean
+};
+constexpr double kGlossyRoughness[3] = {0.2, 0.5, 0.8};
+constexpr double kGlossyF0 = 0.04;
+
+// RMSE of (a - a0) - (b - b0) over the pixels all four cover, over the mean of b - b0: the specular's
+// relative error when a0 and b0 are the diffuse views of a and b. `noise` is b - b0's own (the reference
+// specular's standard error per pixel), taken out in quadrature.
+double specular_error(const hemi::io::ImageRgba& a, const hemi::io::ImageRgba& a0,
+                      const hemi::io::ImageRgba& b, const hemi::io::ImageRgba& b0, double noise)
+{
+    double squared = 0.0, mean = 0.0;
+    size_t n = 0;
+    for (size_t i = 0; i < a.pixels.size(); i += 4)
+    {
+        if (a.pixels[i + 3] != 1.0f || a0.pixels[i + 3] != 1.0f || b.pixels[i + 3] != 1.0f ||
+            b0.pixels[i + 3] != 1.0f)
+            continue;
+        for (int c = 0; c < 3; ++c)
+        {
+            const double s = double(b.pixels[i + c]) - b0.pixels[i + c];
+            const double d = double(a.pixels[i + c]) - a0.pixels[i + c] - s;
+            squared += d * d;
+            mean += s;
+            ++n;
+        }
+    }
+    return n ? std::sqrt(std::max(0.0, squared / double(n) - noise * noise)) /
+                   std::max(mean / double(n), 1e-12)
+             : 0.0;
+}
+
 struct Setup
 {
     const char* name;
@@ -173,7 +212,7 @@ int main(int argc, char** argv)
         "path-traced reference"};
     std::string dir = "irradiance_normalmap", figure = "irradiance_normalmap.png",
                 table = "irradiance_normalmap.md", plot = "irradiance_normalmap_rmse.png", size = "640x400",
-                ssbump_figure = "irradiance_normalmap_ssbump.png";
+                ssbump_figure = "irradiance_normalmap_ssbump.png", glossy_table;
     uint32_t atlas = 384;
     int rays = 256, reference_rays = 256, bounces = 1;
 
@@ -188,6 +227,11 @@ int main(int argc, char** argv)
                    "and with SSBump maps (PNG; empty: none)")
         ->capture_default_str();
     app.add_option("--table", table, "the errors as a Markdown table")->capture_default_str();
+    app.add_option(
+        "--glossy-table", glossy_table,
+        "also measure the GGX coat's specular (roughness 0.2, 0.5, 0.8, f0 0.04) of each technique "
+        "under the sky and the sun against the glossy reference, as a Markdown table (three more "
+        "references: minutes; docs/specular.md)");
     app.add_option("--plot", plot, "the errors as a bar chart (PNG, gnuplot)")->capture_default_str();
     app.add_option("--atlas", atlas, "lightmap atlas size (square)")
         ->check(CLI::Range(64u, 4096u))
@@ -218,6 +262,9 @@ int main(int argc, char** argv)
             hemi::io::check_writable(p);
         if (!ssbump_figure.empty())
             hemi::io::check_writable(ssbump_figure);
+        if (!glossy_table.empty())
+            hemi::io::check_writable(glossy_table);
+        std::vector<GlossyRow> glossy;
 
         // The level, as a file too (hemi-bake lightmap / reference read it).
         const hemi::io::GltfScene level = hemi::samples::make_level(atlas);
@@ -345,6 +392,59 @@ int main(int argc, char** argv)
                     setup.errors.push_back(compare(clean_view.render(clean_frame), reference));
                 }
             }
+            if (setup.sun && !glossy_table.empty())
+            {
+                // The GGX coat: each technique's "+ggx" (its coefficients' specular) against the reference
+                // with the same coat (the same seed: the same diffuse paths, so that the difference of the
+                // two references is the specular alone), and the diffuse view as the baseline.
+                std::vector<std::string> ggx;
+                for (const Column& c : kTechniques)
+                    ggx.push_back(std::string(c.technique) + "+ggx");
+                hemi::render::LightmapView ggx_view(device, asset, ggx, w, h);
+                glossy.assign(std::size(kTechniques) + 1, {});
+                for (size_t i = 0; i < std::size(kTechniques); ++i)
+                    glossy[i].label = kTechniques[i].label;
+                glossy.back().label = "diffuse only (SH9, no specular)";
+                for (int ri = 0; ri < 3; ++ri)
+                {
+                    hemi::bake::ReferenceOptions glossy_options = ro;
+                    glossy_options.roughness = kGlossyRoughness[ri];
+                    glossy_options.f0 = kGlossyF0;
+                    std::fprintf(stderr, "%s: tracing the glossy reference (roughness %.1f) ...\n",
+                                 setup.name, kGlossyRoughness[ri]);
+                    const hemi::bake::ReferenceImage coat =
+                        hemi::bake::render_reference(level.mesh, surfaces, lights, glossy_options);
+                    std::fprintf(stderr, "  %.1f s, noise %.4f\n", coat.seconds, coat.noise);
+                    hemi::render::LightmapFrame glossy_frame = frame;
+                    glossy_frame.glossy_roughness = float(kGlossyRoughness[ri]);
+                    glossy_frame.glossy_f0 = float(kGlossyF0);
+                    for (size_t i = 0; i < std::size(kTechniques); ++i)
+                    {
+                        frame.technique = kTechniques[i].technique;
+                        const hemi::io::ImageRgba diffuse = view.render(frame);
+                        glossy_frame.technique = ggx[i];
+                        const hemi::io::ImageRgba image = ggx_view.render(glossy_frame);
+                        glossy[i].total[ri] = compare(image, coat);
+                        // The two references share their diffuse paths: the specular's noise is what the coat
+                        // adds to the reference's.
+                        const double specular_noise = std::sqrt(
+                            std::max(0.0, coat.noise * coat.noise - reference.noise * reference.noise));
+                        glossy[i].specular[ri] =
+                            specular_error(image, diffuse, coat.image, reference.image, specular_noise);
+                        if (i == 1 && ri == 0)
+                            hemi::io::write_png(fs::path(dir) / (stem + "_h6_ggx.png"), image,
+                                                {exposure, hemi::io::ToneMap::Curve::Clamp});
+                        if (i == 0)
+                        {
+                            glossy.back().total[ri] = compare(diffuse, coat);
+                            glossy.back().specular[ri] = 1.0;
+                        }
+                    }
+                    if (ri == 0)
+                        hemi::io::write_png(fs::path(dir) / (stem + "_reference_ggx.png"), coat.image,
+                                            {exposure, hemi::io::ToneMap::Curve::Clamp});
+                }
+            }
             frame.technique = "sh9";
             frame.white = false;
             // Three dynamic objects, lit by the probes: one in the sun's patch, one in the shade, one by a
@@ -423,6 +523,36 @@ int main(int argc, char** argv)
             setups[1].reference.noise, atlas, atlas, rays, bounces);
         md << foot;
         hemi::io::write_text_atomically(table, md.str());
+        if (!glossy_table.empty())
+        {
+            std::ostringstream g;
+            g << "| technique, sky and sun |";
+            for (const double r : kGlossyRoughness)
+                g << " roughness " << r << ": total, relative | specular, relative |";
+            g << "\n|---|---|---|---|---|---|---|\n";
+            for (const GlossyRow& row : glossy)
+            {
+                g << "| " << row.label << " |";
+                for (int ri = 0; ri < 3; ++ri)
+                {
+                    char cell[96];
+                    std::snprintf(cell, sizeof cell, " %.1f%% | %.1f%% |", 100.0 * row.total[ri].relative,
+                                  100.0 * row.specular[ri]);
+                    g << cell;
+                }
+                g << "\n";
+            }
+            g << "\nA white GGX coat (f0 " << kGlossyF0
+              << ") over the level, the lighting-only view (E / pi plus the coat's specular); \"total\" is "
+                 "the "
+                 "RMSE of the whole image (the glossy reference's noise removed) over its mean, \"specular\" "
+                 "the "
+                 "RMSE of the technique's specular (its coat minus its diffuse view) against the reference's "
+                 "(the glossy reference minus the diffuse one, the same paths) over the reference specular's "
+                 "mean.\n";
+            hemi::io::write_text_atomically(glossy_table, g.str());
+            std::printf("%s", g.str().c_str());
+        }
         std::printf("%s", md.str().c_str());
         std::printf("wrote %s, %s, %s, %s and the single images in %s\n", figure.c_str(), sky_figure.c_str(),
                     plot.c_str(), table.c_str(), dir.c_str());

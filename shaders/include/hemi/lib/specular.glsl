@@ -26,16 +26,14 @@ float hemi_ggx_alpha(float roughness)
     return r * r;
 }
 
-// f_r (n.l) of GGX with Smith's height-correlated masking-shadowing and Schlick's Fresnel: times a light's
-// irradiance on a surface facing it, its reflected radiance. 0 where l or v is below n.
-vec3 hemi_ggx(vec3 n, vec3 l, vec3 v, float roughness, vec3 f0)
+// GGX at alpha^2 = a2 (hemi_ggx's, or a lobe widened for a light of some size: hemi_basis_specular).
+vec3 hemi_ggx_a2(vec3 n, vec3 l, vec3 v, float a2, vec3 f0)
 {
     const float nl = dot(n, l), nv = dot(n, v);
     const vec3 lv = l + v;
     if (nl <= 0.0 || nv <= 0.0 || dot(lv, lv) < 1e-12)
         return vec3(0.0);
     const vec3 h = normalize(lv);
-    const float a = hemi_ggx_alpha(roughness), a2 = a * a;
     const float nh = clamp(dot(n, h), 0.0, 1.0);
     // nh^2 (a2 - 1) + 1 as nh^2 a2 + |n x h|^2: no cancellation near the peak of a smooth lobe in float.
     const vec3 nxh = cross(n, h);
@@ -44,6 +42,14 @@ vec3 hemi_ggx(vec3 n, vec3 l, vec3 v, float roughness, vec3 f0)
     const float vis = 0.5 / (nl * sqrt(nv * nv * (1.0 - a2) + a2) + nv * sqrt(nl * nl * (1.0 - a2) + a2));
     const float fc = pow(1.0 - clamp(dot(v, h), 0.0, 1.0), 5.0);
     return (f0 + (vec3(1.0) - f0) * fc) * (d * vis * nl);
+}
+
+// f_r (n.l) of GGX with Smith's height-correlated masking-shadowing and Schlick's Fresnel: times a light's
+// irradiance on a surface facing it, its reflected radiance. 0 where l or v is below n.
+vec3 hemi_ggx(vec3 n, vec3 l, vec3 v, float roughness, vec3 f0)
+{
+    const float a = hemi_ggx_alpha(roughness);
+    return hemi_ggx_a2(n, l, v, a * a, f0);
 }
 
 // The split sum's directional albedo: the GGX lobe's integral over a white environment at n.v = cos_v, as
@@ -90,7 +96,32 @@ struct HemiSh9Sun
 {
     vec3 direction;
     vec3 irradiance;
+    // How far the light spreads about `direction`: the alpha^2 to add to a GGX lobe lit by it (0: a sun).
+    // From the linear band's length over the constant's once the sky is taken out, which is sqrt(3) for a sun
+    // and sqrt(3) g1 for a von Mises-Fisher lobe of sharpness kappa (g1 = coth kappa - 1 / kappa, inverted as
+    // Banerjee et al. 2005 do); the lobe's angular variance 1 / kappa is a quarter of that in half vectors,
+    // where GGX's alpha^2 is about twice the slopes' variance: 1 / (2 kappa).
+    float spread;
 };
+
+// The linear band's length over the constant's, in units of a sun's (sqrt(3) in radiance: 1 for a sun, less
+// for a wider light), of SH9 irradiance e (luminance).
+float hemi_sh9_directionality(vec3 e[9])
+{
+    const vec3 w = vec3(0.2126, 0.7152, 0.0722);
+    const float l0 = dot(e[0], w) / float(HEMI_SH_A0);
+    const vec3 l1 = vec3(dot(e[3], w), dot(e[1], w), dot(e[2], w)) / float(HEMI_SH_A1);
+    return l0 > 0.0 ? length(l1) / (sqrt(3.0) * l0) : 0.0;
+}
+
+// HemiSh9Sun::spread for a directionality g (1: a sun). Sharpness above 1e5 (a lobe under 0.2 degrees,
+// beyond what float coefficients resolve) counts as a sun: no spread, so that one sun stays exact.
+float hemi_sun_spread(float g)
+{
+    g = clamp(g, 0.0, 1.0 - 1e-6);
+    const float kappa = g * (3.0 - g * g) / (1.0 - g * g);
+    return max(0.5 / max(kappa, 1e-6) - 0.5e-5, 0.0);
+}
 HemiSh9Sun hemi_sh9_dominant_sun(vec3 e[9], bool hemisphere, out vec3 rest[9])
 {
     const vec3 w = vec3(0.2126, 0.7152, 0.0722);
@@ -104,6 +135,7 @@ HemiSh9Sun hemi_sh9_dominant_sun(vec3 e[9], bool hemisphere, out vec3 rest[9])
     HemiSh9Sun sun;
     sun.direction = vec3(0.0, 0.0, 1.0);
     sun.irradiance = vec3(0.0);
+    sun.spread = 0.0;
     vec3 sky = vec3(0.0);
     float y[9];
     for (int pass = 0; pass < 2; ++pass)
@@ -143,6 +175,10 @@ HemiSh9Sun hemi_sh9_dominant_sun(vec3 e[9], bool hemisphere, out vec3 rest[9])
     }
     for (int j = 0; j < 9; ++j)
         rest[j] = e[j] - sun.irradiance * y[j];
+    vec3 lobe[9];
+    for (int j = 0; j < 9; ++j)
+        lobe[j] = e[j] - sky * h[j];
+    sun.spread = hemi_sun_spread(hemi_sh9_directionality(lobe));
     return sun;
 }
 
@@ -155,7 +191,8 @@ vec3 hemi_sh9_specular(vec3 e[9], vec3 n, vec3 v, float roughness, vec3 f0, bool
         return vec3(0.0);
     vec3 rest[9];
     const HemiSh9Sun sun = hemi_sh9_dominant_sun(e, hemisphere, rest);
-    vec3 spec = sun.irradiance * hemi_ggx(n, sun.direction, v, roughness, f0);
+    const float a = hemi_ggx_alpha(roughness);
+    vec3 spec = sun.irradiance * hemi_ggx_a2(n, sun.direction, v, min(a * a + sun.spread, 1.0), f0);
     // The rest at the reflected direction (not below the frame's horizon, which a lightmap does not see).
     vec3 r = reflect(-v, n);
     if (hemisphere)
@@ -276,6 +313,21 @@ HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE]
     }
     sun.direction = d;
     sun.irradiance = max(colour, vec3(0.0));
+    // The spread, from the SH9 estimate with the fitted sky taken out, over what the same estimate gives for
+    // the fitted sun alone (the basis blurs even a sun): 1, and no spread, for a sun.
+    {
+        vec3 one[HEMI_BASIS_MAX_SIZE], lobe[9], alone[9], sky_sh9[9];
+        for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
+            one[i] = vec3(rs[i]);
+        hemi_basis_to_sh9(basis, one, sky_sh9);
+        for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
+            one[i] = vec3(r[i]);
+        hemi_basis_to_sh9(basis, one, alone);
+        for (int j = 0; j < 9; ++j)
+            lobe[j] = e[j] - ss * sky_sh9[j];
+        sun.spread =
+            hemi_sun_spread(hemi_sh9_directionality(lobe) / max(hemi_sh9_directionality(alone), 1e-6));
+    }
     for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
         rest[i] = i < k ? c[i] - sun.irradiance * r[i] : vec3(0.0);
     return sun;
@@ -301,7 +353,8 @@ vec3 hemi_basis_specular(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE], vec3 n, 
     r.z = max(r.z, 0.0);
     r = dot(r, r) > 1e-12 ? normalize(r) : n;
     const vec3 er = hemi_basis_irradiance(basis, k, rest, r, sep4_weights);
-    return sun.irradiance * hemi_ggx(n, sun.direction, v, roughness, f0) +
+    const float a = hemi_ggx_alpha(roughness);
+    return sun.irradiance * hemi_ggx_a2(n, sun.direction, v, min(a * a + sun.spread, 1.0), f0) +
            max(er, vec3(0.0)) / 3.14159265358979 * (f0 * ab.x + ab.y);
 }
 
