@@ -8,7 +8,8 @@
 // every image on its own, so that hemi-bake and hemi-render can re-make each from the command line.
 //
 //   irradiance_normalmap [--dir DIR] [-o FIGURE.png] [--table TABLE.md] [--plot PLOT.png] [--atlas N]
-//                        [--rays R] [--reference-rays R] [--bounces B] [--size WxH] [--glossy-table GLOSSY.md]
+//                        [--rays R] [--reference-rays R] [--bounces B] [--size WxH] [--glossy-table
+//                        GLOSSY.md]
 #include "figure.h"
 #include "level.h"
 

@@ -284,6 +284,42 @@ TEST_F(SpecularGlsl, OneSunComesBackExactlyThroughSh9)
     EXPECT_LT(worst_specular, 1e-4);
 }
 
+// A wider light reads as one: the SH9 irradiance of a von Mises-Fisher lobe of sharpness kappa (its bands
+// attenuated by g1 = coth kappa - 1 / kappa and g2 = 1 - 3 g1 / kappa, computed here) gives the sun about its
+// direction and a spread (the alpha^2 its GGX lobe gains) of 1 / (2 kappa) within 5% (Banerjee's inversion
+// of g1), for kappa from 2 (a hemisphere's glow) to 200 (about 6 degrees), and a sun a spread of 0. A spread
+// ignored, or read from the sky-less remainder, fails.
+TEST_F(SpecularGlsl, AWiderLightWidensItsLobe)
+{
+    const glm::dvec3 d = unit(60.0, 30.0);
+    const double kappas[] = {2.0, 10.0, 50.0, 200.0, 1e9};
+    std::vector<Record> records;
+    for (const double kappa : kappas)
+    {
+        const double g1 = kappa > 1e6 ? 1.0 : 1.0 / std::tanh(kappa) - 1.0 / kappa,
+                     g2 = 1.0 - 3.0 * g1 / kappa;
+        const std::array<double, 9> e = sun_sh9(d);
+        Record r{};
+        for (size_t j = 0; j < 9; ++j)
+            r.c[j] = glm::vec4(glm::vec3(float(e[j] * (j == 0 ? 1.0 : j < 4 ? g1 : g2))), 0);
+        r.n = r.v = r.l = glm::vec4(0, 0, 1, 0);
+        r.params = glm::vec4(0.5f, 0.04f, float(HEMI_BASIS_SH9), 9);
+        records.push_back(r);
+    }
+    const std::vector<glm::vec4> values = run(records);
+    for (size_t i = 0; i < records.size(); ++i)
+    {
+        const glm::vec4 sun = values[i * kValues + 12];
+        // The direction within 0.8 of the lobe's angular width 1 / sqrt(kappa) (the sky the fit takes out
+        // tilts a wide lobe's), a sun's exactly.
+        EXPECT_LT(glm::length(glm::dvec3(glm::vec3(sun)) - d),
+                  kappas[i] > 1e6 ? 1e-4 : 0.8 / std::sqrt(kappas[i]))
+            << "kappa " << kappas[i];
+        const double expected = kappas[i] > 1e6 ? 0.0 : 0.5 / kappas[i];
+        EXPECT_NEAR(double(sun.w), expected, 0.05 * expected + 1e-6) << "kappa " << kappas[i];
+    }
+}
+
 // The one-sun table of docs/specular.md: for each basis, a sun of irradiance 1 projected as the bake projects
 // it, and the relative RMS error of hemi_basis_specular against the sun's exact GGX specular over suns at 10
 // to 85 degrees (four azimuths), the flat normal and four normals tilted by 20 degrees, and 256 views spread

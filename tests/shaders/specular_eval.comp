@@ -1,8 +1,8 @@
 #version 450
 // hemi's specular GLSL (shaders/include/hemi/lib/specular.glsl) at a list of records: per record the
 // coefficients, n, v, a light direction l and (roughness, f0, basis id); out: hemi_basis_specular, hemi_ggx
-// at l, hemi_ggx_albedo, hemi_basis_to_sh9's nine coefficients, and hemi_basis_dominant_sun's direction and
-// irradiance. A test shader (tests/shaders/).
+// at l, hemi_ggx_albedo, hemi_basis_to_sh9's nine coefficients, and hemi_basis_dominant_sun's direction (w:
+// its spread) and irradiance. A test shader (tests/shaders/).
 #extension GL_GOOGLE_include_directive : require
 #include "hemi/hemi.glsl"
 
@@ -57,6 +57,6 @@ void main()
         values[o + 3u + uint(j)] = vec4(e[j], 0.0);
     vec3 rest[HEMI_BASIS_MAX_SIZE];
     const HemiSh9Sun sun = hemi_basis_dominant_sun(basis, K, c, rest);
-    values[o + 12u] = vec4(sun.direction, 0.0);
+    values[o + 12u] = vec4(sun.direction, sun.spread);
     values[o + 13u] = vec4(sun.irradiance, 0.0);
 }

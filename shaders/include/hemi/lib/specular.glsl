@@ -7,10 +7,11 @@
 // the radiance a glossy lobe needs. hemi_basis_specular recovers a lighting that explains them: the SH9
 // irradiance they most likely came from (hemi_basis_to_sh9, a per-basis linear estimator generated from
 // math::sh9_from_basis), split into one sun (its direction from the linear band, where a uniform sky has
-// been taken out) and the rest. The sun's specular is exact GGX; the rest's is its irradiance at the
-// reflected direction, E(r) / pi, as the radiance of a smooth environment, times the split sum's directional
-// albedo. A lightmap lit by one sun gives that sun back exactly through SH9. Mixed lights are not in the
-// coefficients: light them as dynamic lights with hemi_ggx (exact).
+// been taken out; refined in the basis's own space by Gauss-Newton) and the rest. The sun's specular is GGX,
+// its lobe widened by the light's spread; the rest's is its irradiance at the reflected direction, E(r) / pi,
+// as the radiance of a smooth environment, times the split sum's directional albedo. One sun comes back
+// exactly from every basis. Mixed lights are not in the coefficients: light them as dynamic lights with
+// hemi_ggx (exact).
 #ifndef HEMI_LIB_SPECULAR_GLSL
 #define HEMI_LIB_SPECULAR_GLSL
 #include "hemi/basis/sh9.glsl"
@@ -97,10 +98,11 @@ struct HemiSh9Sun
     vec3 direction;
     vec3 irradiance;
     // How far the light spreads about `direction`: the alpha^2 to add to a GGX lobe lit by it (0: a sun).
-    // From the linear band's length over the constant's once the sky is taken out, which is sqrt(3) for a sun
-    // and sqrt(3) g1 for a von Mises-Fisher lobe of sharpness kappa (g1 = coth kappa - 1 / kappa, inverted as
-    // Banerjee et al. 2005 do); the lobe's angular variance 1 / kappa is a quarter of that in half vectors,
-    // where GGX's alpha^2 is about twice the slopes' variance: 1 / (2 kappa).
+    // From the linear band's length over the constant's (of all the light: a sun with a sky reads as a wider
+    // lobe, which on real levels errs on the safe side), which is sqrt(3) for a sun and sqrt(3) g1 for a von
+    // Mises-Fisher lobe of sharpness kappa (g1 = coth kappa - 1 / kappa, inverted as Banerjee et al. 2005
+    // do); the lobe's angular variance 1 / kappa is a quarter of that in half vectors, where GGX's alpha^2 is
+    // about twice the slopes' variance: 1 / (2 kappa).
     float spread;
 };
 
@@ -175,10 +177,7 @@ HemiSh9Sun hemi_sh9_dominant_sun(vec3 e[9], bool hemisphere, out vec3 rest[9])
     }
     for (int j = 0; j < 9; ++j)
         rest[j] = e[j] - sun.irradiance * y[j];
-    vec3 lobe[9];
-    for (int j = 0; j < 9; ++j)
-        lobe[j] = e[j] - sky * h[j];
-    sun.spread = hemi_sun_spread(hemi_sh9_directionality(lobe));
+    sun.spread = hemi_sun_spread(hemi_sh9_directionality(e));
     return sun;
 }
 
@@ -313,20 +312,14 @@ HemiSh9Sun hemi_basis_dominant_sun(int basis, int k, vec3 c[HEMI_BASIS_MAX_SIZE]
     }
     sun.direction = d;
     sun.irradiance = max(colour, vec3(0.0));
-    // The spread, from the SH9 estimate with the fitted sky taken out, over what the same estimate gives for
-    // the fitted sun alone (the basis blurs even a sun): 1, and no spread, for a sun.
+    // The spread: the SH9 estimate's directionality over what the same estimate gives for the fitted sun
+    // alone (the basis blurs even a sun): 1, and no spread, for a sun.
     {
-        vec3 one[HEMI_BASIS_MAX_SIZE], lobe[9], alone[9], sky_sh9[9];
-        for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
-            one[i] = vec3(rs[i]);
-        hemi_basis_to_sh9(basis, one, sky_sh9);
+        vec3 one[HEMI_BASIS_MAX_SIZE], alone[9];
         for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
             one[i] = vec3(r[i]);
         hemi_basis_to_sh9(basis, one, alone);
-        for (int j = 0; j < 9; ++j)
-            lobe[j] = e[j] - ss * sky_sh9[j];
-        sun.spread =
-            hemi_sun_spread(hemi_sh9_directionality(lobe) / max(hemi_sh9_directionality(alone), 1e-6));
+        sun.spread = hemi_sun_spread(hemi_sh9_directionality(e) / max(hemi_sh9_directionality(alone), 1e-6));
     }
     for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
         rest[i] = i < k ? c[i] - sun.irradiance * r[i] : vec3(0.0);
