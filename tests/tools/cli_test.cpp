@@ -986,6 +986,23 @@ std::pair<int, double> compare_covered(const std::vector<float>& a, const std::v
     }
     return {covered, worst};
 }
+// The floor and wall of add_floor_and_wall as a glTF file, with gutters of four texels between the charts: a
+// bilinear lookup of a covered texel never reads light dilated from another chart (with the wall's two sides
+// a texel apart, the baked lightmap's dark side picks up the lit side's light at its edge, where a mixed
+// sun's run-time light, facing away, gives none).
+fs::path write_floor_and_wall(const fs::path& path)
+{
+    hemi::io::GltfScene s;
+    hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
+                         {0.02f, 0.62f, 0.62f, 0.02f});
+    hemi::test::add_quad(s.mesh, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
+                         {0.68f, 0.62f, 0.80f, 0.02f});
+    hemi::test::add_quad(s.mesh, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
+                         {0.86f, 0.62f, 0.98f, 0.02f});
+    to_gltf_scene(s);
+    hemi::io::write_gltf(path, s);
+    return path;
+}
 } // namespace
 
 // Done-when line 1 of issue 43 at run time: a floor and a wall on it (glTF, y up) under a sky,
@@ -999,20 +1016,7 @@ std::pair<int, double> compare_covered(const std::vector<float>& a, const std::v
 // light; without the sun's light at run time the lit ones are.
 TEST(BakeCli, AMixedSunLitAtRunTimeWithItsShadowmaskRendersLikeTheBakedSun)
 {
-    // The floor and wall of add_floor_and_wall, with gutters of four texels between the charts: a bilinear
-    // lookup of a covered texel never reads light dilated from another chart (with the wall's two sides a
-    // texel apart, the baked lightmap's dark side picks up the lit side's light at its edge, where the mixed
-    // sun's run-time light, facing away, gives none).
-    hemi::io::GltfScene s;
-    hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
-                         {0.02f, 0.62f, 0.62f, 0.02f});
-    hemi::test::add_quad(s.mesh, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
-                         {0.68f, 0.62f, 0.80f, 0.02f});
-    hemi::test::add_quad(s.mesh, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
-                         {0.86f, 0.62f, 0.98f, 0.02f});
-    to_gltf_scene(s);
-    const fs::path scene = dir() / "mixed_wall.gltf";
-    hemi::io::write_gltf(scene, s);
+    const fs::path scene = write_floor_and_wall(dir() / "mixed_wall.gltf");
     const glm::vec3 sun = glm::normalize(glm::vec3(0.8f, 0.3f, 0.6f));
     const float e_sun = 3.0f, diameter = 5.0f;
     char sun_option[128];
@@ -1067,16 +1071,7 @@ TEST(BakeCli, AMixedSunLitAtRunTimeWithItsShadowmaskRendersLikeTheBakedSun)
 // shadowmask's wrong channel, or a coat on the view vector's mirror fails.
 TEST(BakeCli, AMixedSunsSpecularUnderAGgxCoatIsTheReferences)
 {
-    hemi::io::GltfScene s;
-    hemi::test::add_quad(s.mesh, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
-                         {0.02f, 0.62f, 0.62f, 0.02f});
-    hemi::test::add_quad(s.mesh, {-0.2f, 1, 0}, {-0.2f, -1, 0}, {-0.2f, -1, 0.5f}, {-0.2f, 1, 0.5f},
-                         {0.68f, 0.62f, 0.80f, 0.02f});
-    hemi::test::add_quad(s.mesh, {-0.2f, -1, 0}, {-0.2f, 1, 0}, {-0.2f, 1, 0.5f}, {-0.2f, -1, 0.5f},
-                         {0.86f, 0.62f, 0.98f, 0.02f});
-    to_gltf_scene(s);
-    const fs::path scene = dir() / "glossy_wall.gltf";
-    hemi::io::write_gltf(scene, s);
+    const fs::path scene = write_floor_and_wall(dir() / "glossy_wall.gltf");
     const std::string lights = " --sun 0.8,0.3,0.45,3,3,3,0 --env-scale 0 --bounces 0";
     const std::string camera = " --size 192x192 --camera -2.2,-1.6,1.6,0,0,0.1 --white";
     const fs::path asset = dir() / "glossy_wall.hemi";
