@@ -3,7 +3,8 @@
 // irradiance they most likely came from (math::sh9_from_basis); hemi_basis_from_sh9(), the bake's projection
 // of SH9 irradiance onto each basis (math::projection_from_sh9); hemi_ggx_albedo_fit(), the split sum's
 // directional albedo (math::ggx_albedo_fit). The GLSL is generated rather than written so that it cannot
-// drift from the C++ (tests/render/specular_glsl_test.cpp holds the two equal).
+// drift from the C++ (tests/render/specular_glsl_test.cpp holds hemi_basis_to_sh9 equal to the C++, the
+// projection through the one-sun test, the albedo fit against its quadrature).
 #include <hemi/io/atomic_file.h>
 #include <hemi/math/ggx.h>
 

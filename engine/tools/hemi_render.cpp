@@ -15,6 +15,7 @@
 #include <hemi/io/image.h>
 #include <hemi/io/lightmap_asset.h>
 #include <hemi/io/prt_asset.h>
+#include <hemi/math/ggx.h>
 #include <hemi/render/view/lightmap_view.h>
 #include <hemi/render/view/prt_view.h>
 
@@ -119,6 +120,13 @@ int main(int argc, char** argv)
             const bool lightmap = kind == "lightmap";
             if (!lightmap && !spheres.empty())
                 throw std::invalid_argument("--sphere is for lightmap assets baked with --probes");
+            if (roughness > 0.0f && roughness < float(hemi::math::kGgxMinRoughness))
+                throw std::invalid_argument("--roughness must be 0 (no coat) or in [0.03, 1]");
+            if (roughness > 0.0f && (technique == "rnm" || technique == "ssbump" || technique == "rnm_ao"))
+                throw std::invalid_argument(
+                    "--roughness needs a basis's coefficients (sh9, h6, ..., plain), not "
+                    "--technique " +
+                    technique);
             if (!lightmap && roughness > 0.0f)
                 throw std::invalid_argument(asset_path +
                                             " is not a lightmap asset: --roughness is for lightmaps");
@@ -182,14 +190,7 @@ int main(int argc, char** argv)
                     device = std::make_unique<hemi::gpu::Device>(desc);
                     // The GGX coat: the output drawn by the ggx technique ("<output>+ggx").
                     if (roughness > 0.0f)
-                    {
-                        if (technique == "rnm" || technique == "ssbump" || technique == "rnm_ao")
-                            throw std::invalid_argument(
-                                "--roughness needs a basis's coefficients (sh9, h6, ..., "
-                                "plain), not --technique " +
-                                technique);
                         technique += "+ggx";
-                    }
                     hemi::render::LightmapView view(*device, asset, {technique}, w, h,
                                                     bicubic ? hemi::render::LightmapFilter::Bicubic
                                                             : hemi::render::LightmapFilter::Linear);

@@ -314,7 +314,7 @@ ReferenceOptions far_view(const glm::dvec3& towards_eye, int rays, double roughn
 // 2000 units away; the sun is sampled as a light),
 // and under uniform radiance 1 with roughness 1 and f0 1 (D = 1 / pi, V = 1 / (2 (n.l + n.v)), F = 1) the
 // coat adds 1 - c ln((1 + c) / c) for c = n.v (the lobe sampled from GGX: the mean over 16 pixels within
-// 0.5%). A Fresnel on n.v, an uncorrelated Smith term or a lobe drawn without its pdf fails.
+// 0.2%). A Fresnel on n.v, an uncorrelated Smith term or a lobe drawn without its pdf fails.
 TEST(Reference, GgxCoatAddsItsBrdfUnderOneSunAndItsAlbedoUnderAUniformSky)
 {
     const Mesh m = hemi::test::plane(2);
@@ -337,14 +337,18 @@ TEST(Reference, GgxCoatAddsItsBrdfUnderOneSunAndItsAlbedoUnderAUniformSky)
         for (uint32_t i = 0; i < 16; ++i)
             ASSERT_NEAR(lit.image.pixels[i * 4 + 1], expected, 5e-4 * expected) << "pixel " << i;
 
+        // The closed form integrates over the whole hemisphere of the normal: a flat normal map, so that the
+        // plane clips none of it (a tilted one loses 0.4% of the coat below the plane).
         LightmapLights sky; // uniform radiance 1
-        const ReferenceImage white = render_reference(m, surfaces, sky, far_view(v, 4096, 1.0, 1.0));
-        const double c = glm::dot(n, v);
+        const FlatNormalMap flat(128, 128, 255);
+        const LightmapSurfaces flat_surfaces(m, flat.materials, flat.images, primitives);
+        const ReferenceImage white = render_reference(m, flat_surfaces, sky, far_view(v, 4096, 1.0, 1.0));
+        const double c = glm::dot(glm::dvec3(flat.tangent_normal), v);
         const double coat = 1.0 - c * std::log((1.0 + c) / c);
-        const double diffuse = (1.0 + double(map.tangent_normal.z)) / 2.0;
+        const double diffuse = (1.0 + double(flat.tangent_normal.z)) / 2.0;
         double mean = 0.0;
         for (uint32_t i = 0; i < 16; ++i)
             mean += white.image.pixels[i * 4 + 1] / 16.0;
-        EXPECT_NEAR(mean, diffuse + coat, 5e-3 * (diffuse + coat)) << "view " << eye.x;
+        EXPECT_NEAR(mean, diffuse + coat, 2e-3 * (diffuse + coat)) << "view " << eye.x;
     }
 }

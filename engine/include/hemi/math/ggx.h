@@ -26,8 +26,8 @@
 namespace hemi::math
 {
 
-// Roughness is clamped to [kGgxMinRoughness, 1] (alpha >= 1e-3 keeps D finite in float): the same clamp as
-// the GLSL.
+// Roughness is clamped to [kGgxMinRoughness, 1] (alpha^2 >= 8.1e-7 keeps D finite in float): the same clamp
+// as the GLSL.
 constexpr double kGgxMinRoughness = 0.03;
 
 // f_r (n.l) of the BRDF above, per channel of f0.
