@@ -4,7 +4,9 @@
 // is destroyed (the object tracker's leak reports) fail the run at exit.
 
 #include <hemi/gpu/device.h>
+#include <hemi/gpu/resources.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string_view>
@@ -44,6 +46,12 @@ gpu::Device& device();
 
 // The SPIR-V of a test-only shader of tests/shaders/ by file name (throws when unknown).
 std::span<const uint32_t> test_spirv(std::string_view name);
+
+// One dispatch of the test compute shader `name` (set 0: storage buffer i at binding i, in order; the push
+// constants `push`; `specialization` value i to constant_id i), submitted and waited for.
+void dispatch_storage(std::string_view name, const std::vector<const gpu::Buffer*>& buffers,
+                      std::span<const std::byte> push, const std::vector<uint32_t>& specialization,
+                      uint32_t groups);
 
 class GpuTest : public ::testing::Test
 {

@@ -18,9 +18,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -55,37 +57,12 @@ std::vector<glm::vec4> run(const std::vector<Record>& records)
     hemi::gpu::write_buffer(dev, in, records.data(), records.size() * sizeof(Record));
     const VkDeviceSize out_bytes = VkDeviceSize(count) * kValues * 16;
     hemi::gpu::Buffer out = hemi::gpu::create_buffer(dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
-    const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
-    std::vector<hemi::gpu::Binding> bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
-                                                {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs},
-                                                {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs}};
     const std::array<float, 36>& weights = hemi::math::sep4_weights();
     hemi::gpu::Buffer sep4 =
         hemi::gpu::create_buffer(dev, {sizeof(weights), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
     hemi::gpu::write_buffer(dev, sep4, weights.data(), sizeof(weights));
-    hemi::gpu::Program program =
-        hemi::gpu::create_compute_program(dev, {hemi::test::test_spirv("specular_eval.comp"), bindings,
-                                                uint32_t(sizeof(uint32_t)), specialization});
-    hemi::gpu::DescriptorPool pool = hemi::gpu::create_descriptor_pool(dev, bindings, 1);
-    VkDescriptorSet set = hemi::gpu::allocate_descriptor_set(dev, pool, program.set_layout);
-    hemi::gpu::DescriptorWrite writes[3];
-    writes[0].binding = 0;
-    writes[0].buffer = {in, 0, VK_WHOLE_SIZE};
-    writes[1].binding = 1;
-    writes[1].buffer = {out, 0, VK_WHOLE_SIZE};
-    writes[2].binding = 2;
-    writes[2].buffer = {sep4, 0, VK_WHOLE_SIZE};
-    hemi::gpu::write_descriptors(dev, set, writes);
-    hemi::gpu::one_shot(dev,
-                        [&](VkCommandBuffer cmd)
-                        {
-                            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
-                            vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1,
-                                                    &set, 0, nullptr);
-                            vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof(uint32_t),
-                                               &count);
-                            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
-                        });
+    hemi::test::dispatch_storage("specular_eval.comp", {&in, &out, &sep4},
+                                 std::as_bytes(std::span(&count, 1)), specialization, (count + 63) / 64);
     std::vector<glm::vec4> values(size_t(count) * kValues);
     hemi::gpu::read_buffer(dev, out, values.data(), out_bytes);
     return values;
