@@ -4,18 +4,14 @@
 #include "models.h"
 
 #include <hemi/bake/factored.h>
-#include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/prt_bake.h>
-#include <hemi/math/camera.h>
+#include <hemi/io/gltf.h>
 #include <hemi/math/sh_environment.h>
-
-#include <glm/geometric.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 
 namespace hemi::samples
 {
@@ -44,7 +40,7 @@ io::ImageRgba sky_image(uint32_t width)
     img.width = width;
     img.height = width / 2;
     img.pixels.resize(size_t(img.width) * img.height * 4);
-    const glm::vec3 sun = glm::normalize(glm::vec3(-0.75f, -0.3f, 0.55f));
+    const glm::vec3 sun = kSunDirection;
     for (uint32_t y = 0; y < img.height; ++y)
         for (uint32_t x = 0; x < img.width; ++x)
         {
@@ -71,48 +67,33 @@ io::ImageRgba sky_image(uint32_t width)
     return img;
 }
 
-void bake_level(const fs::path& path, const std::function<void(const std::string&)>& log)
+// The level as a studio's pipeline bakes it: its glTF (what an artist exports) through hemi-bake's own job
+// (bake::bake_lightmap_file: stitched seams, probes, the light table), outputs h6 and h4 for the floor, walls
+// and pillars and rnm for the SSBump wall. The lights are the irradiance_normalmap sample's: a blue sky and a
+// sun low in the west through the opening, the sun mixed (its bounces in the lightmap, its visibility in the
+// shadowmask; the engine lights it with its shadow map) or baked (all of its light in the lightmap).
+void bake_level(const fs::path& gltf, const fs::path& path, bool mixed_sun,
+                const std::function<void(const std::string&)>& log)
 {
     const auto t0 = std::chrono::steady_clock::now();
     const uint32_t atlas = 256;
-    log("baking the level (" + std::to_string(atlas) + "^2 lightmap: h6, h4, rnm; light probes) into " +
-        path.string());
-    const io::GltfScene level = make_level(atlas, LevelMaps::SsbumpWall);
-    const bake::LightmapSurfaces surfaces(level.mesh, level.materials, level.images, level.primitives);
-    bake::LightmapUvReport report;
-    const bake::LightmapAtlas lightmap_atlas = bake::rasterize_lightmap(level.mesh, atlas, atlas, report);
-    if (!report.ok())
-        throw std::runtime_error("the level's lightmap UVs: " + report.problems.front());
-    // The irradiance_normalmap sample's lights: a blue sky, and a sun low in the west through the opening.
-    bake::LightmapLights lights;
-    lights.uniform = glm::vec3(0.35f, 0.45f, 0.65f);
-    lights.sun = true;
-    lights.sun_direction = glm::normalize(glm::vec3(-0.75f, -0.3f, 0.55f));
-    lights.sun_irradiance = glm::vec3(5.0f, 4.6f, 4.0f);
-    lights.scene_to_world = glm::mat3(math::gltf_to_world());
-    bake::LightmapBakeOptions options;
-    options.rays = 128;
-    options.bounces = 1;
-    const bake::LightmapSh sh =
-        bake::bake_lightmap_sh(level.mesh, lightmap_atlas, lights, options, &surfaces);
-    io::LightmapAsset asset;
-    asset.mesh = level.mesh;
-    asset.materials = level.materials;
-    asset.images = level.images;
-    asset.primitives = level.primitives;
-    asset.width = asset.height = atlas;
-    asset.rays = uint32_t(options.rays);
-    asset.bounces = uint32_t(options.bounces);
-    asset.seed = options.seed;
-    asset.covered_texels = uint32_t(lightmap_atlas.texels.size());
-    for (const char* output : {"h6", "h4", "rnm"})
-        asset.outputs.push_back({output, uint32_t(bake::lightmap_output_size(output)),
-                                 bake::lightmap_maps(output, lightmap_atlas, sh)});
-    asset.probes = bake::probe_grid(level.mesh, glm::uvec3(6, 3, 6));
-    bake::LightmapBakeOptions probe_options = options;
-    probe_options.rays = 1024;
-    bake::bake_light_probes(asset.probes, level.mesh, lightmap_atlas, sh, lights, probe_options, &surfaces);
-    io::write_lightmap_asset(path, asset);
+    log("baking the level (" + std::to_string(atlas) + "^2 lightmap: h6, h4, rnm; light probes; the sun " +
+        (mixed_sun ? "mixed" : "baked") + ") into " + path.string());
+    if (!fs::exists(gltf))
+        io::write_gltf(gltf, make_level(atlas, LevelMaps::SsbumpWall));
+    bake::LightmapFileOptions o;
+    o.width = o.height = atlas;
+    o.outputs = {"h6", "h4", "rnm"};
+    o.probes = glm::uvec3(6, 3, 6);
+    o.probe_rays = 1024;
+    o.bake.rays = 128;
+    o.bake.bounces = 1;
+    o.lights.uniform = glm::vec3(0.35f, 0.45f, 0.65f);
+    o.lights.sun = true;
+    o.lights.sun_direction = kSunDirection;
+    o.lights.sun_irradiance = glm::vec3(5.0f, 4.6f, 4.0f);
+    o.lights.sun_mode = mixed_sun ? io::LightMode::Mixed : io::LightMode::Baked;
+    bake::bake_lightmap_file(gltf, path, o);
     log("  level baked in " + seconds(since(t0)));
 }
 
@@ -132,14 +113,15 @@ void bake_torus(const fs::path& dir, const fs::path& path, const std::function<v
 
 } // namespace
 
-EngineAssets prepare_engine_assets(const fs::path& dir, const std::function<void(const std::string&)>& log)
+EngineAssets prepare_engine_assets(const fs::path& dir, bool mixed_sun,
+                                   const std::function<void(const std::string&)>& log)
 {
     fs::create_directories(dir);
     EngineAssets a;
-    a.level_path = dir / "engine_level.hemi";
+    a.level_path = dir / (mixed_sun ? "engine_level.hemi" : "engine_level_baked_sun.hemi");
     const fs::path torus = dir / "engine_torus.hemi", sky = dir / "engine_sky.hemi";
     if (!fs::exists(a.level_path))
-        bake_level(a.level_path, log);
+        bake_level(dir / "engine_level.glb", a.level_path, mixed_sun, log);
     if (!fs::exists(torus))
         bake_torus(dir, torus, log);
     const io::ImageRgba sky_equirect = sky_image(256);

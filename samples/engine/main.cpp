@@ -1,17 +1,19 @@
 // engine: hemi inside an engine's own frame. The engine owns the window (GLFW), the Vulkan instance and
 // device (loaded with volk), the swapchain (FIFO, re-made on resize), two frames in flight and its render
-// graph (shadow map, depth prepass, main pass with its own shaders, post pass); hemi supplies the baked data
-// (a lightmapped level with an SSBump wall, light probes, a PRT torus relit every frame, a Heidrich-Seidel
-// glossy ball's parabolic maps), its depth and shadow pipelines, and the GLSL library the engine's shaders
-// include. docs/integration.md walks through it.
+// graph (the sun's shadow map, depth prepass, main pass with its own shaders, post pass); hemi supplies the
+// baked data (a lightmapped level with an SSBump wall, a polished floor and a mixed sun's shadowmask, light
+// probes, a PRT torus relit every frame, a Heidrich-Seidel glossy ball's parabolic maps), its depth and
+// shadow pipelines, and the GLSL library the engine's shaders include. docs/integration.md walks through it.
 //
 //   engine [--assets DIR] [--size WxH] [--frames N] [--screenshot FILE] [--validation] [--baked-only]
-//          [--basis auto|h6|h4] [--exposure E] [--no-tonemap] [--fog D] [--camera EYE,TARGET]
-//          [--resize-at N]
+//          [--basis auto|h6|h4] [--sun mixed|baked] [--shadow-distance D] [--no-coat] [--specular-only]
+//          [--exposure E]
+//          [--no-tonemap] [--fog D] [--camera EYE,TARGET] [--resize-at N]
 //
-// Keys: T next basis (H6 near / H4 far, H6, H4), W lighting only, B baked lighting only, L pause the light,
-// E pause the environment, O pause the objects, F fog, M tonemap, P screenshot (engine_NNN.png), Esc quit.
-// Exit status 2 when the validation layer reported anything (--validation).
+// Keys: T next basis (H6 near / H4 far, H6, H4), W lighting only, S specular only, B baked lighting only, L
+// the sun's shadow map on/off (off: the shadowmask alone), G the floor's GGX coat on/off, E pause the
+// environment, O pause the objects, F fog, M tonemap, P screenshot (engine_NNN.png), Esc quit. Exit status 2
+// when the validation layer reported anything (--validation).
 #include "assets.h"
 #include "context.h"
 #include "renderer.h"
@@ -35,7 +37,7 @@ namespace
 struct Input
 {
     engine::Settings* settings;
-    bool pause_light = false, pause_env = false, pause_objects = false, screenshot = false, resized = false;
+    bool pause_env = false, pause_objects = false, screenshot = false, resized = false;
 };
 
 void on_key(GLFWwindow* window, int key, int, int action, int)
@@ -55,11 +57,17 @@ void on_key(GLFWwindow* window, int key, int, int action, int)
     case GLFW_KEY_W:
         s.lighting_only = !s.lighting_only;
         break;
+    case GLFW_KEY_S:
+        s.specular_only = !s.specular_only;
+        break;
     case GLFW_KEY_B:
         s.baked_only = !s.baked_only;
         break;
     case GLFW_KEY_L:
-        in->pause_light = !in->pause_light;
+        s.shadow_map = !s.shadow_map;
+        break;
+    case GLFW_KEY_G:
+        s.coat = !s.coat;
         break;
     case GLFW_KEY_E:
         in->pause_env = !in->pause_env;
@@ -108,9 +116,10 @@ int main(int argc, char** argv)
 {
     CLI::App app{
         "engine: hemi's techniques in an engine's own frame (window, swapchain, render graph, shaders)"};
-    std::string assets_dir = "engine_assets", size = "960x540", screenshot, basis = "auto", camera;
+    std::string assets_dir = "engine_assets", size = "960x540", screenshot, basis = "auto", camera,
+                sun = "mixed";
     int frames = 0, resize_at = -1;
-    bool validation = false, no_tonemap = false;
+    bool validation = false, no_tonemap = false, no_coat = false;
     engine::Settings settings;
     app.add_option("--assets", assets_dir, "folder of the baked assets (baked there when missing)")
         ->capture_default_str();
@@ -123,11 +132,27 @@ int main(int argc, char** argv)
                  "status 2");
     app.add_flag(
         "--baked-only", settings.baked_only,
-        "the level alone in H4 (its SSBump wall in SSBump), lit by its lightmap, no fog, no tonemap: "
-        "what `hemi-render engine_level.hemi --technique h4` draws from the same camera");
+        "the level alone in H4 (its SSBump wall in SSBump), lit by its lightmap and its mixed sun through "
+        "the "
+        "shadowmask alone, no coat, fog or tonemap: what `hemi-render engine_level.hemi --technique h4` "
+        "draws from the same camera");
     app.add_option("--basis", basis, "the level's lightmap basis: auto (H6 near, H4 far), h6 or h4")
         ->check(CLI::IsMember({"auto", "h6", "h4"}))
         ->capture_default_str();
+    app.add_option("--sun", sun,
+                   "the level's sun: mixed (its bounces baked, its direct light at run time through the "
+                   "shadowmask and the shadow map: shadows of moving objects, its exact highlight) or baked "
+                   "(all of its light in the lightmap: the floor's highlight from the directional lightmap); "
+                   "each is its own asset in --assets")
+        ->check(CLI::IsMember({"mixed", "baked"}))
+        ->capture_default_str();
+    app.add_option("--shadow-distance", settings.shadow_distance,
+                   "how far from the eye the sun's shadow map reaches (beyond it, the static shadows alone)")
+        ->check(finite_in(0.0, 1000.0))
+        ->capture_default_str();
+    app.add_flag("--no-coat", no_coat, "no GGX coat on the polished floor (no specular)");
+    app.add_flag("--specular-only", settings.specular_only,
+                 "the coat's light alone: the directional lightmap's specular and the mixed sun's");
     app.add_option("--exposure", settings.exposure, "exposure before the tonemap (--baked-only: 1)")
         ->check(finite_in(1e-6, 1e6))
         ->capture_default_str();
@@ -149,6 +174,7 @@ int main(int argc, char** argv)
         return app.exit(e) == 0 ? 0 : 1; // a usage error exits 1 (--help 0), as hemi's tools do
     }
     settings.tonemap = !no_tonemap;
+    settings.coat = !no_coat;
     settings.basis = basis == "auto" ? 0 : basis == "h6" ? 1 : 2;
 
     try
@@ -186,7 +212,8 @@ int main(int argc, char** argv)
 
         const auto t0 = std::chrono::steady_clock::now();
         const hemi::samples::EngineAssets assets = hemi::samples::prepare_engine_assets(
-            assets_dir, [](const std::string& line) { std::fprintf(stderr, "engine: %s\n", line.c_str()); });
+            assets_dir, sun == "mixed",
+            [](const std::string& line) { std::fprintf(stderr, "engine: %s\n", line.c_str()); });
 
         if (!glfwInit())
             throw std::runtime_error("GLFW cannot open a display (headless: run under xvfb-run)");
@@ -236,8 +263,6 @@ int main(int argc, char** argv)
                         total_ms += std::chrono::duration<double, std::milli>(now - last).count();
                         ++timed;
                     }
-                    if (!input.pause_light)
-                        state.light_time += dt;
                     if (!input.pause_env)
                         state.env_time += dt;
                     if (!input.pause_objects)

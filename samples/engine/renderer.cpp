@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -64,8 +65,8 @@ constexpr VkFormat kHdrFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
 struct EngineFrame
 {
     glm::mat4 view_projection;
-    glm::mat4 light_view_projection;
-    glm::vec4 eye, light_position, light_axis, light_intensity, fog;
+    glm::mat4 sun_view_projection;
+    glm::vec4 eye, sun_direction, sun_irradiance, shadow, fog;
     glm::ivec4 mode;
     glm::vec4 probe_sh[kSpheres * 9];
     shared::EnvironmentUniforms env;
@@ -75,7 +76,13 @@ struct EngineObject
     glm::mat4 model;
     glm::vec4 albedo{1.0f};
     glm::ivec4 index{0};
+    glm::vec4 material{0.0f}; // GGX roughness (0: none), f0, the probes' occlusion of the mixed sun
 };
+static_assert(sizeof(EngineObject) <= 128, "push constants beyond Vulkan's guaranteed 128 bytes");
+
+// The polished floor's coat (the level's material of that name): a dielectric (f0 0.04) of roughness 0.3.
+constexpr float kFloorRoughness = 0.3f, kFloorF0 = 0.04f;
+constexpr float kShadowFade = 1.5f; // the band before the shadow distance where the shadow map fades out
 struct PostPush
 {
     float exposure;
@@ -175,6 +182,19 @@ bool visible(const glm::mat4& view_projection, const glm::mat4& model, glm::vec3
     return true;
 }
 
+// The sun's shadow map: an orthographic view along the sun's light over the level's bounding sphere (Vulkan
+// clip space, y down, as hemi's cameras).
+glm::mat4 sun_matrix(const glm::vec3& towards_sun, const math::BoundingSphere& b)
+{
+    const float r = b.radius;
+    const glm::vec3 up =
+        std::abs(towards_sun.z) > 0.99f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 1.0f);
+    const glm::mat4 view = glm::lookAt(b.centre + 2.0f * r * towards_sun, b.centre, up);
+    glm::mat4 proj = glm::orthoRH_ZO(-r, r, -r, r, 0.5f * r, 3.5f * r);
+    proj[1][1] *= -1.0f;
+    return proj * view;
+}
+
 // The engine's vertex format: positions alone in stream 0 (all its depth-only passes bind), the rest in
 // stream 1; 32-bit indices. Every mesh of the scene lies once in these buffers: hemi is told the layout and
 // the ranges (render::EngineGeometry) and its depth and shadow pipelines draw from them too.
@@ -244,6 +264,10 @@ struct Renderer::Impl
     render::EnvironmentMaterial glossy;
     glm::mat4 level_model, torus_model;
     math::BoundingSphere level_bounds;
+    // The level's mixed sun (render::mixed_lights: the direction towards it, its irradiance and shadowmask
+    // channel), lit by the engine at run time; none when the level's sun is baked.
+    std::optional<render::DynamicLight> sun;
+    glm::mat4 sun_view_projection{1.0f};
 
     // The engine's own descriptors and pipelines.
     VkDescriptorSetLayout frame_layout = VK_NULL_HANDLE, level_layout = VK_NULL_HANDLE,
@@ -535,6 +559,14 @@ struct Renderer::Impl
         shadow.target.render_pass = shadow_pass;
         level_depth = level->add_pass(depth);
         level_shadow = level->add_pass(shadow);
+        for (const render::DynamicLight& l : render::mixed_lights(assets.level, level_model))
+            if (!l.point)
+            {
+                sun = l;
+                break;
+            }
+        if (sun)
+            sun_view_projection = sun_matrix(sun->position, level_bounds);
 
         // The torus relit every frame: one lighting and one set of coefficients per frame in flight.
         render::PrtModelDesc prt;
@@ -577,8 +609,9 @@ struct Renderer::Impl
         const VkDescriptorSetLayoutBinding frame_bindings[] = {
             binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs), binding(1, image, fs)};
         const VkDescriptorSetLayoutBinding level_bindings[] = {
-            binding(0, image, fs), binding(1, image, fs), binding(2, image, fs), binding(3, image, fs),
-            binding(5, image, fs), binding(8, image, fs), binding(9, image, fs), binding(10, image, fs)};
+            binding(0, image, fs), binding(1, image, fs),  binding(2, image, fs),
+            binding(3, image, fs), binding(5, image, fs),  binding(8, image, fs),
+            binding(9, image, fs), binding(10, image, fs), binding(11, image, fs)};
         const VkDescriptorSetLayoutBinding prt_bindings[] = {
             binding(0, image, fs), binding(1, image, fs),
             binding(4, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, vs)};
@@ -628,6 +661,7 @@ struct Renderer::Impl
             write_image(vk, set, 8, h6.table_sampler(), h6.page_table().view());
             write_image(vk, set, 9, h4.table_sampler(), h4.page_table().view());
             write_image(vk, set, 10, rnm.table_sampler(), rnm.page_table().view());
+            write_image(vk, set, 11, h4.sampler(), h4.shadowmask().view());
             level_sets.push_back(set);
         }
         // The torus: its textures and the coefficients hemi's transfer pass writes.
@@ -842,10 +876,11 @@ struct Renderer::Impl
         create_sized();
     }
 
-    // The probe-lit spheres circle the room's centre at three heights.
+    // The probe-lit spheres circle the room's centre at three heights, the lowest starting in the sun's beam
+    // through the wide opening (its shadow on the sunlit floor).
     glm::vec3 sphere_position(uint32_t i, float t) const
     {
-        const float a = 0.35f * t + 2.0944f * float(i);
+        const float a = 0.35f * t + 2.0944f * float(i) + 3.1416f;
         return glm::vec3(1.9f * std::cos(a), 1.9f * std::sin(a), 0.45f + 0.5f * float(i));
     }
 
@@ -861,26 +896,39 @@ struct Renderer::Impl
         EngineFrame f{};
         const glm::vec3 eye = settings.camera.eye;
         f.view_projection = math::camera_matrix(settings.camera, level_bounds, aspect);
-        const float la = 0.5f * state.light_time;
-        const glm::vec3 light_pos(1.6f * std::cos(la), 1.6f * std::sin(la), 2.8f);
-        const glm::vec3 light_target(0.4f * std::cos(la + 1.0f), 0.4f * std::sin(la + 1.0f), 0.0f);
-        const float cone = glm::radians(38.0f);
-        f.light_view_projection =
-            math::look_at_projection(light_pos, light_target, glm::degrees(2.0f * cone) + 4.0f, 1.0f);
         f.eye = glm::vec4(eye, settings.lod_distance);
-        const bool light_on = settings.light && !settings.baked_only;
-        f.light_position = glm::vec4(light_pos, light_on ? 1.0f : 0.0f);
-        f.light_axis = glm::vec4(glm::normalize(light_target - light_pos), std::cos(cone));
-        f.light_intensity = glm::vec4(9.0f, 8.0f, 6.5f, 0.0f);
+        // The mixed sun: lit at run time (by the shadowmask alone in --baked-only, as hemi-render lights it),
+        // its shadow map drawn within the shadow distance.
+        const bool sun_on = sun && settings.sun;
+        const bool shadow_map = sun_on && settings.shadow_map && !settings.baked_only;
+        f.sun_view_projection = sun_view_projection;
+        f.sun_direction = glm::vec4(sun ? sun->position : glm::vec3(0.0f, 0.0f, 1.0f), sun_on ? 1.0f : 0.0f);
+        f.sun_irradiance = glm::vec4(sun ? sun->irradiance : glm::vec3(0.0f),
+                                     sun ? float(std::max(sun->shadowmask_channel, 0)) : 0.0f);
+        f.shadow = glm::vec4(settings.shadow_distance, kShadowFade, shadow_map ? 1.0f : 0.0f, 0.0f);
         f.fog = glm::vec4(0.05f, 0.06f, 0.08f, settings.baked_only ? 0.0f : settings.fog);
-        f.mode = glm::ivec4(settings.baked_only ? 2 : settings.basis, settings.lighting_only ? 1 : 0, 0, 0);
+        f.mode = glm::ivec4(settings.baked_only ? 2 : settings.basis,
+                            settings.specular_only && !settings.baked_only ? 2
+                            : settings.lighting_only                       ? 1
+                                                                           : 0,
+                            settings.coat && !settings.baked_only ? 1 : 0, 0);
         const bool objects = settings.objects && !settings.baked_only;
-        for (uint32_t s = 0; s < kSpheres; ++s)
+        // The probes at each dynamic object (spheres, the glossy ball, the torus): the spheres' SH9, and
+        // every object's occlusion of the mixed sun (its channel), its static shadow beyond the shadow
+        // distance.
+        std::array<float, kSpheres + 2> occlusion;
+        occlusion.fill(1.0f);
+        for (uint32_t s = 0; s <= kSpheres + 1; ++s)
         {
+            const glm::vec3 at =
+                s <= kSpheres ? glm::vec3(object_model(s, state)[3]) : glm::vec3(torus_model[3]);
             std::array<glm::vec3, 9> sh;
-            if (!render::probe_lighting(assets.level, sphere_position(s, state.object_time), level_model, sh))
-                throw std::runtime_error("the level has no light probes for the spheres");
-            for (uint32_t i = 0; i < 9; ++i)
+            std::array<float, 4> occluded;
+            if (!render::probe_lighting(assets.level, at, level_model, sh, &occluded))
+                throw std::runtime_error("the level has no light probes for its dynamic objects");
+            if (sun && sun->shadowmask_channel >= 0)
+                occlusion[s] = occluded[size_t(sun->shadowmask_channel)];
+            for (uint32_t i = 0; s < kSpheres && i < 9; ++i)
                 f.probe_sh[s * 9 + i] = glm::vec4(sh[i], 0.0f);
         }
         const float env_degrees = 25.0f * state.env_time;
@@ -893,8 +941,8 @@ struct Renderer::Impl
         camera_frame.view_projection = f.view_projection;
         camera_frame.eye = eye;
         render::FrameData light_frame;
-        light_frame.view_projection = f.light_view_projection;
-        light_frame.eye = light_pos;
+        light_frame.view_projection = sun_view_projection;
+        light_frame.eye = level_bounds.centre + 2.0f * level_bounds.radius * glm::vec3(f.sun_direction);
         shared::FrameUniforms hemi_uniforms;
         if (!render::frame_uniforms(*system, camera_frame, hemi_uniforms))
             throw std::runtime_error("hemi refused the camera's frame data");
@@ -947,7 +995,7 @@ struct Renderer::Impl
             }
         };
 
-        // 1. The shadow map from the spot light.
+        // 1. The shadow map from the sun.
         VkClearValue clear_depth{};
         clear_depth.depthStencil = {1.0f, 0};
         VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -958,7 +1006,7 @@ struct Renderer::Impl
         rp.pClearValues = &clear_depth;
         vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
         set_viewport(cmd, {kShadowSize, kShadowSize});
-        if (light_on)
+        if (shadow_map)
         {
             level->draw(cmd, slot.light_set, "h4", level_model, level_shadow);
             draw_objects_depth(shadow_program, torus_shadow, slot.light_set);
@@ -983,7 +1031,9 @@ struct Renderer::Impl
         vkCmdEndRenderPass(cmd);
 
         // 3. The main pass: the engine's own shaders over hemi's data.
+        // Where no surface is (the openings), the sky's horizon colour.
         VkClearValue clears[2]{};
+        clears[0].color = {{0.55f, 0.65f, 0.85f, 1.0f}};
         clears[1].depthStencil = {1.0f, 0};
         rp.renderPass = main_pass;
         rp.framebuffer = slot.main_fb;
@@ -1002,6 +1052,8 @@ struct Renderer::Impl
             EngineObject o;
             o.model = level_model;
             o.albedo = entry->material->base_color_factor;
+            if (entry->material->name == "polished floor")
+                o.material = glm::vec4(kFloorRoughness, kFloorF0, 1.0f, 0.0f);
             vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
             // The entry's indices are the engine's own (level_geometry's ranges).
             vkCmdDrawIndexed(cmd, entry->index_count, 1, entry->first_index, int32_t(level_range.base_vertex),
@@ -1027,6 +1079,7 @@ struct Renderer::Impl
                 o.model = torus_model;
                 o.albedo = ts.material(p).base_color_factor;
                 o.index.x = int32_t(coefficients);
+                o.material.z = occlusion[kSpheres + 1];
                 vkCmdPushConstants(cmd, prt_program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
                 const render::SceneSurfaces::Primitive prim = ts.primitive(p);
                 vkCmdDrawIndexed(cmd, prim.index_count, 1, prim.first_index, int32_t(torus_range.base_vertex),
@@ -1046,6 +1099,7 @@ struct Renderer::Impl
                 o.model = object_model(s, state);
                 o.albedo = s < kSpheres ? colours[s] : glm::vec4(0.8f, 0.75f, 0.6f, 1.0f);
                 o.index.x = int32_t(s);
+                o.material.z = occlusion[s];
                 vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof o, &o);
                 vkCmdDrawIndexed(cmd, sphere_range.index_count, 1, sphere_range.first_index,
                                  int32_t(sphere_range.base_vertex), 0);

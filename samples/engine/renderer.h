@@ -1,7 +1,7 @@
 #pragma once
 // The engine sample's renderer: its own render graph over hemi's data.
 //
-//   shadow map  (the spot light's view; D32)   hemi's shadow pipelines for the level and the torus
+//   shadow map  (the sun's view; D32)          hemi's shadow pipelines for the level and the torus
 //   (PassKind::
 //                                              Shadow), the engine's own depth shader for its spheres
 //   depth prepass (the camera; D32)            the same, PassKind::Depth
@@ -35,11 +35,18 @@ struct Settings
     bool baked_only = false; // the level alone, lit by its lightmap only: what hemi-render draws
     int basis = 0;           // 0: H6 near, H4 far; 1: H6; 2: H4
     bool lighting_only = false;
+    bool specular_only = false; // the coat's light alone: the lightmap's specular and the mixed sun's
     float exposure = 1.8f;
     bool tonemap = true;
     float fog = 0.02f;         // density per unit
     float lod_distance = 4.5f; // where H6 gives way to H4
-    bool light = true, objects = true;
+    bool objects = true;
+    // The level's mixed sun (when its bake made it mixed): lit at run time; its shadow map (the dynamic
+    // objects' shadows) within shadow_distance of the eye, fading out over the last 1.5 units, beyond it the
+    // static shadows alone (the shadowmask, the probes' occlusion).
+    bool sun = true, shadow_map = true;
+    float shadow_distance = 8.0f;
+    bool coat = true; // the polished floor's GGX coat: the lightmap's specular and the sun's
     // The camera (world space, z up; the field of view and the near and far planes are hemi-render's, from
     // the level's bounds): `--camera` of both tools takes the same EYE,TARGET.
     hemi::math::Camera camera{{-3.5f, 0.8f, 1.6f}, {3.0f, -0.6f, 0.9f}};
@@ -47,7 +54,7 @@ struct Settings
 
 struct FrameState
 {
-    float light_time = 0.0f, env_time = 0.0f, object_time = 0.0f; // seconds of each animation
+    float env_time = 0.0f, object_time = 0.0f; // seconds of each animation
 };
 
 struct FrameStats

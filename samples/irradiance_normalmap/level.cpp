@@ -159,15 +159,23 @@ io::GltfScene scene_from_quads(const std::vector<Quad>& quads, uint32_t atlas, L
         scene.images.push_back(ssbump_map("bricks ssbump map", 256, bricks, 0.04f * 1.19f));
         scene.materials[3].normal.image = 2;
         scene.materials[3].technique = "ssbump";
+        // The floor's own material (kPolishedFloor), its tiles darker than the plaster: the engine sample
+        // gives it a GGX coat.
+        io::Material floor = scene.materials[0];
+        floor.name = "polished floor";
+        floor.base_color_factor = glm::vec4(0.42f, 0.4f, 0.37f, 1.0f);
+        scene.materials.push_back(floor);
     }
-    // One primitive per material: quads grouped by material.
-    for (uint32_t material = 0; material < 4; ++material)
+    // One primitive per material: quads grouped by material (a quad of a material the scene lacks is the
+    // plaster's).
+    const uint32_t materials = uint32_t(scene.materials.size());
+    for (uint32_t material = 0; material < materials; ++material)
     {
         const uint32_t first = uint32_t(m.indices.size());
         for (size_t i = 0; i < quads.size(); ++i)
         {
             const Quad& q = quads[i];
-            if (q.material != material)
+            if ((q.material < materials ? q.material : 0) != material)
                 continue;
             const glm::vec3 n = glm::normalize(glm::cross(q.u, q.v));
             const glm::vec3 t = glm::normalize(q.u);
@@ -200,8 +208,8 @@ io::GltfScene make_level(uint32_t atlas, LevelMaps maps)
     // glTF space: y up. The room spans x, z in [-4, 4], y in [0, 3]; the walls face inwards.
     std::vector<Quad> quads;
     const float h = 3.0f, s = 4.0f;
-    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, 0}); // floor, facing +y
-    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0}); // ceiling, facing -y
+    quads.push_back({{-s, 0, s}, {2 * s, 0, 0}, {0, 0, -2 * s}, kPolishedFloor}); // floor, facing +y
+    quads.push_back({{-s, h, -s}, {2 * s, 0, 0}, {0, 0, 2 * s}, 0});              // ceiling, facing -y
     // Wall at z = -s (facing +z) in full; wall at z = +s (facing -z) with a window from x -1 to 1, y 1 to 2.
     quads.push_back({{-s, 0, -s}, {2 * s, 0, 0}, {0, h, 0}, 1});
     quads.push_back({{s, 0, s}, {-(s - 1), 0, 0}, {0, h, 0}, 1});  // right of the window

@@ -23,9 +23,11 @@ enum class LevelMaps
     Normal, // tangent-space normal maps
     Ssbump, // SSBump maps with directional occlusion (300 rays a texel)
     // Normal maps, but the blue wall (material 3) holds the bricks' SSBump map and asks for the "ssbump"
-    // technique (io::Material::technique): an SSBump wall inside a level drawn with a basis (samples/engine).
+    // technique (io::Material::technique): an SSBump wall inside a level drawn with a basis; and the floor
+    // has its own material, kPolishedFloor, "polished floor" (samples/engine: a glossy floor).
     SsbumpWall,
 };
+inline constexpr uint32_t kPolishedFloor = 4;
 
 io::GltfScene make_level(uint32_t atlas = 512, LevelMaps maps = LevelMaps::Normal);
 

@@ -10,13 +10,16 @@
 layout(set = 0, binding = 0, std140) uniform EngineFrame
 {
     mat4 view_projection;
-    mat4 light_view_projection;
-    vec4 eye;             // xyz; w: the distance where H6 gives way to H4
-    vec4 light_position;  // the spot light, xyz; w: 1 on, 0 off
-    vec4 light_axis;      // xyz: where it points; w: cosine of its cone's half angle
-    vec4 light_intensity; // rgb: irradiance on a surface facing it at distance 1
-    vec4 fog;             // rgb: fog colour; w: density per unit of distance (0: none)
-    ivec4 mode;           // x: lightmap basis (0: H6 near, H4 far; 1: H6; 2: H4); y: 1 = lighting only
+    mat4 sun_view_projection; // the sun's shadow map: orthographic over the level
+    vec4 eye;                 // xyz; w: the distance where H6 gives way to H4
+    vec4 sun_direction;  // xyz: towards the level's mixed sun; w: 1 when it is lit at run time (0: baked or
+                         // off)
+    vec4 sun_irradiance; // rgb: on a surface facing it; w: its shadowmask channel (0-3)
+    vec4 shadow;         // x: the shadow distance (from the eye); y: the fade band before it; z: 1 = the
+                         // shadow map is drawn, 0 = static shadows alone (shadowmask, probes' occlusion)
+    vec4 fog;            // rgb: fog colour; w: density per unit of distance (0: none)
+    ivec4 mode; // x: lightmap basis (0: H6 near, H4 far; 1: H6; 2: H4); y: 1 = lighting only, 2 = the GGX
+                // coat's light alone; z: 1 = the coat (specular)
     vec4 probe_sh[ENGINE_SPHERES * 9]; // each sphere's SH9 irradiance from the level's probes
     EnvironmentUniforms env;           // the glossy object's environment (turning)
 }
@@ -25,8 +28,10 @@ frame;
 layout(push_constant) uniform EngineObject
 {
     mat4 model;
-    vec4 albedo; // base colour factor
-    ivec4 index; // x: the sphere (its probe_sh), or the PRT instance's first coefficient texel
+    vec4 albedo;   // base colour factor
+    ivec4 index;   // x: the sphere (its probe_sh), or the PRT instance's first coefficient texel
+    vec4 material; // x: GGX roughness (0: no coat), y: f0; z: a dynamic object's occlusion of the mixed sun
+                   // from the level's probes (its static shadow beyond the shadow distance)
 }
 object;
 

@@ -1,6 +1,7 @@
 #version 450
 // The engine's own main-pass fragment shader: the baked lighting from hemi's GLSL library, plus what is the
-// engine's alone (a shadowed spot light, fog) into an HDR target that the post pass exposes and tonemaps.
+// engine's alone (the level's mixed sun lit at run time with its shadow map, a GGX coat, fog) into an HDR
+// target that the post pass exposes and tonemaps.
 // ENGINE_SOURCE: 1 = the lightmapped level (technique: 0 = H6 near / H4 far, 1 = SSBump), 2 = a PRT object's
 // per-vertex coefficients, 3 = a probe-lit sphere (SH9 from the level's probes), 4 = Heidrich & Seidel's
 // glossy object (prefiltered parabolic maps).
@@ -25,6 +26,7 @@ layout(set = 1, binding = 5) uniform sampler2DArray rnm_maps;
 layout(set = 1, binding = 8) uniform usampler2D h6_table;
 layout(set = 1, binding = 9) uniform usampler2D h4_table;
 layout(set = 1, binding = 10) uniform usampler2D rnm_table;
+layout(set = 1, binding = 11) uniform sampler2DArray shadowmask; // the mixed lights' (h4's slots and table)
 #elif ENGINE_SOURCE == 4
 layout(set = 1, binding = 6) uniform sampler2DArray glossy_map;
 layout(set = 1, binding = 7) uniform sampler2DArray diffuse_map;
@@ -41,48 +43,63 @@ layout(location = 0) out vec4 out_color;
 
 const float kPi = 3.14159265358979;
 
-// The spot light's irradiance on a surface facing it (shadowed, 3 x 3 PCF) and the direction towards it.
-vec3 spot_light(vec3 world, out vec3 l)
+// The sun's shadow map at `world`: 3 x 3 PCF; 1 outside the map.
+float sun_shadow_map(vec3 world)
 {
-    const vec3 to = frame.light_position.xyz - world;
-    const float d2 = max(dot(to, to), 1e-6);
-    l = to * inversesqrt(d2);
-    if (frame.light_position.w == 0.0)
-        return vec3(0.0);
-    const float cone =
-        smoothstep(frame.light_axis.w, frame.light_axis.w + 0.08, dot(-l, frame.light_axis.xyz));
-    if (cone <= 0.0)
-        return vec3(0.0);
-    const vec4 p = frame.light_view_projection * vec4(world, 1.0);
+    const vec4 p = frame.sun_view_projection * vec4(world, 1.0);
     const vec3 ndc = p.xyz / p.w;
-    float lit = 1.0;
-    if (p.w > 0.0 && all(lessThan(abs(ndc.xy), vec2(1.0))))
-    {
-        const vec2 uv = ndc.xy * 0.5 + 0.5, texel = 1.0 / vec2(textureSize(shadow_map, 0));
-        lit = 0.0;
-        for (int y = -1; y <= 1; ++y)
-            for (int x = -1; x <= 1; ++x)
-                lit += texture(shadow_map, vec3(uv + vec2(x, y) * texel, ndc.z));
-        lit /= 9.0;
-    }
-    return frame.light_intensity.rgb * (cone * lit / d2);
+    if (!all(lessThan(abs(ndc.xy), vec2(1.0))) || ndc.z >= 1.0)
+        return 1.0;
+    const vec2 uv = ndc.xy * 0.5 + 0.5, texel = 1.0 / vec2(textureSize(shadow_map, 0));
+    float lit = 0.0;
+    for (int y = -1; y <= 1; ++y)
+        for (int x = -1; x <= 1; ++x)
+            lit += texture(shadow_map, vec3(uv + vec2(x, y) * texel, ndc.z));
+    return lit / 9.0;
+}
+
+// The mixed sun's irradiance at `world` on a surface facing it (0 when the level's sun is baked or off). Its
+// static shadow (`baked`: the level's shadowmask channel, or a dynamic object's occlusion from the probes)
+// meets the shadow map within the shadow distance: on the level the darker of the two
+// (hemi_mixed_shadow), on a dynamic object the map alone (the level is in the map); beyond it the static
+// shadow alone.
+vec3 sun_light(vec3 world, float baked, bool level)
+{
+    if (frame.sun_direction.w == 0.0)
+        return vec3(0.0);
+    float fade = 0.0;
+    if (frame.shadow.z != 0.0)
+        fade =
+            1.0 - smoothstep(frame.shadow.x - frame.shadow.y, frame.shadow.x, distance(frame.eye.xyz, world));
+    const float map = fade > 0.0 ? sun_shadow_map(world) : 1.0;
+    const float visible = level ? hemi_mixed_shadow(baked, map, fade) : mix(baked, map, fade);
+    return frame.sun_irradiance.rgb * visible;
 }
 
 void main()
 {
-    vec3 l;
-    const vec3 light = spot_light(in_world, l);
+    const vec3 l = frame.sun_direction.xyz, v = normalize(frame.eye.xyz - in_world);
+    const float roughness = frame.mode.z != 0 ? object.material.x : 0.0;
+    const vec3 f0 = vec3(object.material.y);
+#if ENGINE_SOURCE == 1
+    // The level: the sun's static shadow is its channel of the shadowmask.
+    const float baked = hemi_shadowmask_channel(hemi_lightmap_shadowmask(shadowmask, h4_table, in_uv1),
+                                                int(frame.sun_irradiance.w));
+    const vec3 light = sun_light(in_world, baked, true);
+#else
+    const vec3 light = sun_light(in_world, object.material.z, false);
+#endif
     vec4 sep4[9]; // no basis here uses SEP4's weights
     for (int i = 0; i < 9; ++i)
         sep4[i] = vec4(0.0);
-    vec3 color = vec3(0.0);
+    vec3 color = vec3(0.0), specular = vec3(0.0);
 #if ENGINE_SOURCE == 1 || ENGINE_SOURCE == 2
     vec3 albedo = object.albedo.rgb * texture(base_color, in_uv0).rgb;
     if (frame.mode.y != 0)
         albedo = vec3(1.0);
     const vec3 bump = texture(normal_map, in_uv0).xyz;
     const HemiTangentFrame tf = hemi_tangent_frame(in_normal, in_tangent);
-    const vec3 lt = hemi_to_tangent(tf, l);
+    const vec3 lt = hemi_to_tangent(tf, l), vt = hemi_to_tangent(tf, v);
     vec3 c[HEMI_BASIS_MAX_SIZE];
 #if ENGINE_SOURCE == 1
     if (kTechnique == 1)
@@ -98,18 +115,26 @@ void main()
         const vec3 nt = hemi_normal_map_normal(bump, 1.0);
         const bool near =
             frame.mode.x == 1 || (frame.mode.x == 0 && distance(frame.eye.xyz, in_world) < frame.eye.w);
+        // Under a GGX coat (the polished floor), the specular the directional lightmap holds (its dominant
+        // light's highlight and the rest's reflection: hemi_basis_specular) and the mixed sun's, exact.
         vec3 e;
         if (near)
         {
             hemi_lightmap_coefficients(h6_maps, h6_table, in_uv1, 6, c);
             e = hemi_basis_irradiance(HEMI_BASIS_H6, 6, c, nt, sep4);
+            if (roughness > 0.0)
+                specular = hemi_basis_specular(HEMI_BASIS_H6, 6, c, nt, vt, roughness, f0, sep4);
         }
         else
         {
             hemi_lightmap_coefficients(h4_maps, h4_table, in_uv1, 4, c);
             e = hemi_basis_irradiance(HEMI_BASIS_H4, 4, c, nt, sep4);
+            if (roughness > 0.0)
+                specular = hemi_basis_specular(HEMI_BASIS_H4, 4, c, nt, vt, roughness, f0, sep4);
         }
-        color = albedo * (e + light * max(dot(nt, lt), 0.0)) / kPi;
+        if (roughness > 0.0)
+            specular += light * hemi_ggx(nt, lt, vt, roughness, f0);
+        color = albedo * (e + light * max(dot(nt, lt), 0.0)) / kPi + specular;
     }
 #else
     // PRT: this frame's coefficients at the vertices (hemi's transfer pass), in the tangent frame.
@@ -128,7 +153,6 @@ void main()
 #elif ENGINE_SOURCE == 4
     // Heidrich & Seidel: a Phong-prefiltered glossy reflection and the diffuse map of the same environment.
     const vec3 n = normalize(in_normal);
-    const vec3 v = normalize(frame.eye.xyz - in_world);
     const vec3 r = hemi_reflect(n, v);
     const vec3 r0 = frame.env.world_to_env[0].xyz, r1 = frame.env.world_to_env[1].xyz,
                r2 = frame.env.world_to_env[2].xyz;
@@ -140,8 +164,11 @@ void main()
         hemi_parabolic_lookup(glossy_map, frame.env.extents.y, hemi_env_direction(r0, r1, r2, r));
     color = ks * glossy + kd * albedo * (diffuse + light * max(dot(n, l), 0.0) / kPi);
 #endif
+    // The coat's light alone (--specular-only).
+    if (frame.mode.y == 2)
+        color = specular;
     // Exponential fog over the distance from the eye.
-    if (frame.fog.w > 0.0)
+    else if (frame.fog.w > 0.0)
         color = mix(frame.fog.rgb, color, exp(-frame.fog.w * distance(frame.eye.xyz, in_world)));
     out_color = vec4(color, 1.0);
 }
