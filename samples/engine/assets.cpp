@@ -9,6 +9,7 @@
 #include <hemi/io/gltf.h>
 #include <hemi/math/sh_environment.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -111,6 +112,21 @@ void bake_torus(const fs::path& dir, const fs::path& path, const std::function<v
     log("  torus baked in " + seconds(since(t0)));
 }
 
+// Whether `level` is this sample's: its sun baked as asked and its floor polished.
+bool current_level(const io::LightmapAsset& level, bool mixed_sun)
+{
+    const bool sun =
+        std::any_of(level.lights.begin(), level.lights.end(),
+                    [&](const io::LightmapLight& l)
+                    {
+                        return l.light.type == io::PunctualLight::Type::Directional &&
+                               l.light.mode == (mixed_sun ? io::LightMode::Mixed : io::LightMode::Baked);
+                    });
+    const bool floor = std::any_of(level.materials.begin(), level.materials.end(),
+                                   [](const io::Material& m) { return m.name == "polished floor"; });
+    return sun && floor;
+}
+
 } // namespace
 
 EngineAssets prepare_engine_assets(const fs::path& dir, bool mixed_sun,
@@ -136,6 +152,15 @@ EngineAssets prepare_engine_assets(const fs::path& dir, bool mixed_sun,
         log("  sky baked in " + seconds(since(t0)));
     }
     a.level = io::read_lightmap_asset(a.level_path);
+    if (!current_level(a.level, mixed_sun))
+    {
+        // A folder from before the sample had its mixed sun and polished floor: bake the level again.
+        log(a.level_path.string() + " is an older sample's level (no " + (mixed_sun ? "mixed" : "baked") +
+            " sun or no polished floor): baking it again");
+        fs::remove(dir / "engine_level.glb");
+        bake_level(dir / "engine_level.glb", a.level_path, mixed_sun, log);
+        a.level = io::read_lightmap_asset(a.level_path);
+    }
     a.torus = io::read_prt_asset(torus);
     a.sky = io::read_envmap_asset(sky);
     a.sky_sh = math::project_equirect(3, sky_equirect.width, sky_equirect.height, sky_equirect.pixels);

@@ -899,12 +899,13 @@ struct Renderer::Impl
         f.eye = glm::vec4(eye, settings.lod_distance);
         // The mixed sun: lit at run time (by the shadowmask alone in --baked-only, as hemi-render lights it),
         // its shadow map drawn within the shadow distance.
-        const bool sun_on = sun && settings.sun;
-        const bool shadow_map = sun_on && settings.shadow_map && !settings.baked_only;
+        const bool sun_on = sun.has_value();
+        const bool shadow_map =
+            sun_on && settings.shadow_map && settings.shadow_distance > 0.0f && !settings.baked_only;
         f.sun_view_projection = sun_view_projection;
         f.sun_direction = glm::vec4(sun ? sun->position : glm::vec3(0.0f, 0.0f, 1.0f), sun_on ? 1.0f : 0.0f);
-        f.sun_irradiance = glm::vec4(sun ? sun->irradiance : glm::vec3(0.0f),
-                                     sun ? float(std::max(sun->shadowmask_channel, 0)) : 0.0f);
+        f.sun_irradiance =
+            glm::vec4(sun ? sun->irradiance : glm::vec3(0.0f), sun ? float(sun->shadowmask_channel) : -1.0f);
         f.shadow = glm::vec4(settings.shadow_distance, kShadowFade, shadow_map ? 1.0f : 0.0f, 0.0f);
         f.fog = glm::vec4(0.05f, 0.06f, 0.08f, settings.baked_only ? 0.0f : settings.fog);
         f.mode = glm::ivec4(settings.baked_only ? 2 : settings.basis,
@@ -1031,9 +1032,10 @@ struct Renderer::Impl
         vkCmdEndRenderPass(cmd);
 
         // 3. The main pass: the engine's own shaders over hemi's data.
-        // Where no surface is (the openings), the sky's horizon colour.
+        // Where no surface is (the openings), the sky's horizon colour (--baked-only: black, as hemi-render).
         VkClearValue clears[2]{};
-        clears[0].color = {{0.55f, 0.65f, 0.85f, 1.0f}};
+        if (!settings.baked_only)
+            clears[0].color = {{0.55f, 0.65f, 0.85f, 1.0f}};
         clears[1].depthStencil = {1.0f, 0};
         rp.renderPass = main_pass;
         rp.framebuffer = slot.main_fb;

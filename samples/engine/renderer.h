@@ -44,7 +44,7 @@ struct Settings
     // The level's mixed sun (when its bake made it mixed): lit at run time; its shadow map (the dynamic
     // objects' shadows) within shadow_distance of the eye, fading out over the last 1.5 units, beyond it the
     // static shadows alone (the shadowmask, the probes' occlusion).
-    bool sun = true, shadow_map = true;
+    bool shadow_map = true;
     float shadow_distance = 8.0f;
     bool coat = true; // the polished floor's GGX coat: the lightmap's specular and the sun's
     // The camera (world space, z up; the field of view and the near and far planes are hemi-render's, from

@@ -14,7 +14,7 @@ layout(set = 0, binding = 0, std140) uniform EngineFrame
     vec4 eye;                 // xyz; w: the distance where H6 gives way to H4
     vec4 sun_direction;  // xyz: towards the level's mixed sun; w: 1 when it is lit at run time (0: baked or
                          // off)
-    vec4 sun_irradiance; // rgb: on a surface facing it; w: its shadowmask channel (0-3)
+    vec4 sun_irradiance; // rgb: on a surface facing it; w: its shadowmask channel (0-3; -1: none)
     vec4 shadow;         // x: the shadow distance (from the eye); y: the fade band before it; z: 1 = the
                          // shadow map is drawn, 0 = static shadows alone (shadowmask, probes' occlusion)
     vec4 fog;            // rgb: fog colour; w: density per unit of distance (0: none)

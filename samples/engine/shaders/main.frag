@@ -60,10 +60,11 @@ float sun_shadow_map(vec3 world)
 
 // The mixed sun's irradiance at `world` on a surface facing it (0 when the level's sun is baked or off). Its
 // static shadow (`baked`: the level's shadowmask channel, or a dynamic object's occlusion from the probes)
-// meets the shadow map within the shadow distance: on the level the darker of the two
-// (hemi_mixed_shadow), on a dynamic object the map alone (the level is in the map); beyond it the static
-// shadow alone.
-vec3 sun_light(vec3 world, float baked, bool level)
+// meets the shadow map within the shadow distance as the darker of the two (hemi_mixed_shadow); beyond it
+// the static shadow alone. The map holds what faces the sun (hemi's shadow pipelines cull back faces, and the
+// level's walls and ceiling are one-sided, facing in): the static shadow keeps a dynamic object inside the
+// room dark where the ceiling hides the sun.
+vec3 sun_light(vec3 world, float baked)
 {
     if (frame.sun_direction.w == 0.0)
         return vec3(0.0);
@@ -72,8 +73,7 @@ vec3 sun_light(vec3 world, float baked, bool level)
         fade =
             1.0 - smoothstep(frame.shadow.x - frame.shadow.y, frame.shadow.x, distance(frame.eye.xyz, world));
     const float map = fade > 0.0 ? sun_shadow_map(world) : 1.0;
-    const float visible = level ? hemi_mixed_shadow(baked, map, fade) : mix(baked, map, fade);
-    return frame.sun_irradiance.rgb * visible;
+    return frame.sun_irradiance.rgb * hemi_mixed_shadow(baked, map, fade);
 }
 
 void main()
@@ -85,9 +85,9 @@ void main()
     // The level: the sun's static shadow is its channel of the shadowmask.
     const float baked = hemi_shadowmask_channel(hemi_lightmap_shadowmask(shadowmask, h4_table, in_uv1),
                                                 int(frame.sun_irradiance.w));
-    const vec3 light = sun_light(in_world, baked, true);
+    const vec3 light = sun_light(in_world, baked);
 #else
-    const vec3 light = sun_light(in_world, object.material.z, false);
+    const vec3 light = sun_light(in_world, object.material.z);
 #endif
     vec4 sep4[9]; // no basis here uses SEP4's weights
     for (int i = 0; i < 9; ++i)
