@@ -94,25 +94,22 @@ TEST(EngineSample, BakedLevelEqualsHemiRenderAtTheSameCamera)
 // low enough that what it measures does not clip).
 const std::string kSunView = "--size 320x180 --fog 0 --no-tonemap --camera=0.6,2.6,1.4,-3.2,-0.4,0.0";
 
-// The screenshot after `frames` frames, as linear luminance per pixel (sRGB decoded, Rec. 709 weights).
+// The screenshot after `frames` frames, as linear luminance per pixel (sRGB decoded, Rec. 709 weights), drawn
+// with the validation layer on (a message makes the exit status 2).
 std::vector<double> luminance(const fs::path& dir, int frames, const std::string& args,
                               const std::string& name)
 {
     const fs::path png = dir / (name + ".png");
-    const hemi::test::Result r = engine(dir, kSunView + " --frames " + std::to_string(frames) + " " + args +
-                                                 " --screenshot " + q(png));
+    const hemi::test::Result r = engine(dir, kSunView + " --validation --frames " + std::to_string(frames) +
+                                                 " " + args + " --screenshot " + q(png));
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     const hemi::io::ImageRgba8 img = hemi::io::read_png(png);
     std::vector<double> y(size_t(img.width) * img.height);
     for (size_t i = 0; i < y.size(); ++i)
     {
-        double c[3];
-        for (int k = 0; k < 3; ++k)
-        {
-            const double e = img.pixels[i * 4 + k] / 255.0;
-            c[k] = e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
-        }
-        y[i] = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        const uint8_t* c = &img.pixels[i * 4];
+        y[i] = 0.2126 * hemi::io::srgb_eotf(c[0] / 255.0f) + 0.7152 * hemi::io::srgb_eotf(c[1] / 255.0f) +
+               0.0722 * hemi::io::srgb_eotf(c[2] / 255.0f);
     }
     return y;
 }
