@@ -11,6 +11,7 @@
 //   uniform|FILE.exr] [--env-scale X]
 //       [--sun X,Y,Z,R,G,B[,DIAMETER]] [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm]
 //       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ] [--probe-rays R]
+//       [--probe-depth R]
 //       [--exr-dir DIR] [--json REPORT.json]
 //   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R]
 //       [--exponent E] [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr
@@ -1208,6 +1209,12 @@ int main(int argc, char** argv)
                          "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
                          "grid over the scene's bounding box, at the centres of its cells");
     lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")
+        ->capture_default_str();
+    lightmap
+        ->add_option("--probe-depth", lm.options.probe_depth,
+                     "R: each probe keeps an RxR octahedral map of the distances it sees, so that a "
+                     "lookup leaves out the probes behind walls; 0: none (trilinear alone)")
+        ->check(CLI::Range(0u, hemi::io::kMaxProbeDepthResolution))
         ->capture_default_str();
     lightmap->add_option("--exr-dir", lm.exr_dir,
                          "also write each output as an EXR with named channels into DIR");

@@ -1104,6 +1104,47 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     return out;
 }
 
+namespace
+{
+// A probe's depth map from its rays (direction, distance): per texel the mean distance and its standard
+// deviation over the rays in a cos^50 lobe around the texel's centre direction (DDGI's depth sharpness; the
+// lobe's half width at half weight is 9.6 degrees), or the nearest ray's distance (deviation 0) where no ray
+// falls in the lobe.
+void probe_depth_map(std::span<const glm::vec4> rays, std::span<const glm::vec3> texels,
+                     std::span<glm::vec2> out)
+{
+    constexpr float kSharpness = 50.0f, kCutoff = 0.7f; // 0.7^50 = 2e-8: nothing left beyond
+    for (size_t t = 0; t < texels.size(); ++t)
+    {
+        double sum = 0.0, mean = 0.0, square = 0.0;
+        float nearest = -2.0f;
+        glm::vec2 fallback(0.0f);
+        for (const glm::vec4& r : rays)
+        {
+            const float c = glm::dot(texels[t], glm::vec3(r));
+            if (c > nearest)
+            {
+                nearest = c;
+                fallback = glm::vec2(r.w, 0.0f);
+            }
+            if (c <= kCutoff)
+                continue;
+            const double w = std::pow(double(c), double(kSharpness));
+            sum += w;
+            mean += w * r.w;
+            square += w * double(r.w) * r.w;
+        }
+        if (sum > 0.0)
+        {
+            mean /= sum;
+            out[t] = glm::vec2(float(mean), float(std::sqrt(std::max(square / sum - mean * mean, 0.0))));
+        }
+        else
+            out[t] = fallback;
+    }
+}
+} // namespace
+
 io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count)
 {
     if (count.x == 0 || count.y == 0 || count.z == 0)
@@ -1117,6 +1158,7 @@ io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count)
     const glm::vec3 cell = (hi - lo) / glm::vec3(count);
     io::LightProbes g;
     g.count = count;
+    g.depth_resolution = kProbeDepthResolution;
     g.lo = lo + 0.5f * cell;
     g.hi = hi - 0.5f * cell;
     return g;
@@ -1172,6 +1214,31 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
+    // What each probe sees (io::LightProbes::depth), its distances clamped to 1.5 times the diagonal of a
+    // grid cell (DDGI's clamp): a point the lookup blends a probe for is at most one diagonal away, so a
+    // farther surface only says "visible", and a texel that mixes the sky with a near wall keeps a small
+    // deviation. Along an axis of one probe the cell is the scene's extent.
+    const uint32_t resolution = probes.depth_resolution;
+    if (resolution > io::kMaxProbeDepthResolution)
+        throw std::invalid_argument("a probe's depth map is at most " +
+                                    std::to_string(io::kMaxProbeDepthResolution) + " texels a side");
+    glm::vec3 lo = glm::min(probes.lo, probes.hi), hi = glm::max(probes.lo, probes.hi);
+    for (const glm::vec3& v : mesh.positions)
+    {
+        lo = glm::min(lo, v);
+        hi = glm::max(hi, v);
+    }
+    glm::vec3 cell;
+    for (int a = 0; a < 3; ++a)
+        cell[a] =
+            probes.count[a] > 1 ? (probes.hi[a] - probes.lo[a]) / float(probes.count[a] - 1) : hi[a] - lo[a];
+    probes.max_distance = std::max(1.5f * glm::length(cell), 1e-3f);
+    probes.depth.assign(size_t(n) * resolution * resolution, glm::vec2(0.0f));
+    std::vector<glm::vec3> texel_directions(size_t(resolution) * resolution);
+    for (uint32_t y = 0; y < resolution; ++y)
+        for (uint32_t x = 0; x < resolution; ++x)
+            texel_directions[size_t(y) * resolution + x] =
+                io::octahedral_decode(glm::vec2(float(x) + 0.5f, float(y) + 0.5f) / float(resolution));
     // The mixed lights' occlusion at each probe, in their shadowmask channels.
     const std::vector<ShadowmaskChannel> channels = shadowmask_channels(lights);
     probes.occlusion.assign(channels.empty() ? 0 : size_t(n), {1.0f, 1.0f, 1.0f, 1.0f});
@@ -1194,10 +1261,16 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                 };
                 int back_faces = 0;
                 const double weight = 4.0 * M_PI / double(o.rays);
+                std::vector<glm::vec4> seen; // per ray its direction and the distance to what it hit
+                if (resolution)
+                    seen.resize(size_t(o.rays));
                 for (int r = 0; r < o.rays; ++r)
                 {
                     const glm::vec3 d = sphere_direction(probe_seed, at, r, o.rays);
                     const std::optional<RayHit> hit = scene.intersect(p, d);
+                    if (resolution)
+                        seen[size_t(r)] = glm::vec4(d, hit ? std::min(hit->distance, probes.max_distance)
+                                                           : probes.max_distance);
                     if (!hit)
                     {
                         if (!light.image_environment())
@@ -1280,6 +1353,11 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                 for (int c = 0; c < 9; ++c)
                     probes.irradiance[at][size_t(c)] = e[size_t(c)];
                 probes.valid[at] = uint8_t(2 * back_faces <= o.rays);
+                if (resolution)
+                    probe_depth_map(
+                        seen, texel_directions,
+                        std::span(probes.depth)
+                            .subspan(size_t(at) * texel_directions.size(), texel_directions.size()));
             }
         });
 }

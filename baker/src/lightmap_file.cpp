@@ -77,6 +77,8 @@ constexpr uint64_t kMixedBytesPerCoveredTexel = 28;
 // bytes a probe (64^3 and 128^3 probes at one ray each: +57.7 MB and +458 MB of peak); issue 41 found
 // 256^3 probes peaking at 3.5 GB under a budget of 100 MB.
 constexpr uint64_t kProbeBytes = 224;
+// Each probe's depth map (--probe-depth R): R^2 texels of 2 floats held, 2 halves in the asset's bytes.
+constexpr uint64_t kProbeDepthBytesPerTexel = 8 + 4;
 // The ray tracer's BVH over the scene (EmbreeScene: its copy of the positions and triangles, the BVH and what
 // its build holds): 160 bytes a triangle measured on oa_dm3's 22,188 triangles, rounded up.
 constexpr uint64_t kEmbreeBytesPerTriangle = 256;
@@ -374,7 +376,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
     const uint64_t probe_count =
         uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40)));
-    const uint64_t probe_bytes = probe_count * kProbeBytes;
+    const uint64_t probe_bytes =
+        probe_count * (kProbeBytes + uint64_t(o.probe_depth) * o.probe_depth * kProbeDepthBytesPerTexel);
     // What the bake holds besides the stages counted below: the ray tracer's BVH and, under a budget, what
     // the caller spent of it before (LightmapFileOptions::memory_held: hemi-bake's code and libraries) and
     // the scene just read (io::resident_memory since the start: the mesh, its textures and what reading
@@ -554,6 +557,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
             throw std::invalid_argument("--probes needs at least one probe along each axis");
         asset.probes = probe_grid(scene.mesh, o.probes);
+        asset.probes.depth_resolution = o.probe_depth;
         LightmapBakeOptions probe_options = o.bake;
         probe_options.rays = o.probe_rays;
         bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);

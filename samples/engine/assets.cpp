@@ -112,7 +112,8 @@ void bake_torus(const fs::path& dir, const fs::path& path, const std::function<v
     log("  torus baked in " + seconds(since(t0)));
 }
 
-// Whether `level` is this sample's: its sun baked as asked and its floor polished.
+// Whether `level` is this sample's: its sun baked as asked, its floor polished and its probes' depth maps
+// there (what keeps the spheres' light from leaking through the walls).
 bool current_level(const io::LightmapAsset& level, bool mixed_sun)
 {
     const bool sun =
@@ -124,7 +125,7 @@ bool current_level(const io::LightmapAsset& level, bool mixed_sun)
                     });
     const bool floor = std::any_of(level.materials.begin(), level.materials.end(),
                                    [](const io::Material& m) { return m.name == "polished floor"; });
-    return sun && floor;
+    return sun && floor && !level.probes.depth.empty();
 }
 
 } // namespace
@@ -156,7 +157,7 @@ EngineAssets prepare_engine_assets(const fs::path& dir, bool mixed_sun,
     {
         // A folder from before the sample had its mixed sun and polished floor: bake the level again.
         log(a.level_path.string() + " is an older sample's level (no " + (mixed_sun ? "mixed" : "baked") +
-            " sun or no polished floor): baking it again");
+            " sun, no polished floor or no probe depth maps): baking it again");
         fs::remove(dir / "engine_level.glb");
         bake_level(dir / "engine_level.glb", a.level_path, mixed_sun, log);
         a.level = io::read_lightmap_asset(a.level_path);

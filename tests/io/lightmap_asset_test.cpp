@@ -812,3 +812,202 @@ TEST(LightmapAsset, LightsAndTheShadowmaskRoundTrip)
     EXPECT_NE(error_of(no_lights).find("a shadowmask without mixed lights"), std::string::npos)
         << error_of(no_lights);
 }
+
+// ---- What each probe sees (io/light_probes.h: LightProbes::depth) ----
+
+// The octahedral map: +z at the square's centre, -z at its corners, the equator on the diamond between
+// the edges' midpoints, and decode(encode(d)) = d.
+TEST(LightProbes, TheOctahedralMapCoversTheSphere)
+{
+    EXPECT_EQ(hemi::io::octahedral_encode(glm::vec3(0, 0, 1)), glm::vec2(0.5f, 0.5f));
+    EXPECT_EQ(hemi::io::octahedral_encode(glm::vec3(1, 0, 0)), glm::vec2(1.0f, 0.5f));
+    EXPECT_EQ(hemi::io::octahedral_encode(glm::vec3(0, -2, 0)), glm::vec2(0.5f, 0.0f));
+    EXPECT_EQ(hemi::io::octahedral_encode(glm::vec3(0, 0, -1)), glm::vec2(1.0f, 1.0f));
+    for (int i = 0; i < 200; ++i)
+    {
+        const double z = 1.0 - (i + 0.5) / 100.0, phi = i * 2.39996;
+        const glm::vec3 d(float(std::sqrt(1 - z * z) * std::cos(phi)),
+                          float(std::sqrt(1 - z * z) * std::sin(phi)), float(z));
+        const glm::vec2 uv = hemi::io::octahedral_encode(d);
+        ASSERT_TRUE(uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1);
+        const glm::vec3 back = hemi::io::octahedral_decode(uv);
+        EXPECT_NEAR(glm::distance(back, d), 0.0f, 1e-5f) << i;
+    }
+}
+
+namespace
+{
+// Two probes 2 apart along x (a 2 x 1 x 1 grid), R = 8 depth maps: probe 0 sees a constant 1 with
+// deviation 0.1, probe 1 the smooth f(d) = 2 + d.x + 0.5 d.y (deviation 0) at its texels' centres.
+hemi::io::LightProbes seeing_probes()
+{
+    hemi::io::LightProbes p;
+    p.count = glm::uvec3(2, 1, 1);
+    p.lo = glm::vec3(0.0f);
+    p.hi = glm::vec3(2.0f, 0.0f, 0.0f);
+    for (int at = 0; at < 2; ++at)
+    {
+        std::array<glm::vec3, 9> sh{};
+        sh[0] = glm::vec3(float(at + 1));
+        p.irradiance.push_back(sh);
+        p.valid.push_back(1);
+    }
+    p.depth_resolution = 8;
+    p.max_distance = 10.0f;
+    for (int at = 0; at < 2; ++at)
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x)
+            {
+                const glm::vec3 d = hemi::io::octahedral_decode(glm::vec2(x + 0.5f, y + 0.5f) / 8.0f);
+                p.depth.push_back(at == 0 ? glm::vec2(1.0f, 0.1f) : glm::vec2(2.0f + d.x + 0.5f * d.y, 0.0f));
+            }
+    return p;
+}
+} // namespace
+
+// Visibility is Chebyshev's bound, cubed (worked out here): 1 up to the mean distance, (0.01 / (0.01 +
+// 0.05^2))^3 = 0.512 at 1.05 from a probe whose mean is 1 with deviation 0.1, and the floor 1e-4 at 1.5
+// (the bound's 5.7e-5); the blend weights each probe by trilinear weight times visibility. The depth map's
+// lookup returns a texel at its centre and is continuous over the whole sphere, across the octahedral map's
+// folded edges too (a wrong mirror rule jumps by up to 1 there).
+TEST(LightProbes, VisibilityIsChebyshevsBoundOverTheDepthMaps)
+{
+    const hemi::io::LightProbes p = seeing_probes();
+    EXPECT_FLOAT_EQ(p.visibility(0, glm::vec3(0.0f, 0.5f, 0.0f)), 1.0f);
+    EXPECT_FLOAT_EQ(p.visibility(0, glm::vec3(0.0f, 0.0f, -1.0f)), 1.0f);
+    EXPECT_NEAR(p.visibility(0, glm::vec3(0.0f, -1.05f, 0.0f)), 0.512f, 1e-4f);
+    EXPECT_EQ(p.visibility(0, glm::vec3(1.5f, 0.0f, 0.0f)), hemi::io::LightProbes::kMinVisibility);
+    // At x = 1.5: trilinear 0.25 and 0.75, probe 0 seeing only 1e-4 of it.
+    const float w0 = 0.25f * 1e-4f, w1 = 0.75f * p.visibility(1, glm::vec3(1.5f, 0.0f, 0.0f));
+    EXPECT_FLOAT_EQ(p.visibility(1, glm::vec3(1.5f, 0.0f, 0.0f)), 1.0f); // 0.5 away, f >= 0.88
+    EXPECT_NEAR(p.at(glm::vec3(1.5f, 0.0f, 0.0f))[0].x, (w0 * 1.0f + w1 * 2.0f) / (w0 + w1), 1e-6f);
+    // A texel's centre returns the texel; along a great circle through both poles and the folds the lookup
+    // never jumps.
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x)
+        {
+            const glm::vec3 d = hemi::io::octahedral_decode(glm::vec2(x + 0.5f, y + 0.5f) / 8.0f);
+            EXPECT_NEAR(p.depth_at(1, d).x, p.depth[64 + size_t(y) * 8 + size_t(x)].x, 1e-5f)
+                << x << "," << y;
+        }
+    for (const glm::vec3 axis : {glm::vec3(1, 0, 0), glm::vec3(0.6f, 0.8f, 0), glm::vec3(0.3f, -0.2f, 0.93f)})
+    {
+        const glm::vec3 u = glm::normalize(glm::cross(axis, glm::vec3(0.1f, 0.2f, 1.0f))),
+                        v = glm::normalize(glm::cross(axis, u));
+        float previous = p.depth_at(1, u).x, jump = 0.0f;
+        for (int i = 1; i <= 20000; ++i)
+        {
+            const float a = float(2.0 * M_PI * i / 20000);
+            const float value = p.depth_at(1, std::cos(a) * u + std::sin(a) * v).x;
+            jump = std::max(jump, std::abs(value - previous));
+            previous = value;
+        }
+        EXPECT_LT(jump, 0.003f) << "around " << axis.x << "," << axis.y << "," << axis.z;
+    }
+}
+
+// The depth maps round-trip through the asset to half precision of the largest distance (each value is
+// stored as a half of value / max_distance, the layout the header documents); an asset without them reads
+// with none (trilinear alone). The writer refuses maps of the wrong size, a NaN and a resolution out of
+// range; the reader refuses a truncated section, a resolution out of range, a largest distance that is not
+// finite and depth maps without probes, naming the file.
+TEST(LightProbes, DepthMapsRoundTripAndBrokenOnesAreRefused)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    a.probes = seeing_probes();
+    const fs::path good = dir() / "depth.hemi";
+    hemi::io::write_lightmap_asset(good, a);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(good);
+    ASSERT_EQ(b.probes.depth_resolution, 8u);
+    EXPECT_EQ(b.probes.max_distance, 10.0f);
+    ASSERT_EQ(b.probes.depth.size(), 128u);
+    for (size_t i = 0; i < 128; ++i)
+    {
+        EXPECT_NEAR(b.probes.depth[i].x, a.probes.depth[i].x, 10.0f / 2048.0f) << i;
+        EXPECT_NEAR(b.probes.depth[i].y, a.probes.depth[i].y, 10.0f / 2048.0f) << i;
+    }
+    {
+        const hemi::io::AssetReader r(good);
+        const std::span<const std::byte> s = r.section("lightmap.probe_depth");
+        ASSERT_EQ(s.size(), 8u + 2 * 64 * 4);
+        uint32_t resolution = 0;
+        uint16_t first[2];
+        std::memcpy(&resolution, s.data(), 4);
+        std::memcpy(first, s.data() + 8, 4);
+        EXPECT_EQ(resolution, 8u);
+        EXPECT_EQ(glm::unpackHalf1x16(first[0]), glm::unpackHalf1x16(glm::packHalf1x16(0.1f)));
+        EXPECT_EQ(glm::unpackHalf1x16(first[1]), glm::unpackHalf1x16(glm::packHalf1x16(0.01f)));
+    }
+    hemi::io::LightmapAsset none = a;
+    none.probes.depth.clear();
+    none.probes.depth_resolution = 0;
+    hemi::io::write_lightmap_asset(dir() / "no_depth.hemi", none);
+    EXPECT_TRUE(hemi::io::read_lightmap_asset(dir() / "no_depth.hemi").probes.depth.empty());
+
+    for (const auto& [edit, what] :
+         {std::pair<std::function<void(hemi::io::LightProbes&)>, std::string>{
+              [](hemi::io::LightProbes& p) { p.depth.pop_back(); }, "depth maps hold 127 texels"},
+          {[](hemi::io::LightProbes& p) { p.depth[7].y = NAN; }, "not finite"},
+          {[](hemi::io::LightProbes& p) { p.depth[7].x = 11.0f; }, "beyond its largest"},
+          {[](hemi::io::LightProbes& p) { p.depth_resolution = 65; }, "not 1 to 64"}})
+    {
+        hemi::io::LightmapAsset bad = a;
+        edit(bad.probes);
+        try
+        {
+            hemi::io::write_lightmap_asset(dir() / "never_depth.hemi", bad);
+            ADD_FAILURE() << "accepted: " << what;
+        }
+        catch (const std::invalid_argument& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    }
+    auto read_refused = [&](const std::string& name, const std::string& what,
+                            const std::function<void(const std::string&, std::vector<std::byte>&)>& edit)
+    {
+        const fs::path p = rewritten(good, name, edit);
+        const std::string e = error_of(p);
+        EXPECT_NE(e.find(p.string()), std::string::npos) << e;
+        EXPECT_NE(e.find(what), std::string::npos) << e;
+    };
+    read_refused("depth_short.hemi", "lightmap.probe_depth has 519 bytes",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     if (s == "lightmap.probe_depth")
+                         bytes.pop_back();
+                 });
+    read_refused("depth_huge.hemi", "depth maps of 65 texels",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const uint32_t r = 65;
+                     if (s == "lightmap.probe_depth")
+                         std::memcpy(bytes.data(), &r, 4);
+                 });
+    read_refused("depth_nan.hemi", "largest distance",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const float m = NAN;
+                     if (s == "lightmap.probe_depth")
+                         std::memcpy(bytes.data() + 4, &m, 4);
+                 });
+    read_refused("depth_negative.hemi", "negative",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const uint16_t h = glm::packHalf1x16(-0.5f);
+                     if (s == "lightmap.probe_depth")
+                         std::memcpy(bytes.data() + 8, &h, 2);
+                 });
+    // Without lightmap.probes.
+    const hemi::io::AssetReader r(good);
+    hemi::io::AssetWriter w;
+    for (const std::string& section : r.names())
+        if (section != "lightmap.probes")
+        {
+            const std::span<const std::byte> s = r.section(section);
+            w.add(section, std::vector<std::byte>(s.begin(), s.end()));
+        }
+    w.write(dir() / "depth_alone.hemi");
+    EXPECT_NE(error_of(dir() / "depth_alone.hemi").find("lightmap.probe_depth without lightmap.probes"),
+              std::string::npos);
+}

@@ -72,33 +72,6 @@ bool finite3(const glm::vec3& v)
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-std::string probes_problem(const LightProbes& p)
-{
-    if (p.count == glm::uvec3(0) && p.irradiance.empty() && p.valid.empty())
-        return {};
-    const uint64_t n = probe_grid_count(p.count.x, p.count.y, p.count.z);
-    if (n == 0)
-        return "probe grid " + std::to_string(p.count.x) + "x" + std::to_string(p.count.y) + "x" +
-               std::to_string(p.count.z) + " is empty or larger than 2^24 probes";
-    if (p.irradiance.size() != n || p.valid.size() != n)
-        return "the probe grid holds " + std::to_string(p.irradiance.size()) + " probes and " +
-               std::to_string(p.valid.size()) + " flags, expected " + std::to_string(n);
-    if (!finite3(p.lo) || !finite3(p.hi) || p.lo.x > p.hi.x || p.lo.y > p.hi.y || p.lo.z > p.hi.z)
-        return "the probe grid's corners are not finite or not ordered";
-    for (const auto& probe : p.irradiance)
-        for (const glm::vec3& c : probe)
-            if (!finite3(c))
-                return "a probe holds a value that is not finite";
-    if (!p.occlusion.empty() && p.occlusion.size() != n)
-        return "the probe grid holds " + std::to_string(p.occlusion.size()) + " occlusions for " +
-               std::to_string(n) + " probes";
-    for (const auto& o : p.occlusion)
-        for (float v : o)
-            if (!(v >= 0.0f && v <= 1.0f))
-                return "a probe's occlusion is outside [0, 1]";
-    return {};
-}
-
 std::string output_problem(const LightmapOutput& o, uint32_t width, uint32_t height)
 {
     const uint32_t k = expected_k(o.name);
@@ -175,7 +148,7 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
                std::to_string(kMaxAtlasSide) + "]";
     if (outputs && a.outputs.empty())
         return "no outputs";
-    if (std::string p = probes_problem(a.probes); !p.empty())
+    if (std::string p = light_probes_problem(a.probes); !p.empty())
         return p;
     if (std::string p = lights_problem(a); !p.empty())
         return p;
@@ -187,95 +160,6 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
 }
 
 } // namespace
-
-glm::vec3 LightProbes::position(uint32_t i, uint32_t j, uint32_t k) const
-{
-    const glm::vec3 ijk{float(i), float(j), float(k)};
-    const glm::vec3 steps = glm::max(glm::vec3(count) - 1.0f, glm::vec3(1.0f));
-    return lo + (hi - lo) * ijk / steps;
-}
-
-LightProbes::Blend LightProbes::blend(const glm::vec3& p) const
-{
-    Blend b;
-    if (empty())
-        return b;
-    // The cell and the weights along each axis.
-    uint32_t i0[3], i1[3];
-    float t[3];
-    for (int a = 0; a < 3; ++a)
-    {
-        const uint32_t n = count[a];
-        const float extent = hi[a] - lo[a];
-        float f = n > 1 && extent > 0.0f ? (p[a] - lo[a]) / extent * float(n - 1) : 0.0f;
-        f = std::isfinite(f) ? std::clamp(f, 0.0f, float(n - 1)) : 0.0f; // NaN: the first cell, not UB
-        i0[a] = std::min(uint32_t(f), n - 1);
-        i1[a] = std::min(i0[a] + 1, n - 1);
-        t[a] = f - float(i0[a]);
-    }
-    float total = 0.0f;
-    for (int corner = 0; corner < 8; ++corner)
-    {
-        const uint32_t i = corner & 1 ? i1[0] : i0[0], j = corner & 2 ? i1[1] : i0[1],
-                       k = corner & 4 ? i1[2] : i0[2];
-        const size_t at = i + size_t(count.x) * (j + size_t(count.y) * k);
-        const float w = (corner & 1 ? t[0] : 1.0f - t[0]) * (corner & 2 ? t[1] : 1.0f - t[1]) *
-                        (corner & 4 ? t[2] : 1.0f - t[2]);
-        if (!valid[at] || w <= 0.0f)
-            continue;
-        total += w;
-        b.probe[b.count] = at;
-        b.weight[b.count++] = w;
-    }
-    if (total > 0.0f)
-    {
-        for (int c = 0; c < b.count; ++c)
-            b.weight[c] /= total;
-        return b;
-    }
-    // No valid probe around p: the nearest valid one.
-    float best = INFINITY;
-    for (uint32_t k = 0; k < count.z; ++k)
-        for (uint32_t j = 0; j < count.y; ++j)
-            for (uint32_t i = 0; i < count.x; ++i)
-            {
-                const size_t at = i + size_t(count.x) * (j + size_t(count.y) * k);
-                const glm::vec3 d = position(i, j, k) - p;
-                const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-                if (valid[at] && d2 < best)
-                {
-                    best = d2;
-                    b.probe[0] = at;
-                    b.weight[0] = 1.0f;
-                    b.count = 1;
-                }
-            }
-    return b;
-}
-
-std::array<glm::vec3, 9> LightProbes::at(const glm::vec3& p) const
-{
-    std::array<glm::vec3, 9> out{};
-    const Blend b = blend(p);
-    for (int n = 0; n < b.count; ++n)
-        for (int c = 0; c < 9; ++c)
-            out[size_t(c)] += b.weight[n] * irradiance[b.probe[n]][size_t(c)];
-    return out;
-}
-
-std::array<float, 4> LightProbes::occlusion_at(const glm::vec3& p) const
-{
-    if (occlusion.empty())
-        return {1.0f, 1.0f, 1.0f, 1.0f};
-    std::array<float, 4> out{};
-    const Blend b = blend(p);
-    for (int n = 0; n < b.count; ++n)
-        for (size_t c = 0; c < 4; ++c)
-            out[c] += b.weight[n] * occlusion[b.probe[n]][c];
-    for (float& c : out) // weights that sum to 1 in float can take a blend of 1s a rounding above it
-        c = std::clamp(c, 0.0f, 1.0f);
-    return out;
-}
 
 const LightmapOutput& LightmapAsset::output(const std::string& name) const
 {
@@ -401,6 +285,20 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
                 bytes[base + i * 4 + c] =
                     std::byte(uint8_t(std::lround(std::clamp(p.occlusion[i][c], 0.0f, 1.0f) * 255.0f)));
         sections_->writer.add("lightmap.probes", bytes);
+        if (!p.depth.empty())
+        {
+            const uint32_t r = p.depth_resolution;
+            std::vector<std::byte> depth(8 + p.depth.size() * 4);
+            std::memcpy(depth.data(), &r, 4);
+            std::memcpy(depth.data() + 4, &p.max_distance, 4);
+            for (size_t i = 0; i < p.depth.size(); ++i)
+            {
+                const uint16_t h[2] = {glm::packHalf1x16(p.depth[i].x / p.max_distance),
+                                       glm::packHalf1x16(p.depth[i].y / p.max_distance)};
+                std::memcpy(depth.data() + 8 + i * 4, h, 4);
+            }
+            sections_->writer.add("lightmap.probe_depth", depth);
+        }
     }
     if (!asset_->lights.empty())
     {
@@ -596,7 +494,37 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
                 for (size_t c = 0; c < 4; ++c)
                     p.occlusion[i][c] = float(uint8_t(b[size_t(base) + i * 4 + c])) / 255.0f;
         }
+        if (r.has("lightmap.probe_depth"))
+        {
+            const std::span<const std::byte> d = r.section("lightmap.probe_depth");
+            uint32_t resolution = 0;
+            if (d.size() < 8)
+                throw fail("lightmap.probe_depth is too short");
+            std::memcpy(&resolution, d.data(), 4);
+            std::memcpy(&p.max_distance, d.data() + 4, 4);
+            if (resolution == 0 || resolution > kMaxProbeDepthResolution)
+                throw fail("lightmap.probe_depth: depth maps of " + std::to_string(resolution) +
+                           " texels a side are not supported");
+            const uint64_t depth_texels = n * resolution * resolution;
+            if (d.size() != 8 + depth_texels * 4)
+                throw fail("lightmap.probe_depth has " + std::to_string(d.size()) + " bytes, " +
+                           std::to_string(n) + " probes of " + std::to_string(resolution) + "x" +
+                           std::to_string(resolution) + " texels need " +
+                           std::to_string(8 + depth_texels * 4));
+            if (!(p.max_distance > 0.0f) || !std::isfinite(p.max_distance))
+                throw fail("lightmap.probe_depth: the largest distance is not a positive finite number");
+            p.depth_resolution = resolution;
+            p.depth.resize(size_t(depth_texels));
+            for (size_t i = 0; i < p.depth.size(); ++i)
+            {
+                uint16_t h[2];
+                std::memcpy(h, d.data() + 8 + i * 4, 4);
+                p.depth[i] = glm::vec2(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1])) * p.max_distance;
+            }
+        }
     }
+    else if (r.has("lightmap.probe_depth"))
+        throw fail("lightmap.probe_depth without lightmap.probes");
     if (r.has("lightmap.lights"))
     {
         const std::span<const std::byte> b = r.section("lightmap.lights");

@@ -279,8 +279,12 @@ io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t heig
 // non-negative too. Returns whether anything changed.
 bool make_non_negative(std::string_view name, std::span<glm::vec3> coefficients);
 
-// An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells (what
-// hemi-bake lightmap --probes bakes). Throws std::invalid_argument for a count of 0 along an axis.
+// The side of the depth maps probe_grid asks for (io::LightProbes::depth_resolution).
+constexpr uint32_t kProbeDepthResolution = 8;
+
+// An empty grid of `count` probes over the mesh's bounding box, at the centres of its cells, with depth maps
+// of kProbeDepthResolution texels a side (what hemi-bake lightmap --probes bakes). Throws
+// std::invalid_argument for a count of 0 along an axis.
 io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
 
 // Light probes for dynamic objects, which the lightmap does not light: at each point of `probes`' grid
@@ -290,7 +294,10 @@ io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
 // environment is importance-sampled by `rays` rays of its own), the sun's disc (sun_rays) and every
 // punctual light add their shadowed light, and a ray that lands on the front of a surface carries its
 // emission plus its albedo / pi times the lightmap's irradiance there (E at the surface normal from `sh`,
-// bilinear at the hit's TEXCOORD_1): the same light and bounces as the lightmap's. A probe more than half of
+// bilinear at the hit's TEXCOORD_1): the same light and bounces as the lightmap's. With
+// probes.depth_resolution R > 0 (at most io::kMaxProbeDepthResolution), the same rays' distances to the first
+// surface make each probe's R x R depth map (io::LightProbes::depth), what the lookup needs to leave out the
+// probes a point cannot see. A probe more than half of
 // whose rays see the backs of single-sided surfaces is inside geometry (valid 0). Counter-based rays: the
 // same seed gives the same bytes on any thread count. Throws std::invalid_argument for a bad grid or rays.
 void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const LightmapAtlas& atlas,
@@ -315,6 +322,9 @@ struct LightmapFileOptions
     // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.
     glm::uvec3 probes{0};
     int probe_rays = 1024;
+    // The side of each probe's depth map (io::LightProbes::depth_resolution), 0 to
+    // io::kMaxProbeDepthResolution; 0: none, and the lookup blends the probes trilinearly alone.
+    uint32_t probe_depth = kProbeDepthResolution;
     // Overlapping lightmap UVs: resolved with a warning (lightmap_atlas.h), or refused with strict_uv.
     bool strict_uv = false;
     // A PNG of the atlas, written after rasterising and before the bake: covered texels grey, overlapping

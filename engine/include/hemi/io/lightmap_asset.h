@@ -26,6 +26,10 @@
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
 //                  then NX * NY * NZ u8 valid flags, then with mixed lights NX * NY * NZ x 4 u8: each probe's
 //                  occlusion of the shadowmask's four channels (LightProbes::occlusion), times 255.
+//   lightmap.probe_depth (optional, with lightmap.probes) u32 R, f32 max_distance, then per probe R x R
+//                  texels of 2 f16: the mean distance and its deviation, each over max_distance
+//                  (LightProbes::depth, io/light_probes.h): what each probe sees, for the lookup that blends
+//                  only the probes a point can see.
 //   lightmap.lights (optional) u32 count, then per light: u32 type (0 directional, 1 point, 2 spot), u32 bake
 //                  mode (0 baked, 1 mixed, 2 realtime), i32 shadowmask channel (0-3, -1 none), f32 colour
 //                  RGB, f32 intensity, f32 range (0: infinite), f32 inner and outer cone (radians), f32
@@ -38,6 +42,7 @@
 
 #include <hemi/io/block_maps.h>
 #include <hemi/io/gltf.h>
+#include <hemi/io/light_probes.h>
 #include <hemi/io/material.h>
 #include <hemi/io/mesh.h>
 
@@ -64,52 +69,6 @@ struct LightmapOutput
     // times a power-of-two scale, io/half_scale.h).
     BlockMaps maps;
 };
-
-// Light probes for dynamic objects (hemi-bake lightmap --probes): the SH9 irradiance (hemi's SH order and
-// sign, convolved with the clamped cosine: E(n) = sum_j c_j y_j(n) for any unit n) at the points of a regular
-// grid, in the scene's own frame (the mesh's space), from the same lights and surfaces as the lightmap.
-struct LightProbes
-{
-    glm::uvec3 count{0};          // probes along x, y and z; all 0 when the asset has none
-    glm::vec3 lo{0.0f}, hi{0.0f}; // the grid's corner probes (lo == hi along an axis with one probe)
-    std::vector<std::array<glm::vec3, 9>> irradiance; // probe (i, j, k) at i + NX (j + NY k)
-    std::vector<uint8_t> valid; // 0: inside geometry (most of its rays saw the backs of surfaces)
-    // With mixed lights: per probe, the share of each shadowmask channel's light that reaches it (the sun's
-    // rays over its disc not blocked, a punctual light's one ray; 1 where none of the channel's lights
-    // reaches), what a dynamic object's mixed lights are times (their static shadows). Empty otherwise.
-    std::vector<std::array<float, 4>> occlusion;
-
-    bool empty() const { return irradiance.empty(); }
-    glm::vec3 position(uint32_t i, uint32_t j, uint32_t k) const;
-    // The irradiance at `p` (scene space): trilinear between the 8 probes of p's cell (p clamped to the
-    // grid), over the valid ones, their weights renormalised; the nearest valid probe when none of the 8 is
-    // valid; zero without a valid probe.
-    std::array<glm::vec3, 9> at(const glm::vec3& p) const;
-    // The mixed lights' occlusion at `p`, interpolated as at() interpolates the irradiance; all 1 without.
-    std::array<float, 4> occlusion_at(const glm::vec3& p) const;
-
-  private:
-    // The probes at() blends at `p` and their weights (summing to 1): `count` of them.
-    struct Blend
-    {
-        size_t probe[8];
-        float weight[8];
-        int count = 0;
-    };
-    Blend blend(const glm::vec3& p) const;
-
-  public:
-};
-
-// The probes of an NX x NY x NZ grid, or 0 when the grid is empty or holds more than 2^24 (the product is
-// taken so that it cannot wrap: three counts of up to 2^32 each).
-inline uint64_t probe_grid_count(uint64_t nx, uint64_t ny, uint64_t nz)
-{
-    constexpr uint64_t limit = uint64_t(1) << 24;
-    if (nx == 0 || ny == 0 || nz == 0 || nx > limit || ny > limit || nx * ny > limit || nx * ny * nz > limit)
-        return 0;
-    return nx * ny * nz;
-}
 
 // A light the bake was given, as an engine's runtime needs it to light the lightmap's mixed lights.
 struct LightmapLight
