@@ -230,9 +230,8 @@ size_t probe_texel_stride(uint32_t depth_resolution)
 
 std::vector<glm::vec4> probe_texels(const LightProbes& probes)
 {
-    const size_t stride = probe_texel_stride(probes.depth_resolution), rr =
-                                                                           size_t(probes.depth_resolution) *
-                                                                           probes.depth_resolution;
+    const size_t stride = probe_texel_stride(probes.depth_resolution),
+                 rr = size_t(probes.depth_resolution) * probes.depth_resolution;
     std::vector<glm::vec4> out(probes.size() * stride, glm::vec4(0.0f));
     for (size_t p = 0; p < probes.size(); ++p)
     {

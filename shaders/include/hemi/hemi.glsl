@@ -7,6 +7,7 @@
 //   hemi/lib/frame.glsl         tangent frames (glTF), normal-map normals, normal matrices
 //   hemi/lib/coefficients.glsl  coefficients from a lightmap, a per-vertex (PRT) buffer, varyings
 //   hemi/lib/irradiance.glsl    E(n) for every basis of math::bases(), SH9 probes
+//   hemi/lib/probes.glsl        SH9 light probes blended over the probes a point can see
 //   hemi/lib/rnm.glsl           radiosity normal mapping and SSBump (Green 2007)
 //   hemi/lib/environment.glsl   parabolic environment maps, Fresnel and BRDF tables (Heidrich & Seidel 1999)
 //   hemi/lib/lights.glsl        the dynamic-light terms hemi's techniques use
@@ -18,6 +19,7 @@
 #include "hemi/lib/frame.glsl"
 #include "hemi/lib/irradiance.glsl"
 #include "hemi/lib/lights.glsl"
+#include "hemi/lib/probes.glsl"
 #include "hemi/lib/rnm.glsl"
 #include "hemi/lib/specular.glsl"
 #endif

@@ -23,14 +23,14 @@ namespace hemi::io
 // x, v along y, (0.5, 0.5) is +z and the four corners -z. A probe's depth map has R x R texels over it,
 // texel (x, y) centred at ((x + 0.5) / R, (y + 0.5) / R).
 glm::vec2 octahedral_encode(const glm::vec3& direction); // any non-zero direction
-glm::vec3 octahedral_decode(const glm::vec2& uv);         // unit length
+glm::vec3 octahedral_decode(const glm::vec2& uv);        // unit length
 
 struct LightProbes
 {
     glm::uvec3 count{0};          // probes along x, y and z; all 0 when the asset has none
     glm::vec3 lo{0.0f}, hi{0.0f}; // the grid's corner probes (lo == hi along an axis with one probe)
-    // SH9 irradiance (hemi's SH order and sign, convolved with the clamped cosine: E(n) = sum_j c_j y_j(n) for
-    // any unit n), in the scene's own frame (the mesh's space), from the same lights and surfaces as the
+    // SH9 irradiance (hemi's SH order and sign, convolved with the clamped cosine: E(n) = sum_j c_j y_j(n)
+    // for any unit n), in the scene's own frame (the mesh's space), from the same lights and surfaces as the
     // lightmap: probe (i, j, k) at i + NX (j + NY k).
     std::vector<std::array<glm::vec3, 9>> irradiance;
     std::vector<uint8_t> valid; // 0: inside geometry (most of its rays saw the backs of surfaces); never used
@@ -59,13 +59,14 @@ struct LightProbes
     std::array<glm::vec3, 9> at(const glm::vec3& p) const;
     // The mixed lights' occlusion at `p`, blended as at() blends the irradiance; all 1 without.
     std::array<float, 4> occlusion_at(const glm::vec3& p) const;
-    // The mean distance and its deviation probe `probe` sees towards `direction` (bilinear over its depth map,
-    // the octahedral map's edges wrapped onto their mirror images, so that it is continuous over the sphere).
+    // The mean distance and its deviation probe `probe` sees towards `direction` (bilinear over its depth
+    // map, the octahedral map's edges wrapped onto their mirror images, so that it is continuous over the
+    // sphere).
     glm::vec2 depth_at(size_t probe, const glm::vec3& direction) const;
     // How much of point p probe `probe` sees, in (0, 1]: 1 where p is no farther than the probe's mean
     // distance towards it, else Chebyshev's bound var / (var + (r - mean)^2) (var the deviation squared) on
-    // the chance that nothing lies between, cubed (DDGI's sharpening), and never below kMinVisibility so that weights stay positive. 1
-    // without depth maps.
+    // the chance that nothing lies between, cubed (DDGI's sharpening), and never below kMinVisibility so that
+    // weights stay positive. 1 without depth maps.
     float visibility(size_t probe, const glm::vec3& p) const;
     static constexpr float kMinVisibility = 1e-4f;
 

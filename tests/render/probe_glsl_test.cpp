@@ -1,0 +1,140 @@
+// The GLSL library's probe lookup (hemi_probe_irradiance, hemi/lib/probes.glsl), run by a compute shader
+// (tests/shaders/probe_lookup.comp) over the texel buffer io::probe_texels() packs, held to the C++ lookup
+// (io::LightProbes::at and occlusion_at, written separately) at points in and around a grid whose probes see
+// walls at various distances: the same weights, the same visibility, the same folds of the octahedral maps.
+#include "../gpu_fixture.h"
+
+#include <hemi/gpu/commands.h>
+#include <hemi/gpu/pipeline.h>
+#include <hemi/gpu/resources.h>
+#include <hemi/io/light_probes.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace
+{
+using namespace hemi;
+
+class ProbeGlsl : public test::GpuTest
+{
+};
+
+// A 4 x 3 x 2 grid over [0, 3] x [0, 2] x [0, 1], two probes invalid, each probe's depth map a smooth
+// function of direction (means 0.2 to 1.6 around the 1-unit cells, deviations 0.02 to 0.3), so that points
+// in a cell see some probes and not others, with mixed lights' occlusion.
+io::LightProbes probes()
+{
+    io::LightProbes p;
+    p.count = glm::uvec3(4, 3, 2);
+    p.lo = glm::vec3(0.0f);
+    p.hi = glm::vec3(3.0f, 2.0f, 1.0f);
+    p.depth_resolution = 8;
+    p.max_distance = 2.6f;
+    const size_t n = 24;
+    for (size_t i = 0; i < n; ++i)
+    {
+        std::array<glm::vec3, 9> sh;
+        for (size_t j = 0; j < 9; ++j)
+            sh[j] = glm::vec3(std::sin(float(i * 9 + j)), std::cos(float(i * 5 + j * 3)), 0.1f * float(j) + float(i % 5));
+        p.irradiance.push_back(sh);
+        p.valid.push_back(i == 5 || i == 18 ? 0 : 1);
+        p.occlusion.push_back({float(i % 7) / 6.0f, 1.0f, float(i % 3) / 2.0f, 0.25f});
+        for (uint32_t y = 0; y < 8; ++y)
+            for (uint32_t x = 0; x < 8; ++x)
+            {
+                const glm::vec3 d = io::octahedral_decode(glm::vec2(x + 0.5f, y + 0.5f) / 8.0f);
+                const float mean = 0.9f + 0.7f * std::sin(3.0f * d.x + 2.0f * d.y + float(i)) * d.z;
+                p.depth.emplace_back(mean, 0.02f + 0.28f * (0.5f + 0.5f * std::cos(float(i) + 4.0f * d.y)));
+            }
+    }
+    return p;
+}
+
+} // namespace
+
+TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
+{
+    gpu::Device& dev = test::device();
+    const io::LightProbes grid = probes();
+    ASSERT_EQ(io::light_probes_problem(grid), "");
+    const std::vector<glm::vec4> texels = io::probe_texels(grid);
+    ASSERT_EQ(texels.size(), 24 * io::probe_texel_stride(8));
+    std::vector<glm::vec4> points;
+    uint32_t seed = 11;
+    auto random = [&seed] { return float((seed = seed * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
+    for (int i = 0; i < 2000; ++i) // in the grid and up to half a cell around it
+        points.emplace_back(random() * 4.0f - 0.5f, random() * 3.0f - 0.5f, random() * 2.0f - 0.5f, 0.0f);
+
+    const std::vector<gpu::Binding> bindings = {
+        {0, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
+        {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
+    const gpu::Program program =
+        gpu::create_compute_program(dev, {test::test_spirv("probe_lookup.comp"), bindings, 48, {}});
+    const size_t texel_bytes = texels.size() * sizeof(glm::vec4), point_bytes = points.size() * sizeof(glm::vec4),
+                 out_bytes = points.size() * 10 * sizeof(glm::vec4);
+    const gpu::Buffer probe_buffer =
+        gpu::create_buffer(dev, {texel_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
+    gpu::write_buffer(dev, probe_buffer, texels.data(), texel_bytes);
+    const gpu::BufferView view =
+        gpu::create_buffer_view(dev, probe_buffer.handle(), VK_FORMAT_R32G32B32A32_SFLOAT, 0, texel_bytes);
+    const gpu::Buffer in = gpu::create_buffer(dev, {point_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    gpu::write_buffer(dev, in, points.data(), point_bytes);
+    const gpu::Buffer out = gpu::create_buffer(dev, {out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT});
+    const gpu::DescriptorPool pool = gpu::create_descriptor_pool(dev, bindings, 1);
+    const VkDescriptorSet set = gpu::allocate_descriptor_set(dev, pool, program.set_layout);
+    gpu::DescriptorWrite writes[3];
+    writes[0].binding = 0;
+    writes[0].type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    writes[0].texel_view = view.get();
+    writes[1] = {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {in.handle(), 0, VK_WHOLE_SIZE}};
+    writes[2] = {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {out.handle(), 0, VK_WHOLE_SIZE}};
+    gpu::write_descriptors(dev, set, writes);
+    struct
+    {
+        glm::ivec4 count_r;
+        glm::vec4 lo, hi;
+    } push{glm::ivec4(glm::ivec3(grid.count), 8), glm::vec4(grid.lo, float(points.size())), glm::vec4(grid.hi, 0.0f)};
+    gpu::one_shot(dev,
+                  [&](VkCommandBuffer cmd)
+                  {
+                      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
+                      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0,
+                                              nullptr);
+                      vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
+                      vkCmdDispatch(cmd, uint32_t(points.size() + 63) / 64, 1, 1);
+                  });
+    std::vector<glm::vec4> values(points.size() * 10);
+    gpu::read_buffer(dev, out, values.data(), out_bytes);
+
+    double worst = 0.0;
+    int occluded = 0; // points where some probe of the cell sees under 1% of the point
+    for (size_t i = 0; i < points.size(); ++i)
+    {
+        const glm::vec3 p(points[i]);
+        const std::array<glm::vec3, 9> want = grid.at(p);
+        const std::array<float, 4> occlusion = grid.occlusion_at(p);
+        const io::LightProbes::Blend b = grid.blend(p);
+        for (int n = 0; n < b.count; ++n)
+            if (grid.visibility(b.probe[n], p) < 0.01f)
+            {
+                ++occluded;
+                break;
+            }
+        for (size_t j = 0; j < 9; ++j)
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, double(std::abs(values[i * 10 + j][c] - want[j][c])));
+        for (int c = 0; c < 4; ++c)
+            worst = std::max(worst, double(std::abs(values[i * 10 + 9][c] - occlusion[size_t(c)])));
+    }
+    std::printf("the shader's probe lookup against the CPU's: largest difference %.2e over %zu points, %d of "
+                "them with a probe that does not see them\n",
+                worst, points.size(), occluded);
+    EXPECT_LT(worst, 1e-4); // values of magnitude up to 5: float rounding of the weights
+    EXPECT_GT(occluded, 200) << "the grid no longer exercises visibility";
+}

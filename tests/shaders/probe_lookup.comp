@@ -1,0 +1,43 @@
+#version 450
+// Looks light probes up at a list of points with the GLSL library's hemi_probe_irradiance
+// (hemi/lib/probes.glsl): out[i * 10 + j] = SH9 coefficient j (j < 9), out[i * 10 + 9] the occlusion. A test
+// shader (tests/shaders/).
+#extension GL_GOOGLE_include_directive : require
+#include "hemi/lib/probes.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0) uniform samplerBuffer probes;
+layout(set = 0, binding = 1, std430) readonly buffer Points
+{
+    vec4 points[];
+};
+layout(set = 0, binding = 2, std430) writeonly buffer Values
+{
+    vec4 values[];
+};
+layout(push_constant) uniform Push
+{
+    ivec4 count_r; // count, depth resolution
+    vec4 lo;       // .w: the number of points
+    vec4 hi;
+}
+pc;
+
+void main()
+{
+    const uint i = gl_GlobalInvocationID.x;
+    if (i >= uint(pc.lo.w))
+        return;
+    HemiProbeGrid g;
+    g.count = pc.count_r.xyz;
+    g.depth_resolution = pc.count_r.w;
+    g.lo = pc.lo.xyz;
+    g.hi = pc.hi.xyz;
+    vec3 sh[HEMI_BASIS_MAX_SIZE];
+    vec4 occlusion;
+    hemi_probe_irradiance(probes, g, points[i].xyz, sh, occlusion);
+    for (int j = 0; j < 9; ++j)
+        values[i * 10 + j] = vec4(sh[j], 0.0);
+    values[i * 10 + 9] = occlusion;
+}
