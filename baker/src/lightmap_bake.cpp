@@ -1106,6 +1106,66 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
 
 namespace
 {
+// What a ray from a point in the level carries back from the surface it hits (the probes' and the reflection
+// probes' rays): emission plus albedo / pi times the lightmap's irradiance at the surface normal there
+// (bilinear at the hit's TEXCOORD_1 over the finished lightmap, dilated; the mixed lights' direct light,
+// which the lightmap leaves to the run time, included: it still lights what a probe sees). Without surfaces,
+// nothing.
+class LevelRadiance
+{
+  public:
+    LevelRadiance(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapSh& sh,
+                  const LightmapSurfaces* surfaces)
+        : mesh_(mesh), surfaces_(surfaces)
+    {
+        const bool direct = sh.has_direct();
+        std::vector<std::array<glm::vec3, 9>> sh9;
+        std::vector<std::array<glm::vec3, 4>> directs;
+        map_ = dilated(atlas, 1, 2, sh.valid,
+                       [&](uint32_t first, std::span<glm::vec3> out)
+                       {
+                           const uint32_t count = uint32_t(out.size());
+                           if (direct)
+                           {
+                               directs.resize(count);
+                               sh.read(first, count, nullptr, directs.data());
+                               for (uint32_t i = 0; i < count; ++i)
+                                   out[i] = directs[i][0];
+                           }
+                           else
+                           {
+                               sh9.resize(count);
+                               sh.read(first, count, sh9.data());
+                               for (uint32_t i = 0; i < count; ++i)
+                                   out[i] = math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
+                           }
+                           if (!sh.mixed_direct.empty())
+                               for (uint32_t i = 0; i < count; ++i)
+                                   out[i] += sh.mixed_direct[first + i];
+                       });
+    }
+    // Whether the ray along d met the back of a single-sided surface (which sends no light).
+    bool back_face(const EmbreeScene& scene, const RayHit& hit, const glm::vec3& d) const
+    {
+        return glm::dot(scene.geometric_normal(hit.primitive), d) > 0.0f &&
+               !(surfaces_ && surfaces_->double_sided(hit.primitive));
+    }
+    // The radiance leaving the front of the surface at `hit` (Lambertian: the same towards any direction).
+    glm::vec3 surface(const RayHit& hit) const
+    {
+        if (!surfaces_)
+            return glm::vec3(0.0f);
+        return surfaces_->emission(hit.primitive, hit.u, hit.v) +
+               surfaces_->albedo(hit.primitive, hit.u, hit.v) *
+                   atlas_lookup(mesh_, map_, hit.primitive, hit.u, hit.v) / float(M_PI);
+    }
+
+  private:
+    const io::Mesh& mesh_;
+    const LightmapSurfaces* surfaces_;
+    io::BlockMaps map_;
+};
+
 // A probe's depth map from its rays (direction, distance): per texel the mean distance and its standard
 // deviation over the rays in a cos^50 lobe around the texel's centre direction (DDGI's depth sharpness; the
 // lobe's half width at half weight is 9.6 degrees), or the nearest ray's distance (deviation 0) where no ray
@@ -1183,35 +1243,7 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
         throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
     const EmbreeScene scene(mesh);
     const detail::LightSampler light(lights, o.seed);
-    // What a ray that lands on a surface picks up: the lightmap's irradiance at the surface normal.
-    const bool direct = sh.has_direct();
-    std::vector<std::array<glm::vec3, 9>> sh9;
-    std::vector<std::array<glm::vec3, 4>> directs;
-    const io::BlockMaps map = dilated(atlas, 1, 2, sh.valid,
-                                      [&](uint32_t first, std::span<glm::vec3> out)
-                                      {
-                                          const uint32_t count = uint32_t(out.size());
-                                          if (direct)
-                                          {
-                                              directs.resize(count);
-                                              sh.read(first, count, nullptr, directs.data());
-                                              for (uint32_t i = 0; i < count; ++i)
-                                                  out[i] = directs[i][0];
-                                          }
-                                          else
-                                          {
-                                              sh9.resize(count);
-                                              sh.read(first, count, sh9.data());
-                                              for (uint32_t i = 0; i < count; ++i)
-                                                  out[i] =
-                                                      math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
-                                          }
-                                          // The mixed lights' direct light, which the lightmap leaves to the
-                                          // run time, still lights what the probes see.
-                                          if (!sh.mixed_direct.empty())
-                                              for (uint32_t i = 0; i < count; ++i)
-                                                  out[i] += sh.mixed_direct[first + i];
-                                      });
+    const LevelRadiance level(mesh, atlas, sh, surfaces);
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
@@ -1278,19 +1310,13 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                             add(d, glm::dvec3(lights.environment_radiance(d)) * weight);
                         continue;
                     }
-                    if (glm::dot(scene.geometric_normal(hit->primitive), d) > 0.0f &&
-                        !(surfaces && surfaces->double_sided(hit->primitive)))
+                    if (level.back_face(scene, *hit, d))
                     {
                         ++back_faces;
                         continue;
                     }
-                    if (!surfaces)
-                        continue;
-                    const glm::vec3 radiance = surfaces->emission(hit->primitive, hit->u, hit->v) +
-                                               surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                                                   atlas_lookup(mesh, map, hit->primitive, hit->u, hit->v) /
-                                                   float(M_PI);
-                    add(d, glm::dvec3(radiance) * weight);
+                    if (surfaces)
+                        add(d, glm::dvec3(level.surface(*hit)) * weight);
                 }
                 const uint64_t item =
                     uint64_t(1) << 40 | at; // the light samplers' items, apart from the texels'

@@ -68,7 +68,9 @@ struct EngineFrame
     glm::mat4 sun_view_projection;
     glm::vec4 eye, sun_direction, sun_irradiance, shadow, fog;
     glm::ivec4 mode;
-    glm::vec4 probe_sh[kSpheres * 9];
+    glm::mat4 world_to_level;
+    glm::ivec4 probe_count;
+    glm::vec4 probe_lo, probe_hi;
     shared::EnvironmentUniforms env;
 };
 struct EngineObject
@@ -278,6 +280,9 @@ struct Renderer::Impl
     std::vector<VkDescriptorSet> torus_sets; // per primitive of the torus
     VkDescriptorSet env_set = VK_NULL_HANDLE;
     VkBufferView torus_coefficients = VK_NULL_HANDLE;
+    // The level's light probes, written once (io::probe_texels) and read by the probe-lit objects' shader.
+    Buffer probe_buffer;
+    VkBufferView probe_view = VK_NULL_HANDLE;
     Program depth_program, shadow_program, level_basis, level_ssbump, prt_program, probe_program, env_program,
         post_program;
     VkSampler shadow_sampler = VK_NULL_HANDLE, post_sampler = VK_NULL_HANDLE;
@@ -359,6 +364,8 @@ struct Renderer::Impl
         vkDestroySampler(vk, shadow_sampler, nullptr);
         vkDestroySampler(vk, post_sampler, nullptr);
         vkDestroyBufferView(vk, torus_coefficients, nullptr);
+        vkDestroyBufferView(vk, probe_view, nullptr);
+        destroy(vk, probe_buffer);
         destroy(vk, screenshot_buffer);
         for (VkRenderPass p : {shadow_pass, depth_pass, main_pass, post_pass})
             vkDestroyRenderPass(vk, p, nullptr);
@@ -597,6 +604,20 @@ struct Renderer::Impl
         view.offset = range.offset;
         view.range = range.size;
         check(vkCreateBufferView(vk, &view, nullptr, &torus_coefficients), "vkCreateBufferView");
+        // The level's probes for hemi_probe_irradiance: one RGBA32F texel buffer in hemi's layout.
+        const std::vector<glm::vec4> probe_texels = io::probe_texels(assets.level.probes);
+        if (probe_texels.empty())
+            throw std::runtime_error("the level has no light probes for its dynamic objects");
+        if (probe_texels.size() > device.limits().maxTexelBufferElements)
+            throw std::runtime_error("the level's " + std::to_string(probe_texels.size()) +
+                                     " probe texels exceed the device's texel buffers");
+        probe_buffer = create_buffer(vk, memory, probe_texels.size() * sizeof(glm::vec4),
+                                     VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
+        std::memcpy(probe_buffer.mapped, probe_texels.data(), probe_texels.size() * sizeof(glm::vec4));
+        view.buffer = probe_buffer.buffer;
+        view.offset = 0;
+        view.range = probe_texels.size() * sizeof(glm::vec4);
+        check(vkCreateBufferView(vk, &view, nullptr, &probe_view), "vkCreateBufferView");
     }
 
     void create_descriptors()
@@ -607,7 +628,8 @@ struct Renderer::Impl
             return VkDescriptorSetLayoutBinding{b, type, 1, stages, nullptr};
         };
         const VkDescriptorSetLayoutBinding frame_bindings[] = {
-            binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs), binding(1, image, fs)};
+            binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vs | fs), binding(1, image, fs),
+            binding(2, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, fs)};
         const VkDescriptorSetLayoutBinding level_bindings[] = {
             binding(0, image, fs), binding(1, image, fs),  binding(2, image, fs),
             binding(3, image, fs), binding(5, image, fs),  binding(8, image, fs),
@@ -625,7 +647,7 @@ struct Renderer::Impl
         const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
                                               {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4},
                                               {image, 160},
-                                              {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 4}};
+                                              {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 8}};
         VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
         pool_info.maxSets = 40;
         pool_info.poolSizeCount = uint32_t(std::size(sizes));
@@ -724,6 +746,13 @@ struct Renderer::Impl
             vkUpdateDescriptorSets(vk, 1, &w, 0, nullptr);
             write_image(vk, slot.frame_set, 1, shadow_sampler, slot.shadow.view,
                         VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+            VkWriteDescriptorSet pw{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            pw.dstSet = slot.frame_set;
+            pw.dstBinding = 2;
+            pw.descriptorCount = 1;
+            pw.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+            pw.pTexelBufferView = &probe_view;
+            vkUpdateDescriptorSets(vk, 1, &pw, 0, nullptr);
             slot.post_set = allocate(post_layout);
 
             // hemi's view of this slot: two sets of hemi's frame layout over the engine's buffer.
@@ -914,9 +943,13 @@ struct Renderer::Impl
                                                                            : 0,
                             settings.coat && !settings.baked_only ? 1 : 0, 0);
         const bool objects = settings.objects && !settings.baked_only;
-        // The probes at each dynamic object (spheres, the glossy ball, the torus): the spheres' SH9, and
-        // every object's occlusion of the mixed sun (its channel), its static shadow beyond the shadow
-        // distance.
+        // The level's probes, which the spheres look up per pixel; at the glossy ball and the torus, their
+        // occlusion of the mixed sun (its channel), the objects' static shadow beyond the shadow distance.
+        const io::LightProbes& probes = assets.level.probes;
+        f.world_to_level = glm::inverse(level_model);
+        f.probe_count = glm::ivec4(glm::ivec3(probes.count), int(probes.depth_resolution));
+        f.probe_lo = glm::vec4(probes.lo, 0.0f);
+        f.probe_hi = glm::vec4(probes.hi, 0.0f);
         std::array<float, kSpheres + 2> occlusion;
         occlusion.fill(1.0f);
         for (uint32_t s = 0; s <= kSpheres + 1; ++s)
@@ -929,8 +962,6 @@ struct Renderer::Impl
                 throw std::runtime_error("the level has no light probes for its dynamic objects");
             if (sun && sun->shadowmask_channel >= 0)
                 occlusion[s] = occluded[size_t(sun->shadowmask_channel)];
-            for (uint32_t i = 0; s < kSpheres && i < 9; ++i)
-                f.probe_sh[s * 9 + i] = glm::vec4(sh[i], 0.0f);
         }
         const float env_degrees = 25.0f * state.env_time;
         glossy.world_to_env =

@@ -29,13 +29,12 @@ using hemi::io::LightProbes;
 using hemi::samples::received_light;
 using hemi::samples::TwoRooms;
 
-constexpr float kHeight = 0.7f;         // the maps' and the walk's height above the floor
+constexpr float kHeight = 0.7f;            // the maps' and the walk's height above the floor
 constexpr float kX0 = -2.05f, kX1 = 2.05f; // the two rooms along x; y in [0, 2]
 
 // What an object at each pixel's centre receives (the SH9's constant term's luminance), x to the right, y up
 // the image; black inside the shared wall.
-template <typename Light>
-hemi::io::ImageRgba light_map(uint32_t w, uint32_t h, const Light& light)
+template <typename Light> hemi::io::ImageRgba light_map(uint32_t w, uint32_t h, const Light& light)
 {
     hemi::io::ImageRgba img{w, h, std::vector<float>(size_t(w) * h * 4, 1.0f)};
     for (uint32_t y = 0; y < h; ++y)
@@ -100,8 +99,9 @@ void write_plot(const std::filesystem::path& path, const Walk& w)
                    << "set xlabel 'metres along the walk (the door at 1.0)'\n"
                    << "set ylabel 'light received (SH9 constant term, luminance)'\n"
                    << "set grid\nset key top right\nset yrange [0:*]\n"
-                   << "plot " << d << " using 1:2 with lines lw 3 lc rgb '#999999' title 'probe baked at each point', "
-                   << d << " using 1:4 with lines lw 2 dt 2 lc rgb '#d95f02' title 'trilinear lookup', " << d
+                   << "plot " << d
+                   << " using 1:2 with lines lw 3 lc rgb '#999999' title 'probe baked at each point', " << d
+                   << " using 1:4 with lines lw 2 dt 2 lc rgb '#d95f02' title 'trilinear lookup', " << d
                    << " using 1:3 with lines lw 2 lc rgb '#1b9e77' title 'lookup with visibility'\n";
         });
 }
@@ -113,8 +113,9 @@ int main(int argc, char** argv)
     CLI::App app{"light_probes: probes that do not leak through walls, beside trilinear interpolation"};
     std::string maps = "light_probes.png", plot = "light_probes_door.png", table;
     uint32_t per_metre = 60;
-    app.add_option("-o,--output", maps, "the maps: rows sealed and door, columns trilinear, visibility, "
-                                        "reference")
+    app.add_option("-o,--output", maps,
+                   "the maps: rows sealed and door, columns trilinear, visibility, "
+                   "reference")
         ->capture_default_str();
     app.add_option("--plot", plot, "the walk through the door (gnuplot; empty: none)")->capture_default_str();
     app.add_option("--table", table, "the figures as a Markdown table (empty: none)");
@@ -127,8 +128,9 @@ int main(int argc, char** argv)
         const auto start = std::chrono::steady_clock::now();
         const uint32_t w = uint32_t(std::lround((kX1 - kX0) * float(per_metre))), h = 2 * per_metre;
         std::vector<hemi::io::ImageRgba> tiles;
-        std::string md = "| scene | lookup | largest share of the lit side's light at a mirrored point in the "
-                         "dark room | mean error against the reference over the map |\n| --- | --- | --- | --- |\n";
+        std::string md =
+            "| scene | lookup | largest share of the lit side's light at a mirrored point in the "
+            "dark room | mean error against the reference over the map |\n| --- | --- | --- | --- |\n";
         Walk door_walk;
         for (const bool door : {false, true})
         {
@@ -137,8 +139,9 @@ int main(int argc, char** argv)
             const LightProbes blind = hemi::samples::without_visibility(probes);
             // The reference: a probe baked at every pixel (256 rays).
             const glm::vec2 half(0.5f * (kX1 - kX0) / float(w), 1.0f / float(h));
-            const LightProbes exact = rooms.probes(glm::uvec3(w, h, 1), glm::vec3(kX0 + half.x, half.y, kHeight),
-                                                   glm::vec3(kX1 - half.x, 2.0f - half.y, kHeight), 256, 0);
+            const LightProbes exact =
+                rooms.probes(glm::uvec3(w, h, 1), glm::vec3(kX0 + half.x, half.y, kHeight),
+                             glm::vec3(kX1 - half.x, 2.0f - half.y, kHeight), 256, 0);
             auto reference = [&](const glm::vec3&, size_t i)
             {
                 const uint32_t x = uint32_t(i % w), y = uint32_t(i / w);
@@ -150,14 +153,16 @@ int main(int argc, char** argv)
             for (int which = 0; which < 2; ++which)
             {
                 const LightProbes& p = which == 0 ? blind : probes;
-                tiles.push_back(light_map(w, h, [&](const glm::vec3& q, size_t) { return received_light(p.at(q)); }));
+                tiles.push_back(
+                    light_map(w, h, [&](const glm::vec3& q, size_t) { return received_light(p.at(q)); }));
                 for (size_t i = 0; i < size_t(w) * h; ++i)
                     error[which] += std::abs(tiles.back().pixels[i * 4] - ref.pixels[i * 4]);
                 for (const float x : {0.1f, 0.2f, 0.3f})
                     for (const float y : {0.3f, 1.0f, 1.7f})
                         for (const float z : {0.3f, 1.0f, 1.7f})
-                            leak[which] = std::max(leak[which], received_light(p.at(glm::vec3(x, y, z))) /
-                                                                    received_light(p.at(glm::vec3(-x, y, z))));
+                            leak[which] =
+                                std::max(leak[which], received_light(p.at(glm::vec3(x, y, z))) /
+                                                          received_light(p.at(glm::vec3(-x, y, z))));
                 n = int(w * h);
             }
             tiles.push_back(ref);
@@ -178,13 +183,15 @@ int main(int argc, char** argv)
             door_walk = walk(rooms, rooms.grid(glm::uvec3(8, 5, 4), 1024));
         }
         char row[512];
-        std::snprintf(row, sizeof row,
-                      "\nThe walk through the door (201 points 1 cm apart): largest step %.4f with visibility, %.4f "
-                      "trilinear alone, %.4f for probes baked at each point; mean error %.4f and %.4f.\n",
-                      door_walk.lookup_step, door_walk.trilinear_step, door_walk.reference_step, door_walk.error,
-                      door_walk.trilinear_error);
+        std::snprintf(
+            row, sizeof row,
+            "\nThe walk through the door (201 points 1 cm apart): largest step %.4f with visibility, %.4f "
+            "trilinear alone, %.4f for probes baked at each point; mean error %.4f and %.4f.\n",
+            door_walk.lookup_step, door_walk.trilinear_step, door_walk.reference_step, door_walk.error,
+            door_walk.trilinear_error);
         md += row;
-        hemi::samples::write_labeled_grid(maps, tiles, w, h, {"trilinear", "visibility (depth maps)", "probe at every pixel"},
+        hemi::samples::write_labeled_grid(maps, tiles, w, h,
+                                          {"trilinear", "visibility (depth maps)", "probe at every pixel"},
                                           {"sealed", "door"}, 0.15f);
         if (!plot.empty())
             write_plot(plot, door_walk);

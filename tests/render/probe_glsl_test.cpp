@@ -40,7 +40,8 @@ io::LightProbes probes()
     {
         std::array<glm::vec3, 9> sh;
         for (size_t j = 0; j < 9; ++j)
-            sh[j] = glm::vec3(std::sin(float(i * 9 + j)), std::cos(float(i * 5 + j * 3)), 0.1f * float(j) + float(i % 5));
+            sh[j] = glm::vec3(std::sin(float(i * 9 + j)), std::cos(float(i * 5 + j * 3)),
+                              0.1f * float(j) + float(i % 5));
         p.irradiance.push_back(sh);
         p.valid.push_back(i == 5 || i == 18 ? 0 : 1);
         p.occlusion.push_back({float(i % 7) / 6.0f, 1.0f, float(i % 3) / 2.0f, 0.25f});
@@ -76,7 +77,8 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
         {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
     const gpu::Program program =
         gpu::create_compute_program(dev, {test::test_spirv("probe_lookup.comp"), bindings, 48, {}});
-    const size_t texel_bytes = texels.size() * sizeof(glm::vec4), point_bytes = points.size() * sizeof(glm::vec4),
+    const size_t texel_bytes = texels.size() * sizeof(glm::vec4),
+                 point_bytes = points.size() * sizeof(glm::vec4),
                  out_bytes = points.size() * 10 * sizeof(glm::vec4);
     const gpu::Buffer probe_buffer =
         gpu::create_buffer(dev, {texel_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
@@ -99,13 +101,14 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
     {
         glm::ivec4 count_r;
         glm::vec4 lo, hi;
-    } push{glm::ivec4(glm::ivec3(grid.count), 8), glm::vec4(grid.lo, float(points.size())), glm::vec4(grid.hi, 0.0f)};
+    } push{glm::ivec4(glm::ivec3(grid.count), 8), glm::vec4(grid.lo, float(points.size())),
+           glm::vec4(grid.hi, 0.0f)};
     gpu::one_shot(dev,
                   [&](VkCommandBuffer cmd)
                   {
                       vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
-                      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0,
-                                              nullptr);
+                      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set,
+                                              0, nullptr);
                       vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
                       vkCmdDispatch(cmd, uint32_t(points.size() + 63) / 64, 1, 1);
                   });

@@ -1,11 +1,9 @@
 // The engine sample's own frame data and draw constants (not hemi's): set 0 is the engine's per-frame block
-// (one per frame in flight) and its shadow map, the push constants its per-object block. Shared by its
-// depth, main and post shaders.
+// (one per frame in flight), its shadow map and the level's probes (main.frag), the push constants its
+// per-object block. Shared by its depth, main and post shaders.
 #ifndef ENGINE_FRAME_GLSL
 #define ENGINE_FRAME_GLSL
 #include "hemi/shared/surface.h" // EnvironmentUniforms: what render::EnvironmentLighting::uniforms() gives
-
-#define ENGINE_SPHERES 3
 
 layout(set = 0, binding = 0, std140) uniform EngineFrame
 {
@@ -20,8 +18,12 @@ layout(set = 0, binding = 0, std140) uniform EngineFrame
     vec4 fog;            // rgb: fog colour; w: density per unit of distance (0: none)
     ivec4 mode; // x: lightmap basis (0: H6 near, H4 far; 1: H6; 2: H4); y: 1 = lighting only, 2 = the GGX
                 // coat's light alone; z: 1 = the coat (specular)
-    vec4 probe_sh[ENGINE_SPHERES * 9]; // each sphere's SH9 irradiance from the level's probes
-    EnvironmentUniforms env;           // the glossy object's environment (turning)
+    // The level's light probes (hemi_probe_irradiance over set 0's texel buffer): world to the level's
+    // frame, the grid's count (w: its depth maps' side) and its corner probes.
+    mat4 world_to_level;
+    ivec4 probe_count;
+    vec4 probe_lo, probe_hi;
+    EnvironmentUniforms env; // the glossy object's environment (turning)
 }
 frame;
 
@@ -29,7 +31,7 @@ layout(push_constant) uniform EngineObject
 {
     mat4 model;
     vec4 albedo;   // base colour factor
-    ivec4 index;   // x: the sphere (its probe_sh), or the PRT instance's first coefficient texel
+    ivec4 index;   // x: the PRT instance's first coefficient texel
     vec4 material; // x: GGX roughness (0: no coat), y: f0; z: a dynamic object's occlusion of the mixed sun
                    // from the level's probes (its static shadow beyond the shadow distance)
 }

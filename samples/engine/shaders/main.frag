@@ -3,8 +3,8 @@
 // engine's alone (the level's mixed sun lit at run time with its shadow map, a GGX coat, fog) into an HDR
 // target that the post pass exposes and tonemaps.
 // ENGINE_SOURCE: 1 = the lightmapped level (technique: 0 = H6 near / H4 far, 1 = SSBump), 2 = a PRT object's
-// per-vertex coefficients, 3 = a probe-lit sphere (SH9 from the level's probes), 4 = Heidrich & Seidel's
-// glossy object (prefiltered parabolic maps).
+// per-vertex coefficients, 3 = a probe-lit sphere (SH9 from the level's probes, per pixel), 4 = Heidrich &
+// Seidel's glossy object (prefiltered parabolic maps).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "hemi/hemi.glsl"
@@ -14,6 +14,7 @@ layout(constant_id = 1) const int K = 4;
 layout(constant_id = 2) const int kBasis = 0;
 
 layout(set = 0, binding = 1) uniform sampler2DShadow shadow_map;
+layout(set = 0, binding = 2) uniform samplerBuffer level_probes; // io::probe_texels of the level's probes
 #if ENGINE_SOURCE == 1 || ENGINE_SOURCE == 2
 layout(set = 1, binding = 0) uniform sampler2D base_color; // sRGB
 layout(set = 1, binding = 1) uniform sampler2D normal_map; // or an SSBump map (technique 1)
@@ -86,6 +87,21 @@ void main()
     const float baked = hemi_shadowmask_channel(hemi_lightmap_shadowmask(shadowmask, h4_table, in_uv1),
                                                 int(frame.sun_irradiance.w));
     const vec3 light = sun_light(in_world, baked);
+#elif ENGINE_SOURCE == 3
+    // A probe-lit object, per pixel: the level's probes at the surface point lifted 5 cm off it (in the
+    // level's frame), blended over the probes that see it; their occlusion of the sun is its static shadow.
+    const vec3 n = normalize(in_normal);
+    HemiProbeGrid grid;
+    grid.count = frame.probe_count.xyz;
+    grid.depth_resolution = frame.probe_count.w;
+    grid.lo = frame.probe_lo.xyz;
+    grid.hi = frame.probe_hi.xyz;
+    vec3 probe_sh[HEMI_BASIS_MAX_SIZE];
+    vec4 probe_occlusion;
+    hemi_probe_irradiance(level_probes, grid, (frame.world_to_level * vec4(in_world + 0.05 * n, 1.0)).xyz,
+                          probe_sh, probe_occlusion);
+    const int channel = int(frame.sun_irradiance.w);
+    const vec3 light = sun_light(in_world, channel >= 0 ? probe_occlusion[channel] : 1.0);
 #else
     const vec3 light = sun_light(in_world, object.material.z);
 #endif
@@ -143,13 +159,10 @@ void main()
     color = albedo * (hemi_basis_irradiance(kBasis, K, c, nt, sep4) + light * max(dot(nt, lt), 0.0)) / kPi;
 #endif
 #elif ENGINE_SOURCE == 3
-    // A dynamic object lit by the level's light probes: world-space SH9 irradiance.
-    const vec3 n = normalize(in_normal);
-    vec3 c[HEMI_BASIS_MAX_SIZE];
-    for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i)
-        c[i] = i < 9 ? frame.probe_sh[object.index.x * 9 + i].rgb : vec3(0.0);
+    // The probes' SH9 is in the level's frame: the normal goes there.
     const vec3 albedo = frame.mode.y != 0 ? vec3(1.0) : object.albedo.rgb;
-    color = albedo * (hemi_sh9_irradiance(c, n) + light * max(dot(n, l), 0.0)) / kPi;
+    const vec3 level_normal = normalize(mat3(frame.world_to_level) * n);
+    color = albedo * (hemi_sh9_irradiance(probe_sh, level_normal) + light * max(dot(n, l), 0.0)) / kPi;
 #elif ENGINE_SOURCE == 4
     // Heidrich & Seidel: a Phong-prefiltered glossy reflection and the diffuse map of the same environment.
     const vec3 n = normalize(in_normal);
