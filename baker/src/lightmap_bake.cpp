@@ -6,6 +6,7 @@
 #include <hemi/bake/embree_scene.h>
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/ray_generator.h>
+#include <hemi/bake/reflection_probe.h>
 #include <hemi/io/image.h>
 #include <hemi/math/basis.h>
 #include <hemi/math/luminance.h>
@@ -1387,6 +1388,89 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                             .subspan(size_t(at) * texel_directions.size(), texel_directions.size()));
             }
         });
+}
+
+io::EnvmapAsset bake_reflection_probe(const io::Mesh& mesh, const LightmapAtlas& atlas, const LightmapSh& sh,
+                                      const LightmapLights& lights, const LightmapSurfaces* surfaces,
+                                      const glm::vec3& position, const ReflectionProbeOptions& o,
+                                      io::ImageRgba* radiance)
+{
+    LightmapBakeOptions checked;
+    check(lights, checked);
+    const int side = int(std::lround(std::sqrt(double(std::max(o.rays, 0)))));
+    if (o.rays < 1 || o.rays > 4096 || side * side != o.rays)
+        throw std::invalid_argument(
+            "a reflection probe's rays per pixel must be a square number from 1 to 4096, "
+            "not " +
+            std::to_string(o.rays));
+    EnvmapBakeOptions envmap;
+    envmap.size = o.size;
+    envmap.exponents = o.exponents;
+    check_envmap_options(envmap);
+    if (!std::isfinite(position.x + position.y + position.z))
+        throw std::invalid_argument("a reflection probe's position must be finite");
+    if (sh.texels() != atlas.texels.size() ||
+        (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
+        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
+    if (surfaces && mesh.uvs1.size() != mesh.positions.size())
+        throw std::invalid_argument("reflection probes need lightmap UVs to look the irradiance of a hit up");
+    const EmbreeScene scene(mesh);
+    const LevelRadiance level(mesh, atlas, sh, surfaces);
+    const uint32_t w = 4 * o.size, h = 2 * o.size;
+    io::ImageRgba image{w, h, std::vector<float>(size_t(w) * h * 4, 1.0f)};
+    const uint64_t seed = mix64(o.seed ^ 0x5245464cull);
+    auto direction = [&](double u, double v) // u, v in [0, 1] over the image, v from the top
+    {
+        const double phi = M_PI - 2.0 * M_PI * u, theta = M_PI * v;
+        return glm::vec3(
+            glm::dvec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
+    };
+    tbb::parallel_for(
+        tbb::blocked_range<uint32_t>(0, h, 1),
+        [&](const tbb::blocked_range<uint32_t>& rows)
+        {
+            for (uint32_t y = rows.begin(); y != rows.end(); ++y)
+                for (uint32_t x = 0; x < w; ++x)
+                {
+                    const uint64_t pixel = uint64_t(y) * w + x;
+                    glm::dvec3 sum(0.0);
+                    for (int r = 0; r < o.rays; ++r)
+                    {
+                        const double jx = (r % side + uniform01(seed, pixel, 2 * uint64_t(r))) / side,
+                                     jy = (r / side + uniform01(seed, pixel, 2 * uint64_t(r) + 1)) / side;
+                        const glm::vec3 d = direction((x + jx) / w, (y + jy) / h);
+                        const std::optional<RayHit> hit = scene.intersect(position, d);
+                        if (!hit)
+                            sum += glm::dvec3(lights.environment_radiance(d));
+                        else if (!level.back_face(scene, *hit, d))
+                            sum += glm::dvec3(level.surface(*hit));
+                    }
+                    float* p = image.pixels.data() + pixel * 4;
+                    for (int c = 0; c < 3; ++c)
+                        p[c] = float(sum[c] / o.rays);
+                }
+        });
+    // A baked sun: its disc, far smaller than a pixel, as the irradiance it gives spread over the pixel it
+    // lies in (what the pixel's mean radiance is), times the share of the disc the point sees.
+    if (lights.sun && lights.sun_mode == io::LightMode::Baked)
+    {
+        const detail::LightSampler light(lights, o.seed);
+        const glm::vec3 towards = glm::transpose(lights.scene_to_world) * lights.sun_direction;
+        const int rays = 64;
+        int visible = 0;
+        for (int r = 0; r < rays; ++r)
+            visible += !scene.occluded(position, light.sun_ray(uint64_t(1) << 41, r));
+        uint32_t x = 0, y = 0;
+        math::equirect_pixel(glm::dvec3(glm::normalize(towards)), w, h, x, y);
+        const double solid_angle = 2.0 * M_PI / w * (std::cos(M_PI * y / h) - std::cos(M_PI * (y + 1) / h));
+        float* p = image.pixels.data() + (size_t(y) * w + x) * 4;
+        for (int c = 0; c < 3; ++c)
+            p[c] += float(double(lights.sun_irradiance[c]) * visible / rays / solid_angle);
+    }
+    io::EnvmapAsset asset = bake_envmap(image, envmap);
+    if (radiance)
+        *radiance = std::move(image);
+    return asset;
 }
 
 int lightmap_output_size(std::string_view name)

@@ -12,65 +12,10 @@
 
 namespace hemi::samples
 {
-namespace
-{
-
 using glm::vec3;
 
-// Quads, each a chart of its own in a grid of UV cells.
-struct QuadList
+namespace
 {
-    std::vector<std::array<vec3, 4>> quads;
-    void add(vec3 a, vec3 b, vec3 c, vec3 d) { quads.push_back({a, b, c, d}); }
-    // Axis-aligned rectangles facing + or - along their axis.
-    void wall_x(float at, float y0, float y1, float z0, float z1, bool plus)
-    {
-        if (plus)
-            add({at, y0, z0}, {at, y1, z0}, {at, y1, z1}, {at, y0, z1});
-        else
-            add({at, y1, z0}, {at, y0, z0}, {at, y0, z1}, {at, y1, z1});
-    }
-    void wall_y(float at, float x0, float x1, float z0, float z1, bool plus)
-    {
-        if (plus)
-            add({x1, at, z0}, {x0, at, z0}, {x0, at, z1}, {x1, at, z1});
-        else
-            add({x0, at, z0}, {x1, at, z0}, {x1, at, z1}, {x0, at, z1});
-    }
-    void wall_z(float at, float x0, float x1, float y0, float y1, bool plus)
-    {
-        if (plus)
-            add({x0, y0, at}, {x1, y0, at}, {x1, y1, at}, {x0, y1, at});
-        else
-            add({x0, y1, at}, {x1, y1, at}, {x1, y0, at}, {x0, y0, at});
-    }
-    io::Mesh mesh() const
-    {
-        io::Mesh m;
-        const int side = int(std::ceil(std::sqrt(double(quads.size()))));
-        const float cell = 1.0f / float(side), margin = 0.1f * cell;
-        for (size_t i = 0; i < quads.size(); ++i)
-        {
-            const float u0 = float(int(i) % side) * cell + margin, v0 = float(int(i) / side) * cell + margin,
-                        u1 = u0 + cell - 2 * margin, v1 = v0 + cell - 2 * margin;
-            const auto& q = quads[i];
-            const uint32_t base = uint32_t(m.positions.size());
-            const vec3 n = glm::normalize(glm::cross(q[1] - q[0], q[3] - q[0]));
-            const vec3 t = glm::normalize(q[1] - q[0]);
-            const glm::vec2 uv[4] = {{u0, v1}, {u1, v1}, {u1, v0}, {u0, v0}};
-            for (int k = 0; k < 4; ++k)
-            {
-                m.positions.push_back(q[size_t(k)]);
-                m.normals.push_back(n);
-                m.tangents.emplace_back(t, 1.0f);
-                m.uvs.push_back(uv[k]);
-                m.uvs1.push_back(uv[k]);
-            }
-            m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-        }
-        return m;
-    }
-};
 
 io::Material grey()
 {
@@ -81,6 +26,74 @@ io::Material grey()
 }
 
 } // namespace
+
+void QuadList::add(vec3 a, vec3 b, vec3 c, vec3 d)
+{
+    quads.push_back({a, b, c, d});
+    materials.push_back(material);
+}
+
+void QuadList::wall_x(float at, float y0, float y1, float z0, float z1, bool plus)
+{
+    if (plus)
+        add({at, y0, z0}, {at, y1, z0}, {at, y1, z1}, {at, y0, z1});
+    else
+        add({at, y1, z0}, {at, y0, z0}, {at, y0, z1}, {at, y1, z1});
+}
+
+void QuadList::wall_y(float at, float x0, float x1, float z0, float z1, bool plus)
+{
+    if (plus)
+        add({x1, at, z0}, {x0, at, z0}, {x0, at, z1}, {x1, at, z1});
+    else
+        add({x0, at, z0}, {x1, at, z0}, {x1, at, z1}, {x0, at, z1});
+}
+
+void QuadList::wall_z(float at, float x0, float x1, float y0, float y1, bool plus)
+{
+    if (plus)
+        add({x0, y0, at}, {x1, y0, at}, {x1, y1, at}, {x0, y1, at});
+    else
+        add({x0, y1, at}, {x1, y1, at}, {x1, y0, at}, {x0, y0, at});
+}
+
+io::Mesh QuadList::mesh() const
+{
+    io::Mesh m;
+    const int side = int(std::ceil(std::sqrt(double(quads.size()))));
+    const float cell = 1.0f / float(side), margin = 0.1f * cell;
+    for (size_t i = 0; i < quads.size(); ++i)
+    {
+        const float u0 = float(int(i) % side) * cell + margin, v0 = float(int(i) / side) * cell + margin,
+                    u1 = u0 + cell - 2 * margin, v1 = v0 + cell - 2 * margin;
+        const auto& q = quads[i];
+        const uint32_t base = uint32_t(m.positions.size());
+        const vec3 n = glm::normalize(glm::cross(q[1] - q[0], q[3] - q[0]));
+        const vec3 t = glm::normalize(q[1] - q[0]);
+        const glm::vec2 uv[4] = {{u0, v1}, {u1, v1}, {u1, v0}, {u0, v0}};
+        for (int k = 0; k < 4; ++k)
+        {
+            m.positions.push_back(q[size_t(k)]);
+            m.normals.push_back(n);
+            m.tangents.emplace_back(t, 1.0f);
+            m.uvs.push_back(uv[k]);
+            m.uvs1.push_back(uv[k]);
+        }
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+    return m;
+}
+
+std::vector<io::Primitive> QuadList::primitives() const
+{
+    std::vector<io::Primitive> out;
+    for (size_t i = 0; i < quads.size(); ++i)
+        if (!out.empty() && out.back().material == materials[i])
+            out.back().index_count += 6;
+        else
+            out.push_back({uint32_t(6 * i), 6, materials[i]});
+    return out;
+}
 
 io::Mesh two_rooms_mesh(bool door)
 {

@@ -20,6 +20,22 @@
 namespace hemi::samples
 {
 
+// A level made of axis-aligned rectangles, each its own chart in a grid of lightmap UV cells (TEXCOORD_0
+// the same), each with the material `material` held when it was added.
+struct QuadList
+{
+    std::vector<std::array<glm::vec3, 4>> quads; // counter-clockwise seen from the front
+    std::vector<uint32_t> materials;
+    uint32_t material = 0;
+    void add(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d);
+    // At x = `at` over [y0, y1] x [z0, z1], facing +x (`plus`) or -x; and the same along y and z.
+    void wall_x(float at, float y0, float y1, float z0, float z1, bool plus);
+    void wall_y(float at, float x0, float x1, float z0, float z1, bool plus);
+    void wall_z(float at, float x0, float x1, float y0, float y1, bool plus);
+    io::Mesh mesh() const;
+    std::vector<io::Primitive> primitives() const; // consecutive quads of one material in one primitive
+};
+
 io::Mesh two_rooms_mesh(bool door);
 
 struct TwoRooms

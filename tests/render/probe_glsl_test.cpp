@@ -1,13 +1,16 @@
-// The GLSL library's probe lookup (hemi_probe_irradiance, hemi/lib/probes.glsl), run by a compute shader
-// (tests/shaders/probe_lookup.comp) over the texel buffer io::probe_texels() packs, held to the C++ lookup
-// (io::LightProbes::at and occlusion_at, written separately) at points in and around a grid whose probes see
-// walls at various distances: the same weights, the same visibility, the same folds of the octahedral maps.
+// The GLSL library's probe lookup (hemi_probe_irradiance, hemi/lib/probes.glsl) and the reflection probes'
+// box projection (hemi_box_projected_direction, against math::box_projected_direction), run by a compute
+// shader (tests/shaders/probe_lookup.comp) over the texel buffer io::probe_texels() packs, held to the C++
+// lookup (io::LightProbes::at and occlusion_at, written separately) at points in and around a grid whose
+// probes see walls at various distances: the same weights, the same visibility, the same folds of the
+// octahedral maps.
 #include "../gpu_fixture.h"
 
 #include <hemi/gpu/commands.h>
 #include <hemi/gpu/pipeline.h>
 #include <hemi/gpu/resources.h>
 #include <hemi/io/light_probes.h>
+#include <hemi/math/box_projection.h>
 
 #include <glm/geometric.hpp>
 
@@ -79,7 +82,7 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
         gpu::create_compute_program(dev, {test::test_spirv("probe_lookup.comp"), bindings, 48, {}});
     const size_t texel_bytes = texels.size() * sizeof(glm::vec4),
                  point_bytes = points.size() * sizeof(glm::vec4),
-                 out_bytes = points.size() * 10 * sizeof(glm::vec4);
+                 out_bytes = points.size() * 11 * sizeof(glm::vec4);
     const gpu::Buffer probe_buffer =
         gpu::create_buffer(dev, {texel_bytes, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT});
     gpu::write_buffer(dev, probe_buffer, texels.data(), texel_bytes);
@@ -112,7 +115,7 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
                       vkCmdPushConstants(cmd, program.layout, VK_SHADER_STAGE_ALL, 0, sizeof push, &push);
                       vkCmdDispatch(cmd, uint32_t(points.size() + 63) / 64, 1, 1);
                   });
-    std::vector<glm::vec4> values(points.size() * 10);
+    std::vector<glm::vec4> values(points.size() * 11);
     gpu::read_buffer(dev, out, values.data(), out_bytes);
 
     double worst = 0.0;
@@ -131,10 +134,21 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
             }
         for (size_t j = 0; j < 9; ++j)
             for (int c = 0; c < 3; ++c)
-                worst = std::max(worst, double(std::abs(values[i * 10 + j][c] - want[j][c])));
+                worst = std::max(worst, double(std::abs(values[i * 11 + j][c] - want[j][c])));
         for (int c = 0; c < 4; ++c)
-            worst = std::max(worst, double(std::abs(values[i * 10 + 9][c] - occlusion[size_t(c)])));
+            worst = std::max(worst, double(std::abs(values[i * 11 + 9][c] - occlusion[size_t(c)])));
     }
+    double worst_direction = 0.0;
+    for (size_t i = 0; i < points.size(); ++i)
+    {
+        const glm::vec3 p(points[i]), r = glm::normalize(p - glm::vec3(1.3f, 0.8f, 0.4f));
+        const glm::vec3 want = math::box_projected_direction(
+            p, r, glm::vec3(-0.5f), glm::vec3(3.5f, 2.5f, 1.5f), glm::vec3(1.5f, 1.0f, 0.5f));
+        worst_direction =
+            std::max(worst_direction, double(glm::distance(glm::vec3(values[i * 11 + 10]), want)));
+    }
+    std::printf("the shader's box projection against the CPU's: largest difference %.2e\n", worst_direction);
+    EXPECT_LT(worst_direction, 1e-4);
     std::printf("the shader's probe lookup against the CPU's: largest difference %.2e over %zu points, %d of "
                 "them with a probe that does not see them\n",
                 worst, points.size(), occluded);

@@ -33,6 +33,18 @@ vec3 hemi_parabolic_lookup(sampler2DArray map, float extent, vec3 d)
     return texture(map, hemi_parabolic_coord(d, extent)).rgb;
 }
 
+// A box-projected reflection probe (Lagarde & Zanuttini 2012; math::box_projected_direction): the direction
+// to look the probe captured at `centre` up in, for a reflection from `p` along unit `r`, with the influence
+// box [box_min, box_max] holding p: towards where the ray leaves the box. All in the probe's frame.
+vec3 hemi_box_projected_direction(vec3 p, vec3 r, vec3 box_min, vec3 box_max, vec3 centre)
+{
+    float t = 3.4e38;
+    for (int a = 0; a < 3; ++a)
+        if (r[a] != 0.0)
+            t = min(t, ((r[a] > 0.0 ? box_max[a] : box_min[a]) - p[a]) / r[a]);
+    return normalize(p + max(t, 0.0) * r - centre);
+}
+
 // The mirror reflection of v (towards the eye) about n: 2 (n.v) n - v.
 vec3 hemi_reflect(vec3 n, vec3 v)
 {
