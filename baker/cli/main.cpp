@@ -11,7 +11,7 @@
 //   uniform|FILE.exr] [--env-scale X]
 //       [--sun X,Y,Z,R,G,B[,DIAMETER]] [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm]
 //       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ] [--probe-rays R]
-//       [--probe-depth R]
+//       [--probe-depth R] [--reflection-probe X,Y,Z[,BOX]]... [--reflection-size N]
 //       [--exr-dir DIR] [--json REPORT.json]
 //   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R]
 //       [--exponent E] [--distribution beckmann|gaussian] [--size N] [--8bit] -o BRDF.exr
@@ -461,7 +461,8 @@ struct LightCli
 struct LightmapCli
 {
     std::string scene, asset, bases = "sh9,hl2,h4,h6,sal4,plain,rnm", size, exr_dir, json, probes, uv_report,
-                              memory_budget, sun_mode = "baked";
+                              memory_budget, sun_mode = "baked", reflection_exponents = "10,100";
+    std::vector<std::string> reflection_probes;
     LightCli light;
     hemi::bake::LightmapFileOptions options;
 };
@@ -480,6 +481,30 @@ int run_lightmap(LightmapCli& c)
         if (hemi::io::probe_grid_count(n[0], n[1], n[2]) == 0)
             throw std::invalid_argument("--probes " + c.probes + ": more than 2^24 probes in all");
         o.probes = glm::uvec3(uint32_t(n[0]), uint32_t(n[1]), uint32_t(n[2]));
+    }
+    for (const std::string& r : c.reflection_probes)
+    {
+        const std::vector<double> v = hemi::tool::parse_numbers(
+            r, "--reflection-probe", "X,Y,Z[,MINX,MINY,MINZ,MAXX,MAXY,MAXZ]", {3, 9});
+        bake::ReflectionProbePlacement p;
+        p.centre = glm::vec3(float(v[0]), float(v[1]), float(v[2]));
+        if (v.size() == 9)
+        {
+            p.box_min = glm::vec3(float(v[3]), float(v[4]), float(v[5]));
+            p.box_max = glm::vec3(float(v[6]), float(v[7]), float(v[8]));
+            if (!(p.box_min.x < p.box_max.x && p.box_min.y < p.box_max.y && p.box_min.z < p.box_max.z))
+                throw std::invalid_argument("--reflection-probe " + r +
+                                            ": the box's minimum must be below its "
+                                            "maximum along every axis");
+        }
+        o.reflection_probes.push_back(p);
+    }
+    if (!c.reflection_probes.empty())
+    {
+        o.reflection.exponents.clear();
+        for (double e : hemi::tool::parse_numbers(c.reflection_exponents, "--reflection-exponents",
+                                                  "comma-separated Phong exponents"))
+            o.reflection.exponents.push_back(e);
     }
     o.exr_dir = c.exr_dir;
     o.memory_held = hemi::io::resident_memory(); // --memory-budget is a ceiling on the whole process's peak
@@ -580,6 +605,8 @@ int run_lightmap(LightmapCli& c)
     if (s.probes)
         std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes, o.probes.x,
                     o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);
+    if (s.reflection_probes)
+        std::printf("%zu reflection probe(s), %u^2 a half\n", s.reflection_probes, o.reflection.size);
     if (s.pushed || s.invalid)
         std::printf(
             "%zu texel(s) moved out of walls their footprint reached, %zu inside geometry (filled from "
@@ -1215,6 +1242,24 @@ int main(int argc, char** argv)
                      "R: each probe keeps an RxR octahedral map of the distances it sees, so that a "
                      "lookup leaves out the probes behind walls; 0: none (trilinear alone)")
         ->check(CLI::Range(0u, hemi::io::kMaxProbeDepthResolution))
+        ->capture_default_str();
+    lightmap
+        ->add_option("--reflection-probe", lm.reflection_probes,
+                     "X,Y,Z[,MINX,MINY,MINZ,MAXX,MAXY,MAXZ]: a reflection probe at X,Y,Z (the scene's own "
+                     "frame, glTF's), lighting the box given (else the scene's bounding box); repeat for "
+                     "more")
+        ->take_all();
+    lightmap
+        ->add_option("--reflection-size", lm.options.reflection.size,
+                     "each reflection probe's parabolic halves (a power of two)")
+        ->capture_default_str();
+    lightmap
+        ->add_option("--reflection-rays", lm.options.reflection.rays,
+                     "rays per pixel of a reflection probe's gathered image (a square number)")
+        ->capture_default_str();
+    lightmap
+        ->add_option("--reflection-exponents", lm.reflection_exponents,
+                     "the Phong exponents of each reflection probe's glossy maps")
         ->capture_default_str();
     lightmap->add_option("--exr-dir", lm.exr_dir,
                          "also write each output as an EXR with named channels into DIR");

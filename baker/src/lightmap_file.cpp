@@ -5,6 +5,7 @@
 #include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
+#include <hemi/bake/reflection_probe.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/half_scale.h>
@@ -196,6 +197,27 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
         throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) +
                                     " is not in [1, 2^20]");
+    if (o.reflection_probes.size() > io::kMaxReflectionProbes)
+        throw std::invalid_argument(std::to_string(o.reflection_probes.size()) +
+                                    " reflection probes: at most " +
+                                    std::to_string(io::kMaxReflectionProbes));
+    if (!o.reflection_probes.empty())
+    {
+        const int side = int(std::lround(std::sqrt(double(std::max(o.reflection.rays, 0)))));
+        if (o.reflection.rays < 1 || o.reflection.rays > 4096 || side * side != o.reflection.rays)
+            throw std::invalid_argument("--reflection-rays must be a square number from 1 to 4096, not " +
+                                        std::to_string(o.reflection.rays));
+        EnvmapBakeOptions envmap;
+        envmap.size = o.reflection.size;
+        envmap.exponents = o.reflection.exponents;
+        check_envmap_options(envmap);
+        for (const ReflectionProbePlacement& p : o.reflection_probes)
+            if (!std::isfinite(p.centre.x + p.centre.y + p.centre.z + p.box_min.x + p.box_min.y +
+                               p.box_min.z + p.box_max.x + p.box_max.y + p.box_max.z) ||
+                p.box_min.x > p.box_max.x || p.box_min.y > p.box_max.y || p.box_min.z > p.box_max.z)
+                throw std::invalid_argument(
+                    "a reflection probe's centre and box must be finite, the box ordered");
+    }
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
     // Under a distribution, the other ranks only compute: rank 0 checks and writes every output.
@@ -565,7 +587,28 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         for (uint8_t v : asset.probes.valid)
             summary.invalid_probes += !v;
     }
-    if (!asset.probes.empty())
+    if (!o.reflection_probes.empty() && leader)
+    {
+        glm::vec3 lo(INFINITY), hi(-INFINITY);
+        for (const glm::vec3& v : scene.mesh.positions)
+        {
+            lo = glm::min(lo, v);
+            hi = glm::max(hi, v);
+        }
+        for (const ReflectionProbePlacement& placed : o.reflection_probes)
+        {
+            io::ReflectionProbe probe;
+            probe.centre = placed.centre;
+            const bool whole = placed.box_min == placed.box_max;
+            probe.box_min = whole ? lo : placed.box_min;
+            probe.box_max = whole ? hi : placed.box_max;
+            probe.maps = bake_reflection_probe(scene.mesh, atlas, sh, o.lights, &*surfaces, placed.centre,
+                                               o.reflection);
+            asset.reflections.push_back(std::move(probe));
+        }
+        summary.reflection_probes = asset.reflections.size();
+    }
+    if (!asset.probes.empty() || !asset.reflections.empty())
         stage_done("probes");
     // The passes and the probes are done: the outputs need only each texel's place in the atlas and its
     // chart (12 bytes, not its 96-byte record).
@@ -885,7 +928,10 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
         j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}},
                        {"count", s.probes},
                        {"inside_geometry", s.invalid_probes},
-                       {"rays_per_probe", o.probe_rays}};
+                       {"rays_per_probe", o.probe_rays},
+                       {"depth_resolution", o.probe_depth}};
+    if (s.reflection_probes)
+        j["reflection_probes"] = {{"count", s.reflection_probes}, {"size", o.reflection.size}};
     j["trace_seconds"] = s.trace_seconds;
     j["total_seconds"] = s.total_seconds;
     nlohmann::json stage_seconds = nlohmann::json::object();

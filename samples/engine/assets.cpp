@@ -78,8 +78,9 @@ void bake_level(const fs::path& gltf, const fs::path& path, bool mixed_sun,
 {
     const auto t0 = std::chrono::steady_clock::now();
     const uint32_t atlas = 256;
-    log("baking the level (" + std::to_string(atlas) + "^2 lightmap: h6, h4, rnm; light probes; the sun " +
-        (mixed_sun ? "mixed" : "baked") + ") into " + path.string());
+    log("baking the level (" + std::to_string(atlas) +
+        "^2 lightmap: h6, h4, rnm; light and reflection probes; the sun " + (mixed_sun ? "mixed" : "baked") +
+        ") into " + path.string());
     if (!fs::exists(gltf))
         io::write_gltf(gltf, make_level(atlas, LevelMaps::SsbumpWall));
     bake::LightmapFileOptions o;
@@ -87,6 +88,12 @@ void bake_level(const fs::path& gltf, const fs::path& path, bool mixed_sun,
     o.outputs = {"h6", "h4", "rnm"};
     o.probes = glm::uvec3(6, 3, 6);
     o.probe_rays = 1024;
+    // A reflection probe at the room's centre, half a unit up (the level's own frame: glTF's, y up), over the
+    // whole level, for the glossy ball (box-projected from wherever it stands), glossy enough (Phong 400) to
+    // show the room.
+    o.reflection_probes = {{glm::vec3(0.0f, 0.5f, 0.0f)}};
+    o.reflection.size = 128;
+    o.reflection.exponents = {400.0};
     o.bake.rays = 128;
     o.bake.bounces = 1;
     o.lights.uniform = glm::vec3(0.35f, 0.45f, 0.65f);
@@ -112,8 +119,8 @@ void bake_torus(const fs::path& dir, const fs::path& path, const std::function<v
     log("  torus baked in " + seconds(since(t0)));
 }
 
-// Whether `level` is this sample's: its sun baked as asked, its floor polished and its probes' depth maps
-// there (what keeps the spheres' light from leaking through the walls).
+// Whether `level` is this sample's: its sun baked as asked, its floor polished, its probes' depth maps there
+// (what keeps the spheres' light from leaking through the walls) and its reflection probe.
 bool current_level(const io::LightmapAsset& level, bool mixed_sun)
 {
     const bool sun =
@@ -125,7 +132,7 @@ bool current_level(const io::LightmapAsset& level, bool mixed_sun)
                     });
     const bool floor = std::any_of(level.materials.begin(), level.materials.end(),
                                    [](const io::Material& m) { return m.name == "polished floor"; });
-    return sun && floor && !level.probes.depth.empty();
+    return sun && floor && !level.probes.depth.empty() && !level.reflections.empty();
 }
 
 } // namespace
@@ -157,7 +164,7 @@ EngineAssets prepare_engine_assets(const fs::path& dir, bool mixed_sun,
     {
         // A folder from before the sample had its mixed sun and polished floor: bake the level again.
         log(a.level_path.string() + " is an older sample's level (no " + (mixed_sun ? "mixed" : "baked") +
-            " sun, no polished floor or no probe depth maps): baking it again");
+            " sun, no polished floor, no probe depth maps or no reflection probe): baking it again");
         fs::remove(dir / "engine_level.glb");
         bake_level(dir / "engine_level.glb", a.level_path, mixed_sun, log);
         a.level = io::read_lightmap_asset(a.level_path);

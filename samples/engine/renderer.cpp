@@ -71,6 +71,7 @@ struct EngineFrame
     glm::mat4 world_to_level;
     glm::ivec4 probe_count;
     glm::vec4 probe_lo, probe_hi;
+    glm::vec4 reflection_centre, reflection_min, reflection_max;
     shared::EnvironmentUniforms env;
 };
 struct EngineObject
@@ -262,6 +263,9 @@ struct Renderer::Impl
     std::unique_ptr<render::LightmapModel> level;
     std::unique_ptr<render::PrtModel> torus;
     std::unique_ptr<render::EnvironmentLighting> sky;
+    // The level's reflection probe's maps, which the glossy ball reflects (box-projected).
+    std::unique_ptr<render::EnvironmentLighting> reflection;
+    render::EnvironmentMaterial reflective;
     size_t level_depth = 0, level_shadow = 0, torus_depth = 0, torus_shadow = 0;
     render::EnvironmentMaterial glossy;
     glm::mat4 level_model, torus_model;
@@ -370,6 +374,7 @@ struct Renderer::Impl
         for (VkRenderPass p : {shadow_pass, depth_pass, main_pass, post_pass})
             vkDestroyRenderPass(vk, p, nullptr);
         // hemi's models go before the geometry they draw from.
+        reflection.reset();
         sky.reset();
         torus.reset();
         level.reset();
@@ -594,6 +599,14 @@ struct Renderer::Impl
         glossy.ks = 0.9f;
         sky = std::make_unique<render::EnvironmentLighting>(
             *system, assets.sky, std::span<const math::BrdfTable>{}, glossy, upload);
+        if (assets.level.reflections.empty())
+            throw std::runtime_error("the level has no reflection probe for the glossy ball");
+        reflective = glossy;
+        reflective.world_to_env =
+            glm::mat3(glm::inverse(level_model)); // the probe's maps are in the level's frame
+        reflection = std::make_unique<render::EnvironmentLighting>(*system, assets.level.reflections[0].maps,
+                                                                   std::span<const math::BrdfTable>{},
+                                                                   reflective, upload);
         // hemi's uploads, recorded into the engine's command buffer and submitted by the engine.
         submit_once([&](VkCommandBuffer cmd) { upload.record(cmd); });
         // The engine's own texel-buffer view of the coefficients hemi's transfer writes (every frame slot's).
@@ -706,8 +719,8 @@ struct Renderer::Impl
             torus_sets.push_back(set);
         }
         env_set = allocate(env_layout);
-        write_image(vk, env_set, 6, sky->sampler(), sky->glossy_map().view());
-        write_image(vk, env_set, 7, sky->sampler(), sky->diffuse_map().view());
+        write_image(vk, env_set, 6, reflection->sampler(), reflection->glossy_map().view());
+        write_image(vk, env_set, 7, reflection->sampler(), reflection->diffuse_map().view());
 
         // The shadow map is read with depth comparison (hardware PCF); the post pass reads the HDR image.
         VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -966,7 +979,12 @@ struct Renderer::Impl
         const float env_degrees = 25.0f * state.env_time;
         glossy.world_to_env =
             glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-env_degrees), glm::vec3(0.0f, 0.0f, 1.0f)));
-        f.env = sky->uniforms(glossy);
+        // The glossy ball reflects the level's reflection probe, box-projected in the level's frame.
+        f.env = reflection->uniforms(reflective);
+        const io::ReflectionProbe& probe = assets.level.reflections[0];
+        f.reflection_centre = glm::vec4(probe.centre, 1.0f);
+        f.reflection_min = glm::vec4(probe.box_min, 0.0f);
+        f.reflection_max = glm::vec4(probe.box_max, 0.0f);
         std::memcpy(slot.uniforms.mapped, &f, sizeof f);
         // hemi's view of the frame, into the slot's own buffer (set 0 of hemi's depth and shadow pipelines).
         render::FrameData camera_frame;

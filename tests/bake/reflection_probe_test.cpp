@@ -51,7 +51,8 @@ struct BoxRoom
     bake::LightmapLights lights;
     bake::LightmapSh sh;
 
-    BoxRoom() : mesh(quads().mesh()), primitives(quads().primitives()), surfaces(mesh, materials, {}, primitives)
+    BoxRoom()
+        : mesh(quads().mesh()), primitives(quads().primitives()), surfaces(mesh, materials, {}, primitives)
     {
         bake::LightmapUvReport report;
         atlas = bake::rasterize_lightmap(mesh, 256, 256, report);
@@ -105,7 +106,8 @@ View trace(const BoxRoom& room, glm::vec3 eye, glm::vec3 target, uint32_t size, 
         for (uint32_t x = 0; x < size; ++x)
         {
             const glm::vec2 ndc((x + 0.5f) / size * 2.0f - 1.0f, (y + 0.5f) / size * 2.0f - 1.0f);
-            const glm::vec4 n = inverse * glm::vec4(ndc, 0.0f, 1.0f), f = inverse * glm::vec4(ndc, 1.0f, 1.0f);
+            const glm::vec4 n = inverse * glm::vec4(ndc, 0.0f, 1.0f),
+                            f = inverse * glm::vec4(ndc, 1.0f, 1.0f);
             v.directions.push_back(glm::normalize(glm::vec3(f) / f.w - glm::vec3(n) / n.w));
             const float* p = image.image.at(x, y);
             EXPECT_EQ(p[3], 1.0f) << "a path escaped the closed room";
@@ -133,8 +135,9 @@ TEST(ReflectionProbe, TheMirrorMapIsWhatThePathTracerSeesFromItsCentre)
     // own noise; and the panel's radiance well inside its edges.
     double squared = 0.0, noise = 0.0, bias = 0.0, level = 0.0, panel = 0.0, panel_reference = 0.0;
     size_t n = 0, panel_n = 0;
-    for (const glm::vec3 towards : {glm::vec3(1, 0, 0.1f), glm::vec3(-1, 0, 0.1f), glm::vec3(0, 1, 0.1f),
-                                    glm::vec3(0, -1, 0.1f), glm::vec3(0.3f, 0.2f, 1.0f), glm::vec3(-0.2f, 0.3f, -1.0f)})
+    for (const glm::vec3 towards :
+         {glm::vec3(1, 0, 0.1f), glm::vec3(-1, 0, 0.1f), glm::vec3(0, 1, 0.1f), glm::vec3(0, -1, 0.1f),
+          glm::vec3(0.3f, 0.2f, 1.0f), glm::vec3(-0.2f, 0.3f, -1.0f)})
     {
         const View v = trace(room, centre, centre + towards, 24, 80.0f, 1024);
         noise += v.noise * v.noise / 6.0;
@@ -164,10 +167,11 @@ TEST(ReflectionProbe, TheMirrorMapIsWhatThePathTracerSeesFromItsCentre)
         }
     }
     const double rms = std::sqrt(squared / n);
-    std::printf("mirror map against the path tracer over %zu directions: RMS difference %.4f, the tracer's noise "
-                "%.4f; mean %.4f against %.4f; the light's panel %.3f against %.3f (%zu directions)\n",
-                n, rms, std::sqrt(noise), (level + bias) / n, level / n, panel / panel_n, panel_reference / panel_n,
-                panel_n);
+    std::printf(
+        "mirror map against the path tracer over %zu directions: RMS difference %.4f, the tracer's noise "
+        "%.4f; mean %.4f against %.4f; the light's panel %.3f against %.3f (%zu directions)\n",
+        n, rms, std::sqrt(noise), (level + bias) / n, level / n, panel / panel_n, panel_reference / panel_n,
+        panel_n);
     ASSERT_GT(n, 3000u);
     ASSERT_GT(panel_n, 20u);
     // The tracer's noise and little else (measured 1.03 of it); the mean within the lightmap's own agreement
@@ -196,8 +200,8 @@ TEST(ReflectionProbe, ABoxProjectedLookupOffCentreSeesWhatThePointSees)
     for (int i = 0; i < 40; ++i)
     {
         const double z = 1.0 - (i + 0.5) / 20.0, phi = i * 2.39996;
-        const glm::vec3 r(float(std::sqrt(1 - z * z) * std::cos(phi)), float(std::sqrt(1 - z * z) * std::sin(phi)),
-                          float(z));
+        const glm::vec3 r(float(std::sqrt(1 - z * z) * std::cos(phi)),
+                          float(std::sqrt(1 - z * z) * std::sin(phi)), float(z));
         float t = 1e30f;
         for (int a = 0; a < 3; ++a)
             if (r[a] != 0.0f)
@@ -218,9 +222,10 @@ TEST(ReflectionProbe, ABoxProjectedLookupOffCentreSeesWhatThePointSees)
         ++n;
     }
     const double mean = level / n, rms = std::sqrt(projected / n), rms_plain = std::sqrt(plain / n);
-    std::printf("box-projected reflection at %d directions: RMS difference %.4f (%.1f%% of the mean %.3f), without "
-                "the projection %.4f (%.1f%%)\n",
-                n, rms, 100.0 * rms / mean, mean, rms_plain, 100.0 * rms_plain / mean);
+    std::printf(
+        "box-projected reflection at %d directions: RMS difference %.4f (%.1f%% of the mean %.3f), without "
+        "the projection %.4f (%.1f%%)\n",
+        n, rms, 100.0 * rms / mean, mean, rms_plain, 100.0 * rms_plain / mean);
     ASSERT_GE(n, 25);
     EXPECT_LT(rms, 0.1 * mean);
     EXPECT_GT(rms_plain, 2.0 * rms);

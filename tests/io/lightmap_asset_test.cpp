@@ -4,6 +4,7 @@
 // header documents, and the dense layout 1 is still read.
 #include "../temp_dir.h"
 
+#include <hemi/bake/factored.h>
 #include <hemi/io/asset.h>
 #include <hemi/io/block_maps.h>
 #include <hemi/io/half_scale.h>
@@ -1010,4 +1011,65 @@ TEST(LightProbes, DepthMapsRoundTripAndBrokenOnesAreRefused)
     w.write(dir() / "depth_alone.hemi");
     EXPECT_NE(error_of(dir() / "depth_alone.hemi").find("lightmap.probe_depth without lightmap.probes"),
               std::string::npos);
+}
+
+// Reflection probes travel in the lightmap asset (lightmap.reflections and reflection<i>.*, laid out as an
+// environment asset's sections): centre, box and every map round-trip exactly; a count that disagrees with
+// the section's size, a missing map section and a box out of order are refused, naming the file.
+TEST(LightmapAsset, ReflectionProbesRoundTrip)
+{
+    hemi::io::ImageRgba sky{32, 16, std::vector<float>(32 * 16 * 4, 1.0f)};
+    for (size_t i = 0; i < sky.pixels.size(); ++i)
+        sky.pixels[i] = 0.5f + 0.4f * std::sin(float(i) * 0.37f);
+    hemi::bake::EnvmapBakeOptions eo;
+    eo.size = 8;
+    eo.exponents = {10};
+    hemi::io::LightmapAsset a = small_asset();
+    for (int i = 0; i < 2; ++i)
+        a.reflections.push_back({glm::vec3(0.1f * i, 0.5f, 0.2f), glm::vec3(-1.0f),
+                                 glm::vec3(1.0f, 2.0f, 1.5f), hemi::bake::bake_envmap(sky, eo)});
+    a.reflections[1].maps.mirror[0].rgb[5] = 7.0f; // the two differ
+    const fs::path good = dir() / "reflections.hemi";
+    hemi::io::write_lightmap_asset(good, a);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(good);
+    ASSERT_EQ(b.reflections.size(), 2u);
+    for (size_t i = 0; i < 2; ++i)
+    {
+        EXPECT_EQ(b.reflections[i].centre, a.reflections[i].centre);
+        EXPECT_EQ(b.reflections[i].box_min, a.reflections[i].box_min);
+        EXPECT_EQ(b.reflections[i].box_max, a.reflections[i].box_max);
+        ASSERT_EQ(b.reflections[i].maps.mirror.size(), a.reflections[i].maps.mirror.size());
+        for (size_t l = 0; l < a.reflections[i].maps.mirror.size(); ++l)
+            EXPECT_EQ(b.reflections[i].maps.mirror[l].rgb, a.reflections[i].maps.mirror[l].rgb)
+                << i << " " << l;
+        EXPECT_EQ(b.reflections[i].maps.glossy[0].rgb, a.reflections[i].maps.glossy[0].rgb);
+        EXPECT_EQ(b.reflections[i].maps.diffuse.rgb, a.reflections[i].maps.diffuse.rgb);
+        EXPECT_EQ(b.reflections[i].maps.exponents, a.reflections[i].maps.exponents);
+    }
+    hemi::io::LightmapAsset bad = a;
+    std::swap(bad.reflections[0].box_min, bad.reflections[0].box_max);
+    EXPECT_THROW(hemi::io::write_lightmap_asset(dir() / "never_reflections.hemi", bad),
+                 std::invalid_argument);
+
+    const fs::path miscounted = rewritten(good, "reflections_count.hemi",
+                                          [](const std::string& s, std::vector<std::byte>& bytes)
+                                          {
+                                              const uint32_t three = 3;
+                                              if (s == "lightmap.reflections")
+                                                  std::memcpy(bytes.data(), &three, 4);
+                                          });
+    std::string e = error_of(miscounted);
+    EXPECT_NE(e.find(miscounted.string()), std::string::npos) << e;
+    EXPECT_NE(e.find("lightmap.reflections has 76 bytes for 3 probes"), std::string::npos) << e;
+    const hemi::io::AssetReader r(good);
+    hemi::io::AssetWriter w;
+    for (const std::string& section : r.names())
+        if (section != "reflection1.mirror")
+        {
+            const std::span<const std::byte> s = r.section(section);
+            w.add(section, std::vector<std::byte>(s.begin(), s.end()));
+        }
+    w.write(dir() / "reflections_missing.hemi");
+    e = error_of(dir() / "reflections_missing.hemi");
+    EXPECT_NE(e.find("reflection1.mirror"), std::string::npos) << e;
 }

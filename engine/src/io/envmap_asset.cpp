@@ -119,6 +119,12 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
     if (std::string p = envmap_problem(a); !p.empty())
         throw std::invalid_argument("hemi: cannot write " + path.string() + ": " + p);
     AssetWriter w;
+    add_envmap_sections(w, a, "envmap");
+    w.write(path);
+}
+
+void add_envmap_sections(AssetWriter& w, const EnvmapAsset& a, const std::string& prefix)
+{
     const Info info{kEnvmapLayoutVersion,
                     a.mirror[0].size,
                     uint32_t(a.mirror.size()),
@@ -128,11 +134,11 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
                     a.source_width,
                     a.source_height,
                     float(a.mirror[0].extent)};
-    w.add("envmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
+    w.add(prefix + ".info", std::as_bytes(std::span<const Info>(&info, 1)));
     std::vector<std::byte> mirror;
     for (const math::ParabolicImage& level : a.mirror)
         append(mirror, level.rgb.data(), level.rgb.size());
-    w.add("envmap.mirror", mirror);
+    w.add(prefix + ".mirror", mirror);
     std::vector<std::byte> glossy;
     for (size_t i = 0; i < a.glossy.size(); ++i)
     {
@@ -142,32 +148,30 @@ void write_envmap_asset(const std::filesystem::path& path, const EnvmapAsset& a)
         append(glossy, &extent, 1);
         append(glossy, a.glossy[i].rgb.data(), a.glossy[i].rgb.size());
     }
-    w.add("envmap.glossy", glossy);
+    w.add(prefix + ".glossy", glossy);
     std::vector<std::byte> diffuse;
     append(diffuse, &a.diffuse.size, 1);
     const float diffuse_extent = float(a.diffuse.extent);
     append(diffuse, &diffuse_extent, 1);
     append(diffuse, a.diffuse.rgb.data(), a.diffuse.rgb.size());
-    w.add("envmap.diffuse", diffuse);
+    w.add(prefix + ".diffuse", diffuse);
     std::vector<std::byte> fresnel;
     for (size_t i = 0; i < a.iors.size(); ++i)
     {
         append(fresnel, &a.iors[i], 1);
         append(fresnel, a.fresnel.data() + i * a.fresnel_samples, a.fresnel_samples);
     }
-    w.add("envmap.fresnel", fresnel);
-    w.write(path);
+    w.add(prefix + ".fresnel", fresnel);
 }
 
-namespace
-{
-EnvmapAsset read_envmap_asset_from(const AssetReader& r)
+EnvmapAsset read_envmap_sections(const AssetReader& r, const std::string& prefix)
 {
     const std::string file = r.name();
     auto fail = [&](const std::string& what) { return FormatError(file + ": " + what); };
-    if (!r.has("envmap.info"))
-        throw fail("not an environment asset (no envmap.info)");
-    Cursor ci(r.section("envmap.info"), "envmap.info", file);
+    const std::string info_name = prefix + ".info", mirror_name = prefix + ".mirror",
+                      glossy_name = prefix + ".glossy", diffuse_name = prefix + ".diffuse",
+                      fresnel_name = prefix + ".fresnel";
+    Cursor ci(r.section(info_name), info_name, file);
     const Info info = ci.value<Info>();
     ci.end();
     if (info.layout != kEnvmapLayoutVersion)
@@ -178,27 +182,27 @@ EnvmapAsset read_envmap_asset_from(const AssetReader& r)
         if (size == 0 || size > 8192 || (size & (size - 1)) != 0)
             throw fail(what + ": size " + std::to_string(size) + " is not a power of two in [1, 8192]");
     };
-    check_size(info.size, "envmap.info");
+    check_size(info.size, info_name);
     uint32_t levels = 1;
     while ((info.size >> (levels - 1)) > 1)
         ++levels;
     if (info.levels != levels)
-        throw fail("envmap.info: " + std::to_string(info.levels) + " mirror levels for size " +
+        throw fail(info_name + ": " + std::to_string(info.levels) + " mirror levels for size " +
                    std::to_string(info.size) + ", expected " + std::to_string(levels));
     auto check_extent = [&](float extent, const std::string& what)
     {
         if (!std::isfinite(extent) || extent < 1.0f || extent > 4.0f)
             throw fail(what + ": extent " + std::to_string(extent) + " is not in [1, 4]");
     };
-    check_extent(info.extent, "envmap.info");
+    check_extent(info.extent, info_name);
     if (info.glossy > 64 || info.fresnel_tables > 64 || info.fresnel_samples > 65536 ||
         (info.fresnel_tables > 0 && info.fresnel_samples < 2))
-        throw fail("envmap.info: implausible counts (corrupt)");
+        throw fail(info_name + ": implausible counts (corrupt)");
 
     EnvmapAsset a;
     a.source_width = info.source_width;
     a.source_height = info.source_height;
-    Cursor cm(r.section("envmap.mirror"), "envmap.mirror", file);
+    Cursor cm(r.section(mirror_name), mirror_name, file);
     for (uint32_t l = 0; l < info.levels; ++l)
     {
         math::ParabolicImage level;
@@ -208,42 +212,51 @@ EnvmapAsset read_envmap_asset_from(const AssetReader& r)
         a.mirror.push_back(std::move(level));
     }
     cm.end();
-    Cursor cg(r.section("envmap.glossy"), "envmap.glossy", file);
+    Cursor cg(r.section(glossy_name), glossy_name, file);
     for (uint32_t i = 0; i < info.glossy; ++i)
     {
         const float e = cg.value<float>();
         if (!std::isfinite(e) || !(e > 0.0f))
-            throw fail("envmap.glossy: exponent " + std::to_string(e) + " is not > 0");
+            throw fail(glossy_name + ": exponent " + std::to_string(e) + " is not > 0");
         math::ParabolicImage g;
         g.size = cg.value<uint32_t>();
-        check_size(g.size, "envmap.glossy");
+        check_size(g.size, glossy_name);
         g.extent = cg.value<float>();
-        check_extent(float(g.extent), "envmap.glossy");
+        check_extent(float(g.extent), glossy_name);
         g.rgb = cg.floats(image_floats(g.size));
         a.exponents.push_back(e);
         a.glossy.push_back(std::move(g));
     }
     cg.end();
-    Cursor cd(r.section("envmap.diffuse"), "envmap.diffuse", file);
+    Cursor cd(r.section(diffuse_name), diffuse_name, file);
     a.diffuse.size = cd.value<uint32_t>();
-    check_size(a.diffuse.size, "envmap.diffuse");
+    check_size(a.diffuse.size, diffuse_name);
     a.diffuse.extent = cd.value<float>();
-    check_extent(float(a.diffuse.extent), "envmap.diffuse");
+    check_extent(float(a.diffuse.extent), diffuse_name);
     a.diffuse.rgb = cd.floats(image_floats(a.diffuse.size));
     cd.end();
-    Cursor cf(r.section("envmap.fresnel"), "envmap.fresnel", file);
+    Cursor cf(r.section(fresnel_name), fresnel_name, file);
     a.fresnel_samples = info.fresnel_samples;
     for (uint32_t i = 0; i < info.fresnel_tables; ++i)
     {
         const float ior = cf.value<float>();
         if (!std::isfinite(ior) || !(ior > 1.0f))
-            throw fail("envmap.fresnel: index of refraction " + std::to_string(ior) + " is not > 1");
+            throw fail(fresnel_name + ": index of refraction " + std::to_string(ior) + " is not > 1");
         a.iors.push_back(ior);
         const std::vector<float> t = cf.floats(info.fresnel_samples);
         a.fresnel.insert(a.fresnel.end(), t.begin(), t.end());
     }
     cf.end();
     return a;
+}
+
+namespace
+{
+EnvmapAsset read_envmap_asset_from(const AssetReader& r)
+{
+    if (!r.has("envmap.info"))
+        throw FormatError(r.name() + ": not an environment asset (no envmap.info)");
+    return read_envmap_sections(r, "envmap");
 }
 } // namespace
 

@@ -152,6 +152,19 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
         return p;
     if (std::string p = lights_problem(a); !p.empty())
         return p;
+    if (a.reflections.size() > kMaxReflectionProbes)
+        return std::to_string(a.reflections.size()) + " reflection probes, more than " +
+               std::to_string(kMaxReflectionProbes);
+    for (size_t i = 0; i < a.reflections.size(); ++i)
+    {
+        const ReflectionProbe& r = a.reflections[i];
+        const std::string which = "reflection probe " + std::to_string(i);
+        if (!finite3(r.centre) || !finite3(r.box_min) || !finite3(r.box_max) || r.box_min.x > r.box_max.x ||
+            r.box_min.y > r.box_max.y || r.box_min.z > r.box_max.z)
+            return which + ": its centre or box is not finite, or the box is not ordered";
+        if (std::string p = envmap_problem(r.maps); !p.empty())
+            return which + ": " + p;
+    }
     if (outputs)
         for (const LightmapOutput& o : a.outputs)
             if (std::string p = output_problem(o, a.width, a.height); !p.empty())
@@ -299,6 +312,21 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
             }
             sections_->writer.add("lightmap.probe_depth", depth);
         }
+    }
+    if (!asset_->reflections.empty())
+    {
+        const uint32_t count = uint32_t(asset_->reflections.size());
+        std::vector<std::byte> bytes(4 + size_t(count) * 36);
+        std::memcpy(bytes.data(), &count, 4);
+        for (uint32_t i = 0; i < count; ++i)
+        {
+            const ReflectionProbe& r = asset_->reflections[i];
+            const float v[9] = {r.centre.x,  r.centre.y,  r.centre.z,  r.box_min.x, r.box_min.y,
+                                r.box_min.z, r.box_max.x, r.box_max.y, r.box_max.z};
+            std::memcpy(bytes.data() + 4 + size_t(i) * 36, v, 36);
+            add_envmap_sections(sections_->writer, r.maps, "reflection" + std::to_string(i));
+        }
+        sections_->writer.add("lightmap.reflections", bytes);
     }
     if (!asset_->lights.empty())
     {
@@ -525,6 +553,29 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
     }
     else if (r.has("lightmap.probe_depth"))
         throw fail("lightmap.probe_depth without lightmap.probes");
+    if (r.has("lightmap.reflections"))
+    {
+        const std::span<const std::byte> b = r.section("lightmap.reflections");
+        uint32_t count = 0;
+        if (b.size() < 4)
+            throw fail("lightmap.reflections is too short");
+        std::memcpy(&count, b.data(), 4);
+        if (count > kMaxReflectionProbes || b.size() != 4 + size_t(count) * 36)
+            throw fail("lightmap.reflections has " + std::to_string(b.size()) + " bytes for " +
+                       std::to_string(count) + " probes (at most " + std::to_string(kMaxReflectionProbes) +
+                       ", 36 bytes each)");
+        for (uint32_t i = 0; i < count; ++i)
+        {
+            float v[9];
+            std::memcpy(v, b.data() + 4 + size_t(i) * 36, 36);
+            ReflectionProbe probe;
+            probe.centre = glm::vec3(v[0], v[1], v[2]);
+            probe.box_min = glm::vec3(v[3], v[4], v[5]);
+            probe.box_max = glm::vec3(v[6], v[7], v[8]);
+            probe.maps = read_envmap_sections(r, "reflection" + std::to_string(i));
+            a.reflections.push_back(std::move(probe));
+        }
+    }
     if (r.has("lightmap.lights"))
     {
         const std::span<const std::byte> b = r.section("lightmap.lights");

@@ -23,7 +23,10 @@ layout(set = 0, binding = 0, std140) uniform EngineFrame
     mat4 world_to_level;
     ivec4 probe_count;
     vec4 probe_lo, probe_hi;
-    EnvironmentUniforms env; // the glossy object's environment (turning)
+    // The level's reflection probe (the glossy ball's; env below holds its maps' extents and the rotation
+    // into the level's frame): its centre (w: 1) and box, in the level's frame.
+    vec4 reflection_centre, reflection_min, reflection_max;
+    EnvironmentUniforms env; // the glossy object's environment: the level's reflection probe
 }
 frame;
 

@@ -164,7 +164,8 @@ void main()
     const vec3 level_normal = normalize(mat3(frame.world_to_level) * n);
     color = albedo * (hemi_sh9_irradiance(probe_sh, level_normal) + light * max(dot(n, l), 0.0)) / kPi;
 #elif ENGINE_SOURCE == 4
-    // Heidrich & Seidel: a Phong-prefiltered glossy reflection and the diffuse map of the same environment.
+    // Heidrich & Seidel: a Phong-prefiltered glossy reflection and the diffuse map of the same environment,
+    // here the level's reflection probe.
     const vec3 n = normalize(in_normal);
     const vec3 r = hemi_reflect(n, v);
     const vec3 r0 = frame.env.world_to_env[0].xyz, r1 = frame.env.world_to_env[1].xyz,
@@ -173,8 +174,13 @@ void main()
     const vec3 albedo = frame.mode.y != 0 ? vec3(1.0) : object.albedo.rgb;
     const vec3 diffuse =
         hemi_parabolic_lookup(diffuse_map, frame.env.extents.z, hemi_env_direction(r0, r1, r2, n));
-    const vec3 glossy =
-        hemi_parabolic_lookup(glossy_map, frame.env.extents.y, hemi_env_direction(r0, r1, r2, r));
+    // The level's reflection probe, box-projected from the shaded point (its maps are in the level's frame).
+    vec3 reflected = hemi_env_direction(r0, r1, r2, r);
+    if (frame.reflection_centre.w != 0.0)
+        reflected = hemi_box_projected_direction((frame.world_to_level * vec4(in_world, 1.0)).xyz, reflected,
+                                                 frame.reflection_min.xyz, frame.reflection_max.xyz,
+                                                 frame.reflection_centre.xyz);
+    const vec3 glossy = hemi_parabolic_lookup(glossy_map, frame.env.extents.y, reflected);
     color = ks * glossy + kd * albedo * (diffuse + light * max(dot(n, l), 0.0) / kPi);
 #endif
     // The coat's light alone (--specular-only).

@@ -304,6 +304,25 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                        const LightmapSh& sh, const LightmapLights& lights, const LightmapBakeOptions& options,
                        const LightmapSurfaces* surfaces = nullptr);
 
+// Reflection probes (bake_reflection_probe in hemi/bake/reflection_probe.h).
+struct ReflectionProbeOptions
+{
+    // Level 0 of each parabolic half (a power of two, 8 to 4096); the radiance is first gathered into an
+    // equirectangular image of 4 size x 2 size pixels (math/sh_environment.h's convention, in the mesh's
+    // frame), each pixel the mean of `rays` rays (a square number: stratified over the pixel).
+    uint32_t size = 128;
+    int rays = 16;
+    std::vector<double> exponents{10, 100}; // the glossy maps' Phong exponents
+    uint64_t seed = 1;
+};
+
+// Where hemi-bake lightmap --reflection-probe puts a probe (LightmapFileOptions::reflection_probes), in the
+// mesh's space: its centre and its influence box (box_min == box_max: the scene's bounding box).
+struct ReflectionProbePlacement
+{
+    glm::vec3 centre{0.0f}, box_min{0.0f}, box_max{0.0f};
+};
+
 // The whole job hemi-bake lightmap runs: read the glTF scene, rasterise its TEXCOORD_1 atlas (refused when
 // the scene has none, or its UVs overlap and strict_uv is set), bake, and write the lightmap asset
 // (io/lightmap_asset.h) and, with exr_dir, one EXR per output with named channels ("c<k>.R", ".G", ".B",
@@ -325,6 +344,10 @@ struct LightmapFileOptions
     // The side of each probe's depth map (io::LightProbes::depth_resolution), 0 to
     // io::kMaxProbeDepthResolution; 0: none, and the lookup blends the probes trilinearly alone.
     uint32_t probe_depth = kProbeDepthResolution;
+    // Reflection probes (bake_reflection_probe, hemi/bake/reflection_probe.h), baked after the light probes
+    // into the asset's `reflections`; their size, rays and exponents from `reflection`. Empty: none.
+    std::vector<ReflectionProbePlacement> reflection_probes;
+    ReflectionProbeOptions reflection;
     // Overlapping lightmap UVs: resolved with a warning (lightmap_atlas.h), or refused with strict_uv.
     bool strict_uv = false;
     // A PNG of the atlas, written after rasterising and before the bake: covered texels grey, overlapping
@@ -368,7 +391,7 @@ struct LightmapBakeSummary
     std::vector<std::string> warnings; // the scene reader's and the UV report's
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
-    size_t probes = 0, invalid_probes = 0;
+    size_t probes = 0, invalid_probes = 0, reflection_probes = 0;
     size_t blocks = 0;             // 8x8 blocks of the atlas stored per output (covered texels and dilation)
     double irradiance_bound = 0.0; // the lights' most direct irradiance at any point (light_bound.h)
     std::map<std::string, double> output_scales; // per output, the power of two its halves are times

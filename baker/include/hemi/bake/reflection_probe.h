@@ -21,16 +21,8 @@
 namespace hemi::bake
 {
 
-struct ReflectionProbeOptions
-{
-    // Level 0 of each parabolic half (a power of two, 8 to 4096); the radiance is first gathered into an
-    // equirectangular image of 4 size x 2 size pixels (math/sh_environment.h's convention, in the mesh's
-    // frame), each pixel the mean of `rays` rays (a square number: stratified over the pixel).
-    uint32_t size = 128;
-    int rays = 16;
-    std::vector<double> exponents{10, 100}; // the glossy maps' Phong exponents
-    uint64_t seed = 1;
-};
+// ReflectionProbeOptions and ReflectionProbePlacement are in lightmap_bake.h (LightmapFileOptions holds
+// them).
 
 // The reflection probe at `position` (the mesh's space) of the level `mesh` lit by `sh` (its finished
 // lightmap, bake_lightmap_sh) under `lights`. `radiance`, when given, receives the equirectangular image the

@@ -52,4 +52,12 @@ EnvmapAsset read_envmap_asset(const std::filesystem::path& path);
 // errors.
 EnvmapAsset read_envmap_asset(std::span<const std::byte> bytes, const std::string& name = "<memory>");
 
+class AssetReader;
+class AssetWriter;
+// The same sections inside another asset, named <prefix>.info, .mirror, .glossy, .diffuse and .fresnel (a
+// lightmap asset's reflection probes; the environment asset's own prefix is "envmap"). The writer does not
+// check the asset (the caller does, with envmap_problem); the reader throws FormatError naming the file.
+void add_envmap_sections(AssetWriter& writer, const EnvmapAsset& asset, const std::string& prefix);
+EnvmapAsset read_envmap_sections(const AssetReader& reader, const std::string& prefix);
+
 } // namespace hemi::io

@@ -36,11 +36,16 @@
 //                  position xyz, f32 direction xyz (unit, where the light points), f32 angular diameter
 //                  (degrees: the disc of hemi-bake's --sun; 0 for glTF's lights), u32 name length, the
 //                  name (UTF-8). Every light the bake was given, in the mesh's space.
+//   lightmap.reflections (optional) u32 count (at most 256), then per probe f32 centre xyz, f32 box_min xyz,
+//                  f32 box_max xyz (ReflectionProbe); probe i's maps in the sections reflection<i>.info,
+//                  .mirror, .glossy, .diffuse and .fresnel, laid out as an environment asset's envmap.*
+//                  (io/envmap_asset.h).
 //   lightmap.shadowmask (with mixed lights) u32 N, N u32 block indices (strictly ascending, as an output's),
 //                  then N x 64 x 4 u8: per texel of a block (8 rows of 8, rows from the top) the fraction of
 //                  the direct light of the mixed light of channel R, G, B and A that reaches it, times 255.
 
 #include <hemi/io/block_maps.h>
+#include <hemi/io/envmap_asset.h>
 #include <hemi/io/gltf.h>
 #include <hemi/io/light_probes.h>
 #include <hemi/io/material.h>
@@ -78,6 +83,17 @@ struct LightmapLight
     int channel = -1;                      // the shadowmask channel (0-3) of a mixed light; -1 otherwise
 };
 
+// A reflection probe (bake::bake_reflection_probe; docs/probes.md): what the lit level looks like from
+// `centre` as parabolic maps, and the box it lights (its influence volume, for box projection), all in the
+// mesh's space.
+struct ReflectionProbe
+{
+    glm::vec3 centre{0.0f}, box_min{0.0f}, box_max{0.0f};
+    EnvmapAsset maps;
+};
+
+constexpr size_t kMaxReflectionProbes = 256;
+
 struct LightmapAsset
 {
     Mesh mesh; // with uvs1
@@ -88,8 +104,9 @@ struct LightmapAsset
     uint32_t rays = 0, bounces = 0, covered_texels = 0;
     uint64_t seed = 0;
     std::vector<LightmapOutput> outputs;
-    LightProbes probes;                // optional
-    std::vector<LightmapLight> lights; // optional (assets baked before bake modes have none)
+    LightProbes probes;                       // optional
+    std::vector<LightmapLight> lights;        // optional (assets baked before bake modes have none)
+    std::vector<ReflectionProbe> reflections; // optional, at most kMaxReflectionProbes
     // With mixed lights: the shadowmask, 4 maps of the atlas (k = 4; map c holds channel c's fraction in [0,
     // 1] in all three colours), stored as RGBA8; k = 0 without one.
     BlockMaps shadowmask;
