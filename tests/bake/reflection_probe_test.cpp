@@ -10,6 +10,8 @@
 #include <hemi/bake/lightmap_bake.h>
 #include <hemi/bake/reference.h>
 #include <hemi/bake/reflection_probe.h>
+#include <hemi/io/gltf.h>
+#include <hemi/io/lightmap_asset.h>
 #include <hemi/math/box_projection.h>
 #include <hemi/math/camera.h>
 #include <hemi/math/luminance.h>
@@ -22,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <vector>
 
 using namespace hemi;
@@ -229,4 +232,49 @@ TEST(ReflectionProbe, ABoxProjectedLookupOffCentreSeesWhatThePointSees)
     ASSERT_GE(n, 25);
     EXPECT_LT(rms, 0.1 * mean);
     EXPECT_GT(rms_plain, 2.0 * rms);
+}
+
+// hemi-bake lightmap's job (bake_lightmap_file, --reflection-probe) bakes reflection probes into the asset:
+// one over the scene's bounds (no box given), one with its own box; each probe's mirror map sees the
+// ceiling's panel's middle (emission 4 and its bounce) and the floor below (about 0.2).
+TEST(ReflectionProbe, TheLightmapJobBakesThemIntoTheAsset)
+{
+    const BoxRoom room;
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "hemi_reflection_probe_test";
+    std::filesystem::create_directories(dir);
+    io::GltfScene scene;
+    scene.mesh = room.mesh;
+    scene.materials = room.materials;
+    scene.primitives = room.primitives;
+    io::write_gltf(dir / "room.glb", scene);
+    bake::LightmapFileOptions o;
+    o.width = o.height = 128;
+    o.outputs = {"plain"};
+    o.bake.rays = 64;
+    o.bake.bounces = 1;
+    o.lights.uniform = glm::vec3(0.0f);
+    const glm::vec3 centre(0.3f, -0.2f, 1.2f);
+    o.reflection_probes = {{centre}, {centre, glm::vec3(-1.0f, -1.0f, 0.0f), glm::vec3(1.0f, 1.0f, 2.5f)}};
+    o.reflection.size = 32;
+    o.reflection.rays = 4;
+    o.reflection.exponents = {10};
+    const bake::LightmapBakeSummary summary =
+        bake::bake_lightmap_file(dir / "room.glb", dir / "room.hemi", o);
+    EXPECT_EQ(summary.reflection_probes, 2u);
+    const io::LightmapAsset a = io::read_lightmap_asset(dir / "room.hemi");
+    ASSERT_EQ(a.reflections.size(), 2u);
+    EXPECT_EQ(a.reflections[0].centre, centre);
+    EXPECT_EQ(a.reflections[0].box_min, kBoxMin);
+    EXPECT_EQ(a.reflections[0].box_max, kBoxMax);
+    EXPECT_EQ(a.reflections[1].box_min, glm::vec3(-1.0f, -1.0f, 0.0f));
+    EXPECT_EQ(a.reflections[1].box_max, glm::vec3(1.0f, 1.0f, 2.5f));
+    for (const io::ReflectionProbe& p : a.reflections)
+    {
+        EXPECT_EQ(p.maps.mirror[0].size, 32u);
+        const glm::dvec3 up =
+            glm::normalize(glm::dvec3(glm::vec3(0.0f, 0.0f, 2.5f) - centre)); // the panel's middle
+        EXPECT_GT(math::luminance(glm::vec3(p.maps.mirror[0].sample(up))), 3.8f);
+        EXPECT_LT(math::luminance(glm::vec3(p.maps.mirror[0].sample(glm::dvec3(0, 0, -1)))), 0.5f);
+    }
+    std::filesystem::remove_all(dir);
 }
