@@ -278,3 +278,33 @@ TEST(ReflectionProbe, TheLightmapJobBakesThemIntoTheAsset)
     }
     std::filesystem::remove_all(dir);
 }
+
+// The influence that blends overlapping probes (math::box_influence), worked out here: 1 deeper than the fade
+// inside every face, a third of it 0.1 inside one face with a fade of 0.3, 0 on and beyond a face; with no
+// fade, 1 inside and 0 outside. Two boxes overlapping by 0.6 along x, each fading over 0.3, cross over
+// continuously.
+TEST(ReflectionProbe, OverlappingProbesBlendByTheirBoxesInfluence)
+{
+    const glm::vec3 lo(0.0f), hi(2.0f, 1.0f, 1.0f);
+    EXPECT_FLOAT_EQ(math::box_influence(glm::vec3(1.0f, 0.5f, 0.5f), lo, hi, 0.3f), 1.0f);
+    EXPECT_NEAR(math::box_influence(glm::vec3(1.9f, 0.5f, 0.5f), lo, hi, 0.3f), 1.0f / 3.0f, 1e-6f);
+    EXPECT_NEAR(math::box_influence(glm::vec3(1.0f, 0.5f, 0.95f), lo, hi, 0.3f), 0.05f / 0.3f, 1e-6f);
+    EXPECT_EQ(math::box_influence(glm::vec3(2.0f, 0.5f, 0.5f), lo, hi, 0.3f), 0.0f);
+    EXPECT_EQ(math::box_influence(glm::vec3(2.5f, 0.5f, 0.5f), lo, hi, 0.3f), 0.0f);
+    EXPECT_EQ(math::box_influence(glm::vec3(1.99f, 0.5f, 0.5f), lo, hi, 0.0f), 1.0f);
+    EXPECT_EQ(math::box_influence(glm::vec3(2.01f, 0.5f, 0.5f), lo, hi, 0.0f), 0.0f);
+    // Box a [0, 2] and box b [1.4, 3.4] along x: b's share of the blend rises from 0 to 1 over the overlap.
+    float previous = 0.0f;
+    for (int i = 0; i <= 300; ++i)
+    {
+        const glm::vec3 p(1.0f + 0.005f * i, 0.5f, 0.5f);
+        const float a = math::box_influence(p, lo, hi, 0.3f),
+                    b = math::box_influence(p, glm::vec3(1.4f, 0.0f, 0.0f), glm::vec3(3.4f, 1.0f, 1.0f),
+                                            0.3f);
+        ASSERT_GT(a + b, 0.0f) << p.x;
+        const float share = b / (a + b);
+        EXPECT_LE(std::abs(share - previous), 0.02f) << p.x;
+        previous = share;
+    }
+    EXPECT_FLOAT_EQ(previous, 1.0f);
+}

@@ -139,6 +139,7 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
             worst = std::max(worst, double(std::abs(values[i * 11 + 9][c] - occlusion[size_t(c)])));
     }
     double worst_direction = 0.0;
+    int fading = 0;
     for (size_t i = 0; i < points.size(); ++i)
     {
         const glm::vec3 p(points[i]), r = glm::normalize(p - glm::vec3(1.3f, 0.8f, 0.4f));
@@ -146,8 +147,15 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
             p, r, glm::vec3(-0.5f), glm::vec3(3.5f, 2.5f, 1.5f), glm::vec3(1.5f, 1.0f, 0.5f));
         worst_direction =
             std::max(worst_direction, double(glm::distance(glm::vec3(values[i * 11 + 10]), want)));
+        const float influence = math::box_influence(p, glm::vec3(0.0f), glm::vec3(3.0f, 2.0f, 1.0f), 0.3f);
+        worst_direction = std::max(worst_direction, double(std::abs(values[i * 11 + 10].w - influence)));
+        fading += influence > 0.0f && influence < 1.0f;
     }
-    std::printf("the shader's box projection against the CPU's: largest difference %.2e\n", worst_direction);
+    EXPECT_GT(fading, 200) << "the points no longer cross the influence's fade";
+    std::printf(
+        "the shader's box projection and influence against the CPU's: largest difference %.2e (%d points "
+        "in the fade)\n",
+        worst_direction, fading);
     EXPECT_LT(worst_direction, 1e-4);
     std::printf("the shader's probe lookup against the CPU's: largest difference %.2e over %zu points, %d of "
                 "them with a probe that does not see them\n",

@@ -25,4 +25,18 @@ inline glm::vec3 box_projected_direction(const glm::vec3& p, const glm::vec3& r,
     return glm::normalize(p + glm::max(t, 0.0f) * r - centre);
 }
 
+// How much a reflection probe whose influence box is [box_min, box_max] counts at p: 1 deeper than `fade`
+// inside every face, falling linearly to 0 at the box's faces, 0 outside (with fade 0: 1 inside, 0
+// outside). An engine blends the probes that overlap p by these weights (divided by their sum; the sky, or
+// a wider probe, where they sum to 0), so that light changes continuously as p moves from one room into the
+// next. The GLSL twin is hemi_box_influence.
+inline float box_influence(const glm::vec3& p, const glm::vec3& box_min, const glm::vec3& box_max, float fade)
+{
+    const glm::vec3 inside = glm::min(p - box_min, box_max - p);
+    const float depth = glm::min(inside.x, glm::min(inside.y, inside.z));
+    if (!(fade > 0.0f))
+        return depth >= 0.0f ? 1.0f : 0.0f;
+    return glm::clamp(depth / fade, 0.0f, 1.0f);
+}
+
 } // namespace hemi::math

@@ -45,6 +45,18 @@ vec3 hemi_box_projected_direction(vec3 p, vec3 r, vec3 box_min, vec3 box_max, ve
     return normalize(p + max(t, 0.0) * r - centre);
 }
 
+// How much a reflection probe with influence box [box_min, box_max] counts at p (math::box_influence): 1
+// deeper than `fade` inside every face, falling linearly to 0 at the faces, 0 outside. Blend the probes that
+// overlap p by these weights, divided by their sum.
+float hemi_box_influence(vec3 p, vec3 box_min, vec3 box_max, float fade)
+{
+    const vec3 inside = min(p - box_min, box_max - p);
+    const float depth = min(inside.x, min(inside.y, inside.z));
+    if (!(fade > 0.0))
+        return depth >= 0.0 ? 1.0 : 0.0;
+    return clamp(depth / fade, 0.0, 1.0);
+}
+
 // The mirror reflection of v (towards the eye) about n: 2 (n.v) n - v.
 vec3 hemi_reflect(vec3 n, vec3 v)
 {
