@@ -195,6 +195,15 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
     ASSERT_EQ(pv.byteLength, a.probes.irradiance.size() * 9 * 12);
     EXPECT_EQ(
         std::memcmp(m.buffers[0].data.data() + pv.byteOffset, a.probes.irradiance.data(), pv.byteLength), 0);
+    // Their depth maps, as the asset has them (8 x 8 texels of mean and deviation a probe).
+    const tinygltf::Value& depth = probes.Get("depth");
+    ASSERT_TRUE(depth.IsObject());
+    EXPECT_EQ(depth.Get("resolution").GetNumberAsInt(), 8);
+    EXPECT_FLOAT_EQ(float(depth.Get("maxDistance").GetNumberAsDouble()), a.probes.max_distance);
+    const tinygltf::BufferView& dv = m.bufferViews[size_t(depth.Get("bufferView").GetNumberAsInt())];
+    ASSERT_EQ(dv.byteLength, a.probes.depth.size() * 8);
+    ASSERT_EQ(a.probes.depth.size(), 12u * 64u);
+    EXPECT_EQ(std::memcmp(m.buffers[0].data.data() + dv.byteOffset, a.probes.depth.data(), dv.byteLength), 0);
 
     // The geometry reads back (hemi's reader) with the asset's lightmap UVs.
     const hemi::io::GltfScene back = hemi::io::read_gltf(glb);

@@ -186,6 +186,14 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
         probes["irradiance"] =
             Value(b.view(p.irradiance.data(), p.irradiance.size() * sizeof(p.irradiance[0]), 0));
         probes["valid"] = Value(b.view(p.valid.data(), p.valid.size(), 0));
+        if (!p.depth.empty()) // what each probe sees, for the lookup that leaves out the probes behind walls
+        {
+            Value::Object depth;
+            depth["resolution"] = Value(int(p.depth_resolution));
+            depth["maxDistance"] = number(p.max_distance);
+            depth["bufferView"] = Value(b.view(p.depth.data(), p.depth.size() * sizeof(p.depth[0]), 0));
+            probes["depth"] = Value(depth);
+        }
         ext["probes"] = Value(probes);
     }
     // Mixed lights: the shadowmask as an RGBA8 PNG of the atlas (data, not colour: channel c / 255 is the
