@@ -133,6 +133,7 @@ void main()
     const mat3 to_frame = kFrame == HEMI_FRAME_WORLD ? mat3(1.0) : transpose(mat3(tf.t, tf.b, tf.n));
 
     HemiSurface s;
+    s.position = in_world;
     s.albedo = albedo.rgb;
     s.emissive = emissive;
     s.base_color_factor = material.base_color_factor.rgb;

@@ -11,6 +11,7 @@
 
 #include <hemi/bake/factored.h>
 #include <hemi/gpu/upload.h>
+#include <hemi/math/box_projection.h>
 #include <hemi/math/paraboloid.h>
 
 #include <glm/geometric.hpp>
@@ -434,4 +435,56 @@ TEST_F(FactoredMaterial, MapPrecisionsKeepTheirStatedError)
             EXPECT_NE(std::string(e.what()).find("beyond"), std::string::npos) << e.what();
         }
     upload.clear();
+}
+
+// A reflection probe drawn by hemi's own env_mirror and env_glossy (EnvironmentMaterial::box_projection,
+// docs/probes.md): the environment turned and offset from the world, the probe captured off the sphere's
+// centre with a box around it. Each pixel equals the CPU's lookup towards where the reflected ray from the
+// sphere's surface point leaves the box, seen from the probe's centre (math::box_projected_direction), in
+// the environment's frame; the lookup without the projection is rejected.
+TEST_F(FactoredMaterial, ABoxProjectedReflectionProbeMatchesCpu)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& env = smooth_environment();
+    const glm::mat3 turn(glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 0, 1));
+    const glm::vec3 offset(0.1f, 0.2f, -0.1f), centre(0.4f, -0.3f, 0.2f), lo(-2.5f, -2.0f, -1.5f),
+        hi(2.0f, 3.0f, 2.5f);
+    for (auto technique : {hemi::render::Technique::EnvMirror, hemi::render::Technique::EnvGlossy})
+    {
+        const bool mirror = technique == hemi::render::Technique::EnvMirror;
+        hemi::samples::FactoredView view = sphere_view(scene, technique);
+        view.albedo = glm::vec3(0.6f, 0.5f, 0.4f);
+        view.material.kd = 0.4f;
+        view.material.ks = 0.9f;
+        view.material.world_to_env = turn;
+        view.material.box_projection = true;
+        view.material.world_to_env_offset = offset;
+        view.material.probe_centre = centre;
+        view.material.probe_box_min = lo;
+        view.material.probe_box_max = hi;
+        hemi::io::ImageRgba aux;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+        auto shade = [&](glm::vec2 uv, bool projected)
+        {
+            const Pixel p = sphere_pixel(scene, uv, false);
+            const float nv = glm::dot(p.n, p.v);
+            const glm::vec3 r = turn * (2.0f * nv * p.n - p.v);
+            // The sphere is the unit sphere at the origin: its point at uv is its normal there.
+            const glm::vec3 d =
+                projected ? hemi::math::box_projected_direction(turn * p.n + offset, r, lo, hi, centre) : r;
+            const glm::vec3 ld = view.material.kd * view.albedo * sample(env.diffuse, turn * p.n);
+            if (!mirror)
+                return view.material.ks * sample(env.glossy[0], d) + ld;
+            return float(hemi::math::fresnel_dielectric(nv, 1.5)) * sample(env.mirror[0], d) + ld;
+        };
+        const Comparison c = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, true); },
+            [&](glm::vec2 uv) { return shade(uv, false); }, 0.01f, 0.003f);
+        EXPECT_GT(c.compared, 300);
+        EXPECT_LE(c.failures, c.compared / 100) << (mirror ? "mirror" : "glossy") << c.first_failures;
+        EXPECT_GE(2 * c.rejected, c.compared)
+            << "the lookup without the projection would pass this comparison";
+        std::printf("%s box-projected: %d of %d outside 1%% + 0.003; without the projection rejected at %d\n",
+                    mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected);
+    }
 }

@@ -199,6 +199,15 @@ void check_values(const EnvironmentMaterial& material)
                 std::abs(identity[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-4f)
                 throw std::invalid_argument(
                     "hemi: an environment's world_to_env must be a rotation (orthonormal)");
+    if (material.box_projection)
+    {
+        const glm::vec3 &o = material.world_to_env_offset, &c = material.probe_centre,
+                        &lo = material.probe_box_min, &hi = material.probe_box_max;
+        if (!std::isfinite(o.x + o.y + o.z + c.x + c.y + c.z + lo.x + lo.y + lo.z + hi.x + hi.y + hi.z) ||
+            !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
+            throw std::invalid_argument("hemi: an environment's box projection needs a finite offset and "
+                                        "centre and a box whose minimum is below its maximum");
+    }
 }
 
 // What a material asks of its environment and tables, checked before anything is uploaded (a refused
@@ -319,7 +328,14 @@ shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMater
                            m.coating ? 1.0f : 0.0f);
     u.tables = glm::vec4(float(table_size_), float(maps_->fresnel_samples()), 0.0f, 0.0f);
     for (int r = 0; r < 3; ++r) // rows of world_to_env (glm is column-major: element [column][row])
-        u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r], 0.0f);
+        u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r],
+                                      m.box_projection ? m.world_to_env_offset[r] : 0.0f);
+    if (m.box_projection)
+    {
+        u.probe_centre = glm::vec4(m.probe_centre, 1.0f);
+        u.probe_box_min = glm::vec4(m.probe_box_min, 0.0f);
+        u.probe_box_max = glm::vec4(m.probe_box_max, 0.0f);
+    }
     return u;
 }
 

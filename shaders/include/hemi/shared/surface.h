@@ -115,7 +115,13 @@ struct EnvironmentUniforms
     vec4 material; // x = kd (diffuse weight), y = ks (specular weight), z = the Fresnel row's v coordinate,
                    // w = blend: 0 = F L_m + L_d, 1 = F L_m + (1 - F) L_d (a coating, section 4.4)
     vec4 tables;   // x = the BRDF tables' size, y = the Fresnel table's samples, zw unused
-    vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z: w unused)
+    vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z); w: the
+                          // offset that places world points there (p_env = R p + w), for box projection
+    // A reflection probe's box projection (docs/probes.md), in the environment's frame: the probe's centre
+    // (w: 1 = on, 0 = off) and its influence box.
+    vec4 probe_centre;
+    vec4 probe_box_min;
+    vec4 probe_box_max;
 };
 
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer. The
@@ -145,7 +151,7 @@ static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 4 * HEMI_MAX_LIGH
               "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 96, "push constants (within the 128 bytes every device has)");
-static_assert(sizeof(EnvironmentUniforms) == 6 * 16, "std140 layout");
+static_assert(sizeof(EnvironmentUniforms) == 9 * 16, "std140 layout");
 } // namespace hemi::shared
 #endif
 

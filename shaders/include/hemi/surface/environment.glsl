@@ -32,13 +32,27 @@ vec3 hemi_env_direction(vec3 world)
                               environment.world_to_env[2].xyz, world);
 }
 
-vec3 hemi_env_mirror(vec3 world_d)
+// A reflection from world point p along world_d, in the environment's frame: box-projected when the
+// environment is a reflection probe (EnvironmentUniforms::probe_centre.w), else the direction alone.
+vec3 hemi_env_reflection(vec3 world_p, vec3 world_d)
 {
-    return hemi_parabolic_lookup(env_mirror, environment.extents.x, hemi_env_direction(world_d));
+    const vec3 d = hemi_env_direction(world_d);
+    if (environment.probe_centre.w == 0.0)
+        return d;
+    const vec3 p =
+        hemi_env_direction(world_p) +
+        vec3(environment.world_to_env[0].w, environment.world_to_env[1].w, environment.world_to_env[2].w);
+    return hemi_box_projected_direction(p, d, environment.probe_box_min.xyz, environment.probe_box_max.xyz,
+                                        environment.probe_centre.xyz);
 }
-vec3 hemi_env_glossy(vec3 world_d)
+
+vec3 hemi_env_mirror(vec3 world_p, vec3 world_d)
 {
-    return hemi_parabolic_lookup(env_glossy, environment.extents.y, hemi_env_direction(world_d));
+    return hemi_parabolic_lookup(env_mirror, environment.extents.x, hemi_env_reflection(world_p, world_d));
+}
+vec3 hemi_env_glossy(vec3 world_p, vec3 world_d)
+{
+    return hemi_parabolic_lookup(env_glossy, environment.extents.y, hemi_env_reflection(world_p, world_d));
 }
 vec3 hemi_env_diffuse(vec3 world_n)
 {
@@ -67,11 +81,11 @@ float hemi_env_table_size()
 }
 #define HEMI_ENV_BRDF_TABLES env_brdf
 #else
-vec3 hemi_env_mirror(vec3 d)
+vec3 hemi_env_mirror(vec3 p, vec3 d)
 {
     return vec3(0.0);
 }
-vec3 hemi_env_glossy(vec3 d)
+vec3 hemi_env_glossy(vec3 p, vec3 d)
 {
     return vec3(0.0);
 }

@@ -28,7 +28,8 @@ struct HemiSurface
     float specular_exponent, specular_strength;
     float roughness; // the GGX coat's (0: none; then the Blinn-Phong term above)
     vec3 f0;
-    bool world; // the coefficients' frame is world space (an SH9 probe), not a tangent frame
+    bool world;    // the coefficients' frame is world space (an SH9 probe), not a tangent frame
+    vec3 position; // the surface point in world space (a reflection probe's box projection)
 };
 
 // The dynamic lights' irradiance at normal n: sum_i E_i max(0, n . l_i).

@@ -31,6 +31,13 @@ struct EnvironmentMaterial
     uint32_t fresnel = 0; // which of the asset's Fresnel tables (indices of refraction) env_mirror reads
     bool coating = false; // env_mirror: F L_m + (1 - F) L_d (a coated diffuse surface) for F L_m + L_d
     glm::mat3 world_to_env{1.0f}; // rotation from world space into the environment's (z up: identity)
+    // A reflection probe's parallax correction (box projection, docs/probes.md): env_mirror and env_glossy
+    // then look the maps up towards where the reflected ray leaves the probe's influence box, seen from its
+    // centre (io::ReflectionProbe's, in the environment's frame, which a world point p reaches as
+    // world_to_env p + world_to_env_offset). Off: the environment is infinitely far (a sky).
+    bool box_projection = false;
+    glm::vec3 world_to_env_offset{0.0f};
+    glm::vec3 probe_centre{0.0f}, probe_box_min{0.0f}, probe_box_max{0.0f};
 };
 
 // How an environment's parabolic maps are stored on the GPU. Radiance is never negative, and the maps are
