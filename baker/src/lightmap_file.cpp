@@ -197,6 +197,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
         throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) +
                                     " is not in [1, 2^20]");
+    if (o.probe_depth > io::kMaxProbeDepthResolution)
+        throw std::invalid_argument("--probe-depth " + std::to_string(o.probe_depth) + " is not in [0, " +
+                                    std::to_string(io::kMaxProbeDepthResolution) + "]");
     if (o.reflection_probes.size() > io::kMaxReflectionProbes)
         throw std::invalid_argument(std::to_string(o.reflection_probes.size()) +
                                     " reflection probes: at most " +
@@ -214,9 +217,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         for (const ReflectionProbePlacement& p : o.reflection_probes)
             if (!std::isfinite(p.centre.x + p.centre.y + p.centre.z + p.box_min.x + p.box_min.y +
                                p.box_min.z + p.box_max.x + p.box_max.y + p.box_max.z) ||
-                p.box_min.x > p.box_max.x || p.box_min.y > p.box_max.y || p.box_min.z > p.box_max.z)
-                throw std::invalid_argument(
-                    "a reflection probe's centre and box must be finite, the box ordered");
+                (p.box_min != p.box_max &&
+                 !(p.box_min.x < p.box_max.x && p.box_min.y < p.box_max.y && p.box_min.z < p.box_max.z)))
+                throw std::invalid_argument("a reflection probe's centre and box must be finite, the box's "
+                                            "minimum below its maximum along every axis");
     }
     if (o.bake.checkpoint.empty())
         o.bake.checkpoint = checkpoint_path(asset_path);
@@ -398,8 +402,15 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
     const uint64_t probe_count =
         uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40)));
+    // Reflection probes are held whole too: each its gathered image (4 s x 2 s RGBA floats) while it is made,
+    // then its mirror chain, glossy and diffuse maps (at most 2 s^2 RGB floats each, the chain 4/3 of that).
+    const uint64_t reflection_side = o.reflection_probes.empty() ? 0 : o.reflection.size;
+    const uint64_t reflection_bytes =
+        reflection_side * reflection_side *
+        (128 + uint64_t(o.reflection_probes.size()) * 24 * (2 + o.reflection.exponents.size()));
     const uint64_t probe_bytes =
-        probe_count * (kProbeBytes + uint64_t(o.probe_depth) * o.probe_depth * kProbeDepthBytesPerTexel);
+        probe_count * (kProbeBytes + uint64_t(o.probe_depth) * o.probe_depth * kProbeDepthBytesPerTexel) +
+        reflection_bytes;
     // What the bake holds besides the stages counted below: the ray tracer's BVH and, under a budget, what
     // the caller spent of it before (LightmapFileOptions::memory_held: hemi-bake's code and libraries) and
     // the scene just read (io::resident_memory since the start: the mesh, its textures and what reading
@@ -599,9 +610,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         {
             io::ReflectionProbe probe;
             probe.centre = placed.centre;
+            // The scene's bounds, a little wider (a flat level's box is flat along one axis).
             const bool whole = placed.box_min == placed.box_max;
-            probe.box_min = whole ? lo : placed.box_min;
-            probe.box_max = whole ? hi : placed.box_max;
+            const glm::vec3 pad(1e-3f * glm::length(hi - lo) + 1e-4f);
+            probe.box_min = whole ? lo - pad : placed.box_min;
+            probe.box_max = whole ? hi + pad : placed.box_max;
             probe.maps = bake_reflection_probe(scene.mesh, atlas, sh, o.lights, &*surfaces, placed.centre,
                                                o.reflection);
             asset.reflections.push_back(std::move(probe));

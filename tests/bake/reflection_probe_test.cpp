@@ -20,6 +20,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
+#include <glm/vector_relational.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -254,7 +255,8 @@ TEST(ReflectionProbe, TheLightmapJobBakesThemIntoTheAsset)
     o.bake.bounces = 1;
     o.lights.uniform = glm::vec3(0.0f);
     const glm::vec3 centre(0.3f, -0.2f, 1.2f);
-    o.reflection_probes = {{centre}, {centre, glm::vec3(-1.0f, -1.0f, 0.0f), glm::vec3(1.0f, 1.0f, 2.5f)}};
+    const glm::vec3 corner(1.5f, 1.0f, 0.5f); // a second probe elsewhere, with its own box
+    o.reflection_probes = {{centre}, {corner, glm::vec3(-1.0f, -1.0f, 0.0f), glm::vec3(1.8f, 1.4f, 2.5f)}};
     o.reflection.size = 32;
     o.reflection.rays = 4;
     o.reflection.exponents = {10};
@@ -264,17 +266,25 @@ TEST(ReflectionProbe, TheLightmapJobBakesThemIntoTheAsset)
     const io::LightmapAsset a = io::read_lightmap_asset(dir / "room.hemi");
     ASSERT_EQ(a.reflections.size(), 2u);
     EXPECT_EQ(a.reflections[0].centre, centre);
-    EXPECT_EQ(a.reflections[0].box_min, kBoxMin);
-    EXPECT_EQ(a.reflections[0].box_max, kBoxMax);
+    // The scene's bounds, padded by 0.1% of their diagonal.
+    EXPECT_NEAR(glm::distance(a.reflections[0].box_min, kBoxMin), 0.0f, 0.02f);
+    EXPECT_NEAR(glm::distance(a.reflections[0].box_max, kBoxMax), 0.0f, 0.02f);
+    EXPECT_TRUE(glm::all(glm::lessThan(a.reflections[0].box_min, kBoxMin)));
+    EXPECT_EQ(a.reflections[1].centre, corner);
     EXPECT_EQ(a.reflections[1].box_min, glm::vec3(-1.0f, -1.0f, 0.0f));
-    EXPECT_EQ(a.reflections[1].box_max, glm::vec3(1.0f, 1.0f, 2.5f));
-    for (const io::ReflectionProbe& p : a.reflections)
+    EXPECT_EQ(a.reflections[1].box_max, glm::vec3(1.8f, 1.4f, 2.5f));
+    // Each probe sees the panel's middle from its own centre; from the other's, that direction meets the
+    // grey ceiling (or a wall) instead.
+    for (size_t i = 0; i < 2; ++i)
     {
+        const io::ReflectionProbe& p = a.reflections[i];
         EXPECT_EQ(p.maps.mirror[0].size, 32u);
-        const glm::dvec3 up =
-            glm::normalize(glm::dvec3(glm::vec3(0.0f, 0.0f, 2.5f) - centre)); // the panel's middle
-        EXPECT_GT(math::luminance(glm::vec3(p.maps.mirror[0].sample(up))), 3.8f);
-        EXPECT_LT(math::luminance(glm::vec3(p.maps.mirror[0].sample(glm::dvec3(0, 0, -1)))), 0.5f);
+        const glm::vec3 panel(0.0f, 0.0f, 2.5f);
+        const glm::dvec3 own = glm::normalize(glm::dvec3(panel - p.centre)),
+                         other = glm::normalize(glm::dvec3(panel - a.reflections[1 - i].centre));
+        EXPECT_GT(math::luminance(glm::vec3(p.maps.mirror[0].sample(own))), 3.8f) << i;
+        EXPECT_LT(math::luminance(glm::vec3(p.maps.mirror[0].sample(other))), 1.0f) << i;
+        EXPECT_LT(math::luminance(glm::vec3(p.maps.mirror[0].sample(glm::dvec3(0, 0, -1)))), 0.5f) << i;
     }
     std::filesystem::remove_all(dir);
 }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace hemi::io
 {
@@ -103,7 +104,7 @@ float LightProbes::visibility(size_t probe, const glm::vec3& p) const
 LightProbes::Blend LightProbes::blend(const glm::vec3& p) const
 {
     Blend b;
-    if (empty())
+    if (empty() || count.x == 0 || count.y == 0 || count.z == 0 || valid.size() != irradiance.size())
         return b;
     // The cell and the weights along each axis.
     uint32_t i0[3], i1[3];
@@ -230,6 +231,8 @@ size_t probe_texel_stride(uint32_t depth_resolution)
 
 std::vector<glm::vec4> probe_texels(const LightProbes& probes)
 {
+    if (std::string problem = light_probes_problem(probes); !problem.empty())
+        throw std::invalid_argument("hemi: probe_texels: " + problem);
     const size_t stride = probe_texel_stride(probes.depth_resolution),
                  rr = size_t(probes.depth_resolution) * probes.depth_resolution;
     std::vector<glm::vec4> out(probes.size() * stride, glm::vec4(0.0f));

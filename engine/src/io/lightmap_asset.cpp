@@ -159,9 +159,9 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
     {
         const ReflectionProbe& r = a.reflections[i];
         const std::string which = "reflection probe " + std::to_string(i);
-        if (!finite3(r.centre) || !finite3(r.box_min) || !finite3(r.box_max) || r.box_min.x > r.box_max.x ||
-            r.box_min.y > r.box_max.y || r.box_min.z > r.box_max.z)
-            return which + ": its centre or box is not finite, or the box is not ordered";
+        if (!finite3(r.centre) || !finite3(r.box_min) || !finite3(r.box_max) ||
+            !(r.box_min.x < r.box_max.x && r.box_min.y < r.box_max.y && r.box_min.z < r.box_max.z))
+            return which + ": its centre or box is not finite, or the box's minimum is not below its maximum";
         if (std::string p = envmap_problem(r.maps); !p.empty())
             return which + ": " + p;
     }

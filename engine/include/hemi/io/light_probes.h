@@ -97,7 +97,8 @@ std::string light_probes_problem(const LightProbes& probes);
 constexpr uint32_t kMaxProbeDepthResolution = 64;
 
 // The probes for a shader's lookup (hemi_probe_irradiance, hemi/lib/probes.glsl): one RGBA32F texel
-// buffer, hemi_probe_texels(R) = 8 + ceil(R^2 / 2) texels a probe. Probe p's texels from p * that:
+// buffer, hemi_probe_stride(R) = 8 + ceil(R^2 / 2) texels a probe (throws std::invalid_argument for probes
+// light_probes_problem refuses). Probe p's texels from p * that:
 // texels 0-6 its 27 SH9 floats in hemi_pack_coefficients' order with float 28 its valid flag (1 or 0),
 // texel 7 its occlusion of the four shadowmask channels (all 1 without mixed lights), then its depth map,
 // two texels (mean, deviation) to a vec4, texel t = y R + x in .xy of vec4 t / 2 when t is even, .zw when

@@ -84,7 +84,7 @@ float hemi_probe_visibility(samplerBuffer probes, HemiProbeGrid g, int base, vec
         return 1.0;
     const vec3 d = p - probe_position;
     const float r = length(d);
-    if (!(r > 0.0))
+    if (!(r > 0.0) || isinf(r))
         return 1.0;
     const vec2 m = hemi_probe_depth(probes, base + 8, g.depth_resolution, d / r);
     if (r <= m.x)
@@ -109,8 +109,11 @@ void hemi_probe_irradiance(samplerBuffer probes, HemiProbeGrid g, vec3 p, out ve
     vec3 f = vec3(0.0);
     for (int a = 0; a < 3; ++a)
         if (g.count[a] > 1 && extent[a] > 0.0)
-            f[a] = clamp((p[a] - g.lo[a]) / extent[a] * last[a], 0.0, last[a]);
-    const ivec3 i0 = min(ivec3(f), g.count - 1), i1 = min(i0 + 1, g.count - 1);
+        {
+            const float t = (p[a] - g.lo[a]) / extent[a] * last[a];
+            f[a] = isnan(t) ? 0.0 : clamp(t, 0.0, last[a]); // NaN: the first cell, never outside the buffer
+        }
+    const ivec3 i0 = clamp(ivec3(f), ivec3(0), g.count - 1), i1 = min(i0 + 1, g.count - 1);
     const vec3 t = f - vec3(i0);
     const int stride = hemi_probe_stride(g.depth_resolution);
     float total = 0.0;
