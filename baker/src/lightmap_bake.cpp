@@ -1111,7 +1111,8 @@ namespace
 // probes' rays): emission plus albedo / pi times the lightmap's irradiance at the surface normal there
 // (bilinear at the hit's TEXCOORD_1 over the finished lightmap, dilated; the mixed lights' direct light,
 // which the lightmap leaves to the run time, included: it still lights what a probe sees). Without surfaces,
-// nothing.
+// nothing. Throws std::invalid_argument for a lightmap that does not match its atlas, or surfaces without
+// lightmap UVs to look it up at.
 class LevelRadiance
 {
   public:
@@ -1119,6 +1120,11 @@ class LevelRadiance
                   const LightmapSurfaces* surfaces)
         : mesh_(mesh), surfaces_(surfaces)
     {
+        if (sh.texels() != atlas.texels.size() ||
+            (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
+            throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
+        if (surfaces && mesh.uvs1.size() != mesh.positions.size())
+            throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
         const bool direct = sh.has_direct();
         std::vector<std::array<glm::vec3, 9>> sh9;
         std::vector<std::array<glm::vec3, 4>> directs;
@@ -1237,14 +1243,9 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     if (!(probes.lo.x <= probes.hi.x && probes.lo.y <= probes.hi.y && probes.lo.z <= probes.hi.z) ||
         !std::isfinite(probes.lo.x + probes.lo.y + probes.lo.z + probes.hi.x + probes.hi.y + probes.hi.z))
         throw std::invalid_argument("the probe grid's corners must be finite and ordered");
-    if (sh.texels() != atlas.texels.size() ||
-        (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
-        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
-    if (surfaces && mesh.uvs1.size() != mesh.positions.size())
-        throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
+    const LevelRadiance level(mesh, atlas, sh, surfaces); // throws for a lightmap that does not fit
     const EmbreeScene scene(mesh);
     const detail::LightSampler light(lights, o.seed);
-    const LevelRadiance level(mesh, atlas, sh, surfaces);
     const uint64_t probe_seed = mix64(o.seed ^ 0x50524f4245ull);
     probes.irradiance.assign(size_t(n), {});
     probes.valid.assign(size_t(n), 1);
@@ -1409,13 +1410,8 @@ io::EnvmapAsset bake_reflection_probe(const io::Mesh& mesh, const LightmapAtlas&
     check_envmap_options(envmap);
     if (!std::isfinite(position.x + position.y + position.z))
         throw std::invalid_argument("a reflection probe's position must be finite");
-    if (sh.texels() != atlas.texels.size() ||
-        (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
-        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
-    if (surfaces && mesh.uvs1.size() != mesh.positions.size())
-        throw std::invalid_argument("reflection probes need lightmap UVs to look the irradiance of a hit up");
+    const LevelRadiance level(mesh, atlas, sh, surfaces); // throws for a lightmap that does not fit
     const EmbreeScene scene(mesh);
-    const LevelRadiance level(mesh, atlas, sh, surfaces);
     const uint32_t w = 4 * o.size, h = 2 * o.size;
     io::ImageRgba image{w, h, std::vector<float>(size_t(w) * h * 4, 1.0f)};
     const uint64_t seed = mix64(o.seed ^ 0x5245464cull);
