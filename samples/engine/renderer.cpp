@@ -709,13 +709,7 @@ struct Renderer::Impl
                         ts.textures().image(m.base_color.image, true).view());
             write_image(vk, set, 1, ts.textures().sampler(m.normal.sampler),
                         ts.textures().image(m.normal.image, false).view());
-            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            w.dstSet = set;
-            w.dstBinding = 4;
-            w.descriptorCount = 1;
-            w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-            w.pTexelBufferView = &torus_coefficients;
-            vkUpdateDescriptorSets(vk, 1, &w, 0, nullptr);
+            write_texel_buffer(vk, set, 4, torus_coefficients);
             torus_sets.push_back(set);
         }
         env_set = allocate(env_layout);
@@ -759,13 +753,7 @@ struct Renderer::Impl
             vkUpdateDescriptorSets(vk, 1, &w, 0, nullptr);
             write_image(vk, slot.frame_set, 1, shadow_sampler, slot.shadow.view,
                         VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
-            VkWriteDescriptorSet pw{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            pw.dstSet = slot.frame_set;
-            pw.dstBinding = 2;
-            pw.descriptorCount = 1;
-            pw.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-            pw.pTexelBufferView = &probe_view;
-            vkUpdateDescriptorSets(vk, 1, &pw, 0, nullptr);
+            write_texel_buffer(vk, slot.frame_set, 2, probe_view);
             slot.post_set = allocate(post_layout);
 
             // hemi's view of this slot: two sets of hemi's frame layout over the engine's buffer.

@@ -152,6 +152,17 @@ void write_image(VkDevice device, VkDescriptorSet set, uint32_t binding, VkSampl
     vkUpdateDescriptorSets(device, 1, &w, 0, nullptr);
 }
 
+void write_texel_buffer(VkDevice device, VkDescriptorSet set, uint32_t binding, VkBufferView view)
+{
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstSet = set;
+    w.dstBinding = binding;
+    w.descriptorCount = 1;
+    w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    w.pTexelBufferView = &view;
+    vkUpdateDescriptorSets(device, 1, &w, 0, nullptr);
+}
+
 VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc)
 {
     auto module_of = [&](std::span<const uint32_t> code)

@@ -53,6 +53,7 @@ VkPipelineLayout create_pipeline_layout(VkDevice device, std::span<const VkDescr
                                         uint32_t push_size);
 void write_image(VkDevice device, VkDescriptorSet set, uint32_t binding, VkSampler sampler, VkImageView view,
                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+void write_texel_buffer(VkDevice device, VkDescriptorSet set, uint32_t binding, VkBufferView view);
 
 // A graphics pipeline: triangle lists, dynamic viewport and scissor, counter-clockwise front faces,
 // specialisation constant i = specialization[i] in both stages.
