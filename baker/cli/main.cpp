@@ -10,7 +10,8 @@
 //   lightmap SCENE.gltf|.glb -o LEVEL.hemi [--unwrap] [--strict-uv] [--uv-report FILE.png] [--env
 //   uniform|FILE.exr] [--env-scale X]
 //       [--sun X,Y,Z,R,G,B[,DIAMETER]] [--bounces B] [--bases sh9,hl2,h4,h6,sal4,plain,rnm]
-//       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ] [--probe-rays R]
+//       [--size WxH | --texel-size S] [--rays R] [--seed S] [--probes NX,NY,NZ|auto:N|file:PATH|gltf]
+//       [--probe-rays R]
 //       [--probe-depth R] [--reflection-probe X,Y,Z[,BOX]]... [--reflection-size N]
 //       [--exr-dir DIR] [--json REPORT.json]
 //   brdf --model torrance-sparrow|banks|phong|blinn-phong|cosine-lobe [--ior N] [--roughness R]
@@ -30,6 +31,7 @@
 #include <hemi/bake/checkpoint.h>
 #include <hemi/bake/factored.h>
 #include <hemi/bake/lightmap_bake.h>
+#include <hemi/bake/probe_placement.h>
 #include <hemi/bake/prt_bake.h>
 #include <hemi/bake/reference.h>
 #include <hemi/bake/ssbump.h>
@@ -474,7 +476,15 @@ int run_lightmap(LightmapCli& c)
     o.outputs = hemi::tool::parse_names(c.bases, "--bases");
     if (!c.size.empty())
         std::tie(o.width, o.height) = hemi::tool::parse_size(c.size, "--size", hemi::io::kMaxAtlasSide);
-    if (!c.probes.empty())
+    if (c.probes == "gltf")
+        o.gltf_probes = true;
+    else if (c.probes.rfind("auto:", 0) == 0)
+        o.probe_budget = uint32_t(hemi::tool::parse_counts(c.probes.substr(5), "--probes auto:N",
+                                                           "N, the most probes to place (1 to 2^20)", ',',
+                                                           {1}, 1, 1u << 20)[0]);
+    else if (c.probes.rfind("file:", 0) == 0)
+        o.probe_points = bake::read_probe_points(c.probes.substr(5));
+    else if (!c.probes.empty())
     {
         const std::vector<uint64_t> n = hemi::tool::parse_counts(
             c.probes, "--probes", "NX,NY,NZ (at least 1 each, 2^24 in all)", ',', {3}, 1, 1u << 24);
@@ -545,7 +555,10 @@ int run_lightmap(LightmapCli& c)
                                          "bakes in tiles";
     o.on_stage = [&o](std::string_view done)
     {
-        const std::string probes = o.probes.x ? "baking the light probes" : "making and writing the outputs";
+        const bool any = o.probes.x || o.probe_budget || !o.probe_points.empty() || o.gltf_probes;
+        const std::string probes = !any             ? "making and writing the outputs"
+                                   : o.probe_budget ? "placing and baking the light probes"
+                                                    : "baking the light probes";
         if (done == "scene")
             hemi::tool::set_stage("laying out the lightmap atlas");
         else if (done == "atlas")
@@ -603,8 +616,20 @@ int run_lightmap(LightmapCli& c)
     if (!modes.empty())
         std::printf("lights: %s\n", modes.c_str());
     if (s.probes)
-        std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes, o.probes.x,
-                    o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);
+    {
+        if (o.probes.x)
+            std::printf("%zu light probes (%ux%ux%u, %d rays each), %zu inside geometry\n", s.probes,
+                        o.probes.x, o.probes.y, o.probes.z, o.probe_rays, s.invalid_probes);
+        else if (o.probe_budget)
+            std::printf("%zu light probes placed (budget %u, %d rays each) from %zu candidates in open space "
+                        "of %zu; their lookup's mean error at the others %.1f%%\n",
+                        s.probes, o.probe_budget, o.probe_rays, s.open_probe_candidates, s.probe_candidates,
+                        100.0 * s.probe_placement_error);
+        else
+            std::printf("%zu light probes (%s, %d rays each), %zu inside geometry (never used)\n", s.probes,
+                        o.gltf_probes ? "the glTF's hemi_probe nodes" : "the points file", o.probe_rays,
+                        s.invalid_probes);
+    }
     if (s.reflection_probes)
         std::printf("%zu reflection probe(s), %u^2 a half\n", s.reflection_probes, o.reflection.size);
     if (s.pushed || s.invalid)
@@ -1233,8 +1258,11 @@ int main(int argc, char** argv)
                          "write a PNG of the atlas before the bake: covered texels grey, texels two or more "
                          "triangles overlap red (at most 2048 pixels a side, each the worst of its texels)");
     lightmap->add_option("--probes", lm.probes,
-                         "NX,NY,NZ: light probes for dynamic objects (SH9 irradiance) on a "
-                         "grid over the scene's bounding box, at the centres of its cells");
+                         "light probes for dynamic objects (SH9 irradiance): NX,NY,NZ on a grid over the "
+                         "scene's bounding box, at the centres of its cells; auto:N at most N placed in the "
+                         "level's open space, denser where the light changes; file:PATH at the points of a "
+                         "text file (\"x y z\" a line, the glTF's frame); gltf at the scene's nodes named "
+                         "hemi_probe*");
     lightmap->add_option("--probe-rays", lm.options.probe_rays, "sphere rays per probe")
         ->capture_default_str();
     lightmap

@@ -1237,6 +1237,23 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
                        const LightmapSurfaces* surfaces)
 {
     check(lights, o);
+    const bool scattered = probes.scattered();
+    if (scattered)
+    {
+        if (probes.points.size() > size_t(1) << 24)
+            throw std::invalid_argument("scattered probes number 1 to 2^24");
+        probes.count = glm::uvec3(uint32_t(probes.points.size()), 1, 1);
+        probes.lo = glm::vec3(INFINITY);
+        probes.hi = glm::vec3(-INFINITY);
+        for (const glm::vec4& q : probes.points)
+        {
+            if (!std::isfinite(q.x + q.y + q.z) || !(q.w > 0.0f) || !std::isfinite(q.w))
+                throw std::invalid_argument(
+                    "a scattered probe's position must be finite and its reach positive");
+            probes.lo = glm::min(probes.lo, glm::vec3(q));
+            probes.hi = glm::max(probes.hi, glm::vec3(q));
+        }
+    }
     const uint64_t n = io::probe_grid_count(probes.count.x, probes.count.y, probes.count.z);
     if (n == 0)
         throw std::invalid_argument("a probe grid needs 1 to 2^24 probes");
@@ -1252,7 +1269,8 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     // What each probe sees (io::LightProbes::depth), its distances clamped to 1.5 times the diagonal of a
     // grid cell (DDGI's clamp): a point the lookup blends a probe for is at most one diagonal away, so a
     // farther surface only says "visible", and a texel that mixes the sky with a near wall keeps a small
-    // deviation. Along an axis of one probe the cell is the scene's extent.
+    // deviation. Along an axis of one probe the cell is the scene's extent. Scattered probes: 1.5 times the
+    // largest reach.
     const uint32_t resolution = probes.depth_resolution;
     if (resolution > io::kMaxProbeDepthResolution)
         throw std::invalid_argument("a probe's depth map is at most " +
@@ -1267,7 +1285,14 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
     for (int a = 0; a < 3; ++a)
         cell[a] =
             probes.count[a] > 1 ? (probes.hi[a] - probes.lo[a]) / float(probes.count[a] - 1) : hi[a] - lo[a];
-    probes.max_distance = std::max(1.5f * glm::length(cell), 1e-3f);
+    float largest = glm::length(cell);
+    if (scattered)
+    {
+        largest = 0.0f;
+        for (const glm::vec4& q : probes.points)
+            largest = std::max(largest, q.w);
+    }
+    probes.max_distance = std::max(1.5f * largest, 1e-3f);
     probes.depth.assign(size_t(n) * resolution * resolution, glm::vec2(0.0f));
     std::vector<glm::vec3> texel_directions(size_t(resolution) * resolution);
     for (uint32_t y = 0; y < resolution; ++y)
@@ -1283,10 +1308,7 @@ void bake_light_probes(io::LightProbes& probes, const io::Mesh& mesh, const Ligh
         {
             for (uint64_t at = range.begin(); at != range.end(); ++at)
             {
-                const uint32_t i = uint32_t(at % probes.count.x),
-                               j = uint32_t((at / probes.count.x) % probes.count.y),
-                               k = uint32_t(at / (uint64_t(probes.count.x) * probes.count.y));
-                const glm::vec3 p = probes.position(i, j, k);
+                const glm::vec3 p = probes.position(size_t(at));
                 std::array<glm::dvec3, 9> acc{};
                 auto add = [&](const glm::vec3& d, const glm::dvec3& radiance)
                 {

@@ -5,6 +5,7 @@
 #include <hemi/bake/lightmap_denoise.h>
 #include <hemi/bake/lightmap_seams.h>
 #include <hemi/bake/lightmap_unwrap.h>
+#include <hemi/bake/probe_placement.h>
 #include <hemi/bake/reflection_probe.h>
 #include <hemi/io/atomic_file.h>
 #include <hemi/io/gltf.h>
@@ -156,6 +157,20 @@ LightBound check_light_bound(const LightmapLights& l, const std::vector<io::Mate
     return bound;
 }
 
+// How the light probes are placed, as hemi-bake's --probes says it: "NX,NY,NZ", "auto:N", "points" (N
+// points) or "gltf"; empty for none.
+std::string probes_named(const LightmapFileOptions& o)
+{
+    if (o.probes != glm::uvec3(0))
+        return std::to_string(o.probes.x) + "," + std::to_string(o.probes.y) + "," +
+               std::to_string(o.probes.z);
+    if (o.probe_budget)
+        return "auto:" + std::to_string(o.probe_budget);
+    if (!o.probe_points.empty())
+        return "points (" + std::to_string(o.probe_points.size()) + ")";
+    return o.gltf_probes ? "gltf" : "";
+}
+
 } // namespace
 
 LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
@@ -194,7 +209,21 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                     std::to_string(o.denoise_passes));
     if (o.probes != glm::uvec3(0) && (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0))
         throw std::invalid_argument("--probes needs at least one probe along each axis");
-    if (o.probes != glm::uvec3(0) && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
+    const int probe_kinds =
+        (o.probes != glm::uvec3(0)) + (o.probe_budget != 0) + !o.probe_points.empty() + o.gltf_probes;
+    if (probe_kinds > 1)
+        throw std::invalid_argument("light probes on a grid, placed automatically, at given points or at the "
+                                    "glTF's nodes: one of them, not " +
+                                    std::to_string(probe_kinds));
+    if (o.probe_budget > (1u << 20))
+        throw std::invalid_argument("a probe budget of " + std::to_string(o.probe_budget) +
+                                    " is not in [1, 2^20]");
+    if (o.probe_points.size() > size_t(1) << 24)
+        throw std::invalid_argument(std::to_string(o.probe_points.size()) + " probe points: at most 2^24");
+    for (const glm::vec3& p : o.probe_points)
+        if (!std::isfinite(p.x + p.y + p.z))
+            throw std::invalid_argument("a probe point is not finite");
+    if (probe_kinds && (o.probe_rays < 1 || o.probe_rays > (1 << 20)))
         throw std::invalid_argument("rays per probe " + std::to_string(o.probe_rays) +
                                     " is not in [1, 2^20]");
     if (o.probe_depth > io::kMaxProbeDepthResolution)
@@ -252,6 +281,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                     " (the asset stores it in pages)");
 
     io::GltfScene scene = io::read_gltf(scene_path);
+    if (o.gltf_probes && scene.light_probes.empty())
+        throw io::FormatError(scene_path.string() +
+                              ": --probes gltf: the scene has no light probe nodes (nodes "
+                              "named " +
+                              std::string(io::kLightProbeNodePrefix) + "...)");
     LightmapBakeSummary summary;
     o.lights.scene_to_world = glm::mat3(math::gltf_to_world());
     o.lights.punctual = scene.lights; // in the mesh's (scene) space already
@@ -400,8 +434,12 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         exr_bytes;
     // The probes cannot be tiled: they count in full against the budget, on top of either stage.
     // (In double first: a grid past 2^24 probes, which the probe bake refuses, must not wrap here.)
+    // Automatic placement holds its candidates (ProbePlacementOptions::candidates_per_probe open ones a probe
+    // of the budget, and up to twice as many while it tells the open ones from the others).
     const uint64_t probe_count =
-        uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40)));
+        uint64_t(std::min(double(o.probes.x) * o.probes.y * o.probes.z, double(uint64_t(1) << 40))) +
+        uint64_t(o.probe_budget) * 2 * ProbePlacementOptions{}.candidates_per_probe + o.probe_points.size() +
+        (o.gltf_probes ? scene.light_probes.size() : 0);
     // Reflection probes are held whole too: each its gathered image (4 s x 2 s RGBA floats) while it is made,
     // then its mirror chain, glossy and diffuse maps (at most 2 s^2 RGB floats each, the chain 4/3 of that).
     const uint64_t reflection_side = o.reflection_probes.empty() ? 0 : o.reflection.size;
@@ -423,9 +461,10 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
              : 0) +
         uint64_t(summary.triangles) * kEmbreeBytesPerTriangle;
     if (budget != 0 && probe_bytes != 0 && held < budget && held + probe_bytes > budget)
-        throw io::FormatError(scene_path.string() + ": --probes " + std::to_string(o.probes.x) + "," +
-                              std::to_string(o.probes.y) + "," + std::to_string(o.probes.z) + ": " +
-                              std::to_string(probe_count) + " light probes need about " +
+        throw io::FormatError(scene_path.string() + ": --probes " + probes_named(o) + ": " +
+                              std::to_string(probe_count) +
+                              (o.probe_budget ? " light probes (the placement's candidates) need about "
+                                              : " light probes need about ") +
                               io::format_bytes(probe_bytes) + " of memory, held whole, beside the " +
                               io::format_bytes(held) + " the process and the scene's ray tracer hold, but " +
                               (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
@@ -585,15 +624,31 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     asset.bounces = uint32_t(o.bake.bounces);
     asset.seed = o.bake.seed;
     asset.covered_texels = uint32_t(atlas.texels.size());
-    if (o.probes != glm::uvec3(0) && leader)
+    if (probe_kinds && leader)
     {
-        if (o.probes.x == 0 || o.probes.y == 0 || o.probes.z == 0)
-            throw std::invalid_argument("--probes needs at least one probe along each axis");
-        asset.probes = probe_grid(scene.mesh, o.probes);
-        asset.probes.depth_resolution = o.probe_depth;
         LightmapBakeOptions probe_options = o.bake;
         probe_options.rays = o.probe_rays;
-        bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
+        if (o.probes != glm::uvec3(0))
+        {
+            asset.probes = probe_grid(scene.mesh, o.probes);
+            asset.probes.depth_resolution = o.probe_depth;
+            bake_light_probes(asset.probes, scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
+        }
+        else if (o.probe_budget)
+        {
+            ProbePlacementOptions placement;
+            placement.budget = o.probe_budget;
+            placement.depth_resolution = o.probe_depth;
+            ProbePlacementReport placed;
+            asset.probes = place_light_probes(scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces,
+                                              placement, &placed);
+            summary.probe_candidates = placed.candidates;
+            summary.open_probe_candidates = placed.open;
+            summary.probe_placement_error = placed.error;
+        }
+        else
+            asset.probes = bake_probes_at(o.gltf_probes ? scene.light_probes : o.probe_points, o.probe_depth,
+                                          scene.mesh, atlas, sh, o.lights, probe_options, &*surfaces);
         summary.probes = asset.probes.irradiance.size();
         for (uint8_t v : asset.probes.valid)
             summary.invalid_probes += !v;
@@ -938,7 +993,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)
-        j["probes"] = {{"grid", {o.probes.x, o.probes.y, o.probes.z}},
+        j["probes"] = {{"placement", probes_named(o)},
                        {"count", s.probes},
                        {"inside_geometry", s.invalid_probes},
                        {"rays_per_probe", o.probe_rays},

@@ -8,7 +8,10 @@
 //   engine [--assets DIR] [--size WxH] [--frames N] [--screenshot FILE] [--validation] [--baked-only]
 //          [--basis auto|h6|h4] [--sun mixed|baked] [--shadow-distance D] [--no-coat] [--specular-only]
 //          [--exposure E]
-//          [--no-tonemap] [--fog D] [--camera EYE,TARGET] [--resize-at N]
+//          [--no-tonemap] [--fog D] [--camera EYE,TARGET] [--object-time T] [--resize-at N]
+//
+// With --frames it prints, for the last frame, where each probe-lit sphere is on screen and what the level's
+// probes give it (tests/tools/engine_sample_test.cpp reads it).
 //
 // Keys: T next basis (H6 near / H4 far, H6, H4), W lighting only, S specular only, B baked lighting only, L
 // the sun's shadow map on/off (off: the shadowmask alone), G the floor's GGX coat on/off, E pause the
@@ -119,6 +122,7 @@ int main(int argc, char** argv)
     std::string assets_dir = "engine_assets", size = "960x540", screenshot, basis = "auto", camera,
                 sun = "mixed";
     int frames = 0, resize_at = -1;
+    float object_time = 0.0f;
     bool validation = false, no_tonemap = false, no_coat = false;
     engine::Settings settings;
     app.add_option("--assets", assets_dir, "folder of the baked assets (baked there when missing)")
@@ -163,6 +167,10 @@ int main(int argc, char** argv)
     app.add_option("--camera", camera,
                    "EYE,TARGET as x,y,z,x,y,z in world space (z up), as hemi-render's --camera takes it "
                    "(default -3.5,0.8,1.6,3,-0.6,0.9)");
+    app.add_option("--object-time", object_time,
+                   "start the moving objects this many seconds into their animation (where the spheres are)")
+        ->check(finite_in(0.0, 1e6))
+        ->capture_default_str();
     app.add_option("--resize-at", resize_at,
                    "resize the window to 3/4 of --size at this frame (tests resizing)");
     try
@@ -239,6 +247,7 @@ int main(int argc, char** argv)
 
             // Headless runs step time by 1/60 s a frame, so the same frame number gives the same image.
             engine::FrameState state;
+            state.object_time = object_time;
             auto last = std::chrono::steady_clock::now();
             double total_ms = 0.0;
             int timed = 0, shots = 0, drawn = 0;
@@ -286,6 +295,16 @@ int main(int argc, char** argv)
             }
             renderer.finish();
             messages = context.messages();
+            // Where the last frame drew the probe-lit spheres, and what the probes give them.
+            for (size_t i = 0; i < stats.spheres.size() && frames > 0; ++i)
+            {
+                const engine::SphereSeen& s = stats.spheres[i];
+                std::printf(
+                    "engine: sphere %zu at pixel (%.1f, %.1f), radius %.1f px%s; the probes give it %.3f, "
+                    "%.2f of the sun\n",
+                    i, s.centre.x, s.centre.y, s.radius, s.in_front ? "" : " (behind the eye)", s.light,
+                    s.sun_share);
+            }
             std::printf(
                 "engine: %d frames at %ux%u, %.1f ms a frame (mean over %d), %u level draws, %u culled, "
                 "%llu validation message(s)\n",

@@ -4,6 +4,7 @@
 #include <hemi/gpu/upload.h>
 #include <hemi/io/image.h>
 #include <hemi/math/camera.h>
+#include <hemi/math/luminance.h>
 #include <hemi/render/access.h>
 #include <hemi/render/material/environment_lighting.h>
 #include <hemi/render/material/frame_set.h>
@@ -69,8 +70,6 @@ struct EngineFrame
     glm::vec4 eye, sun_direction, sun_irradiance, shadow, fog;
     glm::ivec4 mode;
     glm::mat4 world_to_level;
-    glm::ivec4 probe_count;
-    glm::vec4 probe_lo, probe_hi;
     glm::vec4 reflection_centre, reflection_min, reflection_max;
     shared::EnvironmentUniforms env;
 };
@@ -946,11 +945,7 @@ struct Renderer::Impl
         const bool objects = settings.objects && !settings.baked_only;
         // The level's probes, which the spheres look up per pixel; at the glossy ball and the torus, their
         // occlusion of the mixed sun (its channel), the objects' static shadow beyond the shadow distance.
-        const io::LightProbes& probes = assets.level.probes;
         f.world_to_level = glm::inverse(level_model);
-        f.probe_count = glm::ivec4(glm::ivec3(probes.count), int(probes.depth_resolution));
-        f.probe_lo = glm::vec4(probes.lo, 0.0f);
-        f.probe_hi = glm::vec4(probes.hi, 0.0f);
         std::array<float, kSpheres + 2> occlusion;
         occlusion.fill(1.0f);
         for (uint32_t s = 0; s <= kSpheres + 1; ++s)
@@ -963,6 +958,25 @@ struct Renderer::Impl
                 throw std::runtime_error("the level has no light probes for its dynamic objects");
             if (sun && sun->shadowmask_channel >= 0)
                 occlusion[s] = occluded[size_t(sun->shadowmask_channel)];
+            if (s < kSpheres)
+            {
+                // Where the sphere is on screen (its centre, and its radius along the camera's right), and
+                // what the probes give it at its centre.
+                SphereSeen& seen = stats.spheres[s];
+                const glm::vec3 forward = glm::normalize(settings.camera.target - eye);
+                const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0.0f, 0.0f, 1.0f)));
+                auto pixel = [&](const glm::vec3& p)
+                {
+                    const glm::vec4 c = f.view_projection * glm::vec4(p, 1.0f);
+                    return glm::vec2((c.x / c.w * 0.5f + 0.5f) * float(e.width),
+                                     (c.y / c.w * 0.5f + 0.5f) * float(e.height));
+                };
+                seen.in_front = glm::dot(at - eye, forward) > 0.5f;
+                seen.centre = pixel(at);
+                seen.radius = glm::distance(pixel(at + 0.32f * right), seen.centre);
+                seen.light = float(math::luminance(glm::dvec3(sh[0])));
+                seen.sun_share = occlusion[s];
+            }
         }
         const float env_degrees = 25.0f * state.env_time;
         glossy.world_to_env =

@@ -21,8 +21,10 @@
 
 #include <hemi/math/camera.h>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -57,9 +59,21 @@ struct FrameState
     float env_time = 0.0f, object_time = 0.0f; // seconds of each animation
 };
 
+// A probe-lit sphere as the frame drew it: its centre on screen (pixels from the top left), its radius in
+// pixels, whether it is in front of the eye, and what the level's probes give at its centre (the luminance
+// of their SH9 constant term, and the share of the mixed sun that reaches it: its static shadow).
+struct SphereSeen
+{
+    glm::vec2 centre{0.0f};
+    float radius = 0.0f;
+    bool in_front = false;
+    float light = 0.0f, sun_share = 1.0f;
+};
+
 struct FrameStats
 {
     uint32_t draws = 0, culled = 0; // main-pass draws of the level's list, and entries culled
+    std::array<SphereSeen, 3> spheres;
 };
 
 class Renderer

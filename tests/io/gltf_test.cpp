@@ -889,6 +889,40 @@ TEST(GltfReader, ReadsPunctualLightsWhereTheirNodesPlaceThem)
                         "not \"stationary\"");
 }
 
+// Light probes placed by hand (issue 44): every node of the scene named hemi_probe* (Blender's empties and
+// their copies, "hemi_probe.001"), at its world position; other names and nodes outside the scene are not.
+TEST(GltfReader, ReadsLightProbesFromNodesNamedHemiProbe)
+{
+    Handmade h = handmade_quad();
+    h.j["nodes"].push_back({{"name", "hemi_probe"}, {"translation", {1, 2, 3}}});
+    h.j["nodes"].push_back(
+        {{"name", "room"}, {"translation", {10, 0, 0}}, {"scale", {2, 2, 2}}, {"children", {3, 4, 5}}});
+    h.j["nodes"].push_back({{"name", "hemi_probe.001"}, {"translation", {0, 1, 0}}});
+    h.j["nodes"].push_back(
+        {{"name", "Hemi_Probe"}, {"translation", {0, 5, 0}}}); // not the prefix: case counts
+    h.j["nodes"].push_back({{"name", "hemi_probe_stairs"}, {"translation", {0.5, 0, -1}}});
+    h.j["nodes"].push_back({{"name", "hemi_probe.002"}, {"translation", {7, 7, 7}}}); // in no scene
+    h.j["scenes"][0]["nodes"] = {0, 1, 2};
+    const hemi::io::GltfScene s = hemi::io::read_gltf(h.save("probes"));
+    ASSERT_EQ(s.light_probes.size(), 3u);
+    EXPECT_EQ(s.light_probes[0], glm::vec3(1, 2, 3));
+    EXPECT_EQ(s.light_probes[1], glm::vec3(10, 2, 0));
+    EXPECT_EQ(s.light_probes[2], glm::vec3(11, 0, -2));
+    EXPECT_TRUE(hemi::io::read_gltf(handmade_quad().save("no_probes")).light_probes.empty());
+    // write_gltf writes them back as such nodes.
+    const fs::path again = fs::temp_directory_path() / "hemi_gltf_probes_again.glb";
+    hemi::io::write_gltf(again, s);
+    EXPECT_EQ(hemi::io::read_gltf(again).light_probes, s.light_probes);
+    fs::remove(again);
+
+    Handmade bad = h;
+    bad.j["nodes"][2]["scale"] = {1e30, 1e30, 1e30};
+    bad.j["nodes"][3]["translation"] = {0, 1e30, 0};
+    expect_error_naming(bad.save("probe_far"),
+                        "node 3 (\"hemi_probe.001\"), a light probe, is placed at a point "
+                        "that is not finite");
+}
+
 TEST(GltfReader, UnreadableFeaturesAreErrorsNamingThem)
 {
     auto required = [](const std::string& ext)

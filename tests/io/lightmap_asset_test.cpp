@@ -1073,3 +1073,100 @@ TEST(LightmapAsset, ReflectionProbesRoundTrip)
     e = error_of(dir() / "reflections_missing.hemi");
     EXPECT_NE(e.find("reflection1.mirror"), std::string::npos) << e;
 }
+
+// Scattered probes (issue 44) round-trip through the asset with their points and reaches (section
+// lightmap.probe_points; lightmap.probes' kind 1), and are looked up by their bumps: at a probe's own point
+// with no other reaching, its value; halfway between two probes of equal reach, their mean. The writer
+// refuses points that disagree with the probes or a reach that is not positive; the reader refuses a
+// truncated or missing points section, and points with a grid, naming the file.
+TEST(LightProbes, ScatteredProbesRoundTripAndBrokenOnesAreRefused)
+{
+    hemi::io::LightmapAsset a = small_asset();
+    a.probes = seeing_probes();
+    a.probes.points = {glm::vec4(0.0f, 0.0f, 0.0f, 1.5f), glm::vec4(2.0f, 0.0f, 0.0f, 1.5f)};
+    a.probes.depth.clear(); // visibility 1: the bumps alone
+    a.probes.depth_resolution = 0;
+    ASSERT_EQ(hemi::io::light_probes_problem(a.probes), "");
+    const fs::path good = dir() / "scattered.hemi";
+    hemi::io::write_lightmap_asset(good, a);
+    const hemi::io::LightmapAsset b = hemi::io::read_lightmap_asset(good);
+    ASSERT_TRUE(b.probes.scattered());
+    EXPECT_EQ(b.probes.points, a.probes.points);
+    EXPECT_EQ(b.probes.irradiance, a.probes.irradiance);
+    EXPECT_EQ(b.probes.at(glm::vec3(0.0f))[0], glm::vec3(1.0f));
+    EXPECT_EQ(b.probes.at(glm::vec3(2.0f, 0.0f, 0.0f))[0], glm::vec3(2.0f));
+    EXPECT_FLOAT_EQ(b.probes.at(glm::vec3(1.0f, 0.3f, 0.0f))[0].x, 1.5f);
+    // At 0.5 from the first and 1.5 from the second (out of its reach): the first alone.
+    EXPECT_EQ(b.probes.at(glm::vec3(0.5f, 0.0f, 0.0f))[0], glm::vec3(1.0f));
+    // At 0.9 and 1.1: (1 - 0.81/2.25)^8 = 0.64^8 = 0.028147 against (1 - 1.21/2.25)^8 = 0.0020836, worked
+    // out here: 1.0692 (a square bump, (1 - x^2)^2, would give 1.343).
+    const float w0 = 0.0281475f, w1 = 0.00208356f;
+    EXPECT_NEAR(b.probes.at(glm::vec3(0.9f, 0.0f, 0.0f))[0].x, (w0 + 2.0f * w1) / (w0 + w1), 1e-5f);
+
+    for (const auto& [edit, what] :
+         {std::pair<std::function<void(hemi::io::LightProbes&)>, std::string>{
+              [](hemi::io::LightProbes& p) { p.points.pop_back(); }, "1 scattered probes in a grid of 2x1x1"},
+          {[](hemi::io::LightProbes& p) { p.points[1].w = 0.0f; }, "reach not a positive"},
+          {[](hemi::io::LightProbes& p) { p.points[0].y = INFINITY; }, "position is not finite"},
+          {[](hemi::io::LightProbes& p) { p.count = glm::uvec3(1, 2, 1); }, "expected 2x1x1"}})
+    {
+        hemi::io::LightmapAsset bad = a;
+        edit(bad.probes);
+        try
+        {
+            hemi::io::write_lightmap_asset(dir() / "never_scattered.hemi", bad);
+            ADD_FAILURE() << "accepted: " << what;
+        }
+        catch (const std::invalid_argument& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    }
+    auto read_refused = [&](const fs::path& from, const std::string& name, const std::string& what,
+                            const std::function<void(const std::string&, std::vector<std::byte>&)>& edit)
+    {
+        const fs::path p = rewritten(from, name, edit);
+        const std::string e = error_of(p);
+        EXPECT_NE(e.find(p.string()), std::string::npos) << e;
+        EXPECT_NE(e.find(what), std::string::npos) << e;
+    };
+    read_refused(good, "points_short.hemi", "lightmap.probe_points has 31 bytes, 2 probes need 32",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     if (s == "lightmap.probe_points")
+                         bytes.pop_back();
+                 });
+    read_refused(good, "points_reach.hemi", "reach not a positive",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const float reach = -1.0f;
+                     if (s == "lightmap.probe_points")
+                         std::memcpy(bytes.data() + 12, &reach, 4);
+                 });
+    read_refused(good, "points_kind.hemi", "lightmap.probe_points with a grid of probes",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const uint32_t grid = 0;
+                     if (s == "lightmap.probes")
+                         std::memcpy(bytes.data() + 12, &grid, 4);
+                 });
+    read_refused(good, "points_unknown_kind.hemi", "not supported",
+                 [](const std::string& s, std::vector<std::byte>& bytes)
+                 {
+                     const uint32_t kind = 2;
+                     if (s == "lightmap.probes")
+                         std::memcpy(bytes.data() + 12, &kind, 4);
+                 });
+    // Without the points section.
+    const hemi::io::AssetReader r(good);
+    hemi::io::AssetWriter w;
+    for (const std::string& section : r.names())
+        if (section != "lightmap.probe_points")
+        {
+            const std::span<const std::byte> s = r.section(section);
+            w.add(section, std::vector<std::byte>(s.begin(), s.end()));
+        }
+    w.write(dir() / "points_missing.hemi");
+    const std::string e = error_of(dir() / "points_missing.hemi");
+    EXPECT_NE(e.find("scattered probes without lightmap.probe_points"), std::string::npos) << e;
+}

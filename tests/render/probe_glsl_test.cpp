@@ -59,27 +59,50 @@ io::LightProbes probes()
     return p;
 }
 
-} // namespace
+// The same probes, scattered: 60 probes at random points of [0, 3] x [0, 2] x [0, 1] with reaches 0.5 to
+// 1.3 and the same kinds of depth maps, three of them invalid.
+io::LightProbes scattered_probes()
+{
+    io::LightProbes p = probes();
+    uint32_t seed = 5;
+    auto random = [&seed] { return float((seed = seed * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
+    const io::LightProbes grid = p;
+    p.irradiance.clear();
+    p.valid.clear();
+    p.occlusion.clear();
+    p.depth.clear();
+    p.lo = glm::vec3(INFINITY);
+    p.hi = glm::vec3(-INFINITY);
+    for (size_t i = 0; i < 60; ++i)
+    {
+        const glm::vec3 at(random() * 3.0f, random() * 2.0f, random());
+        p.points.emplace_back(at, 0.5f + 0.8f * random());
+        p.lo = glm::min(p.lo, at);
+        p.hi = glm::max(p.hi, at);
+        const size_t from = i % 24; // another grid probe's values
+        p.irradiance.push_back(grid.irradiance[from]);
+        p.valid.push_back(i == 7 || i == 30 || i == 41 ? 0 : 1);
+        p.occlusion.push_back(grid.occlusion[from]);
+        p.depth.insert(p.depth.end(), grid.depth.begin() + ptrdiff_t(from * 64),
+                       grid.depth.begin() + ptrdiff_t(from * 64 + 64));
+    }
+    p.count = glm::uvec3(60, 1, 1);
+    return p;
+}
 
-TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
+// hemi_probe_irradiance at each point over io::probe_texels(probes): per point 9 SH9 coefficients, the
+// occlusion, then the box projection's direction and influence.
+std::vector<glm::vec4> shader_lookup(const io::LightProbes& grid, const std::vector<glm::vec4>& points)
 {
     gpu::Device& dev = test::device();
-    const io::LightProbes grid = probes();
-    ASSERT_EQ(io::light_probes_problem(grid), "");
     const std::vector<glm::vec4> texels = io::probe_texels(grid);
-    ASSERT_EQ(texels.size(), 24 * io::probe_texel_stride(8));
-    std::vector<glm::vec4> points;
-    uint32_t seed = 11;
-    auto random = [&seed] { return float((seed = seed * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
-    for (int i = 0; i < 2000; ++i) // in the grid and up to half a cell around it
-        points.emplace_back(random() * 4.0f - 0.5f, random() * 3.0f - 0.5f, random() * 2.0f - 0.5f, 0.0f);
 
     const std::vector<gpu::Binding> bindings = {
         {0, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
         {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT},
         {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT}};
     const gpu::Program program =
-        gpu::create_compute_program(dev, {test::test_spirv("probe_lookup.comp"), bindings, 48, {}});
+        gpu::create_compute_program(dev, {test::test_spirv("probe_lookup.comp"), bindings, 4, {}});
     const size_t texel_bytes = texels.size() * sizeof(glm::vec4),
                  point_bytes = points.size() * sizeof(glm::vec4),
                  out_bytes = points.size() * 11 * sizeof(glm::vec4);
@@ -100,12 +123,7 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
     writes[1] = {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {in.handle(), 0, VK_WHOLE_SIZE}};
     writes[2] = {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {out.handle(), 0, VK_WHOLE_SIZE}};
     gpu::write_descriptors(dev, set, writes);
-    struct
-    {
-        glm::ivec4 count_r;
-        glm::vec4 lo, hi;
-    } push{glm::ivec4(glm::ivec3(grid.count), 8), glm::vec4(grid.lo, float(points.size())),
-           glm::vec4(grid.hi, 0.0f)};
+    const uint32_t push = uint32_t(points.size());
     gpu::one_shot(dev,
                   [&](VkCommandBuffer cmd)
                   {
@@ -117,6 +135,27 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
                   });
     std::vector<glm::vec4> values(points.size() * 11);
     gpu::read_buffer(dev, out, values.data(), out_bytes);
+    return values;
+}
+
+std::vector<glm::vec4> random_points(uint32_t seed, int count)
+{
+    std::vector<glm::vec4> points;
+    auto random = [&seed] { return float((seed = seed * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
+    for (int i = 0; i < count; ++i) // in the grid and up to half a cell around it
+        points.emplace_back(random() * 4.0f - 0.5f, random() * 3.0f - 0.5f, random() * 2.0f - 0.5f, 0.0f);
+    return points;
+}
+
+} // namespace
+
+TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
+{
+    const io::LightProbes grid = probes();
+    ASSERT_EQ(io::light_probes_problem(grid), "");
+    ASSERT_EQ(io::probe_texels(grid).size(), io::kProbeTexelHeader + 24 * io::probe_texel_stride(8));
+    const std::vector<glm::vec4> points = random_points(11, 2000);
+    const std::vector<glm::vec4> values = shader_lookup(grid, points);
 
     double worst = 0.0;
     int occluded = 0; // points where some probe of the cell sees under 1% of the point
@@ -126,7 +165,7 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
         const std::array<glm::vec3, 9> want = grid.at(p);
         const std::array<float, 4> occlusion = grid.occlusion_at(p);
         const io::LightProbes::Blend b = grid.blend(p);
-        for (int n = 0; n < b.count; ++n)
+        for (size_t n = 0; n < b.count(); ++n)
             if (grid.visibility(b.probe[n], p) < 0.01f)
             {
                 ++occluded;
@@ -162,4 +201,57 @@ TEST_F(ProbeGlsl, TheShadersLookupIsTheLibrarysCpuLookup)
                 worst, points.size(), occluded);
     EXPECT_LT(worst, 1e-4); // values of magnitude up to 5: float rounding of the weights
     EXPECT_GT(occluded, 200) << "the grid no longer exercises visibility";
+}
+
+// Scattered probes through the index the texels carry: the same as the CPU's lookup over every probe
+// (LightProbes::at without an index, which visits all 60), and the CPU's lookup through index_probes the
+// same to the bit; where no valid probe reaches a point, the shader's zero and occlusion 1.
+TEST_F(ProbeGlsl, ScatteredProbesThroughTheIndexAreEveryProbesBlend)
+{
+    const io::LightProbes scattered = scattered_probes();
+    ASSERT_EQ(io::light_probes_problem(scattered), "");
+    const io::ProbeIndex index = io::index_probes(scattered);
+    const std::vector<glm::vec4> points = random_points(23, 3000);
+    const std::vector<glm::vec4> values = shader_lookup(scattered, points);
+    double worst = 0.0;
+    int uncovered = 0, blended = 0, occluded = 0;
+    for (size_t i = 0; i < points.size(); ++i)
+    {
+        const glm::vec3 p(points[i]);
+        bool reached = false;
+        for (size_t q = 0; q < scattered.size(); ++q)
+            reached |= scattered.valid[q] &&
+                       glm::distance(glm::vec3(scattered.points[q]), p) < scattered.points[q].w;
+        const std::array<glm::vec3, 9> want = scattered.at(p), indexed = scattered.at(p, &index);
+        for (size_t j = 0; j < 9; ++j)
+            ASSERT_EQ(indexed[j], want[j]) << "point " << i;
+        const io::LightProbes::Blend b = scattered.blend(p);
+        if (!reached)
+        {
+            ++uncovered;
+            for (size_t j = 0; j < 10; ++j)
+                EXPECT_EQ(values[i * 11 + j], j < 9 ? glm::vec4(0.0f) : glm::vec4(1.0f)) << "point " << i;
+            continue;
+        }
+        blended += b.count() > 1;
+        for (size_t n = 0; n < b.count(); ++n)
+            if (scattered.visibility(b.probe[n], p) < 0.01f)
+            {
+                ++occluded;
+                break;
+            }
+        const std::array<float, 4> occlusion = scattered.occlusion_at(p);
+        for (size_t j = 0; j < 9; ++j)
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, double(std::abs(values[i * 11 + j][c] - want[j][c])));
+        for (int c = 0; c < 4; ++c)
+            worst = std::max(worst, double(std::abs(values[i * 11 + 9][c] - occlusion[size_t(c)])));
+    }
+    std::printf("scattered probes, the shader against the CPU: largest difference %.2e over %zu points (%d "
+                "blending several probes, %d with one that does not see them, %d beyond every reach)\n",
+                worst, points.size(), blended, occluded, uncovered);
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_GT(blended, 1500) << "the points no longer blend scattered probes";
+    EXPECT_GT(occluded, 200) << "the probes no longer exercise visibility";
+    EXPECT_GT(uncovered, 20) << "no point lies beyond every probe's reach";
 }

@@ -22,25 +22,18 @@ layout(set = 0, binding = 2, std430) writeonly buffer Values
 };
 layout(push_constant) uniform Push
 {
-    ivec4 count_r; // count, depth resolution
-    vec4 lo;       // .w: the number of points
-    vec4 hi;
+    uint count; // the number of points
 }
 pc;
 
 void main()
 {
     const uint i = gl_GlobalInvocationID.x;
-    if (i >= uint(pc.lo.w))
+    if (i >= pc.count)
         return;
-    HemiProbeGrid g;
-    g.count = pc.count_r.xyz;
-    g.depth_resolution = pc.count_r.w;
-    g.lo = pc.lo.xyz;
-    g.hi = pc.hi.xyz;
     vec3 sh[HEMI_BASIS_MAX_SIZE];
     vec4 occlusion;
-    hemi_probe_irradiance(probes, g, points[i].xyz, sh, occlusion);
+    hemi_probe_irradiance(probes, points[i].xyz, sh, occlusion);
     for (int j = 0; j < 9; ++j)
         values[i * 11 + j] = vec4(sh[j], 0.0);
     values[i * 11 + 9] = occlusion;

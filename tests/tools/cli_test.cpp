@@ -24,6 +24,7 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
 
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -1292,6 +1293,89 @@ TEST(BakeCli, LightmapBakesLightProbesForDynamicObjects)
     const Result bad = lightmap(q(scene) + " -o " + q(dir() / "never.hemi") + " --probes 3,0,3");
     EXPECT_EQ(bad.status, 1);
     EXPECT_NE(bad.err.find("--probes"), std::string::npos) << bad.err;
+}
+
+// hemi-bake lightmap --probes auto:N, file:PATH and gltf (issue 44): scattered probes placed in the sample
+// level's open space within the budget, at the points of a file, at the glTF's hemi_probe nodes; each kind
+// in the asset (the points with their reaches), the JSON report and hemi-bake export; bad forms refused
+// naming the option or the file, before any work.
+TEST(BakeCli, LightmapPlacesScatteredLightProbes)
+{
+    hemi::io::GltfScene level = hemi::samples::make_level(64);
+    const fs::path scene = dir() / "placed_level.glb";
+    hemi::io::write_gltf(scene, level);
+    const std::string common = " --size 64 --rays 16 --bases plain --probe-rays 128 --sun 0.3,-0.5,0.6,4,4,4";
+    const fs::path asset = dir() / "placed_level.hemi", json = dir() / "placed_level.json";
+    Result r = lightmap(q(scene) + " -o " + q(asset) + common + " --probes auto:40 --json " + q(json));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("light probes placed (budget 40"), std::string::npos) << r.out;
+    hemi::io::LightmapAsset a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_TRUE(a.probes.scattered());
+    EXPECT_LE(a.probes.size(), 40u);
+    EXPECT_GE(a.probes.size(), 36u);
+    for (size_t i = 0; i < a.probes.size(); ++i)
+    {
+        EXPECT_TRUE(a.probes.valid[i]) << "probe " << i;
+        const glm::vec4 p = a.probes.points[i]; // inside the level's box: x, z in [-4, 4], y in [0, 3]
+        EXPECT_TRUE(std::abs(p.x) < 4.0f && std::abs(p.z) < 4.0f && p.y > 0.0f && p.y < 3.0f && p.w > 0.0f)
+            << "probe " << i;
+    }
+    nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["probes"]["placement"], "auto:40");
+    EXPECT_EQ(j["probes"]["count"], a.probes.size());
+    // Exported: the points and reaches beside the probes' values.
+    const fs::path exported = dir() / "placed_level_export.gltf";
+    ASSERT_EQ(run(HEMI_BAKE_EXE, "export " + q(asset) + " -o " + q(exported)).status, 0);
+    {
+        tinygltf::Model m;
+        tinygltf::TinyGLTF loader;
+        std::string error, warning;
+        ASSERT_TRUE(loader.LoadASCIIFromFile(&m, &error, &warning, exported.string())) << error;
+        const tinygltf::Value& probes = m.extensions.at("HEMI_lightmaps").Get("probes");
+        const tinygltf::BufferView& v = m.bufferViews[size_t(probes.Get("points").GetNumberAsInt())];
+        ASSERT_EQ(v.byteLength, a.probes.size() * 16);
+        EXPECT_EQ(std::memcmp(m.buffers[0].data.data() + v.byteOffset, a.probes.points.data(), v.byteLength),
+                  0);
+    }
+
+    // A points file: the probes where it puts them.
+    const fs::path points = dir() / "placed_points.txt";
+    std::ofstream(points) << "# x y z, the glTF's frame\n-2 1.5 -2\n2,1.5,-2\n2 1.5 2\n-2 1.5 2\n0 1.5 0\n";
+    r = lightmap(q(scene) + " -o " + q(asset) + common + " --probes file:" + q(points));
+    ASSERT_EQ(r.status, 0) << r.err;
+    a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_EQ(a.probes.size(), 5u);
+    EXPECT_EQ(glm::vec3(a.probes.points[1]), glm::vec3(2.0f, 1.5f, -2.0f));
+    EXPECT_NE(r.out.find("5 light probes (the points file"), std::string::npos) << r.out;
+
+    // The glTF's own hemi_probe nodes.
+    level.light_probes = {glm::vec3(-1.0f, 1.0f, -1.0f), glm::vec3(1.0f, 1.0f, -1.0f),
+                          glm::vec3(0.0f, 2.0f, 1.0f)};
+    const fs::path with_nodes = dir() / "placed_level_nodes.glb";
+    hemi::io::write_gltf(with_nodes, level);
+    r = lightmap(q(with_nodes) + " -o " + q(asset) + common + " --probes gltf");
+    ASSERT_EQ(r.status, 0) << r.err;
+    a = hemi::io::read_lightmap_asset(asset);
+    ASSERT_EQ(a.probes.size(), 3u);
+    for (size_t i = 0; i < 3; ++i)
+        EXPECT_EQ(glm::vec3(a.probes.points[i]), level.light_probes[i]) << "probe " << i;
+
+    // Bad forms, each refused before the bake starts (no progress printed, nothing written).
+    const fs::path never = dir() / "placed_never.hemi";
+    for (const auto& [args, message] :
+         {std::pair<std::string, std::string>{"--probes auto:0", "--probes auto:N"},
+          {"--probes auto:many", "--probes auto:N"},
+          {"--probes auto:2000000", "--probes auto:N"},
+          {"--probes file:" + q(dir() / "no_such_points.txt"), "no_such_points.txt: cannot open"},
+          {"--probes gltf", "placed_level.glb: --probes gltf: the scene has no light probe nodes"},
+          {"--probes 2,2", "--probes"}})
+    {
+        const Result bad = lightmap(q(scene) + " -o " + q(never) + common + " " + args);
+        EXPECT_EQ(bad.status, 1) << args;
+        EXPECT_NE(bad.err.find(message), std::string::npos) << args << ": " << bad.err;
+        EXPECT_EQ(bad.err.find('%'), std::string::npos) << args << ": the work started: " << bad.err;
+        EXPECT_FALSE(fs::exists(never)) << args;
+    }
 }
 
 // hemi-render --sphere draws dynamic objects lit by a lightmap asset's probes, under the validation layer:

@@ -155,6 +155,100 @@ TEST(EngineSample, TheMixedSunsShadowsMoveWithTheDynamicObjects)
     fs::remove_all(dir);
 }
 
+// Issue 44, line 4: the probe-lit spheres darken as they pass into shade. The lowest sphere around its whole
+// circle (--object-time 0 to 17 s, a second apart), seen from above the opening with static shadows alone
+// (--shadow-distance 0: the sun on a sphere is its probes' occlusion of the sun, per pixel, from
+// hemi_probe_irradiance; no shadow map): where the probes' C++ lookup (render::probe_lighting, which the
+// sample prints with the sphere's place on screen) says the sun reaches its centre, the sphere's pixels are
+// several times brighter than where it does not (measured 6.0), and half in the sun they are in between.
+// Fails for a shader that drops the probes' occlusion (every sphere as bright in the shade as in the sun).
+TEST(EngineSample, TheProbeLitSpheresDarkenAsTheyPassIntoShade)
+{
+    const fs::path dir = hemi::test::temp_dir("engine_sample_spheres");
+    struct Seen
+    {
+        double time, sun, light, pixels;
+    };
+    std::vector<Seen> seen;
+    for (int step = 0; step < 18; ++step)
+    {
+        const double time = 1.0 * step;
+        const fs::path png = dir / ("spheres_" + std::to_string(step) + ".png");
+        const hemi::test::Result r =
+            engine(dir, "--size 320x180 --fog 0 --no-tonemap --camera=-3.7,0,2.6,0.5,0,-0.9"
+                        " --validation --frames 2 --exposure 0.3 --shadow-distance 0 --object-time " +
+                            std::to_string(time) + " --screenshot " + q(png));
+        ASSERT_EQ(r.status, 0) << r.out << r.err;
+        const size_t at = r.out.find("engine: sphere 0 at pixel (");
+        ASSERT_NE(at, std::string::npos) << r.out;
+        if (r.out.compare(r.out.find("px", at) + 2, 17, " (behind the eye)") == 0)
+            continue;
+        float x = 0, y = 0, radius = 0, light = 0, sun = 0;
+        ASSERT_EQ(std::sscanf(r.out.c_str() + at,
+                              "engine: sphere 0 at pixel (%f, %f), radius %f px; the probes give it "
+                              "%f, %f of the sun",
+                              &x, &y, &radius, &light, &sun),
+                  5)
+            << r.out.substr(at, 120);
+        const hemi::io::ImageRgba8 img = hemi::io::read_png(png);
+        // The mean luminance over the inner 60% of its disc, where the disc is on screen.
+        double sum = 0.0;
+        size_t n = 0, outside = 0;
+        const float r2 = 0.36f * radius * radius;
+        for (int py = int(y - radius); py <= int(y + radius); ++py)
+            for (int px = int(x - radius); px <= int(x + radius); ++px)
+            {
+                const float dx = float(px) + 0.5f - x, dy = float(py) + 0.5f - y;
+                if (dx * dx + dy * dy > r2)
+                    continue;
+                if (px < 0 || py < 0 || px >= int(img.width) || py >= int(img.height))
+                {
+                    ++outside;
+                    continue;
+                }
+                const uint8_t* c = &img.pixels[(size_t(py) * img.width + size_t(px)) * 4];
+                sum += 0.2126 * hemi::io::srgb_eotf(c[0] / 255.0f) +
+                       0.7152 * hemi::io::srgb_eotf(c[1] / 255.0f) +
+                       0.0722 * hemi::io::srgb_eotf(c[2] / 255.0f);
+                ++n;
+            }
+        std::printf(
+            "t = %4.1f s: sphere 0 at (%.0f, %.0f), radius %.0f px: %.2f of the sun, probes' light %.3f; "
+            "its pixels %.4f (%zu, %zu off screen)\n",
+            time, x, y, radius, sun, light, n ? sum / double(n) : 0.0, n, outside);
+        if (n > 20 && outside < n / 4)
+            seen.push_back({time, sun, light, sum / double(n)});
+    }
+    double lit = 0.0, shade = 0.0;
+    int lit_n = 0, shade_n = 0;
+    for (const Seen& s : seen)
+    {
+        if (s.sun > 0.8)
+            lit += s.pixels, ++lit_n;
+        else if (s.sun < 0.2)
+            shade += s.pixels, ++shade_n;
+    }
+    ASSERT_GE(lit_n, 2) << "the sphere is not seen in the sun";
+    ASSERT_GE(shade_n, 2) << "the sphere is not seen in the shade";
+    lit /= lit_n;
+    shade /= shade_n;
+    std::printf(
+        "in the sun (%d views) its pixels average %.4f, in the shade (%d views) %.4f: %.1f times darker\n",
+        lit_n, lit, shade_n, shade, lit / shade);
+    EXPECT_GT(lit, 2.0 * shade);
+    // Passing into the shade, half in the sun: between the two, not a step from one to the other.
+    int between = 0;
+    for (const Seen& s : seen)
+        if (s.sun > 0.3 && s.sun < 0.7)
+        {
+            ++between;
+            EXPECT_GT(s.pixels, shade + 0.2 * (lit - shade)) << "t = " << s.time;
+            EXPECT_LT(s.pixels, lit - 0.1 * (lit - shade)) << "t = " << s.time;
+        }
+    EXPECT_GE(between, 2) << "no view catches the sphere half in the sun";
+    fs::remove_all(dir);
+}
+
 // The polished floor's highlight of the sun, baked into the directional lightmap (--sun baked: the lightmap's
 // specular, hemi_basis_specular) against the same sun mixed (its specular exact GGX, times the shadowmask,
 // plus the lightmap's specular of the sky and the bounce): the coat's light alone (--specular-only) over the

@@ -65,7 +65,8 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
     const Result b =
         bake("lightmap " + q(scene) + " -o " + q(asset) +
              " --env uniform --env-scale 0.5 --sun 0.4,0.3,1,4,3.6,3 --bounces 1 --size 64 --rays "
-             "32 --probes 3,2,2 --probe-rays 64");
+             "32 --probes 3,2,2 --probe-rays 64 --reflection-probe 0.2,1,0.3 --reflection-size 16 "
+             "--reflection-rays 1 --reflection-exponents 10,50");
     ASSERT_EQ(b.status, 0) << b.err;
     const Result e = bake("export " + q(asset) + " -o " + q(glb));
     ASSERT_EQ(e.status, 0) << e.err;
@@ -204,6 +205,36 @@ TEST(HemiBakeExport, WritesTheLevelsLightmapsIntoAGlbThatDecodesBack)
     ASSERT_EQ(dv.byteLength, a.probes.depth.size() * 8);
     ASSERT_EQ(a.probes.depth.size(), 12u * 64u);
     EXPECT_EQ(std::memcmp(m.buffers[0].data.data() + dv.byteOffset, a.probes.depth.data(), dv.byteLength), 0);
+
+    // The reflection probe (issue 44): its centre, box and maps, the asset's floats bit for bit.
+    const tinygltf::Value& reflections = ext.Get("reflectionProbes");
+    ASSERT_TRUE(reflections.IsArray());
+    ASSERT_EQ(reflections.ArrayLen(), 1u);
+    ASSERT_EQ(a.reflections.size(), 1u);
+    const tinygltf::Value& r = reflections.Get(0);
+    for (int c = 0; c < 3; ++c)
+    {
+        EXPECT_FLOAT_EQ(float(r.Get("centre").Get(c).GetNumberAsDouble()), a.reflections[0].centre[c]);
+        EXPECT_FLOAT_EQ(float(r.Get("boxMin").Get(c).GetNumberAsDouble()), a.reflections[0].box_min[c]);
+        EXPECT_FLOAT_EQ(float(r.Get("boxMax").Get(c).GetNumberAsDouble()), a.reflections[0].box_max[c]);
+    }
+    auto same_map = [&](const tinygltf::Value& v, const hemi::math::ParabolicImage& map, const char* what)
+    {
+        EXPECT_EQ(v.Get("size").GetNumberAsInt(), int(map.size)) << what;
+        EXPECT_DOUBLE_EQ(v.Get("extent").GetNumberAsDouble(), map.extent) << what;
+        const tinygltf::BufferView& view = m.bufferViews[size_t(v.Get("bufferView").GetNumberAsInt())];
+        ASSERT_EQ(view.byteLength, size_t(2) * map.size * map.size * 3 * 4) << what;
+        EXPECT_EQ(std::memcmp(m.buffers[0].data.data() + view.byteOffset, map.rgb.data(), view.byteLength), 0)
+            << what;
+    };
+    same_map(r.Get("mirror"), a.reflections[0].maps.mirror[0], "mirror");
+    ASSERT_EQ(r.Get("glossy").ArrayLen(), 2u);
+    for (int g = 0; g < 2; ++g)
+    {
+        EXPECT_DOUBLE_EQ(r.Get("glossy").Get(g).Get("exponent").GetNumberAsDouble(), g == 0 ? 10.0 : 50.0);
+        same_map(r.Get("glossy").Get(g), a.reflections[0].maps.glossy[size_t(g)], "glossy");
+    }
+    same_map(r.Get("diffuse"), a.reflections[0].maps.diffuse, "diffuse");
 
     // The geometry reads back (hemi's reader) with the asset's lightmap UVs.
     const hemi::io::GltfScene back = hemi::io::read_gltf(glb);

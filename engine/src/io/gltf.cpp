@@ -953,6 +953,14 @@ struct Reader
             }
             if (const auto light = n.extensions.find("KHR_lights_punctual"); light != n.extensions.end())
                 add_light(item.node, light->second, world);
+            if (n.name.rfind(kLightProbeNodePrefix, 0) == 0) // a light probe placed by hand
+            {
+                const glm::vec3 at(world[3]);
+                if (!std::isfinite(at.x + at.y + at.z))
+                    fail("node " + std::to_string(item.node) + " (\"" + n.name +
+                         "\"), a light probe, is placed at a point that is not finite");
+                scene.light_probes.push_back(at);
+            }
             for (auto it = n.children.rbegin(); it != n.children.rend(); ++it)
                 stack.push_back({*it, item.node, world});
         }
@@ -1494,6 +1502,19 @@ GltfBuilder scene_builder(const std::filesystem::path& path, const GltfScene& sc
         gmesh.primitives.push_back(prim);
     }
     b.single_node(gmesh);
+    // The light probes placed by hand, as empties named as read_gltf finds them.
+    for (size_t i = 0; i < scene.light_probes.size(); ++i)
+    {
+        const glm::vec3& at = scene.light_probes[i];
+        if (!std::isfinite(at.x + at.y + at.z))
+            throw std::invalid_argument("hemi: cannot write " + path.string() + ": light probe " +
+                                        std::to_string(i) + " is not at a finite point");
+        tinygltf::Node node;
+        node.name = std::string(kLightProbeNodePrefix) + (i ? "." + std::to_string(i) : "");
+        node.translation = {double(at.x), double(at.y), double(at.z)};
+        b.m.scenes[0].nodes.push_back(int(b.m.nodes.size()));
+        b.m.nodes.push_back(node);
+    }
     return b;
 }
 } // namespace detail

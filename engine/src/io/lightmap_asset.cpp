@@ -285,8 +285,12 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
     if (!asset_->probes.empty())
     {
         const LightProbes& p = asset_->probes;
-        const ProbeHeader header{
-            p.count.x, p.count.y, p.count.z, 0, {p.lo.x, p.lo.y, p.lo.z}, {p.hi.x, p.hi.y, p.hi.z}};
+        const ProbeHeader header{p.count.x,
+                                 p.count.y,
+                                 p.count.z,
+                                 p.scattered() ? 1u : 0u,
+                                 {p.lo.x, p.lo.y, p.lo.z},
+                                 {p.hi.x, p.hi.y, p.hi.z}};
         const size_t base = sizeof header + p.irradiance.size() * 27 * 4 + p.valid.size();
         std::vector<std::byte> bytes(base + p.occlusion.size() * 4);
         std::memcpy(bytes.data(), &header, sizeof header);
@@ -298,6 +302,9 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
                 bytes[base + i * 4 + c] =
                     std::byte(uint8_t(std::lround(std::clamp(p.occlusion[i][c], 0.0f, 1.0f) * 255.0f)));
         sections_->writer.add("lightmap.probes", bytes);
+        if (p.scattered())
+            sections_->writer.add("lightmap.probe_points",
+                                  std::as_bytes(std::span(p.points.data(), p.points.size())));
         if (!p.depth.empty())
         {
             const uint32_t r = p.depth_resolution;
@@ -498,7 +505,17 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
             throw fail("lightmap.probes is too short");
         std::memcpy(&header, b.data(), sizeof header);
         const uint64_t n = probe_grid_count(header.nx, header.ny, header.nz);
-        if (n == 0 || header.zero != 0)
+        if (header.zero > 1)
+            throw fail("lightmap.probes: probes of kind " + std::to_string(header.zero) +
+                       " are not supported (0: a grid, 1: scattered)");
+        const bool scattered = header.zero == 1;
+        if (scattered && (header.ny != 1 || header.nz != 1))
+            throw fail("lightmap.probes: " + std::to_string(header.nx) + "x" + std::to_string(header.ny) +
+                       "x" + std::to_string(header.nz) + " scattered probes, expected Nx1x1");
+        if (scattered != r.has("lightmap.probe_points"))
+            throw fail(scattered ? "lightmap.probes: scattered probes without lightmap.probe_points"
+                                 : "lightmap.probe_points with a grid of probes");
+        if (n == 0)
             throw fail("lightmap.probes: a grid of " + std::to_string(header.nx) + "x" +
                        std::to_string(header.ny) + "x" + std::to_string(header.nz) +
                        " probes is not supported");
@@ -515,6 +532,15 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
         p.valid.resize(size_t(n));
         std::memcpy(p.irradiance.data(), b.data() + sizeof header, size_t(n) * 27 * 4);
         std::memcpy(p.valid.data(), b.data() + sizeof header + size_t(n) * 27 * 4, size_t(n));
+        if (scattered)
+        {
+            const std::span<const std::byte> q = r.section("lightmap.probe_points");
+            if (q.size() != n * 16)
+                throw fail("lightmap.probe_points has " + std::to_string(q.size()) + " bytes, " +
+                           std::to_string(n) + " probes need " + std::to_string(n * 16));
+            p.points.resize(size_t(n));
+            std::memcpy(p.points.data(), q.data(), q.size());
+        }
         if (b.size() > base)
         {
             p.occlusion.resize(size_t(n));
@@ -551,8 +577,10 @@ LightmapAsset read_lightmap_asset_from(const AssetReader& r)
             }
         }
     }
-    else if (r.has("lightmap.probe_depth"))
-        throw fail("lightmap.probe_depth without lightmap.probes");
+    else if (r.has("lightmap.probe_depth") || r.has("lightmap.probe_points"))
+        throw fail(
+            std::string(r.has("lightmap.probe_depth") ? "lightmap.probe_depth" : "lightmap.probe_points") +
+            " without lightmap.probes");
     if (r.has("lightmap.reflections"))
     {
         const std::span<const std::byte> b = r.section("lightmap.reflections");

@@ -186,6 +186,8 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
         probes["irradiance"] =
             Value(b.view(p.irradiance.data(), p.irradiance.size() * sizeof(p.irradiance[0]), 0));
         probes["valid"] = Value(b.view(p.valid.data(), p.valid.size(), 0));
+        if (p.scattered()) // each probe's position and reach
+            probes["points"] = Value(b.view(p.points.data(), p.points.size() * sizeof(p.points[0]), 0));
         if (!p.depth.empty()) // what each probe sees, for the lookup that leaves out the probes behind walls
         {
             Value::Object depth;
@@ -246,6 +248,40 @@ LightmapGltfSummary write_lightmap_gltf(const std::filesystem::path& path, const
             lights.push_back(Value(light));
         }
         ext["lights"] = Value(lights);
+    }
+    // Reflection probes: each one's centre, influence box and parabolic maps (the mirror map's level 0, the
+    // glossy maps and the diffuse map), float32 RGB as the asset holds them.
+    if (!asset.reflections.empty())
+    {
+        auto parabolic = [&](const math::ParabolicImage& image)
+        {
+            Value::Object map;
+            map["size"] = Value(int(image.size));
+            map["extent"] = number(image.extent);
+            map["bufferView"] = Value(b.view(image.rgb.data(), image.rgb.size() * sizeof(float), 0));
+            return map;
+        };
+        Value::Array probes;
+        for (const ReflectionProbe& r : asset.reflections)
+        {
+            Value::Object probe;
+            probe["centre"] = vec3(r.centre);
+            probe["boxMin"] = vec3(r.box_min);
+            probe["boxMax"] = vec3(r.box_max);
+            probe["mirror"] = Value(parabolic(r.maps.mirror.at(0)));
+            Value::Array glossy;
+            for (size_t g = 0; g < r.maps.glossy.size(); ++g)
+            {
+                Value::Object map = parabolic(r.maps.glossy[g]);
+                map["exponent"] = number(r.maps.exponents[g]);
+                glossy.push_back(Value(map));
+            }
+            if (!glossy.empty())
+                probe["glossy"] = Value(glossy);
+            probe["diffuse"] = Value(parabolic(r.maps.diffuse));
+            probes.push_back(Value(probe));
+        }
+        ext["reflectionProbes"] = Value(probes);
     }
     m.extensions["HEMI_lightmaps"] = Value(ext);
     m.extensionsUsed.push_back("HEMI_lightmaps");

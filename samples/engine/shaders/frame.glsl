@@ -18,11 +18,9 @@ layout(set = 0, binding = 0, std140) uniform EngineFrame
     vec4 fog;            // rgb: fog colour; w: density per unit of distance (0: none)
     ivec4 mode; // x: lightmap basis (0: H6 near, H4 far; 1: H6; 2: H4); y: 1 = lighting only, 2 = the GGX
                 // coat's light alone; z: 1 = the coat (specular)
-    // The level's light probes (hemi_probe_irradiance over set 0's texel buffer): world to the level's
-    // frame, the grid's count (w: its depth maps' side) and its corner probes.
+    // World to the level's frame, where the level's light probes are (hemi_probe_irradiance over set 0's
+    // texel buffer, which holds all the lookup needs).
     mat4 world_to_level;
-    ivec4 probe_count;
-    vec4 probe_lo, probe_hi;
     // The level's reflection probe (the glossy ball's; env below holds its maps' extents and the rotation
     // into the level's frame): its centre (w: 1) and box, in the level's frame.
     vec4 reflection_centre, reflection_min, reflection_max;

@@ -91,15 +91,10 @@ void main()
     // A probe-lit object, per pixel: the level's probes at the surface point lifted 5 cm off it (in the
     // level's frame), blended over the probes that see it; their occlusion of the sun is its static shadow.
     const vec3 n = normalize(in_normal);
-    HemiProbeGrid grid;
-    grid.count = frame.probe_count.xyz;
-    grid.depth_resolution = frame.probe_count.w;
-    grid.lo = frame.probe_lo.xyz;
-    grid.hi = frame.probe_hi.xyz;
     vec3 probe_sh[HEMI_BASIS_MAX_SIZE];
     vec4 probe_occlusion;
-    hemi_probe_irradiance(level_probes, grid, (frame.world_to_level * vec4(in_world + 0.05 * n, 1.0)).xyz,
-                          probe_sh, probe_occlusion);
+    hemi_probe_irradiance(level_probes, (frame.world_to_level * vec4(in_world + 0.05 * n, 1.0)).xyz, probe_sh,
+                          probe_occlusion);
     const int channel = int(frame.sun_irradiance.w);
     const vec3 light = sun_light(in_world, channel >= 0 ? probe_occlusion[channel] : 1.0);
 #else

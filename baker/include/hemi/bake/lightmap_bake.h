@@ -288,7 +288,8 @@ constexpr uint32_t kProbeDepthResolution = 8;
 io::LightProbes probe_grid(const io::Mesh& mesh, const glm::uvec3& count);
 
 // Light probes for dynamic objects, which the lightmap does not light: at each point of `probes`' grid
-// (probes.count, probes.lo and probes.hi set by the caller, in the mesh's space), the radiance over the whole
+// (probes.count, probes.lo and probes.hi set by the caller, in the mesh's space) or at its scattered points
+// (probes.points with their reaches; the call sets count, lo and hi from them), the radiance over the whole
 // sphere from `rays` stratified sphere rays, projected into SH9 and convolved with the clamped cosine:
 // irradiance in the mesh's frame (io::LightProbes). A ray that escapes carries the environment (an image
 // environment is importance-sampled by `rays` rays of its own), the sun's disc (sun_rays) and every
@@ -337,9 +338,16 @@ struct LightmapFileOptions
     std::vector<std::string> outputs = {"sh9", "hl2", "h4", "h6", "sal4", "plain", "rnm"};
     std::filesystem::path exr_dir; // empty: no EXRs
     int dilate = 2;
-    // Light probes (bake_light_probes) on a grid of this many probes over the scene's bounding box, each half
-    // a cell inside it; 0 x 0 x 0: none. probe_rays sphere rays per probe.
+    // Light probes (bake_light_probes; docs/probes.md), at most one of: a grid of `probes` probes over the
+    // scene's bounding box, each half a cell inside it; automatic placement (place_light_probes in
+    // hemi/bake/probe_placement.h) of at most probe_budget probes; probes at probe_points (the mesh's space:
+    // the glTF's frame; read_probe_points reads them from a file); with gltf_probes, probes at the scene's
+    // nodes named hemi_probe* (io::GltfScene::light_probes; refused when it has none). None of them: no
+    // probes. probe_rays sphere rays per probe.
     glm::uvec3 probes{0};
+    uint32_t probe_budget = 0;
+    std::vector<glm::vec3> probe_points;
+    bool gltf_probes = false;
     int probe_rays = 1024;
     // The side of each probe's depth map (io::LightProbes::depth_resolution), 0 to
     // io::kMaxProbeDepthResolution; 0: none, and the lookup blends the probes trilinearly alone.
@@ -392,6 +400,10 @@ struct LightmapBakeSummary
     uint64_t rays = 0;
     size_t pushed = 0, invalid = 0; // LightmapSh's: texels moved out of walls, texels left inside geometry
     size_t probes = 0, invalid_probes = 0, reflection_probes = 0;
+    // With probe_budget: the fine grid's points, those in open space, and the placed probes' error at the
+    // others (ProbePlacementReport).
+    size_t probe_candidates = 0, open_probe_candidates = 0;
+    double probe_placement_error = 0.0;
     size_t blocks = 0;             // 8x8 blocks of the atlas stored per output (covered texels and dilation)
     double irradiance_bound = 0.0; // the lights' most direct irradiance at any point (light_bound.h)
     std::map<std::string, double> output_scales; // per output, the power of two its halves are times

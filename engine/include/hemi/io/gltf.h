@@ -76,6 +76,8 @@ struct PunctualLight
     LightMode mode = LightMode::Baked;
 };
 
+inline constexpr const char* kLightProbeNodePrefix = "hemi_probe";
+
 struct GltfScene
 {
     Mesh mesh;                         // every primitive, in scene space; mesh.uvs1 when any has TEXCOORD_1
@@ -83,6 +85,10 @@ struct GltfScene
     std::vector<EncodedImage> images;  // every image a material uses (external, .glb buffer view, data URI)
     std::vector<Primitive> primitives; // ranges of mesh.indices, in order, covering all of them
     std::vector<PunctualLight> lights; // KHR_lights_punctual lights placed by the scene's nodes
+    // Light probes placed by hand: the origin of every node of the scene whose name starts with
+    // kLightProbeNodePrefix (Blender: an empty named "hemi_probe", its copies "hemi_probe.001", ...), in
+    // scene space (hemi-bake lightmap --probes gltf bakes them).
+    std::vector<glm::vec3> light_probes;
     std::vector<std::string> warnings; // features read as something simpler or ignored, each named once
     bool tangents_generated = false;
 };
@@ -112,7 +118,8 @@ enum class ImageStorage
 
 // Writes `scene` as a glTF 2.0 file the way exporters such as Blender do: one mesh node, one glTF primitive
 // per io::Primitive with its own attribute accessors (the vertices it uses, in their order) and its
-// material, every material with its textures, samplers and KHR_texture_transform, every image stored as
+// material, every material with its textures, samplers and KHR_texture_transform, the light probes as empty
+// nodes named hemi_probe, hemi_probe.1, ... at their points, every image stored as
 // `storage[i]` says (one entry per image; the single-value overload stores all alike). A primitive whose
 // TEXCOORD_1 values are all (0, 0) is written without TEXCOORD_1, which is what read_gltf reads for one
 // without it. A .glb when the path ends in ".glb", else a .gltf with its buffer embedded. Atomic (each file).

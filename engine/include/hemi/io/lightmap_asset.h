@@ -22,10 +22,13 @@
 //                  in each texel's tangent frame (the normal-map UV set's), so sum_k c_k b_k(n) at the
 //                  normal-map normal n is E(n); "plain" is E at the surface normal, "rnm" E towards each
 //                  math::rnm_basis() direction (normalised to pi under uniform radiance).
-//   lightmap.probes (optional) u32 NX, NY, NZ, u32 0, f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
+//   lightmap.probes (optional) u32 NX, NY, NZ, u32 kind (0 a grid, 1 scattered: N x 1 x 1 probes placed
+//                  by lightmap.probe_points), f32 lo.xyz, f32 hi.xyz, then NX * NY * NZ probes of
 //                  9 x 3 f32 (SH9 irradiance, coefficient j channel c at j * 3 + c), x fastest, then y, z,
 //                  then NX * NY * NZ u8 valid flags, then with mixed lights NX * NY * NZ x 4 u8: each probe's
 //                  occlusion of the shadowmask's four channels (LightProbes::occlusion), times 255.
+//   lightmap.probe_points (with scattered probes) per probe f32 position xyz, f32 reach
+//                  (LightProbes::points).
 //   lightmap.probe_depth (optional, with lightmap.probes) u32 R, f32 max_distance, then per probe R x R
 //                  texels of 2 f16: the mean distance and its deviation, each over max_distance
 //                  (LightProbes::depth, io/light_probes.h): what each probe sees, for the lookup that blends

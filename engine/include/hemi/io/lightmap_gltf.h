@@ -18,11 +18,15 @@
 //                          "outputs": [{"name": "sh9", "coefficients": K, "format": "RGB16F",
 //                                       "scale": S, "bufferView": V}, ...],
 //                          "probes": {"count": [NX, NY, NZ], "min": [x, y, z], "max": [x, y, z],
-//                                     "irradiance": V1, "valid": V2},
+//                                     "irradiance": V1, "valid": V2, "points": V3,
+//                                     "depth": {"resolution": R, "maxDistance": D, "bufferView": V4}},
 //                          "shadowmask": {"index": T2, "texCoord": 1},
 //                          "lights": [{"name": "sun", "type": "directional", "mode": "mixed",
 //                                      "shadowmaskChannel": 0, "color": [r, g, b], "intensity": I,
-//                                      "direction": [x, y, z], "angularDiameter": D}, ...]}
+//                                      "direction": [x, y, z], "angularDiameter": D}, ...],
+//                          "reflectionProbes": [{"centre": [x, y, z], "boxMin": [x, y, z],
+//                                                "boxMax": [x, y, z], "mirror": M, "glossy": [M, ...],
+//                                                "diffuse": M}, ...]}
 //   ("outputs" is absent when none is stored.) Buffer view V holds K maps one after the other, each H rows
 //   from the top (v = 0) of W texels of three IEEE binary16 values (R, G, B), little-endian: the .hemi
 //   asset's half floats, dense over the atlas (texels the scene does not cover are 0); a value is its half
@@ -30,15 +34,24 @@
 //   are the asset's (io/lightmap_asset.h): irradiance in each texel's TEXCOORD_0 tangent frame (the glTF's
 //   TANGENT attribute), so that sum_k c_k b_k(n) at the normal-map normal n is E(n). Probes (when the asset
 //   has them) as io::LightProbes: V1 holds NX * NY * NZ probes of 9 x 3 float32 (coefficient j, channel c at
-//   j * 3 + c), x fastest; V2 one byte per probe (1 valid, 0 inside geometry). The scene's frame is the
-//   glTF's own (hemi reads glTF's y-up space into its z-up world; the probe grid is in the glTF's frame).
-//   With mixed lights (hemi-bake lightmap's bake modes), "shadowmask" is texture T2, an RGBA8 PNG of the
-//   atlas (data, not sRGB colour; the lightmap's sampler): channel c / 255 is the share of the direct light
-//   of the mixed light of channel c that reaches the texel, the asset's bytes. "lights" lists every light the
-//   bake was given in the glTF's frame (io::LightmapLight): "mode" baked, mixed or realtime, a mixed light's
-//   "shadowmaskChannel" (0-3: R, G, B, A), glTF's colour, intensity, range and cone angles, "position" for
-//   point and spot lights, "direction" (where the light points) for directional and spot lights, and the
-//   sun's "angularDiameter" in degrees.
+//   j * 3 + c), x fastest; V2 one byte per probe (1 valid, 0 inside geometry); scattered probes (count N, 1,
+//   1) have "points", V3: per probe float32 x, y, z and its reach (LightProbes::points); V4 the probes' depth
+//   maps, per probe R x R texels of 2 float32 (mean distance, deviation; LightProbes::depth). The scene's
+//   frame is the glTF's own (hemi reads glTF's y-up space into its z-up world; the probe grid is in the
+//   glTF's frame). With mixed lights (hemi-bake lightmap's bake modes), "shadowmask" is texture T2, an RGBA8
+//   PNG of the atlas (data, not sRGB colour; the lightmap's sampler): channel c / 255 is the share of the
+//   direct light of the mixed light of channel c that reaches the texel, the asset's bytes. "lights" lists
+//   every light the bake was given in the glTF's frame (io::LightmapLight): "mode" baked, mixed or realtime,
+//   a mixed light's "shadowmaskChannel" (0-3: R, G, B, A), glTF's colour, intensity, range and cone angles,
+//   "position" for point and spot lights, "direction" (where the light points) for directional and spot
+//   lights, and the sun's "angularDiameter" in degrees. "reflectionProbes" (when the asset has them,
+//   io::ReflectionProbe) each give the probe's centre and influence box in the glTF's frame and its maps:
+//   each M is {"size": N, "extent": E, "bufferView": V} ("glossy" maps also "exponent": the Phong exponent),
+//   V holding Heidrich & Seidel's two parabolic halves (math::ParabolicImage, math/paraboloid.h), the
+//   directions in the glTF's frame: half 0 the directions with z >= 0, then half 1 those with z < 0, each N
+//   rows from the top (y up the image) of N texels of float32 R, G, B; direction d is at (x, y) = (d.x,
+//   d.y) / (1 + |d.z|) of its half, which covers [-E, E]^2. "mirror" is the mirror map's level 0 (radiance),
+//   "glossy" the Phong-prefiltered maps, "diffuse" the irradiance / pi map.
 #include <hemi/io/lightmap_asset.h>
 
 #include <glm/vec3.hpp>

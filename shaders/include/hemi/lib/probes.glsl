@@ -1,27 +1,20 @@
 // hemi's GLSL library: light probes that do not leak through walls (io/light_probes.h; Majercik et al. 2019).
-// The SH9 irradiance at a point from a lightmap asset's probe grid, each of the 8 probes of the point's cell
-// weighted by its trilinear weight times its visibility: Chebyshev's bound on the chance that nothing lies
-// between the probe and the point, from the probe's octahedral depth map (mean distance and deviation). The
-// same math as io::LightProbes::at() (docs/probes.md).
+// The SH9 irradiance at a point from a lightmap asset's probes, a grid's or scattered ones: each probe around
+// the point (a grid's 8 probes of the point's cell by their trilinear weights; scattered probes whose reach
+// holds the point by their bumps (1 - d^2 / reach^2)^8) weighted by its visibility: Chebyshev's bound on the
+// chance that nothing lies between the probe and the point, from the probe's octahedral depth map (mean
+// distance and deviation). The same math as io::LightProbes::at() (docs/probes.md).
 //
-// The engine keeps the probes in one RGBA32F texel buffer in io::probe_texels()' layout and passes the
-// grid's numbers (HemiProbeGrid, from io::LightProbes). Per object (its centre) or per pixel (a surface
-// point lifted off its surface along the normal by a few centimetres, so that the probes behind the surface
-// do not see it as occluded by the surface itself).
+// The engine keeps the probes in one RGBA32F texel buffer in io::probe_texels()' layout, which describes
+// itself: the shader needs nothing else. Per object (its centre) or per pixel (a surface point lifted off
+// its surface along the normal by a few centimetres, so that the probes behind the surface do not see it as
+// occluded by the surface itself).
 #ifndef HEMI_LIB_PROBES_GLSL
 #define HEMI_LIB_PROBES_GLSL
 #include "hemi/lib/coefficients.glsl"
 
-// io::LightProbes' count, lo, hi and depth_resolution (0: no depth maps, trilinear alone).
-struct HemiProbeGrid
-{
-    ivec3 count;
-    vec3 lo;
-    vec3 hi;
-    int depth_resolution;
-};
-
 #define HEMI_PROBE_MIN_VISIBILITY 1e-4 // io::LightProbes::kMinVisibility
+#define HEMI_PROBE_HEADER 4            // io::kProbeTexelHeader
 
 // io::octahedral_encode: a direction to [0, 1]^2.
 vec2 hemi_octahedral_encode(vec3 d)
@@ -35,13 +28,7 @@ vec2 hemi_octahedral_encode(vec3 d)
 // The texels of one probe: io::probe_texel_stride.
 int hemi_probe_stride(int depth_resolution)
 {
-    return 8 + (depth_resolution * depth_resolution + 1) / 2;
-}
-
-vec3 hemi_probe_position(HemiProbeGrid g, ivec3 ijk)
-{
-    const vec3 steps = max(vec3(g.count) - 1.0, vec3(1.0));
-    return g.lo + (g.hi - g.lo) * vec3(ijk) / steps;
+    return 9 + (depth_resolution * depth_resolution + 1) / 2;
 }
 
 // Texel (x, y) of the depth map that starts at texel `first`: (mean, deviation); outside the square, its
@@ -77,72 +64,115 @@ vec2 hemi_probe_depth(samplerBuffer probes, int first, int r, vec3 direction)
                a.y);
 }
 
-// io::LightProbes::visibility: how much of point p the probe whose texels start at `base` sees.
-float hemi_probe_visibility(samplerBuffer probes, HemiProbeGrid g, int base, vec3 probe_position, vec3 p)
+// io::LightProbes::visibility: how much of point p the probe whose texels start at `base` sees (r: the
+// depth maps' side, 0 for none).
+float hemi_probe_visibility(samplerBuffer probes, int r, int base, vec3 p)
 {
-    if (g.depth_resolution == 0)
+    if (r == 0)
         return 1.0;
-    const vec3 d = p - probe_position;
-    const float r = length(d);
-    if (!(r > 0.0) || isinf(r))
+    const vec3 d = p - texelFetch(probes, base + 8).xyz;
+    const float distance = length(d);
+    if (!(distance > 0.0) || isinf(distance))
         return 1.0;
-    const vec2 m = hemi_probe_depth(probes, base + 8, g.depth_resolution, d / r);
-    if (r <= m.x)
+    const vec2 m = hemi_probe_depth(probes, base + 9, r, d / distance);
+    if (distance <= m.x)
         return 1.0;
-    const float variance = m.y * m.y, beyond = r - m.x;
+    const float variance = m.y * m.y, beyond = distance - m.x;
     const float chebyshev = variance / (variance + beyond * beyond);
     return max(chebyshev * chebyshev * chebyshev, HEMI_PROBE_MIN_VISIBILITY);
 }
 
-// The SH9 irradiance at p (the grid's frame; E(n) = hemi_sh9_irradiance(sh, n)) and the mixed lights'
-// occlusion there (io::LightProbes::occlusion_at; all 1 without mixed lights). Where none of the cell's 8
-// probes is valid, zero light and occlusion 1 (io::LightProbes::at() falls back to the nearest valid probe
-// of the whole grid instead, which a shader cannot afford: place or bake probes so that none of a reachable
-// cell's are all inside geometry).
-void hemi_probe_irradiance(samplerBuffer probes, HemiProbeGrid g, vec3 p, out vec3 sh[HEMI_BASIS_MAX_SIZE],
-                           out vec4 occlusion)
+// The running sums of one lookup.
+struct HemiProbeSum
+{
+    vec4 packed[7];
+    vec4 occlusion;
+    float total;
+};
+
+// Adds probe `probe` with weight w (before its visibility) at p, when it is valid and w > 0.
+void hemi_probe_add(samplerBuffer probes, int r, int stride, int probe, float w, vec3 p, inout HemiProbeSum s)
+{
+    const int base = HEMI_PROBE_HEADER + probe * stride;
+    const vec4 last_texel = texelFetch(probes, base + 6); // .w: valid
+    if (last_texel.w == 0.0 || !(w > 0.0))
+        return;
+    w *= hemi_probe_visibility(probes, r, base, p);
+    s.total += w;
+    HEMI_UNROLL for (int i = 0; i < 6; ++i) s.packed[i] += w * texelFetch(probes, base + i);
+    s.packed[6] += w * last_texel;
+    s.occlusion += w * texelFetch(probes, base + 7);
+}
+
+// The SH9 irradiance at p (the probes' frame, the level's; E(n) = hemi_sh9_irradiance(sh, n)) and the mixed
+// lights' occlusion there (io::LightProbes::occlusion_at; all 1 without mixed lights). Where no valid probe
+// reaches p (all 8 of a grid cell's inside geometry, or beyond every scattered probe's reach), zero light and
+// occlusion 1 (io::LightProbes::at() falls back to the nearest valid probe instead, which a shader cannot
+// afford: place probes so that every reachable point has a valid one around it, as hemi-bake's placement
+// does).
+void hemi_probe_irradiance(samplerBuffer probes, vec3 p, out vec3 sh[HEMI_BASIS_MAX_SIZE], out vec4 occlusion)
 {
     HEMI_UNROLL for (int i = 0; i < HEMI_BASIS_MAX_SIZE; ++i) sh[i] = vec3(0.0);
-    occlusion = vec4(0.0);
-    const vec3 extent = g.hi - g.lo;
-    const vec3 last = vec3(g.count - 1);
-    vec3 f = vec3(0.0);
-    for (int a = 0; a < 3; ++a)
-        if (g.count[a] > 1 && extent[a] > 0.0)
-        {
-            const float t = (p[a] - g.lo[a]) / extent[a] * last[a];
-            f[a] = isnan(t) ? 0.0 : clamp(t, 0.0, last[a]); // NaN: the first cell, never outside the buffer
-        }
-    const ivec3 i0 = clamp(ivec3(f), ivec3(0), g.count - 1), i1 = min(i0 + 1, g.count - 1);
-    const vec3 t = f - vec3(i0);
-    const int stride = hemi_probe_stride(g.depth_resolution);
-    float total = 0.0;
-    vec4 packed_sum[7];
-    HEMI_UNROLL for (int i = 0; i < 7; ++i) packed_sum[i] = vec4(0.0);
-    for (int corner = 0; corner < 8; ++corner)
+    const vec4 header = texelFetch(probes, 0);
+    const int r = int(header.y), stride = int(header.w);
+    HemiProbeSum s;
+    HEMI_UNROLL for (int i = 0; i < 7; ++i) s.packed[i] = vec4(0.0);
+    s.occlusion = vec4(0.0);
+    s.total = 0.0;
+    const vec4 t1 = texelFetch(probes, 1), t2 = texelFetch(probes, 2), t3 = texelFetch(probes, 3);
+    if (header.x == 0.0)
     {
-        const bvec3 up = bvec3((corner & 1) != 0, (corner & 2) != 0, (corner & 4) != 0);
-        const ivec3 ijk = ivec3(up.x ? i1.x : i0.x, up.y ? i1.y : i0.y, up.z ? i1.z : i0.z);
-        const vec3 w3 = mix(1.0 - t, t, vec3(up));
-        float w = w3.x * w3.y * w3.z;
-        const int base = (ijk.x + g.count.x * (ijk.y + g.count.y * ijk.z)) * stride;
-        const vec4 last_texel = texelFetch(probes, base + 6); // .w: valid
-        if (last_texel.w == 0.0 || w <= 0.0)
-            continue;
-        w *= hemi_probe_visibility(probes, g, base, hemi_probe_position(g, ijk), p);
-        total += w;
-        HEMI_UNROLL for (int i = 0; i < 6; ++i) packed_sum[i] += w * texelFetch(probes, base + i);
-        packed_sum[6] += w * last_texel;
-        occlusion += w * texelFetch(probes, base + 7);
+        // A grid: the 8 probes of p's cell.
+        const ivec3 count = ivec3(t1.xyz);
+        const vec3 lo = t2.xyz, extent = t3.xyz - t2.xyz, last = vec3(count - 1);
+        vec3 f = vec3(0.0);
+        for (int a = 0; a < 3; ++a)
+            if (count[a] > 1 && extent[a] > 0.0)
+            {
+                const float t = (p[a] - lo[a]) / extent[a] * last[a];
+                f[a] =
+                    isnan(t) ? 0.0 : clamp(t, 0.0, last[a]); // NaN: the first cell, never outside the buffer
+            }
+        const ivec3 i0 = clamp(ivec3(f), ivec3(0), count - 1), i1 = min(i0 + 1, count - 1);
+        const vec3 t = f - vec3(i0);
+        for (int corner = 0; corner < 8; ++corner)
+        {
+            const bvec3 up = bvec3((corner & 1) != 0, (corner & 2) != 0, (corner & 4) != 0);
+            const ivec3 ijk = ivec3(up.x ? i1.x : i0.x, up.y ? i1.y : i0.y, up.z ? i1.z : i0.z);
+            const vec3 w3 = mix(1.0 - t, t, vec3(up));
+            hemi_probe_add(probes, r, stride, ijk.x + count.x * (ijk.y + count.y * ijk.z), w3.x * w3.y * w3.z,
+                           p, s);
+        }
     }
-    if (!(total > 0.0))
+    else
+    {
+        // Scattered probes: those the index lists for p's cell, each by its bump.
+        const ivec3 cells = ivec3(t1.xyz);
+        const vec3 c = (p - t2.xyz) / t3.xyz;
+        if (all(greaterThanEqual(c, vec3(0.0))) && all(lessThan(c, vec3(cells))))
+        {
+            const ivec3 ci = min(ivec3(c), cells - 1);
+            const int cell = ci.x + cells.x * (ci.y + cells.y * ci.z), first = int(t1.w), list = int(t2.w);
+            const int begin = int(texelFetch(probes, first + cell / 4)[cell & 3]);
+            const int end = int(texelFetch(probes, first + (cell + 1) / 4)[(cell + 1) & 3]);
+            for (int k = begin; k < end; ++k)
+            {
+                const int probe = int(texelFetch(probes, list + k / 4)[k & 3]);
+                const vec4 q = texelFetch(probes, HEMI_PROBE_HEADER + probe * stride + 8);
+                const vec3 d = p - q.xyz;
+                const float b = 1.0 - dot(d, d) / (q.w * q.w), b2 = b * b, b4 = b2 * b2;
+                hemi_probe_add(probes, r, stride, probe, b > 0.0 ? b4 * b4 : 0.0, p, s);
+            }
+        }
+    }
+    if (!(s.total > 0.0))
     {
         occlusion = vec4(1.0);
         return;
     }
-    HEMI_UNROLL for (int i = 0; i < 7; ++i) packed_sum[i] /= total;
-    hemi_unpack_coefficients(packed_sum, 9, sh);
-    occlusion = clamp(occlusion / total, 0.0, 1.0);
+    HEMI_UNROLL for (int i = 0; i < 7; ++i) s.packed[i] /= s.total;
+    hemi_unpack_coefficients(s.packed, 9, sh);
+    occlusion = clamp(s.occlusion / s.total, 0.0, 1.0);
 }
 
 #endif
