@@ -153,7 +153,11 @@ io::ImageRgba render_factored(const gpu::Device& device, const FactoredView& vie
     render::TextureSet textures(device, images, std::span<const io::Material>(&material, 1), upload);
     render::MaterialInstance instance(system, textures, material, upload);
     render::EnvironmentLighting lighting(
-        system, std::make_shared<render::EnvironmentMaps>(device, *view.environment, upload, view.precision),
+        system,
+        view.probes.empty()
+            ? std::make_shared<render::EnvironmentMaps>(device, *view.environment, upload, view.precision)
+            : std::make_shared<render::EnvironmentMaps>(device, std::span<const io::EnvmapAsset>(view.probes),
+                                                        upload, view.precision),
         view.brdf, view.material, upload);
     render::FrameSet frame(system);
     render::MaterialKey key;

@@ -45,6 +45,9 @@ struct FactoredView
     glm::vec3 albedo{0.8f};
     render::Technique technique = render::Technique::EnvMirror;
     const io::EnvmapAsset* environment = nullptr;
+    // Reflection probes' maps blended in its place (EnvironmentMaps of several probes, one
+    // EnvironmentMaterial::probes entry each); empty: `environment` alone.
+    std::vector<io::EnvmapAsset> probes;
     render::MapPrecision precision = render::MapPrecision::Auto; // how the environment's maps are stored
     std::vector<math::BrdfTable> brdf; // the factored BRDF's tables (factored, banks)
     render::EnvironmentMaterial material;

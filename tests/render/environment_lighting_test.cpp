@@ -135,6 +135,30 @@ TEST_F(EnvironmentLightingRefusals, EveryRefusalNamesTheProblem)
         {"sheared", [](Env&, Tables&, Material& m) { m.world_to_env[1][0] += 0.1f; }, "must be a rotation"},
         {"rotation_nan", [](Env&, Tables&, Material& m) { m.world_to_env[2][2] = NAN; },
          "must be a rotation"},
+        {"box_without_probes", [](Env&, Tables&, Material& m) { m.box_projection = true; },
+         "box projection needs 1 to 4 probes, not 0"},
+        {"box_inverted",
+         [](Env&, Tables&, Material& m)
+         {
+             m.box_projection = true;
+             m.probes = {{glm::vec3(0.0f), glm::vec3(1.0f), glm::vec3(-1.0f)}};
+         },
+         "a box whose minimum is below its maximum"},
+        {"box_fade",
+         [](Env&, Tables&, Material& m)
+         {
+             m.box_projection = true;
+             m.probes = {{glm::vec3(0.0f), glm::vec3(-1.0f), glm::vec3(1.0f), -0.5f}};
+         },
+         "a fade of 0 or more"},
+        {"two_boxes_one_probe",
+         [](Env&, Tables&, Material& m)
+         {
+             m.box_projection = true;
+             m.probes = {{glm::vec3(0.0f), glm::vec3(-1.0f), glm::vec3(1.0f)},
+                         {glm::vec3(0.5f), glm::vec3(-1.0f), glm::vec3(2.0f)}};
+         },
+         "the environment's maps hold 1 reflection probes and the material gives 2 probes' boxes"},
     };
     for (const Case& c : cases)
     {

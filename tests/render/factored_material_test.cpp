@@ -459,9 +459,7 @@ TEST_F(FactoredMaterial, ABoxProjectedReflectionProbeMatchesCpu)
         view.material.world_to_env = turn;
         view.material.box_projection = true;
         view.material.world_to_env_offset = offset;
-        view.material.probe_centre = centre;
-        view.material.probe_box_min = lo;
-        view.material.probe_box_max = hi;
+        view.material.probes = {{centre, lo, hi}};
         hemi::io::ImageRgba aux;
         const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
         auto shade = [&](glm::vec2 uv, bool projected)
@@ -487,4 +485,132 @@ TEST_F(FactoredMaterial, ABoxProjectedReflectionProbeMatchesCpu)
         std::printf("%s box-projected: %d of %d outside 1%% + 0.003; without the projection rejected at %d\n",
                     mirror ? "mirror" : "glossy", c.failures, c.compared, c.rejected);
     }
+}
+
+// Two reflection probes blended by hemi's own env_mirror and env_glossy (EnvironmentMaps of both probes,
+// EnvironmentMaterial::probes, docs/probes.md): two probes of different light (the smooth environment, and
+// the same turned a quarter about z with its colours swapped), boxes that overlap across the sphere with a
+// fade of 0.8. Each pixel equals the CPU's blend: each probe box-projected (math::box_projected_direction),
+// weighted by math::box_influence over the sum, the diffuse term blended alike; either probe alone is
+// rejected. The maps of probes that differ in size are refused naming the probe.
+TEST_F(FactoredMaterial, OverlappingReflectionProbesBlendAsTheCpuBlendsThem)
+{
+    const auto scene = hemi::samples::make_sh_normalmap_scene(hemi::samples::Environment::Uniform);
+    const hemi::io::EnvmapAsset& first = smooth_environment();
+    hemi::io::EnvmapAsset second = first; // a quarter turn about z, red and blue swapped, half as bright
+    auto turn_map = [](hemi::math::ParabolicImage& m)
+    {
+        const hemi::math::ParabolicImage from = m;
+        for (int half = 0; half < 2; ++half)
+            for (uint32_t row = 0; row < m.size; ++row)
+                for (uint32_t col = 0; col < m.size; ++col)
+                {
+                    const glm::dvec3 d = m.direction(half, col, row);
+                    const glm::vec3 v(from.sample(glm::dvec3(d.y, -d.x, d.z)));
+                    float* out = m.at(half, col, row);
+                    out[0] = 0.5f * v.z, out[1] = 0.5f * v.y, out[2] = 0.5f * v.x;
+                }
+    };
+    for (auto& m : second.mirror)
+        turn_map(m);
+    for (auto& m : second.glossy)
+        turn_map(m);
+    turn_map(second.diffuse);
+    // Boxes in the environment's frame (the world's here): the first over x < 0.4, the second over x > -0.4,
+    // so that the sphere (radius 1 at the origin) crosses the overlap.
+    const hemi::render::EnvironmentMaterial::Probe a{
+        glm::vec3(-1.0f, 0.2f, 0.1f), glm::vec3(-3.0f, -2.0f, -2.0f), glm::vec3(0.4f, 2.5f, 2.0f), 0.8f};
+    const hemi::render::EnvironmentMaterial::Probe b{
+        glm::vec3(1.2f, -0.3f, 0.0f), glm::vec3(-0.4f, -2.5f, -2.0f), glm::vec3(3.0f, 2.0f, 2.5f), 0.8f};
+    for (auto technique : {hemi::render::Technique::EnvMirror, hemi::render::Technique::EnvGlossy})
+    {
+        const bool mirror = technique == hemi::render::Technique::EnvMirror;
+        hemi::samples::FactoredView view = sphere_view(scene, technique);
+        view.probes = {first, second};
+        view.albedo = glm::vec3(0.6f, 0.5f, 0.4f);
+        view.material.kd = 0.4f;
+        view.material.ks = 0.9f;
+        view.material.box_projection = true;
+        view.material.probes = {a, b};
+        hemi::io::ImageRgba aux;
+        const auto color = hemi::samples::render_factored(hemi::test::device(), view, 200, 160, &aux);
+        int blended = 0;
+        // `only`: -1 the blend, 0 or 1 that probe alone.
+        auto shade = [&](glm::vec2 uv, int only)
+        {
+            const Pixel px = sphere_pixel(scene, uv, false);
+            const float nv = glm::dot(px.n, px.v);
+            const glm::vec3 r = 2.0f * nv * px.n - px.v, p = px.n; // the unit sphere's point is its normal
+            const hemi::io::EnvmapAsset* maps[2] = {&first, &second};
+            const hemi::render::EnvironmentMaterial::Probe* boxes[2] = {&a, &b};
+            glm::vec3 sum(0.0f);
+            float total = 0.0f;
+            for (int k = 0; k < 2; ++k)
+            {
+                float w = hemi::math::box_influence(p, boxes[k]->box_min, boxes[k]->box_max, boxes[k]->fade);
+                if (only >= 0)
+                    w = k == only ? 1.0f : 0.0f;
+                if (w <= 0.0f)
+                    continue;
+                const glm::vec3 d = hemi::math::box_projected_direction(p, r, boxes[k]->box_min,
+                                                                        boxes[k]->box_max, boxes[k]->centre);
+                const glm::vec3 ld = view.material.kd * view.albedo * sample(maps[k]->diffuse, px.n);
+                const glm::vec3 specular =
+                    mirror ? float(hemi::math::fresnel_dielectric(nv, 1.5)) * sample(maps[k]->mirror[0], d)
+                           : view.material.ks * sample(maps[k]->glossy[0], d);
+                sum += w * (specular + ld);
+                total += w;
+            }
+            if (only < 0 && hemi::math::box_influence(p, a.box_min, a.box_max, a.fade) > 0.0f &&
+                hemi::math::box_influence(p, b.box_min, b.box_max, b.fade) > 0.0f)
+                ++blended;
+            return sum / total;
+        };
+        const Comparison c = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, -1); },
+            [&](glm::vec2 uv) { return shade(uv, 0); }, 0.01f, 0.003f);
+        const Comparison c1 = compare(
+            color, aux, [&](glm::vec2 uv) { return shade(uv, -1); },
+            [&](glm::vec2 uv) { return shade(uv, 1); }, 0.01f, 0.003f);
+        EXPECT_GT(c.compared, 300);
+        EXPECT_LE(c.failures, c.compared / 100) << (mirror ? "mirror" : "glossy") << c.first_failures;
+        EXPECT_GT(blended, 100) << "few pixels lie where both probes count";
+        EXPECT_GE(3 * c.rejected, c.compared) << "the first probe alone would pass this comparison";
+        EXPECT_GE(3 * c1.rejected, c1.compared) << "the second probe alone would pass this comparison";
+        std::printf("%s, two probes blended: %d of %d outside 1%% + 0.003 (%d where both count); the first "
+                    "alone rejected at %d, the second at %d\n",
+                    mirror ? "mirror" : "glossy", c.failures, c.compared, blended, c.rejected, c1.rejected);
+    }
+    // Probes whose maps differ cannot share images.
+    hemi::io::EnvmapAsset smaller = hemi::bake::bake_envmap(
+        []
+        {
+            hemi::io::ImageRgba img;
+            img.width = 64;
+            img.height = 32;
+            img.pixels.assign(size_t(64) * 32 * 4, 1.0f);
+            return img;
+        }(),
+        []
+        {
+            hemi::bake::EnvmapBakeOptions o;
+            o.size = 32;
+            o.exponents = {20.0, 60.0};
+            return o;
+        }());
+    hemi::gpu::UploadBatch upload(hemi::test::device());
+    const std::vector<hemi::io::EnvmapAsset> differ = {first, smaller};
+    try
+    {
+        hemi::render::EnvironmentMaps maps(hemi::test::device(),
+                                           std::span<const hemi::io::EnvmapAsset>(differ), upload);
+        ADD_FAILURE() << "probes of 64^2 and 32^2 shared images";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("reflection probe 1 cannot share images with probe 0"),
+                  std::string::npos)
+            << e.what();
+    }
+    upload.clear();
 }

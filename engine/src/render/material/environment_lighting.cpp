@@ -74,25 +74,53 @@ std::vector<std::byte> pack(std::span<const float> rgb, VkFormat format)
     return out;
 }
 
-gpu::Image parabolic_image(const gpu::Device& device, std::span<const math::ParabolicImage> levels,
+// Each probe's chain of levels (probes[k][l]: level l of probe k, all probes alike) as one image, probe k's
+// halves in layers 2k and 2k + 1.
+gpu::Image parabolic_image(const gpu::Device& device,
+                           const std::vector<std::vector<const math::ParabolicImage*>>& probes,
                            VkFormat format, gpu::UploadBatch& upload, VkDeviceSize& bytes_total)
 {
+    const std::vector<const math::ParabolicImage*>& first = probes[0];
     gpu::Image image =
-        gpu::create_image(device, {levels[0].size, levels[0].size, format, VK_IMAGE_USAGE_SAMPLED_BIT,
-                                   uint32_t(levels.size()), 2, true});
+        gpu::create_image(device, {first[0]->size, first[0]->size, format, VK_IMAGE_USAGE_SAMPLED_BIT,
+                                   uint32_t(first.size()), uint32_t(2 * probes.size()), true});
     std::vector<std::vector<std::byte>> bytes;
-    for (const math::ParabolicImage& level : levels)
+    for (size_t l = 0; l < first.size(); ++l)
     {
-        bytes.push_back(pack(level.rgb, format));
+        std::vector<float> rgb;
+        for (const std::vector<const math::ParabolicImage*>& probe : probes)
+            rgb.insert(rgb.end(), probe[l]->rgb.begin(), probe[l]->rgb.end());
+        bytes.push_back(pack(rgb, format));
         bytes_total += bytes.back().size();
     }
     upload.image_levels(image, bytes);
     return image;
 }
 
+// What differs between reflection probe `k` and probe 0 (the sizes, levels, extents and exponents that one
+// set of images needs alike), or empty.
+std::string probe_difference(const io::EnvmapAsset& a, const io::EnvmapAsset& b)
+{
+    auto same = [](const math::ParabolicImage& x, const math::ParabolicImage& y)
+    { return x.size == y.size && x.extent == y.extent; };
+    if (a.mirror.size() != b.mirror.size() || !same(a.mirror[0], b.mirror[0]))
+        return "its mirror map is " + std::to_string(b.mirror[0].size) + " texels a side in " +
+               std::to_string(b.mirror.size()) + " levels, probe 0's " + std::to_string(a.mirror[0].size) +
+               " in " + std::to_string(a.mirror.size());
+    if (a.exponents != b.exponents)
+        return "its glossy maps' exponents differ from probe 0's";
+    for (size_t g = 0; g < a.glossy.size(); ++g)
+        if (!same(a.glossy[g], b.glossy[g]))
+            return "its glossy map " + std::to_string(g) + " differs in size or extent from probe 0's";
+    if (!same(a.diffuse, b.diffuse))
+        return "its diffuse map differs in size or extent from probe 0's";
+    return {};
+}
+
 // The format for `precision`: Auto takes Half where every value fits it. Explicit Half and SharedExponent
 // refuse radiance beyond their range (a sun clamped to 65504 would darken every glossy reflection of it).
-VkFormat choose_map_format(const gpu::Device& device, const io::EnvmapAsset& env, MapPrecision precision)
+VkFormat choose_map_format(const gpu::Device& device, std::span<const io::EnvmapAsset> probes,
+                           MapPrecision precision)
 {
     float largest = 0.0f;
     auto scan = [&](const math::ParabolicImage& m)
@@ -100,11 +128,14 @@ VkFormat choose_map_format(const gpu::Device& device, const io::EnvmapAsset& env
         for (float v : m.rgb)
             largest = std::max(largest, v);
     };
-    for (const math::ParabolicImage& m : env.mirror)
-        scan(m);
-    for (const math::ParabolicImage& m : env.glossy)
-        scan(m);
-    scan(env.diffuse);
+    for (const io::EnvmapAsset& env : probes)
+    {
+        for (const math::ParabolicImage& m : env.mirror)
+            scan(m);
+        for (const math::ParabolicImage& m : env.glossy)
+            scan(m);
+        scan(env.diffuse);
+    }
     const VkFormat float4 = VK_FORMAT_R32G32B32A32_SFLOAT, half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
     auto refuse_beyond = [&](float range, const char* name)
     {
@@ -134,18 +165,62 @@ VkFormat choose_map_format(const gpu::Device& device, const io::EnvmapAsset& env
 
 EnvironmentMaps::EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& env,
                                  gpu::UploadBatch& upload, MapPrecision precision)
+    : EnvironmentMaps(device, std::span(&env, 1), upload, precision)
 {
-    if (const std::string problem = io::envmap_problem(env); !problem.empty())
-        throw std::invalid_argument("hemi: an inconsistent environment: " + problem);
-    map_format_ = choose_map_format(device, env, precision);
-    mirror_ = parabolic_image(device, env.mirror, map_format_, upload, map_bytes_);
-    diffuse_ = parabolic_image(device, {&env.diffuse, 1}, map_format_, upload, map_bytes_);
+}
+
+EnvironmentMaps::EnvironmentMaps(const gpu::Device& device, std::span<const io::EnvmapAsset> probes,
+                                 gpu::UploadBatch& upload, MapPrecision precision)
+{
+    if (probes.empty() || probes.size() > HEMI_MAX_REFLECTION_PROBES)
+        throw std::invalid_argument("hemi: " + std::to_string(probes.size()) +
+                                    " environments in one set of maps: 1 to " +
+                                    std::to_string(HEMI_MAX_REFLECTION_PROBES));
+    for (size_t k = 0; k < probes.size(); ++k)
+    {
+        if (const std::string problem = io::envmap_problem(probes[k]); !problem.empty())
+            throw std::invalid_argument(
+                "hemi: an inconsistent environment" +
+                (probes.size() > 1 ? " (reflection probe " + std::to_string(k) + ")" : std::string()) + ": " +
+                problem);
+        if (const std::string d = probe_difference(probes[0], probes[k]); !d.empty())
+            throw std::invalid_argument("hemi: reflection probe " + std::to_string(k) +
+                                        " cannot share images with probe 0: " + d);
+    }
+    const io::EnvmapAsset& env = probes[0];
+    probe_count_ = uint32_t(probes.size());
+    map_format_ = choose_map_format(device, probes, precision);
+    auto levels = [&](auto&& of)
+    {
+        std::vector<std::vector<const math::ParabolicImage*>> out;
+        for (const io::EnvmapAsset& p : probes)
+            out.push_back(of(p));
+        return out;
+    };
+    mirror_ = parabolic_image(device,
+                              levels(
+                                  [](const io::EnvmapAsset& p)
+                                  {
+                                      std::vector<const math::ParabolicImage*> chain;
+                                      for (const math::ParabolicImage& m : p.mirror)
+                                          chain.push_back(&m);
+                                      return chain;
+                                  }),
+                              map_format_, upload, map_bytes_);
+    diffuse_ = parabolic_image(
+        device,
+        levels([](const io::EnvmapAsset& p) { return std::vector<const math::ParabolicImage*>{&p.diffuse}; }),
+        map_format_, upload, map_bytes_);
     device.set_name(VK_OBJECT_TYPE_IMAGE, mirror_.handle(), "hemi environment mirror map");
     device.set_name(VK_OBJECT_TYPE_IMAGE, diffuse_.handle(), "hemi environment diffuse map");
-    for (const math::ParabolicImage& g : env.glossy)
+    for (size_t g = 0; g < env.glossy.size(); ++g)
     {
-        glossy_.push_back(parabolic_image(device, {&g, 1}, map_format_, upload, map_bytes_));
-        glossy_extents_.push_back(float(g.extent));
+        glossy_.push_back(
+            parabolic_image(device,
+                            levels([g](const io::EnvmapAsset& p)
+                                   { return std::vector<const math::ParabolicImage*>{&p.glossy[g]}; }),
+                            map_format_, upload, map_bytes_));
+        glossy_extents_.push_back(float(env.glossy[g].extent));
         device.set_name(VK_OBJECT_TYPE_IMAGE, glossy_.back().handle(),
                         "hemi environment glossy map " + std::to_string(glossy_.size() - 1));
     }
@@ -201,13 +276,35 @@ void check_values(const EnvironmentMaterial& material)
                     "hemi: an environment's world_to_env must be a rotation (orthonormal)");
     if (material.box_projection)
     {
-        const glm::vec3 &o = material.world_to_env_offset, &c = material.probe_centre,
-                        &lo = material.probe_box_min, &hi = material.probe_box_max;
-        if (!std::isfinite(o.x + o.y + o.z + c.x + c.y + c.z + lo.x + lo.y + lo.z + hi.x + hi.y + hi.z) ||
-            !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
-            throw std::invalid_argument("hemi: an environment's box projection needs a finite offset and "
-                                        "centre and a box whose minimum is below its maximum");
+        const glm::vec3& o = material.world_to_env_offset;
+        if (material.probes.empty() || material.probes.size() > HEMI_MAX_REFLECTION_PROBES)
+            throw std::invalid_argument("hemi: an environment's box projection needs 1 to " +
+                                        std::to_string(HEMI_MAX_REFLECTION_PROBES) + " probes, not " +
+                                        std::to_string(material.probes.size()));
+        for (const EnvironmentMaterial::Probe& p : material.probes)
+        {
+            const glm::vec3 &c = p.centre, &lo = p.box_min, &hi = p.box_max;
+            if (!std::isfinite(o.x + o.y + o.z + c.x + c.y + c.z + lo.x + lo.y + lo.z + hi.x + hi.y + hi.z) ||
+                !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z) || !(p.fade >= 0.0f) || !std::isfinite(p.fade))
+                throw std::invalid_argument(
+                    "hemi: an environment's box projection needs a finite offset, and "
+                    "per probe a finite centre, a box whose minimum is below its "
+                    "maximum and a fade of 0 or more");
+        }
     }
+}
+
+// The material's probes against the maps' (one entry per probe the maps hold).
+void check_probes(const EnvironmentMaps& maps, const EnvironmentMaterial& material)
+{
+    const size_t given = material.box_projection ? material.probes.size() : 1;
+    if (given != maps.probe_count())
+        throw std::invalid_argument("hemi: the environment's maps hold " +
+                                    std::to_string(maps.probe_count()) +
+                                    " reflection probes and the material gives " +
+                                    (material.box_projection ? std::to_string(given) + " probes' boxes"
+                                                             : std::string("no box projection")) +
+                                    ": blending several probes needs box_projection and one box each");
 }
 
 // What a material asks of its environment and tables, checked before anything is uploaded (a refused
@@ -274,6 +371,7 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
     if (!maps_)
         throw std::invalid_argument("hemi: an environment material needs its environment's maps");
     check_material(maps_->glossy_count(), maps_->fresnel_count(), brdf, material);
+    check_probes(*maps_, material);
     glossy_ = material.glossy;
     fresnel_row_ = material.fresnel;
     const VkFormat half4 = VK_FORMAT_R16G16B16A16_SFLOAT;
@@ -321,20 +419,22 @@ EnvironmentLighting::EnvironmentLighting(const MaterialSystem& system,
 shared::EnvironmentUniforms EnvironmentLighting::uniforms(const EnvironmentMaterial& m) const
 {
     check_values(m);
+    check_probes(*maps_, m);
     shared::EnvironmentUniforms u{};
     u.extents =
         glm::vec4(maps_->mirror_extent(), maps_->glossy_extent(glossy_), maps_->diffuse_extent(), 0.0f);
     u.material = glm::vec4(m.kd, m.ks, (float(fresnel_row_) + 0.5f) / float(maps_->fresnel_rows()),
                            m.coating ? 1.0f : 0.0f);
-    u.tables = glm::vec4(float(table_size_), float(maps_->fresnel_samples()), 0.0f, 0.0f);
+    u.tables = glm::vec4(float(table_size_), float(maps_->fresnel_samples()),
+                         m.box_projection ? float(m.probes.size()) : 0.0f, 0.0f);
     for (int r = 0; r < 3; ++r) // rows of world_to_env (glm is column-major: element [column][row])
         u.world_to_env[r] = glm::vec4(m.world_to_env[0][r], m.world_to_env[1][r], m.world_to_env[2][r],
                                       m.box_projection ? m.world_to_env_offset[r] : 0.0f);
-    if (m.box_projection)
+    for (size_t k = 0; k < m.probes.size() && m.box_projection; ++k)
     {
-        u.probe_centre = glm::vec4(m.probe_centre, 1.0f);
-        u.probe_box_min = glm::vec4(m.probe_box_min, 0.0f);
-        u.probe_box_max = glm::vec4(m.probe_box_max, 0.0f);
+        u.probe_centre[k] = glm::vec4(m.probes[k].centre, m.probes[k].fade);
+        u.probe_box_min[k] = glm::vec4(m.probes[k].box_min, 0.0f);
+        u.probe_box_max[k] = glm::vec4(m.probes[k].box_max, 0.0f);
     }
     return u;
 }

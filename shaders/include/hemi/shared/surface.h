@@ -109,19 +109,22 @@ struct MaterialUniforms
 };
 
 // The environment source's uniforms (set 2, binding HEMI_ENV_BINDING_UNIFORMS).
+#define HEMI_MAX_REFLECTION_PROBES 4 // blended by one environment material
 struct EnvironmentUniforms
 {
     vec4 extents;  // x, y, z: the mirror, glossy and diffuse maps' extents (math/paraboloid.h); w: unused
     vec4 material; // x = kd (diffuse weight), y = ks (specular weight), z = the Fresnel row's v coordinate,
                    // w = blend: 0 = F L_m + L_d, 1 = F L_m + (1 - F) L_d (a coating, section 4.4)
-    vec4 tables;   // x = the BRDF tables' size, y = the Fresnel table's samples, zw unused
+    vec4 tables;   // x = the BRDF tables' size, y = the Fresnel table's samples, z = the reflection probes
+                   // blended (0: none, the environment is a sky), w unused
     vec4 world_to_env[3]; // rows of the rotation from world space into the environment's (x, y, z); w: the
                           // offset that places world points there (p_env = R p + w), for box projection
-    // A reflection probe's box projection (docs/probes.md), in the environment's frame: the probe's centre
-    // (w: 1 = on, 0 = off) and its influence box.
-    vec4 probe_centre;
-    vec4 probe_box_min;
-    vec4 probe_box_max;
+    // Reflection probes' box projection and blend (docs/probes.md), in the environment's frame: probe k's
+    // centre (w: the fade of its influence, hemi_box_influence) and influence box; its maps are layers 2k and
+    // 2k + 1 of the environment's images.
+    vec4 probe_centre[HEMI_MAX_REFLECTION_PROBES];
+    vec4 probe_box_min[HEMI_MAX_REFLECTION_PROBES];
+    vec4 probe_box_max[HEMI_MAX_REFLECTION_PROBES];
 };
 
 // Per draw: the object's model matrix and where its coefficients start in the source's texel buffer. The
@@ -151,7 +154,7 @@ static_assert(sizeof(FrameUniforms) == 64 + 16 + 9 * 16 + 16 + 4 * HEMI_MAX_LIGH
               "std140 layout");
 static_assert(sizeof(MaterialUniforms) == 16 * 10 + 16 + 16, "std140 layout");
 static_assert(sizeof(DrawPush) == 96, "push constants (within the 128 bytes every device has)");
-static_assert(sizeof(EnvironmentUniforms) == 9 * 16, "std140 layout");
+static_assert(sizeof(EnvironmentUniforms) == 6 * 16 + 3 * HEMI_MAX_REFLECTION_PROBES * 16, "std140 layout");
 } // namespace hemi::shared
 #endif
 

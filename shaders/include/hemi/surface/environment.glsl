@@ -32,31 +32,64 @@ vec3 hemi_env_direction(vec3 world)
                               environment.world_to_env[2].xyz, world);
 }
 
-// A reflection from world point p along world_d, in the environment's frame: box-projected when the
-// environment is a reflection probe (EnvironmentUniforms::probe_centre.w), else the direction alone.
-vec3 hemi_env_reflection(vec3 world_p, vec3 world_d)
+// World point p in the environment's frame.
+vec3 hemi_env_point(vec3 world_p)
+{
+    return hemi_env_direction(world_p) +
+           vec3(environment.world_to_env[0].w, environment.world_to_env[1].w, environment.world_to_env[2].w);
+}
+
+// A parabolic map of the environment towards world direction world_d, seen from world point p: a sky's
+// (EnvironmentUniforms::tables.z == 0) along the direction alone; reflection probes' box-projected each
+// (hemi_box_projected_direction), blended by their boxes' influence at p over its sum (probe k's halves in
+// layers 2k and 2k + 1), probe 0 alone where no box holds p. `project`: false for the diffuse map, looked up
+// along the normal.
+vec3 hemi_env_probes(sampler2DArray map, float extent, vec3 world_p, vec3 world_d, bool project)
 {
     const vec3 d = hemi_env_direction(world_d);
-    if (environment.probe_centre.w == 0.0)
-        return d;
-    const vec3 p =
-        hemi_env_direction(world_p) +
-        vec3(environment.world_to_env[0].w, environment.world_to_env[1].w, environment.world_to_env[2].w);
-    return hemi_box_projected_direction(p, d, environment.probe_box_min.xyz, environment.probe_box_max.xyz,
-                                        environment.probe_centre.xyz);
+    const int count = int(environment.tables.z);
+    if (count == 0)
+        return hemi_parabolic_lookup(map, extent, d);
+    const vec3 p = hemi_env_point(world_p);
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (int k = 0; k < count; ++k)
+    {
+        const float w =
+            count == 1 ? 1.0
+                       : hemi_box_influence(p, environment.probe_box_min[k].xyz,
+                                            environment.probe_box_max[k].xyz, environment.probe_centre[k].w);
+        if (w <= 0.0)
+            continue;
+        const vec3 r = project ? hemi_box_projected_direction(p, d, environment.probe_box_min[k].xyz,
+                                                              environment.probe_box_max[k].xyz,
+                                                              environment.probe_centre[k].xyz)
+                               : d;
+        vec3 coord = hemi_parabolic_coord(r, extent);
+        coord.z += float(2 * k);
+        sum += w * texture(map, coord).rgb;
+        total += w;
+    }
+    if (total > 0.0)
+        return sum / total;
+    const vec3 r = project ? hemi_box_projected_direction(p, d, environment.probe_box_min[0].xyz,
+                                                          environment.probe_box_max[0].xyz,
+                                                          environment.probe_centre[0].xyz)
+                           : d;
+    return hemi_parabolic_lookup(map, extent, r);
 }
 
 vec3 hemi_env_mirror(vec3 world_p, vec3 world_d)
 {
-    return hemi_parabolic_lookup(env_mirror, environment.extents.x, hemi_env_reflection(world_p, world_d));
+    return hemi_env_probes(env_mirror, environment.extents.x, world_p, world_d, true);
 }
 vec3 hemi_env_glossy(vec3 world_p, vec3 world_d)
 {
-    return hemi_parabolic_lookup(env_glossy, environment.extents.y, hemi_env_reflection(world_p, world_d));
+    return hemi_env_probes(env_glossy, environment.extents.y, world_p, world_d, true);
 }
-vec3 hemi_env_diffuse(vec3 world_n)
+vec3 hemi_env_diffuse(vec3 world_p, vec3 world_n)
 {
-    return hemi_parabolic_lookup(env_diffuse, environment.extents.z, hemi_env_direction(world_n));
+    return hemi_env_probes(env_diffuse, environment.extents.z, world_p, world_n, false);
 }
 // F(cos theta) from the table's row for the material's index of refraction.
 float hemi_env_fresnel(float c)
@@ -89,7 +122,7 @@ vec3 hemi_env_glossy(vec3 p, vec3 d)
 {
     return vec3(0.0);
 }
-vec3 hemi_env_diffuse(vec3 n)
+vec3 hemi_env_diffuse(vec3 p, vec3 n)
 {
     return vec3(0.0);
 }

@@ -12,7 +12,7 @@ vec3 hemi_technique_env_glossy(HemiSurface s)
 {
     const vec3 r = hemi_reflect(s.n, s.v);
     return hemi_env_ks() * hemi_env_glossy(s.position, r) +
-           hemi_env_kd() * s.albedo * (hemi_env_diffuse(s.n) + hemi_env_lambert(s)) +
+           hemi_env_kd() * s.albedo * (hemi_env_diffuse(s.position, s.n) + hemi_env_lambert(s)) +
            hemi_dynamic_specular(s, s.n) + s.emissive;
 }
 

@@ -15,7 +15,7 @@ vec3 hemi_technique_env_mirror(HemiSurface s)
     const float nv = dot(s.n, s.v);
     const vec3 r = hemi_reflect(s.n, s.v);
     const float f = hemi_env_fresnel(max(nv, 0.0));
-    const vec3 ld = hemi_env_kd() * s.albedo * (hemi_env_diffuse(s.n) + hemi_env_lambert(s));
+    const vec3 ld = hemi_env_kd() * s.albedo * (hemi_env_diffuse(s.position, s.n) + hemi_env_lambert(s));
     return f * hemi_env_mirror(s.position, r) + (hemi_env_coating() ? 1.0 - f : 1.0) * ld +
            hemi_dynamic_specular(s, s.n) + s.emissive;
 }

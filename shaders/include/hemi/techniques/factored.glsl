@@ -12,7 +12,7 @@
 // hemi-technique: id=5 name=factored
 vec3 hemi_technique_factored(HemiSurface s)
 {
-    vec3 sum = hemi_env_kd() * s.albedo * hemi_env_diffuse(s.n);
+    vec3 sum = hemi_env_kd() * s.albedo * hemi_env_diffuse(s.position, s.n);
 #if HEMI_SOURCE == HEMI_SOURCE_ENVIRONMENT
     for (int i = 0; i < s.lights; ++i)
     {

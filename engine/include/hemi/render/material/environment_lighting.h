@@ -31,13 +31,21 @@ struct EnvironmentMaterial
     uint32_t fresnel = 0; // which of the asset's Fresnel tables (indices of refraction) env_mirror reads
     bool coating = false; // env_mirror: F L_m + (1 - F) L_d (a coated diffuse surface) for F L_m + L_d
     glm::mat3 world_to_env{1.0f}; // rotation from world space into the environment's (z up: identity)
-    // A reflection probe's parallax correction (box projection, docs/probes.md): env_mirror and env_glossy
-    // then look the maps up towards where the reflected ray leaves the probe's influence box, seen from its
-    // centre (io::ReflectionProbe's, in the environment's frame, which a world point p reaches as
-    // world_to_env p + world_to_env_offset). Off: the environment is infinitely far (a sky).
+    // Reflection probes (docs/probes.md): with box_projection, the environment's maps are reflection probes'
+    // (EnvironmentMaps::probe_count() of them, one `probes` entry each, in the environment's frame, which a
+    // world point p reaches as world_to_env p + world_to_env_offset). env_mirror and env_glossy look each
+    // probe up towards where the reflected ray leaves its influence box, seen from its centre (parallax
+    // correction), and blend the probes whose box holds the point by math::box_influence(p, box, fade) over
+    // their sum, the diffuse map too; a point in no box takes probe 0. Off: the environment is infinitely far
+    // (a sky).
+    struct Probe
+    {
+        glm::vec3 centre{0.0f}, box_min{0.0f}, box_max{0.0f};
+        float fade = 0.0f; // how deep inside its box a probe counts fully (box_influence); 0: a hard edge
+    };
     bool box_projection = false;
     glm::vec3 world_to_env_offset{0.0f};
-    glm::vec3 probe_centre{0.0f}, probe_box_min{0.0f}, probe_box_max{0.0f};
+    std::vector<Probe> probes;
 };
 
 // How an environment's parabolic maps are stored on the GPU. Radiance is never negative, and the maps are
@@ -66,6 +74,14 @@ class EnvironmentMaps
   public:
     EnvironmentMaps(const gpu::Device& device, const io::EnvmapAsset& environment, gpu::UploadBatch& upload,
                     MapPrecision precision = MapPrecision::Auto);
+    // Several reflection probes' maps in one set of images, probe k's halves in layers 2k and 2k + 1 (for a
+    // material that blends them: EnvironmentMaterial::probes). The probes must be alike, as one hemi-bake
+    // lightmap job bakes them (the same sizes, mip levels, extents and glossy exponents); the Fresnel
+    // tables are the first one's. Throws std::invalid_argument for none, more than
+    // HEMI_MAX_REFLECTION_PROBES, an inconsistent asset or probes that differ (naming which and how).
+    EnvironmentMaps(const gpu::Device& device, std::span<const io::EnvmapAsset> probes,
+                    gpu::UploadBatch& upload, MapPrecision precision = MapPrecision::Auto);
+    uint32_t probe_count() const { return probe_count_; }
 
     const gpu::Image& mirror_map() const { return mirror_; }
     // Glossy map `i` (std::out_of_range past glossy_count()); the diffuse map when the asset has none.
@@ -94,7 +110,7 @@ class EnvironmentMaps
     VkFormat map_format_ = VK_FORMAT_UNDEFINED;
     VkDeviceSize map_bytes_ = 0;
     float mirror_extent_ = 1.0f, diffuse_extent_ = 1.0f;
-    uint32_t fresnel_count_ = 0, fresnel_rows_ = 1, fresnel_samples_ = 2;
+    uint32_t fresnel_count_ = 0, fresnel_rows_ = 1, fresnel_samples_ = 2, probe_count_ = 1;
 };
 
 class EnvironmentLighting
@@ -110,8 +126,9 @@ class EnvironmentLighting
     // material alone (an EnvironmentMaps of its own; share one between materials with the constructor
     // above). Nothing is uploaded for a material that is refused. Throws std::invalid_argument for an
     // inconsistent asset (io::envmap_problem), a glossy or Fresnel index the asset does not have, tables of
-    // different sizes or neither Torrance-Sparrow's nor Banks', weights that are not finite, or a
-    // world_to_env that is not a rotation.
+    // different sizes or neither Torrance-Sparrow's nor Banks', weights that are not finite, a
+    // world_to_env that is not a rotation, or a box projection without one valid box for each probe the
+    // maps hold (maps of several probes need it).
     EnvironmentLighting(const MaterialSystem& system, const io::EnvmapAsset& environment,
                         std::span<const math::BrdfTable> brdf, const EnvironmentMaterial& material,
                         gpu::UploadBatch& upload);
