@@ -66,11 +66,11 @@ TEST(LightProbes, NoLightLeaksThroughAWallIntoASealedRoom)
 }
 
 // Issue 44, line 1: an object walking from the lit room through the door into the other changes light
-// continuously, compared with probes baked exactly at the path's points 1 cm apart. Interpolation follows
-// the light's slope only as closely as probes 0.4-0.5 m apart allow (trilinear alone, continuous by
-// construction, steps up to 0.93 of the reference's largest step here, and 1.1 of it with probes twice as
-// dense, whose noise bends its pieces), so the bound is 1.25 times the reference's largest step: a lookup
-// that switches probes on and off where they stop seeing the point steps twice the reference's (0.040 against
+// continuously, compared with probes baked exactly at the path's points 1 cm apart: no step of the lookup
+// is larger than the reference's largest step between two points (measured 0.988 of it; trilinear alone,
+// continuous by construction, 0.95). Visibility squared (not DDGI's cube, which steps 1.02 of it here)
+// is what meets both this bound and the sealed room's 1% (docs/probes.md has the trade). A lookup that
+// switches probes on and off where they stop seeing the point steps twice the reference's (0.040 against
 // 0.019) and fails. With HEMI_PROBE_PATH set, writes the path (metres, reference, lookup, trilinear) there
 // for docs/plots/probes_door.gp.
 TEST(LightProbes, AnObjectWalkingThroughADoorChangesLightContinuously)
@@ -105,7 +105,7 @@ TEST(LightProbes, AnObjectWalkingThroughADoorChangesLightContinuously)
     std::printf("through the door: largest step %.4f (reference's %.4f, trilinear alone %.4f), mean error "
                 "%.4f (trilinear alone %.4f) of a lit side's %.3f\n",
                 lookup_step, reference_step, trilinear_step, error, trilinear_error, reference.front());
-    EXPECT_LE(lookup_step, 1.25 * reference_step);
+    EXPECT_LE(lookup_step, reference_step);
     if (const char* out = std::getenv("HEMI_PROBE_PATH"))
     {
         std::ofstream f(out);

@@ -51,8 +51,10 @@ double back_share(const bake::EmbreeScene& scene, const io::Mesh& mesh, const gl
 }
 
 // Automatic placement against the grid on `level` at a budget of about `budget`: no probe inside geometry,
-// the count within the budget, and a lower mean error at 200 random open points.
-void expect_placement_beats_the_grid(const samples::LitLevel& level, const std::string& name, uint32_t budget)
+// the count within the budget, and a lower mean error at 200 random open points. Returns the placed probes'
+// error over the grid's.
+double expect_placement_beats_the_grid(const samples::LitLevel& level, const std::string& name,
+                                       uint32_t budget)
 {
     const samples::OpenPoints reference = samples::open_points(level, 200, 1024, 7);
     const samples::PlacementRow row = samples::compare_placement(level, budget, 1024, reference);
@@ -62,8 +64,12 @@ void expect_placement_beats_the_grid(const samples::LitLevel& level, const std::
                 100.0 * row.grid_error, row.placed.placed, 100.0 * row.placed_error,
                 row.placed_error / row.grid_error, row.placed.open, row.placed.candidates, row.placed.rounds);
     const io::LightProbes& placed = row.placed_probes;
-    ASSERT_EQ(io::light_probes_problem(placed), "");
-    ASSERT_TRUE(placed.scattered());
+    EXPECT_EQ(io::light_probes_problem(placed), "");
+    if (!placed.scattered())
+    {
+        ADD_FAILURE() << "the placed probes are not scattered";
+        return 1.0;
+    }
     EXPECT_LE(placed.size(), row.grid_probes);
     EXPECT_GE(placed.size(), row.grid_probes * 9 / 10) << "the placement left much of its budget unspent";
     const bake::EmbreeScene scene(level.scene.mesh);
@@ -76,6 +82,7 @@ void expect_placement_beats_the_grid(const samples::LitLevel& level, const std::
     // A probe the bake finds open at most half of whose 1024 rays see backs; here other rays: a little more.
     EXPECT_LT(worst, 0.6) << "a placed probe is inside geometry";
     EXPECT_LT(row.placed_error, row.grid_error);
+    return row.placed_error / row.grid_error;
 }
 
 } // namespace
@@ -202,6 +209,38 @@ TEST(ProbePlacement, ProbesAtGivenPointsLeaveTheOnesInsideGeometryOut)
     EXPECT_GT(p.irradiance[0][0].x, 3.0f * p.irradiance[7][0].x) << "the lit room is not brighter";
 }
 
+// Line 2: "fewer in a uniform hall, more around shadow edges and doors". The two rooms with the door and the
+// sun, 64 probes: the dark room beyond 0.8 m from the shared wall (lit only by what comes through the door,
+// so its light changes slowly) is 30% of the open space and holds under half its share of the placed probes
+// (measured 6 of 64); the lit room, with the sun's patch and the door's edges, holds more than its half.
+// Probes spread evenly (the placement's first quarter alone, carried on to the whole budget) hold about
+// their shares.
+TEST(ProbePlacement, ProbesGatherWhereTheLightChanges)
+{
+    const samples::TwoRooms rooms(true, true);
+    bake::LightmapBakeOptions o;
+    o.rays = 512;
+    bake::ProbePlacementOptions placement;
+    placement.budget = 64;
+    bake::ProbePlacementReport report;
+    const io::LightProbes p = bake::place_light_probes(rooms.mesh, rooms.atlas, rooms.sh, rooms.lights, o,
+                                                       &rooms.surfaces, placement, &report);
+    ASSERT_EQ(p.size(), 64u);
+    size_t far_dark = 0, lit = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+    {
+        far_dark += p.position(i).x > 0.8f;
+        lit += p.position(i).x < -0.05f;
+    }
+    const double far_share = 1.25 / 4.0; // x in [0.8, 2.05] of the rooms' two 2 m widths
+    std::printf(
+        "%zu of 64 placed probes in the dark room's far part (%.0f%% of the space), %zu in the lit room "
+        "(%d rounds)\n",
+        far_dark, 100.0 * far_share, lit, report.rounds);
+    EXPECT_LT(double(far_dark) / 64.0, 0.5 * far_share);
+    EXPECT_GT(lit, 32u);
+}
+
 // Line 2: the sample level (a courtyard room with an opening and pillars) under a sky and a low sun.
 TEST(ProbePlacement, AutomaticPlacementBeatsTheGridOnTheSampleLevel)
 {
@@ -211,7 +250,10 @@ TEST(ProbePlacement, AutomaticPlacementBeatsTheGridOnTheSampleLevel)
     lights.sun_direction = glm::normalize(glm::vec3(0.3f, 0.4f, 0.5f));
     lights.sun_irradiance = glm::vec3(8.0f, 7.5f, 7.0f);
     const samples::LitLevel level(samples::make_level(512), lights, 512, false, 64, 1);
-    expect_placement_beats_the_grid(level, "the sample level", 256);
+    // Below 0.9 of the grid's: the rounds' refinement buys it (probes spread evenly, the first quarter's way
+    // to the end, err 0.98 of the grid's here).
+    const double ratio = expect_placement_beats_the_grid(level, "the sample level", 256);
+    EXPECT_LT(ratio, 0.9);
 }
 
 // Line 2: OpenArena's oa_dm3 (the Quake III level the tests convert), unwrapped, under a sky and a sun.

@@ -866,9 +866,10 @@ hemi::io::LightProbes seeing_probes()
 }
 } // namespace
 
-// Visibility is Chebyshev's bound, cubed (worked out here): 1 up to the mean distance, (0.01 / (0.01 +
-// 0.05^2))^3 = 0.512 at 1.05 from a probe whose mean is 1 with deviation 0.1, and the floor 1e-4 at 1.5
-// (the bound's 5.7e-5); the blend weights each probe by trilinear weight times visibility. The depth map's
+// Visibility is Chebyshev's bound, squared (worked out here): 1 up to the mean distance, (0.01 / (0.01 +
+// 0.05^2))^2 = 0.64 at 1.05 from a probe whose mean is 1 with deviation 0.1, (0.01 / 0.26)^2 = 0.0014793 at
+// 1.5, and the floor 1e-4 at 2.5 (the bound's 1.96e-5); the blend weights each probe by trilinear weight
+// times visibility. The depth map's
 // lookup returns a texel at its centre and is continuous over the whole sphere, across the octahedral map's
 // folded edges too (a wrong mirror rule jumps by up to 1 there).
 TEST(LightProbes, VisibilityIsChebyshevsBoundOverTheDepthMaps)
@@ -876,10 +877,11 @@ TEST(LightProbes, VisibilityIsChebyshevsBoundOverTheDepthMaps)
     const hemi::io::LightProbes p = seeing_probes();
     EXPECT_FLOAT_EQ(p.visibility(0, glm::vec3(0.0f, 0.5f, 0.0f)), 1.0f);
     EXPECT_FLOAT_EQ(p.visibility(0, glm::vec3(0.0f, 0.0f, -1.0f)), 1.0f);
-    EXPECT_NEAR(p.visibility(0, glm::vec3(0.0f, -1.05f, 0.0f)), 0.512f, 1e-4f);
-    EXPECT_EQ(p.visibility(0, glm::vec3(1.5f, 0.0f, 0.0f)), hemi::io::LightProbes::kMinVisibility);
-    // At x = 1.5: trilinear 0.25 and 0.75, probe 0 seeing only 1e-4 of it.
-    const float w0 = 0.25f * 1e-4f, w1 = 0.75f * p.visibility(1, glm::vec3(1.5f, 0.0f, 0.0f));
+    EXPECT_NEAR(p.visibility(0, glm::vec3(0.0f, -1.05f, 0.0f)), 0.64f, 1e-4f);
+    EXPECT_NEAR(p.visibility(0, glm::vec3(1.5f, 0.0f, 0.0f)), 0.0014793f, 1e-6f);
+    EXPECT_EQ(p.visibility(0, glm::vec3(0.0f, 0.0f, 2.5f)), hemi::io::LightProbes::kMinVisibility);
+    // At x = 1.5: trilinear 0.25 and 0.75, probe 0 seeing only 0.0015 of it.
+    const float w0 = 0.25f * 0.0014793f, w1 = 0.75f * p.visibility(1, glm::vec3(1.5f, 0.0f, 0.0f));
     EXPECT_FLOAT_EQ(p.visibility(1, glm::vec3(1.5f, 0.0f, 0.0f)), 1.0f); // 0.5 away, f >= 0.88
     EXPECT_NEAR(p.at(glm::vec3(1.5f, 0.0f, 0.0f))[0].x, (w0 * 1.0f + w1 * 2.0f) / (w0 + w1), 1e-6f);
     // A texel's centre returns the texel; along a great circle through both poles and the folds the lookup

@@ -109,7 +109,7 @@ float LightProbes::visibility(size_t probe, const glm::vec3& p) const
         return 1.0f;
     const float variance = m.y * m.y, beyond = r - m.x;
     const float chebyshev = variance / (variance + beyond * beyond);
-    return std::max(chebyshev * chebyshev * chebyshev, kMinVisibility);
+    return std::max(chebyshev * chebyshev, kMinVisibility);
 }
 
 LightProbes::Blend LightProbes::blend(const glm::vec3& p, const ProbeIndex* index) const

@@ -78,7 +78,8 @@ struct LightProbes
     glm::vec2 depth_at(size_t probe, const glm::vec3& direction) const;
     // How much of point p probe `probe` sees, in (0, 1]: 1 where p is no farther than the probe's mean
     // distance towards it, else Chebyshev's bound var / (var + (r - mean)^2) (var the deviation squared) on
-    // the chance that nothing lies between, cubed (DDGI's sharpening), and never below kMinVisibility so that
+    // the chance that nothing lies between, squared (sharpened, as DDGI cubes it: docs/probes.md says why a
+    // square), and never below kMinVisibility so that
     // weights stay positive. 1 without depth maps.
     float visibility(size_t probe, const glm::vec3& p) const;
     static constexpr float kMinVisibility = 1e-4f;

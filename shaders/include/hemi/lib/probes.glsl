@@ -79,7 +79,7 @@ float hemi_probe_visibility(samplerBuffer probes, int r, int base, vec3 p)
         return 1.0;
     const float variance = m.y * m.y, beyond = distance - m.x;
     const float chebyshev = variance / (variance + beyond * beyond);
-    return max(chebyshev * chebyshev * chebyshev, HEMI_PROBE_MIN_VISIBILITY);
+    return max(chebyshev * chebyshev, HEMI_PROBE_MIN_VISIBILITY);
 }
 
 // The running sums of one lookup.
