@@ -993,11 +993,17 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     if (s.unwrapped_charts)
         j["unwrap"] = {{"charts", s.unwrapped_charts}, {"texel_size", s.unwrap_texel_size}};
     if (s.probes)
+    {
         j["probes"] = {{"placement", probes_named(o)},
                        {"count", s.probes},
                        {"inside_geometry", s.invalid_probes},
                        {"rays_per_probe", o.probe_rays},
                        {"depth_resolution", o.probe_depth}};
+        if (o.probe_budget) // automatic placement: its candidates and the placed probes' error at the others
+            j["probes"]["candidates"] = {{"points", s.probe_candidates},
+                                         {"open", s.open_probe_candidates},
+                                         {"placement_error", s.probe_placement_error}};
+    }
     if (s.reflection_probes)
         j["reflection_probes"] = {{"count", s.reflection_probes}, {"size", o.reflection.size}};
     j["trace_seconds"] = s.trace_seconds;

@@ -1,10 +1,10 @@
 // Reflection probes (issue 44; bake/reflection_probe.h): Heidrich & Seidel's parabolic maps of what a point
 // of a lit level sees, from its finished lightmap. The reference is hemi's path tracer (bake/reference.h),
 // which computes each surface's light itself, without the lightmap: a camera at the probe's centre sees, per
-// pixel, the radiance the mirror map should hold in that direction. The scene: a closed room 4 x 3 x 2.5 m,
-// lit only by an emissive panel in its ceiling, walls of three colours so that a direction mapped wrongly
-// shows.
-#include "two_rooms.h"
+// pixel, the radiance the mirror map should hold in that direction. The scene: samples/light_probes' box
+// room (box_room.h), 4 x 3 x 2.5 m, lit only by an emissive panel in its ceiling, walls of three colours so
+// that a direction mapped wrongly shows.
+#include "box_room.h"
 
 #include <hemi/bake/lightmap_atlas.h>
 #include <hemi/bake/lightmap_bake.h>
@@ -33,58 +33,8 @@ using namespace hemi;
 namespace
 {
 
-constexpr glm::vec3 kBoxMin(-2.0f, -1.5f, 0.0f), kBoxMax(2.0f, 1.5f, 2.5f);
-
-io::Material material(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f))
-{
-    io::Material m;
-    m.base_color_factor = glm::vec4(albedo, 1.0f);
-    m.emissive_factor = emission;
-    return m;
-}
-
-struct BoxRoom
-{
-    io::Mesh mesh;
-    std::vector<io::Material> materials{material(glm::vec3(0.6f)), material({0.7f, 0.4f, 0.3f}),
-                                        material({0.3f, 0.4f, 0.7f}),
-                                        material(glm::vec3(0.5f), glm::vec3(4.0f, 4.0f, 3.5f))};
-    std::vector<io::Primitive> primitives;
-    bake::LightmapSurfaces surfaces;
-    bake::LightmapAtlas atlas;
-    bake::LightmapLights lights;
-    bake::LightmapSh sh;
-
-    BoxRoom()
-        : mesh(quads().mesh()), primitives(quads().primitives()), surfaces(mesh, materials, {}, primitives)
-    {
-        bake::LightmapUvReport report;
-        atlas = bake::rasterize_lightmap(mesh, 256, 256, report);
-        lights.uniform = glm::vec3(0.0f);
-        bake::LightmapBakeOptions o;
-        o.rays = 512;
-        o.bounces = 2;
-        sh = bake::bake_lightmap_sh(mesh, atlas, lights, o, &surfaces);
-    }
-    static samples::QuadList quads()
-    {
-        samples::QuadList q;
-        const glm::vec3 a = kBoxMin, b = kBoxMax;
-        q.material = 1; // a terracotta floor
-        q.wall_z(a.z, a.x, b.x, a.y, b.y, true);
-        q.material = 2; // a blue wall at +x
-        q.wall_x(b.x, a.y, b.y, a.z, b.z, false);
-        q.material = 0;
-        q.wall_x(a.x, a.y, b.y, a.z, b.z, true);
-        q.wall_y(a.y, a.x, b.x, a.z, b.z, true);
-        q.wall_y(b.y, a.x, b.x, a.z, b.z, false);
-        q.wall_z(b.z, a.x, -0.5f, a.y, b.y, false);
-        q.wall_z(b.z, 0.5f, b.x, a.y, b.y, false);
-        q.material = 3; // the light: a panel in the ceiling
-        q.wall_z(b.z, -0.5f, 0.5f, a.y, b.y, false);
-        return q;
-    }
-};
+using samples::BoxRoom;
+constexpr glm::vec3 kBoxMin = samples::kBoxRoomMin, kBoxMax = samples::kBoxRoomMax;
 
 // What the path tracer sees from `eye` towards `target` over a `size`^2 image of `fov` degrees: per pixel its
 // direction and radiance (alpha 1: every path hit the room).

@@ -1323,6 +1323,10 @@ TEST(BakeCli, LightmapPlacesScatteredLightProbes)
     nlohmann::json j = nlohmann::json::parse(slurp(json));
     EXPECT_EQ(j["probes"]["placement"], "auto:40");
     EXPECT_EQ(j["probes"]["count"], a.probes.size());
+    EXPECT_GE(j["probes"]["candidates"]["open"].get<size_t>(), 8u * a.probes.size() / 2);
+    EXPECT_LE(j["probes"]["candidates"]["open"].get<size_t>(),
+              j["probes"]["candidates"]["points"].get<size_t>());
+    EXPECT_GT(j["probes"]["candidates"]["placement_error"].get<double>(), 0.0);
     // Exported: the points and reaches beside the probes' values.
     const fs::path exported = dir() / "placed_level_export.gltf";
     ASSERT_EQ(run(HEMI_BAKE_EXE, "export " + q(asset) + " -o " + q(exported)).status, 0);
