@@ -20,8 +20,10 @@
 #include <tbb/parallel_for.h>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/packing.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
@@ -106,10 +108,18 @@ glm::vec4 LightmapSurfaces::sample(const io::TextureRef& t, uint32_t triangle, f
         const uint8_t* p = &im.pixels[(size_t(wrap(y, im.height, t.sampler.wrap_t)) * im.width +
                                        size_t(wrap(x, im.width, t.sampler.wrap_s))) *
                                       4];
-        glm::vec4 c(p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f, p[3] / 255.0f);
+        // sRGB's curve through a table of its 256 values (the same floats as io::srgb_eotf(p / 255), without
+        // twelve powf calls a lookup).
+        static const std::array<float, 256> linear = []
+        {
+            std::array<float, 256> table{};
+            for (size_t i = 0; i < table.size(); ++i)
+                table[i] = io::srgb_eotf(float(i) / 255.0f);
+            return table;
+        }();
         if (srgb)
-            c = glm::vec4(io::srgb_eotf(c.r), io::srgb_eotf(c.g), io::srgb_eotf(c.b), c.a);
-        return c;
+            return glm::vec4(linear[p[0]], linear[p[1]], linear[p[2]], p[3] / 255.0f);
+        return glm::vec4(p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f, p[3] / 255.0f);
     };
     const int64_t ix = int64_t(x0), iy = int64_t(y0);
     const glm::vec4 top = texel(ix, iy) * (1.0f - tx) + texel(ix + 1, iy) * tx;
@@ -150,7 +160,9 @@ bool LightmapSurfaces::double_sided(uint32_t triangle) const
 namespace
 {
 
-constexpr uint64_t kLightmapCheckpointVersion = 7; // 7: the mixed lights' shadowmask and direct light
+// 7: the mixed lights' shadowmask and direct light; 8: the rays' angles from a table of turns, the sums in
+// float, the bounces' lookups of a packed map.
+constexpr uint64_t kLightmapCheckpointVersion = 8;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -376,6 +388,168 @@ glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t 
     return map.bilinear(0, atlas_uv(mesh, triangle, bu, bv));
 }
 
+// The previous pass's irradiance over the atlas (dilated), as the bounce rays read it: three half floats a
+// texel (6 bytes, half the float map's 12: a bilinear lookup's four texels lie in fewer cache lines, and more
+// of the map stays in cache, where the bounce rays land anywhere in the level), the values first scaled by
+// the power of two that brings the map's largest value to the top of the halves' range, so that any light
+// fits (a 10^5 lux sun, a sky of 10^-4) with the halves' 30 octaves below it. Each channel
+// keeps its own value to 2^-11, as the asset's halves do. (A shared exponent, 4 bytes,
+// was tried: it keeps a channel only to 2^-10 of the texel's largest, and the bounce of coloured light off
+// a saturated surface lost its weaker channels.)
+class PackedIrradiance
+{
+  public:
+    struct Taps
+    {
+        const uint16_t* texel[4]; // as io::BlockMaps::Taps: nullptr where no block is kept
+        float tx, ty;
+    };
+
+    PackedIrradiance() = default;
+    // A map of one coefficient (k = 1).
+    explicit PackedIrradiance(const io::BlockMaps& map) : grid_(map.grid), halves_(map.grid.slots() * 3, 0)
+    {
+        float largest = 0.0f;
+        for (const float v : map.values)
+            largest = std::max(largest, v); // NaN is left out
+        // The smallest power of two that brings the largest value under the largest half (a dim map up, so
+        // that its light stays clear of the halves' subnormals).
+        int shift = 0;
+        while (std::ldexp(double(kLargest), shift) < double(largest))
+            ++shift;
+        while (largest > 0.0f && std::ldexp(double(kLargest), shift - 1) >= double(largest))
+            --shift;
+        scale_ = std::ldexp(1.0f, shift);
+        for (size_t slot = 0; slot < map.grid.slots(); ++slot)
+        {
+            const float* v = &map.values[map.index(0, slot)];
+            for (size_t c = 0; c < 3; ++c)
+                halves_[slot * 3 + c] = to_half(std::ldexp(v[c], -shift));
+        }
+    }
+
+    Taps taps(glm::vec2 uv) const
+    {
+        const io::BilinearSlots b = io::bilinear_slots(grid_, uv);
+        Taps t{{nullptr, nullptr, nullptr, nullptr}, b.tx, b.ty};
+        for (int i = 0; i < 4; ++i)
+            if (b.slot[i] >= 0)
+                t.texel[i] = &halves_[size_t(b.slot[i]) * 3];
+        return t;
+    }
+    glm::vec3 read(const Taps& t) const
+    {
+        auto at = [&](int i)
+        {
+            if (!t.texel[i])
+                return glm::vec3(0.0f);
+            const uint16_t* h = t.texel[i];
+            return glm::vec3(from_half(h[0]), from_half(h[1]), from_half(h[2]));
+        };
+        return ((at(0) * (1.0f - t.tx) + at(1) * t.tx) * (1.0f - t.ty) +
+                (at(2) * (1.0f - t.tx) + at(3) * t.tx) * t.ty) *
+               scale_;
+    }
+
+  private:
+    static constexpr float kLargest = 65504.0f; // the largest finite half
+    // A non-negative half's value (glm::unpackHalf1x16's, without its branches): its bits in a float's place
+    // (the half's exponent bias is 112 short of a float's) times 2^112, exact for normal and subnormal
+    // halves.
+    static float from_half(uint16_t h) { return std::bit_cast<float>(uint32_t(h) << 13) * 0x1p112f; }
+    // GLM's half of a value (as the asset's), negative and NaN as 0, beyond kLargest as kLargest.
+    static uint16_t to_half(float f)
+    {
+        return uint16_t(glm::packHalf1x16(f > 0.0f ? std::min(f, kLargest) : 0.0f));
+    }
+
+    io::BlockGrid grid_;
+    std::vector<uint16_t> halves_;
+    float scale_ = 1.0f;
+};
+
+// A texel's samples in one pass, as they come (world direction, and radiance times weight), summed at the
+// end by sum(): the SH9 projection of the radiance, and the plain and rnm sums of the radiance times each
+// one's clamped cosine, in the texel's tangent frame. In float, kLanes samples at a time into kLanes partial
+// sums that are added in a fixed order at the end: a loop the compiler vectorises, with the same bytes on
+// any number of threads (and ranks). Against the double sums it replaced, the difference is float's
+// rounding over a few hundred samples (about 1e-6 relative), a thousandth of the half floats the asset keeps.
+class TexelSamples
+{
+  public:
+    static constexpr size_t kLanes = 8;
+    // The sums: 9 SH coefficients, then plain's and rnm's three clamped-cosine sums, each RGB.
+    struct Sums
+    {
+        std::array<glm::vec3, 9> sh;
+        std::array<glm::vec3, 4> direct;
+    };
+
+    void reserve(size_t n)
+    {
+        n = (n + kLanes - 1) / kLanes * kLanes;
+        if (x_.size() >= n)
+            return;
+        for (std::vector<float>* v : {&x_, &y_, &z_, &r_, &g_, &b_})
+            v->resize(n);
+    }
+    void clear() { n_ = 0; }
+    void push(const glm::vec3& d, const glm::vec3& radiance)
+    {
+        x_[n_] = d.x;
+        y_[n_] = d.y;
+        z_[n_] = d.z;
+        r_[n_] = radiance.x;
+        g_[n_] = radiance.y;
+        b_[n_++] = radiance.z;
+    }
+    Sums sum(const glm::vec3& tangent, const glm::vec3& bitangent, const glm::vec3& normal,
+             const std::array<glm::vec3, 3>& rnm, const float (&rnm_scale)[3])
+    {
+        // The last lanes' samples are zero radiance (their sums add 0).
+        const size_t padded = (n_ + kLanes - 1) / kLanes * kLanes;
+        for (size_t i = n_; i < padded; ++i)
+            x_[i] = y_[i] = z_[i] = r_[i] = g_[i] = b_[i] = 0.0f;
+        float acc[13][3][kLanes] = {};
+        for (size_t first = 0; first < padded; first += kLanes)
+            for (size_t l = 0; l < kLanes; ++l)
+            {
+                const size_t i = first + l;
+                const float wx = x_[i], wy = y_[i], wz = z_[i];
+                // glm::dot's order of operations, so that the frame's coordinates are those it gave.
+                const float lx = wx * tangent.x + wy * tangent.y + wz * tangent.z;
+                const float ly = wx * bitangent.x + wy * bitangent.y + wz * bitangent.z;
+                const float lz = wx * normal.x + wy * normal.y + wz * normal.z;
+                float w[13];
+                math::sh9_basis(lx, ly, lz, w);
+                w[9] = std::max(lz, 0.0f);
+                for (size_t b = 0; b < 3; ++b)
+                    w[10 + b] = std::max(lx * rnm[b].x + ly * rnm[b].y + lz * rnm[b].z, 0.0f) * rnm_scale[b];
+                const float c[3] = {r_[i], g_[i], b_[i]};
+                for (size_t j = 0; j < 13; ++j)
+                    for (size_t ch = 0; ch < 3; ++ch)
+                        acc[j][ch][l] += w[j] * c[ch];
+            }
+        Sums out;
+        for (size_t j = 0; j < 13; ++j)
+        {
+            glm::vec3& v = j < 9 ? out.sh[j] : out.direct[j - 9];
+            for (size_t ch = 0; ch < 3; ++ch)
+            {
+                float total = 0.0f;
+                for (size_t l = 0; l < kLanes; ++l)
+                    total += acc[j][ch][l];
+                v[int(ch)] = total;
+            }
+        }
+        return out;
+    }
+
+  private:
+    std::vector<float> x_, y_, z_, r_, g_, b_;
+    size_t n_ = 0;
+};
+
 // A texel's rays, reused from texel to texel by each thread: directions, the rays traced, what they found
 // (sized once for the largest stream; a texel uses the first so many of each).
 struct RayScratch
@@ -402,11 +576,12 @@ struct RayScratch
     std::vector<double> weight; // the environment rays' weights
     std::vector<std::optional<RayHit>> hits;
     std::vector<uint8_t> blocked;
-    std::vector<io::BlockMaps::Taps> taps; // the bounce rays' lookups
+    std::vector<PackedIrradiance::Taps> taps; // the bounce rays' lookups
     // Per stream of samples (hemisphere, environment, sun) and sample, its share of the denoiser's four
     // guides (LightmapSh::noise).
     std::array<std::vector<std::array<double, 4>>, 3> shares;
     std::vector<float> stratum; // the environment rays' places along the CDF, without their jitter
+    TexelSamples samples;
 };
 
 // The variance of the sum of a stream's shares (`share[r]`, sample r's part of four values), estimated from
@@ -567,9 +742,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // rnm's directions in the tangent frame and the factor that makes each give pi under uniform radiance 1
     // over the hemisphere (lightmap_bake.h).
     const std::array<glm::vec3, 3>& rnm = math::rnm_basis();
-    double rnm_scale[3];
+    float rnm_scale[3];
     for (size_t b = 0; b < 3; ++b)
-        rnm_scale[b] = 2.0 / (1.0 + double(rnm[b].z));
+        rnm_scale[b] = float(2.0 / (1.0 + double(rnm[b].z)));
     std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
     std::vector<glm::vec3> next_previous(tiled ? n : 0,
                                          glm::vec3(0.0f)); // with tiles: the pass's, as it goes
@@ -585,7 +760,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.mixed_direct.assign(mixed ? n : 0, glm::vec3(0.0f));
     const bool sun_lit = lights.sun && lights.sun_mode != io::LightMode::Realtime;
     std::vector<uint8_t> pushed(n, 0);
-    io::BlockMaps previous_map; // `previous` over the atlas, dilated, for bilinear lookups
+    PackedIrradiance previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     tbb::enumerable_thread_specific<RayScratch> scratch;
 
     // Against light leaking, each texel's rays start where detail::TexelOrigins puts them: moved out of a
@@ -687,36 +862,33 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
         const glm::vec3 origin = origins[i];
-        std::array<glm::dvec3, 9> acc{};
-        std::array<glm::dvec3, 4> direct{}; // plain and rnm's three, against their own clamped cosines
         RayScratch& s = scratch.local();
         s.reserve(size_t(std::max(o.rays, o.sun_rays)));
+        s.samples.reserve(size_t(2 * o.rays + o.sun_rays) + lights.punctual.size());
+        s.samples.clear();
         if (o.keep_noise)
             for (size_t stream = 0; stream < 3; ++stream)
                 std::fill_n(s.shares[stream].begin(), stream == 2 ? o.sun_rays : o.rays,
                             std::array<double, 4>{});
         // `stream`: 0 the hemisphere rays, 1 the environment's, 2 the sun's, -1 an exact sample (a punctual
         // light); `ray`: the sample's index in its stream.
+        // A sample of radiance (times its weight) from `world`; summed with the others at the end.
         auto add = [&](const glm::vec3& world, const glm::dvec3& radiance, int stream, int ray)
         {
-            const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
-                                  glm::dot(world, t.normal));
-            const math::Sh9 y = math::sh9_eval(local);
             if (o.keep_noise && stream >= 0)
             {
                 // Its share of the guides: luminance times the clamped cosine, and times band 1's
                 // functions as the cosine's convolution scales them.
+                const glm::vec3 local(glm::dot(world, t.tangent), glm::dot(world, t.bitangent),
+                                      glm::dot(world, t.normal));
+                const math::Sh9 y = math::sh9_eval(local);
                 const double l = double(math::luminance(glm::vec3(radiance)));
                 std::array<double, 4>& share = s.shares[size_t(stream)][size_t(ray)];
                 share[0] += l * double(std::max(local.z, 0.0f));
                 for (size_t b = 0; b < 3; ++b)
                     share[1 + b] += l * double(y[1 + b]) * band1;
             }
-            for (int j = 0; j < 9; ++j)
-                acc[size_t(j)] += radiance * double(y[size_t(j)]);
-            direct[0] += radiance * double(std::max(local.z, 0.0f));
-            for (size_t b = 0; b < 3; ++b)
-                direct[1 + b] += radiance * double(std::max(glm::dot(local, rnm[b]), 0.0f)) * rnm_scale[b];
+            s.samples.push(world, glm::vec3(radiance));
         };
         // Each pass draws its own directions (seed per pass), so the passes' noise does not line up. The
         // texel's rays are traced together (EmbreeScene's packets), then their hits are shaded in ray order.
@@ -750,8 +922,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             s.blocked[k] = hit && is_back_face(hit->primitive, s.rays[k].direction);
             if (!lookups || !hit || s.blocked[k])
                 continue;
-            s.taps[k] = previous_map.taps(0, atlas_uv(mesh, hit->primitive, hit->u, hit->v));
-            for (const float* p : s.taps[k].texel)
+            s.taps[k] = previous_map.taps(atlas_uv(mesh, hit->primitive, hit->u, hit->v));
+            for (const uint16_t* p : s.taps[k].texel)
                 if (p)
                     __builtin_prefetch(p);
         }
@@ -772,7 +944,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 continue;
             glm::vec3 radiance = pass == 0 ? surfaces->emission(hit->primitive, hit->u, hit->v)
                                            : surfaces->albedo(hit->primitive, hit->u, hit->v) *
-                                                 io::BlockMaps::read(s.taps[k]) / float(M_PI);
+                                                 previous_map.read(s.taps[k]) / float(M_PI);
             if (radiance != glm::vec3(0.0f))
                 add(d, glm::dvec3(radiance) * weight, 0, r);
         }
@@ -870,12 +1042,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     continue;
                 add(d, glm::dvec3(e), -1, 0);
             }
-        math::Sh9Rgb radiance;
-        for (int j = 0; j < 9; ++j)
-            radiance[size_t(j)] = glm::vec3(acc[size_t(j)]);
-        pass_sh[i - base] = math::convolve_cosine(radiance);
-        for (size_t b = 0; b < 4; ++b)
-            pass_direct[i - base][b] = glm::vec3(direct[b]);
+        const TexelSamples::Sums sums = s.samples.sum(t.tangent, t.bitangent, t.normal, rnm, rnm_scale);
+        pass_sh[i - base] = math::convolve_cosine(sums.sh);
+        pass_direct[i - base] = sums.direct;
         if (mixed && pass == 0)
         {
             out.shadowmask[i] = mask;
@@ -965,7 +1134,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         if (first == n)
             continue; // resumed after this pass was added in
         if (pass > 0)
-            previous_map = dilated(atlas, previous, 1, 2, out.valid);
+            previous_map = PackedIrradiance(dilated(atlas, previous, 1, 2, out.valid));
         if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
         // Without tiles, one run over the whole pass; with tiles, one per tile, each added to the tile file

@@ -79,7 +79,7 @@ void check(const io::Mesh& mesh, const PrtBakeOptions& o)
         throw std::invalid_argument("hemi: PRT bake: " + problem);
 }
 
-constexpr uint32_t kCheckpointVersion = 2;
+constexpr uint32_t kCheckpointVersion = 3; // 3: the rays' angles from a table of turns (ray_generator.cpp)
 
 // Everything the bake's result depends on: the geometry, every option that changes a number, the layout.
 uint64_t checkpoint_key(const io::Mesh& mesh, const PrtBakeOptions& o)

@@ -1,5 +1,7 @@
 #include <hemi/bake/ray_generator.h>
 
+#include <glm/vec2.hpp>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -42,13 +44,41 @@ float uniform01(uint64_t seed, uint64_t a, uint64_t b)
 namespace
 {
 
-// Direction at height z, in the golden-angle spiral whose rotation is `offset` (an item's uniform01(.., 0)).
-glm::vec3 spiral(float offset, int ray, float z)
+// The golden-angle spiral's angle of ray r of an item is 2 pi (r g + offset), g the golden ratio's
+// conjugate and `offset` the item's uniform01(.., 0). Its cosine and sine are the ray's own turn, 2 pi
+// frac(r g) (the same for every item, in double), rotated by the item's 2 pi offset: one sine and cosine per
+// item and a table per set size instead of one per ray (they were a tenth of a lightmap bake), and the same
+// values for one ray as for the whole set.
+constexpr double kGolden = 0.6180339887498949;
+glm::vec2 ray_turn(int ray)
 {
-    float frac = float(ray) * 0.6180339887f + offset;
-    frac -= std::floor(frac);
-    const float phi = 2.0f * float(M_PI) * frac, s = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return {s * std::cos(phi), s * std::sin(phi), z};
+    double f = double(ray) * kGolden;
+    f -= std::floor(f);
+    return {float(std::cos(2.0 * M_PI * f)), float(std::sin(2.0 * M_PI * f))};
+}
+glm::vec2 item_turn(float offset)
+{
+    return {float(std::cos(2.0 * M_PI * double(offset))), float(std::sin(2.0 * M_PI * double(offset)))};
+}
+// The rays' turns of a set of `rays`, kept per thread for the last size asked (a bake asks for one size).
+const std::vector<glm::vec2>& ray_turns(size_t rays)
+{
+    thread_local std::vector<glm::vec2> turns;
+    if (turns.size() != rays)
+    {
+        turns.resize(rays);
+        for (size_t r = 0; r < rays; ++r)
+            turns[r] = ray_turn(int(r));
+    }
+    return turns;
+}
+
+// Direction at height z, at the angle whose cosine and sine are `ray` turned by `item`.
+glm::vec3 spiral(glm::vec2 item, glm::vec2 ray, float z)
+{
+    const float c = ray.x * item.x - ray.y * item.y, s = ray.y * item.x + ray.x * item.y;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return {r * c, r * s, z};
 }
 
 } // namespace
@@ -57,29 +87,33 @@ glm::vec3 sphere_direction(uint64_t seed, uint64_t item, int ray, int rays)
 {
     // z uniform in [-1, 1] (Archimedes: uniform in z is uniform in area), one ray per stratum of height 2/R.
     const float z = 1.0f - 2.0f * (float(ray) + uniform01(seed, item, uint64_t(ray) + 1)) / float(rays);
-    return spiral(uniform01(seed, item, 0), ray, z);
+    return spiral(item_turn(uniform01(seed, item, 0)), ray_turn(ray), z);
 }
 
 glm::vec3 hemisphere_direction(uint64_t seed, uint64_t item, int ray, int rays)
 {
     const float z = 1.0f - (float(ray) + uniform01(seed, item, uint64_t(ray) + 1)) / float(rays);
-    return spiral(uniform01(seed, item, 0), ray, z);
+    return spiral(item_turn(uniform01(seed, item, 0)), ray_turn(ray), z);
 }
 
 void sphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out)
 {
     const uint64_t h = item_hash(seed, item);
-    const float offset = draw(h, 0), rays = float(out.size());
+    const glm::vec2 turn = item_turn(draw(h, 0));
+    const std::vector<glm::vec2>& turns = ray_turns(out.size());
+    const float rays = float(out.size());
     for (size_t r = 0; r < out.size(); ++r)
-        out[r] = spiral(offset, int(r), 1.0f - 2.0f * (float(int(r)) + draw(h, uint64_t(r) + 1)) / rays);
+        out[r] = spiral(turn, turns[r], 1.0f - 2.0f * (float(int(r)) + draw(h, uint64_t(r) + 1)) / rays);
 }
 
 void hemisphere_directions(uint64_t seed, uint64_t item, std::span<glm::vec3> out)
 {
     const uint64_t h = item_hash(seed, item);
-    const float offset = draw(h, 0), rays = float(out.size());
+    const glm::vec2 turn = item_turn(draw(h, 0));
+    const std::vector<glm::vec2>& turns = ray_turns(out.size());
+    const float rays = float(out.size());
     for (size_t r = 0; r < out.size(); ++r)
-        out[r] = spiral(offset, int(r), 1.0f - (float(int(r)) + draw(h, uint64_t(r) + 1)) / rays);
+        out[r] = spiral(turn, turns[r], 1.0f - (float(int(r)) + draw(h, uint64_t(r) + 1)) / rays);
 }
 
 namespace

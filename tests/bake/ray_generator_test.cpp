@@ -150,9 +150,11 @@ TEST(RayGenerator, EstimatesWithTheDocumentedWeights)
     }
 }
 
-// The directions of the PRT bake before the generator had a file of its own: the bake's assets and
-// checkpoints are made of them, so a change here is a change of every asset (and needs its checkpoint key
-// bumped). A tolerance rather than bits: the values go through the platform's sin and cos.
+// The directions the bakes draw: the bakes' assets and checkpoints are made of them, so a change here is a
+// change of every asset (and needs the checkpoint keys bumped: the lightmap's 8 and the PRT bake's 3 came
+// with the angle's cosine and sine from a table of the rays' turns, exact in double where the float sum
+// r g + offset had lost up to 1.5e-5 at ray 100). A tolerance rather than bits: the values go through the
+// platform's sin and cos.
 TEST(RayGenerator, DrawsThePrtBakesDirections)
 {
     struct Ray
@@ -165,19 +167,21 @@ TEST(RayGenerator, DrawsThePrtBakesDirections)
         Ray ray;
         glm::vec3 sphere, hemisphere;
     };
+    // From the formula evaluated independently in double (Python: SplitMix64's mix, z = 1 - (r + u) / R or
+    // 1 - 2 (r + u) / R, phi = 2 pi (frac(r g) + offset) with g the golden ratio's conjugate).
     const Pinned pinned[] = {
         {{1, 0, 0, 256},
-         {-0.020806205f, -0.056139167f, 0.998206139f},
-         {-0.014715634f, -0.039705627f, 0.999103069f}},
+         {-0.020806057f, -0.056138706f, 0.998206168f},
+         {-0.014715406f, -0.039704967f, 0.999103084f}},
         {{1, 12345, 100, 256},
-         {0.770916939f, 0.598632276f, 0.217546523f},
-         {0.626609862f, 0.486574978f, 0.608773232f}},
+         {0.770928481f, 0.598617393f, 0.217546534f},
+         {0.626619244f, 0.486562875f, 0.608773267f}},
         {{7, 3, 63, 64},
-         {-0.112315327f, -0.033342749f, -0.993113041f},
-         {-0.958643138f, -0.284589797f, 0.003443480f}},
+         {-0.112314919f, -0.033342592f, -0.993113101f},
+         {-0.958643277f, -0.284589548f, 0.003443450f}},
         {{1, 1, 0, 1},
-         {-0.529688299f, 0.816045403f, -0.231301188f},
-         {-0.502632022f, 0.774362087f, 0.384349406f}},
+         {-0.529688259f, 0.816045408f, -0.231301188f},
+         {-0.502631964f, 0.774362088f, 0.384349406f}},
     };
     for (const Pinned& p : pinned)
     {

@@ -91,16 +91,9 @@ void sh_eval(int order, const glm::vec3& d, std::span<float> out)
 
 Sh9 sh9_eval(const glm::vec3& d)
 {
-    const float x = d.x, y = d.y, z = d.z;
-    return {float(HEMI_SH_Y00),
-            -float(HEMI_SH_Y1) * y,
-            float(HEMI_SH_Y1) * z,
-            -float(HEMI_SH_Y1) * x,
-            float(HEMI_SH_Y2) * x * y,
-            -float(HEMI_SH_Y2) * y * z,
-            float(HEMI_SH_Y20) * (3.0f * z * z - 1.0f),
-            -float(HEMI_SH_Y2) * x * z,
-            float(HEMI_SH_Y22) * (x * x - y * y)};
+    Sh9 y;
+    sh9_basis(d.x, d.y, d.z, y.data());
+    return y;
 }
 
 std::vector<glm::vec3> project_sh(int order, const std::function<glm::vec3(const glm::vec3&)>& radiance,

@@ -52,19 +52,25 @@ class BlockGrid
         if (x < 0 || y < 0 || x >= int64_t(width_) || y >= int64_t(height_))
             return -1;
         const uint32_t row = uint32_t(y / kSize), block = row * blocks_x() + uint32_t(x / kSize);
-        const int64_t local = (y % kSize) * kSize + x % kSize;
+        const int64_t first = block_slot(block);
+        return first < 0 ? -1 : first + (y % kSize) * kSize + x % kSize;
+    }
+    // The first slot of block `block` (< blocks_x() * blocks_y()), or -1 when it is not kept.
+    int64_t block_slot(uint32_t block) const
+    {
         if (!kept_.empty())
         {
             const uint64_t word = kept_[block / 64], bit = uint64_t(1) << (block % 64);
             if (!(word & bit))
                 return -1;
-            return int64_t(rank_[block / 64] + ones(word & (bit - 1))) * kTexels + local;
+            return int64_t(rank_[block / 64] + ones(word & (bit - 1))) * kTexels;
         }
+        const uint32_t row = block / blocks_x();
         const auto first = blocks_.begin() + row_begin_[row], last = blocks_.begin() + row_begin_[row + 1];
         const auto it = std::lower_bound(first, last, block);
         if (it == last || *it != block)
             return -1;
-        return int64_t(it - blocks_.begin()) * kTexels + local;
+        return int64_t(it - blocks_.begin()) * kTexels;
     }
     // The texel of a slot (it may lie past the atlas in a block of the last column or row).
     glm::uvec2 texel(size_t slot) const
@@ -106,7 +112,9 @@ inline BilinearFootprint bilinear_footprint(glm::vec2 uv, uint32_t width, uint32
 {
     const double fx = std::clamp(double(uv.x), 0.0, 1.0) * width - 0.5;
     const double fy = std::clamp(double(uv.y), 0.0, 1.0) * height - 0.5;
-    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    // fx, fy >= -0.5: floor(f) as the truncation of f + 1 (exact in double), less 1, which is
+    // std::floor's value without its call (the bake makes a lookup for every bounce ray).
+    const double x0 = double(int64_t(fx + 1.0)) - 1.0, y0 = double(int64_t(fy + 1.0)) - 1.0;
     const int64_t ix = int64_t(x0), iy = int64_t(y0), w = int64_t(width) - 1, h = int64_t(height) - 1;
     return {std::clamp<int64_t>(ix, 0, w),
             std::clamp<int64_t>(ix + 1, 0, w),
@@ -114,6 +122,38 @@ inline BilinearFootprint bilinear_footprint(glm::vec2 uv, uint32_t width, uint32
             std::clamp<int64_t>(iy + 1, 0, h),
             float(fx - x0),
             float(fy - y0)};
+}
+
+// The slots of a bilinear lookup's four texels at `uv` (bilinear_footprint's, in its order: (x0, y0),
+// (x1, y0), (x0, y1), (x1, y1)), -1 where no block is kept, and its weights. The texels lie in one, two or
+// four blocks: each block is found once. Every per-texel map over a grid (BlockMaps, the bake's packed
+// irradiance) reads through it.
+struct BilinearSlots
+{
+    int64_t slot[4];
+    float tx, ty;
+};
+inline BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv)
+{
+    const BilinearFootprint f = bilinear_footprint(uv, grid.width(), grid.height());
+    BilinearSlots t{{-1, -1, -1, -1}, f.tx, f.ty};
+    // Inside the atlas (the footprint is clamped to it): unsigned, so that / and % are shifts and masks.
+    const uint32_t B = BlockGrid::kSize, xs[2] = {uint32_t(f.x0), uint32_t(f.x1)},
+                   ys[2] = {uint32_t(f.y0), uint32_t(f.y1)};
+    int64_t first[2][2]; // each tap's block's first slot
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i)
+        {
+            if (i == 1 && xs[1] / B == xs[0] / B)
+                first[j][1] = first[j][0];
+            else if (j == 1 && ys[1] / B == ys[0] / B)
+                first[1][i] = first[0][i];
+            else
+                first[j][i] = grid.block_slot((ys[j] / B) * grid.blocks_x() + xs[i] / B);
+            if (first[j][i] >= 0)
+                t.slot[j * 2 + i] = first[j][i] + int64_t((ys[j] % B) * B + xs[i] % B);
+        }
+    return t;
 }
 
 // K RGB maps over a BlockGrid: coefficient k of the texel at slot s, channel c, at
@@ -163,25 +203,11 @@ struct BlockMaps
     };
     Taps taps(uint32_t map, glm::vec2 uv) const
     {
-        const BilinearFootprint f = bilinear_footprint(uv, width(), height());
-        Taps t{{nullptr, nullptr, nullptr, nullptr}, f.tx, f.ty};
-        // The four texels lie in one, two or four blocks: find each block once.
-        const int64_t xs[2] = {f.x0, f.x1}, ys[2] = {f.y0, f.y1};
-        int64_t found_block = -1, found_slot = -1; // the last block looked up and its slot (or -1)
-        for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i)
-            {
-                const int64_t x = xs[i], y = ys[j], B = BlockGrid::kSize;
-                const int64_t block = (y / B) * grid.blocks_x() + x / B;
-                if (block != found_block)
-                {
-                    const int64_t s = grid.slot(x, y);
-                    found_block = block;
-                    found_slot = s < 0 ? -1 : s - s % BlockGrid::kTexels;
-                }
-                if (found_slot >= 0)
-                    t.texel[j * 2 + i] = &values[index(map, size_t(found_slot + (y % B) * B + x % B))];
-            }
+        const BilinearSlots b = bilinear_slots(grid, uv);
+        Taps t{{nullptr, nullptr, nullptr, nullptr}, b.tx, b.ty};
+        for (int i = 0; i < 4; ++i)
+            if (b.slot[i] >= 0)
+                t.texel[i] = &values[index(map, size_t(b.slot[i]))];
         return t;
     }
     static glm::vec3 read(const Taps& t)

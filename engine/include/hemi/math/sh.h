@@ -8,6 +8,8 @@
 // (windowing); J. Ivanic, K. Ruedenberg, "Rotation Matrices for Real Spherical Harmonics. Direct
 // Determination by Recursion", J. Phys. Chem. 1996, with the 1998 additions and corrections.
 
+#include "hemi/shared/sh_constants.h"
+
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
@@ -37,6 +39,20 @@ using Sh9Rgb = std::array<glm::vec3, 9>;
 void sh_eval(int order, const glm::vec3& d, std::span<float> out);
 // The 9 functions of bands 0-2 in closed form (the same values as sh_eval(3, ...)).
 Sh9 sh9_eval(const glm::vec3& d);
+// sh9_eval's closed form on three floats, inline: what a loop over many directions calls so that the
+// compiler can vectorise it (the bake's per-texel sums). The same values as sh9_eval, which calls it.
+inline void sh9_basis(float x, float y, float z, float* out)
+{
+    out[0] = float(HEMI_SH_Y00);
+    out[1] = -float(HEMI_SH_Y1) * y;
+    out[2] = float(HEMI_SH_Y1) * z;
+    out[3] = -float(HEMI_SH_Y1) * x;
+    out[4] = float(HEMI_SH_Y2) * x * y;
+    out[5] = -float(HEMI_SH_Y2) * y * z;
+    out[6] = float(HEMI_SH_Y20) * (3.0f * z * z - 1.0f);
+    out[7] = -float(HEMI_SH_Y2) * x * z;
+    out[8] = float(HEMI_SH_Y22) * (x * x - y * y);
+}
 
 // Projects a radiance function over the sphere onto SH of `order` by quadrature: `theta_steps`
 // Gauss-Legendre nodes in cos(theta) times 2*`theta_steps` uniform steps in phi (exact for band-limited
