@@ -40,6 +40,11 @@
 //   lightmap/bake/large/...           the same for a level of 8 x 5 rooms and corridors (4096^2, 11.9 M
 //                                     covered texels; samples::make_large_level). --write-large-level=FILE
 //                                     writes that level as a .glb and exits (for bench/level_scaling.sh).
+//   lightmap/bake/dense/...           the many-room level at 2048^2 with each triangle cut into 16 x 16: a
+//                                     generated level of a million triangles (990,208).
+//   lightmap/bake/q3/...              a real one: OpenArena's oa_dm3, its patches tessellated to 969,708
+//                                     triangles, its own 512^2 lightmap UVs. Every bake benchmark reports
+//                                     triangles, covered_texels, rays_per_s and its own peak_rss_MiB.
 //   lightmap/denoise/large/...        hemi-bake lightmap --denoise's filter on that level at 1024^2 (760,546
 //                                     covered texels), baked with 32 rays, a sun and a bounce: time, and
 //                                     filter_over_bake = the filter's time over that bake's (both wall
@@ -56,6 +61,7 @@
 #include "level.h"
 #include "models.h"
 #include "relief.h"
+#include "tools/q3_level.h"
 #include "vulkan_calls.h"
 
 #include <hemi/bake/cpca.h>
@@ -146,7 +152,10 @@ struct Sizes
     // The many-room level that lightmap/bake/large bakes (samples::make_large_level): rooms along x and z,
     // atlas side. 8 x 5 rooms at 4096^2: 11.9 M covered texels, 3,682 triangles.
     uint32_t large_rooms_x = 8, large_rooms_z = 5, large_atlas = 4096;
-    uint32_t prefilter = 512;    // the parabolic maps' level 0 that prefilter/ filters (hemi-bake envmap's)
+    // lightmap/bake/dense: that level at dense_atlas^2, each triangle cut into dense_split^2.
+    uint32_t dense_atlas = 2048, dense_split = 16;
+    int q3_patch_level = 32;  // lightmap/bake/q3: oa_dm3's patches as 32 x 32 quads each (969,708 triangles)
+    uint32_t prefilter = 512; // the parabolic maps' level 0 that prefilter/ filters (hemi-bake envmap's)
     float unwrap_detail = 4.18f; // the knot that lightmap/unwrap unwraps: about a million triangles
 };
 
@@ -165,6 +174,9 @@ Sizes smoke_sizes()
     s.bake_atlas = 64;
     s.large_rooms_x = s.large_rooms_z = 2;
     s.large_atlas = 256;
+    s.dense_atlas = 256;
+    s.dense_split = 2;
+    s.q3_patch_level = 1;
     s.prefilter = 64;
     s.unwrap_detail = 0.3f;
     return s;
@@ -841,6 +853,74 @@ double peak_rss_mib()
     return kib / 1024.0;
 }
 
+// Forgets the peak resident memory so far (VmHWM), so that a benchmark's peak is its own: Linux resets it
+// when "5" is written to /proc/self/clear_refs. False where that is not there.
+bool reset_peak_rss()
+{
+    std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+    if (!f)
+        return false;
+    const bool ok = std::fputs("5", f) >= 0;
+    return std::fclose(f) == 0 && ok;
+}
+
+// `mesh` with each triangle cut into k x k triangles (the points i/k, j/k of its barycentric grid), every
+// attribute interpolated linearly, so that its surfaces, normals and lightmap UVs are the same and only the
+// triangles are more: the same bake over k^2 times as many triangles. A point on an edge is the same float
+// from both of its triangles (its weights are the edge's two ends; the third adds an exact 0).
+hemi::io::GltfScene subdivided(const hemi::io::GltfScene& scene, uint32_t k)
+{
+    hemi::io::GltfScene out = scene;
+    const hemi::io::Mesh& m = scene.mesh;
+    hemi::io::Mesh& d = out.mesh;
+    d.positions.clear();
+    d.normals.clear();
+    d.tangents.clear();
+    d.uvs.clear();
+    d.uvs1.clear();
+    d.indices.clear();
+    auto mix = [&](const auto& a, const auto& b, const auto& c, uint32_t i, uint32_t j)
+    { return (a * float(i) + b * float(j) + c * float(k - i - j)) / float(k); };
+    for (size_t t = 0; t < m.indices.size(); t += 3)
+    {
+        const uint32_t v0 = m.indices[t], v1 = m.indices[t + 1], v2 = m.indices[t + 2];
+        const uint32_t base = uint32_t(d.positions.size());
+        auto at = [&](uint32_t i, uint32_t j) // grid point (i, j), i + j <= k, row i after row i - 1
+        { return base + i * (k + 1) - i * (i - 1) / 2 + j; };
+        for (uint32_t i = 0; i <= k; ++i)
+            for (uint32_t j = 0; i + j <= k; ++j)
+            {
+                d.positions.push_back(mix(m.positions[v0], m.positions[v1], m.positions[v2], i, j));
+                if (!m.normals.empty())
+                    d.normals.push_back(
+                        glm::normalize(mix(m.normals[v0], m.normals[v1], m.normals[v2], i, j)));
+                if (!m.tangents.empty())
+                    d.tangents.emplace_back(
+                        glm::normalize(mix(glm::vec3(m.tangents[v0]), glm::vec3(m.tangents[v1]),
+                                           glm::vec3(m.tangents[v2]), i, j)),
+                        m.tangents[v0].w);
+                if (!m.uvs.empty())
+                    d.uvs.push_back(mix(m.uvs[v0], m.uvs[v1], m.uvs[v2], i, j));
+                if (!m.uvs1.empty())
+                    d.uvs1.push_back(mix(m.uvs1[v0], m.uvs1[v1], m.uvs1[v2], i, j));
+            }
+        // The same winding as the triangle: (i, j) towards v0, v1 as i, j grow.
+        for (uint32_t i = 0; i < k; ++i)
+            for (uint32_t j = 0; i + j < k; ++j)
+            {
+                d.indices.insert(d.indices.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+                if (i + j + 1 < k)
+                    d.indices.insert(d.indices.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+            }
+    }
+    for (hemi::io::Primitive& p : out.primitives)
+    {
+        p.first_index *= k * k;
+        p.index_count *= k * k;
+    }
+    return out;
+}
+
 // What the lightmap bake benchmarks bake: `scene`'s size x size atlas, its surfaces, and a uniform sky of 1
 // with a sun of 6 from (0.4, 1, 0.35) in the mesh's y-up space. Not copyable (the surfaces point at the
 // mesh).
@@ -875,6 +955,7 @@ void lightmap_bake(benchmark::State& state, const hemi::io::GltfScene& scene, ui
     o.rays = 64;
     o.bounces = 2;
     hemi::bake::LightmapSh sh;
+    reset_peak_rss(); // the level's own peak: the scene, its atlas, its ray tracer and the bake
     for (auto _ : state)
     {
         sh = hemi::bake::bake_lightmap_sh(scene.mesh, atlas, lights, o, &surfaces);
@@ -950,6 +1031,7 @@ void lightmap_bake(benchmark::State& state, const hemi::io::GltfScene& scene, ui
     const double embree_s = (1 + o.bounces) * covered / sampled * hemisphere_s + covered / sampled * sun_s;
     const double bake_rays =
         covered / sampled * ((1 + o.bounces) * double(hemisphere.size()) + double(sun.size()));
+    state.counters["triangles"] = double(scene.mesh.indices.size() / 3);
     state.counters["covered_texels"] = covered;
     state.counters["seconds"] = sh.trace_seconds;
     state.counters["rays_per_s"] = bake_rays / sh.trace_seconds;
@@ -973,8 +1055,35 @@ void lightmap_large(benchmark::State& state)
 {
     const hemi::io::GltfScene scene =
         hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z, g_sizes.large_atlas);
-    state.counters["triangles"] = double(scene.mesh.indices.size() / 3);
     lightmap_bake(state, scene, g_sizes.large_atlas);
+}
+
+// Issue 45's generated level of a million triangles: the many-room level (8 x 5 rooms) at 2048^2 with each
+// triangle cut into 16 x 16 (990,208 triangles), the same surfaces and lightmap: against
+// lightmap/bake/large's own level at the same texel density it shows what the triangles cost.
+void lightmap_dense(benchmark::State& state)
+{
+    const hemi::io::GltfScene scene = subdivided(
+        hemi::samples::make_large_level(g_sizes.large_rooms_x, g_sizes.large_rooms_z, g_sizes.dense_atlas),
+        g_sizes.dense_split);
+    lightmap_bake(state, scene, g_sizes.dense_atlas);
+}
+
+// A real level at a million triangles: OpenArena's oa_dm3 (Debian's openarena-081-maps, converted as the
+// tests convert it, tests/tools/q3_level.h) with its 470 Bezier patches tessellated into 32 x 32 quads each
+// (969,708 triangles), its own lightmap UVs (14 pages of 128^2 in a 512^2 atlas); through a .glb and
+// io::read_gltf as hemi-bake reads it (which makes its tangents). Its sky is an opening: 98% of its
+// bounding box is open air, and most rays leave the level.
+void lightmap_q3(benchmark::State& state)
+{
+    const std::filesystem::path glb =
+        std::filesystem::temp_directory_path() / ("hemi_bench_q3_" + std::to_string(getpid()) + ".glb");
+    hemi::io::write_gltf(
+        glb, hemi::test::read_q3_level(hemi::test::kOpenArenaMaps, "maps/oa_dm3.bsp", g_sizes.q3_patch_level)
+                 .scene);
+    const hemi::io::GltfScene scene = hemi::io::read_gltf(glb);
+    std::filesystem::remove(glb);
+    lightmap_bake(state, scene, 512);
 }
 
 // The denoiser (bake::denoise_lightmap, what --denoise runs) on the many-room level at 1024^2 (at most the
@@ -1583,6 +1692,20 @@ int main(int argc, char** argv)
                               std::to_string(g_sizes.large_rooms_z) + "/" +
                               std::to_string(g_sizes.large_atlas) + "x" + std::to_string(g_sizes.large_atlas);
     full_iterations(add("lightmap/bake/large/" + large + "/bounces:2/rays:64", lightmap_large)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    full_iterations(add("lightmap/bake/dense/" + std::to_string(g_sizes.large_rooms_x) + "x" +
+                            std::to_string(g_sizes.large_rooms_z) + "/" +
+                            std::to_string(g_sizes.dense_atlas) + "x" + std::to_string(g_sizes.dense_atlas) +
+                            "/split:" + std::to_string(g_sizes.dense_split) + "/bounces:2/rays:64",
+                        lightmap_dense)
+                        ->Unit(benchmark::kMillisecond)
+                        ->UseManualTime(),
+                    1);
+    full_iterations(add("lightmap/bake/q3/oa_dm3/patches:" + std::to_string(g_sizes.q3_patch_level) +
+                            "/512x512/bounces:2/rays:64",
+                        lightmap_q3)
                         ->Unit(benchmark::kMillisecond)
                         ->UseManualTime(),
                     1);
