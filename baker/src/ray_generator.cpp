@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -60,16 +61,20 @@ glm::vec2 item_turn(float offset)
 {
     return {float(std::cos(2.0 * M_PI * double(offset))), float(std::sin(2.0 * M_PI * double(offset)))};
 }
-// The rays' turns of a set of `rays`, kept per thread for the last size asked (a bake asks for one size).
+// The rays' turns of a set of `rays`, kept per thread for the last four sizes asked (a lightmap bake asks
+// for its own ray count and for TexelOrigins' 128 and 64), the oldest replaced first.
 const std::vector<glm::vec2>& ray_turns(size_t rays)
 {
-    thread_local std::vector<glm::vec2> turns;
-    if (turns.size() != rays)
-    {
-        turns.resize(rays);
-        for (size_t r = 0; r < rays; ++r)
-            turns[r] = ray_turn(int(r));
-    }
+    thread_local std::array<std::vector<glm::vec2>, 4> tables;
+    thread_local size_t next = 0;
+    for (const std::vector<glm::vec2>& t : tables)
+        if (t.size() == rays)
+            return t;
+    std::vector<glm::vec2>& turns = tables[next];
+    next = (next + 1) % tables.size();
+    turns.resize(rays);
+    for (size_t r = 0; r < rays; ++r)
+        turns[r] = ray_turn(int(r));
     return turns;
 }
 
