@@ -378,10 +378,15 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> val
 
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
 // (Embree's barycentrics): what a ray that lands there picks up.
+// The UV at Embree's barycentrics (bu, bv) of a triangle whose corners have UVs a, b, c.
+glm::vec2 barycentric_uv(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c, float bu, float bv)
+{
+    return (1.0f - bu - bv) * a + bu * b + bv * c;
+}
 glm::vec2 atlas_uv(const io::Mesh& mesh, uint32_t triangle, float bu, float bv)
 {
     const uint32_t* idx = &mesh.indices[size_t(triangle) * 3];
-    return (1.0f - bu - bv) * mesh.uvs1[idx[0]] + bu * mesh.uvs1[idx[1]] + bv * mesh.uvs1[idx[2]];
+    return barycentric_uv(mesh.uvs1[idx[0]], mesh.uvs1[idx[1]], mesh.uvs1[idx[2]], bu, bv);
 }
 glm::vec3 atlas_lookup(const io::Mesh& mesh, const io::BlockMaps& map, uint32_t triangle, float bu, float bv)
 {
@@ -446,9 +451,7 @@ class PackedIrradiance
             const uint16_t* h = t.texel[i];
             return glm::vec3(from_half(h[0]), from_half(h[1]), from_half(h[2]));
         };
-        return ((at(0) * (1.0f - t.tx) + at(1) * t.tx) * (1.0f - t.ty) +
-                (at(2) * (1.0f - t.tx) + at(3) * t.tx) * t.ty) *
-               scale_;
+        return io::bilinear_blend(at(0), at(1), at(2), at(3), t.tx, t.ty) * scale_;
     }
 
   private:
@@ -781,11 +784,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         uint32_t double_sided;
     };
     std::vector<HitTriangle> hit_triangles(mesh.indices.size() / 3);
+    const bool uvs = mesh.uvs1.size() == mesh.positions.size();
     tbb::parallel_for(size_t(0), hit_triangles.size(),
                       [&](size_t t)
                       {
                           HitTriangle& h = hit_triangles[t];
-                          const bool uvs = mesh.uvs1.size() == mesh.positions.size();
                           for (size_t c = 0; c < 3; ++c)
                               h.uv[c] = uvs ? mesh.uvs1[mesh.indices[t * 3 + c]] : glm::vec2(0.0f);
                           h.normal = scene.geometric_normal(uint32_t(t));
@@ -946,9 +949,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             s.blocked[k] = hit && is_back_face(hit->primitive, s.rays[k].direction);
             if (!lookups || !hit || s.blocked[k])
                 continue;
-            const HitTriangle& h = hit_triangles[hit->primitive]; // atlas_uv's sum, from the record
-            s.taps[k] =
-                previous_map.taps((1.0f - hit->u - hit->v) * h.uv[0] + hit->u * h.uv[1] + hit->v * h.uv[2]);
+            const HitTriangle& h = hit_triangles[hit->primitive];
+            s.taps[k] = previous_map.taps(barycentric_uv(h.uv[0], h.uv[1], h.uv[2], hit->u, hit->v));
             for (const uint16_t* p : s.taps[k].texel)
                 if (p)
                     __builtin_prefetch(p);

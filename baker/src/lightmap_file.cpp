@@ -82,7 +82,8 @@ constexpr uint64_t kProbeBytes = 224;
 // Each probe's depth map (--probe-depth R): R^2 texels of 2 floats held, 2 halves in the asset's bytes.
 constexpr uint64_t kProbeDepthBytesPerTexel = 8 + 4;
 // The ray tracer's BVH over the scene (EmbreeScene: its copy of the positions and triangles, the BVH and what
-// its build holds): 160 bytes a triangle measured on oa_dm3's 22,188 triangles, rounded up.
+// its build holds): 160 bytes a triangle measured on oa_dm3's 22,188 triangles; with the bake's own record of
+// each triangle for its rays' hits (40 bytes: lightmap_bake.cpp, HitTriangle), 200, rounded up.
 constexpr uint64_t kEmbreeBytesPerTriangle = 256;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.

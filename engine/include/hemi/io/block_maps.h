@@ -156,6 +156,13 @@ inline BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv)
     return t;
 }
 
+// A bilinear lookup's four texels (bilinear_slots' order) blended by its weights.
+inline glm::vec3 bilinear_blend(const glm::vec3& v00, const glm::vec3& v10, const glm::vec3& v01,
+                                const glm::vec3& v11, float tx, float ty)
+{
+    return (v00 * (1.0f - tx) + v10 * tx) * (1.0f - ty) + (v01 * (1.0f - tx) + v11 * tx) * ty;
+}
+
 // K RGB maps over a BlockGrid: coefficient k of the texel at slot s, channel c, at
 // ((s / 64 * K + k) * 64 + s % 64) * 3 + c (block after block; in a block, map after map). Texels of blocks
 // that are not kept read as 0.
@@ -214,8 +221,7 @@ struct BlockMaps
     {
         auto at = [&](int i)
         { return t.texel[i] ? glm::vec3(t.texel[i][0], t.texel[i][1], t.texel[i][2]) : glm::vec3(0.0f); };
-        return (at(0) * (1.0f - t.tx) + at(1) * t.tx) * (1.0f - t.ty) +
-               (at(2) * (1.0f - t.tx) + at(3) * t.tx) * t.ty;
+        return bilinear_blend(at(0), at(1), at(2), at(3), t.tx, t.ty);
     }
 };
 
