@@ -1,3 +1,4 @@
+#include <hemi/bake/float4.h>
 #include <hemi/bake/lightmap_denoise.h>
 #include <hemi/math/luminance.h>
 
@@ -94,6 +95,54 @@ Guide guides_of(const ShArray& irradiance, const DirectArray& direct)
             math::luminance(irradiance[3])};
 }
 
+// A texel's window in the filter (5 x 5 texels at most) as arrays over its neighbours, laid out for loops of
+// kLanes: the entries past the neighbours, up to a multiple of kLanes, are zeros (weights of 0).
+constexpr int kLanes = 4;
+constexpr int kWindow = 28; // 25, rounded up to kLanes
+struct Window
+{
+    alignas(32) float dx[kWindow], dy[kWindow]; // offsets, in texels of the pass's spacing
+    alignas(32) float base[kWindow];            // the weight without the light's term
+    alignas(32) float w[kWindow];               // the weight
+    alignas(32) float guide[4][kWindow], smooth[4][kWindow];
+    uint32_t j[kWindow]; // the neighbour's index in the range
+    // What the weight without the light's term is made of: the spline's weight, the distance in texels of
+    // the offset, and the neighbour's point, shading normal and world size (read once, before `base`).
+    alignas(32) float spline[kWindow], distance[kWindow];
+    alignas(32) float position[3][kWindow], normal[3][kWindow], size[kWindow];
+
+    // Zeros from entry `count` to the next multiple of kLanes.
+    void clear(int count)
+    {
+        for (int k = count; k % kLanes; ++k)
+        {
+            dx[k] = dy[k] = base[k] = w[k] = 0.0f;
+            j[k] = 0;
+            for (size_t c = 0; c < 4; ++c)
+                guide[c][k] = smooth[c][k] = 0.0f;
+            spline[k] = distance[k] = size[k] = 0.0f;
+            for (size_t c = 0; c < 3; ++c)
+                position[c][k] = normal[c][k] = 0.0f;
+        }
+    }
+    // N sums over entries [0, padded) (a multiple of kLanes) of what f(k) gives for entries [k, k + kLanes):
+    // kLanes partial sums each, added in a fixed order (the same result on any machine and thread).
+    template <size_t N, class F> static std::array<float, N> sums(int padded, F&& f)
+    {
+        std::array<f32x4, N> acc{};
+        for (int k = 0; k < padded; k += kLanes)
+        {
+            const std::array<f32x4, N> x = f(k);
+            for (size_t c = 0; c < N; ++c)
+                acc[c] += x[c];
+        }
+        std::array<float, N> s;
+        for (size_t c = 0; c < N; ++c)
+            s[c] = (acc[c][0] + acc[c][1]) + (acc[c][2] + acc[c][3]);
+        return s;
+    }
+};
+
 // Filters texels [first, first + n) of the atlas, `values`, in place, with `noise` the variance of each
 // texel's guides (LightmapSh::noise); texels outside the range count as absent. The passes alternate between
 // `values` and a second copy of them; everything is allocated before `values` is written, so that on a
@@ -103,18 +152,41 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                   const std::vector<uint8_t>& valid, size_t first, size_t n, Values& values,
                   const LightmapSh::Noise* noise, const LightmapDenoiseOptions& o)
 {
+    // What a window reads of each texel, in one cache line (the atlas's record is 96 bytes, and the guides
+    // are arrays of their own): its sample point, its world size (at least 1e-30), its shading normal, its
+    // chart (kNone where it is invalid), and this pass's guides and smoothed variances.
+    struct alignas(64) Site
+    {
+        glm::vec3 position;
+        float size;
+        glm::vec3 normal;
+        uint32_t chart;
+        Guide guide, smooth;
+    };
+    static constexpr uint32_t kNone = UINT32_MAX;
+    std::vector<Site> site(n);
+    for (size_t i = 0; i < n; ++i)
+    {
+        const LightmapTexel& t = atlas.texels[first + i];
+        site[i] = {t.position, std::max(t.world_size, 1e-30f),
+                   t.normal,   valid[first + i] ? chart[first + i] : kNone,
+                   {},         {}};
+    }
+    // f(i) for every texel of the range, in parallel.
+    const auto each_texel = [&](auto&& f) { tbb::parallel_for(size_t(0), n, [&](size_t i) { f(i); }); };
     // Calls f(j, dx, dy) for each valid texel j of i's chart in the range at (dx, dy) texels of `step` from
     // it (i and j: indices in the range).
     const auto each_in_chart = [&](size_t i, int radius, int step, auto&& f)
     {
         const LightmapTexel& t = atlas.texels[first + i];
+        const uint32_t own = site[i].chart;
         for (int dy = -radius; dy <= radius; ++dy)
             for (int dx = -radius; dx <= radius; ++dx)
             {
-                const int64_t j = atlas.texel_of(int64_t(t.x) + dx * step, int64_t(t.y) + dy * step);
-                if (j >= int64_t(first) && j < int64_t(first + n) && valid[size_t(j)] &&
-                    chart[size_t(j)] == chart[first + i])
-                    f(size_t(j) - first, dx, dy);
+                const int64_t j =
+                    atlas.texel_of(int64_t(t.x) + dx * step, int64_t(t.y) + dy * step) - int64_t(first);
+                if (j >= 0 && j < int64_t(n) && site[size_t(j)].chart == own)
+                    f(size_t(j), dx, dy);
             }
     };
 
@@ -151,31 +223,40 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
     };
     {
         std::vector<Guide> g(guide), v(variance);
-        tbb::parallel_for(size_t(0), n,
-                          [&](size_t i)
-                          {
-                              if (valid[first + i])
-                              {
-                                  g[i] = binomial(guide, i, 1);
-                                  v[i] = binomial(variance, i, 2);
-                              }
-                          });
+        each_texel(
+            [&](size_t i)
+            {
+                if (valid[first + i])
+                {
+                    g[i] = binomial(guide, i, 1);
+                    v[i] = binomial(variance, i, 2);
+                }
+            });
         guide.swap(g);
         variance.swap(v);
     }
 
     std::vector<Guide> next_guide(n), next_variance(n), smooth(n);
     static constexpr float kSpline[5] = {1.0f / 16, 4.0f / 16, 6.0f / 16, 4.0f / 16, 1.0f / 16};
-    const double k2 = double(o.sigma_light) * double(o.sigma_light);
+    static const std::array<float, 25> kDistance = [] // sqrt(dx^2 + dy^2) over the 5 x 5 offsets
+    {
+        std::array<float, 25> d;
+        for (int k = 0; k < 25; ++k)
+            d[size_t(k)] = std::sqrt(float((k % 5 - 2) * (k % 5 - 2) + (k / 5 - 2) * (k / 5 - 2)));
+        return d;
+    }();
+    const float k2 = o.sigma_light * o.sigma_light;
     for (int pass = 0; pass < o.iterations; ++pass)
     {
         const int step = 1 << pass;
         // The variance the light's term divides by: each texel's, averaged over its 3 x 3 neighbours.
-        tbb::parallel_for(size_t(0), n,
-                          [&](size_t i)
-                          { smooth[i] = valid[first + i] ? binomial(variance, i, 1) : Guide{}; });
-        tbb::parallel_for(
-            size_t(0), n,
+        each_texel([&](size_t i) { smooth[i] = valid[first + i] ? binomial(variance, i, 1) : Guide{}; });
+        for (size_t i = 0; i < n; ++i)
+        {
+            site[i].guide = guide[i];
+            site[i].smooth = smooth[i];
+        }
+        each_texel(
             [&](size_t i)
             {
                 if (!valid[first + i])
@@ -187,84 +268,136 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                     return;
                 }
                 const LightmapTexel& t = atlas.texels[first + i];
-                const float size = std::max(t.world_size, 1e-30f);
-                // The light's term for neighbour j whose guides differ by `difference` (from the centre's, or
-                // from the fitted planes): exp(-max(0, D)) with D the mean over the guides of the squared
-                // difference less what the two texels' noise explains, in units of that noise (the
+                const Site& centre = site[i];
+                const float size = centre.size;
+                // The window: the neighbours that weigh anything, their offsets (in texels of this pass's
+                // spacing), their weight without the light's term (`base`), and their guides and smoothed
+                // variances, as arrays over the window, so that the light's term, the fit and the sums are
+                // loops over it that the compiler vectorises. Past `count`, up to a multiple of kLanes,
+                // weights of 0.
+                Window win;
+                int count = 0, centre_k = 0;
+                each_in_chart(i, 2, step,
+                              [&](size_t j, int dx, int dy)
+                              {
+                                  if (j == i)
+                                      centre_k = count;
+                                  const Site& u = site[j];
+                                  win.j[count] = uint32_t(j);
+                                  win.dx[count] = float(dx);
+                                  win.dy[count] = float(dy);
+                                  win.spline[count] = kSpline[dx + 2] * kSpline[dy + 2];
+                                  win.distance[count] = kDistance[size_t((dy + 2) * 5 + dx + 2)];
+                                  win.size[count] = u.size;
+                                  for (int c = 0; c < 3; ++c)
+                                  {
+                                      win.position[c][count] = u.position[c];
+                                      win.normal[c][count] = u.normal[c];
+                                  }
+                                  for (size_t c = 0; c < 4; ++c)
+                                  {
+                                      win.guide[c][count] = u.guide[c];
+                                      win.smooth[c][count] = u.smooth[c];
+                                  }
+                                  ++count;
+                              });
+                win.clear(count);
+                const int padded = (count + kLanes - 1) / kLanes * kLanes;
+                for (int k = count; k < padded; ++k) // (flat, so that they ask for no exp or log)
+                    for (int c = 0; c < 3; ++c)
+                    {
+                        win.position[c][k] = centre.position[c];
+                        win.normal[c][k] = centre.normal[c];
+                    }
+                // The weight without the light's term: 0 for a neighbour that is not where the chart's
+                // surface continues, else the spline's times the step off the centre's plane and the turn
+                // of the shading normals (lightmap_denoise.h); the centre's, the spline's.
+                for (int k = 0; k < padded; k += kLanes)
+                {
+                    f32x4 d[3], along = {}, turn = {}, off = {};
+                    const f32x4 spline = load4(&win.spline[k]);
+                    for (int c = 0; c < 3; ++c)
+                    {
+                        d[c] = load4(&win.position[c][k]) - centre.position[c];
+                        along += d[c] * d[c];
+                        off += d[c] * t.geometric_normal[c];
+                        turn += load4(&win.normal[c][k]) * centre.normal[c];
+                    }
+                    const f32x4 other_size = load4(&win.size[k]);
+                    const f32x4 reach = 1.5f * float(step) * load4(&win.distance[k]) *
+                                            (other_size > size ? other_size : size) +
+                                        size;
+                    off = off < 0.0f ? -off : off;
+                    f32x4 weight = spline;
+                    // (Each factor is exactly 1 on a flat chart: no exp or log for it.)
+                    const i32x4 curved = (off > 0.0f) | (turn < 1.0f);
+                    if (curved[0] | curved[1] | curved[2] | curved[3])
+                    {
+                        const f32x4 positive = turn > 0.0f ? turn : splat(1.0f);
+                        const f32x4 bend = turn < 1.0f
+                                               ? exp_nonpositive(o.sigma_normal * log_positive(positive))
+                                               : splat(1.0f);
+                        weight = weight * exp_nonpositive(-off / (o.sigma_plane * size)) *
+                                 (turn > 0.0f ? bend : f32x4{});
+                    }
+                    store4(&win.base[k], along > reach * reach ? f32x4{} : weight);
+                }
+                win.base[centre_k] = win.spline[centre_k];
+                // The light's term for each neighbour whose guides differ from the centre's (or from the
+                // fitted planes) by difference(c, k): exp(-max(0, D)), D the mean over the guides of the
+                // squared difference less what the two texels' noise explains, in units of that noise (the
                 // non-local means distance of Rousselle, Knaus and Zwicker 2012): about 0 for a neighbour
                 // whose light differs from the centre's by noise only, growing with the square of a real
                 // difference. A guide without variance at the centre (its samples agreed, as in a sealed room
-                // where none saw light) admits only neighbours with exactly its value.
-                const auto light_weight = [&](size_t j, const std::array<double, 4>& difference)
+                // where none saw light) admits only neighbours with exactly its value. Into `out`, times
+                // `base`.
+                int counted = 0;
+                for (size_t c = 0; c < 4; ++c)
+                    counted += variance[i][c] > 0.0f;
+                const float per_guide = counted ? 1.0f / float(counted) : 0.0f;
+                const auto light = [&](auto&& difference, float* out)
                 {
-                    double distance = 0.0;
-                    int counted = 0;
-                    for (size_t c = 0; c < 4; ++c)
+                    for (int k = 0; k < padded; k += kLanes)
                     {
-                        if (variance[i][c] > 0.0f)
+                        f32x4 distance = {}, admitted = splat(1.0f);
+                        for (size_t c = 0; c < 4; ++c)
                         {
-                            const double vi = smooth[i][c], vj = smooth[j][c];
-                            distance += (difference[c] * difference[c] - (vi + std::min(vi, vj))) /
-                                        (k2 * (vi + vj) + 1e-30);
-                            ++counted;
+                            if (variance[i][c] > 0.0f)
+                            {
+                                const f32x4 d = difference(c, k), vi = splat(smooth[i][c]),
+                                            vj = load4(&win.smooth[c][k]);
+                                distance += (d * d - (vi + (vj < vi ? vj : vi))) / (k2 * (vi + vj) + 1e-30f);
+                            }
+                            else
+                                admitted = load4(&win.guide[c][k]) == guide[i][c] ? admitted : f32x4{};
                         }
-                        else if (guide[j][c] != guide[i][c])
-                            return 0.0;
+                        distance = distance > 0.0f ? distance : f32x4{};
+                        store4(out + k,
+                               load4(&win.base[k]) * admitted * exp_nonpositive(-distance * per_guide));
                     }
-                    return counted && distance > 0.0 ? std::exp(-distance / counted) : 1.0;
                 };
-                // The neighbours that weigh anything, with their offsets (in texels of this pass's spacing).
-                struct Neighbour
-                {
-                    size_t j;
-                    double w, dx, dy, base; // base: w without the light's term
-                };
-                std::array<Neighbour, 25> used;
-                size_t count = 0;
-                each_in_chart(
-                    i, 2, step,
-                    [&](size_t j, int dx, int dy)
-                    {
-                        const LightmapTexel& u = atlas.texels[first + j];
-                        double weight = double(kSpline[dx + 2] * kSpline[dy + 2]), base = weight;
-                        if (j != i)
-                        {
-                            const glm::vec3 d = u.position - t.position;
-                            const float reach = 1.5f * float(step) * std::sqrt(float(dx * dx + dy * dy)) *
-                                                    std::max(size, u.world_size) +
-                                                size;
-                            if (glm::dot(d, d) > reach * reach)
-                                return;
-                            // (Each factor is exactly 1 on a flat chart: no exp or pow for it.)
-                            if (const float off = std::abs(glm::dot(d, t.geometric_normal)); off > 0.0f)
-                                weight *= std::exp(-off / (o.sigma_plane * size));
-                            if (const float turn = glm::dot(t.normal, u.normal); turn < 1.0f)
-                                weight *= std::pow(std::max(0.0f, turn), o.sigma_normal);
-                            base = weight;
-                            std::array<double, 4> difference;
-                            for (size_t c = 0; c < 4; ++c)
-                                difference[c] = double(guide[j][c]) - double(guide[i][c]);
-                            weight *= light_weight(j, difference);
-                            if (!(weight > 0.0))
-                                return;
-                        }
-                        used[count++] = {j, weight, double(dx), double(dy), base};
-                    });
+                light([&](size_t c, int k) { return load4(&win.guide[c][k]) - guide[i][c]; }, win.w);
+                win.w[centre_k] = win.base[centre_k];
+                // Only those that weigh anything take part from here on (the centre always).
+                for (int k = 0; k < padded; k += kLanes)
+                    store4(&win.base[k], load4(&win.w[k]) > 0.0f ? load4(&win.base[k]) : f32x4{});
+                win.base[centre_k] = win.w[centre_k];
                 // A weighted first-order fit v ~ b0 + b1 dx + b2 dy; the texel takes b0 = sum l_j v_j
                 // (lightmap_denoise.h), and where the centre's noise is known, the light's term is taken
                 // again against the guides' fitted planes and the fit repeated.
-                std::array<double, 25> l;
                 const bool refit = variance[i] != Guide{};
+                alignas(32) float l[kWindow];
                 for (int fit = 0; fit < (refit ? 2 : 1); ++fit)
                 {
-                    double m[3][3] = {};
-                    for (size_t k = 0; k < count; ++k)
-                    {
-                        const double x[3] = {1.0, used[k].dx, used[k].dy};
-                        for (int r = 0; r < 3; ++r)
-                            for (int c = 0; c < 3; ++c)
-                                m[r][c] += used[k].w * x[r] * x[c];
-                    }
+                    const std::array<float, 6> s =
+                        Window::sums<6>(padded,
+                                        [&](int k)
+                                        {
+                                            const f32x4 w = load4(&win.w[k]), dx = load4(&win.dx[k]),
+                                                        dy = load4(&win.dy[k]), wx = w * dx, wy = w * dy;
+                                            return std::array<f32x4, 6>{w, wx, wy, wx * dx, wx * dy, wy * dy};
+                                        });
+                    double m[3][3] = {{s[0], s[1], s[2]}, {s[1], s[3], s[4]}, {s[2], s[4], s[5]}};
                     m[1][1] += 1e-2 * m[0][0];
                     m[2][2] += 1e-2 * m[0][0];
                     // m's inverse (symmetric: cofactors over the determinant).
@@ -274,71 +407,68 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                                  i11 = m[0][0] * m[2][2] - m[0][2] * m[2][0],
                                  i12 = m[0][2] * m[1][0] - m[0][0] * m[1][2],
                                  i22 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-                    const double det = m[0][0] * i00 + m[0][1] * i01 + m[0][2] * i02;
-                    double total = 0.0;
-                    for (size_t k = 0; k < count; ++k)
-                    {
-                        l[k] = used[k].w * (i00 + i01 * used[k].dx + i02 * used[k].dy);
-                        total += l[k];
-                    }
-                    for (size_t k = 0; k < count; ++k)
+                    const double inverse = 1.0 / (m[0][0] * i00 + m[0][1] * i01 + m[0][2] * i02);
+                    const float a0 = float(i00 * inverse), a1 = float(i01 * inverse),
+                                a2 = float(i02 * inverse);
+                    for (int k = 0; k < padded; ++k)
+                        l[k] = win.w[k] * (a0 + a1 * win.dx[k] + a2 * win.dy[k]);
+                    const float total =
+                        Window::sums<1>(padded, [&](int k) { return std::array<f32x4, 1>{load4(&l[k])}; })[0];
+                    for (int k = 0; k < padded; ++k)
                         l[k] /= total;
                     if (fit == 1 || !refit)
                         break;
-                    std::array<std::array<double, 3>, 4> plane{};
+                    float plane[4][3];
                     for (size_t c = 0; c < 4; ++c)
                     {
-                        double r[3] = {};
-                        for (size_t k = 0; k < count; ++k)
+                        const std::array<float, 3> r = Window::sums<3>(
+                            padded,
+                            [&](int k)
+                            {
+                                const f32x4 y = load4(&win.w[k]) * load4(&win.guide[c][k]);
+                                return std::array<f32x4, 3>{y, y * load4(&win.dx[k]), y * load4(&win.dy[k])};
+                            });
+                        plane[c][0] = float((i00 * r[0] + i01 * r[1] + i02 * r[2]) * inverse);
+                        plane[c][1] = float((i01 * r[0] + i11 * r[1] + i12 * r[2]) * inverse);
+                        plane[c][2] = float((i02 * r[0] + i12 * r[1] + i22 * r[2]) * inverse);
+                    }
+                    light(
+                        [&](size_t c, int k)
                         {
-                            const double y = used[k].w * double(guide[used[k].j][c]);
-                            r[0] += y;
-                            r[1] += y * used[k].dx;
-                            r[2] += y * used[k].dy;
-                        }
-                        plane[c] = {(i00 * r[0] + i01 * r[1] + i02 * r[2]) / det,
-                                    (i01 * r[0] + i11 * r[1] + i12 * r[2]) / det,
-                                    (i02 * r[0] + i12 * r[1] + i22 * r[2]) / det};
-                    }
-                    for (size_t k = 0; k < count; ++k)
-                    {
-                        if (used[k].j == i)
-                            continue;
-                        std::array<double, 4> difference;
-                        for (size_t c = 0; c < 4; ++c)
-                            difference[c] = double(guide[used[k].j][c]) - plane[c][0] -
-                                            plane[c][1] * used[k].dx - plane[c][2] * used[k].dy;
-                        used[k].w = used[k].base * light_weight(used[k].j, difference);
-                    }
+                            return load4(&win.guide[c][k]) - plane[c][0] - plane[c][1] * load4(&win.dx[k]) -
+                                   plane[c][2] * load4(&win.dy[k]);
+                        },
+                        win.w);
+                    win.w[centre_k] = win.base[centre_k];
                 }
                 // The values, the guides and what is left of their variance (sum l_j^2 v_j) go through the
                 // same l_j.
                 // (The values in float: 4 to a vector, and every texel's sums in the same order.)
                 std::array<float, 27> sum_sh{};
                 std::array<float, 12> sum_direct{};
-                std::array<double, 4> g{}, v{};
-                for (size_t k = 0; k < count; ++k)
+                Guide g{}, v{};
+                for (int k = 0; k < count; ++k)
                 {
-                    const float* x = &current->irradiance[used[k].j][0].x;
-                    const float* y = &current->direct[used[k].j][0].x;
-                    const float lk = float(l[k]);
+                    if (l[k] == 0.0f)
+                        continue; // (no neighbour's light may be infinite or NaN: nothing to add)
+                    const uint32_t j = win.j[k];
+                    const float* x = &current->irradiance[j][0].x;
+                    const float* y = &current->direct[j][0].x;
+                    const float lk = l[k];
                     for (size_t c = 0; c < 27; ++c)
                         sum_sh[c] += lk * x[c];
                     for (size_t c = 0; c < 12; ++c)
                         sum_direct[c] += lk * y[c];
                     for (size_t c = 0; c < 4; ++c)
                     {
-                        g[c] += l[k] * double(guide[used[k].j][c]);
-                        v[c] += l[k] * l[k] * double(variance[used[k].j][c]);
+                        g[c] += lk * win.guide[c][k];
+                        v[c] += lk * lk * variance[j][c];
                     }
                 }
                 std::memcpy(&other->irradiance[i][0].x, sum_sh.data(), sizeof sum_sh);
                 std::memcpy(&other->direct[i][0].x, sum_direct.data(), sizeof sum_direct);
-                for (size_t c = 0; c < 4; ++c)
-                {
-                    next_guide[i][c] = float(g[c]);
-                    next_variance[i][c] = float(v[c]);
-                }
+                next_guide[i] = g;
+                next_variance[i] = v;
             });
         std::swap(current, other);
         guide.swap(next_guide);

@@ -55,7 +55,8 @@ namespace
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds each texel's noise estimate, for the bake and
 // for the pass (32 bytes), and what the filter holds beside the bake's sums: a second copy of the values,
-// five arrays of four floats and a chart number (kDenoiseBytesPerCoveredTexel); in tiles the filter works in
+// five arrays of four floats, the 64-byte record of what its windows read and a chart number
+// (kDenoiseBytesPerCoveredTexel); in tiles the filter works in
 // bands of rows with the rows around them it depends on, each texel of a band read (sums and noise) and
 // filtered in two copies (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
@@ -69,8 +70,8 @@ constexpr uint64_t kDilationBytesPerSlot = 2 + 4; // the dilation's state (two p
 constexpr uint64_t kPlaceBytesPerTexel = 12; // what the outputs keep of the atlas: each texel's (x, y), chart
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
-constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 4;
-constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 64 + 4;
+constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16 + 64;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // With mixed lights, every covered texel's shadowmask (4 floats) and the mixed lights' direct light (3).
 constexpr uint64_t kMixedBytesPerCoveredTexel = 28;
