@@ -41,6 +41,10 @@ TEST(Float4, ExpOfNonPositiveValuesIsWithinOneUlpAndZeroBelowFloatsRange)
     const f32x4 beyond = hemi::bake::exp_nonpositive(f32x4{-87.5f, -1000.0f, -inf, nan});
     for (int lane = 0; lane < 4; ++lane)
         EXPECT_EQ(beyond[lane], 0.0f) << lane;
+    const f32x4 positive =
+        hemi::bake::exp_nonpositive(f32x4{1e-30f, 1.0f, 1000.0f, inf}); // outside its range
+    for (int lane = 0; lane < 4; ++lane)
+        EXPECT_EQ(positive[lane], 1.0f) << lane;
 }
 
 TEST(Float4, LogOfPositiveValuesIsWithinOneUlpAndZeroAtOne)

@@ -31,11 +31,11 @@ inline void store4(float* p, f32x4 v)
 }
 
 // e^x for x <= 0, in float to within 1 ulp (Cody and Waite's reduction, Cephes's polynomial; the worst of 2e7
-// values against double's exp: 0.99 ulp); 0 below -87 and for NaN (float's normal range ends at e^-87.3). No
-// call and no branch.
+// values against double's exp: 0.99 ulp); 0 below -87 and for NaN (float's normal range ends at e^-87.3), 1
+// above 0. No call and no branch.
 inline f32x4 exp_nonpositive(f32x4 x)
 {
-    const f32x4 in = x < -87.0f ? splat(-87.0f) : x;
+    const f32x4 in = x >= -87.0f ? (x < 0.0f ? x : f32x4{}) : splat(-87.0f); // (no NaN reaches the int)
     const f32x4 n = (in * 1.44269504f + 12582912.0f) - 12582912.0f; // round(x / ln 2), 1.5 * 2^23's trick
     const f32x4 r = (in - n * 0.693359375f) - n * -2.12194440e-4f;  // x - n ln 2, ln 2 in two parts
     f32x4 p = splat(1.9875691500e-4f);
