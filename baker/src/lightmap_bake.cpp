@@ -446,24 +446,19 @@ class PackedIrradiance
     // The four texels of a bilinear lookup at `uv` (io::bilinear_slots' slots).
     Taps taps(glm::vec2 uv) const
     {
-        if (rank_.empty())
-        {
-            const io::BilinearSlots b = io::bilinear_slots(grid_, uv);
-            Taps t{{nullptr, nullptr, nullptr, nullptr}, b.tx, b.ty};
-            for (int i = 0; i < 4; ++i)
-                if (b.slot[i] >= 0)
-                    t.texel[i] = &halves_[size_t(b.slot[i]) * 3];
-            return t;
-        }
-        const io::BilinearFootprint f = io::bilinear_footprint(uv, grid_.width(), grid_.height());
-        Taps t{{nullptr, nullptr, nullptr, nullptr}, f.tx, f.ty};
-        constexpr uint32_t B = io::BlockGrid::kSize;
-        const uint32_t xs[2] = {uint32_t(f.x0), uint32_t(f.x1)}, ys[2] = {uint32_t(f.y0), uint32_t(f.y1)};
-        for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i)
-                if (const int32_t rank = rank_[(ys[j] / B) * grid_.blocks_x() + xs[i] / B]; rank >= 0)
-                    t.texel[j * 2 + i] =
-                        &halves_[(size_t(rank) * io::BlockGrid::kTexels + (ys[j] % B) * B + xs[i] % B) * 3];
+        const io::BilinearSlots b =
+            rank_.empty() ? io::bilinear_slots(grid_, uv)
+                          : io::bilinear_slots(grid_, uv,
+                                               [&](uint32_t block)
+                                               {
+                                                   const int32_t rank = rank_[block];
+                                                   return rank < 0 ? int64_t(-1)
+                                                                   : int64_t(rank) * io::BlockGrid::kTexels;
+                                               });
+        Taps t{{nullptr, nullptr, nullptr, nullptr}, b.tx, b.ty};
+        for (int i = 0; i < 4; ++i)
+            if (b.slot[i] >= 0)
+                t.texel[i] = &halves_[size_t(b.slot[i]) * 3];
         return t;
     }
     glm::vec3 read(const Taps& t) const

@@ -111,8 +111,9 @@ struct Window
     alignas(32) float spline[kWindow], distance[kWindow];
     alignas(32) float position[3][kWindow], normal[3][kWindow], size[kWindow];
 
-    // Zeros from entry `count` to the next multiple of kLanes.
-    void clear(int count)
+    // Zeros from entry `count` to the next multiple of kLanes, at the centre's point and normal (flat, so
+    // that they ask for no exp or log).
+    void clear(int count, const glm::vec3& centre, const glm::vec3& centre_normal)
     {
         for (int k = count; k % kLanes; ++k)
         {
@@ -121,8 +122,11 @@ struct Window
             for (size_t c = 0; c < 4; ++c)
                 guide[c][k] = smooth[c][k] = 0.0f;
             spline[k] = distance[k] = size[k] = 0.0f;
-            for (size_t c = 0; c < 3; ++c)
-                position[c][k] = normal[c][k] = 0.0f;
+            for (int c = 0; c < 3; ++c)
+            {
+                position[c][k] = centre[c];
+                normal[c][k] = centre_normal[c];
+            }
         }
     }
     // N sums over entries [0, padded) (a multiple of kLanes) of what f(k) gives for entries [k, k + kLanes):
@@ -301,14 +305,8 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                                   }
                                   ++count;
                               });
-                win.clear(count);
+                win.clear(count, centre.position, centre.normal);
                 const int padded = (count + kLanes - 1) / kLanes * kLanes;
-                for (int k = count; k < padded; ++k) // (flat, so that they ask for no exp or log)
-                    for (int c = 0; c < 3; ++c)
-                    {
-                        win.position[c][k] = centre.position[c];
-                        win.normal[c][k] = centre.normal[c];
-                    }
                 // The weight without the light's term: 0 for a neighbour that is not where the chart's
                 // surface continues, else the spline's times the step off the centre's plane and the turn
                 // of the shading normals (lightmap_denoise.h); the centre's, the spline's.
@@ -381,7 +379,6 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                 // Only those that weigh anything take part from here on (the centre always).
                 for (int k = 0; k < padded; k += kLanes)
                     store4(&win.base[k], load4(&win.w[k]) > 0.0f ? load4(&win.base[k]) : f32x4{});
-                win.base[centre_k] = win.w[centre_k];
                 // A weighted first-order fit v ~ b0 + b1 dx + b2 dy; the texel takes b0 = sum l_j v_j
                 // (lightmap_denoise.h), and where the centre's noise is known, the light's term is taken
                 // again against the guides' fitted planes and the fit repeated.

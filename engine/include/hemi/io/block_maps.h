@@ -133,7 +133,10 @@ struct BilinearSlots
     int64_t slot[4];
     float tx, ty;
 };
-inline BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv)
+// `block_slot(block)` finds a block's first slot, or -1 (BlockGrid::block_slot's answer; a caller with a
+// faster table of its own passes that).
+template <class BlockSlot>
+BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv, BlockSlot&& block_slot)
 {
     const BilinearFootprint f = bilinear_footprint(uv, grid.width(), grid.height());
     BilinearSlots t{{-1, -1, -1, -1}, f.tx, f.ty};
@@ -149,11 +152,15 @@ inline BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv)
             else if (j == 1 && ys[1] / B == ys[0] / B)
                 first[1][i] = first[0][i];
             else
-                first[j][i] = grid.block_slot((ys[j] / B) * grid.blocks_x() + xs[i] / B);
+                first[j][i] = block_slot((ys[j] / B) * grid.blocks_x() + xs[i] / B);
             if (first[j][i] >= 0)
                 t.slot[j * 2 + i] = first[j][i] + int64_t((ys[j] % B) * B + xs[i] % B);
         }
     return t;
+}
+inline BilinearSlots bilinear_slots(const BlockGrid& grid, glm::vec2 uv)
+{
+    return bilinear_slots(grid, uv, [&](uint32_t block) { return grid.block_slot(block); });
 }
 
 // A bilinear lookup's four texels (bilinear_slots' order) blended by its weights.
