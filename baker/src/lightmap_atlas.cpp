@@ -30,6 +30,12 @@ double cross2(const dvec2& a, const dvec2& b)
     return a.x * b.y - a.y * b.x;
 }
 
+// The barycentric weights an atlas keeps of a sample point (LightmapTexels::Packed): vertices 1 and 2's.
+glm::vec2 kept(const glm::dvec3& b)
+{
+    return {float(b.y), float(b.z)};
+}
+
 // Barycentric weights of p in triangle (a, b, c) of signed area2 = cross(b - a, c - a) != 0.
 glm::dvec3 barycentric(const dvec2& p, const dvec2& a, const dvec2& b, const dvec2& c, double area2)
 {
@@ -274,7 +280,7 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
 void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vector<Candidate>& contested,
                       std::vector<Candidate>& grazing, const std::vector<uint8_t>& inside_count,
                       const std::vector<int32_t>& first_inside, std::vector<int32_t>& best,
-                      std::vector<double>& best_distance, std::vector<glm::dvec3>& best_bary,
+                      std::vector<double>& best_distance, std::vector<glm::vec2>& best_bary,
                       std::span<const uint8_t> double_sided, LightmapUvReport& report)
 {
     std::sort(grazing.begin(), grazing.end());
@@ -388,14 +394,15 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
         triangle_uvs(mesh, winner, width, height, uv, area2);
         best[slot] = int32_t(winner);
         best_distance[slot] = 0.0;
-        best_bary[slot] = barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2);
+        best_bary[slot] = kept(barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2));
         while (next_grazer < grazing.size() && grazing[next_grazer].slot < slot)
             ++next_grazer;
         for (size_t g = next_grazer; winner_hidden && g < grazing.size() && grazing[g].slot == slot; ++g)
             if (grazer_visible[g])
             {
                 best[slot] = int32_t(grazing[g].triangle);
-                best_bary[slot] = sample_barycentric(mesh, grid, grazing[g], true, &best_distance[slot]);
+                best_bary[slot] =
+                    kept(sample_barycentric(mesh, grid, grazing[g], true, &best_distance[slot]));
                 ++report.grazed_instead;
                 break;
             }
@@ -406,6 +413,66 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
 }
 
 } // namespace
+
+LightmapTexels::LightmapTexels(const io::Mesh& mesh, uint32_t width, uint32_t height,
+                               std::vector<Packed> packed, std::vector<uint32_t> charts)
+    : packed_(std::move(packed)), charts_(std::move(charts)), width_(width), height_(height),
+      positions_(mesh.positions), normals_(mesh.normals), tangents_(mesh.tangents), uvs1_(mesh.uvs1),
+      indices_(mesh.indices)
+{
+}
+
+glm::vec3 LightmapTexels::geometric_normal(size_t i) const
+{
+    const uint32_t* idx = &indices_[size_t(triangle(i)) * 3];
+    const glm::dvec3 p0(positions_[idx[0]]), p1(positions_[idx[1]]), p2(positions_[idx[2]]);
+    return glm::vec3(glm::normalize(glm::cross(p1 - p0, p2 - p0)));
+}
+
+LightmapTexel LightmapTexels::operator[](size_t i) const
+{
+    const Packed& k = packed_[i];
+    LightmapTexel out;
+    out.x = k.x;
+    out.y = k.y;
+    const size_t t = k.triangle & ~kCentreInside;
+    out.triangle = uint32_t(t);
+    out.centre_inside = (k.triangle & kCentreInside) != 0;
+    const glm::dvec3 b(std::max(0.0, 1.0 - double(k.b1) - double(k.b2)), double(k.b1), double(k.b2));
+    out.barycentric = glm::vec3(b);
+    const uint32_t* idx = &indices_[t * 3];
+    const glm::dvec3 p0(positions_[idx[0]]), p1(positions_[idx[1]]), p2(positions_[idx[2]]);
+    out.position = glm::vec3(b.x * p0 + b.y * p1 + b.z * p2);
+    const glm::dvec3 cross = glm::cross(p1 - p0, p2 - p0);
+    const glm::dvec3 g = glm::normalize(cross); // as geometric_normal()
+    out.geometric_normal = glm::vec3(g);
+    glm::dvec3 nrm = b.x * glm::dvec3(normals_[idx[0]]) + b.y * glm::dvec3(normals_[idx[1]]) +
+                     b.z * glm::dvec3(normals_[idx[2]]);
+    nrm = glm::length(nrm) > 1e-12 ? glm::normalize(nrm) : g;
+    const glm::dvec4 t4 = b.x * glm::dvec4(tangents_[idx[0]]) + b.y * glm::dvec4(tangents_[idx[1]]) +
+                          b.z * glm::dvec4(tangents_[idx[2]]);
+    glm::dvec3 tan = glm::dvec3(t4) - nrm * glm::dot(nrm, glm::dvec3(t4));
+    if (glm::length(tan) < 1e-9)
+    {
+        // No usable tangent: any direction orthogonal to the normal.
+        tan = std::abs(nrm.x) < 0.9 ? glm::cross(nrm, glm::dvec3(1, 0, 0))
+                                    : glm::cross(nrm, glm::dvec3(0, 1, 0));
+    }
+    tan = glm::normalize(tan);
+    const double w = tangents_[idx[0]].w < 0.0f ? -1.0 : 1.0;
+    out.normal = glm::vec3(nrm);
+    out.tangent = glm::vec3(tan);
+    out.bitangent = glm::vec3(glm::cross(nrm, tan) * w);
+    // The footprint: world area over lightmap UV area (in texels), as the rasteriser's density report has it.
+    dvec2 uv[3];
+    for (int c = 0; c < 3; ++c)
+        uv[c] = dvec2(double(uvs1_[idx[c]].x) * width_, double(uvs1_[idx[c]].y) * height_);
+    const double world_area = 0.5 * glm::length(cross),
+                 uv_area = 0.5 * std::abs(cross2(uv[1] - uv[0], uv[2] - uv[0]));
+    out.world_size = float(std::sqrt(world_area / uv_area));
+    out.chart = charts_[t];
+    return out;
+}
 
 io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t height)
 {
@@ -448,7 +515,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     const size_t texels = grid.slots();
     std::vector<int32_t> best(texels, -1);
     std::vector<double> best_distance(texels, std::numeric_limits<double>::infinity());
-    std::vector<glm::dvec3> best_bary(texels);
+    std::vector<glm::vec2> best_bary(texels); // as kept (kept())
     std::vector<uint8_t> inside_count(texels, 0);
     std::vector<int32_t> first_inside(texels, -1);
     std::vector<Candidate> contested; // (slot, triangle) for centres two triangles claim
@@ -558,7 +625,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                 {
                     best_distance[texel] = distance;
                     best[texel] = int32_t(t);
-                    best_bary[texel] = b;
+                    best_bary[texel] = kept(b);
                 }
             }
     }
@@ -596,7 +663,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     atlas.slot_texel.assign(texels, -1);
     // Covered texels in row-major order of the atlas: block row by block row, then texel row by texel row
     // across the row's kept blocks.
-    std::vector<size_t> order;
+    std::vector<LightmapTexels::Packed> packed;
     {
         const std::vector<uint32_t>& blocks = grid.blocks();
         const uint32_t bx = grid.blocks_x();
@@ -609,50 +676,22 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
             for (uint32_t ly = 0; ly < io::BlockGrid::kSize; ++ly)
                 for (size_t b = first; b < last; ++b)
                     for (uint32_t lx = 0; lx < io::BlockGrid::kSize; ++lx)
-                        if (best[b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx] >= 0)
-                            order.push_back(b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx);
+                    {
+                        const size_t texel = b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx;
+                        if (best[texel] < 0)
+                            continue;
+                        const glm::uvec2 xy = grid.texel(texel);
+                        atlas.slot_texel[texel] = int32_t(packed.size());
+                        packed.push_back(
+                            {uint16_t(xy.x), uint16_t(xy.y),
+                             uint32_t(best[texel]) |
+                                 (best_distance[texel] == 0.0 ? LightmapTexels::kCentreInside : 0u),
+                             best_bary[texel].x, best_bary[texel].y});
+                    }
             first = last;
         }
     }
-    for (const size_t texel : order)
-    {
-        const size_t t = size_t(best[texel]);
-        const uint32_t* idx = &mesh.indices[t * 3];
-        const glm::dvec3 b = best_bary[texel];
-        LightmapTexel out;
-        const glm::uvec2 xy = grid.texel(texel);
-        out.x = xy.x;
-        out.y = xy.y;
-        out.triangle = uint32_t(t);
-        out.barycentric = glm::vec3(b);
-        out.centre_inside = best_distance[texel] == 0.0;
-        const glm::dvec3 p0(mesh.positions[idx[0]]), p1(mesh.positions[idx[1]]), p2(mesh.positions[idx[2]]);
-        out.position = glm::vec3(b.x * p0 + b.y * p1 + b.z * p2);
-        const glm::dvec3 g = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-        out.geometric_normal = glm::vec3(g);
-        glm::dvec3 nrm = b.x * glm::dvec3(mesh.normals[idx[0]]) + b.y * glm::dvec3(mesh.normals[idx[1]]) +
-                         b.z * glm::dvec3(mesh.normals[idx[2]]);
-        nrm = glm::length(nrm) > 1e-12 ? glm::normalize(nrm) : g;
-        const glm::dvec4 t4 = b.x * glm::dvec4(mesh.tangents[idx[0]]) +
-                              b.y * glm::dvec4(mesh.tangents[idx[1]]) +
-                              b.z * glm::dvec4(mesh.tangents[idx[2]]);
-        glm::dvec3 tan = glm::dvec3(t4) - nrm * glm::dot(nrm, glm::dvec3(t4));
-        if (glm::length(tan) < 1e-9)
-        {
-            // No usable tangent: any direction orthogonal to the normal.
-            tan = std::abs(nrm.x) < 0.9 ? glm::cross(nrm, glm::dvec3(1, 0, 0))
-                                        : glm::cross(nrm, glm::dvec3(0, 1, 0));
-        }
-        tan = glm::normalize(tan);
-        const double w = mesh.tangents[idx[0]].w < 0.0f ? -1.0 : 1.0;
-        out.normal = glm::vec3(nrm);
-        out.tangent = glm::vec3(tan);
-        out.bitangent = glm::vec3(glm::cross(nrm, tan) * w);
-        out.world_size = float(std::sqrt(world_area[t] / uv_area[t]));
-        out.chart = chart_of[t];
-        atlas.slot_texel[texel] = int32_t(atlas.texels.size());
-        atlas.texels.push_back(out);
-    }
+    atlas.texels = LightmapTexels(mesh, width, height, std::move(packed), chart_of);
     report.covered_texels = atlas.texels.size();
     atlas.grid = std::move(grid);
 

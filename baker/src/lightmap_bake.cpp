@@ -239,15 +239,23 @@ namespace
 // order, a chunk at a time: a map is filled without all of its texels' values in memory at once.
 // The texels are given by their places in a width x height atlas: place(i) is texel i's (x, y).
 using TexelValues = std::function<void(uint32_t first, std::span<glm::vec3> values)>;
+
+// The bake's tile file (texel_file.h): per texel the sums of the passes (SH9, then plain's and rnm's), the
+// pass's irradiance at the normal that the next pass's bounce map is made from, the texel's ray origin and
+// whether it was moved out of a wall (copy 0 alone), and with keep_noise the noise estimate.
+constexpr size_t kBounceField = 2, kOriginField = 3, kMovedField = 4, kNoiseField = 5;
+// The bounce map: dilated by two texels, in bands of at most 2^20 slots (and at least a tile's, or 1024).
+constexpr int kBounceDilation = 2;
+constexpr size_t kBounceBandSlots = size_t(1) << 20, kBounceBandLeastSlots = 1024;
 // An invalid texel (inside geometry, `valid`) is filled only from valid texels of its own chart (`charts`,
 // per texel; empty: any): a texel that the 32-ray test judged inside geometry though a viewer sees it (a
 // ceiling of a sealed level, whose rays meet many backs) keeps its own value beside another face's
 // rectangle in an unpadded page, instead of taking that face's light (issue 41: oacmpdm1's ceiling at
 // Quake (619, -551, 384), 0 against the reference's 0.117).
+// The blocks a dilation by `dilate` texels keeps: those that hold a covered texel or one within `dilate`
+// texels of one.
 template <typename Place>
-io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& place, int k, int dilate,
-                      std::span<const uint8_t> valid, const TexelValues& produce,
-                      std::span<const uint32_t> charts = {})
+io::BlockGrid dilated_grid(uint32_t width, uint32_t height, uint32_t n, const Place& place, int dilate)
 {
     dilate = std::max(dilate, 0);
     const int64_t w = width, h = height, B = io::BlockGrid::kSize;
@@ -266,95 +274,173 @@ io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& 
     for (size_t i = 0; i < keep.size(); ++i)
         if (keep[i])
             blocks.push_back(uint32_t(i));
-    io::BlockMaps maps(io::BlockGrid(width, height, std::move(blocks)), uint32_t(k));
-    const io::BlockGrid& grid = maps.grid;
-    auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
-    // Per slot: 0 empty, kOwn a texel inside geometry holding its own value (or an empty one filled from
-    // such texels), kValid a valid texel's value (or one filled from those).
-    constexpr uint8_t kOwn = 1, kValid = 2;
-    std::vector<uint8_t> filled(grid.slots(), 0);
-    constexpr uint32_t kAnyChart = ~0u;
-    std::vector<uint32_t> slot_chart(charts.empty() ? 0 : grid.slots(), kAnyChart);
-    constexpr uint32_t kChunk = 1u << 16;
-    std::vector<glm::vec3> values(size_t(std::min(n, kChunk)) * size_t(k));
-    for (uint32_t first = 0; first < n; first += kChunk)
+    return io::BlockGrid(width, height, std::move(blocks));
+}
+
+// The dilation of `grid` (dilated_grid's) made band by band: bands of whole block rows of at most
+// `band_slots` slots each (at least one row), each dilated with the rows within `dilate` texels above and
+// below it (whole block rows), as far as a texel's dilated value depends on others, so that each band's
+// values come out as the whole atlas's would. For each band, emit(maps, first, count, at): `maps` over the
+// band and its rows around, whose blocks [at, at + count) are grid's blocks [first, first + count). The
+// texels must come in the atlas's order (block row after block row); `produce` is then asked for the texels
+// of each band and its rows around, in bands of increasing rows (the rows around a band are asked for again
+// with the next). With band_slots at least grid.slots(), one band: the whole atlas, each texel asked for
+// once.
+template <typename Place, typename Emit>
+void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, int k, int dilate,
+                     std::span<const uint8_t> valid, const TexelValues& produce,
+                     std::span<const uint32_t> charts, size_t band_slots, const Emit& emit)
+{
+    dilate = std::max(dilate, 0);
+    const uint32_t width = grid.width(), height = grid.height(), B = io::BlockGrid::kSize;
+    const uint32_t bx = grid.blocks_x(), by = grid.blocks_y();
+    const std::vector<uint32_t>& all = grid.blocks();
+    // Per block row r: the first of grid's blocks and the first texel in it or a later row.
+    std::vector<uint32_t> row_block(size_t(by) + 1, 0), row_texel(size_t(by) + 1, n);
+    for (uint32_t r = 0, b = 0; r <= by; ++r)
     {
-        const uint32_t count = std::min(kChunk, n - first);
-        produce(first, std::span<glm::vec3>(values.data(), size_t(count) * size_t(k)));
-        for (uint32_t i = first; i < first + count; ++i)
-        {
-            // Inside geometry: filled from its valid neighbours like an empty texel; where none reaches
-            // it (a face no viewer can reach, a chart that lies wholly in a wall) it keeps its own value.
-            const glm::uvec2 t = place(i);
-            const size_t slot = size_t(grid.slot(t.x, t.y));
-            filled[slot] = !valid.empty() && !valid[i] ? kOwn : kValid;
-            if (!charts.empty())
-                slot_chart[slot] = charts[i];
-            for (int j = 0; j < k; ++j)
-            {
-                const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
-                float* out = at(j, slot);
-                out[0] = v.x;
-                out[1] = v.y;
-                out[2] = v.z;
-            }
-        }
+        while (b < all.size() && all[b] / bx < r)
+            ++b;
+        row_block[r] = b;
     }
+    for (uint32_t i = n; i-- > 0;)
+        row_texel[place(i).y / B] = i;
+    for (uint32_t r = by; r-- > 0;)
+        row_texel[r] = std::min(row_texel[r], row_texel[r + 1]);
+    // Bands need the texels in block-row order; otherwise (not the atlas's order) one band.
+    bool ordered = true;
+    for (uint32_t i = 1; i < n && ordered; ++i)
+        ordered = place(i - 1).y / B <= place(i).y / B;
+    const uint32_t halo = uint32_t((dilate + int(B) - 1) / int(B)); // block rows
+    if (!ordered)
+        band_slots = SIZE_MAX;
+    constexpr uint8_t kOwn = 1, kValid = 2;
+    constexpr uint32_t kAnyChart = ~0u;
+    constexpr uint32_t kChunk = 1u << 16;
+    std::vector<glm::vec3> values;
     std::vector<glm::dvec3> sum(static_cast<size_t>(k));
-    for (int pass = 0; pass < dilate; ++pass)
+    for (uint32_t r0 = 0; r0 < by;)
     {
-        // First every texel that valid texels reach (from the values before the pass: those are never
-        // rewritten), then the empty ones that only texels holding their own reach (those that kept it).
-        std::vector<uint8_t> next = filled;
-        for (const uint8_t source : {kValid, kOwn})
-            for (size_t slot = 0; slot < grid.slots(); ++slot)
+        // Rows [r0, r1) out of this band, [lo, hi) dilated for it.
+        uint32_t r1 = r0 + 1;
+        const auto lo = [&](uint32_t r) { return r >= halo ? r - halo : 0u; };
+        const auto hi = [&](uint32_t r) { return std::min(by, r + halo); };
+        if (band_slots == SIZE_MAX)
+            r1 = by;
+        else
+            while (r1 < by &&
+                   size_t(row_block[hi(r1 + 1)] - row_block[lo(r0)]) * io::BlockGrid::kTexels <= band_slots)
+                ++r1;
+        const uint32_t first_row = band_slots == SIZE_MAX ? 0 : lo(r0),
+                       last_row = band_slots == SIZE_MAX ? by : hi(r1);
+        io::BlockMaps maps(io::BlockGrid(width, height,
+                                         std::vector<uint32_t>(all.begin() + row_block[first_row],
+                                                               all.begin() + row_block[last_row])),
+                           uint32_t(k));
+        const io::BlockGrid& local = maps.grid;
+        auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
+        // Per slot: 0 empty, kOwn a texel inside geometry holding its own value (or an empty one filled from
+        // such texels), kValid a valid texel's value (or one filled from those).
+        std::vector<uint8_t> filled(local.slots(), 0);
+        std::vector<uint32_t> slot_chart(charts.empty() ? 0 : local.slots(), kAnyChart);
+        const uint32_t t0 = band_slots == SIZE_MAX ? 0 : row_texel[first_row],
+                       t1 = band_slots == SIZE_MAX ? n : row_texel[last_row];
+        values.resize(size_t(std::min(t1 - t0, kChunk)) * size_t(k));
+        for (uint32_t first = t0; first < t1; first += kChunk)
+        {
+            const uint32_t count = std::min(kChunk, t1 - first);
+            produce(first, std::span<glm::vec3>(values.data(), size_t(count) * size_t(k)));
+            for (uint32_t i = first; i < first + count; ++i)
             {
-                if (source == kValid ? filled[slot] == kValid : next[slot] != 0)
-                    continue;
-                const glm::uvec2 xy = grid.texel(slot);
-                if (xy.x >= width || xy.y >= height)
-                    continue; // past the atlas in a block of its last column or row
-                int count = 0;
-                std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx)
-                    {
-                        const int64_t from = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
-                        if (from < 0 || filled[size_t(from)] != source || next[size_t(from)] != source)
-                            continue;
-                        // An invalid texel takes only its own chart's light.
-                        if (!slot_chart.empty() && filled[slot] == kOwn && slot_chart[slot] != kAnyChart &&
-                            slot_chart[size_t(from)] != slot_chart[slot])
-                            continue;
-                        ++count;
-                        for (int j = 0; j < k; ++j)
-                        {
-                            const float* v = at(j, size_t(from));
-                            sum[size_t(j)] += glm::dvec3(v[0], v[1], v[2]);
-                        }
-                    }
-                if (!count)
-                    continue;
+                // Inside geometry: filled from its valid neighbours like an empty texel; where none reaches
+                // it (a face no viewer can reach, a chart that lies wholly in a wall) it keeps its own value.
+                const glm::uvec2 t = place(i);
+                const size_t slot = size_t(local.slot(t.x, t.y));
+                filled[slot] = !valid.empty() && !valid[i] ? kOwn : kValid;
+                if (!charts.empty())
+                    slot_chart[slot] = charts[i];
                 for (int j = 0; j < k; ++j)
                 {
-                    const glm::vec3 v(sum[size_t(j)] / double(count));
+                    const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
                     float* out = at(j, slot);
                     out[0] = v.x;
                     out[1] = v.y;
                     out[2] = v.z;
                 }
-                next[slot] = source;
             }
-        filled.swap(next);
+        }
+        for (int pass = 0; pass < dilate; ++pass)
+        {
+            // First every texel that valid texels reach (from the values before the pass: those are never
+            // rewritten), then the empty ones that only texels holding their own reach (those that kept it).
+            std::vector<uint8_t> next = filled;
+            for (const uint8_t source : {kValid, kOwn})
+                for (size_t slot = 0; slot < local.slots(); ++slot)
+                {
+                    if (source == kValid ? filled[slot] == kValid : next[slot] != 0)
+                        continue;
+                    const glm::uvec2 xy = local.texel(slot);
+                    if (xy.x >= width || xy.y >= height)
+                        continue; // past the atlas in a block of its last column or row
+                    int count = 0;
+                    std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx)
+                        {
+                            const int64_t from = local.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
+                            if (from < 0 || filled[size_t(from)] != source || next[size_t(from)] != source)
+                                continue;
+                            // An invalid texel takes only its own chart's light.
+                            if (!slot_chart.empty() && filled[slot] == kOwn &&
+                                slot_chart[slot] != kAnyChart && slot_chart[size_t(from)] != slot_chart[slot])
+                                continue;
+                            ++count;
+                            for (int j = 0; j < k; ++j)
+                            {
+                                const float* v = at(j, size_t(from));
+                                sum[size_t(j)] += glm::dvec3(v[0], v[1], v[2]);
+                            }
+                        }
+                    if (!count)
+                        continue;
+                    for (int j = 0; j < k; ++j)
+                    {
+                        const glm::vec3 v(sum[size_t(j)] / double(count));
+                        float* out = at(j, slot);
+                        out[0] = v.x;
+                        out[1] = v.y;
+                        out[2] = v.z;
+                    }
+                    next[slot] = source;
+                }
+            filled.swap(next);
+        }
+        const uint32_t out_first = band_slots == SIZE_MAX ? 0 : row_block[r0],
+                       out_count =
+                           (band_slots == SIZE_MAX ? uint32_t(all.size()) : row_block[r1]) - out_first;
+        emit(std::move(maps), out_first, out_count, out_first - row_block[first_row]);
+        r0 = r1;
     }
-    return maps;
+}
+
+// The whole atlas dilated at once (dilate_in_bands' one band).
+template <typename Place>
+io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& place, int k, int dilate,
+                      std::span<const uint8_t> valid, const TexelValues& produce,
+                      std::span<const uint32_t> charts = {})
+{
+    io::BlockMaps out;
+    dilate_in_bands(dilated_grid(width, height, n, place, dilate), n, place, k, dilate, valid, produce,
+                    charts, SIZE_MAX,
+                    [&](io::BlockMaps&& maps, uint32_t, uint32_t, uint32_t) { out = std::move(maps); });
+    return out;
 }
 // Each texel's chart, as dilated() takes them.
 std::vector<uint32_t> texel_charts(const LightmapAtlas& atlas)
 {
     std::vector<uint32_t> charts(atlas.texels.size());
     for (size_t i = 0; i < charts.size(); ++i)
-        charts[i] = atlas.texels[i].chart;
+        charts[i] = atlas.texels.chart(i);
     return charts;
 }
 
@@ -363,17 +449,7 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, int k, int dilate, std::span<c
 {
     return dilated(
         atlas.width, atlas.height, uint32_t(atlas.texels.size()),
-        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, k, dilate, valid,
-        produce, texel_charts(atlas));
-}
-
-// The same from every texel's values in memory.
-io::BlockMaps dilated(const LightmapAtlas& atlas, std::span<const glm::vec3> values, int k, int dilate,
-                      std::span<const uint8_t> valid = {})
-{
-    return dilated(atlas, k, dilate, valid,
-                   [&](uint32_t first, std::span<glm::vec3> out)
-                   { std::copy_n(values.begin() + ptrdiff_t(first) * k, out.size(), out.begin()); });
+        [&](uint32_t i) { return atlas.texels.place(i); }, k, dilate, valid, produce, texel_charts(atlas));
 }
 
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
@@ -411,8 +487,8 @@ class PackedIrradiance
     };
 
     PackedIrradiance() = default;
-    // A map of one coefficient (k = 1).
-    explicit PackedIrradiance(const io::BlockMaps& map) : grid_(map.grid), halves_(map.grid.slots() * 3, 0)
+    // A map over `grid`'s blocks (dilated_grid's), every value 0 until fill() or broadcast() sets them.
+    explicit PackedIrradiance(io::BlockGrid grid) : grid_(std::move(grid)), halves_(grid_.slots() * 3, 0)
     {
         // Each block's rank among the kept ones, for every block of the atlas, where that table takes at most
         // an eighth of the halves (4 bytes a block against 384 a kept block): one load where the grid's rank
@@ -424,9 +500,28 @@ class PackedIrradiance
             for (size_t b = 0; b < grid_.blocks().size(); ++b)
                 rank_[grid_.blocks()[b]] = int32_t(b);
         }
+    }
+    // The atlas's texels' values (`produce`, one a texel, over the texels of `places`) dilated by `dilate`
+    // (dilate_in_bands, in bands of `band_slots`), each band packed into halves as it comes: beyond the
+    // halves, one band's floats are held. The scale comes from the largest texel value, valid or not (the
+    // dilated values lie between the texels'), read first.
+    template <typename Place>
+    void fill(uint32_t n, const Place& place, int dilate, std::span<const uint8_t> valid,
+              const TexelValues& produce, std::span<const uint32_t> charts, size_t band_slots)
+    {
         float largest = 0.0f;
-        for (const float v : map.values)
-            largest = std::max(largest, v); // NaN is left out
+        {
+            constexpr uint32_t kChunk = 1u << 16;
+            std::vector<glm::vec3> values(std::min(n, kChunk));
+            for (uint32_t first = 0; first < n; first += kChunk)
+            {
+                const uint32_t count = std::min(kChunk, n - first);
+                produce(first, std::span<glm::vec3>(values.data(), count));
+                for (uint32_t i = 0; i < count; ++i)
+                    for (int c = 0; c < 3; ++c)
+                        largest = std::max(largest, values[i][c]); // NaN is left out
+            }
+        }
         // The smallest power of two that brings the largest value under the largest half (a dim map up, so
         // that its light stays clear of the halves' subnormals).
         int shift = 0;
@@ -435,12 +530,24 @@ class PackedIrradiance
         while (largest > 0.0f && std::ldexp(double(kLargest), shift - 1) >= double(largest))
             --shift;
         scale_ = std::ldexp(1.0f, shift);
-        for (size_t slot = 0; slot < map.grid.slots(); ++slot)
-        {
-            const float* v = &map.values[map.index(0, slot)];
-            for (size_t c = 0; c < 3; ++c)
-                halves_[slot * 3 + c] = to_half(std::ldexp(v[c], -shift));
-        }
+        dilate_in_bands(grid_, n, place, 1, dilate, valid, produce, charts, band_slots,
+                        [&](io::BlockMaps&& maps, uint32_t first, uint32_t count, uint32_t at)
+                        {
+                            const size_t to = size_t(first) * io::BlockGrid::kTexels,
+                                         from = size_t(at) * io::BlockGrid::kTexels;
+                            for (size_t slot = 0; slot < size_t(count) * io::BlockGrid::kTexels; ++slot)
+                            {
+                                const float* v = &maps.values[maps.index(0, from + slot)];
+                                for (size_t c = 0; c < 3; ++c)
+                                    halves_[(to + slot) * 3 + c] = to_half(std::ldexp(v[c], -shift));
+                            }
+                        });
+    }
+    // The leader's map to every rank (all made over the same grid).
+    void broadcast(Distribution& dist)
+    {
+        dist.broadcast(std::as_writable_bytes(std::span<uint16_t>(halves_)));
+        dist.broadcast(std::as_writable_bytes(std::span<float>(&scale_, 1)));
     }
 
     // The four texels of a bilinear lookup at `uv` (io::bilinear_slots' slots).
@@ -759,6 +866,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     std::vector<ShArray> sum_sh(tiled ? tile : 0);
     std::vector<DirectArray> sum_direct(tiled ? tile : 0);
     std::vector<LightmapSh::Noise> sum_noise(tiled && o.keep_noise ? tile : 0);
+    std::vector<glm::vec3> tile_bounce(tiled ? tile : 0);
     out.irradiance.assign(tiled ? 0 : n, {});
     out.direct.assign(tiled ? 0 : n, {});
     out.noise.assign(o.keep_noise && !tiled ? n : 0, {});
@@ -768,9 +876,9 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     float rnm_scale[3];
     for (size_t b = 0; b < 3; ++b)
         rnm_scale[b] = float(2.0 / (1.0 + double(rnm[b].z)));
-    std::vector<glm::vec3> previous(n, glm::vec3(0.0f));
-    std::vector<glm::vec3> next_previous(tiled ? n : 0,
-                                         glm::vec3(0.0f)); // with tiles: the pass's, as it goes
+    // The irradiance at each texel's normal that the pass before left (what the bounce map is made from):
+    // without tiles here; with tiles in the tile file beside the sums (kBounceField), the pass's own copy.
+    std::vector<glm::vec3> previous(tiled ? 0 : n, glm::vec3(0.0f));
     out.valid.assign(n, 1);
     // The mixed lights' channels; their shadowmask and direct light are kept for every texel (28 bytes).
     const std::vector<ShadowmaskChannel> channels = shadowmask_channels(lights);
@@ -782,7 +890,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.shadowmask.assign(mixed ? n : 0, {1.0f, 1.0f, 1.0f, 1.0f});
     out.mixed_direct.assign(mixed ? n : 0, glm::vec3(0.0f));
     const bool sun_lit = lights.sun && lights.sun_mode != io::LightMode::Realtime;
-    std::vector<uint8_t> pushed(n, 0);
     PackedIrradiance previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     tbb::enumerable_thread_specific<RayScratch> scratch;
 
@@ -825,67 +932,141 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                          : std::span<const io::Material>(),
                                 tiled);
     dist.check_same(key, "baked a lightmap whose scene, atlas, lights or options");
-    std::vector<glm::vec3> origins(n);
+    // What the checkpoint saves: without tiles, the sums and the pass so far; with tiles, the irradiance at
+    // the normals of the pass before and of this one so far (the sums are in the tile file, synced before the
+    // checkpoint counts a tile as done).
+    std::vector<CheckpointSection> sections;
+    if (!tiled)
+        sections = {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
+                    {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
+                    {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
+                    {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
+                    {"noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(out.noise))},
+                    {"pass_noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(pass_noise))},
+                    {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
+                    {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
+    else
+        sections = {{"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
+    sections.push_back(
+        {"shadowmask", std::as_writable_bytes(std::span<std::array<float, 4>>(out.shadowmask))});
+    sections.push_back({"mixed_direct", std::as_writable_bytes(std::span<glm::vec3>(out.mixed_direct))});
+    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
+                               n, std::move(sections), o.checkpoint_seconds);
+    SlicePosition state;
+    if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
+    {
+        state = *resumed;
+        out.resumed = true;
+    }
+    // The tile file: on the leader, which alone keeps the sums. Kept while a checkpoint may need it.
+    std::shared_ptr<TexelFile> tiles;
+    if (tiled && dist.leader())
+    {
+        std::vector<uint32_t> fields = {uint32_t(sizeof(ShArray)), uint32_t(sizeof(DirectArray)),
+                                        uint32_t(sizeof(glm::vec3)), uint32_t(sizeof(glm::vec3)), 1};
+        if (o.keep_noise)
+            fields.push_back(uint32_t(sizeof(LightmapSh::Noise)));
+        tiles = std::make_shared<TexelFile>(o.tile_file, key, n, std::move(fields), out.resumed);
+        if (checkpoint.active())
+            tiles->keep();
+    }
+    // Each texel's ray origin and whether it was moved out of a wall: without tiles here for every texel;
+    // with tiles here for a tile's (origins[i - base]), every tile's in the tile file (kOriginField,
+    // kMovedField, copy 0), read back and sent to every rank before the tile's work (load_origins).
+    std::vector<glm::vec3> origins(tile);
+    std::vector<uint8_t> pushed(tile, 0);
+    uint32_t base = 0; // the first texel of the tile being worked on: origins[0], pass_*[0]
+    const auto load_origins = [&](uint32_t begin, uint32_t count)
+    {
+        base = tiled ? begin : 0;
+        if (!tiled)
+            return;
+        if (tiles)
+        {
+            tiles->read(0, kOriginField, begin, std::as_writable_bytes(std::span(origins.data(), count)));
+            tiles->read(0, kMovedField, begin, std::as_writable_bytes(std::span(pushed.data(), count)));
+        }
+        dist.broadcast(std::as_writable_bytes(std::span(origins.data(), count)));
+        dist.broadcast(std::as_writable_bytes(std::span(pushed.data(), count)));
+    };
     auto find_origin = [&](uint32_t i)
     {
         const LightmapTexel& t = atlas.texels[i];
         const detail::TexelOrigins::Origin found =
             texel_origins.find(t.triangle, t.x, t.y, t.barycentric, &t.tangent);
-        origins[i] = found.origin;
-        pushed[i] = found.moved;
+        origins[i - base] = found.origin;
+        pushed[i - base] = found.moved;
         out.valid[i] = !found.inside;
     };
-    const ItemArray origin_arrays[3] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
-                                        {reinterpret_cast<std::byte*>(pushed.data()), 1},
-                                        {reinterpret_cast<std::byte*>(out.valid.data()), 1}};
-    dist.run(
-        0, n, std::min<uint32_t>(uint32_t(1) << 18, n), origin_arrays,
-        [&](uint32_t begin, uint32_t end)
-        {
-            tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
-                              [&](const tbb::blocked_range<uint32_t>& r)
-                              {
-                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
-                                      find_origin(i);
-                              });
-        },
-        [](uint32_t) {});
-    // A texel inside geometry that texels outside it see is outside all the same (TexelOrigins::seen): its
-    // rays start from its centre's origin, and those that meet the backs of walls bring no light.
-    std::vector<uint8_t> seen(n, 0);
-    const ItemArray seen_array[1] = {{reinterpret_cast<std::byte*>(seen.data()), 1}};
-    dist.run(
-        0, n, std::min<uint32_t>(uint32_t(1) << 18, n), seen_array,
-        [&](uint32_t begin, uint32_t end)
-        {
-            tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, 64),
-                              [&](const tbb::blocked_range<uint32_t>& r)
-                              {
-                                  for (uint32_t i = r.begin(); i != r.end(); ++i)
+    for (uint32_t begin = 0; begin < n; begin += tile)
+    {
+        const uint32_t end = std::min(n, begin + tile);
+        base = begin;
+        const ItemArray origin_arrays[3] = {{reinterpret_cast<std::byte*>(origins.data()), sizeof(glm::vec3)},
+                                            {reinterpret_cast<std::byte*>(pushed.data()), 1},
+                                            {reinterpret_cast<std::byte*>(out.valid.data() + base), 1}};
+        dist.run(
+            0, end - begin, std::min<uint32_t>(uint32_t(1) << 18, end - begin), origin_arrays,
+            [&](uint32_t b, uint32_t e)
+            {
+                tbb::parallel_for(tbb::blocked_range<uint32_t>(base + b, base + e, 64),
+                                  [&](const tbb::blocked_range<uint32_t>& r)
                                   {
-                                      if (out.valid[i])
-                                          continue;
-                                      const LightmapTexel& t = atlas.texels[i];
-                                      // A point on a texel inside geometry (its own triangle's) is inside
-                                      // geometry.
-                                      auto may_be_outside = [&](const RayHit& hit)
-                                      {
-                                          const glm::vec2 uv = atlas_uv(mesh, hit.primitive, hit.u, hit.v);
-                                          const int32_t at =
-                                              atlas.texel_of(int64_t(std::floor(uv.x * float(atlas.width))),
-                                                             int64_t(std::floor(uv.y * float(atlas.height))));
-                                          return at < 0 || out.valid[size_t(at)] ||
-                                                 atlas.texels[size_t(at)].triangle != hit.primitive;
-                                      };
-                                      seen[i] = texel_origins.seen(origins[i], t.triangle,
-                                                                   uint64_t(t.y) * atlas.width + t.x,
-                                                                   may_be_outside);
-                                  }
-                              });
-        },
-        [](uint32_t) {});
+                                      for (uint32_t i = r.begin(); i != r.end(); ++i)
+                                          find_origin(i);
+                                  });
+            },
+            [](uint32_t) {});
+        for (uint32_t i = 0; i < end - begin; ++i)
+            out.pushed += pushed[i];
+        if (tiles)
+        {
+            tiles->write(0, kOriginField, begin, std::as_bytes(std::span(origins.data(), end - begin)));
+            tiles->write(0, kMovedField, begin, std::as_bytes(std::span(pushed.data(), end - begin)));
+        }
+    }
+    // A texel inside geometry that texels outside it see is outside all the same (TexelOrigins::seen): its
+    // rays start from its centre's origin, and those that meet the backs of walls bring no light. (Each
+    // texel's answer reads the others' validity as the origins left it: it is kept apart until all are in.)
+    std::vector<uint8_t> seen(n, 0);
+    for (uint32_t begin = 0; begin < n; begin += tile)
+    {
+        const uint32_t end = std::min(n, begin + tile);
+        load_origins(begin, end - begin);
+        const ItemArray seen_array[1] = {{reinterpret_cast<std::byte*>(seen.data() + base), 1}};
+        dist.run(
+            0, end - begin, std::min<uint32_t>(uint32_t(1) << 18, end - begin), seen_array,
+            [&](uint32_t b, uint32_t e)
+            {
+                tbb::parallel_for(
+                    tbb::blocked_range<uint32_t>(base + b, base + e, 64),
+                    [&](const tbb::blocked_range<uint32_t>& r)
+                    {
+                        for (uint32_t i = r.begin(); i != r.end(); ++i)
+                        {
+                            if (out.valid[i])
+                                continue;
+                            const LightmapTexel& t = atlas.texels[i];
+                            // A point on a texel inside geometry (its own triangle's) is inside geometry.
+                            auto may_be_outside = [&](const RayHit& hit)
+                            {
+                                const glm::vec2 uv = atlas_uv(mesh, hit.primitive, hit.u, hit.v);
+                                const int32_t at =
+                                    atlas.texel_of(int64_t(std::floor(uv.x * float(atlas.width))),
+                                                   int64_t(std::floor(uv.y * float(atlas.height))));
+                                return at < 0 || out.valid[size_t(at)] ||
+                                       atlas.texels.triangle(size_t(at)) != hit.primitive;
+                            };
+                            seen[i] = texel_origins.seen(origins[i - base], t.triangle,
+                                                         uint64_t(t.y) * atlas.width + t.x, may_be_outside);
+                        }
+                    });
+            },
+            [](uint32_t) {});
+    }
     for (uint32_t i = 0; i < n; ++i)
         out.valid[i] |= seen[i];
+    std::vector<uint8_t>().swap(seen);
 
     // The noise estimate's patterns (LightmapSh::noise): each sample is compared with its six nearest in its
     // stream's. The sun's rays are drawn independently.
@@ -903,12 +1084,11 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         unit[1] = glm::vec3(1.0f);
         return double(math::convolve_cosine(unit)[1].x);
     }();
-    uint32_t base = 0; // the texel that pass_*[0] holds: the tile's first
     auto texel = [&](uint32_t i, int pass)
     {
         const LightmapTexel& t = atlas.texels[i];
         const uint64_t item = uint64_t(t.y) * atlas.width + t.x;
-        const glm::vec3 origin = origins[i];
+        const glm::vec3 origin = origins[i - base];
         RayScratch& s = scratch.local();
         s.reserve(size_t(std::max(o.rays, o.sun_rays)));
         s.samples.reserve(size_t(2 * o.rays + o.sun_rays) + lights.punctual.size());
@@ -1064,7 +1244,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 glm::vec3 d(0.0f, 0.0f, 1.0f);
                 float distance = INFINITY;
                 // A texel moved out of a wall is lit where its rays start.
-                const glm::vec3 at = pushed[i] ? origin : t.position;
+                const glm::vec3 at = pushed[i - base] ? origin : t.position;
                 const glm::vec3 e = light.punctual(p, at, d, distance);
                 if (const int c = punctual_channel[l]; c >= 0)
                 {
@@ -1119,45 +1299,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         }
     };
 
-    // What the checkpoint saves: without tiles, the sums and the pass so far; with tiles, the irradiance at
-    // the normals of the pass before and of this one so far (the sums are in the tile file, synced before the
-    // checkpoint counts a tile as done).
-    std::vector<CheckpointSection> sections;
-    if (!tiled)
-        sections = {{"irradiance", std::as_writable_bytes(std::span<ShArray>(out.irradiance))},
-                    {"pass", std::as_writable_bytes(std::span<ShArray>(pass_sh))},
-                    {"direct", std::as_writable_bytes(std::span<DirectArray>(out.direct))},
-                    {"pass_direct", std::as_writable_bytes(std::span<DirectArray>(pass_direct))},
-                    {"noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(out.noise))},
-                    {"pass_noise", std::as_writable_bytes(std::span<LightmapSh::Noise>(pass_noise))},
-                    {"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
-                    {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
-    else
-        sections = {{"previous", std::as_writable_bytes(std::span<glm::vec3>(previous))},
-                    {"next_previous", std::as_writable_bytes(std::span<glm::vec3>(next_previous))},
-                    {"valid", std::as_writable_bytes(std::span<uint8_t>(out.valid))}};
-    sections.push_back(
-        {"shadowmask", std::as_writable_bytes(std::span<std::array<float, 4>>(out.shadowmask))});
-    sections.push_back({"mixed_direct", std::as_writable_bytes(std::span<glm::vec3>(out.mixed_direct))});
-    SliceCheckpoint checkpoint(dist.leader() ? o.checkpoint : std::filesystem::path(), key, uint32_t(passes),
-                               n, std::move(sections), o.checkpoint_seconds);
-    SlicePosition state;
-    if (const std::optional<SlicePosition> resumed = checkpoint.resume(dist)) // every rank from the leader's
-    {
-        state = *resumed;
-        out.resumed = true;
-    }
-    // The tile file: on the leader, which alone keeps the sums. Kept while a checkpoint may need it.
-    std::shared_ptr<TexelFile> tiles;
-    if (tiled && dist.leader())
-    {
-        std::vector<uint32_t> fields = {uint32_t(sizeof(ShArray)), uint32_t(sizeof(DirectArray))};
-        if (o.keep_noise)
-            fields.push_back(uint32_t(sizeof(LightmapSh::Noise)));
-        tiles = std::make_shared<TexelFile>(o.tile_file, key, n, std::move(fields), out.resumed);
-        if (checkpoint.active())
-            tiles->keep();
-    }
     const uint64_t rays_per_texel =
         uint64_t(o.rays) * (image_env ? 2 : 1) + (sun_lit ? uint64_t(o.sun_rays) : 0) +
         uint64_t(std::count_if(lights.punctual.begin(), lights.punctual.end(),
@@ -1182,7 +1323,26 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         if (first == n)
             continue; // resumed after this pass was added in
         if (pass > 0)
-            previous_map = PackedIrradiance(dilated(atlas, previous, 1, 2, out.valid));
+        {
+            // The bounce map, from the pass before: without tiles on every rank from `previous`, with tiles
+            // on the leader from the tile file and then sent to the others.
+            const auto place = [&](uint32_t i) { return atlas.texels.place(i); };
+            previous_map =
+                PackedIrradiance(dilated_grid(atlas.width, atlas.height, n, place, kBounceDilation));
+            const TexelValues produce = [&](uint32_t from, std::span<glm::vec3> values)
+            {
+                if (tiled)
+                    tiles->read((pass - 1) % 2, kBounceField, from, std::as_writable_bytes(values));
+                else
+                    std::copy_n(previous.begin() + from, values.size(), values.begin());
+            };
+            if (!tiled || tiles)
+                previous_map.fill(
+                    n, place, kBounceDilation, out.valid, produce, texel_charts(atlas),
+                    std::min<size_t>(kBounceBandSlots, std::max<size_t>(tile, kBounceBandLeastSlots)));
+            if (tiled)
+                previous_map.broadcast(dist);
+        }
         if (progress && dist.leader())
             progress({pass, passes, first, n, checkpoint.error()});
         // Without tiles, one run over the whole pass; with tiles, one per tile, each added to the tile file
@@ -1190,7 +1350,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         for (uint32_t begin = first; begin < n; begin = tiled ? std::min(n, begin + tile) : n)
         {
             const uint32_t end = tiled ? std::min(n, begin + tile) : n;
-            base = tiled ? begin : 0;
+            load_origins(begin, end - begin);
             // What a texel's work writes, which every rank gathers.
             std::vector<ItemArray> arrays = {
                 {reinterpret_cast<std::byte*>(pass_sh.data()), sizeof(ShArray)},
@@ -1243,7 +1403,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     io_tile(false, (pass - 1) % 2, 0, sum_sh);
                     io_tile(false, (pass - 1) % 2, 1, sum_direct);
                     if (o.keep_noise)
-                        io_tile(false, (pass - 1) % 2, 2, sum_noise);
+                        io_tile(false, (pass - 1) % 2, kNoiseField, sum_noise);
                 }
                 else
                 {
@@ -1265,14 +1425,15 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 io_tile(true, pass % 2, 0, sum_sh);
                 io_tile(true, pass % 2, 1, sum_direct);
                 if (o.keep_noise)
-                    io_tile(true, pass % 2, 2, sum_noise);
+                    io_tile(true, pass % 2, kNoiseField, sum_noise);
+                // The bounces start from all of the first pass's light, the mixed lights' direct light too.
+                for (uint32_t i = 0; i < count; ++i)
+                    tile_bounce[i] = pass_direct[i][0] +
+                                     (mixed && pass == 0 ? out.mixed_direct[begin + i] : glm::vec3(0.0f));
+                io_tile(true, pass % 2, kBounceField, tile_bounce);
                 if (checkpoint.active())
                     tiles->sync();
             }
-            // The bounces start from all of the first pass's light, the mixed lights' direct light too.
-            for (uint32_t i = 0; i < count; ++i)
-                next_previous[begin + i] =
-                    pass_direct[i][0] + (mixed && pass == 0 ? out.mixed_direct[begin + i] : glm::vec3(0.0f));
             if (end < n)
                 checkpoint.slice_done(uint32_t(pass), end);
             forget_failed_checkpoint();
@@ -1296,8 +1457,6 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                 if (mixed && pass == 0)
                     previous[i] += out.mixed_direct[i]; // the bounces carry the mixed lights' light
             }
-        else
-            std::copy(next_previous.begin(), next_previous.end(), previous.begin());
         // With tiles, a save at the end of every pass: the next pass overwrites the copy of the tile file
         // that a resume from a save in this pass would read (texel_file.h).
         checkpoint.slice_done(uint32_t(pass), n, tiled);
@@ -1315,10 +1474,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     out.trace_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     out.checkpoint_error = checkpoint.error();
     for (uint32_t i = 0; i < n; ++i)
-    {
-        out.pushed += pushed[i];
         out.invalid += !out.valid[i];
-    }
     return out;
 }
 
@@ -1999,9 +2155,8 @@ io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, c
     if (sh.texels() != atlas.texels.size())
         throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
     return maps_at(
-        name, atlas.width, atlas.height,
-        [&](uint32_t i) { return glm::uvec2(atlas.texels[i].x, atlas.texels[i].y); }, texel_charts(atlas), sh,
-        dilate, non_negative, adjusted);
+        name, atlas.width, atlas.height, [&](uint32_t i) { return atlas.texels.place(i); },
+        texel_charts(atlas), sh, dilate, non_negative, adjusted);
 }
 
 io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
@@ -2029,7 +2184,7 @@ void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* 
         if (dir)
             tiles->read(tiles_copy, 1, first, std::as_writable_bytes(std::span(dir, count)));
         if (noise_out)
-            tiles->read(tiles_copy, 2, first, std::as_writable_bytes(std::span(noise_out, count)));
+            tiles->read(tiles_copy, kNoiseField, first, std::as_writable_bytes(std::span(noise_out, count)));
         return;
     }
     if (irr)

@@ -182,7 +182,7 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
     // it (i and j: indices in the range).
     const auto each_in_chart = [&](size_t i, int radius, int step, auto&& f)
     {
-        const LightmapTexel& t = atlas.texels[first + i];
+        const glm::uvec2 t = atlas.texels.place(first + i);
         const uint32_t own = site[i].chart;
         for (int dy = -radius; dy <= radius; ++dy)
             for (int dx = -radius; dx <= radius; ++dx)
@@ -271,7 +271,7 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                     next_variance[i] = variance[i];
                     return;
                 }
-                const LightmapTexel& t = atlas.texels[first + i];
+                const glm::vec3 geometric_normal = atlas.texels.geometric_normal(first + i);
                 const Site& centre = site[i];
                 const float size = centre.size;
                 // The window: the neighbours that weigh anything, their offsets (in texels of this pass's
@@ -318,7 +318,7 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
                     {
                         d[c] = load4(&win.position[c][k]) - centre.position[c];
                         along += d[c] * d[c];
-                        off += d[c] * t.geometric_normal[c];
+                        off += d[c] * geometric_normal[c];
                         turn += load4(&win.normal[c][k]) * centre.normal[c];
                     }
                     const f32x4 other_size = load4(&win.size[k]);
@@ -502,7 +502,7 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     std::vector<uint32_t> chart(n);
     for (size_t i = 0; i < n; ++i)
     {
-        chart[i] = chart_of_triangle[atlas.texels[i].triangle];
+        chart[i] = chart_of_triangle[atlas.texels.triangle(i)];
         report.texels += sh.valid[i] != 0;
     }
     // Each chart keeps the light it was baked with: the filter moves light within a chart (a texel's weights
@@ -574,15 +574,22 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     // The first texel at row y or below it (texels are in row-major order), n past the last row.
     const auto row_start = [&](int64_t y)
     {
-        return size_t(std::partition_point(atlas.texels.begin(), atlas.texels.end(),
-                                           [&](const LightmapTexel& t) { return int64_t(t.y) < y; }) -
-                      atlas.texels.begin());
+        size_t lo = 0, hi = n;
+        while (lo < hi)
+        {
+            const size_t mid = lo + (hi - lo) / 2;
+            if (int64_t(atlas.texels.place(mid).y) < y)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        return lo;
     };
     const int from = sh.tiles_copy, to = 1 - from;
     Values band;
     for (size_t out_first = 0; out_first < n;)
     {
-        const int64_t y0 = atlas.texels[out_first].y;
+        const int64_t y0 = atlas.texels.place(out_first).y;
         int64_t y1 = y0 + 1; // rows [y0, y1) come out of this band: as many as fit, at least one
         while (row_start(y1) < n && row_start(y1 + 1 + halo) - row_start(y0 - halo) <= band_texels)
             ++y1;

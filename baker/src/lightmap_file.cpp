@@ -26,6 +26,7 @@
 #include <cstring>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 namespace hemi::bake
 {
@@ -44,14 +45,21 @@ namespace
 {
 
 // Peak memory of a bake, an upper estimate. The bake keeps only the 8 x 8 blocks of the atlas that triangles
-// touch (io::BlockGrid), so it is counted per texel of those blocks ("slots"): the rasteriser's tables and
-// the bounces' lookup map; per slot of the outputs' blocks (the touched ones and their dilation), the float
-// map of the one output being made (the largest; the asset's writer spools each finished output's half
-// floats to disk, io::AssetWriter); per covered texel (at most one per slot), the texel's record and sample
-// point, and either every sum of the passes and the pass being gathered (kLightmapBytesPerCoveredTexel,
-// in memory) or, in tiles under a memory budget, only the irradiance at the normals the bounces read
-// (kTiledBytesPerCoveredTexel) plus one tile's sums and pass (kTileBytesPerTexel per texel of a tile; the
-// sums of the passes are in the tile file, texel_file.h). Measured (docs/lightmaps.md#memory-and-asset-size):
+// touch (io::BlockGrid), so it is counted per texel of those blocks ("slots") and per covered texel (at most
+// one a slot), as the largest of three stages':
+// - the rasteriser (lightmap_atlas.cpp): per slot its tables (the best triangle, its distance and
+//   barycentrics, the claimants' count and first, the slot's texel index: kRasterBytesPerSlot), per covered
+//   texel the record it makes (kTexelRecordBytes, LightmapTexels);
+// - the passes: per slot the texel index and the bounce map's halves (kLightmapBytesPerSlot), one band of the
+//   bounce map's dilation (bounce_band_bytes), per covered texel its record and either every sum of the
+//   passes and the pass being gathered with each texel's origin, flags and the irradiance the next pass
+//   bounces (kLightmapBytesPerCoveredTexel, in memory) or, in tiles under a memory budget, the record, the
+//   texel's validity and chart (kTiledBytesPerCoveredTexel) plus one tile's sums, pass, origins and bounced
+//   irradiance (kTileBytesPerTexel per texel of a tile; the rest is in the tile file, texel_file.h);
+// - the outputs: per slot of the outputs' blocks (the touched ones and their dilation) the float map of the
+//   one output being made (the largest; the asset's writer spools each finished output's half floats to
+//   disk, io::AssetWriter), per covered texel its place and chart and the sums when in memory.
+// Measured (docs/lightmaps.md#memory-and-asset-size):
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds each texel's noise estimate, for the bake and
 // for the pass (32 bytes), and what the filter holds beside the bake's sums: a second copy of the values,
@@ -61,14 +69,18 @@ namespace
 // filtered in two copies (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
 // texel and coefficient of the largest output, and OpenEXR's half copy.
-constexpr uint64_t kLightmapBytesPerSlot = 56;
+constexpr uint64_t kRasterBytesPerSlot = 32;
+constexpr uint64_t kTexelRecordBytes = 16;
+constexpr uint64_t kLightmapBytesPerSlot = 12;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
-constexpr uint64_t kLightmapBytesPerCoveredTexel =
-    356; // the texel record with its chart (96 bytes) among them
-constexpr uint64_t kTiledBytesPerCoveredTexel = 140;
-constexpr uint64_t kDilationBytesPerSlot = 2 + 4; // the dilation's state (two passes') and chart per slot
+// In memory: the record 16, origin 12, flags 3, the bounced irradiance 12, the sums 108 + 48 and the pass's
+// 108 + 48, the charts 4.
+constexpr uint64_t kLightmapBytesPerCoveredTexel = 360;
+constexpr uint64_t kTiledBytesPerCoveredTexel = 24; // the record 16, validity 1 (and 1 while found), chart 4
+constexpr uint64_t kDilationBytesPerSlot = 2 + 4;   // the dilation's state (two passes') and chart per slot
 constexpr uint64_t kPlaceBytesPerTexel = 12; // what the outputs keep of the atlas: each texel's (x, y), chart
-constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48);
+// A tile's sums and pass (108 + 48 each), its origins and flags (13) and bounced irradiance (12).
+constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48) + 13 + 12;
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 64 + 4;
 constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16 + 64;
@@ -86,6 +98,10 @@ constexpr uint64_t kProbeDepthBytesPerTexel = 8 + 4;
 // its build holds): 160 bytes a triangle measured on oa_dm3's 22,188 triangles; with the bake's own record of
 // each triangle for its rays' hits (40 bytes: lightmap_bake.cpp, HitTriangle), 200, rounded up.
 constexpr uint64_t kEmbreeBytesPerTriangle = 256;
+// What the ray tracer's device and the threads hold beside the heap the bake counts (Embree's and TBB's own
+// arenas, the threads' stacks): measured 2.2 MB on 2 threads (the post scene at 512^2: the process's peak
+// resident set over what it held before the bake and the heap's peak, heaptrack), counted with room.
+constexpr uint64_t kTracerBytes = uint64_t(4) << 20, kTracerBytesPerThread = uint64_t(1) << 20;
 // The smallest tile a budget may leave room for: below it, the ranks' slices and the tile file's reads
 // would be too small to keep the cores busy.
 constexpr uint32_t kMinTileTexels = 4096;
@@ -125,8 +141,8 @@ void write_uv_report(const std::filesystem::path& path, const LightmapAtlas& atl
         p[1] = g;
         p[2] = b;
     };
-    for (const LightmapTexel& t : atlas.texels)
-        paint(t.x, t.y, 110, 110, 110);
+    for (size_t i = 0; i < atlas.texels.size(); ++i)
+        paint(atlas.texels.place(i).x, atlas.texels.place(i).y, 110, 110, 110);
     for (const glm::uvec2& t : report.overlaps)
         paint(t.x, t.y, 255, 40, 40);
     io::write_png(path, image);
@@ -461,7 +477,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         (o.memory_budget
              ? o.memory_held + (resident_now > resident_at_start ? resident_now - resident_at_start : 0)
              : 0) +
-        uint64_t(summary.triangles) * kEmbreeBytesPerTriangle;
+        uint64_t(summary.triangles) * kEmbreeBytesPerTriangle + kTracerBytes +
+        uint64_t(std::max(1u, std::thread::hardware_concurrency())) * kTracerBytesPerThread;
     if (budget != 0 && probe_bytes != 0 && held < budget && held + probe_bytes > budget)
         throw io::FormatError(scene_path.string() + ": --probes " + probes_named(o) + ": " +
                               std::to_string(probe_count) +
@@ -471,19 +488,32 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                               io::format_bytes(held) + " the process and the scene's ray tracer hold, but " +
                               (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
                               (o.memory_budget ? "" : " is available") + ": ask for fewer probes");
+    // One band of the bounce map's dilation (lightmap_bake.cpp: at most 2^20 slots and at least a tile's or
+    // 1024, or three block rows, each slot's float, state and chart), or nothing without bounces.
+    const auto bounce_band_bytes = [&](uint64_t tile)
+    {
+        const uint64_t row_slots =
+            uint64_t((w + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize) * io::BlockGrid::kTexels;
+        const uint64_t band =
+            std::max(std::min<uint64_t>(uint64_t(1) << 20, std::max<uint64_t>(tile, 1024)) + 4 * row_slots,
+                     5 * row_slots);
+        return o.bake.bounces > 0 ? std::min(band, slots) * (12 + kDilationBytesPerSlot) : 0;
+    };
     const auto whole_bytes = [&](uint64_t texels)
     {
         return held + probe_bytes +
-               std::max(slots * kLightmapBytesPerSlot + texels * per_texel,
-                        output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel + mixed_bytes));
+               std::max({slots * kRasterBytesPerSlot + texels * kTexelRecordBytes,
+                         slots * kLightmapBytesPerSlot + bounce_band_bytes(texels) + texels * per_texel,
+                         output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel + mixed_bytes)});
     };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
-        const uint64_t passes = slots * kLightmapBytesPerSlot +
+        const uint64_t passes = slots * kLightmapBytesPerSlot + bounce_band_bytes(tile) +
                                 texels * (kTiledBytesPerCoveredTexel + mixed_bytes + (o.denoise ? 4 : 0)) +
                                 std::max(tile, std::min(texels, least_band)) * per_tile_texel;
         return held + probe_bytes +
-               std::max(passes, output_map_bytes + texels * (kPlaceBytesPerTexel + mixed_bytes));
+               std::max({slots * kRasterBytesPerSlot + texels * kTexelRecordBytes, passes,
+                         output_map_bytes + texels * (kPlaceBytesPerTexel + mixed_bytes)});
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
@@ -511,7 +541,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     for (uint32_t t = 0; t < summary.triangles; ++t)
         double_sided[t] = surfaces->double_sided(t);
     // Overlapping UVs' candidates may take what the budget leaves beside the rasteriser's tables.
-    const uint64_t raster_bytes = held + probe_bytes + slots * kLightmapBytesPerSlot;
+    const uint64_t raster_bytes = held + probe_bytes + slots * (kRasterBytesPerSlot + kTexelRecordBytes);
     const uint64_t overlap_budget = budget == 0 ? 0 : budget > raster_bytes ? budget - raster_bytes : 1;
     LightmapAtlas atlas;
     try
@@ -681,13 +711,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (!asset.probes.empty() || !asset.reflections.empty())
         stage_done("probes");
     // The passes and the probes are done: the outputs need only each texel's place in the atlas and its
-    // chart (12 bytes, not its 96-byte record).
+    // chart (12 bytes, not its 16-byte record and the slots' 4).
     std::vector<glm::uvec2> places(atlas.texels.size());
     std::vector<uint32_t> charts(atlas.texels.size());
     for (size_t i = 0; i < places.size(); ++i)
     {
-        places[i] = glm::uvec2(atlas.texels[i].x, atlas.texels[i].y);
-        charts[i] = atlas.texels[i].chart;
+        places[i] = atlas.texels.place(i);
+        charts[i] = atlas.texels.chart(i);
     }
     atlas = LightmapAtlas{};
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the

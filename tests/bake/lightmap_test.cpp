@@ -2016,7 +2016,8 @@ TEST(LightmapAtlas, KeepsOnlyTheBlocksThatHoldCoveredTexels)
 TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
 {
     LightmapUvReport report;
-    const LightmapAtlas a = rasterize_lightmap(three_charts(), kChartsWidth, kChartsHeight, report);
+    const Mesh charts = three_charts();
+    const LightmapAtlas a = rasterize_lightmap(charts, kChartsWidth, kChartsHeight, report);
     const LightmapSh sh = made_up_sh(a, {{8, 8}, {30, 20}, {31, 20}, {30, 21}, {31, 21}});
     {
         const std::vector<float> plain = lightmap_maps("plain", a, sh).dense();

@@ -32,6 +32,10 @@
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <compare>
+#include <iterator>
 
 #include <cstdint>
 #include <span>
@@ -57,14 +61,104 @@ struct LightmapTexel
     uint32_t chart = 0;      // its triangle's chart (lightmap_charts): what may fill it when it is invalid
 };
 
+// The covered texels of an atlas, in row-major order of (y, x), each kept in 16 bytes (its place, its
+// triangle, the barycentrics of its sample point) and given out as a whole LightmapTexel, its frame, point
+// and size computed from the mesh it was rasterised from when asked for (in double, the same arithmetic each
+// time: the same texel gives the same bytes). The 96 bytes of a LightmapTexel a covered texel were the
+// largest part of a bake's memory after the sums; now the bake and its outputs hold 16 (issue 45).
+//
+// It refers to the mesh's arrays (positions, normals, tangents, indices, lightmap UVs) as a span does: the
+// mesh must outlive the atlas and keep those arrays unchanged (moving the mesh keeps them).
+class LightmapTexels
+{
+  public:
+    // A texel as kept: x and y (an atlas side is at most 65536), the triangle with the "centre inside" flag
+    // in its top bit, and the sample point's barycentric weights of vertices 1 and 2 (vertex 0's is the
+    // rest).
+    struct Packed
+    {
+        uint16_t x = 0, y = 0;
+        uint32_t triangle = 0;
+        float b1 = 0.0f, b2 = 0.0f;
+    };
+    static constexpr uint32_t kCentreInside = 0x80000000u;
+
+    class Iterator
+    {
+      public:
+        using iterator_category = std::random_access_iterator_tag;
+        using value_type = LightmapTexel;
+        using difference_type = std::ptrdiff_t;
+        using pointer = void;
+        using reference = LightmapTexel;
+
+        Iterator() = default;
+        Iterator(const LightmapTexels* texels, size_t i) : texels_(texels), i_(i) {}
+        LightmapTexel operator*() const { return (*texels_)[i_]; }
+        LightmapTexel operator[](difference_type d) const
+        {
+            return (*texels_)[size_t(difference_type(i_) + d)];
+        }
+        Iterator& operator++() { return ++i_, *this; }
+        Iterator operator++(int) { return {texels_, i_++}; }
+        Iterator& operator--() { return --i_, *this; }
+        Iterator operator--(int) { return {texels_, i_--}; }
+        Iterator& operator+=(difference_type d) { return i_ = size_t(difference_type(i_) + d), *this; }
+        Iterator& operator-=(difference_type d) { return i_ = size_t(difference_type(i_) - d), *this; }
+        Iterator operator+(difference_type d) const { return {texels_, size_t(difference_type(i_) + d)}; }
+        Iterator operator-(difference_type d) const { return {texels_, size_t(difference_type(i_) - d)}; }
+        difference_type operator-(const Iterator& o) const
+        {
+            return difference_type(i_) - difference_type(o.i_);
+        }
+        bool operator==(const Iterator& o) const { return i_ == o.i_; }
+        auto operator<=>(const Iterator& o) const { return i_ <=> o.i_; }
+
+      private:
+        const LightmapTexels* texels_ = nullptr;
+        size_t i_ = 0;
+    };
+
+    LightmapTexels() = default;
+    // The texels of a width x height atlas over `mesh` (rasterize_lightmap makes them), with each triangle's
+    // chart.
+    LightmapTexels(const io::Mesh& mesh, uint32_t width, uint32_t height, std::vector<Packed> packed,
+                   std::vector<uint32_t> charts);
+
+    size_t size() const { return packed_.size(); }
+    bool empty() const { return packed_.empty(); }
+    Iterator begin() const { return {this, 0}; }
+    Iterator end() const { return {this, packed_.size()}; }
+
+    // Texel i whole (computed: about a hundred operations in double).
+    LightmapTexel operator[](size_t i) const;
+    // What is kept of it, without the computing.
+    glm::uvec2 place(size_t i) const { return {packed_[i].x, packed_[i].y}; }
+    uint32_t triangle(size_t i) const { return packed_[i].triangle & ~kCentreInside; }
+    uint32_t chart(size_t i) const { return charts_[triangle(i)]; }
+    glm::vec3 geometric_normal(size_t i) const; // its triangle's (LightmapTexel::geometric_normal)
+    // Each triangle's chart (lightmap_charts).
+    std::span<const uint32_t> charts() const { return charts_; }
+
+  private:
+    std::vector<Packed> packed_;
+    std::vector<uint32_t> charts_; // per triangle
+    uint32_t width_ = 0, height_ = 0;
+    std::span<const glm::vec3> positions_, normals_;
+    std::span<const glm::vec4> tangents_;
+    std::span<const glm::vec2> uvs1_;
+    std::span<const uint32_t> indices_;
+};
+
 // The covered texels and where they are. Its memory follows the covered texels: only the 8 x 8 blocks of the
-// atlas that some triangle touches are kept (io::BlockGrid).
+// atlas that some triangle touches are kept (io::BlockGrid), and 20 bytes a covered texel (its record and its
+// slot's index).
 struct LightmapAtlas
 {
     uint32_t width = 0, height = 0;
-    io::BlockGrid grid;                // the blocks that triangles touch
-    std::vector<int32_t> slot_texel;   // per slot of grid: index into texels, or -1
-    std::vector<LightmapTexel> texels; // covered texels, in row-major order of (y, x)
+    io::BlockGrid grid;              // the blocks that triangles touch
+    std::vector<int32_t> slot_texel; // per slot of grid: index into texels, or -1
+    LightmapTexels texels;           // covered texels, in row-major order of (y, x)
 
     // Index into texels of texel (x, y), or -1 for an empty texel (or one outside the atlas).
     int32_t texel_of(int64_t x, int64_t y) const
@@ -132,5 +226,10 @@ constexpr uint64_t kOverlapCandidateBytes =
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
                                  std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0);
+// The atlas refers to the mesh's arrays (LightmapTexels): not of a temporary mesh.
+LightmapAtlas rasterize_lightmap(io::Mesh&& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
+                                 const std::vector<TriangleRange>& ranges = {},
+                                 std::span<const uint8_t> double_sided = {},
+                                 uint64_t overlap_budget = 0) = delete;
 
 } // namespace hemi::bake
