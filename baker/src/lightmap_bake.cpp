@@ -280,88 +280,115 @@ io::BlockGrid dilated_grid(uint32_t width, uint32_t height, uint32_t n, const Pl
 // The dilation of `grid` (dilated_grid's) made band by band: bands of whole block rows of at most
 // `band_slots` slots each (at least one row), each dilated with the rows within `dilate` texels above and
 // below it (whole block rows), as far as a texel's dilated value depends on others, so that each band's
-// values come out as the whole atlas's would. For each band, emit(maps, first, count, at): `maps` over the
-// band and its rows around, whose blocks [at, at + count) are grid's blocks [first, first + count). The
-// texels must come in the atlas's order (block row after block row); `produce` is then asked for the texels
-// of each band and its rows around, in bands of increasing rows (the rows around a band are asked for again
-// with the next). With band_slots at least grid.slots(), one band: the whole atlas, each texel asked for
-// once.
-template <typename Place, typename Emit>
-void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, int k, int dilate,
-                     std::span<const uint8_t> valid, const TexelValues& produce,
-                     std::span<const uint32_t> charts, size_t band_slots, const Emit& emit)
+// values come out as the whole atlas's would. next() makes the next band: `maps` over the band and its rows
+// around, whose blocks [at, at + count) are grid's blocks [first, first + count). The texels must come in the
+// atlas's order (block row after block row); `produce` is then asked for the texels of each band and its rows
+// around (those are asked for again with the next band). With band_slots at least grid.slots(), one band:
+// the whole atlas, each texel asked for once. An atlas whose texels are not in that order is one band.
+class BandDilation
 {
-    dilate = std::max(dilate, 0);
-    const uint32_t width = grid.width(), height = grid.height(), B = io::BlockGrid::kSize;
-    const uint32_t bx = grid.blocks_x(), by = grid.blocks_y();
-    const std::vector<uint32_t>& all = grid.blocks();
-    // Per block row r: the first of grid's blocks and the first texel in it or a later row.
-    std::vector<uint32_t> row_block(size_t(by) + 1, 0), row_texel(size_t(by) + 1, n);
-    for (uint32_t r = 0, b = 0; r <= by; ++r)
+  public:
+    struct Band
     {
-        while (b < all.size() && all[b] / bx < r)
-            ++b;
-        row_block[r] = b;
+        io::BlockMaps maps;
+        uint32_t first = 0, count = 0, at = 0;
+    };
+
+    BandDilation(io::BlockGrid grid, uint32_t n, std::function<glm::uvec2(uint32_t)> place, int k, int dilate,
+                 std::span<const uint8_t> valid, std::span<const uint32_t> charts, size_t band_slots)
+        : grid_(std::move(grid)), n_(n), place_(std::move(place)), k_(k), dilate_(std::max(dilate, 0)),
+          valid_(valid), charts_(charts), band_slots_(band_slots)
+    {
+        const uint32_t B = io::BlockGrid::kSize, bx = grid_.blocks_x();
+        by_ = grid_.blocks_y();
+        const std::vector<uint32_t>& all = grid_.blocks();
+        // Per block row r: the first of grid's blocks and the first texel in it or a later row.
+        row_block_.assign(size_t(by_) + 1, 0);
+        row_texel_.assign(size_t(by_) + 1, n);
+        for (uint32_t r = 0, b = 0; r <= by_; ++r)
+        {
+            while (b < all.size() && all[b] / bx < r)
+                ++b;
+            row_block_[r] = b;
+        }
+        bool ordered = true;
+        for (uint32_t i = n; i-- > 0;)
+        {
+            const uint32_t row = place_(i).y / B;
+            row_texel_[row] = i;
+            ordered = ordered && (i == 0 || place_(i - 1).y / B <= row);
+        }
+        for (uint32_t r = by_; r-- > 0;)
+            row_texel_[r] = std::min(row_texel_[r], row_texel_[r + 1]);
+        if (!ordered)
+            band_slots_ = SIZE_MAX;
+        halo_ = uint32_t((dilate_ + int(B) - 1) / int(B));
     }
-    for (uint32_t i = n; i-- > 0;)
-        row_texel[place(i).y / B] = i;
-    for (uint32_t r = by; r-- > 0;)
-        row_texel[r] = std::min(row_texel[r], row_texel[r + 1]);
-    // Bands need the texels in block-row order; otherwise (not the atlas's order) one band.
-    bool ordered = true;
-    for (uint32_t i = 1; i < n && ordered; ++i)
-        ordered = place(i - 1).y / B <= place(i).y / B;
-    const uint32_t halo = uint32_t((dilate + int(B) - 1) / int(B)); // block rows
-    if (!ordered)
-        band_slots = SIZE_MAX;
-    constexpr uint8_t kOwn = 1, kValid = 2;
-    constexpr uint32_t kAnyChart = ~0u;
-    constexpr uint32_t kChunk = 1u << 16;
-    std::vector<glm::vec3> values;
-    std::vector<glm::dvec3> sum(static_cast<size_t>(k));
-    for (uint32_t r0 = 0; r0 < by;)
+    const io::BlockGrid& grid() const { return grid_; }
+    void restart() { r0_ = 0; }
+    // While next() asks for values: the texels of the band's own rows, [first, second) (the others are the
+    // rows around it, asked for again with the next band).
+    std::pair<uint32_t, uint32_t> own_texels() const { return own_; }
+
+    bool next(const TexelValues& produce, Band& band)
     {
-        // Rows [r0, r1) out of this band, [lo, hi) dilated for it.
-        uint32_t r1 = r0 + 1;
-        const auto lo = [&](uint32_t r) { return r >= halo ? r - halo : 0u; };
-        const auto hi = [&](uint32_t r) { return std::min(by, r + halo); };
-        if (band_slots == SIZE_MAX)
-            r1 = by;
-        else
-            while (r1 < by &&
-                   size_t(row_block[hi(r1 + 1)] - row_block[lo(r0)]) * io::BlockGrid::kTexels <= band_slots)
-                ++r1;
-        const uint32_t first_row = band_slots == SIZE_MAX ? 0 : lo(r0),
-                       last_row = band_slots == SIZE_MAX ? by : hi(r1);
-        io::BlockMaps maps(io::BlockGrid(width, height,
-                                         std::vector<uint32_t>(all.begin() + row_block[first_row],
-                                                               all.begin() + row_block[last_row])),
-                           uint32_t(k));
+        if (r0_ >= by_)
+            return false;
+        const bool whole = band_slots_ == SIZE_MAX;
+        const auto lo = [&](uint32_t r) { return whole ? 0u : r >= halo_ ? r - halo_ : 0u; };
+        const auto hi = [&](uint32_t r) { return whole ? by_ : std::min(by_, r + halo_); };
+        // Rows [r0, r1) out of this band, [lo(r0), hi(r1)) dilated for it.
+        uint32_t r1 = whole ? by_ : r0_ + 1;
+        while (r1 < by_ &&
+               size_t(row_block_[hi(r1 + 1)] - row_block_[lo(r0_)]) * io::BlockGrid::kTexels <= band_slots_)
+            ++r1;
+        const uint32_t first_row = lo(r0_), last_row = hi(r1);
+        const std::vector<uint32_t>& all = grid_.blocks();
+        band.maps = io::BlockMaps(io::BlockGrid(grid_.width(), grid_.height(),
+                                                std::vector<uint32_t>(all.begin() + row_block_[first_row],
+                                                                      all.begin() + row_block_[last_row])),
+                                  uint32_t(k_));
+        own_ = {whole ? 0 : row_texel_[r0_], whole ? n_ : row_texel_[r1]};
+        dilate(band.maps, whole ? 0 : row_texel_[first_row], whole ? n_ : row_texel_[last_row], produce);
+        band.first = whole ? 0 : row_block_[r0_];
+        band.count = (whole ? uint32_t(all.size()) : row_block_[r1]) - band.first;
+        band.at = band.first - row_block_[first_row];
+        r0_ = r1;
+        return true;
+    }
+
+  private:
+    // Texels [t0, t1) into `maps` (over their blocks), then the dilation.
+    void dilate(io::BlockMaps& maps, uint32_t t0, uint32_t t1, const TexelValues& produce)
+    {
+        const uint32_t width = grid_.width(), height = grid_.height();
+        const int k = k_;
         const io::BlockGrid& local = maps.grid;
         auto at = [&](int j, size_t slot) { return &maps.values[maps.index(uint32_t(j), slot)]; };
         // Per slot: 0 empty, kOwn a texel inside geometry holding its own value (or an empty one filled from
         // such texels), kValid a valid texel's value (or one filled from those).
+        constexpr uint8_t kOwn = 1, kValid = 2;
+        constexpr uint32_t kAnyChart = ~0u;
+        constexpr uint32_t kChunk = 1u << 16;
         std::vector<uint8_t> filled(local.slots(), 0);
-        std::vector<uint32_t> slot_chart(charts.empty() ? 0 : local.slots(), kAnyChart);
-        const uint32_t t0 = band_slots == SIZE_MAX ? 0 : row_texel[first_row],
-                       t1 = band_slots == SIZE_MAX ? n : row_texel[last_row];
-        values.resize(size_t(std::min(t1 - t0, kChunk)) * size_t(k));
+        std::vector<uint32_t> slot_chart(charts_.empty() ? 0 : local.slots(), kAnyChart);
+        values_.resize(size_t(std::min(t1 - t0, kChunk)) * size_t(k));
         for (uint32_t first = t0; first < t1; first += kChunk)
         {
             const uint32_t count = std::min(kChunk, t1 - first);
-            produce(first, std::span<glm::vec3>(values.data(), size_t(count) * size_t(k)));
+            produce(first, std::span<glm::vec3>(values_.data(), size_t(count) * size_t(k)));
             for (uint32_t i = first; i < first + count; ++i)
             {
                 // Inside geometry: filled from its valid neighbours like an empty texel; where none reaches
                 // it (a face no viewer can reach, a chart that lies wholly in a wall) it keeps its own value.
-                const glm::uvec2 t = place(i);
+                const glm::uvec2 t = place_(i);
                 const size_t slot = size_t(local.slot(t.x, t.y));
-                filled[slot] = !valid.empty() && !valid[i] ? kOwn : kValid;
-                if (!charts.empty())
-                    slot_chart[slot] = charts[i];
+                filled[slot] = !valid_.empty() && !valid_[i] ? kOwn : kValid;
+                if (!charts_.empty())
+                    slot_chart[slot] = charts_[i];
                 for (int j = 0; j < k; ++j)
                 {
-                    const glm::vec3& v = values[size_t(i - first) * size_t(k) + size_t(j)];
+                    const glm::vec3& v = values_[size_t(i - first) * size_t(k) + size_t(j)];
                     float* out = at(j, slot);
                     out[0] = v.x;
                     out[1] = v.y;
@@ -369,7 +396,8 @@ void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, 
                 }
             }
         }
-        for (int pass = 0; pass < dilate; ++pass)
+        std::vector<glm::dvec3> sum(static_cast<size_t>(k));
+        for (int pass = 0; pass < dilate_; ++pass)
         {
             // First every texel that valid texels reach (from the values before the pass: those are never
             // rewritten), then the empty ones that only texels holding their own reach (those that kept it).
@@ -415,12 +443,31 @@ void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, 
                 }
             filled.swap(next);
         }
-        const uint32_t out_first = band_slots == SIZE_MAX ? 0 : row_block[r0],
-                       out_count =
-                           (band_slots == SIZE_MAX ? uint32_t(all.size()) : row_block[r1]) - out_first;
-        emit(std::move(maps), out_first, out_count, out_first - row_block[first_row]);
-        r0 = r1;
     }
+
+    io::BlockGrid grid_;
+    uint32_t n_;
+    std::function<glm::uvec2(uint32_t)> place_;
+    int k_, dilate_;
+    std::span<const uint8_t> valid_;
+    std::span<const uint32_t> charts_;
+    size_t band_slots_;
+    uint32_t by_ = 0, halo_ = 0, r0_ = 0;
+    std::pair<uint32_t, uint32_t> own_{0, 0};
+    std::vector<uint32_t> row_block_, row_texel_;
+    std::vector<glm::vec3> values_;
+};
+
+// Every band of a BandDilation in turn: emit(maps, first, count, at).
+template <typename Place, typename Emit>
+void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, int k, int dilate,
+                     std::span<const uint8_t> valid, const TexelValues& produce,
+                     std::span<const uint32_t> charts, size_t band_slots, const Emit& emit)
+{
+    BandDilation bands(grid, n, place, k, dilate, valid, charts, band_slots);
+    BandDilation::Band band;
+    while (bands.next(produce, band))
+        emit(std::move(band.maps), band.first, band.count, band.at);
 }
 
 // The whole atlas dilated at once (dilate_in_bands' one band).
@@ -2093,81 +2140,123 @@ bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
     return changed;
 }
 
-namespace
+struct LightmapOutputBands::Impl
 {
-template <typename Place>
-io::BlockMaps maps_at(std::string_view name, uint32_t width, uint32_t height, const Place& place,
-                      std::span<const uint32_t> charts, const LightmapSh& sh, int dilate, bool non_negative,
-                      size_t* adjusted)
-{
-    const int k = lightmap_output_size(name);
-    if (name == "shadowmask")
+    Impl(std::string_view name_, uint32_t width, uint32_t height, std::function<glm::uvec2(uint32_t)> place,
+         const LightmapSh& sh_, int dilate, bool non_negative_, std::span<const uint32_t> charts,
+         size_t band_slots)
+        : name(name_), k(lightmap_output_size(name_)), sh(sh_), non_negative(non_negative_),
+          matrix(name_ == "shadowmask" ? nullptr : &output_matrix(name_)),
+          direct((name_ == "plain" || name_ == "rnm") && sh_.has_direct()),
+          bands(dilated_grid(width, height, uint32_t(sh_.texels()), place, dilate), uint32_t(sh_.texels()),
+                place, k, dilate, sh_.valid, charts, band_slots)
     {
-        if (sh.shadowmask.size() != sh.texels())
+        if (name == "shadowmask" && sh.shadowmask.size() != sh.texels())
             throw std::invalid_argument("the bake has no shadowmask (no mixed light)");
-        return dilated(
-            width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
-            [&](uint32_t first, std::span<glm::vec3> values)
-            {
-                for (size_t i = 0; i < values.size() / 4; ++i)
-                    for (size_t c = 0; c < 4; ++c)
-                        values[i * 4 + c] = glm::vec3(sh.shadowmask[first + i][c]);
-            },
-            charts);
     }
-    const std::vector<double>& m = output_matrix(name); // once, not per texel
-    // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
-    const bool direct = (name == "plain" || name == "rnm") && sh.has_direct();
+    // The K values of texels [first, first + values.size() / K).
+    void produce(uint32_t first, std::span<glm::vec3> values, size_t* adjusted)
+    {
+        const uint32_t count = uint32_t(values.size() / size_t(k));
+        if (name == "shadowmask")
+        {
+            for (size_t i = 0; i < count; ++i)
+                for (size_t c = 0; c < 4; ++c)
+                    values[i * 4 + c] = glm::vec3(sh.shadowmask[first + i][c]);
+            return;
+        }
+        // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
+        if (direct)
+        {
+            directs.resize(count);
+            sh.read(first, count, nullptr, directs.data());
+            for (uint32_t i = 0; i < count; ++i)
+                for (int j = 0; j < k; ++j)
+                    values[i * size_t(k) + size_t(j)] = directs[i][name == "plain" ? 0 : size_t(1 + j)];
+            return;
+        }
+        sh9.resize(count);
+        sh.read(first, count, sh9.data());
+        for (uint32_t i = 0; i < count; ++i)
+        {
+            glm::vec3* v = &values[i * size_t(k)];
+            apply(*matrix, sh9[i], v);
+            // (A texel of the rows around a band is counted with its own band.)
+            if (non_negative && name != "plain" && name != "rnm" &&
+                make_non_negative(name, std::span<glm::vec3>(v, size_t(k))) && adjusted &&
+                first + i >= bands.own_texels().first && first + i < bands.own_texels().second)
+                ++*adjusted;
+        }
+    }
+
+    std::string name;
+    int k;
+    const LightmapSh& sh;
+    bool non_negative;
+    const std::vector<double>* matrix; // once, not per texel
+    bool direct;
+    BandDilation bands;
     std::vector<std::array<glm::vec3, 9>> sh9;
     std::vector<std::array<glm::vec3, 4>> directs;
-    return dilated(
-        width, height, uint32_t(sh.texels()), place, k, dilate, sh.valid,
-        [&](uint32_t first, std::span<glm::vec3> values)
-        {
-            const uint32_t count = uint32_t(values.size() / size_t(k));
-            if (direct)
-            {
-                directs.resize(count);
-                sh.read(first, count, nullptr, directs.data());
-                for (uint32_t i = 0; i < count; ++i)
-                    for (int j = 0; j < k; ++j)
-                        values[i * size_t(k) + size_t(j)] = directs[i][name == "plain" ? 0 : size_t(1 + j)];
-                return;
-            }
-            sh9.resize(count);
-            sh.read(first, count, sh9.data());
-            for (uint32_t i = 0; i < count; ++i)
-            {
-                glm::vec3* v = &values[i * size_t(k)];
-                apply(m, sh9[i], v);
-                if (non_negative && name != "plain" && name != "rnm" &&
-                    make_non_negative(name, std::span<glm::vec3>(v, size_t(k))) && adjusted)
-                    ++*adjusted;
-            }
-        },
-        charts);
+};
+
+LightmapOutputBands::LightmapOutputBands(std::string_view name, uint32_t width, uint32_t height,
+                                         std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
+                                         bool non_negative, std::span<const uint32_t> charts,
+                                         size_t band_slots)
+{
+    if (sh.texels() != places.size() || (!charts.empty() && charts.size() != places.size()))
+        throw std::invalid_argument("the lightmap's irradiance does not match its texels' places");
+    impl_ = std::make_unique<Impl>(
+        name, width, height, [places](uint32_t i) { return places[i]; }, sh, dilate, non_negative, charts,
+        band_slots);
 }
-} // namespace
+
+LightmapOutputBands::~LightmapOutputBands() = default;
+
+const io::BlockGrid& LightmapOutputBands::grid() const
+{
+    return impl_->bands.grid();
+}
+
+bool LightmapOutputBands::next(Band& band, size_t* adjusted)
+{
+    BandDilation::Band b;
+    if (!impl_->bands.next(
+            [&](uint32_t first, std::span<glm::vec3> values) { impl_->produce(first, values, adjusted); }, b))
+        return false;
+    band.maps = std::move(b.maps);
+    band.first = b.first;
+    band.count = b.count;
+    band.at = b.at;
+    return true;
+}
+
+void LightmapOutputBands::restart()
+{
+    impl_->bands.restart();
+}
 
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                             int dilate, bool non_negative, size_t* adjusted)
 {
     if (sh.texels() != atlas.texels.size())
         throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
-    return maps_at(
-        name, atlas.width, atlas.height, [&](uint32_t i) { return atlas.texels.place(i); },
-        texel_charts(atlas), sh, dilate, non_negative, adjusted);
+    std::vector<glm::uvec2> places(atlas.texels.size());
+    for (size_t i = 0; i < places.size(); ++i)
+        places[i] = atlas.texels.place(i);
+    return lightmap_maps(name, atlas.width, atlas.height, places, sh, dilate, non_negative, adjusted,
+                         texel_charts(atlas));
 }
 
 io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,
                             std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
                             bool non_negative, size_t* adjusted, std::span<const uint32_t> charts)
 {
-    if (sh.texels() != places.size() || (!charts.empty() && charts.size() != places.size()))
-        throw std::invalid_argument("the lightmap's irradiance does not match its texels' places");
-    return maps_at(
-        name, width, height, [&](uint32_t i) { return places[i]; }, charts, sh, dilate, non_negative,
-        adjusted);
+    LightmapOutputBands bands(name, width, height, places, sh, dilate, non_negative, charts, SIZE_MAX);
+    LightmapOutputBands::Band band;
+    bands.next(band, adjusted);
+    return std::move(band.maps);
 }
 
 void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irr,

@@ -418,12 +418,16 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const std::string atlas_text = std::to_string(w) + "x" + std::to_string(h) + " lightmap";
     const uint64_t exr_bytes =
         o.exr_dir.empty() ? 0 : uint64_t(w) * h * largest_output * kExrBytesPerCoefficient;
-    uint64_t slots = 0, output_slots = 0;
+    uint64_t slots = 0, output_slots = 0, seam_slots = 0;
     try
     {
         const io::BlockGrid touched = lightmap_blocks(scene.mesh, w, h);
         slots = touched.slots();
         output_slots = dilated_slots(touched, o.dilate);
+        // The blocks the seams read, which a bake in tiles holds whole while it stitches each output: within
+        // a block of those the seams read among the touched ones (a seam's points lie in touched texels).
+        seam_slots = std::min<uint64_t>(
+            output_slots, 9 * lightmap_seam_blocks(find_lightmap_seams(scene.mesh), touched).slots());
     }
     catch (const std::invalid_argument& e)
     {
@@ -506,6 +510,23 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                          slots * kLightmapBytesPerSlot + bounce_band_bytes(texels) + texels * per_texel,
                          output_map_bytes + texels * (kPlaceBytesPerTexel + sums_per_texel + mixed_bytes)});
     };
+    // In tiles (without --exr-dir) an output is made band by band (LightmapOutputBands): one band's floats
+    // and dilation (at least a tile's texels or 4096, and a block row with the rows around it), and the
+    // seams' blocks; the shadowmask, with mixed lights, whole.
+    const auto tiled_output_bytes = [&](uint64_t tile)
+    {
+        if (exr_bytes)
+            return output_map_bytes;
+        const uint64_t row_slots =
+            uint64_t((w + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize) * io::BlockGrid::kTexels;
+        const uint64_t halo_rows =
+            (uint64_t(std::max(o.dilate, 0)) + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize;
+        const uint64_t band =
+            std::min(output_slots, std::max<uint64_t>(tile, 4096) + (2 * halo_rows + 1) * row_slots);
+        return band * (largest_output * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot) +
+               seam_slots * largest_output * kLightmapBytesPerLargestCoefficient +
+               (mixed_channels.empty() ? 0 : output_slots * 12 * kLightmapBytesPerLargestCoefficient);
+    };
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
         const uint64_t passes = slots * kLightmapBytesPerSlot + bounce_band_bytes(tile) +
@@ -513,7 +534,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                                 std::max(tile, std::min(texels, least_band)) * per_tile_texel;
         return held + probe_bytes +
                std::max({slots * kRasterBytesPerSlot + texels * kTexelRecordBytes, passes,
-                         output_map_bytes + texels * (kPlaceBytesPerTexel + mixed_bytes)});
+                         tiled_output_bytes(tile) + texels * (kPlaceBytesPerTexel + mixed_bytes)});
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
@@ -745,6 +766,67 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         uint8_t stitched = 0, has_clamped = 0;
         int32_t scale_exponent = 0; // the power of two the output's halves are times (io/half_scale.h)
     };
+    // Stitches `maps` (an output's, or its seams' blocks) along the output's seams with `stitch`, keeps
+    // irradiance non-negative and the ringing-free lift where asked, and says so in `made`.
+    const auto stitch_output = [&](const std::string& name, io::BlockMaps& maps,
+                                   const LightmapSeamStitch& stitch, OutputReport& made)
+    {
+        const uint32_t k = maps.k;
+        made.stitched = 1;
+        made.stitched_texels = stitch.slots().size();
+        stitch.apply(maps);
+        if (name == "plain" || name == "rnm")
+        {
+            // Irradiance is never negative; least squares can swing a texel that only a seam's lookups
+            // read (a gutter texel between a bright and a dark side) below 0. Such values go to 0, and
+            // that seam agrees a little less.
+            size_t clamped = 0;
+            for (const size_t slot : stitch.slots())
+                for (uint32_t j = 0; j < k; ++j)
+                {
+                    float* v = &maps.values[maps.index(j, slot)];
+                    bool any = false;
+                    for (int c = 0; c < 3; ++c)
+                        if (v[c] < 0.0f)
+                        {
+                            v[c] = 0.0f;
+                            any = true;
+                        }
+                    clamped += any;
+                }
+            made.has_clamped = 1;
+            made.clamped = clamped;
+        }
+        else if (o.non_negative)
+        {
+            std::vector<glm::vec3> texel(k);
+            for (const size_t slot : stitch.slots())
+            {
+                for (uint32_t j = 0; j < k; ++j)
+                    std::memcpy(&texel[j], &maps.values[maps.index(j, slot)], sizeof texel[j]);
+                if (make_non_negative(name, texel))
+                    for (uint32_t j = 0; j < k; ++j)
+                        std::memcpy(&maps.values[maps.index(j, slot)], &texel[j], sizeof texel[j]);
+            }
+        }
+        const LightmapSeamMetric m = measure_lightmap_seams(seams_of(name), maps);
+        made.after_mean = m.mean;
+        made.after_p95 = m.p95;
+    };
+    // Whether an output is stitched, and the stitch its seams share with the outputs before (one
+    // factorisation per set of seams and grid).
+    const auto stitched = [&](const std::string& name)
+    { return o.stitch && !seams.empty() && (name == "plain" || !framed.empty()); };
+    const auto stitch_of = [&](const std::string& name, std::optional<LightmapSeamStitch>& whole,
+                               std::optional<LightmapSeamStitch>& framed_only,
+                               const io::BlockGrid& grid) -> const LightmapSeamStitch&
+    {
+        std::optional<LightmapSeamStitch>& stitch =
+            name == "plain" || framed.size() == seams.size() ? whole : framed_only;
+        if (!stitch)
+            stitch.emplace(seams_of(name), grid, o.stitch_closeness);
+        return *stitch;
+    };
     const auto make_output = [&](const std::string& name, OutputReport& made)
     {
         size_t adjusted = 0;
@@ -756,58 +838,113 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         const LightmapSeamMetric before = measure_lightmap_seams(seams_of(output.name), output.maps);
         made.before_mean = made.after_mean = before.mean;
         made.before_p95 = made.after_p95 = before.p95;
-        if (o.stitch && !seams.empty() && (output.name == "plain" || !framed.empty()))
-        {
-            const bool plain = output.name == "plain";
-            std::optional<LightmapSeamStitch>& stitch =
-                plain || framed.size() == seams.size() ? all : along_frames;
-            if (!stitch)
-                stitch.emplace(seams_of(output.name), output.maps.grid, o.stitch_closeness);
-            made.stitched = 1;
-            made.stitched_texels = stitch->slots().size();
-            stitch->apply(output.maps);
-            if (plain || output.name == "rnm")
-            {
-                // Irradiance is never negative; least squares can swing a texel that only a seam's lookups
-                // read (a gutter texel between a bright and a dark side) below 0. Such values go to 0, and
-                // that seam agrees a little less.
-                size_t clamped = 0;
-                for (const size_t slot : stitch->slots())
-                    for (uint32_t k = 0; k < output.k; ++k)
-                    {
-                        float* v = &output.maps.values[output.maps.index(k, slot)];
-                        bool any = false;
-                        for (int c = 0; c < 3; ++c)
-                            if (v[c] < 0.0f)
-                            {
-                                v[c] = 0.0f;
-                                any = true;
-                            }
-                        clamped += any;
-                    }
-                made.has_clamped = 1;
-                made.clamped = clamped;
-            }
-            else if (o.non_negative)
-            {
-                std::vector<glm::vec3> texel(output.k);
-                for (const size_t slot : stitch->slots())
-                {
-                    for (uint32_t k = 0; k < output.k; ++k)
-                        std::memcpy(&texel[k], &output.maps.values[output.maps.index(k, slot)],
-                                    sizeof texel[k]);
-                    if (make_non_negative(output.name, texel))
-                        for (uint32_t k = 0; k < output.k; ++k)
-                            std::memcpy(&output.maps.values[output.maps.index(k, slot)], &texel[k],
-                                        sizeof texel[k]);
-                }
-            }
-            const LightmapSeamMetric m = measure_lightmap_seams(seams_of(output.name), output.maps);
-            made.after_mean = m.mean;
-            made.after_p95 = m.p95;
-        }
+        if (stitched(output.name))
+            stitch_output(output.name, output.maps,
+                          stitch_of(output.name, all, along_frames, output.maps.grid), made);
         made.scale_exponent = io::half_scale_exponent(io::largest_magnitude(output.maps.values));
         return output;
+    };
+    // In tiles, each output band by band of block rows (LightmapOutputBands), so that one band's floats are
+    // held, not the output's: a first sweep keeps the blocks the seams read (lightmap_seam_blocks) and the
+    // largest value of the texels no stitch changes; the seams are measured and stitched over those blocks
+    // alone; a second sweep makes the bands again and writes each into the asset's spool with the stitched
+    // texels put in. The same bytes as make_output's (the dilation, the stitch and the scale are the same).
+    std::optional<LightmapSeamStitch> seam_all, seam_along_frames; // over the seams' blocks
+    const size_t band_slots = std::max<size_t>(summary.tile_texels, size_t(1) << 12);
+    const auto write_output_in_bands =
+        [&](const std::string& name, OutputReport& made, io::LightmapAssetWriter& writer)
+    {
+        const uint32_t k = uint32_t(lightmap_output_size(name));
+        LightmapOutputBands bands(name, w, h, places, sh, o.dilate, o.non_negative, charts, band_slots);
+        const io::BlockGrid& grid = bands.grid();
+        made.blocks = grid.blocks().size();
+        io::BlockMaps seam(lightmap_seam_blocks(seams_of(name), grid), k);
+        const LightmapSeamStitch* stitch =
+            stitched(name) ? &stitch_of(name, seam_all, seam_along_frames, seam.grid) : nullptr;
+        std::vector<uint8_t> moved(seam.grid.slots(), 0); // the texels the stitch may change
+        if (stitch)
+            for (const size_t slot : stitch->slots())
+                moved[slot] = 1;
+        const size_t block_values = size_t(k) * io::BlockGrid::kTexels * 3;
+        const std::vector<uint32_t>& seam_blocks = seam.grid.blocks();
+        float largest = 0.0f;
+        size_t adjusted = 0;
+        LightmapOutputBands::Band band;
+        for (size_t next_seam = 0; bands.next(band, &adjusted);)
+            for (uint32_t b = 0; b < band.count; ++b)
+            {
+                const float* v = &band.maps.values[size_t(band.at + b) * block_values];
+                const bool on_seam =
+                    next_seam < seam_blocks.size() && seam_blocks[next_seam] == grid.blocks()[band.first + b];
+                if (!on_seam)
+                {
+                    largest = std::max(largest, io::largest_magnitude(std::span(v, block_values)));
+                    continue;
+                }
+                std::copy_n(v, block_values, &seam.values[next_seam * block_values]);
+                for (uint32_t j = 0; j < k; ++j)
+                    for (size_t t = 0; t < io::BlockGrid::kTexels; ++t)
+                        if (!moved[next_seam * io::BlockGrid::kTexels + t])
+                            largest = std::max(largest, io::largest_magnitude(std::span(
+                                                            &v[(j * io::BlockGrid::kTexels + t) * 3], 3)));
+                ++next_seam;
+            }
+        made.adjusted = adjusted;
+        const LightmapSeamMetric before = measure_lightmap_seams(seams_of(name), seam);
+        made.before_mean = made.after_mean = before.mean;
+        made.before_p95 = made.after_p95 = before.p95;
+        if (stitch)
+        {
+            stitch_output(name, seam, *stitch, made);
+            for (const size_t slot : stitch->slots())
+                for (uint32_t j = 0; j < k; ++j)
+                    largest = std::max(
+                        largest, io::largest_magnitude(std::span(&seam.values[seam.index(j, slot)], 3)));
+        }
+        made.scale_exponent = io::half_scale_exponent(largest);
+        // The second sweep, pulled by the writer a piece at a time: each band made again, its stitched texels
+        // put in from `seam`.
+        bands.restart();
+        band = {};
+        size_t next_seam = 0;
+        writer.add_output(
+            name, k, grid, made.scale_exponent,
+            [&](uint64_t first, std::span<float> out)
+            {
+                for (size_t done = 0; done < out.size();)
+                {
+                    const uint64_t at = first + done, block = at / block_values;
+                    while (block >= uint64_t(band.first) + band.count)
+                    {
+                        if (!bands.next(band))
+                            throw std::logic_error("an output's bands ended before its values");
+                        for (uint32_t b = 0; b < band.count; ++b)
+                        {
+                            while (next_seam < seam_blocks.size() &&
+                                   seam_blocks[next_seam] < grid.blocks()[band.first + b])
+                                ++next_seam;
+                            if (next_seam == seam_blocks.size() ||
+                                seam_blocks[next_seam] != grid.blocks()[band.first + b])
+                                continue;
+                            for (uint32_t j = 0; j < k; ++j)
+                                for (size_t t = 0; t < io::BlockGrid::kTexels; ++t)
+                                    if (moved[next_seam * io::BlockGrid::kTexels + t])
+                                        std::copy_n(
+                                            &seam.values[seam.index(j,
+                                                                    next_seam * io::BlockGrid::kTexels + t)],
+                                            3,
+                                            &band.maps.values[band.maps.index(
+                                                j, size_t(band.at + b) * io::BlockGrid::kTexels + t)]);
+                        }
+                    }
+                    const size_t in_block = size_t(at % block_values),
+                                 count = std::min(out.size() - done, block_values - in_block);
+                    std::copy_n(
+                        &band.maps.values[size_t(block - band.first + band.at) * block_values + in_block],
+                        count, out.begin() + ptrdiff_t(done));
+                    done += count;
+                }
+            });
     };
     const auto take_report = [&](const std::string& name, const OutputReport& made)
     {
@@ -918,6 +1055,12 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         for (const std::string& name : o.outputs)
         {
             OutputReport made;
+            if (summary.tile_texels && o.exr_dir.empty())
+            {
+                write_output_in_bands(name, made, writer);
+                take_report(name, made);
+                continue;
+            }
             const io::LightmapOutput output = make_output(name, made);
             take_report(name, made);
             writer.add_output(output);

@@ -103,6 +103,35 @@ std::vector<LightmapSeam> find_lightmap_seams(const io::Mesh& mesh, float crease
     return seams;
 }
 
+io::BlockGrid lightmap_seam_blocks(std::span<const LightmapSeam> seams, const io::BlockGrid& grid)
+{
+    const uint32_t B = io::BlockGrid::kSize, bx = grid.blocks_x();
+    const int64_t w = grid.width(), h = grid.height();
+    std::vector<uint8_t> keep(size_t(bx) * grid.blocks_y(), 0); // a byte a block (1/64 a texel)
+    const glm::vec2 texels{float(w), float(h)};
+    for (const LightmapSeam& s : seams)
+        for (const auto& [p0, p1] : {std::pair{s.a0, s.a1}, std::pair{s.b0, s.b1}})
+        {
+            const int steps = 1 + int(std::ceil(4.0f * glm::length((p1 - p0) * texels)));
+            for (int i = 0; i <= steps; ++i)
+            {
+                const io::BilinearFootprint f = io::bilinear_footprint(
+                    p0 + (p1 - p0) * (float(i) / float(steps)), grid.width(), grid.height());
+                for (int64_t y = std::max<int64_t>(0, f.y0 - 1); y <= std::min(h - 1, f.y1 + 1); ++y)
+                    for (int64_t x = std::max<int64_t>(0, f.x0 - 1); x <= std::min(w - 1, f.x1 + 1); ++x)
+                    {
+                        const uint32_t block = uint32_t(y / B) * bx + uint32_t(x / B);
+                        keep[block] = 1;
+                    }
+            }
+        }
+    std::vector<uint32_t> blocks;
+    for (const uint32_t block : grid.blocks())
+        if (keep[block])
+            blocks.push_back(block);
+    return io::BlockGrid(grid.width(), grid.height(), std::move(blocks));
+}
+
 LightmapSeamMetric measure_lightmap_seams(std::span<const LightmapSeam> seams, const io::BlockMaps& maps)
 {
     LightmapSeamMetric m;

@@ -1570,6 +1570,41 @@ fs::path write_split_floor(const std::string& name, bool seamed)
 }
 } // namespace
 
+// In tiles the outputs are made band by band of block rows (LightmapOutputBands), their seams measured and
+// stitched over the seams' blocks alone (lightmap_seam_blocks): the unwrapped torus (seams between its
+// charts, stitched), with --non-negative and the irradiance outputs (the stitch's clamp), under a budget
+// between the two estimates, gives the bytes and the seam figures of the bake in memory. Fails for bands
+// without the rows around them, and for seam blocks found from the seams' ends alone.
+TEST(BakeCli, OutputsInBandsGiveTheBytesOfTheWholeOutputs)
+{
+    const fs::path torus =
+        hemi::samples::write_prt_model(dir() / "models", "torus", hemi::samples::PrtModel::Simple);
+    const std::string args =
+        q(torus) + " --unwrap --size 256 --rays 4 --bounces 1 --non-negative --bases sh9,h4,plain,rnm";
+    const auto bake = [&](const std::string& name, const std::string& more)
+    {
+        const fs::path asset = dir() / (name + ".hemi"), json = dir() / (name + ".json");
+        const Result r = lightmap(args + more + " -o " + q(asset) + " --json " + q(json));
+        EXPECT_EQ(r.status, 0) << r.err;
+        return std::pair{hemi::test::slurp(asset), nlohmann::json::parse(slurp(json))};
+    };
+    const auto [whole, whole_json] = bake("bands_whole", "");
+    // A tenth of the way from the least tiles to the whole bake: the unwrapped charts cover their blocks
+    // sparsely, and the estimates count the blocks' texels.
+    const std::string budget = hemi::test::tiling_budget(
+        [&](const std::string& extra)
+        { return lightmap(args + extra + " -o " + q(dir() / "bands_refused.hemi")); },
+        0.1);
+    ASSERT_FALSE(budget.empty());
+    const auto [banded, banded_json] = bake("bands_tiled", budget);
+    EXPECT_EQ(whole_json["tile_texels"], 0);
+    EXPECT_GT(banded_json["tile_texels"].get<uint32_t>(), 0u);
+    EXPECT_GT(whole_json["seams"]["stitched_texels"].get<int>(), 0);
+    EXPECT_EQ(whole_json["seams"], banded_json["seams"]);
+    EXPECT_EQ(whole_json["non_negative_texels_changed"], banded_json["non_negative_texels_changed"]);
+    EXPECT_TRUE(!whole.empty() && whole == banded) << "the bytes of the outputs made in bands differ";
+}
+
 // --denoise through the command line: a glTF floor under uniform radiance 1 at 8 rays per texel, whose E = pi
 // everywhere. Denoised, the worst texel is at most half as far from pi as without, the mean within 0.5%; the
 // JSON counts the texels it filtered, and a pass count out of range is refused naming the option.

@@ -50,8 +50,10 @@ inline Result run(const std::filesystem::path& dir, const std::string& exe, cons
 // budget too small for either ("needs about 21.1 MiB of memory (15.4 MiB in tiles of ..."); 0 (and a test
 // failure) when `refusal` does not say so. Both estimates count what the process holds (its code, the
 // scene), which differs under the sanitizers and mpirun, and grows with the test binary: a budget between
-// them makes the bake run in tiles wherever it runs.
-inline uint64_t tiling_budget_kib(const std::string& refusal)
+// them makes the bake run in tiles wherever it runs. `fraction` places it from the least tiles (0) to the
+// whole bake (1): an atlas whose texels cover its blocks sparsely needs less than halfway, since the
+// estimates count every texel of the touched blocks.
+inline uint64_t tiling_budget_kib(const std::string& refusal, double fraction = 0.5)
 {
     const auto size_after = [&](const std::string& label, size_t from, size_t& end) -> double
     {
@@ -77,12 +79,12 @@ inline uint64_t tiling_budget_kib(const std::string& refusal)
         ADD_FAILURE() << "no estimate in the refusal of a small memory budget: " << refusal;
         return 0;
     }
-    return uint64_t((whole + least) / 2.0);
+    return uint64_t(least + (whole - least) * fraction);
 }
 
 // The same as hemi-bake's option (" --memory-budget <n>K"): `bake(extra)` runs the bake with `extra` on its
 // command line, and its refusal of --memory-budget 1M names both estimates. "" when it does not.
-inline std::string tiling_budget(const std::function<Result(const std::string&)>& bake)
+inline std::string tiling_budget(const std::function<Result(const std::string&)>& bake, double fraction = 0.5)
 {
     const Result r = bake(" --memory-budget 1M");
     if (r.status != 1)
@@ -90,7 +92,7 @@ inline std::string tiling_budget(const std::function<Result(const std::string&)>
         ADD_FAILURE() << "hemi-bake did not refuse --memory-budget 1M: " << r.err;
         return "";
     }
-    const uint64_t kib = tiling_budget_kib(r.err);
+    const uint64_t kib = tiling_budget_kib(r.err, fraction);
     return kib ? " --memory-budget " + std::to_string(kib) + "K" : "";
 }
 

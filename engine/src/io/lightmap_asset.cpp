@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -215,25 +216,37 @@ namespace
 {
 // An output's section: u32 K, u32 N, i32 e, N u32 block indices, then the values / 2^e as half floats,
 // encoded piece by piece as the container asks for them (straight into its spool when it has one).
+// An output's section: K, the block count, the scale's exponent and the block list, then every value as a
+// half float (value / 2^exponent), in BlockMaps' order, taken from `values(first, out)` a piece at a time.
 struct OutputSection
 {
-    explicit OutputSection(const LightmapOutput& o, uint32_t width, uint32_t height) : output(o)
+    using Values = std::function<void(uint64_t first, std::span<float> out)>;
+    OutputSection(const std::string& name_, uint32_t k, const BlockGrid& grid, int32_t exponent_,
+                  Values values_)
+        : name(name_), count(uint64_t(grid.slots()) * k * 3), exponent(exponent_), values(std::move(values_))
     {
-        if (std::string p = output_problem(o, width, height); !p.empty())
-            throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
-        const std::vector<uint32_t>& blocks = o.maps.grid.blocks();
-        exponent = half_scale_exponent(largest_magnitude(o.maps.values));
+        const std::vector<uint32_t>& blocks = grid.blocks();
         head.resize(3 + blocks.size());
-        head[0] = o.k;
+        head[0] = k;
         head[1] = uint32_t(blocks.size());
         std::memcpy(&head[2], &exponent, 4);
         if (!blocks
                  .empty()) // an output with no blocks: all 0 (memcpy from null is undefined even for 0 bytes)
             std::memcpy(head.data() + 3, blocks.data(), blocks.size() * 4);
     }
+    // A whole output in memory (checked first).
+    static OutputSection of(const LightmapOutput& o, uint32_t width, uint32_t height)
+    {
+        if (std::string p = output_problem(o, width, height); !p.empty())
+            throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
+        return OutputSection(
+            o.name, o.k, o.maps.grid, half_scale_exponent(largest_magnitude(o.maps.values)),
+            [&o](uint64_t first, std::span<float> out)
+            { std::copy_n(o.maps.values.begin() + ptrdiff_t(first), out.size(), out.begin()); });
+    }
     uint64_t head_bytes() const { return head.size() * 4; }
-    uint64_t size() const { return head_bytes() + output.maps.values.size() * 2; }
-    void fill(uint64_t offset, std::span<std::byte> out) const
+    uint64_t size() const { return head_bytes() + count * 2; }
+    void fill(uint64_t offset, std::span<std::byte> out)
     {
         size_t at = 0;
         if (offset < head_bytes())
@@ -242,22 +255,50 @@ struct OutputSection
             std::memcpy(out.data(), reinterpret_cast<const std::byte*>(head.data()) + offset, at);
         }
         // The head and every piece have an even size: values start on a whole half float.
-        for (size_t v = size_t((offset + at - head_bytes()) / 2); at < out.size(); at += 2, ++v)
+        const uint64_t first = (offset + at - head_bytes()) / 2;
+        piece.resize((out.size() - at) / 2);
+        if (piece.empty())
+            return;
+        values(first, piece);
+        for (size_t v = 0; v < piece.size(); ++v, at += 2)
         {
-            const uint16_t h = glm::packHalf1x16(std::ldexp(output.maps.values[v], -exponent));
+            if (!std::isfinite(piece[v]))
+                throw std::invalid_argument("hemi: cannot write a lightmap asset: output '" + name +
+                                            "' holds a value that is not finite");
+            const uint16_t h = glm::packHalf1x16(std::ldexp(piece[v], -exponent));
             std::memcpy(out.data() + at, &h, 2);
         }
     }
-    const LightmapOutput& output;
+    std::string name;
+    uint64_t count; // values
     int32_t exponent = 0;
+    Values values;
     std::vector<uint32_t> head;
+    std::vector<float> piece;
 };
 } // namespace
 
 void LightmapAssetWriter::add_output(const LightmapOutput& o)
 {
-    const OutputSection section(o, asset_->width, asset_->height);
+    OutputSection section = OutputSection::of(o, asset_->width, asset_->height);
     sections_->writer.add_generated("L." + o.name, section.size(),
+                                    [&](uint64_t offset, std::span<std::byte> out)
+                                    { section.fill(offset, out); });
+    ++outputs_;
+}
+
+void LightmapAssetWriter::add_output(const std::string& name, uint32_t k, const BlockGrid& grid,
+                                     int32_t exponent,
+                                     const std::function<void(uint64_t first, std::span<float> out)>& values)
+{
+    // output_problem's checks but the values' (which come as they are written, checked then).
+    if (expected_k(name) == 0 || expected_k(name) != k || grid.width() != asset_->width ||
+        grid.height() != asset_->height)
+        throw std::invalid_argument("hemi: cannot write a lightmap asset: output '" + name + "' with K = " +
+                                    std::to_string(k) + " over a " + std::to_string(grid.width()) + "x" +
+                                    std::to_string(grid.height()) + " grid does not fit");
+    OutputSection section(name, k, grid, exponent, values);
+    sections_->writer.add_generated("L." + name, section.size(),
                                     [&](uint64_t offset, std::span<std::byte> out)
                                     { section.fill(offset, out); });
     ++outputs_;
@@ -266,7 +307,7 @@ void LightmapAssetWriter::add_output(const LightmapOutput& o)
 std::vector<std::byte> LightmapAssetWriter::encode_output(const LightmapOutput& o, uint32_t width,
                                                           uint32_t height)
 {
-    const OutputSection section(o, width, height);
+    OutputSection section = OutputSection::of(o, width, height);
     std::vector<std::byte> bytes(size_t(section.size()));
     section.fill(0, bytes);
     return bytes;

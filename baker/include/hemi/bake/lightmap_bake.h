@@ -265,6 +265,37 @@ io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t heig
                             std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate = 2,
                             bool non_negative = false, size_t* adjusted = nullptr,
                             std::span<const uint32_t> charts = {});
+// The same band by band of block rows, one band's floats held at a time (what a bake in tiles makes its
+// outputs with): each band is dilated with the rows the dilation reaches around it, so that its values are
+// lightmap_maps' own, bit for bit. band_slots bounds a band and its rows around (at least one block row and
+// those around it; SIZE_MAX: the whole atlas in one band, lightmap_maps). The places must be in the atlas's
+// order (LightmapTexels'); otherwise one band.
+class LightmapOutputBands
+{
+  public:
+    // `maps` over the band's blocks and the rows around them: grid()'s blocks [first, first + count) are
+    // its blocks [at, at + count).
+    struct Band
+    {
+        io::BlockMaps maps;
+        uint32_t first = 0, count = 0, at = 0;
+    };
+    LightmapOutputBands(std::string_view name, uint32_t width, uint32_t height,
+                        std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
+                        bool non_negative, std::span<const uint32_t> charts, size_t band_slots);
+    ~LightmapOutputBands();
+    LightmapOutputBands(const LightmapOutputBands&) = delete;
+    LightmapOutputBands& operator=(const LightmapOutputBands&) = delete;
+
+    const io::BlockGrid& grid() const; // the output's blocks (lightmap_maps' grid)
+    // The next band, false after the last; `adjusted` counts the texels make_non_negative changed.
+    bool next(Band& band, size_t* adjusted = nullptr);
+    void restart(); // from the first band again
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // Ringing-free coefficients (hemi-bake lightmap --non-negative): a basis fitted to SH9 irradiance rings where
 // the light is concentrated (a low sun's delta lobe gives negative irradiance at normals facing away from

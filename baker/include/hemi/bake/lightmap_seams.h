@@ -50,6 +50,12 @@ struct LightmapSeamMetric
 };
 LightmapSeamMetric measure_lightmap_seams(std::span<const LightmapSeam> seams, const io::BlockMaps& maps);
 
+// The blocks of `grid` that a bilinear lookup at any point of the seams reads (each side's segment walked
+// in steps of a quarter texel, each step's footprint widened by a texel): a grid over which
+// measure_lightmap_seams and LightmapSeamStitch give what they give over `grid` itself, so that a bake in
+// tiles measures and stitches its outputs over these blocks alone.
+io::BlockGrid lightmap_seam_blocks(std::span<const LightmapSeam> seams, const io::BlockGrid& grid);
+
 // Seam stitching (Sloan's least-squares seams; Liu, Ferguson, Jacobson and Gingold 2017, "Seamless"): the
 // smallest change d of the texels along the seams that makes the two sides' bilinear lookups agree,
 //     minimise  sum over seams of  integral over the edge of |L_a(x + d) - L_b(x + d)|^2  +  closeness |d|^2,

@@ -61,6 +61,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -139,6 +140,12 @@ class LightmapAssetWriter
     LightmapAssetWriter(const LightmapAssetWriter&) = delete;
     LightmapAssetWriter& operator=(const LightmapAssetWriter&) = delete;
     void add_output(const LightmapOutput& output);
+    // An output whose values are made as they are written (a bake in tiles, band by band): K maps over
+    // `grid` (the atlas's size), its halves times 2^exponent (io/half_scale.h), and values(first, out) the
+    // values from index `first` on in BlockMaps' layout, asked for in order, a piece at a time. A value that
+    // is not finite throws std::invalid_argument when it comes.
+    void add_output(const std::string& name, uint32_t k, const BlockGrid& grid, int32_t exponent,
+                    const std::function<void(uint64_t first, std::span<float> out)>& values);
     // The same in two steps, for an output made elsewhere (another rank of a distributed bake): its section's
     // bytes for an asset of width x height, then those bytes added under its name.
     static std::vector<std::byte> encode_output(const LightmapOutput& output, uint32_t width,
