@@ -13,8 +13,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -227,21 +229,48 @@ glm::dvec3 sample_barycentric(const io::Mesh& mesh, const io::BlockGrid& grid, c
     return b / (b.x + b.y + b.z);
 }
 
+// What judges overlapping texels: the mesh's ray tracer and the bake's test of a texel inside geometry,
+// made when first asked for (only meshes with overlaps or charts that share texels pay for them) and kept
+// for every band of the atlas.
+class OverlapJudge
+{
+  public:
+    OverlapJudge(const io::Mesh& mesh, uint32_t width, uint32_t height, std::span<const uint8_t> double_sided)
+        : mesh_(mesh), width_(width), height_(height), double_sided_(double_sided)
+    {
+    }
+    const detail::TexelOrigins& origins()
+    {
+        if (!origins_)
+        {
+            scene_ = std::make_unique<EmbreeScene>(mesh_);
+            const float offset = scene_->ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
+            origins_ = std::make_unique<detail::TexelOrigins>(*scene_, mesh_, width_, height_, offset,
+                                                              [sided = double_sided_](uint32_t t)
+                                                              { return t < sided.size() && sided[t]; });
+        }
+        return *origins_;
+    }
+
+  private:
+    const io::Mesh& mesh_;
+    uint32_t width_, height_;
+    std::span<const uint8_t> double_sided_;
+    std::unique_ptr<EmbreeScene> scene_;
+    std::unique_ptr<detail::TexelOrigins> origins_;
+};
+
 // Per candidate (`which`: indices into `candidates`, each sampled as sample_barycentric gives), 1 when the
 // texel lies inside geometry there as the lightmap bake judges a texel (detail::TexelOrigins, with its
 // footprint). Deterministic on any thread count.
 std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& grid,
                                      const std::vector<Candidate>& candidates, bool grazes,
-                                     std::span<const size_t> which, std::span<const uint8_t> double_sided)
+                                     std::span<const size_t> which, OverlapJudge& judge)
 {
     std::vector<uint8_t> inside(which.size(), 0);
     if (which.empty())
         return inside;
-    const EmbreeScene scene(mesh);
-    const float offset = scene.ray_offset(1e-4f); // LightmapBakeOptions::ray_offset's default
-    const detail::TexelOrigins origins(scene, mesh, grid.width(), grid.height(), offset,
-                                       [&](uint32_t t)
-                                       { return t < double_sided.size() && double_sided[t]; });
+    const detail::TexelOrigins& origins = judge.origins();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size(), 16),
                       [&](const tbb::blocked_range<size_t>& r)
                       {
@@ -277,11 +306,12 @@ std::vector<uint8_t> inside_geometry(const io::Mesh& mesh, const io::BlockGrid& 
 // lowest-index grazing triangle that does not lie inside geometry takes the texel, sampled at the centroid of
 // its part of the square: a viewer sees that face there, and the texel would otherwise be filled from its
 // neighbours.
-void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vector<Candidate>& contested,
-                      std::vector<Candidate>& grazing, const std::vector<uint8_t>& inside_count,
-                      const std::vector<int32_t>& first_inside, std::vector<int32_t>& best,
-                      std::vector<double>& best_distance, std::vector<glm::vec2>& best_bary,
-                      std::span<const uint8_t> double_sided, LightmapUvReport& report)
+// The tables are those of a band of the atlas: slot s's entry is at s - base (rasterize_lightmap).
+void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, size_t base,
+                      std::vector<Candidate>& contested, std::vector<Candidate>& grazing,
+                      const std::vector<uint8_t>& inside_count, const std::vector<int32_t>& first_inside,
+                      std::vector<int32_t>& best, std::vector<double>& best_distance,
+                      std::vector<glm::vec2>& best_bary, OverlapJudge& judge, LightmapUvReport& report)
 {
     std::sort(grazing.begin(), grazing.end());
     grazing.erase(std::unique(grazing.begin(), grazing.end(),
@@ -290,15 +320,15 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
                   grazing.end());
     // A texel that one triangle claims and another chart's grazes: its claimant is judged too.
     for (size_t g = 0; g < grazing.size(); ++g)
-        if ((g == 0 || grazing[g - 1].slot != grazing[g].slot) && inside_count[grazing[g].slot] == 1)
-            contested.push_back({grazing[g].slot, uint32_t(first_inside[grazing[g].slot])});
+        if ((g == 0 || grazing[g - 1].slot != grazing[g].slot) && inside_count[grazing[g].slot - base] == 1)
+            contested.push_back({grazing[g].slot, uint32_t(first_inside[grazing[g].slot - base])});
     if (contested.empty())
         return;
     std::sort(contested.begin(), contested.end());
     std::vector<size_t> all(contested.size());
     for (size_t c = 0; c < all.size(); ++c)
         all[c] = c;
-    const std::vector<uint8_t> hidden = inside_geometry(mesh, grid, contested, false, all, double_sided);
+    const std::vector<uint8_t> hidden = inside_geometry(mesh, grid, contested, false, all, judge);
     // The grazing triangles of texels whose every claimant is hidden.
     std::vector<size_t> judged;
     {
@@ -314,8 +344,7 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
                 judged.push_back(g);
         }
     }
-    const std::vector<uint8_t> grazer_hidden =
-        inside_geometry(mesh, grid, grazing, true, judged, double_sided);
+    const std::vector<uint8_t> grazer_hidden = inside_geometry(mesh, grid, grazing, true, judged, judge);
     std::vector<uint8_t> grazer_visible(grazing.size(), 0);
     for (size_t k = 0; k < judged.size(); ++k)
         grazer_visible[judged[k]] = !grazer_hidden[k];
@@ -369,8 +398,8 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
                 for (int dx = -1; dx <= 1; ++dx)
                 {
                     const int64_t n = grid.slot(int64_t(xy.x) + dx, int64_t(xy.y) + dy);
-                    if ((dx || dy) && n >= 0 && inside_count[size_t(n)] == 1 && best[size_t(n)] >= 0 &&
-                        same_plane(t, uint32_t(best[size_t(n)])))
+                    if ((dx || dy) && n >= 0 && inside_count[size_t(n) - base] == 1 &&
+                        best[size_t(n) - base] >= 0 && same_plane(t, uint32_t(best[size_t(n) - base])))
                         ++support;
                 }
             const glm::dvec3 centroid = (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0;
@@ -392,21 +421,21 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, std::vect
         dvec2 uv[3];
         double area2;
         triangle_uvs(mesh, winner, width, height, uv, area2);
-        best[slot] = int32_t(winner);
-        best_distance[slot] = 0.0;
-        best_bary[slot] = kept(barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2));
+        const size_t at = slot - base;
+        best[at] = int32_t(winner);
+        best_distance[at] = 0.0;
+        best_bary[at] = kept(barycentric(dvec2(xy.x + 0.5, xy.y + 0.5), uv[0], uv[1], uv[2], area2));
         while (next_grazer < grazing.size() && grazing[next_grazer].slot < slot)
             ++next_grazer;
         for (size_t g = next_grazer; winner_hidden && g < grazing.size() && grazing[g].slot == slot; ++g)
             if (grazer_visible[g])
             {
-                best[slot] = int32_t(grazing[g].triangle);
-                best_bary[slot] =
-                    kept(sample_barycentric(mesh, grid, grazing[g], true, &best_distance[slot]));
+                best[at] = int32_t(grazing[g].triangle);
+                best_bary[at] = kept(sample_barycentric(mesh, grid, grazing[g], true, &best_distance[at]));
                 ++report.grazed_instead;
                 break;
             }
-        if (inside_count[slot] >= 2)
+        if (inside_count[at] >= 2)
             report.overlaps.push_back(xy);
         first = last;
     }
@@ -505,42 +534,21 @@ io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t hei
 
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges,
-                                 std::span<const uint8_t> double_sided, uint64_t overlap_budget)
+                                 std::span<const uint8_t> double_sided, uint64_t overlap_budget,
+                                 size_t band_slots)
 {
     io::BlockGrid grid = lightmap_blocks(mesh, width, height); // checks the mesh
     report = {};
     const size_t triangles = mesh.indices.size() / 3;
     report.triangles = triangles;
-    // Per texel of the touched blocks (slots), not per texel of the atlas.
-    const size_t texels = grid.slots();
-    std::vector<int32_t> best(texels, -1);
-    std::vector<double> best_distance(texels, std::numeric_limits<double>::infinity());
-    std::vector<glm::vec2> best_bary(texels); // as kept (kept())
-    std::vector<uint8_t> inside_count(texels, 0);
-    std::vector<int32_t> first_inside(texels, -1);
-    std::vector<Candidate> contested; // (slot, triangle) for centres two triangles claim
-    std::vector<Candidate>
-        grazing; // (slot, triangle) for another chart's triangles that graze a claimed texel
     const std::vector<uint32_t> chart_of = lightmap_charts(mesh);
-    // The candidates grow by doubling, within overlap_budget: refused before it is exceeded.
-    auto room_for = [&](std::vector<Candidate>& list)
-    {
-        if (list.size() + 2 <= list.capacity())
-            return;
-        const size_t grown = std::max<size_t>(2 * list.capacity(), 1024);
-        const size_t other = &list == &contested ? grazing.capacity() : contested.capacity();
-        if (overlap_budget && (grown + other) * kOverlapCandidateBytes > overlap_budget)
-            throw std::length_error(
-                "at least " + std::to_string(report.overlapping_texels) +
-                " lightmap texels lie inside two or more triangles (overlapping lightmap UVs, as a mesh "
-                "instanced over one set of TEXCOORD_1 has them): resolving them needs more than " +
-                io::format_bytes((grown + other) * kOverlapCandidateBytes) +
-                " of memory, and the budget leaves " + io::format_bytes(overlap_budget));
-        list.reserve(grown);
-    };
+    OverlapJudge judge(mesh, width, height, double_sided);
+
+    // Each triangle once: what the report says of it, its areas for the density, and the texel rows its UVs'
+    // bounding box touches (row_end 0: none, it holds no texel).
     size_t example_outside = SIZE_MAX, example_degenerate = SIZE_MAX;
     std::vector<double> world_area(triangles, 0.0), uv_area(triangles, 0.0);
-
+    std::vector<uint32_t> row_begin(triangles, 0), row_end(triangles, 0);
     for (size_t t = 0; t < triangles; ++t)
     {
         const uint32_t* idx = &mesh.indices[t * 3];
@@ -577,119 +585,197 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
         int64_t x_begin, x_end, y_begin, y_end;
         if (!texel_bounds(uv, width, height, x_begin, x_end, y_begin, y_end))
             continue;
-        for (int64_t y = y_begin; y <= y_end; ++y)
-            for (int64_t x = x_begin; x <= x_end; ++x)
-            {
-                if (!overlaps_square(uv, double(x), double(y)))
-                    continue;
-                const int64_t slot = grid.slot(x, y);
-                if (slot < 0)
-                    continue; // cannot happen: lightmap_blocks keeps every block a triangle touches
-                const size_t texel = size_t(slot);
-                const dvec2 centre(double(x) + 0.5, double(y) + 0.5);
-                glm::dvec3 b = barycentric(centre, uv[0], uv[1], uv[2], area2);
-                double distance = 0.0;
-                if (claims(uv, area2, centre))
-                {
-                    if (inside_count[texel] >= 1)
-                        room_for(contested);
-                    if (inside_count[texel] == 0)
-                        first_inside[texel] = int32_t(t);
-                    else if (inside_count[texel] == 1)
-                    {
-                        if (report.overlapping_texels == 0)
-                        {
-                            report.overlap_example[0] = uint32_t(first_inside[texel]);
-                            report.overlap_example[1] = uint32_t(t);
-                        }
-                        ++report.overlapping_texels;
-                        contested.push_back({texel, uint32_t(first_inside[texel])});
-                        contested.push_back({texel, uint32_t(t)});
-                    }
-                    else if (inside_count[texel] < kMaxCandidates)
-                        contested.push_back({texel, uint32_t(t)});
-                    inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
-                }
-                if (!(b.x >= 0 && b.y >= 0 && b.z >= 0))
-                {
-                    // A grazed texel: the centroid of the triangle's part inside its square.
-                    dvec2 q;
-                    if (!clipped_centroid(uv, double(x), double(y), q))
-                        continue; // touches the square only along an edge or at a corner
-                    b = barycentric(q, uv[0], uv[1], uv[2], area2);
-                    b = glm::max(b, glm::dvec3(0.0));
-                    b /= (b.x + b.y + b.z);
-                    distance = glm::length(q - centre);
-                }
-                if (distance < best_distance[texel])
-                {
-                    best_distance[texel] = distance;
-                    best[texel] = int32_t(t);
-                    best_bary[texel] = kept(b);
-                }
-            }
+        row_begin[t] = uint32_t(y_begin);
+        row_end[t] = uint32_t(y_end + 1);
     }
 
-    // Another chart's triangles that graze a texel whose centre a triangle claims (a second walk, once every
-    // texel's claimants are known).
-    for (size_t t = 0; t < triangles; ++t)
-    {
-        dvec2 uv[3];
-        double area2;
-        int64_t x_begin, x_end, y_begin, y_end;
-        if (world_area[t] <= 0.0 || !triangle_uvs(mesh, t, width, height, uv, area2) ||
-            std::abs(area2) < 1e-12 || !texel_bounds(uv, width, height, x_begin, x_end, y_begin, y_end))
-            continue;
-        for (int64_t y = y_begin; y <= y_end; ++y)
-            for (int64_t x = x_begin; x <= x_end; ++x)
-            {
-                const int64_t slot = grid.slot(x, y);
-                dvec2 q;
-                if (slot < 0 || inside_count[size_t(slot)] == 0 ||
-                    chart_of[t] == chart_of[size_t(first_inside[size_t(slot)])] ||
-                    claims(uv, area2, dvec2(double(x) + 0.5, double(y) + 0.5)) ||
-                    !overlaps_square(uv, double(x), double(y)) ||
-                    !clipped_centroid(uv, double(x), double(y), q))
-                    continue;
-                room_for(grazing);
-                grazing.push_back({size_t(slot), uint32_t(t)});
-            }
-    }
-    resolve_overlaps(mesh, grid, contested, grazing, inside_count, first_inside, best, best_distance,
-                     best_bary, double_sided, report);
+    // The atlas in bands of whole block rows (one band without band_slots, or where it holds them all), each
+    // with the block row above and below it: a texel's overlap is resolved from its 8 neighbours, which the
+    // band then holds. The tables below are the band's, slot s at s - base. The same texels, records and
+    // report as the whole atlas at once: every triangle that touches a band's texels is rasterised into it,
+    // in the same order, and the row above holds the finished choices of the band before (the whole atlas
+    // resolves its texels in slot order: a row above is finished, a row below not yet).
+    const std::vector<uint32_t>& blocks = grid.blocks();
+    const uint32_t bx = grid.blocks_x(), by = grid.blocks_y();
+    constexpr uint32_t B = io::BlockGrid::kSize;
+    std::vector<size_t> row_first(size_t(by) + 1); // per block row, its first kept block
+    for (uint32_t r = 0; r <= by; ++r)
+        row_first[r] = size_t(std::lower_bound(blocks.begin(), blocks.end(), uint64_t(r) * bx,
+                                               [](uint32_t b, uint64_t v) { return uint64_t(b) < v; }) -
+                              blocks.begin());
+    const auto slot_of_row = [&](uint32_t r) { return row_first[r] * io::BlockGrid::kTexels; };
+
     LightmapAtlas atlas;
     atlas.width = width;
     atlas.height = height;
-    atlas.slot_texel.assign(texels, -1);
-    // Covered texels in row-major order of the atlas: block row by block row, then texel row by texel row
-    // across the row's kept blocks.
+    atlas.slot_texel.assign(grid.slots(), -1);
     std::vector<LightmapTexels::Packed> packed;
+    std::vector<int32_t> best;
+    std::vector<double> best_distance;
+    std::vector<glm::vec2> best_bary; // as kept (kept())
+    std::vector<uint8_t> inside_count;
+    std::vector<int32_t> first_inside;
+    std::vector<Candidate> contested; // (slot, triangle) for centres two triangles claim
+    std::vector<Candidate>
+        grazing; // (slot, triangle) for another chart's triangles that graze a claimed texel
+    std::vector<int32_t> finished_row; // the band before's last block row, as it was resolved
+    // The first overlap (lowest triangle, then row, then column), as the whole atlas would name it.
+    std::array<uint64_t, 3> example_key{UINT64_MAX, UINT64_MAX, UINT64_MAX};
+    for (uint32_t r0 = 0; r0 < by;)
     {
-        const std::vector<uint32_t>& blocks = grid.blocks();
-        const uint32_t bx = grid.blocks_x();
-        for (size_t first = 0; first < blocks.size();)
+        uint32_t r1 = r0 + 1;
+        while (r1 < by && (band_slots == 0 || slot_of_row(r1 + 1) - slot_of_row(r0) <= band_slots))
+            ++r1;
+        const uint32_t e0 = r0 > 0 ? r0 - 1 : 0, e1 = std::min(by, r1 + 1);
+        const size_t base = slot_of_row(e0), own_end = slot_of_row(r1);
+        const size_t slots = slot_of_row(e1) - base;
+        const int64_t y_lo = int64_t(e0) * B, y_hi = std::min<int64_t>(int64_t(e1) * B, height) - 1;
+        const int64_t own_lo = int64_t(r0) * B, own_hi = std::min<int64_t>(int64_t(r1) * B, height) - 1;
+        best.assign(slots, -1);
+        best_distance.assign(slots, std::numeric_limits<double>::infinity());
+        best_bary.assign(slots, glm::vec2(0.0f));
+        inside_count.assign(slots, 0);
+        first_inside.assign(slots, -1);
+        contested.clear();
+        grazing.clear();
+        size_t band_overlaps = 0;
+        // The candidates grow by doubling, within overlap_budget: refused before it is exceeded.
+        auto room_for = [&](std::vector<Candidate>& list)
         {
-            const uint32_t row = blocks[first] / bx;
-            size_t last = first;
-            while (last < blocks.size() && blocks[last] / bx == row)
-                ++last;
-            for (uint32_t ly = 0; ly < io::BlockGrid::kSize; ++ly)
+            if (list.size() + 2 <= list.capacity())
+                return;
+            const size_t grown = std::max<size_t>(2 * list.capacity(), 1024);
+            const size_t other = &list == &contested ? grazing.capacity() : contested.capacity();
+            if (overlap_budget && (grown + other) * kOverlapCandidateBytes > overlap_budget)
+                throw std::length_error(
+                    "at least " + std::to_string(report.overlapping_texels + band_overlaps) +
+                    " lightmap texels lie inside two or more triangles (overlapping lightmap UVs, as a mesh "
+                    "instanced over one set of TEXCOORD_1 has them): resolving them needs more than " +
+                    io::format_bytes((grown + other) * kOverlapCandidateBytes) +
+                    " of memory, and the budget leaves " + io::format_bytes(overlap_budget));
+            list.reserve(grown);
+        };
+        const auto in_band = [&](size_t t)
+        { return row_end[t] > 0 && int64_t(row_begin[t]) <= y_hi && int64_t(row_end[t]) - 1 >= y_lo; };
+        // Each texel (x, y) of rows [lo, hi] that the UV box of a triangle reaching the band touches,
+        // triangle by triangle in order: visit(t, uv, area2, x, y).
+        const auto each_texel = [&](int64_t lo, int64_t hi, auto&& visit)
+        {
+            for (size_t t = 0; t < triangles; ++t)
+            {
+                if (!in_band(t))
+                    continue;
+                dvec2 uv[3];
+                double area2;
+                triangle_uvs(mesh, t, width, height, uv, area2);
+                int64_t x_begin, x_end, y_begin, y_end;
+                texel_bounds(uv, width, height, x_begin, x_end, y_begin, y_end);
+                for (int64_t y = std::max(y_begin, lo); y <= std::min(y_end, hi); ++y)
+                    for (int64_t x = x_begin; x <= x_end; ++x)
+                        visit(t, uv, area2, x, y);
+            }
+        };
+        each_texel(y_lo, y_hi,
+                   [&](size_t t, const dvec2(&uv)[3], double area2, int64_t x, int64_t y)
+                   {
+                       if (!overlaps_square(uv, double(x), double(y)))
+                           return;
+                       const int64_t slot = grid.slot(x, y);
+                       if (slot < 0)
+                           return; // cannot happen: lightmap_blocks keeps every block a triangle touches
+                       const size_t texel = size_t(slot) - base;
+                       const bool own = y >= own_lo && y <= own_hi;
+                       const dvec2 centre(double(x) + 0.5, double(y) + 0.5);
+                       glm::dvec3 b = barycentric(centre, uv[0], uv[1], uv[2], area2);
+                       double distance = 0.0;
+                       if (claims(uv, area2, centre))
+                       {
+                           if (own && inside_count[texel] >= 1)
+                               room_for(contested);
+                           if (inside_count[texel] == 0)
+                               first_inside[texel] = int32_t(t);
+                           else if (own && inside_count[texel] == 1)
+                           {
+                               if (band_overlaps == 0 &&
+                                   std::array<uint64_t, 3>{t, uint64_t(y), uint64_t(x)} < example_key)
+                               {
+                                   example_key = {t, uint64_t(y), uint64_t(x)};
+                                   report.overlap_example[0] = uint32_t(first_inside[texel]);
+                                   report.overlap_example[1] = uint32_t(t);
+                               }
+                               ++band_overlaps;
+                               contested.push_back({size_t(slot), uint32_t(first_inside[texel])});
+                               contested.push_back({size_t(slot), uint32_t(t)});
+                           }
+                           else if (own && inside_count[texel] < kMaxCandidates)
+                               contested.push_back({size_t(slot), uint32_t(t)});
+                           inside_count[texel] = uint8_t(std::min(255, inside_count[texel] + 1));
+                       }
+                       if (!(b.x >= 0 && b.y >= 0 && b.z >= 0))
+                       {
+                           // A grazed texel: the centroid of the triangle's part inside its square.
+                           dvec2 q;
+                           if (!clipped_centroid(uv, double(x), double(y), q))
+                               return; // touches the square only along an edge or at a corner
+                           b = barycentric(q, uv[0], uv[1], uv[2], area2);
+                           b = glm::max(b, glm::dvec3(0.0));
+                           b /= (b.x + b.y + b.z);
+                           distance = glm::length(q - centre);
+                       }
+                       if (distance < best_distance[texel])
+                       {
+                           best_distance[texel] = distance;
+                           best[texel] = int32_t(t);
+                           best_bary[texel] = kept(b);
+                       }
+                   });
+        report.overlapping_texels += band_overlaps;
+        // The row above as the band before resolved it.
+        if (r0 > 0)
+            std::copy(finished_row.begin(), finished_row.end(), best.begin());
+
+        // Another chart's triangles that graze a texel of the band whose centre a triangle claims (a second
+        // walk, once every texel's claimants are known).
+        each_texel(own_lo, own_hi,
+                   [&](size_t t, const dvec2(&uv)[3], double area2, int64_t x, int64_t y)
+                   {
+                       const int64_t slot = grid.slot(x, y);
+                       dvec2 q;
+                       if (slot < 0 || inside_count[size_t(slot) - base] == 0 ||
+                           chart_of[t] == chart_of[size_t(first_inside[size_t(slot) - base])] ||
+                           claims(uv, area2, dvec2(double(x) + 0.5, double(y) + 0.5)) ||
+                           !overlaps_square(uv, double(x), double(y)) ||
+                           !clipped_centroid(uv, double(x), double(y), q))
+                           return;
+                       room_for(grazing);
+                       grazing.push_back({size_t(slot), uint32_t(t)});
+                   });
+        resolve_overlaps(mesh, grid, base, contested, grazing, inside_count, first_inside, best,
+                         best_distance, best_bary, judge, report);
+        // Covered texels in row-major order of the atlas: block row by block row, then texel row by texel row
+        // across the row's kept blocks.
+        for (uint32_t row = r0; row < r1; ++row)
+        {
+            const size_t first = row_first[row], last = row_first[row + 1];
+            for (uint32_t ly = 0; ly < B; ++ly)
                 for (size_t b = first; b < last; ++b)
-                    for (uint32_t lx = 0; lx < io::BlockGrid::kSize; ++lx)
+                    for (uint32_t lx = 0; lx < B; ++lx)
                     {
-                        const size_t texel = b * io::BlockGrid::kTexels + ly * io::BlockGrid::kSize + lx;
+                        const size_t slot = b * io::BlockGrid::kTexels + ly * B + lx, texel = slot - base;
                         if (best[texel] < 0)
                             continue;
-                        const glm::uvec2 xy = grid.texel(texel);
-                        atlas.slot_texel[texel] = int32_t(packed.size());
+                        const glm::uvec2 xy = grid.texel(slot);
+                        atlas.slot_texel[slot] = int32_t(packed.size());
                         packed.push_back(
                             {uint16_t(xy.x), uint16_t(xy.y),
                              uint32_t(best[texel]) |
                                  (best_distance[texel] == 0.0 ? LightmapTexels::kCentreInside : 0u),
                              best_bary[texel].x, best_bary[texel].y});
                     }
-            first = last;
         }
+        finished_row.assign(best.begin() + ptrdiff_t(slot_of_row(r1 - 1) - base),
+                            best.begin() + ptrdiff_t(own_end - base));
+        r0 = r1;
     }
     atlas.texels = LightmapTexels(mesh, width, height, std::move(packed), chart_of);
     report.covered_texels = atlas.texels.size();

@@ -161,8 +161,8 @@ namespace
 {
 
 // 7: the mixed lights' shadowmask and direct light; 8: the rays' angles from a table of turns, the sums in
-// float, the bounces' lookups of a packed map.
-constexpr uint64_t kLightmapCheckpointVersion = 8;
+// float, the bounces' lookups of a packed map; 9: in tiles, the mixed lights' values in the tile file.
+constexpr uint64_t kLightmapCheckpointVersion = 9;
 
 void check(const LightmapLights& l, const LightmapBakeOptions& o)
 {
@@ -927,15 +927,21 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
     // without tiles here; with tiles in the tile file beside the sums (kBounceField), the pass's own copy.
     std::vector<glm::vec3> previous(tiled ? 0 : n, glm::vec3(0.0f));
     out.valid.assign(n, 1);
-    // The mixed lights' channels; their shadowmask and direct light are kept for every texel (28 bytes).
+    // The mixed lights' channels; their shadowmask and direct light (28 bytes a texel) are kept for every
+    // texel, or with tiles for a tile's (indexed from its first texel, like pass_*), every tile's in the tile
+    // file (copy 0, written in the first pass).
     const std::vector<ShadowmaskChannel> channels = shadowmask_channels(lights);
     int sun_channel = -1;
     std::vector<int> punctual_channel(lights.punctual.size(), -1);
     for (const ShadowmaskChannel& c : channels)
         (c.light < 0 ? sun_channel : punctual_channel[size_t(c.light)]) = c.channel;
     const bool mixed = !channels.empty();
-    out.shadowmask.assign(mixed ? n : 0, {1.0f, 1.0f, 1.0f, 1.0f});
-    out.mixed_direct.assign(mixed ? n : 0, glm::vec3(0.0f));
+    out.shadowmask.assign(mixed && !tiled ? n : 0, {1.0f, 1.0f, 1.0f, 1.0f});
+    out.mixed_direct.assign(mixed && !tiled ? n : 0, glm::vec3(0.0f));
+    std::vector<std::array<float, 4>> tile_mask(mixed && tiled ? tile : 0);
+    std::vector<glm::vec3> tile_mixed(mixed && tiled ? tile : 0);
+    std::array<float, 4>* const mask_out = tiled ? tile_mask.data() : out.shadowmask.data();
+    glm::vec3* const mixed_out = tiled ? tile_mixed.data() : out.mixed_direct.data();
     const bool sun_lit = lights.sun && lights.sun_mode != io::LightMode::Realtime;
     PackedIrradiance previous_map; // `previous` over the atlas, dilated, for bilinear lookups
     tbb::enumerable_thread_specific<RayScratch> scratch;
@@ -1013,6 +1019,12 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                                         uint32_t(sizeof(glm::vec3)), uint32_t(sizeof(glm::vec3)), 1};
         if (o.keep_noise)
             fields.push_back(uint32_t(sizeof(LightmapSh::Noise)));
+        if (mixed)
+        {
+            out.tiles_mixed_field = int(fields.size());
+            fields.push_back(uint32_t(sizeof(std::array<float, 4>)));
+            fields.push_back(uint32_t(sizeof(glm::vec3)));
+        }
         tiles = std::make_shared<TexelFile>(o.tile_file, key, n, std::move(fields), out.resumed);
         if (checkpoint.active())
             tiles->keep();
@@ -1322,8 +1334,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
         pass_direct[i - base] = sums.direct;
         if (mixed && pass == 0)
         {
-            out.shadowmask[i] = mask;
-            out.mixed_direct[i] = glm::vec3(mixed_e);
+            mask_out[i - base] = mask;
+            mixed_out[i - base] = glm::vec3(mixed_e);
         }
         if (o.keep_noise)
         {
@@ -1407,10 +1419,8 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     {reinterpret_cast<std::byte*>(pass_noise.data()), sizeof(LightmapSh::Noise)});
             if (mixed && pass == 0) // indexed from the tile's first texel, like the pass's
             {
-                arrays.push_back({reinterpret_cast<std::byte*>(out.shadowmask.data() + base),
-                                  sizeof(std::array<float, 4>)});
-                arrays.push_back(
-                    {reinterpret_cast<std::byte*>(out.mixed_direct.data() + base), sizeof(glm::vec3)});
+                arrays.push_back({reinterpret_cast<std::byte*>(mask_out), sizeof(std::array<float, 4>)});
+                arrays.push_back({reinterpret_cast<std::byte*>(mixed_out), sizeof(glm::vec3)});
             }
             dist.run(
                 begin - base, end - base, tiled ? std::min(slice, end - begin) : slice, arrays,
@@ -1475,9 +1485,14 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
                     io_tile(true, pass % 2, kNoiseField, sum_noise);
                 // The bounces start from all of the first pass's light, the mixed lights' direct light too.
                 for (uint32_t i = 0; i < count; ++i)
-                    tile_bounce[i] = pass_direct[i][0] +
-                                     (mixed && pass == 0 ? out.mixed_direct[begin + i] : glm::vec3(0.0f));
+                    tile_bounce[i] =
+                        pass_direct[i][0] + (mixed && pass == 0 ? tile_mixed[i] : glm::vec3(0.0f));
                 io_tile(true, pass % 2, kBounceField, tile_bounce);
+                if (mixed && pass == 0)
+                {
+                    io_tile(true, 0, size_t(out.tiles_mixed_field), tile_mask);
+                    io_tile(true, 0, size_t(out.tiles_mixed_field) + 1, tile_mixed);
+                }
                 if (checkpoint.active())
                     tiles->sync();
             }
@@ -1541,13 +1556,14 @@ class LevelRadiance
         : mesh_(mesh), surfaces_(surfaces)
     {
         if (sh.texels() != atlas.texels.size() ||
-            (!sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
+            (!sh.tiles && !sh.mixed_direct.empty() && sh.mixed_direct.size() != sh.texels()))
             throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
         if (surfaces && mesh.uvs1.size() != mesh.positions.size())
             throw std::invalid_argument("probes need lightmap UVs to look the irradiance of a hit up");
         const bool direct = sh.has_direct();
         std::vector<std::array<glm::vec3, 9>> sh9;
         std::vector<std::array<glm::vec3, 4>> directs;
+        std::vector<glm::vec3> mixed;
         map_ = dilated(atlas, 1, 2, sh.valid,
                        [&](uint32_t first, std::span<glm::vec3> out)
                        {
@@ -1566,9 +1582,13 @@ class LevelRadiance
                                for (uint32_t i = 0; i < count; ++i)
                                    out[i] = math::sh9_eval_rgb(sh9[i], glm::vec3(0.0f, 0.0f, 1.0f));
                            }
-                           if (!sh.mixed_direct.empty())
+                           if (sh.has_mixed())
+                           {
+                               mixed.resize(count);
+                               sh.read_mixed(first, count, nullptr, mixed.data());
                                for (uint32_t i = 0; i < count; ++i)
-                                   out[i] += sh.mixed_direct[first + i];
+                                   out[i] += mixed[i];
+                           }
                        });
     }
     // Whether the ray along d met the back of a single-sided surface (which sends no light).
@@ -2151,7 +2171,7 @@ struct LightmapOutputBands::Impl
           bands(dilated_grid(width, height, uint32_t(sh_.texels()), place, dilate), uint32_t(sh_.texels()),
                 place, k, dilate, sh_.valid, charts, band_slots)
     {
-        if (name == "shadowmask" && sh.shadowmask.size() != sh.texels())
+        if (name == "shadowmask" && !sh.has_mixed())
             throw std::invalid_argument("the bake has no shadowmask (no mixed light)");
     }
     // The K values of texels [first, first + values.size() / K).
@@ -2160,9 +2180,11 @@ struct LightmapOutputBands::Impl
         const uint32_t count = uint32_t(values.size() / size_t(k));
         if (name == "shadowmask")
         {
+            masks.resize(count);
+            sh.read_mixed(first, count, masks.data());
             for (size_t i = 0; i < count; ++i)
                 for (size_t c = 0; c < 4; ++c)
-                    values[i * 4 + c] = glm::vec3(sh.shadowmask[first + i][c]);
+                    values[i * 4 + c] = glm::vec3(masks[i][c]);
             return;
         }
         // plain and rnm hold irradiance itself: integrated directly where the bake did (LightmapSh::direct).
@@ -2198,6 +2220,7 @@ struct LightmapOutputBands::Impl
     BandDilation bands;
     std::vector<std::array<glm::vec3, 9>> sh9;
     std::vector<std::array<glm::vec3, 4>> directs;
+    std::vector<std::array<float, 4>> masks;
 };
 
 LightmapOutputBands::LightmapOutputBands(std::string_view name, uint32_t width, uint32_t height,
@@ -2284,6 +2307,29 @@ void LightmapSh::read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* 
         std::copy_n(noise.begin() + first, count, noise_out);
 }
 
+void LightmapSh::read_mixed(uint32_t first, uint32_t count, std::array<float, 4>* mask_out,
+                            glm::vec3* mixed_out) const
+{
+    if (uint64_t(first) + count > texels())
+        throw std::out_of_range("LightmapSh::read_mixed: texels past the lightmap's");
+    if (!has_mixed())
+        throw std::invalid_argument("LightmapSh::read_mixed: the bake has no mixed light");
+    if (tiles)
+    {
+        if (mask_out)
+            tiles->read(0, size_t(tiles_mixed_field), first,
+                        std::as_writable_bytes(std::span(mask_out, count)));
+        if (mixed_out)
+            tiles->read(0, size_t(tiles_mixed_field) + 1, first,
+                        std::as_writable_bytes(std::span(mixed_out, count)));
+        return;
+    }
+    if (mask_out)
+        std::copy_n(shadowmask.begin() + first, count, mask_out);
+    if (mixed_out)
+        std::copy_n(mixed_direct.begin() + first, count, mixed_out);
+}
+
 void LightmapSh::load()
 {
     if (!tiles)
@@ -2293,6 +2339,12 @@ void LightmapSh::load()
     direct.resize(n);
     noise.resize(has_noise() ? n : 0);
     read(0, n, irradiance.data(), direct.data(), noise.empty() ? nullptr : noise.data());
+    if (has_mixed())
+    {
+        shadowmask.resize(n);
+        mixed_direct.resize(n);
+        read_mixed(0, n, shadowmask.data(), mixed_direct.data());
+    }
     tiles.reset();
 }
 

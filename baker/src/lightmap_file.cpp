@@ -49,7 +49,9 @@ namespace
 // one a slot), as the largest of three stages':
 // - the rasteriser (lightmap_atlas.cpp): per slot its tables (the best triangle, its distance and
 //   barycentrics, the claimants' count and first, the slot's texel index: kRasterBytesPerSlot), per covered
-//   texel the record it makes (kTexelRecordBytes, LightmapTexels);
+//   texel the record it makes (kTexelRecordBytes, LightmapTexels); in bands of block rows when that does not
+//   fit the budget, per slot its texel index (kSlotTexelBytes) and the tables over one band and the block
+//   rows either side (kRasterTableBytesPerSlot, lightmap_atlas.h);
 // - the passes: per slot the texel index and the bounce map's halves (kLightmapBytesPerSlot), one band of the
 //   bounce map's dilation (bounce_band_bytes), per covered texel its record and either every sum of the
 //   passes and the pass being gathered with each texel's origin, flags and the irradiance the next pass
@@ -70,6 +72,7 @@ namespace
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
 // texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kRasterBytesPerSlot = 32;
+constexpr uint64_t kSlotTexelBytes = 4;
 constexpr uint64_t kTexelRecordBytes = 16;
 constexpr uint64_t kLightmapBytesPerSlot = 12;
 constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being made, in floats
@@ -85,7 +88,8 @@ constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
 constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 64 + 4;
 constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16 + 64;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
-// With mixed lights, every covered texel's shadowmask (4 floats) and the mixed lights' direct light (3).
+// With mixed lights, every covered texel's shadowmask (4 floats) and the mixed lights' direct light (3); in
+// tiles a tile's, the rest in the tile file.
 constexpr uint64_t kMixedBytesPerCoveredTexel = 28;
 // Light probes (--probes) are held whole, beside the lightmap's sums while they bake and then written with
 // the asset: their SH9 irradiance and validity, the asset's copy and its spooled bytes. Measured 218-220
@@ -409,7 +413,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         coefficients += uint64_t(lightmap_output_size(name)) * 3;
         largest_output = std::max<uint64_t>(largest_output, uint64_t(lightmap_output_size(name)) * 3);
     }
-    // With mixed lights, each texel's shadowmask and mixed direct light, through the whole bake.
+    // With mixed lights, each texel's shadowmask and mixed direct light, through the whole bake (in tiles,
+    // a tile's, and the rest in the tile file).
     const uint64_t mixed_bytes = mixed_channels.empty() ? 0 : kMixedBytesPerCoveredTexel;
     // The budget: --memory-budget, else what the machine has free (io::available_memory, which
     // HEMI_MEMORY_BUDGET and the process's limits lower); 0 when neither is known.
@@ -503,6 +508,19 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                      5 * row_slots);
         return o.bake.bounces > 0 ? std::min(band, slots) * (12 + kDilationBytesPerSlot) : 0;
     };
+    // The rasteriser whole (band 0) or in bands of block rows of at most `band` slots (at least a row), each
+    // with the block rows either side.
+    const uint64_t raster_row_slots =
+        uint64_t((w + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize) * io::BlockGrid::kTexels;
+    const uint64_t least_raster_band = raster_row_slots;
+    const auto raster_band_bytes = [&](uint64_t band)
+    {
+        if (band == 0)
+            return slots * kRasterBytesPerSlot;
+        return slots * kSlotTexelBytes +
+               std::min(slots, std::max(band, raster_row_slots) + 2 * raster_row_slots) *
+                   kRasterTableBytesPerSlot;
+    };
     // An output's texels are read 65,536 at a time: their sums (156 bytes) and the output's values.
     const auto read_chunk_bytes = [&](uint64_t texels)
     {
@@ -538,11 +556,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
     {
         const uint64_t passes = slots * kLightmapBytesPerSlot + bounce_band_bytes(tile) +
-                                texels * (kTiledBytesPerCoveredTexel + mixed_bytes + (o.denoise ? 4 : 0)) +
-                                std::max(tile, std::min(texels, least_band)) * per_tile_texel;
+                                texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
+                                std::max(tile, std::min(texels, least_band)) * per_tile_texel +
+                                tile * mixed_bytes;
+        // (the mixed lights' values read from the tile file 65,536 at a time)
         return held + probe_bytes +
-               std::max({slots * kRasterBytesPerSlot + texels * kTexelRecordBytes, passes,
-                         tiled_output_bytes(texels, tile) + texels * (kPlaceBytesPerTexel + mixed_bytes)});
+               std::max({raster_band_bytes(least_raster_band) + texels * kTexelRecordBytes, passes,
+                         tiled_output_bytes(texels, tile) + texels * kPlaceBytesPerTexel +
+                             std::min<uint64_t>(texels, uint64_t(1) << 16) * mixed_bytes});
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
     {
@@ -569,13 +590,29 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     std::vector<uint8_t> double_sided(summary.triangles, 0);
     for (uint32_t t = 0; t < summary.triangles; ++t)
         double_sided[t] = surfaces->double_sided(t);
+    // The rasteriser whole where it fits beside the records (the covered texels at most the slots), else in
+    // the largest bands of block rows that do (check_fits has made sure that a row's does).
+    uint64_t raster_band = 0;
+    const uint64_t usable_now = budget - budget / 8;
+    const uint64_t records = held + probe_bytes + slots * kTexelRecordBytes;
+    if (budget != 0 && records + raster_band_bytes(0) > usable_now)
+    {
+        const uint64_t fixed =
+            records + slots * kSlotTexelBytes + 2 * raster_row_slots * kRasterTableBytesPerSlot;
+        raster_band = std::max(least_raster_band,
+                               fixed < usable_now ? (usable_now - fixed) / kRasterTableBytesPerSlot : 0);
+        if (raster_band >= slots)
+            raster_band = 0;
+    }
+    summary.raster_band_slots = raster_band;
     // Overlapping UVs' candidates may take what the budget leaves beside the rasteriser's tables.
-    const uint64_t raster_bytes = held + probe_bytes + slots * (kRasterBytesPerSlot + kTexelRecordBytes);
+    const uint64_t raster_bytes = records + raster_band_bytes(raster_band);
     const uint64_t overlap_budget = budget == 0 ? 0 : budget > raster_bytes ? budget - raster_bytes : 1;
     LightmapAtlas atlas;
     try
     {
-        atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided, overlap_budget);
+        atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided, overlap_budget,
+                                   size_t(raster_band));
     }
     catch (const std::length_error& e)
     {
@@ -1131,6 +1168,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["memory_budget_bytes"] = s.memory_budget;
     j["tile_texels"] = s.tile_texels; // 0: the whole atlas in memory
     j["tiles_per_pass"] = s.tiles;
+    j["raster_band_slots"] = s.raster_band_slots; // 0: the atlas rasterised whole
     j["triangles"] = s.triangles;
     // The most direct irradiance the lights can give a point (light_bound.h), and the power of two each
     // output's half floats are times (io/half_scale.h: 1 for light in the ordinary range).

@@ -194,6 +194,49 @@ TEST(RealLevel, BakesItsOwnOverlappingLightmapUvsWithAWarning)
     EXPECT_FALSE(fs::exists(refused));
 }
 
+// The rasteriser in bands of block rows (a bake in tiles under a memory budget, issue 45) makes the atlas and
+// the report of the whole atlas at once, on the real level's own lightmap UVs: its overlapping rectangles
+// (resolved from each texel's neighbours, which may lie across a band's edge, and by rays), the texels given
+// to a grazing face, the first overlap named. Bands of one block row, of three, and of a size that is no
+// multiple of a row.
+TEST(RealLevel, TheAtlasRasterisedInBandsIsTheWholeAtlas)
+{
+    // As hemi-bake reads it (its tangents made on reading).
+    const hemi::io::Mesh mesh = hemi::io::read_gltf(level_gltf()).mesh;
+    constexpr uint32_t kSize = 1024;
+    hemi::bake::LightmapUvReport whole_report;
+    const hemi::bake::LightmapAtlas whole = hemi::bake::rasterize_lightmap(mesh, kSize, kSize, whole_report);
+    std::printf("%zu covered texels, %zu overlapping, %zu given to a grazing face\n",
+                whole_report.covered_texels, whole_report.overlapping_texels, whole_report.grazed_instead);
+    ASSERT_GT(whole_report.overlapping_texels, 1000u);
+    ASSERT_GT(whole_report.grazed_instead, 0u);
+    const size_t row = (kSize / 8) * 64;
+    for (const size_t band : {row, 3 * row, size_t(10007)})
+    {
+        hemi::bake::LightmapUvReport report;
+        const hemi::bake::LightmapAtlas banded =
+            hemi::bake::rasterize_lightmap(mesh, kSize, kSize, report, {}, {}, 0, band);
+        ASSERT_EQ(banded.texels.size(), whole.texels.size()) << band;
+        EXPECT_EQ(banded.slot_texel, whole.slot_texel) << band;
+        EXPECT_EQ(banded.grid.blocks(), whole.grid.blocks()) << band;
+        size_t different = 0;
+        for (size_t i = 0; i < whole.texels.size(); ++i)
+        {
+            const hemi::bake::LightmapTexel a = whole.texels[i], b = banded.texels[i];
+            different += a.x != b.x || a.y != b.y || a.triangle != b.triangle ||
+                         a.barycentric != b.barycentric || a.centre_inside != b.centre_inside;
+        }
+        EXPECT_EQ(different, 0u) << band;
+        EXPECT_EQ(report.overlapping_texels, whole_report.overlapping_texels) << band;
+        EXPECT_EQ(report.grazed_instead, whole_report.grazed_instead) << band;
+        EXPECT_EQ(report.overlap_example[0], whole_report.overlap_example[0]) << band;
+        EXPECT_EQ(report.overlap_example[1], whole_report.overlap_example[1]) << band;
+        EXPECT_EQ(report.overlaps, whole_report.overlaps) << band;
+        EXPECT_EQ(report.warnings, whole_report.warnings) << band;
+        EXPECT_EQ(report.covered_texels, whole_report.covered_texels) << band;
+    }
+}
+
 // --unwrap on the real level (issue 25): its coplanar faces that overlap (a face modelled twice, a patch over
 // a wall) used to join one planar chart, and the bake then refused its own atlas ("176 lightmap texel(s) lie
 // inside two or more triangles"). Unwrapped now, no texel lies in two triangles: --strict-uv bakes it.

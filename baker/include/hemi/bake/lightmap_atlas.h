@@ -221,15 +221,25 @@ struct TriangleRange
 // when the candidates would take more (a mesh instanced many times over one set of lightmap UVs), throws
 // std::length_error saying how many texels overlap and how much they need, as soon as they exceed it, before
 // any ray is traced. 0: no bound.
+//
+// The rasteriser's tables take kRasterTableBytesPerSlot a slot of the atlas's touched blocks. With
+// `band_slots`, they cover one band of whole block rows of at most that many slots at a time (at least one
+// row), with the block row above and below it, each triangle that touches the band rasterised into it: the
+// atlas then holds each slot's texel index (4 bytes) and each covered texel's record (16), and the tables one
+// band (a bake in tiles under a memory budget). The same atlas and report for any band size; 0: the whole
+// atlas at once. The candidates and their bound are then a band's.
 constexpr uint64_t kOverlapCandidateBytes =
     16 + 1; // (slot, triangle) and the judge's answer, claimant or grazer
+constexpr uint64_t kRasterTableBytesPerSlot =
+    4 + 8 + 8 + 1 + 4; // best triangle, distance, barycentrics, claims
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
-                                 std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0);
+                                 std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0,
+                                 size_t band_slots = 0);
 // The atlas refers to the mesh's arrays (LightmapTexels): not of a temporary mesh.
 LightmapAtlas rasterize_lightmap(io::Mesh&& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
                                  const std::vector<TriangleRange>& ranges = {},
-                                 std::span<const uint8_t> double_sided = {},
-                                 uint64_t overlap_budget = 0) = delete;
+                                 std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0,
+                                 size_t band_slots = 0) = delete;
 
 } // namespace hemi::bake

@@ -191,7 +191,8 @@ struct LightmapSh
     // light that reaches it (of its shadow rays, those not blocked; a channel no light of which reaches the
     // texel is 1), and the mixed lights' direct irradiance at its normal as their shadow rays gave it. The
     // sums above hold none of the mixed lights' direct light, and all of their bounces: the bounce rays pick
-    // up the first pass's irradiance with mixed_direct added. Empty without mixed lights.
+    // up the first pass's irradiance with mixed_direct added. Empty without mixed lights, and in tiles (then
+    // in `tiles`: read_mixed()).
     std::vector<std::array<float, 4>> shadowmask;
     std::vector<glm::vec3> mixed_direct;
     // Per texel: 0 when the texel lies inside geometry (more than half of its first-pass rays hit the backs
@@ -203,23 +204,29 @@ struct LightmapSh
     double trace_seconds = 0.0;
     bool resumed = false;
     std::string checkpoint_error;
-    // A bake in tiles (LightmapBakeOptions::tile_texels) leaves irradiance, direct and noise empty: their
-    // values are in `tiles` (copy `tiles_copy`: fields irradiance, direct, noise), read back by read(). On
-    // the leader only; the other ranks of a job return without them. Null otherwise.
+    // A bake in tiles (LightmapBakeOptions::tile_texels) leaves irradiance, direct, noise, shadowmask and
+    // mixed_direct empty: their values are in `tiles` (copy `tiles_copy`: fields irradiance, direct, noise;
+    // copy 0: fields tiles_mixed_field, shadowmask, and the next, mixed_direct), read back by read() and
+    // read_mixed(). On the leader only; the other ranks of a job return without them. Null otherwise.
     std::shared_ptr<TexelFile> tiles;
     int tiles_copy = 0;
     uint32_t tiles_count = 0; // tiles in the last pass (1 without tiles)
     bool tiles_noise = false;
+    int tiles_mixed_field = -1; // -1: no mixed light
 
     size_t texels() const { return tiles ? tiles->items() : irradiance.size(); }
     bool has_direct() const { return tiles || !direct.empty(); }
     bool has_noise() const { return tiles ? tiles_noise : !noise.empty(); }
+    bool has_mixed() const { return tiles ? tiles_mixed_field >= 0 : !shadowmask.empty(); }
     // Texels [first, first + count) from memory or from `tiles`, into each array that is not null: their
     // SH9 irradiance, direct values (has_direct()) and noise (has_noise()).
     void read(uint32_t first, uint32_t count, std::array<glm::vec3, 9>* irradiance,
               std::array<glm::vec3, 4>* direct = nullptr, Noise* noise = nullptr) const;
-    // Reads every texel into irradiance, direct and noise, and lets the tiles go (the denoiser works on the
-    // whole atlas in memory).
+    // The same for the mixed lights' shadowmask and direct light (has_mixed()).
+    void read_mixed(uint32_t first, uint32_t count, std::array<float, 4>* shadowmask,
+                    glm::vec3* mixed_direct = nullptr) const;
+    // Reads every texel into irradiance, direct, noise, shadowmask and mixed_direct, and lets the tiles go
+    // (the denoiser works on the whole atlas in memory).
     void load();
 };
 
@@ -460,6 +467,8 @@ struct LightmapBakeSummary
     uint64_t memory_budget = 0; // the budget the bake kept to (0: none known)
     uint32_t tile_texels = 0;   // texels per tile; 0: the whole atlas in memory
     uint32_t tiles = 0;         // tiles per pass (the last pass's; 1 without tiles)
+    // Slots per band of the rasteriser (rasterize_lightmap's band_slots); 0: the whole atlas at once.
+    uint64_t raster_band_slots = 0;
     // The ranks that shared the bake and the texels each computed, over the origin search and all passes;
     // {n * (2 + bounces)} on one process.
     std::vector<uint64_t> texels_by_rank;
