@@ -2043,6 +2043,54 @@ TEST(LightmapMaps, BlocksHoldTheSameValuesAsTheDenseDilation)
 //   down-facing face would get 0);
 // - a small wall piece whose UVs land inside a floor's chart, listed first and facing the scene's centre
 //   better than the floor, loses the texels whose uncontested neighbours continue the floor's plane.
+// The rasteriser in bands of block rows gives the whole atlas's texels and report (see also
+// RealLevel.TheAtlasRasterisedInBandsIsTheWholeAtlas) on a soup of quads laid over each other in UV space:
+// 200 quads at random places and turns in a box, each on a random rectangle of a 64 x 64 atlas, so that most
+// texels are claimed several times, many by faces inside others' volumes (judged by rays), and grazed by
+// other charts. Bands of one block row, of two, and of 700 slots.
+TEST(LightmapAtlas, AQuadSoupRasterisedInBandsIsTheWholeAtlas)
+{
+    Mesh m;
+    uint64_t state = 12345;
+    const auto next = [&] { return float(hemi::bake::mix64(++state) >> 40) / 16777216.0f; };
+    for (int q = 0; q < 200; ++q)
+    {
+        const glm::vec3 c(next() * 4 - 2, next() * 4 - 2, next() * 4 - 2);
+        const glm::vec3 a = glm::normalize(glm::vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f) + 1e-3f);
+        const glm::vec3 b = glm::normalize(glm::cross(a, glm::vec3(next() - 0.5f, next() - 0.5f, 1.0f)));
+        const float s = 0.3f + next();
+        const float u0 = next() * 0.8f, v0 = next() * 0.8f, du = 0.05f + next() * 0.15f,
+                    dv = 0.05f + next() * 0.15f;
+        add_quad(m, c - s * a - s * b, c + s * a - s * b, c + s * a + s * b, c - s * a + s * b,
+                 {u0, v0 + dv, u0 + du, v0});
+    }
+    LightmapUvReport whole_report;
+    const LightmapAtlas whole = rasterize_lightmap(m, 64, 64, whole_report);
+    std::printf("%zu covered texels, %zu overlapping, %zu given to a grazing face\n",
+                whole_report.covered_texels, whole_report.overlapping_texels, whole_report.grazed_instead);
+    ASSERT_GT(whole_report.overlapping_texels, 500u);
+    ASSERT_GT(whole_report.grazed_instead, 0u);
+    for (const size_t band : {size_t(512), size_t(1024), size_t(700)})
+    {
+        LightmapUvReport report;
+        const LightmapAtlas banded = rasterize_lightmap(m, 64, 64, report, {}, {}, 0, band);
+        ASSERT_EQ(banded.texels.size(), whole.texels.size()) << band;
+        EXPECT_EQ(banded.slot_texel, whole.slot_texel) << band;
+        size_t different = 0;
+        for (size_t i = 0; i < whole.texels.size(); ++i)
+        {
+            const LightmapTexel a = whole.texels[i], b = banded.texels[i];
+            different += a.triangle != b.triangle || a.barycentric != b.barycentric ||
+                         a.centre_inside != b.centre_inside;
+        }
+        EXPECT_EQ(different, 0u) << band;
+        EXPECT_EQ(report.overlapping_texels, whole_report.overlapping_texels) << band;
+        EXPECT_EQ(report.grazed_instead, whole_report.grazed_instead) << band;
+        EXPECT_EQ(report.overlaps, whole_report.overlaps) << band;
+        EXPECT_EQ(report.warnings, whole_report.warnings) << band;
+    }
+}
+
 TEST(LightmapAtlas, OverlapsGoToTheChartTheyContinueElseTheFaceTowardsTheScene)
 {
     auto at = [](float u, float v) { return glm::vec3(2.0f * u - 1.0f, 1.0f - 2.0f * v, 0.0f); };
