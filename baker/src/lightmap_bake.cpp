@@ -2324,6 +2324,9 @@ void LightmapSh::read_mixed(uint32_t first, uint32_t count, std::array<float, 4>
                         std::as_writable_bytes(std::span(mixed_out, count)));
         return;
     }
+    if ((mask_out && shadowmask.size() != texels()) || (mixed_out && mixed_direct.size() != texels()))
+        throw std::invalid_argument("LightmapSh::read_mixed: the shadowmask or mixed direct light does not "
+                                    "match the lightmap's texels");
     if (mask_out)
         std::copy_n(shadowmask.begin() + first, count, mask_out);
     if (mixed_out)

@@ -388,6 +388,14 @@ TEST(MixedLights, LightProbesTakeAMixedSunsBounceButNotItsDirectLight)
             bake_light_probes(pm, s.mesh, s.atlas, cut, mixed_lights, po, &s.surfaces);
         },
         std::invalid_argument);
+    // A shadowmask that does not match the texels is refused too, not read past its end.
+    EXPECT_THROW(
+        {
+            LightmapSh cut = mixed;
+            cut.shadowmask.pop_back();
+            lightmap_maps("shadowmask", s.atlas, cut, 2);
+        },
+        std::invalid_argument);
 }
 
 // A bake in tiles (its sums on disk) keeps the mixed light's shadowmask and direct light in its tile file
