@@ -251,13 +251,53 @@ class OverlapJudge
         }
         return *origins_;
     }
+    // The scene's centre: the area-weighted centroid of its surfaces (a few faces far out, as levels have
+    // them, move it little; they would move the bounding box's centre out of the playable space); and the
+    // distance within which two planes are one, 1e-4 of its bounding box's diagonal. Found once, for every
+    // band.
+    glm::dvec3 scene_centre()
+    {
+        measure();
+        return centre_;
+    }
+    double tolerance()
+    {
+        measure();
+        return tolerance_;
+    }
 
   private:
+    void measure()
+    {
+        if (measured_)
+            return;
+        auto corner = [&](uint32_t t, int k)
+        { return glm::dvec3(mesh_.positions[mesh_.indices[size_t(t) * 3 + k]]); };
+        glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+        glm::dvec3 weighted(0.0);
+        double area = 0.0;
+        for (uint32_t t = 0; t < mesh_.indices.size() / 3; ++t)
+        {
+            const glm::dvec3 a = corner(t, 0), b = corner(t, 1), c = corner(t, 2);
+            const double w = 0.5 * glm::length(glm::cross(b - a, c - a));
+            weighted += w * (a + b + c) / 3.0;
+            area += w;
+            lo = glm::min(lo, glm::min(a, glm::min(b, c)));
+            hi = glm::max(hi, glm::max(a, glm::max(b, c)));
+        }
+        centre_ = area > 0.0 ? weighted / area : 0.5 * (lo + hi);
+        tolerance_ = 1e-4 * glm::length(hi - lo);
+        measured_ = true;
+    }
+
     const io::Mesh& mesh_;
     uint32_t width_, height_;
     std::span<const uint8_t> double_sided_;
     std::unique_ptr<EmbreeScene> scene_;
     std::unique_ptr<detail::TexelOrigins> origins_;
+    bool measured_ = false;
+    glm::dvec3 centre_{0.0};
+    double tolerance_ = 0.0;
 };
 
 // Per candidate (`which`: indices into `candidates`, each sampled as sample_barycentric gives), 1 when the
@@ -351,22 +391,8 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, size_t ba
     size_t next_grazer = 0;
     auto corner = [&](uint32_t t, int k)
     { return glm::dvec3(mesh.positions[mesh.indices[size_t(t) * 3 + k]]); };
-    // The scene's centre: the area-weighted centroid of its surfaces (a few faces far out, as levels have
-    // them, move it little; they would move the bounding box's centre out of the playable space).
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    glm::dvec3 weighted(0.0);
-    double area = 0.0;
-    for (uint32_t t = 0; t < mesh.indices.size() / 3; ++t)
-    {
-        const glm::dvec3 a = corner(t, 0), b = corner(t, 1), c = corner(t, 2);
-        const double w = 0.5 * glm::length(glm::cross(b - a, c - a));
-        weighted += w * (a + b + c) / 3.0;
-        area += w;
-        lo = glm::min(lo, glm::min(a, glm::min(b, c)));
-        hi = glm::max(hi, glm::max(a, glm::max(b, c)));
-    }
-    const glm::dvec3 scene_centre = area > 0.0 ? weighted / area : 0.5 * (lo + hi);
-    const double tolerance = 1e-4 * glm::length(hi - lo);
+    const glm::dvec3 scene_centre = judge.scene_centre();
+    const double tolerance = judge.tolerance();
     auto normal = [&](uint32_t t)
     { return glm::normalize(glm::cross(corner(t, 1) - corner(t, 0), corner(t, 2) - corner(t, 0))); };
     auto same_plane = [&](uint32_t a, uint32_t b)
