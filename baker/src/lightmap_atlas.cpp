@@ -470,7 +470,7 @@ void resolve_overlaps(const io::Mesh& mesh, const io::BlockGrid& grid, size_t ba
 } // namespace
 
 LightmapTexels::LightmapTexels(const io::Mesh& mesh, uint32_t width, uint32_t height,
-                               std::vector<Packed> packed, std::vector<uint32_t> charts)
+                               PagedArray<Packed> packed, std::vector<uint32_t> charts)
     : packed_(std::move(packed)), charts_(std::move(charts)), width_(width), height_(height),
       positions_(mesh.positions), normals_(mesh.normals), tangents_(mesh.tangents), uvs1_(mesh.uvs1),
       indices_(mesh.indices)
@@ -486,7 +486,7 @@ glm::vec3 LightmapTexels::geometric_normal(size_t i) const
 
 LightmapTexel LightmapTexels::operator[](size_t i) const
 {
-    const Packed& k = packed_[i];
+    const Packed k = packed_[i];
     LightmapTexel out;
     out.x = k.x;
     out.y = k.y;
@@ -561,7 +561,7 @@ io::BlockGrid lightmap_blocks(const io::Mesh& mesh, uint32_t width, uint32_t hei
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges,
                                  std::span<const uint8_t> double_sided, uint64_t overlap_budget,
-                                 size_t band_slots)
+                                 size_t band_slots, const LightmapAtlasStorage& storage)
 {
     io::BlockGrid grid = lightmap_blocks(mesh, width, height); // checks the mesh
     report = {};
@@ -634,8 +634,15 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
     LightmapAtlas atlas;
     atlas.width = width;
     atlas.height = height;
-    atlas.slot_texel.assign(grid.slots(), -1);
-    std::vector<LightmapTexels::Packed> packed;
+    PagedArray<LightmapTexels::Packed> packed;
+    if (!storage.directory.empty())
+    {
+        packed = PagedArray<LightmapTexels::Packed>(PagedStore(
+            sizeof(LightmapTexels::Packed), storage.directory, "texel-records", storage.cache_pages));
+        atlas.slot_texel = PagedArray<int32_t>(
+            PagedStore(sizeof(int32_t), storage.directory, "slot-texels", storage.cache_pages));
+    }
+    std::vector<int32_t> band_texel; // the band's own slots' texel indices, appended to atlas.slot_texel
     std::vector<int32_t> best;
     std::vector<double> best_distance;
     std::vector<glm::vec2> best_bary; // as kept (kept())
@@ -780,6 +787,9 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                          best_distance, best_bary, judge, report);
         // Covered texels in row-major order of the atlas: block row by block row, then texel row by texel row
         // across the row's kept blocks.
+        const size_t own_begin = slot_of_row(r0);
+        band_texel.assign(own_end - own_begin, -1);
+        size_t texels = packed.size();
         for (uint32_t row = r0; row < r1; ++row)
         {
             const size_t first = row_first[row], last = row_first[row + 1];
@@ -791,7 +801,7 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                         if (best[texel] < 0)
                             continue;
                         const glm::uvec2 xy = grid.texel(slot);
-                        atlas.slot_texel[slot] = int32_t(packed.size());
+                        band_texel[slot - own_begin] = int32_t(texels++);
                         packed.push_back(
                             {uint16_t(xy.x), uint16_t(xy.y),
                              uint32_t(best[texel]) |
@@ -799,10 +809,14 @@ LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t 
                              best_bary[texel].x, best_bary[texel].y});
                     }
         }
+        atlas.slot_texel.append(band_texel);
         finished_row.assign(best.begin() + ptrdiff_t(slot_of_row(r1 - 1) - base),
                             best.begin() + ptrdiff_t(own_end - base));
         r0 = r1;
     }
+    std::vector<int32_t>().swap(band_texel);
+    packed.finish();
+    atlas.slot_texel.finish();
     atlas.texels = LightmapTexels(mesh, width, height, std::move(packed), chart_of);
     report.covered_texels = atlas.texels.size();
     atlas.grid = std::move(grid);

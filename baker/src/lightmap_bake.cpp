@@ -239,6 +239,8 @@ namespace
 // order, a chunk at a time: a map is filled without all of its texels' values in memory at once.
 // The texels are given by their places in a width x height atlas: place(i) is texel i's (x, y).
 using TexelValues = std::function<void(uint32_t first, std::span<glm::vec3> values)>;
+// Texel i's chart (LightmapTexels::chart); empty: no charts.
+using TexelChart = std::function<uint32_t(uint32_t i)>;
 
 // The bake's tile file (texel_file.h): per texel the sums of the passes (SH9, then plain's and rnm's), the
 // pass's irradiance at the normal that the next pass's bounce map is made from, the texel's ray origin and
@@ -247,7 +249,7 @@ constexpr size_t kBounceField = 2, kOriginField = 3, kMovedField = 4, kNoiseFiel
 // The bounce map: dilated by two texels, in bands of at most 2^20 slots (and at least a tile's, or 1024).
 constexpr int kBounceDilation = 2;
 constexpr size_t kBounceBandSlots = size_t(1) << 20, kBounceBandLeastSlots = 1024;
-// An invalid texel (inside geometry, `valid`) is filled only from valid texels of its own chart (`charts`,
+// An invalid texel (inside geometry, `valid`) is filled only from valid texels of its own chart (`chart`,
 // per texel; empty: any): a texel that the 32-ray test judged inside geometry though a viewer sees it (a
 // ceiling of a sealed level, whose rays meet many backs) keeps its own value beside another face's
 // rectangle in an unpadded page, instead of taking that face's light (issue 41: oacmpdm1's ceiling at
@@ -295,9 +297,9 @@ class BandDilation
     };
 
     BandDilation(io::BlockGrid grid, uint32_t n, std::function<glm::uvec2(uint32_t)> place, int k, int dilate,
-                 std::span<const uint8_t> valid, std::span<const uint32_t> charts, size_t band_slots)
+                 std::span<const uint8_t> valid, TexelChart chart, size_t band_slots)
         : grid_(std::move(grid)), n_(n), place_(std::move(place)), k_(k), dilate_(std::max(dilate, 0)),
-          valid_(valid), charts_(charts), band_slots_(band_slots)
+          valid_(valid), chart_(std::move(chart)), band_slots_(band_slots)
     {
         const uint32_t B = io::BlockGrid::kSize, bx = grid_.blocks_x();
         by_ = grid_.blocks_y();
@@ -371,7 +373,7 @@ class BandDilation
         constexpr uint32_t kAnyChart = ~0u;
         constexpr uint32_t kChunk = 1u << 16;
         std::vector<uint8_t> filled(local.slots(), 0);
-        std::vector<uint32_t> slot_chart(charts_.empty() ? 0 : local.slots(), kAnyChart);
+        std::vector<uint32_t> slot_chart(chart_ ? local.slots() : 0, kAnyChart);
         values_.resize(size_t(std::min(t1 - t0, kChunk)) * size_t(k));
         for (uint32_t first = t0; first < t1; first += kChunk)
         {
@@ -384,8 +386,8 @@ class BandDilation
                 const glm::uvec2 t = place_(i);
                 const size_t slot = size_t(local.slot(t.x, t.y));
                 filled[slot] = !valid_.empty() && !valid_[i] ? kOwn : kValid;
-                if (!charts_.empty())
-                    slot_chart[slot] = charts_[i];
+                if (chart_)
+                    slot_chart[slot] = chart_(i);
                 for (int j = 0; j < k; ++j)
                 {
                     const glm::vec3& v = values_[size_t(i - first) * size_t(k) + size_t(j)];
@@ -450,7 +452,7 @@ class BandDilation
     std::function<glm::uvec2(uint32_t)> place_;
     int k_, dilate_;
     std::span<const uint8_t> valid_;
-    std::span<const uint32_t> charts_;
+    TexelChart chart_;
     size_t band_slots_;
     uint32_t by_ = 0, halo_ = 0, r0_ = 0;
     std::pair<uint32_t, uint32_t> own_{0, 0};
@@ -461,10 +463,10 @@ class BandDilation
 // Every band of a BandDilation in turn: emit(maps, first, count, at).
 template <typename Place, typename Emit>
 void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, int k, int dilate,
-                     std::span<const uint8_t> valid, const TexelValues& produce,
-                     std::span<const uint32_t> charts, size_t band_slots, const Emit& emit)
+                     std::span<const uint8_t> valid, const TexelValues& produce, const TexelChart& chart,
+                     size_t band_slots, const Emit& emit)
 {
-    BandDilation bands(grid, n, place, k, dilate, valid, charts, band_slots);
+    BandDilation bands(grid, n, place, k, dilate, valid, chart, band_slots);
     BandDilation::Band band;
     while (bands.next(produce, band))
         emit(std::move(band.maps), band.first, band.count, band.at);
@@ -474,21 +476,18 @@ void dilate_in_bands(const io::BlockGrid& grid, uint32_t n, const Place& place, 
 template <typename Place>
 io::BlockMaps dilated(uint32_t width, uint32_t height, uint32_t n, const Place& place, int k, int dilate,
                       std::span<const uint8_t> valid, const TexelValues& produce,
-                      std::span<const uint32_t> charts = {})
+                      const TexelChart& chart = {})
 {
     io::BlockMaps out;
-    dilate_in_bands(dilated_grid(width, height, n, place, dilate), n, place, k, dilate, valid, produce,
-                    charts, SIZE_MAX,
+    dilate_in_bands(dilated_grid(width, height, n, place, dilate), n, place, k, dilate, valid, produce, chart,
+                    SIZE_MAX,
                     [&](io::BlockMaps&& maps, uint32_t, uint32_t, uint32_t) { out = std::move(maps); });
     return out;
 }
-// Each texel's chart, as dilated() takes them.
-std::vector<uint32_t> texel_charts(const LightmapAtlas& atlas)
+// Each texel's chart, as dilated() takes them, read from the atlas's records.
+TexelChart texel_chart(const LightmapAtlas& atlas)
 {
-    std::vector<uint32_t> charts(atlas.texels.size());
-    for (size_t i = 0; i < charts.size(); ++i)
-        charts[i] = atlas.texels.chart(i);
-    return charts;
+    return [&atlas](uint32_t i) { return atlas.texels.chart(i); };
 }
 
 io::BlockMaps dilated(const LightmapAtlas& atlas, int k, int dilate, std::span<const uint8_t> valid,
@@ -496,7 +495,7 @@ io::BlockMaps dilated(const LightmapAtlas& atlas, int k, int dilate, std::span<c
 {
     return dilated(
         atlas.width, atlas.height, uint32_t(atlas.texels.size()),
-        [&](uint32_t i) { return atlas.texels.place(i); }, k, dilate, valid, produce, texel_charts(atlas));
+        [&](uint32_t i) { return atlas.texels.place(i); }, k, dilate, valid, produce, texel_chart(atlas));
 }
 
 // A per-texel map over the whole atlas (dilated) read bilinearly at the TEXCOORD_1 of a point of a triangle
@@ -554,7 +553,7 @@ class PackedIrradiance
     // dilated values lie between the texels'), read first.
     template <typename Place>
     void fill(uint32_t n, const Place& place, int dilate, std::span<const uint8_t> valid,
-              const TexelValues& produce, std::span<const uint32_t> charts, size_t band_slots)
+              const TexelValues& produce, const TexelChart& chart, size_t band_slots)
     {
         float largest = 0.0f;
         {
@@ -577,7 +576,7 @@ class PackedIrradiance
         while (largest > 0.0f && std::ldexp(double(kLargest), shift - 1) >= double(largest))
             --shift;
         scale_ = std::ldexp(1.0f, shift);
-        dilate_in_bands(grid_, n, place, 1, dilate, valid, produce, charts, band_slots,
+        dilate_in_bands(grid_, n, place, 1, dilate, valid, produce, chart, band_slots,
                         [&](io::BlockMaps&& maps, uint32_t first, uint32_t count, uint32_t at)
                         {
                             const size_t to = size_t(first) * io::BlockGrid::kTexels,
@@ -1397,7 +1396,7 @@ LightmapSh bake_lightmap_sh(const io::Mesh& mesh, const LightmapAtlas& atlas, co
             };
             if (!tiled || tiles)
                 previous_map.fill(
-                    n, place, kBounceDilation, out.valid, produce, texel_charts(atlas),
+                    n, place, kBounceDilation, out.valid, produce, texel_chart(atlas),
                     std::min<size_t>(kBounceBandSlots, std::max<size_t>(tile, kBounceBandLeastSlots)));
             if (tiled)
                 previous_map.broadcast(dist);
@@ -2163,13 +2162,12 @@ bool make_non_negative(std::string_view name, std::span<glm::vec3> c)
 struct LightmapOutputBands::Impl
 {
     Impl(std::string_view name_, uint32_t width, uint32_t height, std::function<glm::uvec2(uint32_t)> place,
-         const LightmapSh& sh_, int dilate, bool non_negative_, std::span<const uint32_t> charts,
-         size_t band_slots)
+         const LightmapSh& sh_, int dilate, bool non_negative_, TexelChart chart, size_t band_slots)
         : name(name_), k(lightmap_output_size(name_)), sh(sh_), non_negative(non_negative_),
           matrix(name_ == "shadowmask" ? nullptr : &output_matrix(name_)),
           direct((name_ == "plain" || name_ == "rnm") && sh_.has_direct()),
           bands(dilated_grid(width, height, uint32_t(sh_.texels()), place, dilate), uint32_t(sh_.texels()),
-                place, k, dilate, sh_.valid, charts, band_slots)
+                place, k, dilate, sh_.valid, std::move(chart), band_slots)
     {
         if (name == "shadowmask" && !sh.has_mixed())
             throw std::invalid_argument("the bake has no shadowmask (no mixed light)");
@@ -2231,8 +2229,19 @@ LightmapOutputBands::LightmapOutputBands(std::string_view name, uint32_t width, 
     if (sh.texels() != places.size() || (!charts.empty() && charts.size() != places.size()))
         throw std::invalid_argument("the lightmap's irradiance does not match its texels' places");
     impl_ = std::make_unique<Impl>(
-        name, width, height, [places](uint32_t i) { return places[i]; }, sh, dilate, non_negative, charts,
-        band_slots);
+        name, width, height, [places](uint32_t i) { return places[i]; }, sh, dilate, non_negative,
+        charts.empty() ? TexelChart() : TexelChart([charts](uint32_t i) { return charts[i]; }), band_slots);
+}
+
+LightmapOutputBands::LightmapOutputBands(std::string_view name, const LightmapAtlas& atlas,
+                                         const LightmapSh& sh, int dilate, bool non_negative,
+                                         size_t band_slots)
+{
+    if (sh.texels() != atlas.texels.size())
+        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
+    impl_ = std::make_unique<Impl>(
+        name, atlas.width, atlas.height, [&atlas](uint32_t i) { return atlas.texels.place(i); }, sh, dilate,
+        non_negative, texel_chart(atlas), band_slots);
 }
 
 LightmapOutputBands::~LightmapOutputBands() = default;
@@ -2263,13 +2272,10 @@ void LightmapOutputBands::restart()
 io::BlockMaps lightmap_maps(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh,
                             int dilate, bool non_negative, size_t* adjusted)
 {
-    if (sh.texels() != atlas.texels.size())
-        throw std::invalid_argument("the lightmap's irradiance does not match its atlas");
-    std::vector<glm::uvec2> places(atlas.texels.size());
-    for (size_t i = 0; i < places.size(); ++i)
-        places[i] = atlas.texels.place(i);
-    return lightmap_maps(name, atlas.width, atlas.height, places, sh, dilate, non_negative, adjusted,
-                         texel_charts(atlas));
+    LightmapOutputBands bands(name, atlas, sh, dilate, non_negative, SIZE_MAX);
+    LightmapOutputBands::Band band;
+    bands.next(band, adjusted);
+    return std::move(band.maps);
 }
 
 io::BlockMaps lightmap_maps(std::string_view name, uint32_t width, uint32_t height,

@@ -79,9 +79,17 @@ constexpr uint64_t kLightmapBytesPerLargestCoefficient = 4; // the output being 
 // In memory: the record 16, origin 12, flags 3, the bounced irradiance 12, the sums 108 + 48 and the pass's
 // 108 + 48, the charts 4.
 constexpr uint64_t kLightmapBytesPerCoveredTexel = 360;
-constexpr uint64_t kTiledBytesPerCoveredTexel = 24; // the record 16, validity 1 (and 1 while found), chart 4
+constexpr uint64_t kTiledBytesPerCoveredTexel = 18; // the record 16, validity 1 (and 1 while found)
 constexpr uint64_t kDilationBytesPerSlot = 2 + 4;   // the dilation's state (two passes') and chart per slot
-constexpr uint64_t kPlaceBytesPerTexel = 12; // what the outputs keep of the atlas: each texel's (x, y), chart
+constexpr uint64_t kPlaceBytesPerTexel =
+    16; // what the outputs keep of the atlas: the records (places, charts)
+// With the records in pages of files (LightmapAtlasStorage, when kept in memory they would leave tiles of
+// fewer than kPagedBelowTileTexels): per slot the bounce map's halves alone, per texel its validity (and 1
+// while found), and two caches of pages (kPageCacheBytes).
+constexpr uint64_t kPagedLightmapBytesPerSlot = kLightmapBytesPerSlot - kSlotTexelBytes;
+constexpr uint64_t kPagedTiledBytesPerCoveredTexel = kTiledBytesPerCoveredTexel - kTexelRecordBytes;
+constexpr uint64_t kPagedBelowTileTexels = 65536;
+constexpr size_t kPageCachePages = LightmapAtlasStorage::kDefaultCachePages;
 // A tile's sums and pass (108 + 48 each), its origins and flags (13) and bounced irradiance (12).
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48) + 13 + 12;
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
@@ -513,11 +521,21 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const uint64_t raster_row_slots =
         uint64_t((w + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize) * io::BlockGrid::kTexels;
     const uint64_t least_raster_band = raster_row_slots;
-    const auto raster_band_bytes = [&](uint64_t band)
+    // The two caches of pages of the records and slot indices when they are in files (PagedStore): at most
+    // the arrays themselves.
+    const uint64_t cache_items =
+        (kPageCachePages + std::max(1u, std::thread::hardware_concurrency()) * PagedStore::kLocalPages) *
+        PagedStore::kPageItems;
+    const auto page_cache_bytes = [&](uint64_t texels)
+    {
+        return std::min(cache_items, texels) * kTexelRecordBytes +
+               std::min(cache_items, slots) * kSlotTexelBytes;
+    };
+    const auto raster_band_bytes = [&](uint64_t band, bool paged)
     {
         if (band == 0)
             return slots * kRasterBytesPerSlot;
-        return slots * kSlotTexelBytes +
+        return (paged ? page_cache_bytes(slots) : slots * kSlotTexelBytes) +
                std::min(slots, std::max(band, raster_row_slots) + 2 * raster_row_slots) *
                    kRasterTableBytesPerSlot;
     };
@@ -553,16 +571,21 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                read_chunk_bytes(texels) + seam_slots * largest_output * kLightmapBytesPerLargestCoefficient +
                (mixed_channels.empty() ? 0 : output_slots * 12 * kLightmapBytesPerLargestCoefficient);
     };
-    const auto tiled_bytes = [&](uint64_t texels, uint64_t tile)
+    // `paged`: the atlas's records and slot indices in pages of files.
+    const auto tiled_bytes = [&](uint64_t texels, uint64_t tile, bool paged)
     {
-        const uint64_t passes = slots * kLightmapBytesPerSlot + bounce_band_bytes(tile) +
-                                texels * (kTiledBytesPerCoveredTexel + (o.denoise ? 4 : 0)) +
-                                std::max(tile, std::min(texels, least_band)) * per_tile_texel +
-                                tile * mixed_bytes;
+        const uint64_t records = paged ? page_cache_bytes(texels) : texels * kTexelRecordBytes;
+        const uint64_t passes =
+            slots * (paged ? kPagedLightmapBytesPerSlot : kLightmapBytesPerSlot) + bounce_band_bytes(tile) +
+            texels * ((paged ? kPagedTiledBytesPerCoveredTexel : kTiledBytesPerCoveredTexel) +
+                      (o.denoise ? 4 : 0)) +
+            (paged ? page_cache_bytes(texels) : 0) +
+            std::max(tile, std::min(texels, least_band)) * per_tile_texel + tile * mixed_bytes;
         // (the mixed lights' values read from the tile file 65,536 at a time)
         return held + probe_bytes +
-               std::max({raster_band_bytes(least_raster_band) + texels * kTexelRecordBytes, passes,
-                         tiled_output_bytes(texels, tile) + texels * kPlaceBytesPerTexel +
+               std::max({raster_band_bytes(least_raster_band, paged) + records, passes,
+                         tiled_output_bytes(texels, tile) +
+                             (paged ? page_cache_bytes(texels) : texels * kPlaceBytesPerTexel) +
                              std::min<uint64_t>(texels, uint64_t(1) << 16) * mixed_bytes});
     };
     const auto check_fits = [&](uint64_t texels, const std::string& what)
@@ -570,15 +593,18 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         const uint64_t whole = whole_bytes(texels);
         if (budget == 0 || whole <= budget)
             return;
-        const uint64_t least = tiled_bytes(texels, std::min<uint64_t>(texels, kMinTileTexels));
+        const uint64_t least_tile = std::min<uint64_t>(texels, kMinTileTexels);
+        const uint64_t least =
+            std::min(tiled_bytes(texels, least_tile, false), tiled_bytes(texels, least_tile, true));
         if (least > budget)
-            throw io::FormatError(what + ": needs about " + io::format_bytes(whole) + " of memory (" +
-                                  io::format_bytes(least) + " in tiles of " + std::to_string(kMinTileTexels) +
-                                  " texels" + (o.denoise ? ", --denoise's filter in bands of rows" : "") +
-                                  "; of either, " + io::format_bytes(held) +
-                                  " the process, the scene and its ray tracer hold), but " +
-                                  (o.memory_budget ? "--memory-budget is " : "only ") +
-                                  io::format_bytes(budget) + (o.memory_budget ? "" : " is available"));
+            throw io::FormatError(
+                what + ": needs about " + io::format_bytes(whole) + " of memory (" + io::format_bytes(least) +
+                " in tiles of " + std::to_string(kMinTileTexels) + " texels" +
+                (least < tiled_bytes(texels, least_tile, false) ? ", the atlas's records on disk" : "") +
+                (o.denoise ? ", --denoise's filter in bands of rows" : "") + "; of either, " +
+                io::format_bytes(held) + " the process, the scene and its ray tracer hold), but " +
+                (o.memory_budget ? "--memory-budget is " : "only ") + io::format_bytes(budget) +
+                (o.memory_budget ? "" : " is available"));
     };
     check_fits(slots, scene_path.string() + ": a " + atlas_text + " whose triangles touch " +
                           std::to_string(slots / io::BlockGrid::kTexels) + " blocks of 8x8 texels, with " +
@@ -590,15 +616,23 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     std::vector<uint8_t> double_sided(summary.triangles, 0);
     for (uint32_t t = 0; t < summary.triangles; ++t)
         double_sided[t] = surfaces->double_sided(t);
+    // The atlas's records and slot indices go to pages of files beside the asset (LightmapAtlasStorage) when
+    // the bake does not fit in memory and, kept in memory, they would leave room only for tiles of fewer than
+    // kPagedBelowTileTexels texels (counted with the slots as the texels, which they bound).
+    const uint64_t usable_now = budget - budget / 8;
+    const bool paged =
+        budget != 0 && whole_bytes(slots) > usable_now &&
+        tiled_bytes(slots, std::min<uint64_t>(slots, kPagedBelowTileTexels), false) > usable_now;
+    summary.paged_records = paged;
     // The rasteriser whole where it fits beside the records (the covered texels at most the slots), else in
     // the largest bands of block rows that do (check_fits has made sure that a row's does).
     uint64_t raster_band = 0;
-    const uint64_t usable_now = budget - budget / 8;
-    const uint64_t records = held + probe_bytes + slots * kTexelRecordBytes;
-    if (budget != 0 && records + raster_band_bytes(0) > usable_now)
+    const uint64_t records =
+        held + probe_bytes + (paged ? page_cache_bytes(slots) : slots * kTexelRecordBytes);
+    if (budget != 0 && (paged || records + raster_band_bytes(0, false) > usable_now))
     {
         const uint64_t fixed =
-            records + slots * kSlotTexelBytes + 2 * raster_row_slots * kRasterTableBytesPerSlot;
+            records + (paged ? 0 : slots * kSlotTexelBytes) + 2 * raster_row_slots * kRasterTableBytesPerSlot;
         raster_band = std::max(least_raster_band,
                                fixed < usable_now ? (usable_now - fixed) / kRasterTableBytesPerSlot : 0);
         if (raster_band >= slots)
@@ -606,13 +640,16 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     summary.raster_band_slots = raster_band;
     // Overlapping UVs' candidates may take what the budget leaves beside the rasteriser's tables.
-    const uint64_t raster_bytes = records + raster_band_bytes(raster_band);
+    const uint64_t raster_bytes = records + raster_band_bytes(raster_band, paged);
     const uint64_t overlap_budget = budget == 0 ? 0 : budget > raster_bytes ? budget - raster_bytes : 1;
     LightmapAtlas atlas;
     try
     {
+        LightmapAtlasStorage storage;
+        if (paged)
+            storage.directory = std::filesystem::absolute(asset_path).parent_path();
         atlas = rasterize_lightmap(scene.mesh, w, h, report, ranges, double_sided, overlap_budget,
-                                   size_t(raster_band));
+                                   size_t(raster_band), storage);
     }
     catch (const std::length_error& e)
     {
@@ -659,7 +696,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const uint64_t usable = budget - budget / 8;
     if (covered > 1 && ((budget != 0 && whole_bytes(covered) > usable) || tiles_to_resume))
     {
-        const uint64_t fixed = tiled_bytes(covered, 0);
+        const uint64_t fixed = tiled_bytes(covered, 0, paged);
         const uint64_t room = budget == 0 ? covered : fixed < usable ? (usable - fixed) / per_tile_texel : 0;
         tile_texels = uint32_t(std::min<uint64_t>(std::max<uint64_t>(room, kMinTileTexels), covered - 1));
     }
@@ -781,15 +818,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     if (!asset.probes.empty() || !asset.reflections.empty())
         stage_done("probes");
     // The passes and the probes are done: the outputs need only each texel's place in the atlas and its
-    // chart (12 bytes, not its 16-byte record and the slots' 4).
-    std::vector<glm::uvec2> places(atlas.texels.size());
-    std::vector<uint32_t> charts(atlas.texels.size());
-    for (size_t i = 0; i < places.size(); ++i)
-    {
-        places[i] = atlas.texels.place(i);
-        charts[i] = atlas.texels.chart(i);
-    }
-    atlas = LightmapAtlas{};
+    // chart, which they read from its records (in memory, or in pages of a file), not the slots' indices.
+    atlas.slot_texel = {};
     // Plain is the same in any tangent frame; the other outputs are stitched and measured only along the
     // seams whose two sides' frames agree (LightmapSeam::frames_agree).
     const std::vector<LightmapSeam> seams = find_lightmap_seams(scene.mesh);
@@ -879,9 +909,8 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     const auto make_output = [&](const std::string& name, OutputReport& made)
     {
         size_t adjusted = 0;
-        io::LightmapOutput output{
-            name, uint32_t(lightmap_output_size(name)),
-            lightmap_maps(name, w, h, places, sh, o.dilate, o.non_negative, &adjusted, charts)};
+        io::LightmapOutput output{name, uint32_t(lightmap_output_size(name)),
+                                  lightmap_maps(name, atlas, sh, o.dilate, o.non_negative, &adjusted)};
         made.adjusted = adjusted;
         made.blocks = output.maps.grid.blocks().size();
         const LightmapSeamMetric before = measure_lightmap_seams(seams_of(output.name), output.maps);
@@ -904,7 +933,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         [&](const std::string& name, OutputReport& made, io::LightmapAssetWriter& writer)
     {
         const uint32_t k = uint32_t(lightmap_output_size(name));
-        LightmapOutputBands bands(name, w, h, places, sh, o.dilate, o.non_negative, charts, band_slots);
+        LightmapOutputBands bands(name, atlas, sh, o.dilate, o.non_negative, band_slots);
         const io::BlockGrid& grid = bands.grid();
         made.blocks = grid.blocks().size();
         io::BlockMaps seam(lightmap_seam_blocks(seams_of(name), grid), k);
@@ -1034,7 +1063,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     }
     if (leader && !mixed_channels.empty())
     {
-        io::BlockMaps mask = lightmap_maps("shadowmask", w, h, places, sh, o.dilate, false, nullptr, charts);
+        io::BlockMaps mask = lightmap_maps("shadowmask", atlas, sh, o.dilate, false);
         const LightmapSeamMetric before = measure_lightmap_seams(seams, mask);
         LightmapSeamMetric after = before;
         if (o.stitch && !seams.empty())
@@ -1169,6 +1198,7 @@ void write_lightmap_bake_json(const std::filesystem::path& path, const LightmapB
     j["tile_texels"] = s.tile_texels; // 0: the whole atlas in memory
     j["tiles_per_pass"] = s.tiles;
     j["raster_band_slots"] = s.raster_band_slots; // 0: the atlas rasterised whole
+    j["paged_records"] = s.paged_records;         // the atlas's records in pages of temporary files
     j["triangles"] = s.triangles;
     // The most direct irradiance the lights can give a point (light_bound.h), and the power of two each
     // output's half floats are times (io/half_scale.h: 1 for light in the ordinary range).

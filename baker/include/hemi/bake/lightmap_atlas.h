@@ -27,6 +27,7 @@
 // cross(N, T) * tangent.w, as glTF defines it. Lightmap coefficients live in that frame, so that the runtime
 // evaluates them at the normal-map normal with no further transform.
 
+#include <hemi/bake/paged_array.h>
 #include <hemi/io/block_maps.h>
 #include <hemi/io/mesh.h>
 
@@ -38,6 +39,7 @@
 #include <iterator>
 
 #include <cstdint>
+#include <filesystem>
 #include <span>
 #include <string>
 #include <vector>
@@ -122,7 +124,7 @@ class LightmapTexels
     LightmapTexels() = default;
     // The texels of a width x height atlas over `mesh` (rasterize_lightmap makes them), with each triangle's
     // chart.
-    LightmapTexels(const io::Mesh& mesh, uint32_t width, uint32_t height, std::vector<Packed> packed,
+    LightmapTexels(const io::Mesh& mesh, uint32_t width, uint32_t height, PagedArray<Packed> packed,
                    std::vector<uint32_t> charts);
 
     size_t size() const { return packed_.size(); }
@@ -133,15 +135,21 @@ class LightmapTexels
     // Texel i whole (computed: about a hundred operations in double).
     LightmapTexel operator[](size_t i) const;
     // What is kept of it, without the computing.
-    glm::uvec2 place(size_t i) const { return {packed_[i].x, packed_[i].y}; }
+    glm::uvec2 place(size_t i) const
+    {
+        const Packed k = packed_[i];
+        return {k.x, k.y};
+    }
     uint32_t triangle(size_t i) const { return packed_[i].triangle & ~kCentreInside; }
     uint32_t chart(size_t i) const { return charts_[triangle(i)]; }
     glm::vec3 geometric_normal(size_t i) const; // its triangle's (LightmapTexel::geometric_normal)
     // Each triangle's chart (lightmap_charts).
     std::span<const uint32_t> charts() const { return charts_; }
+    // Where the records are: in memory or in pages of a temporary file (LightmapAtlasStorage).
+    const PagedStore& store() const { return packed_.store(); }
 
   private:
-    std::vector<Packed> packed_;
+    PagedArray<Packed> packed_;
     std::vector<uint32_t> charts_; // per triangle
     uint32_t width_ = 0, height_ = 0;
     std::span<const glm::vec3> positions_, normals_;
@@ -152,13 +160,14 @@ class LightmapTexels
 
 // The covered texels and where they are. Its memory follows the covered texels: only the 8 x 8 blocks of the
 // atlas that some triangle touches are kept (io::BlockGrid), and 20 bytes a covered texel (its record and its
-// slot's index).
+// slot's index), in memory or, for a bake larger than its memory budget, in pages of temporary files
+// (LightmapAtlasStorage).
 struct LightmapAtlas
 {
     uint32_t width = 0, height = 0;
-    io::BlockGrid grid;              // the blocks that triangles touch
-    std::vector<int32_t> slot_texel; // per slot of grid: index into texels, or -1
-    LightmapTexels texels;           // covered texels, in row-major order of (y, x)
+    io::BlockGrid grid;             // the blocks that triangles touch
+    PagedArray<int32_t> slot_texel; // per slot of grid: index into texels, or -1
+    LightmapTexels texels;          // covered texels, in row-major order of (y, x)
 
     // Index into texels of texel (x, y), or -1 for an empty texel (or one outside the atlas).
     int32_t texel_of(int64_t x, int64_t y) const
@@ -197,6 +206,16 @@ struct LightmapUvReport
     bool ok() const { return problems.empty(); }
 };
 
+// Where rasterize_lightmap keeps the atlas's texel records and slot indices: in memory (no directory), or in
+// two temporary files in `directory`, each read back through a cache of `cache_pages` pages of
+// PagedStore::kPageItems items (PagedStore: the files are gone from the directory as soon as they are made).
+struct LightmapAtlasStorage
+{
+    static constexpr size_t kDefaultCachePages = 256;
+    std::filesystem::path directory;
+    size_t cache_pages = kDefaultCachePages;
+};
+
 struct TriangleRange
 {
     uint32_t first = 0, count = 0; // triangles [first, first + count)
@@ -227,19 +246,20 @@ struct TriangleRange
 // row), with the block row above and below it, each triangle that touches the band rasterised into it: the
 // atlas then holds each slot's texel index (4 bytes) and each covered texel's record (16), and the tables one
 // band (a bake in tiles under a memory budget). The same atlas and report for any band size; 0: the whole
-// atlas at once. The candidates and their bound are then a band's.
+// atlas at once. The candidates and their bound are then a band's. `storage`: where the records and slot
+// indices go (in memory, or in pages of files: the same atlas).
 constexpr uint64_t kOverlapCandidateBytes =
     16 + 1; // (slot, triangle) and the judge's answer, claimant or grazer
 constexpr uint64_t kRasterTableBytesPerSlot =
-    4 + 8 + 8 + 1 + 4; // best triangle, distance, barycentrics, claims
+    4 + 8 + 8 + 1 + 4 + 4; // best triangle, distance, barycentrics, claims, first claimant, texel index
 LightmapAtlas rasterize_lightmap(const io::Mesh& mesh, uint32_t width, uint32_t height,
                                  LightmapUvReport& report, const std::vector<TriangleRange>& ranges = {},
                                  std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0,
-                                 size_t band_slots = 0);
+                                 size_t band_slots = 0, const LightmapAtlasStorage& storage = {});
 // The atlas refers to the mesh's arrays (LightmapTexels): not of a temporary mesh.
 LightmapAtlas rasterize_lightmap(io::Mesh&& mesh, uint32_t width, uint32_t height, LightmapUvReport& report,
                                  const std::vector<TriangleRange>& ranges = {},
                                  std::span<const uint8_t> double_sided = {}, uint64_t overlap_budget = 0,
-                                 size_t band_slots = 0) = delete;
+                                 size_t band_slots = 0, const LightmapAtlasStorage& storage = {}) = delete;
 
 } // namespace hemi::bake

@@ -290,6 +290,10 @@ class LightmapOutputBands
     LightmapOutputBands(std::string_view name, uint32_t width, uint32_t height,
                         std::span<const glm::uvec2> places, const LightmapSh& sh, int dilate,
                         bool non_negative, std::span<const uint32_t> charts, size_t band_slots);
+    // The places and charts read from the atlas's records (in memory or in pages: LightmapAtlasStorage),
+    // which must outlive this.
+    LightmapOutputBands(std::string_view name, const LightmapAtlas& atlas, const LightmapSh& sh, int dilate,
+                        bool non_negative, size_t band_slots);
     ~LightmapOutputBands();
     LightmapOutputBands(const LightmapOutputBands&) = delete;
     LightmapOutputBands& operator=(const LightmapOutputBands&) = delete;
@@ -469,6 +473,8 @@ struct LightmapBakeSummary
     uint32_t tiles = 0;         // tiles per pass (the last pass's; 1 without tiles)
     // Slots per band of the rasteriser (rasterize_lightmap's band_slots); 0: the whole atlas at once.
     uint64_t raster_band_slots = 0;
+    // The atlas's texel records and slot indices kept in pages of temporary files (LightmapAtlasStorage).
+    bool paged_records = false;
     // The ranks that shared the bake and the texels each computed, over the origin search and all passes;
     // {n * (2 + bounces)} on one process.
     std::vector<uint64_t> texels_by_rank;
