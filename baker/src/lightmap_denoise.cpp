@@ -151,10 +151,11 @@ struct Window
 // texel's guides (LightmapSh::noise); texels outside the range count as absent. The passes alternate between
 // `values` and a second copy of them; everything is allocated before `values` is written, so that on a
 // failure to allocate it is as it was. Plain and rnm come out >= 0; each chart's light is restored by the
-// caller.
-void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart,
-                  const std::vector<uint8_t>& valid, size_t first, size_t n, Values& values,
-                  const LightmapSh::Noise* noise, const LightmapDenoiseOptions& o)
+// caller. chart(i): texel i's chart.
+template <typename Chart>
+void filter_range(const LightmapAtlas& atlas, const Chart& chart, const std::vector<uint8_t>& valid,
+                  size_t first, size_t n, Values& values, const LightmapSh::Noise* noise,
+                  const LightmapDenoiseOptions& o)
 {
     // What a window reads of each texel, in one cache line (the atlas's record is 96 bytes, and the guides
     // are arrays of their own): its sample point, its world size (at least 1e-30), its shading normal, its
@@ -173,7 +174,7 @@ void filter_range(const LightmapAtlas& atlas, const std::vector<uint32_t>& chart
     {
         const LightmapTexel& t = atlas.texels[first + i];
         site[i] = {t.position, std::max(t.world_size, 1e-30f),
-                   t.normal,   valid[first + i] ? chart[first + i] : kNone,
+                   t.normal,   valid[first + i] ? chart(first + i) : kNone,
                    {},         {}};
     }
     // f(i) for every texel of the range, in parallel.
@@ -498,13 +499,12 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
         !(o.sigma_plane > 0.0f))
         throw std::invalid_argument("denoising needs 0 to 10 iterations and positive sigmas");
     LightmapDenoiseReport report;
+    // Each texel's chart from its record (in memory, or in pages of a file for a bake out of core: no
+    // per-texel copy).
     const std::vector<uint32_t> chart_of_triangle = lightmap_charts(mesh, &report.charts);
-    std::vector<uint32_t> chart(n);
+    const auto chart = [&](size_t i) { return chart_of_triangle[atlas.texels.triangle(i)]; };
     for (size_t i = 0; i < n; ++i)
-    {
-        chart[i] = chart_of_triangle[atlas.texels.triangle(i)];
         report.texels += sh.valid[i] != 0;
-    }
     // Each chart keeps the light it was baked with: the filter moves light within a chart (a texel's weights
     // sum to 1, its neighbours' weights on it need not: a flat, dim region takes more from a bright feature
     // than the feature takes from it), so the filtered chart is scaled, per colour channel, until its plain
@@ -514,19 +514,19 @@ LightmapDenoiseReport denoise_lightmap(const io::Mesh& mesh, const LightmapAtlas
     const auto add_baked = [&](size_t i, const glm::vec3& baked)
     {
         for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
-            sums[chart[i]][c] += double(baked[int(c)]);
+            sums[chart(i)][c] += double(baked[int(c)]);
     };
     const auto add_filtered = [&](size_t i, const glm::vec3& filtered)
     {
         for (size_t c = 0; c < 3 && sh.valid[i]; ++c)
-            sums[chart[i]][3 + c] += double(filtered[int(c)]);
+            sums[chart(i)][3 + c] += double(filtered[int(c)]);
     };
     // Every value of texel i times its chart's factors, channel by channel.
     const auto scale = [&](size_t i, ShArray& irradiance, DirectArray& direct)
     {
         if (!sh.valid[i])
             return;
-        const std::array<double, 6>& s = sums[chart[i]];
+        const std::array<double, 6>& s = sums[chart(i)];
         glm::vec3 factor(1.0f);
         for (int c = 0; c < 3; ++c)
             if (s[size_t(3 + c)] > 0.0 && s[size_t(c)] > 0.0)

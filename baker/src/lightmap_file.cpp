@@ -60,15 +60,17 @@ namespace
 //   irradiance (kTileBytesPerTexel per texel of a tile; the rest is in the tile file, texel_file.h);
 // - the outputs: per slot of the outputs' blocks (the touched ones and their dilation) the float map of the
 //   one output being made (the largest; the asset's writer spools each finished output's half floats to
-//   disk, io::AssetWriter), per covered texel its place and chart and the sums when in memory.
+//   disk, io::AssetWriter), per covered texel its record (its place and chart) and the sums when in memory.
+// In tiles, where the records and slot indices kept in memory would leave room only for small tiles, they go
+// to pages of files (PagedArray): each stage then holds the pages' caches instead.
 // Measured (docs/lightmaps.md#memory-and-asset-size):
 // the sample's 2 x 2 rooms at 2048^2 (2.77 M covered texels) peaked at 3.29 GB with every output held in
 // floats at once, 2.08 GB with one at a time. --denoise adds each texel's noise estimate, for the bake and
 // for the pass (32 bytes), and what the filter holds beside the bake's sums: a second copy of the values,
-// five arrays of four floats, the 64-byte record of what its windows read and a chart number
-// (kDenoiseBytesPerCoveredTexel); in tiles the filter works in
+// five arrays of four floats and the 64-byte record of what its windows read (kDenoiseBytesPerCoveredTexel;
+// each texel's chart it reads from the records); in tiles the filter works in
 // bands of rows with the rows around them it depends on, each texel of a band read (sums and noise) and
-// filtered in two copies (kDenoiseBandBytesPerTexel), the chart numbers of the whole atlas kept. With
+// filtered in two copies (kDenoiseBandBytesPerTexel). With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
 // texel and coefficient of the largest output, and OpenEXR's half copy.
 constexpr uint64_t kRasterBytesPerSlot = 32;
@@ -93,7 +95,7 @@ constexpr size_t kPageCachePages = LightmapAtlasStorage::kDefaultCachePages;
 // A tile's sums and pass (108 + 48 each), its origins and flags (13) and bounced irradiance (12).
 constexpr uint64_t kTileBytesPerTexel = 2 * (108 + 48) + 13 + 12;
 constexpr uint64_t kTileNoiseBytesPerTexel = 2 * 16;
-constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 64 + 4;
+constexpr uint64_t kDenoiseBytesPerCoveredTexel = 2 * 16 + 156 + 5 * 16 + 64;
 constexpr uint64_t kDenoiseBandBytesPerTexel = 2 * 156 + 16 + 5 * 16 + 64;
 constexpr uint64_t kExrBytesPerCoefficient = 6;
 // With mixed lights, every covered texel's shadowmask (4 floats) and the mixed lights' direct light (3); in
@@ -577,8 +579,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         const uint64_t records = paged ? page_cache_bytes(texels) : texels * kTexelRecordBytes;
         const uint64_t passes =
             slots * (paged ? kPagedLightmapBytesPerSlot : kLightmapBytesPerSlot) + bounce_band_bytes(tile) +
-            texels * ((paged ? kPagedTiledBytesPerCoveredTexel : kTiledBytesPerCoveredTexel) +
-                      (o.denoise ? 4 : 0)) +
+            texels * (paged ? kPagedTiledBytesPerCoveredTexel : kTiledBytesPerCoveredTexel) +
             (paged ? page_cache_bytes(texels) : 0) +
             std::max(tile, std::min(texels, least_band)) * per_tile_texel + tile * mixed_bytes;
         // (the mixed lights' values read from the tile file 65,536 at a time)

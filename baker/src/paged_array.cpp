@@ -98,7 +98,8 @@ struct PagedStore::Impl
             done += size_t(r);
         }
         if (XXH64(page->data(), page->size(), 0) != checksums[p])
-            throw io::FormatError(path.string() + ": the bake's temporary texel data came back altered from " +
+            throw io::FormatError(path.string() +
+                                  ": the bake's temporary texel data came back altered from " +
                                   "the disk (items " + std::to_string(first) + " to " +
                                   std::to_string(first + bytes / item_bytes - 1) + ")");
         return page;
@@ -135,8 +136,8 @@ PagedStore::PagedStore(uint32_t item_bytes, const std::filesystem::path& directo
     Impl& m = *impl_;
     m.item_bytes = item_bytes;
     m.cache_pages = std::max<size_t>(cache_pages, 1);
-    std::string pattern = (directory.empty() ? std::filesystem::path(".") : directory).string() + "/.hemi-" +
-                          name + "-XXXXXX";
+    std::string pattern =
+        (directory.empty() ? std::filesystem::path(".") : directory).string() + "/.hemi-" + name + "-XXXXXX";
     errno = 0;
     m.fd = ::mkstemp(pattern.data());
     m.path = pattern;

@@ -2645,7 +2645,8 @@ TEST(LightmapDenoise, ThirtyTwoRaysDenoisedComeCloserWithTheShadowEdgeKept)
 // rows around them that N passes depend on, gives the bytes of the whole atlas filtered in memory: for N = 1,
 // 2, 3 and 5 with bands of one row (the strictest), and for 3 passes with larger bands too. The result is in
 // the tile file's other copy, the copy the bake left is untouched (a resume reads it), and the estimate is
-// released. (With a halo one row short it fails.)
+// released. (With a halo one row short it fails.) The bake in tiles keeps its atlas's records in pages of
+// files read through a cache of one page (a bake out of core: LightmapAtlasStorage).
 TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
 {
     Mesh m;
@@ -2668,6 +2669,9 @@ TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
     const LightmapSurfaces surfaces(m, materials, {}, {{0, uint32_t(m.indices.size()), 0}});
     const LightmapSh baked = bake_lightmap_sh(m, a, lights, o, &surfaces);
     const std::filesystem::path folder = hemi::test::temp_dir("lightmap_denoise_tiles");
+    LightmapUvReport paged_report;
+    const LightmapAtlas paged = rasterize_lightmap(m, 64, 64, paged_report, {}, {}, 0, 0, {folder, 1});
+    ASSERT_TRUE(paged.texels.store().paged());
     o.tile_texels = 300;
     o.tile_file = folder / "floor.tiles";
     for (const int passes : {1, 2, 3, 5})
@@ -2678,11 +2682,11 @@ TEST(LightmapDenoise, InTilesBandByBandGivesTheBytesOfTheWholeAtlas)
             d.iterations = passes;
             LightmapSh whole = baked;
             denoise_lightmap(m, a, whole, d);
-            LightmapSh tiled = bake_lightmap_sh(m, a, lights, o, &surfaces);
+            LightmapSh tiled = bake_lightmap_sh(m, paged, lights, o, &surfaces);
             ASSERT_TRUE(tiled.tiles);
             const int copy = tiled.tiles_copy;
             d.tile_texels = band;
-            denoise_lightmap(m, a, tiled, d);
+            denoise_lightmap(m, paged, tiled, d);
             EXPECT_EQ(tiled.tiles_copy, 1 - copy) << what;
             EXPECT_FALSE(tiled.has_noise()) << what;
             std::vector<std::array<glm::vec3, 9>> irradiance(n);

@@ -58,8 +58,8 @@ TEST(PagedArray, ItemsReadBackFromAnyThreadAreTheItemsWrittenInMemoryAndInPages)
     constexpr size_t kItems = 10 * PagedStore::kPageItems + 37;
     for (const bool paged : {false, true})
     {
-        PagedArray<Item> array = paged ? PagedArray<Item>(PagedStore(sizeof(Item), dir, "test-items", 1))
-                                       : PagedArray<Item>();
+        PagedArray<Item> array =
+            paged ? PagedArray<Item>(PagedStore(sizeof(Item), dir, "test-items", 1)) : PagedArray<Item>();
         for (size_t i = 0; i < kItems;)
         {
             std::vector<Item> some;
@@ -81,9 +81,8 @@ TEST(PagedArray, ItemsReadBackFromAnyThreadAreTheItemsWrittenInMemoryAndInPages)
         const PagedArray<Item> copy = array;
         EXPECT_EQ(copy[kItems - 1].b, expected(kItems - 1).b);
         EXPECT_THROW(array.push_back(expected(0)), std::logic_error);
-        EXPECT_EQ(array.store().cache_bytes(2), paged ? (1 + 2 * PagedStore::kLocalPages) *
-                                                            PagedStore::kPageItems * sizeof(Item)
-                                                      : 0u);
+        EXPECT_EQ(array.store().cache_bytes(2),
+                  paged ? (1 + 2 * PagedStore::kLocalPages) * PagedStore::kPageItems * sizeof(Item) : 0u);
     }
 }
 
