@@ -557,7 +557,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     };
     // In tiles (without --exr-dir) an output is made band by band (LightmapOutputBands): one band's floats
     // and dilation (at least a tile's texels or 4096, and a block row with the rows around it), and the
-    // seams' blocks; the shadowmask, with mixed lights, whole.
+    // seams' blocks; the shadowmask, with mixed lights, too, after them.
     const auto tiled_output_bytes = [&](uint64_t texels, uint64_t tile)
     {
         if (exr_bytes)
@@ -568,10 +568,11 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             (uint64_t(std::max(o.dilate, 0)) + io::BlockGrid::kSize - 1) / io::BlockGrid::kSize;
         const uint64_t band =
             std::min(output_slots, std::max<uint64_t>(tile, 4096) + (2 * halo_rows + 1) * row_slots);
-        // (and the texels' values read 65,536 at a time: their sums, 156 bytes, and the output's values)
-        return band * (largest_output * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot) +
-               read_chunk_bytes(texels) + seam_slots * largest_output * kLightmapBytesPerLargestCoefficient +
-               (mixed_channels.empty() ? 0 : output_slots * 12 * kLightmapBytesPerLargestCoefficient);
+        // (and the texels' values read 65,536 at a time: their sums, 156 bytes, and the output's values; the
+        // shadowmask, with mixed lights, is made the same way after the outputs: 12 floats a slot)
+        const uint64_t floats = std::max<uint64_t>(largest_output, mixed_channels.empty() ? 0 : 12);
+        return band * (floats * kLightmapBytesPerLargestCoefficient + kDilationBytesPerSlot) +
+               read_chunk_bytes(texels) + seam_slots * floats * kLightmapBytesPerLargestCoefficient;
     };
     // `paged`: the atlas's records and slot indices in pages of files.
     const auto tiled_bytes = [&](uint64_t texels, uint64_t tile, bool paged)
@@ -831,7 +832,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     summary.seams = seams.size();
     summary.seams_across_frames = seams.size() - framed.size();
     const auto seams_of = [&](const std::string& name) -> const std::vector<LightmapSeam>&
-    { return name == "plain" ? seams : framed; };
+    { return name == "plain" || name == "shadowmask" ? seams : framed; };
     // One output at a time: made, stitched, measured, encoded into the asset's half floats (and its EXR
     // written), then freed, so that the bake holds one output's float maps, not all of them. One
     // factorisation per set of seams, shared by the outputs (they share the grid); the ringing-free lift runs
@@ -877,6 +878,17 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             made.has_clamped = 1;
             made.clamped = clamped;
         }
+        else if (name == "shadowmask")
+        {
+            // Fractions of the light: kept in [0, 1] (the texels no stitch changes are).
+            for (const size_t slot : stitch.slots())
+                for (uint32_t j = 0; j < k; ++j)
+                    for (int c = 0; c < 3; ++c)
+                    {
+                        float& v = maps.values[maps.index(j, slot) + size_t(c)];
+                        v = std::clamp(v, 0.0f, 1.0f);
+                    }
+        }
         else if (o.non_negative)
         {
             std::vector<glm::vec3> texel(k);
@@ -896,13 +908,13 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // Whether an output is stitched, and the stitch its seams share with the outputs before (one
     // factorisation per set of seams and grid).
     const auto stitched = [&](const std::string& name)
-    { return o.stitch && !seams.empty() && (name == "plain" || !framed.empty()); };
+    { return o.stitch && !seams.empty() && (name == "plain" || name == "shadowmask" || !framed.empty()); };
     const auto stitch_of = [&](const std::string& name, std::optional<LightmapSeamStitch>& whole,
                                std::optional<LightmapSeamStitch>& framed_only,
                                const io::BlockGrid& grid) -> const LightmapSeamStitch&
     {
         std::optional<LightmapSeamStitch>& stitch =
-            name == "plain" || framed.size() == seams.size() ? whole : framed_only;
+            name == "plain" || name == "shadowmask" || framed.size() == seams.size() ? whole : framed_only;
         if (!stitch)
             stitch.emplace(seams_of(name), grid, o.stitch_closeness);
         return *stitch;
@@ -930,20 +942,34 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     // texels put in. The same bytes as make_output's (the dilation, the stitch and the scale are the same).
     std::optional<LightmapSeamStitch> seam_all, seam_along_frames; // over the seams' blocks
     const size_t band_slots = std::max<size_t>(summary.tile_texels, size_t(1) << 12);
-    const auto write_output_in_bands =
-        [&](const std::string& name, OutputReport& made, io::LightmapAssetWriter& writer)
+    // An output between its two sweeps: its bands, the seams' blocks stitched, the texels the stitch moved,
+    // and where the second sweep is.
+    struct BandedOutput
+    {
+        uint32_t k = 0;
+        std::optional<LightmapOutputBands> bands;
+        io::BlockMaps seam;
+        std::vector<uint8_t> moved;
+        LightmapOutputBands::Band band;
+        size_t next_seam = 0;
+    };
+    // The first sweep.
+    const auto first_sweep = [&](const std::string& name, OutputReport& made, BandedOutput& out)
     {
         const uint32_t k = uint32_t(lightmap_output_size(name));
-        LightmapOutputBands bands(name, atlas, sh, o.dilate, o.non_negative, band_slots);
+        out.k = k;
+        out.bands.emplace(name, atlas, sh, o.dilate, o.non_negative, band_slots);
+        LightmapOutputBands& bands = *out.bands;
         const io::BlockGrid& grid = bands.grid();
         made.blocks = grid.blocks().size();
-        io::BlockMaps seam(lightmap_seam_blocks(seams_of(name), grid), k);
+        out.seam = io::BlockMaps(lightmap_seam_blocks(seams_of(name), grid), k);
+        io::BlockMaps& seam = out.seam;
         const LightmapSeamStitch* stitch =
             stitched(name) ? &stitch_of(name, seam_all, seam_along_frames, seam.grid) : nullptr;
-        std::vector<uint8_t> moved(seam.grid.slots(), 0); // the texels the stitch may change
+        out.moved.assign(seam.grid.slots(), 0); // the texels the stitch may change
         if (stitch)
             for (const size_t slot : stitch->slots())
-                moved[slot] = 1;
+                out.moved[slot] = 1;
         const size_t block_values = size_t(k) * io::BlockGrid::kTexels * 3;
         const std::vector<uint32_t>& seam_blocks = seam.grid.blocks();
         float largest = 0.0f;
@@ -963,7 +989,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                 std::copy_n(v, block_values, &seam.values[next_seam * block_values]);
                 for (uint32_t j = 0; j < k; ++j)
                     for (size_t t = 0; t < io::BlockGrid::kTexels; ++t)
-                        if (!moved[next_seam * io::BlockGrid::kTexels + t])
+                        if (!out.moved[next_seam * io::BlockGrid::kTexels + t])
                             largest = std::max(largest, io::largest_magnitude(std::span(
                                                             &v[(j * io::BlockGrid::kTexels + t) * 3], 3)));
                 ++next_seam;
@@ -981,49 +1007,56 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
                         largest, io::largest_magnitude(std::span(&seam.values[seam.index(j, slot)], 3)));
         }
         made.scale_exponent = io::half_scale_exponent(largest);
-        // The second sweep, pulled by the writer a piece at a time: each band made again, its stitched texels
-        // put in from `seam`.
         bands.restart();
-        band = {};
-        size_t next_seam = 0;
-        writer.add_output(
-            name, k, grid, made.scale_exponent,
-            [&](uint64_t first, std::span<float> out)
+    };
+    // The second sweep, pulled by the writer a piece at a time: each band made again, its stitched texels put
+    // in from the seams' blocks.
+    const auto pull = [](BandedOutput& out, uint64_t first, std::span<float> values)
+    {
+        const uint32_t k = out.k;
+        const size_t block_values = size_t(k) * io::BlockGrid::kTexels * 3;
+        const io::BlockGrid& grid = out.bands->grid();
+        const std::vector<uint32_t>& seam_blocks = out.seam.grid.blocks();
+        LightmapOutputBands::Band& band = out.band;
+        for (size_t done = 0; done < values.size();)
+        {
+            const uint64_t at = first + done, block = at / block_values;
+            while (block >= uint64_t(band.first) + band.count)
             {
-                for (size_t done = 0; done < out.size();)
+                if (!out.bands->next(band))
+                    throw std::logic_error("an output's bands ended before its values");
+                for (uint32_t b = 0; b < band.count; ++b)
                 {
-                    const uint64_t at = first + done, block = at / block_values;
-                    while (block >= uint64_t(band.first) + band.count)
-                    {
-                        if (!bands.next(band))
-                            throw std::logic_error("an output's bands ended before its values");
-                        for (uint32_t b = 0; b < band.count; ++b)
-                        {
-                            while (next_seam < seam_blocks.size() &&
-                                   seam_blocks[next_seam] < grid.blocks()[band.first + b])
-                                ++next_seam;
-                            if (next_seam == seam_blocks.size() ||
-                                seam_blocks[next_seam] != grid.blocks()[band.first + b])
-                                continue;
-                            for (uint32_t j = 0; j < k; ++j)
-                                for (size_t t = 0; t < io::BlockGrid::kTexels; ++t)
-                                    if (moved[next_seam * io::BlockGrid::kTexels + t])
-                                        std::copy_n(
-                                            &seam.values[seam.index(j,
-                                                                    next_seam * io::BlockGrid::kTexels + t)],
+                    while (out.next_seam < seam_blocks.size() &&
+                           seam_blocks[out.next_seam] < grid.blocks()[band.first + b])
+                        ++out.next_seam;
+                    if (out.next_seam == seam_blocks.size() ||
+                        seam_blocks[out.next_seam] != grid.blocks()[band.first + b])
+                        continue;
+                    for (uint32_t j = 0; j < k; ++j)
+                        for (size_t t = 0; t < io::BlockGrid::kTexels; ++t)
+                            if (out.moved[out.next_seam * io::BlockGrid::kTexels + t])
+                                std::copy_n(&out.seam.values[out.seam.index(
+                                                j, out.next_seam * io::BlockGrid::kTexels + t)],
                                             3,
                                             &band.maps.values[band.maps.index(
                                                 j, size_t(band.at + b) * io::BlockGrid::kTexels + t)]);
-                        }
-                    }
-                    const size_t in_block = size_t(at % block_values),
-                                 count = std::min(out.size() - done, block_values - in_block);
-                    std::copy_n(
-                        &band.maps.values[size_t(block - band.first + band.at) * block_values + in_block],
-                        count, out.begin() + ptrdiff_t(done));
-                    done += count;
                 }
-            });
+            }
+            const size_t in_block = size_t(at % block_values),
+                         count = std::min(values.size() - done, block_values - in_block);
+            std::copy_n(&band.maps.values[size_t(block - band.first + band.at) * block_values + in_block],
+                        count, values.begin() + ptrdiff_t(done));
+            done += count;
+        }
+    };
+    const auto write_output_in_bands =
+        [&](const std::string& name, OutputReport& made, io::LightmapAssetWriter& writer)
+    {
+        BandedOutput out;
+        first_sweep(name, made, out);
+        writer.add_output(name, out.k, out.bands->grid(), made.scale_exponent,
+                          [&](uint64_t first, std::span<float> values) { pull(out, first, values); });
     };
     const auto take_report = [&](const std::string& name, const OutputReport& made)
     {
@@ -1062,7 +1095,9 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             asset.lights[size_t(c.light + (o.lights.sun ? 1 : 0))].channel = c.channel;
         summary.light_table = asset.lights;
     }
-    if (leader && !mixed_channels.empty())
+    // (In tiles it is made band by band as the asset is written, below.)
+    const bool outputs_in_bands = summary.tile_texels && o.exr_dir.empty();
+    if (leader && !mixed_channels.empty() && !outputs_in_bands)
     {
         io::BlockMaps mask = lightmap_maps("shadowmask", atlas, sh, o.dilate, false);
         const LightmapSeamMetric before = measure_lightmap_seams(seams, mask);
@@ -1134,7 +1169,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         for (const std::string& name : o.outputs)
         {
             OutputReport made;
-            if (summary.tile_texels && o.exr_dir.empty())
+            if (outputs_in_bands)
             {
                 write_output_in_bands(name, made, writer);
                 take_report(name, made);
@@ -1171,6 +1206,18 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
             const std::filesystem::path file = lightmap_exr_path(o.exr_dir, asset_path, output.name);
             io::write_exr_channels(file, w, h, channels, attributes);
             summary.exr_files.push_back(file);
+        }
+        // In tiles the shadowmask too is made band by band, as the writer encodes it (the same bytes as made
+        // whole above: the same dilation, the stitch over the seams' blocks, kept in [0, 1]).
+        BandedOutput mask;
+        if (outputs_in_bands && !mixed_channels.empty())
+        {
+            OutputReport made;
+            first_sweep("shadowmask", made, mask);
+            summary.seam_difference["shadowmask"] = {{made.before_mean, made.before_p95},
+                                                     {made.after_mean, made.after_p95}};
+            writer.set_shadowmask(mask.bands->grid(), [&](uint64_t first, std::span<float> values)
+                                  { pull(mask, first, values); });
         }
         writer.write(asset_path);
     }

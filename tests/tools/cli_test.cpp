@@ -1572,15 +1572,17 @@ fs::path write_split_floor(const std::string& name, bool seamed)
 
 // In tiles the outputs are made band by band of block rows (LightmapOutputBands), their seams measured and
 // stitched over the seams' blocks alone (lightmap_seam_blocks): the unwrapped torus (seams between its
-// charts, stitched), with --non-negative and the irradiance outputs (the stitch's clamp), under a budget
-// between the two estimates, gives the bytes and the seam figures of the bake in memory. Fails for bands
-// without the rows around them, and for seam blocks found from the seams' ends alone.
+// charts, stitched), with --non-negative and the irradiance outputs (the stitch's clamp), and a mixed sun
+// (its shadowmask made band by band as the asset's writer encodes it, stitched and kept in [0, 1]), under a
+// budget between the two estimates, gives the bytes and the seam figures of the bake in memory. Fails for
+// bands without the rows around them, and for seam blocks found from the seams' ends alone.
 TEST(BakeCli, OutputsInBandsGiveTheBytesOfTheWholeOutputs)
 {
     const fs::path torus =
         hemi::samples::write_prt_model(dir() / "models", "torus", hemi::samples::PrtModel::Simple);
     const std::string args =
-        q(torus) + " --unwrap --size 256 --rays 4 --bounces 1 --non-negative --bases sh9,h4,plain,rnm";
+        q(torus) + " --unwrap --size 256 --rays 4 --bounces 1 --non-negative --bases sh9,h4,plain,rnm" +
+        " --sun 0.3,0.2,1,3,3,3 --sun-mode mixed";
     const auto bake = [&](const std::string& name, const std::string& more)
     {
         const fs::path asset = dir() / (name + ".hemi"), json = dir() / (name + ".json");

@@ -94,7 +94,9 @@ std::string output_problem(const LightmapOutput& o, uint32_t width, uint32_t hei
     return {};
 }
 
-std::string lights_problem(const LightmapAsset& a)
+// `shadowmask_to_come`: mixed lights may have no shadowmask in the asset (LightmapAssetWriter's, which may be
+// given it by set_shadowmask).
+std::string lights_problem(const LightmapAsset& a, bool shadowmask_to_come = false)
 {
     int channels = 0;
     for (const LightmapLight& l : a.lights)
@@ -121,7 +123,7 @@ std::string lights_problem(const LightmapAsset& a)
         channels += p.mode == LightMode::Mixed;
     }
     const BlockMaps& m = a.shadowmask;
-    if (channels == 0 && m.k == 0)
+    if ((channels == 0 || shadowmask_to_come) && m.k == 0)
         return {};
     if (channels == 0 || m.k != 4)
         return channels == 0 ? "a shadowmask without mixed lights"
@@ -151,7 +153,7 @@ std::string problem(const LightmapAsset& a, bool outputs = true)
         return "no outputs";
     if (std::string p = light_probes_problem(a.probes); !p.empty())
         return p;
-    if (std::string p = lights_problem(a); !p.empty())
+    if (std::string p = lights_problem(a, !outputs); !p.empty())
         return p;
     if (a.reflections.size() > kMaxReflectionProbes)
         return std::to_string(a.reflections.size()) + " reflection probes, more than " +
@@ -199,13 +201,10 @@ LightmapAssetWriter::LightmapAssetWriter(const LightmapAsset& a, const std::file
 {
     if (std::string p = problem(a, false); !p.empty())
         throw std::invalid_argument("hemi: cannot write a lightmap asset: " + p);
-    const Info info{a.shadowmask.k == 4 ? kLightmapLayoutVersion : 3u,
-                    a.width,
-                    a.height,
-                    a.rays,
-                    a.seed,
-                    a.bounces,
-                    a.covered_texels};
+    mixed_ = std::any_of(a.lights.begin(), a.lights.end(),
+                         [](const LightmapLight& l) { return l.light.mode == LightMode::Mixed; });
+    const Info info{
+        mixed_ ? kLightmapLayoutVersion : 3u, a.width, a.height, a.rays, a.seed, a.bounces, a.covered_texels};
     sections_->writer.add("lightmap.info", std::as_bytes(std::span<const Info>(&info, 1)));
     write_scene_sections(sections_->writer, a.mesh, a.materials, a.images, a.primitives);
 }
@@ -319,6 +318,19 @@ void LightmapAssetWriter::add_encoded_output(const std::string& name, std::span<
     ++outputs_;
 }
 
+void LightmapAssetWriter::set_shadowmask(const BlockGrid& grid,
+                                         std::function<void(uint64_t first, std::span<float> out)> values)
+{
+    if (!mixed_ || asset_->shadowmask.k != 0 || grid.width() != asset_->width ||
+        grid.height() != asset_->height)
+        throw std::invalid_argument("hemi: cannot write a lightmap asset: a shadowmask over a " +
+                                    std::to_string(grid.width()) + "x" + std::to_string(grid.height()) +
+                                    " grid for an asset " +
+                                    (mixed_ ? "that has one or another size" : "without mixed lights"));
+    shadowmask_grid_ = grid;
+    shadowmask_values_ = std::move(values);
+}
+
 void LightmapAssetWriter::write(const std::filesystem::path& path)
 {
     if (outputs_ == 0)
@@ -403,22 +415,51 @@ void LightmapAssetWriter::write(const std::filesystem::path& path)
         }
         sections_->writer.add("lightmap.lights", bytes);
     }
-    if (asset_->shadowmask.k == 4)
+    if (mixed_)
     {
-        // u32 N, the blocks, then per texel of each block its 4 channels as u8.
-        const BlockMaps& m = asset_->shadowmask;
-        const std::vector<uint32_t>& blocks = m.grid.blocks();
-        std::vector<std::byte> bytes(4 + blocks.size() * 4 + m.grid.slots() * 4);
-        const uint32_t n = uint32_t(blocks.size());
-        std::memcpy(bytes.data(), &n, 4);
-        if (n > 0)
-            std::memcpy(bytes.data() + 4, blocks.data(), blocks.size() * 4);
-        std::byte* texels = bytes.data() + 4 + blocks.size() * 4;
-        for (size_t slot = 0; slot < m.grid.slots(); ++slot)
-            for (uint32_t c = 0; c < 4; ++c)
-                texels[slot * 4 + c] = std::byte(
-                    uint8_t(std::lround(std::clamp(m.values[m.index(c, slot)], 0.0f, 1.0f) * 255.0f)));
-        sections_->writer.add("lightmap.shadowmask", bytes);
+        // u32 N, the blocks, then per texel of each block its 4 channels as u8, made a block at a time from
+        // set_shadowmask's values or the asset's shadowmask.
+        const bool pulled = bool(shadowmask_values_);
+        if (!pulled && asset_->shadowmask.k != 4)
+            throw std::invalid_argument("hemi: cannot write " + path.string() +
+                                        ": mixed lights without a shadowmask of 4 channels");
+        const BlockGrid& grid = pulled ? shadowmask_grid_ : asset_->shadowmask.grid;
+        const std::vector<uint32_t>& blocks = grid.blocks();
+        const uint64_t head = 4 + uint64_t(blocks.size()) * 4;
+        constexpr size_t kBlockValues = 4 * BlockGrid::kTexels * 3;
+        std::vector<float> block(kBlockValues);
+        uint64_t block_at = UINT64_MAX; // the block `block` holds
+        sections_->writer.add_generated(
+            "lightmap.shadowmask", head + grid.slots() * 4,
+            [&](uint64_t offset, std::span<std::byte> out)
+            {
+                for (size_t i = 0; i < out.size(); ++i)
+                {
+                    const uint64_t at = offset + i;
+                    if (at < head)
+                    {
+                        const uint32_t word = at < 4 ? uint32_t(blocks.size()) : blocks[size_t(at / 4 - 1)];
+                        out[i] = std::byte(uint8_t(word >> (8 * (at % 4))));
+                        continue;
+                    }
+                    const uint64_t texel = (at - head) / 4, b = texel / BlockGrid::kTexels;
+                    if (b != block_at)
+                    {
+                        if (pulled)
+                            shadowmask_values_(b * kBlockValues, block);
+                        else
+                            std::copy_n(&asset_->shadowmask.values[size_t(b) * kBlockValues], kBlockValues,
+                                        block.begin());
+                        block_at = b;
+                    }
+                    const uint32_t c = uint32_t((at - head) % 4), t = uint32_t(texel % BlockGrid::kTexels);
+                    const float v = block[(c * BlockGrid::kTexels + t) * 3];
+                    if (!(v >= 0.0f && v <= 1.0f))
+                        throw std::invalid_argument("hemi: cannot write " + path.string() +
+                                                    ": the shadowmask holds a value outside [0, 1]");
+                    out[i] = std::byte(uint8_t(std::lround(v * 255.0f)));
+                }
+            });
     }
     sections_->writer.write(path);
 }

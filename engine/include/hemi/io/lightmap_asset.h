@@ -151,6 +151,12 @@ class LightmapAssetWriter
     static std::vector<std::byte> encode_output(const LightmapOutput& output, uint32_t width,
                                                 uint32_t height);
     void add_encoded_output(const std::string& name, std::span<const std::byte> bytes);
+    // With mixed lights, the shadowmask made as it is written, when the asset holds none (a bake in tiles,
+    // band by band): its 4 maps over `grid` (the atlas's size), values(first, out) the values from index
+    // `first` on in BlockMaps' layout, asked for a block at a time in order during write(), each in [0, 1]
+    // (write() throws std::invalid_argument for one that is not). The function must live until write().
+    void set_shadowmask(const BlockGrid& grid,
+                        std::function<void(uint64_t first, std::span<float> out)> values);
     void write(const std::filesystem::path& path);
 
   private:
@@ -158,6 +164,9 @@ class LightmapAssetWriter
     const LightmapAsset* asset_;
     std::unique_ptr<Sections> sections_;
     size_t outputs_ = 0;
+    bool mixed_ = false; // the asset has mixed lights: a shadowmask is written
+    BlockGrid shadowmask_grid_;
+    std::function<void(uint64_t first, std::span<float> out)> shadowmask_values_;
 };
 // Throws FormatError naming the file and the problem (missing, truncated, corrupt, another kind of asset,
 // sizes that disagree, non-finite values).
