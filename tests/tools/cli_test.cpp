@@ -1591,12 +1591,13 @@ TEST(BakeCli, OutputsInBandsGiveTheBytesOfTheWholeOutputs)
         return std::pair{hemi::test::slurp(asset), nlohmann::json::parse(slurp(json))};
     };
     const auto [whole, whole_json] = bake("bands_whole", "");
-    // A tenth of the way from the least tiles to the whole bake: the unwrapped charts cover their blocks
-    // sparsely, and the estimates count the blocks' texels.
+    // A third of the way from the least tiles to the whole bake: the unwrapped charts cover their blocks
+    // sparsely, and the estimates count the blocks' texels. (A tenth left 1.1 MiB above the least estimate
+    // under AddressSanitizer, less than what the process holds moves between two runs beside another test.)
     const std::string budget = hemi::test::tiling_budget(
         [&](const std::string& extra)
         { return lightmap(args + extra + " -o " + q(dir() / "bands_refused.hemi")); },
-        0.1);
+        0.33);
     ASSERT_FALSE(budget.empty());
     const auto [banded, banded_json] = bake("bands_tiled", budget);
     EXPECT_EQ(whole_json["tile_texels"], 0);
