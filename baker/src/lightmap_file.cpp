@@ -48,7 +48,8 @@ namespace
 // touch (io::BlockGrid), so it is counted per texel of those blocks ("slots") and per covered texel (at most
 // one a slot), as the largest of three stages':
 // - the rasteriser (lightmap_atlas.cpp): per slot its tables (the best triangle, its distance and
-//   barycentrics, the claimants' count and first, the slot's texel index: kRasterBytesPerSlot), per covered
+//   barycentrics, the claimants' count and first, the slot's texel index and its band copy:
+//   kRasterBytesPerSlot), per covered
 //   texel the record it makes (kTexelRecordBytes, LightmapTexels); in bands of block rows when that does not
 //   fit the budget, per slot its texel index (kSlotTexelBytes) and the tables over one band and the block
 //   rows either side (kRasterTableBytesPerSlot, lightmap_atlas.h);
@@ -73,7 +74,7 @@ namespace
 // filtered in two copies (kDenoiseBandBytesPerTexel). With
 // --exr-dir, one output at a time is expanded to the whole atlas (an EXR is a dense image): 4 bytes per atlas
 // texel and coefficient of the largest output, and OpenEXR's half copy.
-constexpr uint64_t kRasterBytesPerSlot = 32;
+constexpr uint64_t kRasterBytesPerSlot = 33;
 constexpr uint64_t kSlotTexelBytes = 4;
 constexpr uint64_t kTexelRecordBytes = 16;
 constexpr uint64_t kLightmapBytesPerSlot = 12;
@@ -87,7 +88,7 @@ constexpr uint64_t kPlaceBytesPerTexel =
     16; // what the outputs keep of the atlas: the records (places, charts)
 // With the records in pages of files (LightmapAtlasStorage, when kept in memory they would leave tiles of
 // fewer than kPagedBelowTileTexels): per slot the bounce map's halves alone, per texel its validity (and 1
-// while found), and two caches of pages (kPageCacheBytes).
+// while found), and two caches of pages (page_cache_bytes below).
 constexpr uint64_t kPagedLightmapBytesPerSlot = kLightmapBytesPerSlot - kSlotTexelBytes;
 constexpr uint64_t kPagedTiledBytesPerCoveredTexel = kTiledBytesPerCoveredTexel - kTexelRecordBytes;
 constexpr uint64_t kPagedBelowTileTexels = 65536;
@@ -537,7 +538,7 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
     {
         if (band == 0)
             return slots * kRasterBytesPerSlot;
-        return (paged ? page_cache_bytes(slots) : slots * kSlotTexelBytes) +
+        return (paged ? 0 : slots * kSlotTexelBytes) + // (paged: nothing is read while it rasterises)
                std::min(slots, std::max(band, raster_row_slots) + 2 * raster_row_slots) *
                    kRasterTableBytesPerSlot;
     };
@@ -701,6 +702,14 @@ LightmapBakeSummary bake_lightmap_file(const std::filesystem::path& scene_path,
         const uint64_t fixed = tiled_bytes(covered, 0, paged);
         const uint64_t room = budget == 0 ? covered : fixed < usable ? (usable - fixed) / per_tile_texel : 0;
         tile_texels = uint32_t(std::min<uint64_t>(std::max<uint64_t>(room, kMinTileTexels), covered - 1));
+    }
+    // Records paged for an atlas whose covered texels then fit in memory after all (paged was decided from
+    // the slots, which bound them): brought back, since a bake in memory reads them at random.
+    if (paged && tile_texels == 0)
+    {
+        atlas.texels.keep_in_memory();
+        atlas.slot_texel = atlas.slot_texel.in_memory();
+        summary.paged_records = false;
     }
     summary.tile_texels = tile_texels;
     for (const std::string& warning : report.warnings)

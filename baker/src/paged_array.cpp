@@ -29,8 +29,9 @@ struct PagedStore::Impl
     uint32_t item_bytes = 0;
     size_t items = 0;
     bool finished = false;
-    // In memory.
-    std::vector<std::byte> memory;
+    // In memory: chunks of kChunkItems items, the last one filled up to `items`.
+    std::vector<std::unique_ptr<std::byte[]>> chunks;
+    std::vector<const std::byte*> chunk_pointers;
     // In a file.
     int fd = -1;
     std::filesystem::path path;
@@ -71,6 +72,8 @@ struct PagedStore::Impl
         {
             errno = 0;
             const ssize_t w = ::pwrite(fd, pending.data() + done, pending.size() - done, off_t(at + done));
+            if (w < 0 && errno == EINTR)
+                continue;
             if (w <= 0)
                 fail("writing " + std::to_string(pending.size()) + " bytes of the bake's temporary " +
                          "texel data at byte " + std::to_string(at + done) + " (" +
@@ -92,6 +95,8 @@ struct PagedStore::Impl
             errno = 0;
             const ssize_t r =
                 ::pread(fd, page->data() + done, bytes - done, off_t(uint64_t(p) * page_bytes() + done));
+            if (r < 0 && errno == EINTR)
+                continue;
             if (r <= 0)
                 fail("reading back the bake's temporary texel data (page " + std::to_string(p) + ")",
                      r == 0 ? EIO : errno);
@@ -139,7 +144,7 @@ PagedStore::PagedStore(uint32_t item_bytes, const std::filesystem::path& directo
     std::string pattern =
         (directory.empty() ? std::filesystem::path(".") : directory).string() + "/.hemi-" + name + "-XXXXXX";
     errno = 0;
-    m.fd = ::mkstemp(pattern.data());
+    m.fd = ::mkostemp(pattern.data(), O_CLOEXEC); // no child keeps the file alive
     m.path = pattern;
     if (m.fd < 0)
         m.fail("cannot make the bake's temporary file for its " + name, errno);
@@ -155,12 +160,25 @@ void PagedStore::append(std::span<const std::byte> bytes)
         throw std::logic_error("PagedStore::append after finish");
     if (bytes.size() % m.item_bytes)
         throw std::invalid_argument("PagedStore::append: not whole items");
-    m.items += bytes.size() / m.item_bytes;
     if (m.fd < 0)
     {
-        m.memory.insert(m.memory.end(), bytes.begin(), bytes.end());
+        const size_t chunk_bytes = kChunkItems * m.item_bytes;
+        while (!bytes.empty())
+        {
+            const size_t at = m.items % kChunkItems;
+            if (at == 0)
+            {
+                m.chunks.push_back(std::make_unique_for_overwrite<std::byte[]>(chunk_bytes));
+                m.chunk_pointers.push_back(m.chunks.back().get());
+            }
+            const size_t take = std::min(bytes.size(), chunk_bytes - at * m.item_bytes);
+            std::memcpy(m.chunks.back().get() + at * m.item_bytes, bytes.data(), take);
+            m.items += take / m.item_bytes;
+            bytes = bytes.subspan(take);
+        }
         return;
     }
+    m.items += bytes.size() / m.item_bytes;
     while (!bytes.empty())
     {
         const size_t take = std::min(bytes.size(), m.page_bytes() - m.pending.size());
@@ -179,9 +197,8 @@ void PagedStore::finish()
     if (m.fd >= 0 && !m.pending.empty())
         m.write_page(m.checksums.size());
     Page().swap(m.pending);
-    m.memory.shrink_to_fit();
     m.finished = true;
-    memory_ = m.fd < 0 ? m.memory.data() : nullptr;
+    chunks_ = m.fd < 0 && !m.chunk_pointers.empty() ? m.chunk_pointers.data() : nullptr;
 }
 
 size_t PagedStore::size() const
@@ -211,12 +228,27 @@ uint64_t PagedStore::cache_bytes(size_t threads) const
     return uint64_t(impl_->cache_pages + threads * kLocalPages) * impl_->page_bytes();
 }
 
+PagedStore PagedStore::in_memory() const
+{
+    if (!paged())
+        return *this;
+    const Impl& m = *impl_;
+    PagedStore out(m.item_bytes);
+    for (size_t p = 0; p * kPageItems < m.items; ++p)
+    {
+        const std::shared_ptr<const Page> page = m.shared(p);
+        out.append(*page);
+    }
+    out.finish();
+    return out;
+}
+
 void PagedStore::read(size_t i, std::byte* out) const
 {
     const Impl& m = *impl_;
     if (m.fd < 0)
     {
-        std::memcpy(out, m.memory.data() + i * m.item_bytes, m.item_bytes);
+        std::memcpy(out, m.chunk_pointers[i / kChunkItems] + (i % kChunkItems) * m.item_bytes, m.item_bytes);
         return;
     }
     const size_t p = i / kPageItems, slot = p % kLocalPages;

@@ -54,8 +54,9 @@ TEST(PagedArray, ItemsReadBackFromAnyThreadAreTheItemsWrittenInMemoryAndInPages)
 {
     const fs::path dir = hemi::test::temp_dir("paged_array_test") / "pages";
     fs::create_directories(dir);
-    // 10 pages and a bit, appended one item and a few hundred at a time (across page ends).
-    constexpr size_t kItems = 10 * PagedStore::kPageItems + 37;
+    // Two chunks (in memory) and a bit, 128 pages and a bit (in a file), appended one item and a few hundred
+    // at a time (across page and chunk ends).
+    constexpr size_t kItems = 2 * PagedStore::kChunkItems + 37;
     for (const bool paged : {false, true})
     {
         PagedArray<Item> array =
@@ -77,9 +78,11 @@ TEST(PagedArray, ItemsReadBackFromAnyThreadAreTheItemsWrittenInMemoryAndInPages)
             wrong += array[i].a != expected(i).a || array[i].c != expected(i).c;
         EXPECT_EQ(wrong, 0u) << paged;
         EXPECT_EQ(wrong_reads(array, 200000), 0u) << paged;
-        // A copy shares the items.
-        const PagedArray<Item> copy = array;
+        // A copy shares the items; in_memory() gives them in memory, read back from the file.
+        const PagedArray<Item> copy = array, loaded = array.in_memory();
         EXPECT_EQ(copy[kItems - 1].b, expected(kItems - 1).b);
+        EXPECT_FALSE(loaded.store().paged());
+        EXPECT_EQ(wrong_reads(loaded, 100000), 0u) << paged;
         EXPECT_THROW(array.push_back(expected(0)), std::logic_error);
         EXPECT_EQ(array.store().cache_bytes(2),
                   paged ? (1 + 2 * PagedStore::kLocalPages) * PagedStore::kPageItems * sizeof(Item) : 0u);

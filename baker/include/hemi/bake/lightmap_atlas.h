@@ -147,6 +147,8 @@ class LightmapTexels
     std::span<const uint32_t> charts() const { return charts_; }
     // Where the records are: in memory or in pages of a temporary file (LightmapAtlasStorage).
     const PagedStore& store() const { return packed_.store(); }
+    // The records brought into memory (from pages of a file, read back in order).
+    void keep_in_memory() { packed_ = packed_.in_memory(); }
 
   private:
     PagedArray<Packed> packed_;

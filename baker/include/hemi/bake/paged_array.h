@@ -10,9 +10,11 @@
 // back: a page the disk gives back altered throws io::FormatError naming the file, as does any failed read
 // or write (a full disk names it and how much it needed).
 //
-// Reads: each thread keeps the last few pages it read (kLocalPages, direct-mapped by page), the rest come
-// from a cache shared by the threads (cache_pages, the oldest dropped first) or the file. A copy of a
-// PagedArray shares its items (they do not change once finished).
+// In memory the items are kept in chunks of kChunkItems (no array is copied as it grows: what it holds is
+// its items and at most one chunk more). Reads: each thread keeps the last few pages it read (kLocalPages,
+// direct-mapped by page), the rest come from a cache shared by the threads (cache_pages, the oldest dropped
+// first) or the file. A copy of a PagedArray shares its items (copy a finished one: a copy taken before
+// finish() sees later appends but reads through read(), not inline).
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -21,6 +23,7 @@
 #include <span>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace hemi::bake
@@ -31,8 +34,22 @@ class PagedStore
   public:
     static constexpr size_t kPageItems = 1024;
     static constexpr size_t kLocalPages = 8;
+    static constexpr unsigned kChunkShift = 16;
+    static constexpr size_t kChunkItems = size_t(1) << kChunkShift;
 
     PagedStore() = default;
+    PagedStore(const PagedStore&) = default;
+    PagedStore& operator=(const PagedStore&) = default;
+    PagedStore(PagedStore&& o) noexcept
+        : impl_(std::move(o.impl_)), chunks_(std::exchange(o.chunks_, nullptr))
+    {
+    }
+    PagedStore& operator=(PagedStore&& o) noexcept
+    {
+        impl_ = std::move(o.impl_);
+        chunks_ = std::exchange(o.chunks_, nullptr);
+        return *this;
+    }
     // In memory.
     explicit PagedStore(uint32_t item_bytes);
     // In a temporary file in `directory` (named after `name`, for messages), read back through a cache of
@@ -53,15 +70,17 @@ class PagedStore
     // What reading holds at most beside what it reads: the shared cache and each thread's pages (0 in
     // memory).
     uint64_t cache_bytes(size_t threads) const;
+    // The same items in memory (a finished store; read back in order from the file when paged).
+    PagedStore in_memory() const;
     // The file's name as messages give it (empty in memory).
     std::filesystem::path path() const;
-    // The items in memory, once finished (else nullptr): what PagedArray reads inline.
-    const std::byte* memory() const { return memory_; }
+    // The items' chunks in memory, once finished (else nullptr): what PagedArray reads inline.
+    const std::byte* const* chunks() const { return chunks_; }
 
   private:
     struct Impl;
     std::shared_ptr<Impl> impl_;
-    const std::byte* memory_ = nullptr;
+    const std::byte* const* chunks_ = nullptr;
 };
 
 // A PagedStore of trivially copyable T.
@@ -82,8 +101,9 @@ template <class T> class PagedArray
     T operator[](size_t i) const
     {
         T v;
-        if (const std::byte* m = store_.memory())
-            std::memcpy(&v, m + i * sizeof(T), sizeof(T));
+        if (const std::byte* const* c = store_.chunks())
+            std::memcpy(&v, c[i >> PagedStore::kChunkShift] + (i & (PagedStore::kChunkItems - 1)) * sizeof(T),
+                        sizeof(T));
         else
             store_.read(i, reinterpret_cast<std::byte*>(&v));
         return v;
@@ -97,6 +117,7 @@ template <class T> class PagedArray
         return out;
     }
     const PagedStore& store() const { return store_; }
+    PagedArray in_memory() const { return PagedArray(store_.in_memory()); }
 
   private:
     PagedStore store_;

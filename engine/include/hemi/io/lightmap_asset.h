@@ -130,7 +130,8 @@ void write_lightmap_asset(const std::filesystem::path& path, const LightmapAsset
 // asset. With a `spool` file (AssetWriter's), each output's half floats go to disk as they are encoded and
 // the writer holds none of them: a bake's memory then holds one output at a time, in floats, and nothing
 // else of its outputs. Throws as write_lightmap_asset does: the constructor for the rest of the asset (or a
-// spool it cannot create), add_output for an output, write() for no outputs or a file that cannot be
+// spool it cannot create), add_output for an output, write() for no outputs, mixed lights with no shadowmask
+// (neither the asset's nor set_shadowmask's), a shadowmask value outside [0, 1], or a file that cannot be
 // written.
 class LightmapAssetWriter
 {
