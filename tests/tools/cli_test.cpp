@@ -1691,7 +1691,9 @@ TEST(BakeCli, MemoryBudgetBakesInTilesUnderItWithTheSameBytes)
                     paged_json["peak_memory_bytes"].get<double>() / 1048576.0);
         EXPECT_TRUE(paged_json["paged_records"].get<bool>()) << mib << ": the records in memory";
         if (mib == 48)
+        {
             EXPECT_GT(paged_json["raster_band_slots"].get<uint64_t>(), 0u) << "not rasterised in bands";
+        }
         EXPECT_LT(paged_json["peak_memory_bytes"].get<uint64_t>(), uint64_t(mib) << 20);
         EXPECT_TRUE(paged == whole) << mib << ": the bytes of the bake with its records in pages differ";
         for (const fs::directory_entry& e : fs::directory_iterator(dir()))
